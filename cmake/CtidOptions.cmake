@@ -1,0 +1,18 @@
+# Compiler flags shared by every ctid target: warnings (errors by default) and sanitizers.
+add_library(ctid_compile_options INTERFACE)
+target_compile_options(ctid_compile_options INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wold-style-cast -Wcast-align
+  -Wunused -Woverloaded-virtual -Wnull-dereference -Wdouble-promotion -Wformat=2
+  -Wimplicit-fallthrough
+  $<$<BOOL:${CTID_WERROR}>:-Werror>)
+if(CTID_SANITIZE)
+  target_compile_options(ctid_compile_options INTERFACE
+    -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all)
+  target_link_options(ctid_compile_options INTERFACE -fsanitize=address,undefined)
+endif()
+
+# Rebuilds are much faster with ccache; use it when the machine has it.
+find_program(CTID_CCACHE ccache)
+if(CTID_CCACHE AND NOT CMAKE_CXX_COMPILER_LAUNCHER)
+  set(CMAKE_CXX_COMPILER_LAUNCHER ${CTID_CCACHE})
+endif()

@@ -1,0 +1,46 @@
+// A uniformly sampled SISO record: input u_k, output y_k and optionally the reference r_k
+// of a closed-loop experiment, at t_k = t_0 + k h, k = 0..N-1.
+#pragma once
+
+#include <optional>
+
+#include <Eigen/Core>
+
+namespace ctid {
+
+class SampledData {
+ public:
+  /// Throws InvalidArgument for a non-positive or non-finite sample time, unequal lengths,
+  /// fewer than 2 samples or a non-finite value (naming the signal and the index).
+  SampledData(double sample_time, Eigen::VectorXd input, Eigen::VectorXd output,
+              std::optional<Eigen::VectorXd> reference = std::nullopt, double start_time = 0.0);
+
+  /// From time stamps: they must increase uniformly, each step within
+  /// relative_tolerance * h of the mean step h (the first offending index is named).
+  static SampledData from_time_stamps(const Eigen::VectorXd& time, Eigen::VectorXd input,
+                                      Eigen::VectorXd output,
+                                      std::optional<Eigen::VectorXd> reference = std::nullopt,
+                                      double relative_tolerance = 1e-6);
+
+  int size() const { return static_cast<int>(input_.size()); }
+  double sample_time() const { return sample_time_; }
+  double start_time() const { return start_time_; }
+  Eigen::VectorXd time() const;
+  const Eigen::VectorXd& input() const { return input_; }
+  const Eigen::VectorXd& output() const { return output_; }
+  bool has_reference() const { return reference_.has_value(); }
+  /// Throws InvalidArgument if there is no reference.
+  const Eigen::VectorXd& reference() const;
+
+  /// Samples [begin, begin + count).
+  SampledData segment(int begin, int count) const;
+
+ private:
+  double sample_time_;
+  double start_time_;
+  Eigen::VectorXd input_;
+  Eigen::VectorXd output_;
+  std::optional<Eigen::VectorXd> reference_;
+};
+
+}  // namespace ctid
