@@ -5,10 +5,14 @@ target_compile_options(ctid_compile_options INTERFACE
   -Wunused -Woverloaded-virtual -Wnull-dereference -Wdouble-promotion -Wformat=2
   -Wimplicit-fallthrough
   $<$<BOOL:${CTID_WERROR}>:-Werror>)
+
+# Sanitizers apply to the whole build (libraries, tests, CLI, benchmarks) rather than
+# through ctid_compile_options: every object that ends up in one executable must agree,
+# or a target that forgets the flag fails to link against instrumented static libraries.
 if(CTID_SANITIZE)
-  target_compile_options(ctid_compile_options INTERFACE
-    -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all)
-  target_link_options(ctid_compile_options INTERFACE -fsanitize=address,undefined)
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer
+    -fno-sanitize-recover=all)
+  add_link_options(-fsanitize=address,undefined)
 endif()
 
 # Rebuilds are much faster with ccache; use it when the machine has it.
