@@ -1,0 +1,77 @@
+// Exact ZOH and FOH discretisation through one matrix exponential of an augmented matrix
+// (Van Loan's construction): the blocks of exp(M h) are exactly the integrals needed, with no
+// inverse of A, so integrators (singular A) need no special case.
+#include "ctid/simulation/discretization.h"
+
+#include <cmath>
+#include <utility>
+
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "ctid/core/error.h"
+
+namespace ctid {
+namespace {
+
+void check_arguments(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double h,
+                     const char* function) {
+  require(a.rows() == a.cols(), function, ": A must be square, got ", a.rows(), " x ", a.cols());
+  require(b.rows() == a.rows(), function, ": B must have as many rows as A (", a.rows(), "), got ",
+          b.rows());
+  require(b.cols() >= 1, function, ": B must have at least one column, got 0");
+  require(std::isfinite(h) && h > 0.0, function,
+          ": sample time h must be positive and finite, got ", h);
+  require(a.allFinite(), function, ": A has a non-finite entry");
+  require(b.allFinite(), function, ": B has a non-finite entry");
+}
+
+}  // namespace
+
+ZohDiscretization discretize_zoh(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double h) {
+  check_arguments(a, b, h, "discretize_zoh");
+  const Eigen::Index n = a.rows();
+  const Eigen::Index m = b.cols();
+  // exp([[A, B], [0, 0]] h) = [[e^{Ah}, int_0^h e^{As} ds B], [0, I]].
+  Eigen::MatrixXd augmented = Eigen::MatrixXd::Zero(n + m, n + m);
+  augmented.topLeftCorner(n, n) = a * h;
+  augmented.topRightCorner(n, m) = b * h;
+  const Eigen::MatrixXd e = augmented.exp();
+  ZohDiscretization result;
+  result.phi = e.topLeftCorner(n, n);
+  result.gamma = e.topRightCorner(n, m);
+  return result;
+}
+
+FohDiscretization discretize_foh(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double h) {
+  check_arguments(a, b, h, "discretize_foh");
+  const Eigen::Index n = a.rows();
+  const Eigen::Index m = b.cols();
+  // With u(t_k + s) = u_k + (u_{k+1} - u_k) s / h, x_{k+1} = Phi x_k + G0 u_k + G1 (u_{k+1} - u_k),
+  // G0 = int_0^h e^{A(h-s)} ds B and G1 = (1/h) int_0^h e^{A(h-s)} s ds B. Both are blocks of
+  // exp(M h), M = [[A, B, 0], [0, 0, I/h], [0, 0, 0]].
+  Eigen::MatrixXd augmented = Eigen::MatrixXd::Zero(n + 2 * m, n + 2 * m);
+  augmented.topLeftCorner(n, n) = a * h;
+  augmented.block(0, n, n, m) = b * h;
+  augmented.block(n, n + m, m, m).setIdentity();
+  const Eigen::MatrixXd e = augmented.exp();
+  const Eigen::MatrixXd g0 = e.block(0, n, n, m);
+  const Eigen::MatrixXd g1 = e.block(0, n + m, n, m);
+  FohDiscretization result;
+  result.phi = e.topLeftCorner(n, n);
+  result.gamma0 = g0 - g1;
+  result.gamma1 = g1;
+  return result;
+}
+
+StateSpace discretize_zoh(const StateSpace& model, double h) {
+  model.validate();
+  ZohDiscretization zoh = discretize_zoh(model.a, model.b, h);
+  StateSpace result;
+  result.a = std::move(zoh.phi);
+  result.b = zoh.gamma.col(0);
+  result.c = model.c;
+  result.d = model.d;
+  return result;
+}
+
+}  // namespace ctid
