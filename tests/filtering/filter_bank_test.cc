@@ -1,0 +1,140 @@
+#include "ctid/filtering/filter_bank.h"
+
+#include <cmath>
+#include <random>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "ctid/core/error.h"
+
+namespace ctid {
+namespace {
+
+Eigen::VectorXd random_signal(int n, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal;
+  Eigen::VectorXd x(n);
+  for (int k = 0; k < n; ++k) x(k) = normal(rng);
+  return x;
+}
+
+TEST(FilterBank, FirstOrderStepResponseMatchesClosedForm) {
+  // 1/(1 + tau p) of a unit step: w = 1 - e^{-t/tau}, p w = e^{-t/tau} / tau.
+  const double tau = 0.7;
+  const double h = 0.05;
+  const int n = 100;
+  const Eigen::MatrixXd out = filter_derivatives(Polynomial{1.0, tau}, Eigen::VectorXd::Ones(n), h,
+                                                 Interpolation::zero_order_hold);
+  for (int k = 0; k < n; ++k) {
+    const double t = k * h;
+    EXPECT_NEAR(out(k, 0), 1.0 - std::exp(-t / tau), 1e-14);
+    EXPECT_NEAR(out(k, 1), std::exp(-t / tau) / tau, 1e-13);
+  }
+}
+
+TEST(FilterBank, FirstOrderHoldIsExactForARamp) {
+  // 1/(1 + tau p) of x(t) = t from rest: w = t - tau + tau e^{-t/tau}.
+  const double tau = 0.3;
+  const double h = 0.1;
+  const int n = 60;
+  Eigen::VectorXd ramp(n);
+  for (int k = 0; k < n; ++k) ramp(k) = k * h;
+  const Eigen::MatrixXd foh =
+      filter_derivatives(Polynomial{1.0, tau}, ramp, h, Interpolation::first_order_hold);
+  const Eigen::MatrixXd zoh =
+      filter_derivatives(Polynomial{1.0, tau}, ramp, h, Interpolation::zero_order_hold);
+  for (int k = 0; k < n; ++k) {
+    const double t = k * h;
+    EXPECT_NEAR(foh(k, 0), t - tau + tau * std::exp(-t / tau), 1e-13);
+  }
+  // The zero-order hold lags the ramp by about h/2: visibly different.
+  EXPECT_GT(std::abs(zoh(n - 1, 0) - foh(n - 1, 0)), 0.01);
+}
+
+TEST(FilterBank, IntegratorChainsGivePolynomials) {
+  // 1/p^2 of a unit step = t^2/2, 1/p = t, p^2/p^2 = 1 (ZOH exact).
+  const double h = 0.01;
+  const int n = 200;
+  const Eigen::MatrixXd out = filter_derivatives(
+      Polynomial{0.0, 0.0, 1.0}, Eigen::VectorXd::Ones(n), h, Interpolation::zero_order_hold);
+  for (int k = 0; k < n; ++k) {
+    const double t = k * h;
+    EXPECT_NEAR(out(k, 0), 0.5 * t * t, 1e-13);
+    EXPECT_NEAR(out(k, 1), t, 1e-13);
+    EXPECT_NEAR(out(k, 2), 1.0, 1e-15);
+  }
+}
+
+TEST(FilterBank, WeightedSumOfDerivativesReproducesTheSignalAtTheSamples) {
+  // sum_k a_k p^k/A x = x exactly at the samples for any interpolation: the property the
+  // fixed point of the refined IV iteration rests on. An 8th-order A with spread poles
+  // (the open-loop example of Section 6.1).
+  const Polynomial a =
+      Polynomial{1.0, 0.5 / 1.96, 1.0 / 1.96} * Polynomial{1.0, 0.3 / 10.0, 1.0 / 10.0} *
+      Polynomial{1.0, 0.34 / 33.3, 1.0 / 33.3} * Polynomial{1.0, 1.0 / 100.0, 1.0 / 100.0};
+  const Eigen::VectorXd x = random_signal(2000, 7);
+  for (Interpolation hold : {Interpolation::zero_order_hold, Interpolation::first_order_hold}) {
+    const Eigen::MatrixXd out = filter_derivatives(a, x, 0.05, hold);
+    const Eigen::VectorXd recombined = out * a.coefficients();
+    EXPECT_LT((recombined - x).cwiseAbs().maxCoeff(), 1e-11 * x.cwiseAbs().maxCoeff());
+  }
+}
+
+TEST(FilterBank, CascadeEqualsOneBankOfTheSquaredDenominator) {
+  // p^k B/A^2 from two cascaded 1/A stages against sum_j b_j p^{k+j}/A^2 from one bank of
+  // A^2: two different realisations of the same transfer functions.
+  const Polynomial a{1.0, 0.2, 0.05};
+  const Polynomial b{2.0, -0.3};
+  const FilterRealization first = derivative_filters(a);
+  Eigen::VectorXd weights = Eigen::VectorXd::Zero(first.outputs());
+  weights.head(2) = b.coefficients();
+  const FilterRealization chain = cascade(first, weights, derivative_filters(a));
+  const Eigen::VectorXd u = random_signal(500, 3);
+  const double h = 0.02;
+  const Eigen::MatrixXd cascaded = SampledFilter(chain, h, Interpolation::zero_order_hold).apply(u);
+  const Eigen::MatrixXd squared = filter_derivatives(a * a, u, h, Interpolation::zero_order_hold);
+  ASSERT_EQ(cascaded.cols(), 3);
+  for (int k = 0; k <= 2; ++k) {
+    const Eigen::VectorXd reference = b[0] * squared.col(k) + b[1] * squared.col(k + 1);
+    EXPECT_LT((cascaded.col(k) - reference).cwiseAbs().maxCoeff(),
+              1e-10 * (1.0 + reference.cwiseAbs().maxCoeff()))
+        << "k = " << k;
+  }
+}
+
+TEST(FilterBank, StartsAtRestAndIsLinear) {
+  const Polynomial a{1.0, 0.4, 0.1};
+  const Eigen::VectorXd x1 = random_signal(300, 1);
+  const Eigen::VectorXd x2 = random_signal(300, 2);
+  const SampledFilter f(derivative_filters(a), 0.05, Interpolation::first_order_hold);
+  const Eigen::MatrixXd y1 = f.apply(x1);
+  const Eigen::MatrixXd y2 = f.apply(x2);
+  const Eigen::MatrixXd y12 = f.apply(2.0 * x1 - x2);
+  EXPECT_LT((y12 - (2.0 * y1 - y2)).cwiseAbs().maxCoeff(), 1e-12);
+  // At rest at t_0: only the biproper output p^2/A sees x_0 (through 1/a_2).
+  EXPECT_DOUBLE_EQ(y1(0, 0), 0.0);
+  EXPECT_DOUBLE_EQ(y1(0, 1), 0.0);
+  EXPECT_NEAR(y1(0, 2), x1(0) / 0.1, 1e-12);
+}
+
+TEST(FilterBank, DelayShiftsWithZeros) {
+  const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(5, 1.0, 5.0);
+  const Eigen::VectorXd d = delay_samples(x, 2);
+  EXPECT_THAT(std::vector<double>(d.data(), d.data() + 5),
+              ::testing::ElementsAre(0.0, 0.0, 1.0, 2.0, 3.0));
+  EXPECT_TRUE(delay_samples(x, 9).isZero());
+  EXPECT_THROW(delay_samples(x, -1), InvalidArgument);
+}
+
+TEST(FilterBank, RejectsBadArguments) {
+  EXPECT_THROW(derivative_filters(Polynomial{2.0}), InvalidArgument);
+  EXPECT_THROW(
+      SampledFilter(derivative_filters(Polynomial{1.0, 1.0}), 0.0, Interpolation::zero_order_hold),
+      InvalidArgument);
+  const FilterRealization f = derivative_filters(Polynomial{1.0, 1.0});
+  EXPECT_THROW(cascade(f, Eigen::VectorXd::Ones(5), f), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace ctid
