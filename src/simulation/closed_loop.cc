@@ -1,0 +1,116 @@
+// Closed-loop simulation on the discrete ZOH equivalent of the plant: per sample, solve the
+// loop equation for u_k, then advance plant and controller states.
+#include "ctid/simulation/closed_loop.h"
+
+#include <cmath>
+#include <complex>
+
+#include <Eigen/Eigenvalues>
+
+#include "ctid/core/error.h"
+#include "ctid/simulation/simulate.h"
+#include "simulation/internal/state_recursion.h"
+
+namespace ctid {
+namespace {
+
+/// 1 + D_c D_g, the loop's algebraic-loop factor; must not vanish.
+double loop_factor(const StateSpace& plant, const StateSpace& controller) {
+  const double factor = 1.0 + controller.d * plant.d;
+  require(std::abs(factor) > 1e-12 * (1.0 + std::abs(controller.d * plant.d)),
+          "closed loop is ill-posed: 1 + D_c D_g = ", factor, " (controller feedthrough ",
+          controller.d, ", plant feedthrough ", plant.d, ")");
+  return factor;
+}
+
+void check_stable(const Eigen::VectorXcd& poles) {
+  Eigen::Index worst = 0;
+  double radius = 0.0;
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    if (std::abs(poles(i)) > radius) {
+      radius = std::abs(poles(i));
+      worst = i;
+    }
+  }
+  require(radius<1.0, "the controller does not stabilise the loop: closed-loop pole z = ",
+                 poles.size()> 0
+              ? poles(worst)
+              : std::complex<double>(),
+          " has |z| = ", radius, " >= 1");
+}
+
+}  // namespace
+
+Eigen::VectorXcd closed_loop_poles(const StateSpace& discrete_plant,
+                                   const DiscreteTransferFunction& controller) {
+  discrete_plant.validate();
+  const StateSpace c = controller.to_state_space();
+  const StateSpace& g = discrete_plant;
+  const double s = 1.0 / loop_factor(g, c);
+  const int ng = g.order();
+  const int nc = c.order();
+  // u = s (C_c x_c - D_c C_g x_g) for zero r and v; e = -(C_g x_g + D_g u).
+  const Eigen::RowVectorXd u_from_xg = -s * c.d * g.c;
+  const Eigen::RowVectorXd u_from_xc = s * c.c;
+  Eigen::MatrixXd a(ng + nc, ng + nc);
+  a.topLeftCorner(ng, ng) = g.a + g.b * u_from_xg;
+  a.topRightCorner(ng, nc) = g.b * u_from_xc;
+  a.bottomLeftCorner(nc, ng) = -c.b * (g.c + g.d * u_from_xg);
+  a.bottomRightCorner(nc, nc) = c.a - c.b * (g.d * u_from_xc);
+  if (a.size() == 0) return Eigen::VectorXcd();
+  return Eigen::EigenSolver<Eigen::MatrixXd>(a, false).eigenvalues();
+}
+
+ClosedLoopSimulation simulate_closed_loop(const StateSpace& discrete_plant,
+                                          const DiscreteTransferFunction& controller,
+                                          const Eigen::VectorXd& reference,
+                                          const Eigen::VectorXd& noise) {
+  const Eigen::Index n = reference.size();
+  require(noise.size() == 0 || noise.size() == n, "noise has ", noise.size(),
+          " samples but the reference has ", n, " (give equal lengths, or no noise)");
+  for (Eigen::Index k = 0; k < n; ++k) {
+    require(std::isfinite(reference(k)), "reference r[", k, "] is not finite (", reference(k), ")");
+    if (noise.size() > 0) {
+      require(std::isfinite(noise(k)), "noise v[", k, "] is not finite (", noise(k), ")");
+    }
+  }
+  check_stable(closed_loop_poles(discrete_plant, controller));
+
+  const StateSpace c = controller.to_state_space();
+  const double s = 1.0 / loop_factor(discrete_plant, c);
+  internal::StateRecursion plant(discrete_plant);
+  internal::StateRecursion control(c);
+  ClosedLoopSimulation result{Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n)};
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double v = noise.size() > 0 ? noise(k) : 0.0;
+    const double plant_free = plant.state_output();
+    // u = C_c x_c + D_c (r - C_g x_g - D_g u - v), solved for u.
+    const double u = s * (control.state_output() + c.d * (reference(k) - plant_free - v));
+    const double y_clean = plant_free + plant.feedthrough() * u;
+    const double y = y_clean + v;
+    result.input(k) = u;
+    result.output(k) = y;
+    result.noise_free_output(k) = y_clean;
+    plant.advance(u);
+    control.advance(reference(k) - y);
+  }
+  return result;
+}
+
+ClosedLoopSimulation simulate_closed_loop(const TransferFunction& plant,
+                                          const DiscreteTransferFunction& controller,
+                                          const Eigen::VectorXd& reference,
+                                          const Eigen::VectorXd& noise) {
+  return simulate_closed_loop(zoh_equivalent(plant, controller.sample_time()), controller,
+                              reference, noise);
+}
+
+ClosedLoopSimulation simulate_closed_loop(const AdditiveModel& plant,
+                                          const DiscreteTransferFunction& controller,
+                                          const Eigen::VectorXd& reference,
+                                          const Eigen::VectorXd& noise) {
+  return simulate_closed_loop(zoh_equivalent(plant, controller.sample_time()), controller,
+                              reference, noise);
+}
+
+}  // namespace ctid
