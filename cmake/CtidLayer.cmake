@@ -31,8 +31,9 @@ function(ctid_add_layer name)
 endfunction()
 
 # ctid_add_layer_tests(<layer> [LIBS <targets>...])
-# One GoogleTest executable per layer from tests/<layer>/*_test.cc, its tests labelled
-# "unit" and "<layer>" (ctest -L unit runs them all, ctest -L core one layer).
+# One GoogleTest executable per layer from tests/<layer>/*_test.cc, its tests labelled with
+# the layer's name (ctest -L core runs one layer; ctest -LE install all but the install test).
+# One label only: gtest_discover_tests flattens a list-valued LABELS property.
 function(ctid_add_layer_tests name)
   cmake_parse_arguments(ARG "" "" "LIBS" ${ARGN})
   file(GLOB sources CONFIGURE_DEPENDS "${PROJECT_SOURCE_DIR}/tests/${name}/*_test.cc")
@@ -46,5 +47,5 @@ function(ctid_add_layer_tests name)
     ctid_compile_options)
   target_compile_definitions(${target} PRIVATE
     CTID_SOURCE_DIR="${PROJECT_SOURCE_DIR}" CTID_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared")
-  gtest_discover_tests(${target} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "unit;${name}")
+  gtest_discover_tests(${target} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS ${name})
 endfunction()

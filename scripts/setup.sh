@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# Set up a fresh Debian 12 machine for ctid and build it (Release, Ninja, into build/).
+# Idempotent: installs only the packages in scripts/debian-packages.txt that are missing
+# (apt-get update only then), then configures with the "release" preset and builds.
+# Runs as root, or through sudo otherwise; needs no terminal (CI=true, no stdin).
+#   scripts/setup.sh [extra cmake -D options for the release configure]
+# Environment: CTID_JOBS (parallel jobs, default nproc), CTID_SKIP_BUILD=1 (packages only).
+set -euo pipefail
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+jobs=${CTID_JOBS:-$(nproc)}
+export DEBIAN_FRONTEND=noninteractive
+
+mapfile -t packages < <(sed -e 's/#.*//' -e 's/[[:space:]]//g' "$root/scripts/debian-packages.txt" |
+  grep -v '^$')
+missing=()
+for package in "${packages[@]}"; do
+  status=$(dpkg-query -W -f='${Status}' "$package" 2>/dev/null || true)
+  [[ $status == "install ok installed" ]] || missing+=("$package")
+done
+
+if ((${#missing[@]} > 0)); then
+  echo "setup: installing missing Debian packages: ${missing[*]}"
+  if [[ $(id -u) -eq 0 ]]; then
+    as_root=()
+  elif command -v sudo >/dev/null; then
+    as_root=(sudo --non-interactive env DEBIAN_FRONTEND=noninteractive)
+  else
+    echo "setup: need root or sudo to install: ${missing[*]}" >&2
+    exit 1
+  fi
+  "${as_root[@]}" apt-get update -q
+  "${as_root[@]}" apt-get install -y -q "${missing[@]}" </dev/null
+else
+  echo "setup: all ${#packages[@]} Debian packages present"
+fi
+
+if [[ ${CTID_SKIP_BUILD:-0} == 1 ]]; then
+  exit 0
+fi
+
+cd "$root"
+# A build/ made earlier with another generator cannot be reconfigured with Ninja.
+if [[ -f build/CMakeCache.txt ]] && ! grep -q '^CMAKE_GENERATOR:INTERNAL=Ninja$' build/CMakeCache.txt; then
+  echo "setup: build/ was configured with another generator; reconfiguring from scratch"
+  rm -rf build/CMakeCache.txt build/CMakeFiles
+fi
+# The "release" preset (CMakePresets.json) pins Release, Ninja, build/ and /usr/bin/python3.
+cmake --preset release "$@"
+cmake --build --preset release -j "$jobs"
+echo "setup: build/ is ready"
