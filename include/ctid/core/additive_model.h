@@ -17,9 +17,9 @@
 namespace ctid {
 
 struct Submodel {
-  Polynomial a;          ///< anti-monic denominator A_i, a[0] == 1, degree n_i >= 1 (or 0 if l_i > 0)
-  Polynomial b;          ///< numerator B_i, degree m_i
-  int integrators = 0;   ///< l_i, poles at the origin, the factor 1/p^{l_i}
+  Polynomial a;  ///< anti-monic denominator A_i, a[0] == 1, degree n_i >= 1 (or 0 if l_i > 0)
+  Polynomial b;  ///< numerator B_i, degree m_i
+  int integrators = 0;  ///< l_i, poles at the origin, the factor 1/p^{l_i}
 
   int n() const { return a.degree(); }
   int m() const { return b.degree(); }
@@ -52,6 +52,8 @@ class AdditiveModel {
   explicit AdditiveModel(std::vector<Submodel> submodels, double input_delay = 0.0);
 
   /// Builds a model from the stacked parameter vector theta = [theta_1; ...; theta_K].
+  /// The orders are kept even where a leading coefficient of theta is exactly zero, so
+  /// parameters() gives back a vector of the same layout.
   static AdditiveModel from_parameters(const std::vector<SubmodelOrder>& orders,
                                        const Eigen::VectorXd& theta, double input_delay = 0.0);
 
@@ -87,7 +89,10 @@ class AdditiveModel {
   std::string to_string() const;
 
  private:
+  AdditiveModel() = default;
+
   std::vector<Submodel> submodels_;
+  std::vector<SubmodelOrder> orders_;  // may exceed the degrees if leading coefficients are 0
   double input_delay_ = 0.0;
 };
 

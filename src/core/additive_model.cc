@@ -1,0 +1,268 @@
+#include "ctid/core/additive_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include "ctid/core/error.h"
+
+namespace ctid {
+
+namespace {
+
+Polynomial integrator_factor(int l) { return Polynomial::monomial(l); }
+
+void validate_submodels(const std::vector<Submodel>& submodels,
+                        const std::vector<SubmodelOrder>& orders) {
+  require(!submodels.empty(), "an additive model needs at least one submodel");
+  int biproper = 0;
+  int with_integrators = 0;
+  for (size_t i = 0; i < submodels.size(); ++i) {
+    const Submodel& s = submodels[i];
+    const SubmodelOrder& o = orders[i];
+    require(!s.a.is_zero() && s.a[0] == 1.0, "submodel ", i,
+            ": denominator A must be anti-monic (A(0) = 1); got A = ", s.a.to_string("p"));
+    require(s.integrators >= 0, "submodel ", i, ": integrators is ", s.integrators,
+            "; it must be >= 0");
+    require(o.n >= 1 || s.integrators > 0, "submodel ", i,
+            ": denominator order n is 0 and there are no integrators; a submodel needs poles");
+    require(o.m >= 0, "submodel ", i, ": numerator order m is ", o.m, "; it must be >= 0");
+    require(o.m <= o.n + s.integrators, "submodel ", i, ": numerator order m = ", o.m,
+            " exceeds the denominator order ", o.n + s.integrators, " (the model must be proper)");
+    if (o.m == o.n + s.integrators) ++biproper;
+    if (s.integrators > 0) ++with_integrators;
+  }
+  require(biproper <= 1, "an additive model may have at most one biproper submodel; got ",
+          biproper);
+  require(with_integrators <= 1,
+          "an additive model may have poles at the origin in at most one submodel; got ",
+          with_integrators);
+}
+
+std::vector<SubmodelOrder> orders_of(const std::vector<Submodel>& submodels) {
+  std::vector<SubmodelOrder> orders;
+  for (const Submodel& s : submodels) orders.push_back({s.n(), s.m(), s.integrators});
+  return orders;
+}
+
+}  // namespace
+
+TransferFunction Submodel::to_transfer_function() const {
+  return TransferFunction(b, integrator_factor(integrators) * a);
+}
+
+AdditiveModel::AdditiveModel(std::vector<Submodel> submodels, double input_delay)
+    : submodels_(std::move(submodels)), orders_(orders_of(submodels_)), input_delay_(input_delay) {
+  for (size_t i = 0; i < submodels_.size(); ++i) {
+    require(!submodels_[i].b.is_zero(), "submodel ", i, ": numerator B is zero");
+  }
+  validate_submodels(submodels_, orders_);
+  require(std::isfinite(input_delay_) && input_delay_ >= 0.0, "input delay is ", input_delay_,
+          " s; it must be finite and >= 0");
+}
+
+AdditiveModel AdditiveModel::from_parameters(const std::vector<SubmodelOrder>& orders,
+                                             const Eigen::VectorXd& theta, double input_delay) {
+  int expected = 0;
+  for (const SubmodelOrder& o : orders) {
+    require(o.n >= 0 && o.m >= 0, "submodel orders must be >= 0; got n = ", o.n, ", m = ", o.m);
+    expected += o.n + o.m + 1;
+  }
+  require(theta.size() == expected, "parameter vector has ", theta.size(),
+          " entries; the orders need ", expected);
+  require(theta.allFinite(), "parameter vector has a non-finite entry");
+  std::vector<Submodel> submodels;
+  Eigen::Index offset = 0;
+  for (const SubmodelOrder& o : orders) {
+    Eigen::VectorXd a(o.n + 1);
+    a(0) = 1.0;
+    a.tail(o.n) = theta.segment(offset, o.n);
+    offset += o.n;
+    Eigen::VectorXd b = theta.segment(offset, o.m + 1);
+    offset += o.m + 1;
+    submodels.push_back({Polynomial::trimmed(a), Polynomial::trimmed(b), o.integrators});
+  }
+  AdditiveModel model;
+  model.submodels_ = std::move(submodels);
+  model.orders_ = orders;
+  model.input_delay_ = input_delay;
+  require(std::isfinite(input_delay) && input_delay >= 0.0, "input delay is ", input_delay,
+          " s; it must be finite and >= 0");
+  validate_submodels(model.submodels_, model.orders_);
+  return model;
+}
+
+AdditiveModel AdditiveModel::from_transfer_function(const TransferFunction& g,
+                                                    double imag_tolerance) {
+  require(g.is_proper(), "cannot split an improper transfer function into submodels");
+  require(g.denominator().degree() >= 1, "a constant transfer function has no submodels");
+  const Polynomial& den = g.denominator();
+  const double d = g.numerator().coefficient(den.degree()) / den.leading();
+  const Polynomial remainder = g.numerator() - d * den;
+
+  // Poles at the origin are the exact zero low-order coefficients of D.
+  int l = 0;
+  while (den[l] == 0.0) ++l;
+  Eigen::VectorXd reduced_coeffs = den.coefficients().tail(den.degree() + 1 - l);
+  const Polynomial reduced(reduced_coeffs);  // D = s^l D'
+  const Eigen::VectorXcd poles = reduced.roots();
+  const Polynomial den_derivative = den.derivative();
+
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    for (Eigen::Index j = i + 1; j < poles.size(); ++j) {
+      require(std::abs(poles(i) - poles(j)) > 1e-6 * std::max(std::abs(poles(i)), 1e-300),
+              "the transfer function has a repeated pole near ", poles(i).real(), " + ",
+              poles(i).imag(), "j; partial fractions into additive submodels need distinct poles");
+    }
+  }
+
+  struct Piece {
+    double magnitude;
+    Submodel submodel;
+  };
+  std::vector<Piece> pieces;
+  if (l > 0) {
+    // Principal part at the origin P(s)/s^l: P = R / D' truncated to l terms of its series.
+    Eigen::VectorXd p = Eigen::VectorXd::Zero(l);
+    for (int k = 0; k < l; ++k) {
+      double acc = remainder[k];
+      for (int j = 1; j <= k; ++j) acc -= reduced[j] * p(k - j);
+      p(k) = acc / reduced[0];
+    }
+    pieces.push_back({0.0, {Polynomial::constant(1.0), Polynomial::trimmed(p), l}});
+  }
+  std::vector<bool> used(static_cast<size_t>(poles.size()), false);
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    if (used[static_cast<size_t>(i)]) continue;
+    used[static_cast<size_t>(i)] = true;
+    const std::complex<double> pole = poles(i);
+    const std::complex<double> residue = remainder(pole) / den_derivative(pole);
+    const double magnitude = std::abs(pole);
+    if (std::abs(pole.imag()) <= imag_tolerance * magnitude) {
+      // r/(s - p) = (-r/p) / (1 - s/p).
+      const double p = pole.real();
+      pieces.push_back(
+          {magnitude,
+           {Polynomial({1.0, -1.0 / p}),
+            Polynomial::trimmed(Eigen::VectorXd::Constant(1, -residue.real() / p)), 0}});
+      continue;
+    }
+    // Pair with the conjugate.
+    Eigen::Index partner = -1;
+    double best = INFINITY;
+    for (Eigen::Index j = 0; j < poles.size(); ++j) {
+      if (used[static_cast<size_t>(j)]) continue;
+      const double distance = std::abs(poles(j) - std::conj(pole));
+      if (distance < best) {
+        best = distance;
+        partner = j;
+      }
+    }
+    require(partner >= 0 && best <= 1e-6 * magnitude, "complex pole ", pole.real(), " + ",
+            pole.imag(), "j has no conjugate partner");
+    used[static_cast<size_t>(partner)] = true;
+    // r/(s-p) + conj(r)/(s-conj p) = (2Re(r) s - 2Re(r conj p)) / (s^2 - 2Re(p) s + |p|^2).
+    const double m2 = std::norm(pole);
+    Eigen::Vector2d b(-2.0 * (residue * std::conj(pole)).real() / m2, 2.0 * residue.real() / m2);
+    pieces.push_back(
+        {magnitude,
+         {Polynomial({1.0, -2.0 * pole.real() / m2, 1.0 / m2}), Polynomial::trimmed(b), 0}});
+  }
+  std::stable_sort(pieces.begin(), pieces.end(),
+                   [](const Piece& x, const Piece& y) { return x.magnitude < y.magnitude; });
+  if (d != 0.0) {
+    Submodel& first = pieces.front().submodel;
+    first.b = first.b + d * integrator_factor(first.integrators) * first.a;
+  }
+  std::vector<Submodel> submodels;
+  for (Piece& piece : pieces) {
+    submodels.push_back(std::move(piece.submodel));
+  }
+  // A submodel whose residue vanished keeps a zero numerator, of order 0 in orders_.
+  AdditiveModel model;
+  model.submodels_ = std::move(submodels);
+  model.orders_.clear();
+  for (const Submodel& s : model.submodels_) {
+    model.orders_.push_back({s.n(), std::max(s.m(), 0), s.integrators});
+  }
+  model.input_delay_ = g.input_delay();
+  validate_submodels(model.submodels_, model.orders_);
+  return model;
+}
+
+AdditiveModel AdditiveModel::with_input_delay(double tau) const {
+  require(std::isfinite(tau) && tau >= 0.0, "input delay is ", tau,
+          " s; it must be finite and >= 0");
+  AdditiveModel copy = *this;
+  copy.input_delay_ = tau;
+  return copy;
+}
+
+std::vector<SubmodelOrder> AdditiveModel::orders() const { return orders_; }
+
+int AdditiveModel::parameter_count() const {
+  return std::accumulate(orders_.begin(), orders_.end(), 0,
+                         [](int acc, const SubmodelOrder& o) { return acc + o.n + o.m + 1; });
+}
+
+Eigen::VectorXd AdditiveModel::parameters() const {
+  Eigen::VectorXd theta(parameter_count());
+  Eigen::Index offset = 0;
+  for (size_t i = 0; i < submodels_.size(); ++i) {
+    const SubmodelOrder& o = orders_[i];
+    for (int k = 1; k <= o.n; ++k) theta(offset++) = submodels_[i].a[k];
+    for (int k = 0; k <= o.m; ++k) theta(offset++) = submodels_[i].b[k];
+  }
+  return theta;
+}
+
+AdditiveModel AdditiveModel::with_parameters(const Eigen::VectorXd& theta) const {
+  return from_parameters(orders_, theta, input_delay_);
+}
+
+TransferFunction AdditiveModel::to_transfer_function() const {
+  Polynomial num;
+  Polynomial den = Polynomial::constant(1.0);
+  for (const Submodel& s : submodels_) {
+    const Polynomial a = integrator_factor(s.integrators) * s.a;
+    num = num * a + s.b * den;
+    den = den * a;
+  }
+  return TransferFunction(num, den, input_delay_);
+}
+
+std::complex<double> AdditiveModel::frequency_response(double omega) const {
+  const std::complex<double> s(0.0, omega);
+  std::complex<double> sum = 0.0;
+  for (const Submodel& m : submodels_) {
+    sum += m.b(s) / (std::pow(s, m.integrators) * m.a(s));
+  }
+  return sum * std::exp(-s * input_delay_);
+}
+
+std::optional<ModalParameters> AdditiveModel::modal_parameters(int i) const {
+  require(i >= 0 && i < size(), "submodel index ", i, " is out of range [0, ", size(), ")");
+  const Submodel& s = submodels_[static_cast<size_t>(i)];
+  if (s.n() != 2 || s.integrators != 0 || !(s.a[2] > 0.0)) return std::nullopt;
+  ModalParameters modal;
+  modal.natural_frequency = 1.0 / std::sqrt(s.a[2]);
+  modal.damping_ratio = s.a[1] / (2.0 * std::sqrt(s.a[2]));
+  modal.gain = s.b[0];
+  return modal;
+}
+
+std::string AdditiveModel::to_string() const {
+  std::ostringstream out;
+  for (size_t i = 0; i < submodels_.size(); ++i) {
+    const Submodel& s = submodels_[i];
+    if (i > 0) out << " + ";
+    out << "(" << s.b.to_string("p") << ") / (";
+    if (s.integrators > 0) out << "p^" << s.integrators << " ";
+    out << "(" << s.a.to_string("p") << "))";
+  }
+  if (input_delay_ != 0.0) out << ", input delay " << input_delay_ << " s";
+  return out.str();
+}
+
+}  // namespace ctid

@@ -1,0 +1,81 @@
+#include "ctid/core/sampled_data.h"
+
+#include <cmath>
+
+#include "ctid/core/error.h"
+
+namespace ctid {
+
+namespace {
+
+void require_finite_signal(const Eigen::VectorXd& v, const char* name) {
+  for (Eigen::Index k = 0; k < v.size(); ++k) {
+    require(std::isfinite(v(k)), name, " sample ", k, " is ", v(k),
+            "; every sample must be finite");
+  }
+}
+
+}  // namespace
+
+SampledData::SampledData(double sample_time, Eigen::VectorXd input, Eigen::VectorXd output,
+                         std::optional<Eigen::VectorXd> reference, double start_time)
+    : sample_time_(sample_time),
+      start_time_(start_time),
+      input_(std::move(input)),
+      output_(std::move(output)),
+      reference_(std::move(reference)) {
+  require(std::isfinite(sample_time_) && sample_time_ > 0.0, "sample time is ", sample_time_,
+          " s; it must be finite and > 0");
+  require(std::isfinite(start_time_), "start time must be finite");
+  require(input_.size() == output_.size(), "input has ", input_.size(), " samples but output has ",
+          output_.size(), "; they must have equal lengths");
+  require(input_.size() >= 2, "a record needs at least 2 samples; got ", input_.size());
+  if (reference_) {
+    require(reference_->size() == input_.size(), "reference has ", reference_->size(),
+            " samples but input has ", input_.size(), "; they must have equal lengths");
+    require_finite_signal(*reference_, "reference");
+  }
+  require_finite_signal(input_, "input");
+  require_finite_signal(output_, "output");
+}
+
+SampledData SampledData::from_time_stamps(const Eigen::VectorXd& time, Eigen::VectorXd input,
+                                          Eigen::VectorXd output,
+                                          std::optional<Eigen::VectorXd> reference,
+                                          double relative_tolerance) {
+  require(time.size() == input.size(), "time has ", time.size(), " samples but input has ",
+          input.size(), "; they must have equal lengths");
+  require(time.size() >= 2, "a record needs at least 2 samples; got ", time.size());
+  require_finite_signal(time, "time");
+  const Eigen::Index n = time.size();
+  const double h = (time(n - 1) - time(0)) / static_cast<double>(n - 1);
+  require(h > 0.0, "time stamps must increase; first ", time(0), " s, last ", time(n - 1), " s");
+  for (Eigen::Index k = 1; k < n; ++k) {
+    const double step = time(k) - time(k - 1);
+    require(std::abs(step - h) <= relative_tolerance * h, "time stamps are not uniform: step ", k,
+            " (from t = ", time(k - 1), " to ", time(k), ") is ", step, " s but the mean step is ",
+            h, " s");
+  }
+  return SampledData(h, std::move(input), std::move(output), std::move(reference), time(0));
+}
+
+Eigen::VectorXd SampledData::time() const {
+  return Eigen::VectorXd::LinSpaced(size(), 0.0, static_cast<double>(size() - 1)) * sample_time_ +
+         Eigen::VectorXd::Constant(size(), start_time_);
+}
+
+const Eigen::VectorXd& SampledData::reference() const {
+  require(reference_.has_value(), "this record has no reference signal");
+  return *reference_;
+}
+
+SampledData SampledData::segment(int begin, int count) const {
+  require(begin >= 0 && count >= 2 && begin + count <= size(), "segment [", begin, ", ",
+          begin + count, ") does not fit a record of ", size(), " samples (and needs >= 2)");
+  std::optional<Eigen::VectorXd> r;
+  if (reference_) r = reference_->segment(begin, count);
+  return SampledData(sample_time_, input_.segment(begin, count), output_.segment(begin, count),
+                     std::move(r), start_time_ + begin * sample_time_);
+}
+
+}  // namespace ctid
