@@ -4,7 +4,7 @@
 #   benchmarks/run.sh [benchmark name regex, e.g. 'simulat']
 # Environment: CTID_BUILD_DIR (default build/, configured by scripts/setup.sh),
 #   CTID_JOBS (default nproc), BENCHMARK_MIN_TIME (seconds per benchmark, default 0.2).
-# Full JSON results: <build>/benchmarks/results/<name>.json.
+# Full results: <build>/benchmarks/results/<name>.json, console output <name>.log.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${CTID_BUILD_DIR:-$root/build}
@@ -30,7 +30,8 @@ for program in "${programs[@]}"; do
   [[ $name =~ $filter ]] || continue
   echo "running $name"
   "$program" --benchmark_min_time="${BENCHMARK_MIN_TIME:-0.2}" \
-    --benchmark_out="$results/$name.json" --benchmark_out_format=json >/dev/null
+    --benchmark_out="$results/$name.json" --benchmark_out_format=json >"$results/$name.log" 2>&1 ||
+    { echo "$name failed; its output:" >&2; cat "$results/$name.log" >&2; exit 1; }
 done
 
 /usr/bin/python3 - "$results" <<'PY'
