@@ -1,0 +1,66 @@
+// Excitation signals for identification experiments: seeded Gaussian white noise,
+// maximum-length PRBS (period 2^n - 1 from an n-bit linear feedback shift register) and
+// random-phase multisines with a flat amplitude spectrum on a band of DFT lines k / (N h) Hz
+// (González et al. Section 7 uses one flat from 0.5 to 500 Hz). Every random signal takes a
+// seed for std::mt19937_64, so the same seed gives the same signal.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace ctid {
+
+/// `length` samples of zero-mean Gaussian white noise with the given standard deviation.
+Eigen::VectorXd white_noise(int length, double standard_deviation, std::uint64_t seed);
+
+struct PrbsOptions {
+  int register_length = 10;         ///< n in [2, 24]; the bit sequence has period 2^n - 1
+  double amplitude = 1.0;           ///< levels +amplitude (bit 1) and -amplitude (bit 0)
+  int samples_per_bit = 1;          ///< each bit is held this many samples
+  std::uint64_t initial_state = 1;  ///< register start, 1 <= state < 2^n; shifts the sequence
+  /// Throws InvalidArgument naming the field, its value and the rule.
+  void validate() const;
+};
+
+/// Samples per period, (2^n - 1) * samples_per_bit.
+int prbs_period(const PrbsOptions& options);
+/// `length` samples of a maximum-length PRBS. Each period holds 2^(n-1) bits at +amplitude and
+/// 2^(n-1) - 1 at -amplitude.
+Eigen::VectorXd prbs(int length, const PrbsOptions& options = {});
+
+enum class FrequencyGrid {
+  full,  ///< every DFT line in the band
+  odd,   ///< odd lines only (k = 1, 3, 5, ...), leaving even lines to detect nonlinearity
+};
+
+struct MultisineOptions {
+  int period_length = 1024;    ///< N, samples per period (>= 4)
+  double sample_time = 1.0;    ///< h in seconds (> 0)
+  double min_frequency = 0.0;  ///< band lower edge in Hz (inclusive, >= 0)
+  double max_frequency = 0.0;  ///< band upper edge in Hz (inclusive); 0 means up to Nyquist
+  FrequencyGrid grid = FrequencyGrid::full;
+  int periods = 1;         ///< repetitions of the period (>= 1)
+  double rms = 1.0;        ///< root mean square of the signal (> 0)
+  std::uint64_t seed = 0;  ///< seeds the phases, uniform on [0, 2 pi)
+  /// Throws InvalidArgument naming the field, its value and the rule.
+  void validate() const;
+};
+
+struct Multisine {
+  Eigen::VectorXd signal;  ///< periods * period_length samples
+  std::vector<int> lines;  ///< excited DFT lines k, 1 <= k < N/2, at k / (N h) Hz
+  Eigen::VectorXd phases;  ///< phase of each line (radians)
+  double amplitude = 0.0;  ///< amplitude of every line: u_n = sum A cos(2 pi k n / N + phi_k)
+  int period_length = 0;   ///< N
+};
+
+/// Random-phase multisine with equal amplitudes on the lines in the band (DC and Nyquist
+/// excluded). Throws InvalidArgument if no line falls in the band.
+Multisine multisine(const MultisineOptions& options);
+
+/// `periods` copies of `period` one after another.
+Eigen::VectorXd repeat_periodic(const Eigen::VectorXd& period, int periods);
+
+}  // namespace ctid

@@ -1,0 +1,150 @@
+// Excitation signals. The multisine is synthesised by one inverse FFT of its line spectrum.
+#include "ctid/simulation/excitation.h"
+
+#include <array>
+#include <bit>
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <random>
+
+#include <unsupported/Eigen/FFT>
+
+#include "ctid/core/error.h"
+
+namespace ctid {
+namespace {
+
+// Feedback taps (1-based bit positions) of maximum-length Fibonacci shift registers; each
+// was checked to cycle through all 2^n - 1 non-zero states (the PRBS period test repeats it).
+constexpr std::array<std::array<int, 4>, 25> kTaps = {{
+    {0, 0, 0, 0},   {0, 0, 0, 0},    {2, 1, 0, 0},   {3, 2, 0, 0},   {4, 3, 0, 0},
+    {5, 3, 0, 0},   {6, 5, 0, 0},    {7, 6, 0, 0},   {8, 6, 5, 4},   {9, 5, 0, 0},
+    {10, 7, 0, 0},  {11, 9, 0, 0},   {12, 6, 4, 1},  {13, 4, 3, 1},  {14, 5, 3, 1},
+    {15, 14, 0, 0}, {16, 15, 13, 4}, {17, 14, 0, 0}, {18, 11, 0, 0}, {19, 6, 2, 1},
+    {20, 17, 0, 0}, {21, 19, 0, 0},  {22, 21, 0, 0}, {23, 18, 0, 0}, {24, 23, 22, 17},
+}};
+
+void require_length(int length, const char* function) {
+  require(length >= 0, function, ": length must be >= 0, got ", length);
+}
+
+}  // namespace
+
+Eigen::VectorXd white_noise(int length, double standard_deviation, std::uint64_t seed) {
+  require_length(length, "white_noise");
+  require(std::isfinite(standard_deviation) && standard_deviation >= 0.0,
+          "white_noise: standard_deviation must be finite and >= 0, got ", standard_deviation);
+  std::mt19937_64 engine(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::VectorXd e(length);
+  for (int k = 0; k < length; ++k) e(k) = standard_deviation * normal(engine);
+  return e;
+}
+
+void PrbsOptions::validate() const {
+  require(register_length >= 2 && register_length <= 24,
+          "PrbsOptions.register_length must be in [2, 24], got ", register_length);
+  require(std::isfinite(amplitude) && amplitude > 0.0,
+          "PrbsOptions.amplitude must be positive and finite, got ", amplitude);
+  require(samples_per_bit >= 1, "PrbsOptions.samples_per_bit must be >= 1, got ", samples_per_bit);
+  const std::uint64_t states = std::uint64_t{1} << register_length;
+  require(initial_state >= 1 && initial_state < states, "PrbsOptions.initial_state must be in [1, ",
+          states - 1, "] (a non-zero ", register_length, "-bit state), got ", initial_state);
+  require((states - 1) * static_cast<std::uint64_t>(samples_per_bit) <= 0x7fffffffULL,
+          "PrbsOptions: period (2^register_length - 1) * samples_per_bit exceeds 2^31 - 1");
+}
+
+int prbs_period(const PrbsOptions& options) {
+  options.validate();
+  return ((1 << options.register_length) - 1) * options.samples_per_bit;
+}
+
+Eigen::VectorXd prbs(int length, const PrbsOptions& options) {
+  options.validate();
+  require_length(length, "prbs");
+  const int n = options.register_length;
+  std::uint64_t mask = 0;
+  for (int tap : kTaps[static_cast<std::size_t>(n)]) {
+    if (tap > 0) mask |= std::uint64_t{1} << (tap - 1);
+  }
+  const std::uint64_t full = (std::uint64_t{1} << n) - 1;
+  std::uint64_t state = options.initial_state;
+  Eigen::VectorXd u(length);
+  double level = 0.0;
+  for (int k = 0; k < length; ++k) {
+    if (k % options.samples_per_bit == 0) {
+      const std::uint64_t bit = static_cast<std::uint64_t>(std::popcount(state & mask) & 1);
+      state = ((state << 1) | bit) & full;
+      level = bit != 0 ? options.amplitude : -options.amplitude;
+    }
+    u(k) = level;
+  }
+  return u;
+}
+
+void MultisineOptions::validate() const {
+  require(period_length >= 4, "MultisineOptions.period_length must be >= 4, got ", period_length);
+  require(std::isfinite(sample_time) && sample_time > 0.0,
+          "MultisineOptions.sample_time must be positive and finite, got ", sample_time);
+  require(std::isfinite(min_frequency) && min_frequency >= 0.0,
+          "MultisineOptions.min_frequency must be finite and >= 0 Hz, got ", min_frequency);
+  require(std::isfinite(max_frequency) && max_frequency >= 0.0,
+          "MultisineOptions.max_frequency must be finite and >= 0 Hz (0 means Nyquist), got ",
+          max_frequency);
+  require(max_frequency == 0.0 || max_frequency >= min_frequency,
+          "MultisineOptions.max_frequency (", max_frequency, " Hz) must be >= min_frequency (",
+          min_frequency, " Hz)");
+  require(periods >= 1, "MultisineOptions.periods must be >= 1, got ", periods);
+  require(std::isfinite(rms) && rms > 0.0, "MultisineOptions.rms must be positive and finite, got ",
+          rms);
+}
+
+Multisine multisine(const MultisineOptions& options) {
+  options.validate();
+  const int n = options.period_length;
+  const double resolution = 1.0 / (n * options.sample_time);
+  const double upper =
+      options.max_frequency > 0.0 ? options.max_frequency : 0.5 / options.sample_time;
+  // Lines on the band edges count as inside despite rounding of k / (N h).
+  const double slack = 1e-9 * resolution;
+  Multisine result;
+  result.period_length = n;
+  for (int k = 1; 2 * k < n; ++k) {
+    if (options.grid == FrequencyGrid::odd && k % 2 == 0) continue;
+    const double f = k * resolution;
+    if (f >= options.min_frequency - slack && f <= upper + slack) result.lines.push_back(k);
+  }
+  require(!result.lines.empty(), "multisine: no DFT line of ", resolution,
+          " Hz spacing falls in the band [", options.min_frequency, ", ", upper,
+          "] Hz; widen the band or lengthen period_length");
+  const auto count = static_cast<Eigen::Index>(result.lines.size());
+  result.amplitude = options.rms * std::sqrt(2.0 / static_cast<double>(count));
+  std::mt19937_64 engine(options.seed);
+  std::uniform_real_distribution<double> uniform(0.0, 2.0 * std::numbers::pi);
+  result.phases.resize(count);
+  // X_k = (N A / 2) e^{j phi_k} and its mirror X_{N-k}, so that the inverse DFT (which
+  // divides by N) gives A cos(2 pi k n / N + phi_k).
+  std::vector<std::complex<double>> spectrum(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < count; ++i) {
+    result.phases(i) = uniform(engine);
+    const auto k = static_cast<std::size_t>(result.lines[static_cast<std::size_t>(i)]);
+    const std::complex<double> line = std::polar(0.5 * n * result.amplitude, result.phases(i));
+    spectrum[k] = line;
+    spectrum[static_cast<std::size_t>(n) - k] = std::conj(line);
+  }
+  std::vector<std::complex<double>> period;
+  Eigen::FFT<double> fft;
+  fft.inv(period, spectrum);
+  Eigen::VectorXd one_period(n);
+  for (int t = 0; t < n; ++t) one_period(t) = period[static_cast<std::size_t>(t)].real();
+  result.signal = repeat_periodic(one_period, options.periods);
+  return result;
+}
+
+Eigen::VectorXd repeat_periodic(const Eigen::VectorXd& period, int periods) {
+  require(periods >= 1, "repeat_periodic: periods must be >= 1, got ", periods);
+  return period.replicate(periods, 1);
+}
+
+}  // namespace ctid
