@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <complex>
+#include <numbers>
 #include <set>
 #include <vector>
 
@@ -137,7 +138,7 @@ TEST(Multisine, FlatOnFullBandAndZeroOffIt) {
   EXPECT_NEAR(std::sqrt(m.signal.squaredNorm() / 3000.0), 2.0, 1e-12);
   // Phases are the ones reported.
   const std::vector<std::complex<double>> spectrum = dft(m.signal.head(1000));
-  EXPECT_NEAR(std::arg(spectrum[20]), std::remainder(m.phases(0), 2.0 * M_PI), 1e-10);
+  EXPECT_NEAR(std::arg(spectrum[20]), std::remainder(m.phases(0), 2.0 * std::numbers::pi), 1e-10);
 }
 
 TEST(Multisine, OddGridExcitesOnlyOddLines) {
