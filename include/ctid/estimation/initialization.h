@@ -1,0 +1,54 @@
+// Starting models for the refined IV iterations without knowing the true system: a
+// least-squares state-variable-filter (LSSVF, Young 1965) estimate of the unfactored model
+// for a grid of filter bandwidths, each refined by a few SRIVC iterations (eq. 30), the best
+// output-error fit kept; then its poles grouped into the requested submodels (complex pairs
+// stay together, origin poles go to the integrator submodel) with numerators by least squares.
+#pragma once
+
+#include <vector>
+
+#include "ctid/core/additive_model.h"
+#include "ctid/core/sampled_data.h"
+#include "ctid/core/transfer_function.h"
+
+namespace ctid {
+
+struct InitializationOptions {
+  /// Bandwidths lambda [rad/s] of the SVF filter (1 + p/lambda)^n to try; empty: a factor-2
+  /// grid from (pi/h)/128 to pi/h.
+  std::vector<double> filter_bandwidths;
+  /// SRIVC iterations refining each LSSVF start (0: LSSVF only).
+  int refinement_iterations = 20;
+  /// Input delay in samples.
+  int input_delay = 0;
+
+  void validate() const;
+};
+
+/// LSSVF estimate of B/(p^l A) (A anti-monic, deg A = order.n, deg B = order.m) with the
+/// filter (1 + p/lambda)^(n + l). Open-loop least squares: biased under noise, a start only.
+TransferFunction lssvf(const SampledData& data, const SubmodelOrder& order, double bandwidth,
+                       int input_delay = 0);
+
+/// Orders of the unfactored model equivalent to an additive structure: n = sum n_i,
+/// m = max_i (m_i + sum_{j != i} n_j + l - l_i), l = integrators.
+SubmodelOrder unfactored_order(const std::vector<SubmodelOrder>& orders);
+
+/// The best unfactored start for `order` over the bandwidth grid (see file comment).
+TransferFunction initial_transfer_function(const SampledData& data, const SubmodelOrder& order,
+                                           const InitializationOptions& options = {});
+
+/// Groups the poles of g into submodels of the requested orders, filled in the given order
+/// with poles of increasing magnitude; the numerators B_i are then fitted to the data by
+/// linear least squares (output error with the denominators fixed). Unstable poles are
+/// reflected. Throws InvalidArgument if the pole counts do not match.
+AdditiveModel group_into_submodels(const TransferFunction& g,
+                                   const std::vector<SubmodelOrder>& orders,
+                                   const SampledData& data, int input_delay = 0);
+
+/// initial_transfer_function + group_into_submodels.
+AdditiveModel initial_additive_model(const SampledData& data,
+                                     const std::vector<SubmodelOrder>& orders,
+                                     const InitializationOptions& options = {});
+
+}  // namespace ctid

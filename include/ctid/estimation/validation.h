@@ -1,0 +1,44 @@
+// Judging a continuous-time model against sampled data, and checking data against the
+// assumptions of the refined IV estimators (González et al., Assumptions 1 and 4): the
+// model's exact ZOH response, fit %, persistency of excitation and the sampling-rate rule.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "ctid/core/additive_model.h"
+#include "ctid/core/sampled_data.h"
+
+namespace ctid {
+
+/// Exact sampled response (from rest) of the model to the ZOH input u with period h. The
+/// model's input delay must be a whole number of samples (within 1e-9). Integrators and a
+/// biproper submodel are allowed.
+Eigen::VectorXd model_output(const AdditiveModel& model, const Eigen::VectorXd& input,
+                             double sample_time);
+
+/// 100 (1 - ||y - y_model|| / ||y - mean(y)||); 100 is a perfect fit. Sizes must agree.
+double fit_percent(const Eigen::VectorXd& measured, const Eigen::VectorXd& modelled);
+
+/// Residual statistics of a model on data (for `ctid validate`).
+struct ValidationReport {
+  double fit_percent = 0.0;
+  double mean_squared_error = 0.0;
+  double residual_mean = 0.0;
+  double residual_std = 0.0;
+  /// Largest |normalised autocorrelation| of the residual at lags 1..20, and the 99 %
+  /// whiteness bound 2.58/sqrt(N) it is judged against.
+  double max_residual_autocorrelation = 0.0;
+  double whiteness_bound = 0.0;
+};
+ValidationReport validate_model(const AdditiveModel& model, const SampledData& data);
+
+/// Largest n <= max_order for which the sample matrix sum_k phi_k phi_k' of the windows
+/// phi_k = [x_k, x_{k-1}, ..., x_{k-n+1}] is numerically non-singular (smallest over
+/// largest eigenvalue above `tolerance`): the order of persistency of excitation seen in
+/// the record. A constant gives 1, one sinusoid 2, white noise max_order.
+int persistent_excitation_order(const Eigen::VectorXd& x, int max_order, double tolerance = 1e-9);
+
+/// Largest |imaginary part| of the model's poles in rad/s (0 for real poles).
+double largest_pole_frequency(const AdditiveModel& model);
+
+}  // namespace ctid

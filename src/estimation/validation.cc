@@ -1,0 +1,112 @@
+// Model output, fit and the data checks of Assumptions 1 and 4.
+#include "ctid/estimation/validation.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+
+#include "ctid/core/error.h"
+#include "ctid/filtering/filter_bank.h"
+
+namespace ctid {
+
+Eigen::VectorXd model_output(const AdditiveModel& model, const Eigen::VectorXd& input,
+                             double sample_time) {
+  require(std::isfinite(sample_time) && sample_time > 0.0,
+          "model_output: sample_time must be positive, got ", sample_time);
+  require(input.allFinite(), "model_output: the input has a non-finite value");
+  const double samples = model.input_delay() / sample_time;
+  const double rounded = std::round(samples);
+  require(std::abs(samples - rounded) <= 1e-9 * std::max(1.0, samples),
+          "model_output: the input delay ", model.input_delay(), " s is not a whole number of ",
+          "samples of ", sample_time, " s (", samples, " samples)");
+  const Eigen::VectorXd u = delay_samples(input, static_cast<int>(rounded));
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(input.size());
+  for (int i = 0; i < model.size(); ++i) {
+    const Submodel& s = model[i];
+    const Polynomial den = Polynomial::monomial(s.integrators) * s.a;
+    if (den.degree() == 0) {
+      y += (s.b[0] / den[0]) * u;
+      continue;
+    }
+    const Eigen::MatrixXd f =
+        filter_derivatives(den, u, sample_time, Interpolation::zero_order_hold);
+    for (int k = 0; k <= s.m(); ++k) y += s.b[k] * f.col(k);
+  }
+  return y;
+}
+
+double fit_percent(const Eigen::VectorXd& measured, const Eigen::VectorXd& modelled) {
+  require(measured.size() == modelled.size(), "fit_percent: ", measured.size(),
+          " measured samples against ", modelled.size(), " modelled");
+  require(measured.size() >= 2, "fit_percent: needs at least 2 samples");
+  const double spread = (measured.array() - measured.mean()).matrix().norm();
+  const double error = (measured - modelled).norm();
+  if (!(spread > 0.0)) return error == 0.0 ? 100.0 : -std::numeric_limits<double>::infinity();
+  return 100.0 * (1.0 - error / spread);
+}
+
+ValidationReport validate_model(const AdditiveModel& model, const SampledData& data) {
+  const Eigen::VectorXd yhat = model_output(model, data.input(), data.sample_time());
+  const Eigen::VectorXd e = data.output() - yhat;
+  const auto n = static_cast<double>(e.size());
+  ValidationReport r;
+  r.fit_percent = fit_percent(data.output(), yhat);
+  r.mean_squared_error = e.squaredNorm() / n;
+  r.residual_mean = e.mean();
+  const Eigen::VectorXd c = e.array() - r.residual_mean;
+  const double c0 = c.squaredNorm();
+  r.residual_std = std::sqrt(c0 / n);
+  r.whiteness_bound = 2.58 / std::sqrt(n);
+  if (c0 > 0.0) {
+    const Eigen::Index lags = std::min<Eigen::Index>(20, e.size() - 1);
+    for (Eigen::Index k = 1; k <= lags; ++k) {
+      const double rk = c.head(e.size() - k).dot(c.tail(e.size() - k)) / c0;
+      r.max_residual_autocorrelation = std::max(r.max_residual_autocorrelation, std::abs(rk));
+    }
+  }
+  return r;
+}
+
+int persistent_excitation_order(const Eigen::VectorXd& x, int max_order, double tolerance) {
+  require(max_order >= 1, "persistent_excitation_order: max_order is ", max_order,
+          "; it must be >= 1");
+  const Eigen::Index n = x.size();
+  const int top = static_cast<int>(std::min<Eigen::Index>(max_order, n / 2));
+  if (top < 1 || x.squaredNorm() == 0.0) return 0;
+  // G(i, j) = sum_{k = top-1}^{n-1} x_{k-i} x_{k-j}: the Gram matrix of the lag windows,
+  // exactly singular for a signal obeying a linear recursion of order < top.
+  Eigen::MatrixXd g(top, top);
+  const Eigen::Index len = n - top + 1;
+  for (int i = 0; i < top; ++i) {
+    for (int j = i; j < top; ++j) {
+      g(i, j) = x.segment(top - 1 - i, len).dot(x.segment(top - 1 - j, len));
+      g(j, i) = g(i, j);
+    }
+  }
+  int order = 0;
+  for (int k = 1; k <= top; ++k) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(g.topLeftCorner(k, k),
+                                                             Eigen::EigenvaluesOnly);
+    const Eigen::VectorXd& ev = eig.eigenvalues();
+    if (!(ev(0) > tolerance * ev(k - 1))) break;
+    order = k;
+  }
+  return order;
+}
+
+double largest_pole_frequency(const AdditiveModel& model) {
+  double largest = 0.0;
+  for (int i = 0; i < model.size(); ++i) {
+    const Polynomial& a = model[i].a;
+    if (a.degree() < 1) continue;
+    const Eigen::VectorXcd roots = a.roots();
+    for (Eigen::Index k = 0; k < roots.size(); ++k) {
+      largest = std::max(largest, std::abs(roots(k).imag()));
+    }
+  }
+  return largest;
+}
+
+}  // namespace ctid
