@@ -1,0 +1,91 @@
+// Nonparametric frequency response functions (FRF) from sampled input/output data, and
+// resonance peaks picked from them (for choosing orders and initial modes). Periodic data:
+// the DFT of each steady-state period, G_p(k) = Y_p(k) / U_p(k), averaged over the P periods,
+// with variance s^2 / P (Pintelon & Schoukens, System Identification, Ch. 2). Non-periodic
+// data: the H1 estimate S_yu / S_uu with Hann-windowed, overlapping Welch segments, and the
+// coherence |S_yu|^2 / (S_uu S_yy). Frequencies in rad/s; DFT line k of a block of L samples
+// sits at 2 pi k / (L h).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ctid/core/sampled_data.h"
+
+namespace ctid {
+
+/// An FRF on a set of DFT lines. `variance` is E|G_hat - G|^2 of the complex estimate.
+struct Frf {
+  std::vector<int> lines;       ///< DFT line k of each frequency (of one period / segment)
+  Eigen::VectorXd frequencies;  ///< 2 pi k / (L h) [rad/s], increasing
+  Eigen::VectorXcd response;    ///< G_hat at each frequency
+  Eigen::VectorXd variance;     ///< estimated variance of G_hat per line
+  Eigen::VectorXd coherence;    ///< Welch only: squared coherence in [0, 1]; empty otherwise
+  int averages = 0;             ///< periods (periodic) or segments (Welch) averaged
+  int block_length = 0;         ///< L: samples per period or per segment
+};
+
+struct PeriodicFrfOptions {
+  /// N, samples per period of the excitation (>= 4). The record must hold a whole number of
+  /// periods.
+  int period_length = 0;
+  /// Periods dropped at the start so that the transient has died out (>= 0); at least two
+  /// periods must remain for the variance.
+  int transient_periods = 1;
+  /// DFT lines (1 <= k <= N/2) to estimate; empty: every line where the input's averaged
+  /// spectrum exceeds line_threshold times its largest line (the excited lines).
+  std::vector<int> lines;
+  /// Relative amplitude that makes a line count as excited, in (0, 1).
+  double line_threshold = 1e-6;
+  /// Throws InvalidArgument naming the field, its value and the rule.
+  void validate() const;
+};
+
+/// FRF from a periodic experiment (a multisine repeated P + transient_periods times). Throws
+/// InvalidArgument when the record length is not a multiple of N, when fewer than two
+/// periods remain after the transient, or when a requested line is not excited.
+Frf periodic_frf(const SampledData& data, const PeriodicFrfOptions& options);
+
+struct WelchOptions {
+  /// L, samples per segment (>= 8, <= record length).
+  int segment_length = 256;
+  /// Fraction of a segment shared with the next one, in [0, 1).
+  double overlap = 0.5;
+  /// Throws InvalidArgument naming the field, its value and the rule.
+  void validate() const;
+};
+
+/// H1 estimate with periodic-Hann-windowed segments starting every L - round(overlap L)
+/// samples (as many as fit), on lines k = 1..L/2. The variance is the usual first-order
+/// approximation (1 - coh) / (coh n) |G|^2 with n segments, which ignores the correlation
+/// between overlapping segments. Throws InvalidArgument when the record is shorter than L.
+Frf welch_frf(const SampledData& data, const WelchOptions& options = {});
+
+/// A local maximum of |G| and what it says about a lightly damped mode.
+struct ResonancePeak {
+  int index = 0;               ///< position in the FRF's vectors
+  double frequency = 0.0;      ///< rad/s (parabolic interpolation of log|G| around the maximum)
+  double magnitude = 0.0;      ///< |G| at the grid maximum
+  double prominence_db = 0.0;  ///< height above the higher of the two surrounding minima
+  /// Half-power bandwidth estimate (w2 - w1) / (2 w_peak); NaN when |G| does not fall to
+  /// |G_peak| / sqrt(2) on both sides within the grid.
+  double damping_ratio = 0.0;
+};
+
+struct PeakOptions {
+  /// Keep peaks at least this many dB above the surrounding minima (>= 0).
+  double min_prominence_db = 3.0;
+  /// Keep at most this many peaks, the most prominent ones (0: all).
+  int max_peaks = 0;
+  /// Throws InvalidArgument naming the field, its value and the rule.
+  void validate() const;
+};
+
+/// Resonance peaks of |G| in increasing frequency. Frequencies must be finite and strictly
+/// increasing, of the size of `response` (>= 3).
+std::vector<ResonancePeak> resonance_peaks(const Eigen::VectorXd& frequencies,
+                                           const Eigen::VectorXcd& response,
+                                           const PeakOptions& options = {});
+
+}  // namespace ctid

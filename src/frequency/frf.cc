@@ -1,0 +1,275 @@
+#include "ctid/frequency/frf.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <numbers>
+#include <string>
+
+#include <unsupported/Eigen/FFT>
+
+#include "ctid/core/error.h"
+
+namespace ctid {
+namespace {
+
+using Complex = std::complex<double>;
+
+// Unnormalised DFT X(k) = sum_n x_n e^{-j 2 pi k n / L} of one block (kissfft backend).
+Eigen::VectorXcd dft(Eigen::FFT<double>& fft, const Eigen::VectorXd& block) {
+  Eigen::VectorXcd spectrum(block.size());
+  fft.fwd(spectrum, block);
+  return spectrum;
+}
+
+double line_frequency(int k, int block_length, double sample_time) {
+  return 2.0 * std::numbers::pi * k / (block_length * sample_time);
+}
+
+}  // namespace
+
+void PeriodicFrfOptions::validate() const {
+  require(period_length >= 4, "PeriodicFrfOptions.period_length = ", period_length,
+          ": must be at least 4 samples");
+  require(transient_periods >= 0, "PeriodicFrfOptions.transient_periods = ", transient_periods,
+          ": must be >= 0");
+  require(std::isfinite(line_threshold) && line_threshold > 0.0 && line_threshold < 1.0,
+          "PeriodicFrfOptions.line_threshold = ", line_threshold, ": must lie in (0, 1)");
+  for (int k : lines) {
+    require(k >= 1 && k <= period_length / 2, "PeriodicFrfOptions.lines contains ", k,
+            ": every line must lie in [1, period_length/2 = ", period_length / 2, "]");
+  }
+}
+
+void WelchOptions::validate() const {
+  require(segment_length >= 8, "WelchOptions.segment_length = ", segment_length,
+          ": must be at least 8 samples");
+  require(std::isfinite(overlap) && overlap >= 0.0 && overlap < 1.0,
+          "WelchOptions.overlap = ", overlap, ": must lie in [0, 1)");
+}
+
+void PeakOptions::validate() const {
+  require(std::isfinite(min_prominence_db) && min_prominence_db >= 0.0,
+          "PeakOptions.min_prominence_db = ", min_prominence_db, ": must be finite and >= 0");
+  require(max_peaks >= 0, "PeakOptions.max_peaks = ", max_peaks, ": must be >= 0 (0 keeps all)");
+}
+
+Frf periodic_frf(const SampledData& data, const PeriodicFrfOptions& options) {
+  options.validate();
+  const int n = options.period_length;
+  const int total = data.size();
+  require(total % n == 0, "periodic_frf: the record length ", total,
+          " is not a multiple of period_length ", n);
+  const int periods = total / n - options.transient_periods;
+  require(periods >= 2, "periodic_frf: too few samples: ", total, " samples hold ", total / n,
+          " periods of ", n, "; after dropping transient_periods = ", options.transient_periods,
+          " at least 2 must remain");
+
+  Eigen::FFT<double> fft;
+  std::vector<Eigen::VectorXcd> u_spectra;
+  std::vector<Eigen::VectorXcd> y_spectra;
+  Eigen::VectorXcd u_mean = Eigen::VectorXcd::Zero(n);
+  for (int p = 0; p < periods; ++p) {
+    const int begin = (options.transient_periods + p) * n;
+    u_spectra.push_back(dft(fft, data.input().segment(begin, n)));
+    y_spectra.push_back(dft(fft, data.output().segment(begin, n)));
+    u_mean += u_spectra.back();
+  }
+  u_mean /= periods;
+
+  const int half = n / 2;
+  double largest = 0.0;
+  for (int k = 1; k <= half; ++k) largest = std::max(largest, std::abs(u_mean(k)));
+  require(largest > 0.0, "periodic_frf: the input has no power at any line 1..", half);
+  const double threshold = options.line_threshold * largest;
+  const auto excited = [&](int k) {
+    if (std::abs(u_mean(k)) <= threshold) return false;
+    for (const auto& u : u_spectra) {
+      if (std::abs(u(k)) == 0.0) return false;
+    }
+    return true;
+  };
+
+  Frf result;
+  result.averages = periods;
+  result.block_length = n;
+  if (options.lines.empty()) {
+    for (int k = 1; k <= half; ++k) {
+      if (excited(k)) result.lines.push_back(k);
+    }
+  } else {
+    result.lines = options.lines;
+    std::sort(result.lines.begin(), result.lines.end());
+    result.lines.erase(std::unique(result.lines.begin(), result.lines.end()), result.lines.end());
+    for (int k : result.lines) {
+      require(excited(k), "periodic_frf: line ", k,
+              " requested in PeriodicFrfOptions.lines is not excited by the input (|U| = ",
+              std::abs(u_mean(k)), ", threshold ", threshold, ")");
+    }
+  }
+
+  const auto count = static_cast<Eigen::Index>(result.lines.size());
+  result.frequencies.resize(count);
+  result.response.resize(count);
+  result.variance.resize(count);
+  Eigen::VectorXcd per_period(periods);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    const int k = result.lines[static_cast<size_t>(i)];
+    for (int p = 0; p < periods; ++p) {
+      const auto q = static_cast<size_t>(p);
+      per_period(p) = y_spectra[q](k) / u_spectra[q](k);
+    }
+    const Complex mean = per_period.mean();
+    result.frequencies(i) = line_frequency(k, n, data.sample_time());
+    result.response(i) = mean;
+    // Sample variance over periods, divided by P for the variance of the mean.
+    result.variance(i) = (per_period.array() - mean).abs2().sum() / (periods - 1) / periods;
+  }
+  return result;
+}
+
+Frf welch_frf(const SampledData& data, const WelchOptions& options) {
+  options.validate();
+  const int length = options.segment_length;
+  const int total = data.size();
+  require(total >= length, "welch_frf: too few samples: the record has ", total,
+          " samples, fewer than WelchOptions.segment_length = ", length);
+  const int shared = static_cast<int>(std::lround(options.overlap * length));
+  const int step = std::max(1, length - shared);
+
+  // Periodic Hann window: w_n = (1 - cos(2 pi n / L)) / 2.
+  Eigen::VectorXd window(length);
+  for (int i = 0; i < length; ++i) {
+    window(i) = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * i / length);
+  }
+
+  const int half = length / 2;
+  Eigen::VectorXd suu = Eigen::VectorXd::Zero(half + 1);
+  Eigen::VectorXd syy = Eigen::VectorXd::Zero(half + 1);
+  Eigen::VectorXcd syu = Eigen::VectorXcd::Zero(half + 1);
+  Eigen::FFT<double> fft;
+  int segments = 0;
+  for (int begin = 0; begin + length <= total; begin += step) {
+    const Eigen::VectorXcd u =
+        dft(fft, data.input().segment(begin, length).cwiseProduct(window).eval());
+    const Eigen::VectorXcd y =
+        dft(fft, data.output().segment(begin, length).cwiseProduct(window).eval());
+    for (int k = 1; k <= half; ++k) {
+      suu(k) += std::norm(u(k));
+      syy(k) += std::norm(y(k));
+      syu(k) += y(k) * std::conj(u(k));
+    }
+    ++segments;
+  }
+
+  Frf result;
+  result.averages = segments;
+  result.block_length = length;
+  result.frequencies.resize(half);
+  result.response.resize(half);
+  result.variance.resize(half);
+  result.coherence.resize(half);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int k = 1; k <= half; ++k) {
+    const int i = k - 1;
+    result.lines.push_back(k);
+    result.frequencies(i) = line_frequency(k, length, data.sample_time());
+    if (suu(k) == 0.0) {
+      result.response(i) = Complex(nan, nan);
+      result.coherence(i) = 0.0;
+      result.variance(i) = nan;
+      continue;
+    }
+    result.response(i) = syu(k) / suu(k);
+    const double coherence = syy(k) == 0.0 ? 0.0 : std::norm(syu(k)) / (suu(k) * syy(k));
+    result.coherence(i) = std::min(coherence, 1.0);
+    result.variance(i) = coherence == 0.0 ? std::numeric_limits<double>::infinity()
+                                          : (1.0 - result.coherence(i)) / (coherence * segments) *
+                                                std::norm(result.response(i));
+  }
+  return result;
+}
+
+std::vector<ResonancePeak> resonance_peaks(const Eigen::VectorXd& frequencies,
+                                           const Eigen::VectorXcd& response,
+                                           const PeakOptions& options) {
+  options.validate();
+  const auto size = frequencies.size();
+  require(size == response.size(), "resonance_peaks: ", size, " frequencies but ", response.size(),
+          " response values");
+  require(size >= 3, "resonance_peaks: needs at least 3 points, got ", size);
+  for (Eigen::Index i = 0; i < size; ++i) {
+    require(std::isfinite(frequencies(i)), "resonance_peaks: frequencies[", i,
+            "] = ", frequencies(i), " is not finite");
+    require(i == 0 || frequencies(i) > frequencies(i - 1), "resonance_peaks: frequencies[", i,
+            "] = ", frequencies(i), " does not exceed the one before; they must increase");
+    require(std::isfinite(response(i).real()) && std::isfinite(response(i).imag()),
+            "resonance_peaks: response[", i, "] is not finite");
+  }
+  const Eigen::VectorXd magnitude = response.cwiseAbs();
+  Eigen::VectorXd db(size);
+  for (Eigen::Index i = 0; i < size; ++i) {
+    db(i) = 20.0 * std::log10(std::max(magnitude(i), std::numeric_limits<double>::min()));
+  }
+
+  std::vector<ResonancePeak> peaks;
+  for (Eigen::Index i = 1; i + 1 < size; ++i) {
+    if (!(db(i) > db(i - 1) && db(i) >= db(i + 1))) continue;
+    // Prominence: the lowest point on each side before a higher value (or the grid's end).
+    double left_min = db(i);
+    for (Eigen::Index j = i - 1; j >= 0 && db(j) <= db(i); --j)
+      left_min = std::min(left_min, db(j));
+    double right_min = db(i);
+    for (Eigen::Index j = i + 1; j < size && db(j) <= db(i); ++j) {
+      right_min = std::min(right_min, db(j));
+    }
+    ResonancePeak peak;
+    peak.index = static_cast<int>(i);
+    peak.magnitude = magnitude(i);
+    peak.prominence_db = db(i) - std::max(left_min, right_min);
+    if (peak.prominence_db < options.min_prominence_db) continue;
+
+    // Vertex of the parabola through the three points (x, log|G|) around the maximum.
+    const double x0 = frequencies(i - 1), x1 = frequencies(i), x2 = frequencies(i + 1);
+    const double y0 = db(i - 1), y1 = db(i), y2 = db(i + 1);
+    const double denominator = (x0 - x1) * (x0 - x2) * (x1 - x2);
+    const double a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denominator;
+    const double b =
+        (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denominator;
+    peak.frequency = a < 0.0 ? std::clamp(-b / (2.0 * a), x0, x2) : x1;
+
+    // Half-power points, linearly interpolated in frequency.
+    const double half_power = magnitude(i) / std::sqrt(2.0);
+    double lower = std::numeric_limits<double>::quiet_NaN();
+    for (Eigen::Index j = i - 1; j >= 0; --j) {
+      if (magnitude(j) < half_power) {
+        const double t = (half_power - magnitude(j)) / (magnitude(j + 1) - magnitude(j));
+        lower = frequencies(j) + t * (frequencies(j + 1) - frequencies(j));
+        break;
+      }
+    }
+    double upper = std::numeric_limits<double>::quiet_NaN();
+    for (Eigen::Index j = i + 1; j < size; ++j) {
+      if (magnitude(j) < half_power) {
+        const double t = (magnitude(j - 1) - half_power) / (magnitude(j - 1) - magnitude(j));
+        upper = frequencies(j - 1) + t * (frequencies(j) - frequencies(j - 1));
+        break;
+      }
+    }
+    peak.damping_ratio = (upper - lower) / (2.0 * peak.frequency);
+    peaks.push_back(peak);
+  }
+
+  if (options.max_peaks > 0 && static_cast<int>(peaks.size()) > options.max_peaks) {
+    std::stable_sort(peaks.begin(), peaks.end(), [](const auto& a, const auto& b) {
+      return a.prominence_db > b.prominence_db;
+    });
+    peaks.resize(static_cast<size_t>(options.max_peaks));
+    std::sort(peaks.begin(), peaks.end(),
+              [](const auto& a, const auto& b) { return a.index < b.index; });
+  }
+  return peaks;
+}
+
+}  // namespace ctid
