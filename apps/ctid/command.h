@@ -1,0 +1,58 @@
+// The frame every `ctid` subcommand plugs into, and the exit-status policy of the tool:
+// 0 the command ran; 2 bad usage or bad input (one line on stderr,
+// "ctid <command>: error: <what>"); 1 any other failure. A subcommand is one file,
+// <name>_command.cc, that registers itself with CTID_REGISTER_COMMAND; main.cc never
+// changes when a command is added. No numerics here: commands call the library.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+namespace ctid::cli {
+
+/// Exit statuses of the ctid tool.
+enum ExitStatus : int { kExitOk = 0, kExitFailure = 1, kExitUsage = 2 };
+
+/// What a command's registration gives back: the CLI11 subcommand it added (its flags bound
+/// to storage the command owns) and the action main() runs when that subcommand was chosen.
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<void()> run;
+};
+
+/// Adds one subcommand to the top-level app.
+using CommandFactory = Command (*)(CLI::App& parent);
+
+struct CommandRegistration {
+  int order;  ///< position in `ctid --help` (ascending)
+  CommandFactory factory;
+};
+
+/// Records a command; called once per command at static-initialisation time through
+/// CTID_REGISTER_COMMAND. Returns true so it can initialise a namespace-scope constant.
+bool register_command(int order, CommandFactory factory);
+/// Every registered command, sorted by order.
+std::vector<CommandRegistration> registered_commands();
+
+/// Runs a command's action and maps its outcome to an exit status: ctid::InvalidArgument
+/// (bad input) gives 2, anything else 1, each with one line on stderr naming the command.
+int run_command(const std::string& command_path, const std::function<void()>& action);
+
+/// Prints a CLI11 parse error as one line naming the command and the help flag, and
+/// returns 2; --help and --version print to stdout and return 0.
+int report_parse_error(const CLI::App& app, const CLI::ParseError& error,
+                       const std::string& command_path);
+
+/// Throws ctid::InvalidArgument with `message` (usage errors found after parsing, such as
+/// two inputs given at once).
+[[noreturn]] void usage_error(const std::string& message);
+
+}  // namespace ctid::cli
+
+/// Registers `factory` (a CommandFactory) at position `order` in the help listing.
+#define CTID_REGISTER_COMMAND(order, factory)                            \
+  [[maybe_unused]] static const bool ctid_command_registered_##factory = \
+      ::ctid::cli::register_command(order, &factory)

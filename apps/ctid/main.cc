@@ -1,0 +1,61 @@
+// ctid: continuous-time system identification from sampled data, on the command line.
+// The subcommands register themselves (command.h); this file parses the command line,
+// runs the chosen command and returns its exit status (0 ran, 2 bad usage or input,
+// 1 other error).
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "command.h"
+
+#ifndef CTID_VERSION
+#define CTID_VERSION "unknown"
+#endif
+
+int main(int argc, char** argv) {
+  using namespace ctid::cli;
+  CLI::App app{
+      "ctid: continuous-time system identification from sampled data.\n"
+      "Models are JSON files with coefficients in ascending powers (docs/formats.md);\n"
+      "data are CSV files with a header row of column names. Run 'ctid <command> --help'\n"
+      "for a command's flags. Exit status: 0 ran, 2 bad usage or input, 1 other error.",
+      "ctid"};
+  app.set_version_flag("--version", std::string("ctid ") + CTID_VERSION,
+                       "Print the version and exit");
+  app.require_subcommand(1);
+  app.fallthrough(false);
+
+  std::vector<Command> commands;
+  for (const CommandRegistration& registration : registered_commands()) {
+    commands.push_back(registration.factory(app));
+  }
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    std::string path = "ctid";
+    std::vector<std::string> unexpected = app.remaining();
+    for (const Command& command : commands) {
+      if (command.app->parsed()) {
+        path += " " + command.app->get_name();
+        const std::vector<std::string> extra = command.app->remaining();
+        unexpected.insert(unexpected.end(), extra.begin(), extra.end());
+      }
+    }
+    // CLI11 checks required flags before unknown ones; a misspelt flag is the likelier
+    // cause of both, so it is the one reported.
+    if (!unexpected.empty() && dynamic_cast<const CLI::CallForHelp*>(&error) == nullptr &&
+        dynamic_cast<const CLI::CallForVersion*>(&error) == nullptr) {
+      return report_parse_error(app, CLI::ExtrasError(unexpected), path);
+    }
+    return report_parse_error(app, error, path);
+  }
+
+  for (const Command& command : commands) {
+    if (command.app->parsed()) return run_command("ctid " + command.app->get_name(), command.run);
+  }
+  std::cerr << "ctid: error: no command given (see 'ctid --help')\n";
+  return kExitUsage;
+}

@@ -1,0 +1,350 @@
+// `ctid simulate`: the sampled response of a continuous-time model (JSON) to an input read
+// from a CSV column or generated from an excitation spec, in open loop or in closed loop
+// with a discrete controller (the input then is the reference r), with optional output
+// noise; writes CSV t,u,y[,r]. The numerics are ctid::simulate / simulate_closed_loop.
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <variant>
+
+#include "command.h"
+#include "ctid/core/error.h"
+#include "ctid/io/csv.h"
+#include "ctid/io/excitation_spec.h"
+#include "ctid/io/model_json.h"
+#include "ctid/io/sampled_data_csv.h"
+#include "ctid/simulation/closed_loop.h"
+#include "ctid/simulation/excitation.h"
+#include "ctid/simulation/noise.h"
+#include "ctid/simulation/simulate.h"
+
+namespace ctid::cli {
+namespace {
+
+struct NoiseFlags {
+  std::string filter;
+  double snr = 0.0;
+  double standard_deviation = 0.0;
+  std::uint64_t seed = 2;
+  CLI::Option* snr_option = nullptr;
+  CLI::Option* std_option = nullptr;
+
+  bool wanted() const { return snr_option->count() > 0 || std_option->count() > 0; }
+};
+
+struct SimulateFlags {
+  std::string model;
+  std::string output;
+  bool force = false;
+
+  std::string input;
+  std::string input_column = "u";
+  std::string time_column = "t";
+
+  std::string excitation;
+  std::string excitation_spec;
+  io::ExcitationSpec spec;
+  std::string grid = "full";
+  double sample_time = 0.0;
+
+  std::string controller;
+
+  NoiseFlags noise;
+  bool quiet = false;
+};
+
+// Agreement of two sample times given in different places (flag, file, controller).
+bool same_sample_time(double a, double b) { return std::abs(a - b) <= 1e-9 * std::abs(b); }
+
+struct InputSignal {
+  Eigen::VectorXd values;
+  double sample_time = 0.0;
+  double start_time = 0.0;
+};
+
+InputSignal read_input_column(const SimulateFlags& f, CLI::App& app,
+                              const std::optional<DiscreteTransferFunction>& controller) {
+  const io::CsvTable table = io::read_csv(f.input);
+  InputSignal in;
+  const bool time_flag_given = app.count("--time-column") > 0;
+  if (table.has_column(f.time_column)) {
+    const io::TimedSignal s = io::timed_signal_from_table(table, f.time_column, f.input_column);
+    in.values = s.values;
+    in.sample_time = s.sample_time;
+    in.start_time = s.start_time;
+    if (app.count("--sample-time") > 0 && !same_sample_time(f.sample_time, s.sample_time)) {
+      usage_error(internal::concat("--sample-time ", f.sample_time,
+                                   " disagrees with the time column '", f.time_column, "' of ",
+                                   f.input, " (step ", s.sample_time, " s)"));
+    }
+    return in;
+  }
+  if (time_flag_given) {
+    table.column(f.time_column);  // throws, naming the columns present
+  }
+  in.values = table.column(f.input_column);
+  if (app.count("--sample-time") > 0) {
+    in.sample_time = f.sample_time;
+  } else if (controller) {
+    in.sample_time = controller->sample_time();
+  } else {
+    usage_error(internal::concat(f.input, " has no time column '", f.time_column,
+                                 "'; give --sample-time (or --time-column)"));
+  }
+  return in;
+}
+
+InputSignal generate_input(const SimulateFlags& f, CLI::App& app,
+                           const std::optional<DiscreteTransferFunction>& controller) {
+  io::ExcitationSpec spec;
+  if (!f.excitation_spec.empty()) {
+    spec = io::read_excitation_spec(f.excitation_spec);
+    if (app.count("--sample-time") > 0 && !same_sample_time(f.sample_time, spec.sample_time)) {
+      usage_error(internal::concat("--sample-time ", f.sample_time, " disagrees with sample_time ",
+                                   spec.sample_time, " in ", f.excitation_spec));
+    }
+  } else {
+    spec = f.spec;
+    spec.kind = io::excitation_kind_from_string(f.excitation);
+    spec.grid = io::frequency_grid_from_string(f.grid);
+    if (app.count("--sample-time") > 0) {
+      spec.sample_time = f.sample_time;
+    } else if (controller) {
+      spec.sample_time = controller->sample_time();
+    } else {
+      usage_error("--excitation needs --sample-time (or --controller, whose sample time is used)");
+    }
+  }
+  spec.validate();
+  return InputSignal{io::generate_excitation(spec), spec.sample_time, 0.0};
+}
+
+// v_k = H(q) e_k with e white of standard deviation `std` (H = 1 without a filter file).
+Eigen::VectorXd raw_noise(const NoiseFlags& f, Eigen::Index n, double h, double std) {
+  if (f.filter.empty()) return white_noise(static_cast<int>(n), std, f.seed);
+  const DiscreteTransferFunction filter = io::read_discrete_transfer_function(f.filter);
+  if (!same_sample_time(filter.sample_time(), h)) {
+    usage_error(internal::concat("the noise filter in ", f.filter, " has sample time ",
+                                 filter.sample_time(), " s but the input is sampled every ", h,
+                                 " s"));
+  }
+  return colored_noise(filter, static_cast<int>(n), std * std, f.seed);
+}
+
+// The noise to add, or an empty vector. With --snr the noise is scaled against
+// `noise_free`, the output without noise.
+Eigen::VectorXd output_noise(const NoiseFlags& f, const Eigen::VectorXd& noise_free, double h) {
+  if (!f.wanted()) {
+    if (!f.filter.empty()) usage_error("--noise-filter needs --noise-std or --snr");
+    return Eigen::VectorXd();
+  }
+  if (f.std_option->count() > 0) return raw_noise(f, noise_free.size(), h, f.standard_deviation);
+  return scale_noise_to_snr(noise_free, raw_noise(f, noise_free.size(), h, 1.0), f.snr);
+}
+
+void add_noise_flags(CLI::App& app, NoiseFlags& f) {
+  app.add_option("--noise-filter", f.filter,
+                 "Noise filter JSON (discrete_transfer_function H(q), e.g. (q + 0.5)/(q - 0.85)); "
+                 "default H = 1 (white noise)")
+      ->check(CLI::ExistingFile)
+      ->group("Output noise");
+  f.std_option = app.add_option("--noise-std", f.standard_deviation,
+                                "Standard deviation of the white noise e driving H(q)")
+                     ->check(CLI::PositiveNumber)
+                     ->group("Output noise");
+  f.snr_option = app.add_option("--snr", f.snr,
+                                "Signal-to-noise ratio in dB, 10 log10(var y0 / var v), y0 the "
+                                "output without noise (in closed loop: the loop's response to r "
+                                "alone)")
+                     ->group("Output noise");
+  f.std_option->excludes(f.snr_option);
+  app.add_option("--noise-seed", f.seed, "Seed of the noise e")
+      ->capture_default_str()
+      ->group("Output noise");
+}
+
+void run_simulate(const SimulateFlags& f, CLI::App& app) {
+  const std::filesystem::path output = f.output;
+  if (!f.force && std::filesystem::exists(output)) {
+    usage_error(output.string() + ": file exists; pass --force to replace it");
+  }
+  const io::ContinuousModel model = io::read_continuous_model(f.model);
+  std::optional<DiscreteTransferFunction> controller;
+  if (!f.controller.empty()) controller = io::read_discrete_transfer_function(f.controller);
+
+  const InputSignal in =
+      f.input.empty() ? generate_input(f, app, controller) : read_input_column(f, app, controller);
+  const double h = in.sample_time;
+  if (controller && !same_sample_time(controller->sample_time(), h)) {
+    usage_error(internal::concat("the controller in ", f.controller, " has sample time ",
+                                 controller->sample_time(), " s but the input is sampled every ", h,
+                                 " s"));
+  }
+  const Eigen::Index n = in.values.size();
+
+  Eigen::VectorXd u;
+  Eigen::VectorXd y;
+  std::optional<Eigen::VectorXd> r;
+  if (controller) {
+    r = in.values;
+    Eigen::VectorXd v;
+    if (f.noise.wanted()) {
+      // The SNR reference is the loop's noise-free response to r.
+      const Eigen::VectorXd noise_free = std::visit(
+          [&](const auto& plant) { return simulate_closed_loop(plant, *controller, *r).output; },
+          model);
+      v = output_noise(f.noise, noise_free, h);
+    } else {
+      v = output_noise(f.noise, Eigen::VectorXd::Zero(n), h);
+    }
+    const ClosedLoopSimulation loop = std::visit(
+        [&](const auto& plant) { return simulate_closed_loop(plant, *controller, *r, v); }, model);
+    u = loop.input;
+    y = loop.output;
+  } else {
+    u = in.values;
+    const Eigen::VectorXd noise_free =
+        std::visit([&](const auto& g) { return simulate(g, u, h); }, model);
+    const Eigen::VectorXd v = output_noise(f.noise, noise_free, h);
+    y = v.size() == 0 ? noise_free : Eigen::VectorXd(noise_free + v);
+  }
+
+  const SampledData data(h, u, y, r, in.start_time);
+  io::CsvColumns columns;
+  if (r) columns.reference = "r";
+  io::write_sampled_data(output, data, columns, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  if (!f.quiet) {
+    std::cout << "wrote " << n << " samples (" << (r ? "t,u,y,r" : "t,u,y") << ", h = " << h
+              << " s, " << (controller ? "closed loop" : "open loop") << ") to " << output.string()
+              << "\n";
+  }
+}
+
+Command add_simulate_command(CLI::App& parent) {
+  auto flags = std::make_shared<SimulateFlags>();
+  SimulateFlags& f = *flags;
+  CLI::App* app = parent.add_subcommand(
+      "simulate",
+      "Simulate a continuous-time model (JSON) driven by a zero-order-hold input, in open loop "
+      "or in closed loop with a discrete controller, and write CSV t,u,y[,r].");
+  app->footer(
+      "Input: exactly one of --input (a CSV column) or --excitation/--excitation-spec.\n"
+      "Closed loop (--controller): the input is the reference r, u_k = C_d(q)(r_k - y_k), and "
+      "the CSV gets an r column.\n"
+      "Noise: v_k = H(q) e_k added to y at the samples; H = 1 unless --noise-filter; its size "
+      "from --noise-std (std of e) or --snr (dB, 10 log10 var(y without noise)/var(v)).\n"
+      "Formats: docs/formats.md. Exit status: 0 ran, 2 bad usage or input, 1 other error.");
+
+  app->add_option("--model,-m", f.model,
+                  "Model JSON file: a transfer_function or an additive_model (coefficients in "
+                  "ascending powers of s)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app->add_option("--output,-o", f.output, "CSV file to write (columns t,u,y and r in closed loop)")
+      ->required();
+  app->add_flag("--force", f.force, "Replace --output if it exists (never replaced otherwise)");
+  app->add_flag("--quiet,-q", f.quiet, "Print nothing on success");
+
+  auto* input = app->add_option("--input,-i", f.input,
+                                "CSV file holding the input (or, with --controller, the reference) "
+                                "in a named column")
+                    ->check(CLI::ExistingFile)
+                    ->group("Input from a file");
+  app->add_option("--input-column", f.input_column, "Column of --input to use")
+      ->capture_default_str()
+      ->group("Input from a file");
+  app->add_option("--time-column", f.time_column,
+                  "Time column of --input; if present, its uniform step is the sample time")
+      ->capture_default_str()
+      ->group("Input from a file");
+
+  auto* excitation = app->add_option("--excitation,-e", f.excitation,
+                                     "Generate the input: white, prbs or multisine")
+                         ->check(CLI::IsMember({"white", "prbs", "multisine"}))
+                         ->group("Generated input");
+  auto* spec_file = app->add_option("--excitation-spec", f.excitation_spec,
+                                    "Excitation JSON file (type \"excitation\") instead of the "
+                                    "excitation flags")
+                        ->check(CLI::ExistingFile)
+                        ->group("Generated input");
+  app->add_option("--samples,-n", f.spec.samples, "Number of samples N")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 100000000))
+      ->group("Generated input");
+  app->add_option("--sample-time,-T", f.sample_time,
+                  "Sample time h in seconds (default: from the input's time column or the "
+                  "controller)")
+      ->check(CLI::PositiveNumber)
+      ->group("Generated input");
+  app->add_option("--seed", f.spec.seed,
+                  "Seed of the white noise or multisine phases; for prbs it picks the start "
+                  "state")
+      ->capture_default_str()
+      ->group("Generated input");
+  app->add_option("--std", f.spec.standard_deviation, "white: standard deviation")
+      ->capture_default_str()
+      ->group("Generated input");
+  app->add_option("--amplitude", f.spec.amplitude, "prbs: levels +-amplitude")
+      ->capture_default_str()
+      ->group("Generated input");
+  app->add_option("--register-length", f.spec.register_length,
+                  "prbs: shift-register length n, period 2^n - 1 bits")
+      ->capture_default_str()
+      ->group("Generated input");
+  app->add_option("--samples-per-bit", f.spec.samples_per_bit, "prbs: samples each bit is held")
+      ->capture_default_str()
+      ->group("Generated input");
+  app->add_option("--periods", f.spec.periods,
+                  "multisine: periods in the record (N must be a multiple)")
+      ->capture_default_str()
+      ->group("Generated input");
+  app->add_option("--min-frequency", f.spec.min_frequency, "multisine: band lower edge, Hz")
+      ->capture_default_str()
+      ->group("Generated input");
+  app->add_option("--max-frequency", f.spec.max_frequency,
+                  "multisine: band upper edge, Hz (0: up to Nyquist)")
+      ->capture_default_str()
+      ->group("Generated input");
+  app->add_option("--grid", f.grid,
+                  "multisine: excite every DFT line in the band (full) or odd lines only (odd)")
+      ->check(CLI::IsMember({"full", "odd"}))
+      ->capture_default_str()
+      ->group("Generated input");
+  app->add_option("--rms", f.spec.rms, "multisine: root mean square")
+      ->capture_default_str()
+      ->group("Generated input");
+
+  app->add_option("--controller,-c", f.controller,
+                  "Discrete controller JSON (discrete_transfer_function in q): closed loop, the "
+                  "input becomes the reference r")
+      ->check(CLI::ExistingFile)
+      ->group("Closed loop");
+
+  add_noise_flags(*app, f.noise);
+
+  input->excludes(excitation);
+  input->excludes(spec_file);
+  excitation->excludes(spec_file);
+
+  Command command;
+  command.app = app;
+  command.run = [flags, app] {
+    const SimulateFlags& g = *flags;
+    const int sources = (g.input.empty() ? 0 : 1) + (g.excitation.empty() ? 0 : 1) +
+                        (g.excitation_spec.empty() ? 0 : 1);
+    if (sources != 1)
+      usage_error("give one input: --input FILE, --excitation KIND or --excitation-spec FILE");
+    run_simulate(g, *app);
+  };
+  return command;
+}
+
+}  // namespace
+
+CTID_REGISTER_COMMAND(10, add_simulate_command);
+
+}  // namespace ctid::cli

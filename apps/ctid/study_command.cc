@@ -1,0 +1,249 @@
+// `ctid study open-loop|closed-loop`: the Monte Carlo studies of González et al., Section 6
+// (ctid/study/paper_study.h), at the paper's size by default. Writes runs.csv (per-run
+// estimates), mse.csv (MSE per N and parameter beside the covariance prediction), trends.csv
+// and mse.png (MSE against N, log-log, drawn by matplotlib through /usr/bin/python3).
+// --size-index/--run-index replay one run and write only its records.
+#include <chrono>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "command.h"
+#include "ctid/core/error.h"
+#include "ctid/study/monte_carlo.h"
+#include "ctid/study/paper_study.h"
+#include "ctid/study/study_output.h"
+
+namespace ctid::cli {
+namespace {
+
+// Draws mse.png from mse.csv: one panel per parameter, one line per estimator (Monte Carlo
+// MSE, solid with markers) and its covariance prediction (dashed).
+constexpr const char* kPlotScript =
+    R"PY(# Written by `ctid study`: plots mse.csv as MSE against N (log-log).
+import csv, sys, math
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+folder = sys.argv[1]
+title = sys.argv[2] if len(sys.argv) > 2 else ""
+rows = list(csv.DictReader(open(folder + "/mse.csv")))
+params = list(dict.fromkeys(r["parameter"] for r in rows))
+estimators = list(dict.fromkeys(r["estimator"] for r in rows))
+cols = 2 if len(params) <= 4 else 3
+nrows = math.ceil(len(params) / cols)
+fig, axes = plt.subplots(nrows, cols, figsize=(4.2 * cols, 3.2 * nrows), squeeze=False)
+colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+for ax, p in zip(axes.flat, params):
+    for k, e in enumerate(estimators):
+        sel = [r for r in rows if r["parameter"] == p and r["estimator"] == e]
+        n = [float(r["N"]) for r in sel]
+        mse = [float(r["mse"]) for r in sel]
+        pred = [float(r["predicted_mse"]) for r in sel]
+        c = colors[k % len(colors)]
+        ax.loglog(n, mse, "o-", ms=3, lw=1, color=c, label=e)
+        if any(math.isfinite(v) and v > 0 for v in pred):
+            ax.loglog(n, pred, "--", lw=1, color=c, label=e + " (predicted)")
+    ax.set_title(p)
+    ax.set_xlabel("N")
+    ax.set_ylabel("MSE")
+    ax.grid(True, which="both", alpha=0.3)
+for ax in list(axes.flat)[len(params):]:
+    ax.axis("off")
+axes.flat[0].legend(fontsize=7)
+if title:
+    fig.suptitle(title)
+fig.tight_layout()
+fig.savefig(folder + "/mse.png", dpi=110)
+)PY";
+
+struct StudyFlags {
+  std::string kind;
+  std::string output;
+  int runs = -1;
+  int sizes = -1;
+  int min_samples = -1;
+  int max_samples = -1;
+  int threads = 0;
+  std::uint64_t seed = 1;
+  int size_index = -1;
+  int run_index = -1;
+  int max_iterations = -1;
+  double tolerance = -1.0;
+  std::vector<std::string> estimators;
+  bool no_covariance = false;
+  bool no_plot = false;
+  bool quiet = false;
+};
+
+StudyEstimator estimator_from_string(const std::string& name) {
+  if (name == "srivc") return StudyEstimator::srivc;
+  if (name == "clsrivc") return StudyEstimator::clsrivc;
+  if (name == "additive_srivc") return StudyEstimator::additive_srivc;
+  if (name == "additive_clsrivc") return StudyEstimator::additive_clsrivc;
+  usage_error("--estimators: unknown estimator '" + name +
+              "' (srivc, clsrivc, additive_srivc, additive_clsrivc)");
+}
+
+StudyOptions options_from_flags(const StudyFlags& f) {
+  const StudyKind kind = f.kind == "open-loop" ? StudyKind::open_loop : StudyKind::closed_loop;
+  StudyOptions options = StudyOptions::paper(kind);
+  if (f.runs >= 0) options.runs = f.runs;
+  if (f.sizes >= 0) options.sizes = f.sizes;
+  if (f.min_samples >= 0) options.min_samples = f.min_samples;
+  if (f.max_samples >= 0) options.max_samples = f.max_samples;
+  if (f.max_iterations >= 0) options.max_iterations = f.max_iterations;
+  if (f.tolerance > 0.0) options.tolerance = f.tolerance;
+  options.threads = f.threads;
+  options.seed = f.seed;
+  options.compute_covariance = !f.no_covariance;
+  for (const std::string& name : f.estimators) {
+    options.estimators.push_back(estimator_from_string(name));
+  }
+  options.validate();
+  return options;
+}
+
+std::ofstream open_output(const std::filesystem::path& path) {
+  std::ofstream out(path);
+  if (!out) throw ComputationError("cannot write " + path.string());
+  return out;
+}
+
+void run_study_command(const StudyFlags& f) {
+  const StudyOptions options = options_from_flags(f);
+  const std::filesystem::path folder(f.output);
+  std::filesystem::create_directories(folder);
+  const StudySetup setup = study_setup(options.kind);
+
+  if (f.size_index >= 0 || f.run_index >= 0) {
+    if (f.size_index < 0 || f.run_index < 0) {
+      usage_error("--size-index and --run-index replay one run: give both");
+    }
+    const std::vector<StudyRecord> records = run_study_case(options, f.size_index, f.run_index);
+    std::ofstream out = open_output(folder / "runs.csv");
+    write_records_csv(records, setup.parameter_names, out);
+    if (!f.quiet) write_records_csv(records, setup.parameter_names, std::cout);
+    return;
+  }
+
+  const auto start = std::chrono::steady_clock::now();
+  const int total = options.sizes * options.runs;
+  int last_percent = -1;
+  auto progress = [&](int done, int all) {
+    const int percent = static_cast<int>(100LL * done / all);
+    if (f.quiet || percent == last_percent) return;
+    last_percent = percent;
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::cerr << "\rctid study: " << done << "/" << all << " cases (" << percent << " %), "
+              << static_cast<int>(seconds) << " s" << std::flush;
+  };
+  const StudyResult result = run_study(options, progress);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!f.quiet) std::cerr << "\n";
+
+  {
+    std::ofstream out = open_output(folder / "runs.csv");
+    write_records_csv(result, out);
+  }
+  {
+    std::ofstream out = open_output(folder / "mse.csv");
+    write_mse_csv(result, out);
+  }
+  {
+    std::ofstream out = open_output(folder / "trends.csv");
+    write_trends_csv(result, out);
+  }
+  if (!f.quiet) {
+    std::cout << "ctid study " << to_string(options.kind) << ": " << total << " cases x "
+              << options.active_estimators().size() << " estimators in " << seconds << " s on "
+              << resolve_thread_count(options.threads) << " threads\n";
+    write_trends_csv(result, std::cout);
+  }
+  if (!f.no_plot) {
+    const std::filesystem::path script = folder / "plot_study.py";
+    {
+      std::ofstream out = open_output(script);
+      out << kPlotScript;
+    }
+    const std::string title =
+        "Section " + std::string(options.kind == StudyKind::open_loop ? "6.1" : "6.2") + " " +
+        to_string(options.kind) + ", " + std::to_string(options.runs) + " runs per N";
+    const std::string command =
+        "/usr/bin/python3 '" + script.string() + "' '" + folder.string() + "' '" + title + "'";
+    if (std::system(command.c_str()) != 0) {
+      throw ComputationError("plotting failed (" + command +
+                             "); the CSV files are written, rerun with --no-plot to skip");
+    }
+  }
+}
+
+Command add_study_command(CLI::App& parent) {
+  auto flags = std::make_shared<StudyFlags>();
+  StudyFlags& f = *flags;
+  CLI::App* app = parent.add_subcommand(
+      "study",
+      "Monte Carlo study of González et al. Section 6: open-loop (6.1, SRIVC 8 poles/6 zeros "
+      "against the additive estimator, DC gains) or closed-loop (6.2, direct SRIVC, CLSRIVC "
+      "and the additive closed-loop estimator, all six parameters). Paper size by default.");
+  app->footer(
+      "Writes DIR/runs.csv (per-run estimates and standard errors), DIR/mse.csv (MSE per N and "
+      "parameter with the covariance prediction), DIR/trends.csv (log-log slopes, MSE ratios) "
+      "and DIR/mse.png. Run r at size j is a pure function of (--seed, j, r): the output does "
+      "not depend on --threads, and --size-index j --run-index r replays that run alone.\n"
+      "Docs: docs/study.md. Exit status: 0 ran, 2 bad usage or input, 1 other error.");
+  app->add_option("kind", f.kind, "open-loop (Section 6.1) or closed-loop (Section 6.2)")
+      ->required()
+      ->check(CLI::IsMember({"open-loop", "closed-loop"}));
+  app->add_option("--output,-o", f.output, "Folder to write the results into")->required();
+  app->add_option("--runs,-r", f.runs, "Monte Carlo runs per sample size (paper: 300)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--sizes,-k", f.sizes,
+                  "Number of log-spaced sample sizes (paper: 30 open loop, 50 closed loop)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--min-samples", f.min_samples,
+                  "Smallest N (paper: 2000 open loop, 500 closed loop)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--max-samples", f.max_samples,
+                  "Largest N (paper: 100000 open loop, 123036 closed loop)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--threads,-j", f.threads, "Worker threads (0: every core)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app->add_option("--seed", f.seed, "Study seed")->capture_default_str();
+  app->add_option("--size-index", f.size_index, "Replay one run: the sample-size index j")
+      ->check(CLI::NonNegativeNumber);
+  app->add_option("--run-index", f.run_index, "Replay one run: the run index r")
+      ->check(CLI::NonNegativeNumber);
+  app->add_option("--max-iterations", f.max_iterations, "Estimator iterations (paper: 100)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--tolerance", f.tolerance,
+                  "Relative parameter change that stops the iteration (paper: 1e-10 open loop, "
+                  "1e-7 closed loop)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--estimators", f.estimators,
+                  "Subset of estimators (srivc, clsrivc, additive_srivc, additive_clsrivc)");
+  app->add_flag("--no-covariance", f.no_covariance,
+                "Skip the estimators' covariance (no standard errors or predicted MSE; faster)");
+  app->add_flag("--no-plot", f.no_plot, "Do not draw mse.png");
+  app->add_flag("--quiet,-q", f.quiet, "Print nothing on success");
+
+  Command command;
+  command.app = app;
+  command.run = [flags] { run_study_command(*flags); };
+  return command;
+}
+
+}  // namespace
+
+CTID_REGISTER_COMMAND(60, add_study_command);
+
+}  // namespace ctid::cli

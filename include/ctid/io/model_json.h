@@ -1,0 +1,53 @@
+// JSON files for models (docs/formats.md): continuous TransferFunction, AdditiveModel and
+// DiscreteTransferFunction (controllers C_d(q), noise filters). Coefficients are stored in
+// ASCENDING powers under fields named *_ascending (polynomial.h), e.g. 1 + 0.5 s is
+// [1, 0.5]. Every document has a "type" field; unknown fields are rejected; errors name the
+// file and the field.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <variant>
+
+#include <nlohmann/json.hpp>
+
+#include "ctid/core/additive_model.h"
+#include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/transfer_function.h"
+#include "ctid/io/file.h"
+
+namespace ctid::io {
+
+/// The "type" values of the model formats.
+inline constexpr const char* kTransferFunctionType = "transfer_function";
+inline constexpr const char* kAdditiveModelType = "additive_model";
+inline constexpr const char* kDiscreteTransferFunctionType = "discrete_transfer_function";
+
+/// A continuous-time model as read from a file: unfactored or additive.
+using ContinuousModel = std::variant<TransferFunction, AdditiveModel>;
+
+nlohmann::json to_json(const TransferFunction& model);
+nlohmann::json to_json(const AdditiveModel& model);
+nlohmann::json to_json(const DiscreteTransferFunction& model);
+nlohmann::json to_json(const ContinuousModel& model);
+
+/// Readers of one format; `source` names the document in error messages. The model's own
+/// validation (finite coefficients, non-zero leading coefficient, anti-monic A_i, ...) is
+/// reported as InvalidArgument prefixed with the source and the field path.
+TransferFunction transfer_function_from_json(const nlohmann::json& value,
+                                             const std::string& source);
+AdditiveModel additive_model_from_json(const nlohmann::json& value, const std::string& source);
+DiscreteTransferFunction discrete_transfer_function_from_json(const nlohmann::json& value,
+                                                              const std::string& source);
+/// Dispatches on "type": transfer_function or additive_model.
+ContinuousModel continuous_model_from_json(const nlohmann::json& value, const std::string& source);
+
+ContinuousModel read_continuous_model(const std::filesystem::path& path);
+DiscreteTransferFunction read_discrete_transfer_function(const std::filesystem::path& path);
+
+void write_model(const std::filesystem::path& path, const ContinuousModel& model,
+                 Overwrite overwrite = Overwrite::no);
+void write_model(const std::filesystem::path& path, const DiscreteTransferFunction& model,
+                 Overwrite overwrite = Overwrite::no);
+
+}  // namespace ctid::io

@@ -1,0 +1,52 @@
+// SampledData records as CSV files with named columns (docs/formats.md): a time column
+// checked for uniform sampling (SampledData::from_time_stamps), input, output and an
+// optional reference. Errors name the file and the column; CsvTable errors name the line.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "ctid/core/sampled_data.h"
+#include "ctid/io/csv.h"
+#include "ctid/io/file.h"
+
+namespace ctid::io {
+
+/// Which CSV columns hold which signal.
+struct CsvColumns {
+  std::string time = "t";
+  std::string input = "u";
+  std::string output = "y";
+  /// Empty: the record has no reference.
+  std::string reference;
+  /// Allowed deviation of each time step from the mean step, relative to the mean step.
+  double relative_tolerance = 1e-6;
+
+  /// Throws InvalidArgument naming the field, its value and the rule.
+  void validate() const;
+};
+
+/// A uniformly sampled signal read from a table's time and value columns.
+struct TimedSignal {
+  double start_time = 0.0;
+  double sample_time = 0.0;
+  Eigen::VectorXd values;
+};
+
+/// Checks that `time_column` is uniformly sampled and returns it with `value_column`.
+TimedSignal timed_signal_from_table(const CsvTable& table, const std::string& time_column,
+                                    const std::string& value_column,
+                                    double relative_tolerance = 1e-6);
+
+SampledData sampled_data_from_table(const CsvTable& table, const CsvColumns& columns = {});
+SampledData read_sampled_data(const std::filesystem::path& path, const CsvColumns& columns = {});
+
+/// Columns time, input, output and (if the record has one and columns.reference is not
+/// empty) reference, named as in `columns`.
+CsvTable to_csv_table(const SampledData& data, const CsvColumns& columns = {});
+void write_sampled_data(const std::filesystem::path& path, const SampledData& data,
+                        const CsvColumns& columns = {}, Overwrite overwrite = Overwrite::no);
+
+}  // namespace ctid::io

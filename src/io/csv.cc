@@ -1,0 +1,201 @@
+#include "ctid/io/csv.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <optional>
+#include <system_error>
+
+#include "ctid/core/error.h"
+
+namespace ctid::io {
+namespace {
+
+std::string_view trim(std::string_view s) {
+  const auto is_space = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
+  while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
+  while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+std::vector<std::string_view> split_fields(std::string_view line) {
+  std::vector<std::string_view> fields;
+  size_t begin = 0;
+  while (true) {
+    const size_t comma = line.find(',', begin);
+    if (comma == std::string_view::npos) {
+      fields.push_back(trim(line.substr(begin)));
+      return fields;
+    }
+    fields.push_back(trim(line.substr(begin, comma - begin)));
+    begin = comma + 1;
+  }
+}
+
+// The whole field as a double, or nullopt if it is not exactly one number. A leading '+'
+// is accepted (std::from_chars does not).
+std::optional<double> parse_number(std::string_view field) {
+  std::string_view digits = field;
+  if (!digits.empty() && digits.front() == '+') {
+    digits.remove_prefix(1);
+    if (!digits.empty() && (digits.front() == '+' || digits.front() == '-')) return std::nullopt;
+  }
+  if (digits.empty()) return std::nullopt;
+  double value = 0.0;
+  const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+  if (end != digits.data() + digits.size()) return std::nullopt;
+  if (ec == std::errc::result_out_of_range) {
+    // Overflow (1e999) or underflow (1e-999): strtod gives the IEEE result, +-inf or a
+    // denormal / signed zero, and the caller rejects the infinite case.
+    const std::string copy(digits);
+    return std::strtod(copy.c_str(), nullptr);
+  }
+  if (ec != std::errc()) return std::nullopt;
+  return value;
+}
+
+bool valid_name(std::string_view name) {
+  return !name.empty() && name.find_first_of(",\n\r") == std::string_view::npos &&
+         trim(name) == name;
+}
+
+std::string join_names(const std::vector<std::string>& names) {
+  std::string joined;
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (i > 0) joined += ", ";
+    joined += names[i];
+  }
+  return joined;
+}
+
+}  // namespace
+
+bool CsvTable::has_column(std::string_view name) const {
+  for (const auto& n : names) {
+    if (n == name) return true;
+  }
+  return false;
+}
+
+const Eigen::VectorXd& CsvTable::column(std::string_view name) const {
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == name) return columns[i];
+  }
+  throw InvalidArgument(
+      internal::concat(source, ": no column '", name, "' (columns: ", join_names(names), ")"));
+}
+
+void CsvTable::add_column(std::string name, Eigen::VectorXd values) {
+  require(valid_name(name), "CSV column name '", name,
+          "' is invalid: it must be non-empty, without commas, line breaks or surrounding "
+          "spaces");
+  require(!has_column(name), "CSV column '", name, "' is already present");
+  require(columns.empty() || values.size() == columns.front().size(), "CSV column '", name,
+          "' has ", values.size(), " values but the other columns have ",
+          columns.empty() ? 0 : columns.front().size());
+  names.push_back(std::move(name));
+  columns.push_back(std::move(values));
+}
+
+CsvTable parse_csv(std::string_view text, const std::string& source) {
+  CsvTable table;
+  table.source = source;
+  std::vector<std::vector<double>> values;
+  int header_line = 0;
+  int line_number = 0;
+  size_t position = 0;
+  while (position < text.size()) {
+    size_t end = text.find('\n', position);
+    if (end == std::string_view::npos) end = text.size();
+    const std::string_view line = trim(text.substr(position, end - position));
+    position = end + 1;
+    ++line_number;
+    if (line.empty() || line.front() == '#') continue;
+
+    const auto fields = split_fields(line);
+    if (header_line == 0) {
+      header_line = line_number;
+      bool all_numbers = true;
+      for (size_t i = 0; i < fields.size(); ++i) {
+        const std::string_view name = fields[i];
+        require(!name.empty(), source, ":", line_number, ": header field ", i + 1,
+                " is empty; every column needs a name");
+        for (size_t j = 0; j < i; ++j) {
+          require(fields[j] != name, source, ":", line_number, ": column name '", name,
+                  "' appears twice in the header");
+        }
+        all_numbers = all_numbers && parse_number(name).has_value();
+      }
+      require(!all_numbers, source, ":", line_number,
+              ": the first line holds numbers, not column names; a CSV file must start with "
+              "a header row such as 't,u,y'");
+      for (const auto& name : fields) table.names.emplace_back(name);
+      values.resize(fields.size());
+      continue;
+    }
+
+    require(fields.size() == table.names.size(), source, ":", line_number, ": expected ",
+            table.names.size(), " fields (", join_names(table.names), ") but found ",
+            fields.size());
+    for (size_t i = 0; i < fields.size(); ++i) {
+      const auto where = [&] {
+        return internal::concat(source, ":", line_number, ": column '", table.names[i], "' (field ",
+                                i + 1, "): ");
+      };
+      require(!fields[i].empty(), where(), "empty field; expected a number");
+      const std::optional<double> value = parse_number(fields[i]);
+      require(value.has_value(), where(), "malformed number '", fields[i], "'");
+      require(std::isfinite(*value), where(), "value '", fields[i],
+              "' is not finite; every value must be a finite number");
+      values[i].push_back(*value);
+    }
+  }
+  require(header_line != 0, source,
+          ": file is empty; expected a header row of column names such as 't,u,y'");
+  require(!values.front().empty(), source, ": no data rows after the header on line ", header_line);
+  for (auto& column : values) {
+    table.columns.emplace_back(
+        Eigen::Map<const Eigen::VectorXd>(column.data(), static_cast<Eigen::Index>(column.size())));
+  }
+  return table;
+}
+
+CsvTable read_csv(const std::filesystem::path& path) {
+  return parse_csv(read_text_file(path), path.string());
+}
+
+std::string format_csv(const CsvTable& table) {
+  require(!table.names.empty(), "a CSV table needs at least one column");
+  require(table.names.size() == table.columns.size(), "CSV table has ", table.names.size(),
+          " names but ", table.columns.size(), " columns");
+  const Eigen::Index rows = table.columns.front().size();
+  for (size_t i = 0; i < table.names.size(); ++i) {
+    require(valid_name(table.names[i]), "CSV column name '", table.names[i], "' is invalid");
+    require(table.columns[i].size() == rows, "CSV column '", table.names[i], "' has ",
+            table.columns[i].size(), " values but column '", table.names[0], "' has ", rows);
+  }
+  std::string text;
+  text.reserve(static_cast<size_t>(rows + 1) * table.names.size() * 25);
+  for (size_t i = 0; i < table.names.size(); ++i) {
+    if (i > 0) text += ',';
+    text += table.names[i];
+  }
+  text += '\n';
+  char buffer[32];
+  for (Eigen::Index k = 0; k < rows; ++k) {
+    for (size_t i = 0; i < table.columns.size(); ++i) {
+      if (i > 0) text += ',';
+      const int length = std::snprintf(buffer, sizeof buffer, "%.17g", table.columns[i](k));
+      text.append(buffer, static_cast<size_t>(length));
+    }
+    text += '\n';
+  }
+  return text;
+}
+
+void write_csv(const std::filesystem::path& path, const CsvTable& table, Overwrite overwrite) {
+  write_text_file(path, format_csv(table), overwrite);
+}
+
+}  // namespace ctid::io

@@ -1,0 +1,193 @@
+#include "ctid/io/json.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "ctid/core/error.h"
+
+namespace ctid::io {
+namespace {
+
+// nlohmann reports the byte offset just past the offending character; the line and column
+// are recomputed here so the message has the "file:line:column" form editors jump to.
+std::string parse_error_location(std::string_view text, size_t byte) {
+  const size_t offending = byte == 0 ? 0 : std::min(byte - 1, text.size());
+  int line = 1;
+  size_t line_start = 0;
+  for (size_t i = 0; i < offending; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      line_start = i + 1;
+    }
+  }
+  return std::to_string(line) + ":" + std::to_string(offending - line_start + 1);
+}
+
+// "[json.exception.parse_error.101] parse error at line 3, column 5: syntax error while
+// parsing value - invalid literal; last read: 'NaN'" -> "syntax error while parsing value -
+// invalid literal; last read: 'NaN'".
+std::string parse_error_reason(const std::string& what) {
+  const size_t colon = what.find(": ");
+  return colon == std::string::npos ? what : what.substr(colon + 2);
+}
+
+std::string kind_of(const nlohmann::json& value) {
+  if (value.is_null()) return "null";
+  if (value.is_boolean()) return "a boolean";
+  if (value.is_number()) return "a number";
+  if (value.is_string()) return "a string";
+  if (value.is_array()) return "an array";
+  return "an object";
+}
+
+}  // namespace
+
+nlohmann::json parse_json(std::string_view text, const std::string& source) {
+  try {
+    return nlohmann::json::parse(text.begin(), text.end());
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InvalidArgument(source + ":" + parse_error_location(text, e.byte) +
+                          ": malformed JSON: " + parse_error_reason(e.what()));
+  } catch (const nlohmann::json::out_of_range& e) {
+    // A number too large for a double ("number overflow parsing '1e999'") carries no
+    // position; the first occurrence of the quoted literal locates it.
+    const std::string what = e.what();
+    const size_t open = what.find('\'');
+    const size_t close = open == std::string::npos ? open : what.find('\'', open + 1);
+    std::string location = "1:1";
+    if (close != std::string::npos) {
+      const size_t at = text.find(what.substr(open + 1, close - open - 1));
+      if (at != std::string_view::npos) location = parse_error_location(text, at + 1);
+    }
+    const size_t bracket = what.find("] ");
+    throw InvalidArgument(source + ":" + location + ": malformed JSON: " +
+                          (bracket == std::string::npos ? what : what.substr(bracket + 2)) +
+                          " (out of the range of a double)");
+  }
+}
+
+nlohmann::json read_json(const std::filesystem::path& path) {
+  return parse_json(read_text_file(path), path.string());
+}
+
+void write_json(const std::filesystem::path& path, const nlohmann::json& value,
+                Overwrite overwrite) {
+  write_text_file(path, value.dump(2) + "\n", overwrite);
+}
+
+JsonObject::JsonObject(const nlohmann::json& value, std::string source, std::string path)
+    : value_(value), source_(std::move(source)), path_(std::move(path)) {
+  if (!value.is_object()) {
+    throw InvalidArgument(internal::concat(source_, ": ", path_.empty() ? "document" : path_,
+                                           ": expected a JSON object but found ", kind_of(value)));
+  }
+}
+
+std::string JsonObject::field_path(std::string_view key) const {
+  return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
+}
+
+void JsonObject::fail(std::string_view key, std::string_view message) const {
+  throw InvalidArgument(internal::concat(source_, ": ", field_path(key), ": ", message));
+}
+
+bool JsonObject::has(std::string_view key) const {
+  known_.emplace(key);
+  return value_.contains(key);
+}
+
+const nlohmann::json& JsonObject::field(std::string_view key) const {
+  known_.emplace(key);
+  const auto it = value_.find(key);
+  if (it == value_.end()) fail(key, "required field is missing");
+  return *it;
+}
+
+double JsonObject::number(std::string_view key) const {
+  const nlohmann::json& v = field(key);
+  if (!v.is_number()) fail(key, "expected a number but found " + kind_of(v));
+  const double x = v.get<double>();
+  if (!std::isfinite(x)) fail(key, "value is not finite");
+  return x;
+}
+
+double JsonObject::number_or(std::string_view key, double fallback) const {
+  return has(key) ? number(key) : fallback;
+}
+
+long long JsonObject::integer(std::string_view key) const {
+  const nlohmann::json& v = field(key);
+  if (v.is_number_integer()) return v.get<long long>();
+  if (v.is_number_float()) {
+    const double x = v.get<double>();
+    if (std::isfinite(x) && std::floor(x) == x && std::abs(x) < 9.0e15) {
+      return static_cast<long long>(x);
+    }
+  }
+  fail(key, "expected an integer but found " + (v.is_number() ? v.dump() : kind_of(v)));
+}
+
+long long JsonObject::integer_or(std::string_view key, long long fallback) const {
+  return has(key) ? integer(key) : fallback;
+}
+
+std::string JsonObject::string(std::string_view key) const {
+  const nlohmann::json& v = field(key);
+  if (!v.is_string()) fail(key, "expected a string but found " + kind_of(v));
+  return v.get<std::string>();
+}
+
+std::string JsonObject::string_or(std::string_view key, std::string fallback) const {
+  return has(key) ? string(key) : std::move(fallback);
+}
+
+bool JsonObject::boolean_or(std::string_view key, bool fallback) const {
+  if (!has(key)) return fallback;
+  const nlohmann::json& v = field(key);
+  if (!v.is_boolean()) fail(key, "expected true or false but found " + kind_of(v));
+  return v.get<bool>();
+}
+
+Eigen::VectorXd JsonObject::numbers(std::string_view key, bool allow_empty) const {
+  const nlohmann::json& v = field(key);
+  if (!v.is_array()) fail(key, "expected an array of numbers but found " + kind_of(v));
+  if (v.empty() && !allow_empty) fail(key, "the array is empty; at least one number is needed");
+  Eigen::VectorXd out(static_cast<Eigen::Index>(v.size()));
+  for (size_t i = 0; i < v.size(); ++i) {
+    const std::string entry = std::string(key) + "[" + std::to_string(i) + "]";
+    if (!v[i].is_number()) fail(entry, "expected a number but found " + kind_of(v[i]));
+    const double x = v[i].get<double>();
+    if (!std::isfinite(x)) fail(entry, "value is not finite");
+    out(static_cast<Eigen::Index>(i)) = x;
+  }
+  return out;
+}
+
+JsonObject JsonObject::object(std::string_view key) const {
+  return JsonObject(field(key), source_, field_path(key));
+}
+
+std::vector<JsonObject> JsonObject::objects(std::string_view key) const {
+  const nlohmann::json& v = field(key);
+  if (!v.is_array()) fail(key, "expected an array of objects but found " + kind_of(v));
+  if (v.empty()) fail(key, "the array is empty; at least one entry is needed");
+  std::vector<JsonObject> out;
+  out.reserve(v.size());
+  for (size_t i = 0; i < v.size(); ++i) {
+    out.emplace_back(v[i], source_, field_path(key) + "[" + std::to_string(i) + "]");
+  }
+  return out;
+}
+
+void JsonObject::finish() const {
+  for (const auto& item : value_.items()) {
+    if (known_.find(item.key()) == known_.end()) {
+      std::string known;
+      for (const auto& k : known_) known += (known.empty() ? "" : ", ") + k;
+      fail(item.key(), "unknown field (known fields here: " + known + ")");
+    }
+  }
+}
+
+}  // namespace ctid::io

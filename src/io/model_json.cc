@@ -1,0 +1,165 @@
+#include "ctid/io/model_json.h"
+
+#include <utility>
+#include <vector>
+
+#include "ctid/core/error.h"
+#include "ctid/io/json.h"
+
+namespace ctid::io {
+namespace {
+
+nlohmann::json coefficients(const Polynomial& p) {
+  nlohmann::json array = nlohmann::json::array();
+  for (Eigen::Index k = 0; k < p.coefficients().size(); ++k) array.push_back(p.coefficients()(k));
+  return array;
+}
+
+// Runs a core constructor and prefixes its validation message with where the values came
+// from, so the user learns which file and which field to fix.
+template <typename Make>
+auto construct(const JsonObject& object, std::string_view what, Make&& make) {
+  try {
+    return make();
+  } catch (const InvalidArgument& e) {
+    const std::string where = object.path().empty() ? std::string(what) : object.path();
+    throw InvalidArgument(internal::concat(object.source(), ": ", where, ": ", e.what()));
+  }
+}
+
+Polynomial polynomial_field(const JsonObject& object, std::string_view key) {
+  const Eigen::VectorXd c = object.numbers(key);
+  try {
+    return Polynomial(c);
+  } catch (const InvalidArgument& e) {
+    object.fail(key, e.what());
+  }
+}
+
+void check_type(const JsonObject& object, std::string_view expected) {
+  const std::string type = object.string("type");
+  if (type != expected) {
+    object.fail("type", internal::concat("is '", type, "' but a ", expected, " is expected here"));
+  }
+  object.string_or("description", "");
+}
+
+TransferFunction read_transfer_function(const JsonObject& object) {
+  check_type(object, kTransferFunctionType);
+  Polynomial numerator = polynomial_field(object, "numerator_ascending");
+  Polynomial denominator = polynomial_field(object, "denominator_ascending");
+  const double delay = object.number_or("input_delay", 0.0);
+  object.finish();
+  return construct(object, "transfer function", [&] {
+    return TransferFunction(std::move(numerator), std::move(denominator), delay);
+  });
+}
+
+AdditiveModel read_additive_model(const JsonObject& object) {
+  check_type(object, kAdditiveModelType);
+  std::vector<Submodel> submodels;
+  for (const JsonObject& entry : object.objects("submodels")) {
+    Submodel submodel;
+    submodel.a = polynomial_field(entry, "denominator_ascending");
+    submodel.b = polynomial_field(entry, "numerator_ascending");
+    const long long integrators = entry.integer_or("integrators", 0);
+    if (integrators < 0 || integrators > 16) {
+      entry.fail("integrators",
+                 internal::concat("is ", integrators, "; it must be between 0 and 16"));
+    }
+    submodel.integrators = static_cast<int>(integrators);
+    entry.string_or("description", "");
+    entry.finish();
+    submodels.push_back(std::move(submodel));
+  }
+  const double delay = object.number_or("input_delay", 0.0);
+  object.finish();
+  return construct(object, "additive model",
+                   [&] { return AdditiveModel(std::move(submodels), delay); });
+}
+
+DiscreteTransferFunction read_discrete_transfer_function(const JsonObject& object) {
+  check_type(object, kDiscreteTransferFunctionType);
+  Polynomial numerator = polynomial_field(object, "numerator_ascending");
+  Polynomial denominator = polynomial_field(object, "denominator_ascending");
+  const double sample_time = object.number("sample_time");
+  object.finish();
+  return construct(object, "discrete transfer function", [&] {
+    return DiscreteTransferFunction(std::move(numerator), std::move(denominator), sample_time);
+  });
+}
+
+}  // namespace
+
+nlohmann::json to_json(const TransferFunction& model) {
+  return {{"type", kTransferFunctionType},
+          {"numerator_ascending", coefficients(model.numerator())},
+          {"denominator_ascending", coefficients(model.denominator())},
+          {"input_delay", model.input_delay()}};
+}
+
+nlohmann::json to_json(const AdditiveModel& model) {
+  nlohmann::json submodels = nlohmann::json::array();
+  for (const Submodel& s : model.submodels()) {
+    submodels.push_back({{"denominator_ascending", coefficients(s.a)},
+                         {"numerator_ascending", coefficients(s.b)},
+                         {"integrators", s.integrators}});
+  }
+  return {{"type", kAdditiveModelType},
+          {"submodels", std::move(submodels)},
+          {"input_delay", model.input_delay()}};
+}
+
+nlohmann::json to_json(const DiscreteTransferFunction& model) {
+  return {{"type", kDiscreteTransferFunctionType},
+          {"numerator_ascending", coefficients(model.numerator())},
+          {"denominator_ascending", coefficients(model.denominator())},
+          {"sample_time", model.sample_time()}};
+}
+
+nlohmann::json to_json(const ContinuousModel& model) {
+  return std::visit([](const auto& m) { return to_json(m); }, model);
+}
+
+TransferFunction transfer_function_from_json(const nlohmann::json& value,
+                                             const std::string& source) {
+  return read_transfer_function(JsonObject(value, source));
+}
+
+AdditiveModel additive_model_from_json(const nlohmann::json& value, const std::string& source) {
+  return read_additive_model(JsonObject(value, source));
+}
+
+DiscreteTransferFunction discrete_transfer_function_from_json(const nlohmann::json& value,
+                                                              const std::string& source) {
+  return read_discrete_transfer_function(JsonObject(value, source));
+}
+
+ContinuousModel continuous_model_from_json(const nlohmann::json& value, const std::string& source) {
+  const JsonObject object(value, source);
+  const std::string type = object.string("type");
+  if (type == kTransferFunctionType) return read_transfer_function(object);
+  if (type == kAdditiveModelType) return read_additive_model(object);
+  object.fail("type", internal::concat("is '", type, "'; a continuous-time model file needs '",
+                                       kTransferFunctionType, "' or '", kAdditiveModelType, "'"));
+}
+
+ContinuousModel read_continuous_model(const std::filesystem::path& path) {
+  return continuous_model_from_json(read_json(path), path.string());
+}
+
+DiscreteTransferFunction read_discrete_transfer_function(const std::filesystem::path& path) {
+  return discrete_transfer_function_from_json(read_json(path), path.string());
+}
+
+void write_model(const std::filesystem::path& path, const ContinuousModel& model,
+                 Overwrite overwrite) {
+  write_json(path, to_json(model), overwrite);
+}
+
+void write_model(const std::filesystem::path& path, const DiscreteTransferFunction& model,
+                 Overwrite overwrite) {
+  write_json(path, to_json(model), overwrite);
+}
+
+}  // namespace ctid::io

@@ -1,0 +1,75 @@
+#include "ctid/io/sampled_data_csv.h"
+
+#include <cmath>
+#include <optional>
+
+#include "ctid/core/error.h"
+
+namespace ctid::io {
+
+void CsvColumns::validate() const {
+  require(!time.empty(), "CsvColumns.time is empty; it must name the time column");
+  require(!input.empty(), "CsvColumns.input is empty; it must name the input column");
+  require(!output.empty(), "CsvColumns.output is empty; it must name the output column");
+  require(std::isfinite(relative_tolerance) && relative_tolerance > 0.0 && relative_tolerance < 1.0,
+          "CsvColumns.relative_tolerance is ", relative_tolerance, "; it must be in (0, 1)");
+  require(
+      time != input && time != output && input != output &&
+          (reference.empty() || (reference != time && reference != input && reference != output)),
+      "CsvColumns names '", time, "', '", input, "', '", output, "', '", reference,
+      "' must differ from each other");
+}
+
+TimedSignal timed_signal_from_table(const CsvTable& table, const std::string& time_column,
+                                    const std::string& value_column, double relative_tolerance) {
+  const Eigen::VectorXd& time = table.column(time_column);
+  const Eigen::VectorXd& values = table.column(value_column);
+  try {
+    const SampledData checked =
+        SampledData::from_time_stamps(time, values, values, std::nullopt, relative_tolerance);
+    return TimedSignal{checked.start_time(), checked.sample_time(), values};
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(
+        internal::concat(table.source, ": column '", time_column, "': ", e.what()));
+  }
+}
+
+SampledData sampled_data_from_table(const CsvTable& table, const CsvColumns& columns) {
+  columns.validate();
+  const Eigen::VectorXd& time = table.column(columns.time);
+  const Eigen::VectorXd& input = table.column(columns.input);
+  const Eigen::VectorXd& output = table.column(columns.output);
+  std::optional<Eigen::VectorXd> reference;
+  if (!columns.reference.empty()) reference = table.column(columns.reference);
+  try {
+    return SampledData::from_time_stamps(time, input, output, std::move(reference),
+                                         columns.relative_tolerance);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(
+        internal::concat(table.source, ": column '", columns.time, "': ", e.what()));
+  }
+}
+
+SampledData read_sampled_data(const std::filesystem::path& path, const CsvColumns& columns) {
+  columns.validate();
+  return sampled_data_from_table(read_csv(path), columns);
+}
+
+CsvTable to_csv_table(const SampledData& data, const CsvColumns& columns) {
+  columns.validate();
+  CsvTable table;
+  table.add_column(columns.time, data.time());
+  table.add_column(columns.input, data.input());
+  table.add_column(columns.output, data.output());
+  if (data.has_reference() && !columns.reference.empty()) {
+    table.add_column(columns.reference, data.reference());
+  }
+  return table;
+}
+
+void write_sampled_data(const std::filesystem::path& path, const SampledData& data,
+                        const CsvColumns& columns, Overwrite overwrite) {
+  write_csv(path, to_csv_table(data, columns), overwrite);
+}
+
+}  // namespace ctid::io

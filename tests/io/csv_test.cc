@@ -1,0 +1,174 @@
+#include "ctid/io/csv.h"
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "ctid/core/error.h"
+#include "io/test_directory.h"
+
+namespace ctid::io {
+namespace {
+
+using ::testing::HasSubstr;
+
+// The message of the InvalidArgument that parsing `text` throws ("" if none).
+std::string parse_error(const std::string& text) {
+  try {
+    parse_csv(text, "data.csv");
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Csv, ParsesNamedColumnsSkippingCommentsBlankLinesAndCarriageReturns) {
+  const CsvTable table =
+      parse_csv("# recorded 2024\r\n t , u,y\r\n0,1.5,-2\r\n\r\n1, +2e-3 ,3\r\n# end\n", "x.csv");
+  ASSERT_EQ(table.names, (std::vector<std::string>{"t", "u", "y"}));
+  ASSERT_EQ(table.rows(), 2);
+  EXPECT_EQ(table.column("u")(0), 1.5);
+  EXPECT_EQ(table.column("u")(1), 2e-3);
+  EXPECT_EQ(table.column("y")(0), -2.0);
+  EXPECT_TRUE(table.has_column("t"));
+  EXPECT_FALSE(table.has_column("r"));
+}
+
+TEST(Csv, MalformedNumberNamesFileLineAndColumn) {
+  EXPECT_EQ(parse_error("t,u,y\n0,1,2\n0.1,abc,3\n"),
+            "data.csv:3: column 'u' (field 2): malformed number 'abc'");
+  EXPECT_THAT(parse_error("t,u\n0,1.2.3\n"), HasSubstr("data.csv:2: column 'u'"));
+  EXPECT_THAT(parse_error("t,u\n0,1e\n"), HasSubstr("malformed number '1e'"));
+  EXPECT_THAT(parse_error("t,u\n0,+-1\n"), HasSubstr("malformed number '+-1'"));
+  EXPECT_THAT(parse_error("t,u\n0,1 2\n"), HasSubstr("malformed number '1 2'"));
+}
+
+TEST(Csv, LineNumbersCountCommentsAndBlankLines) {
+  EXPECT_THAT(parse_error("# c\n\nt,u\n0,1\n\n# c\n1,x\n"), HasSubstr("data.csv:7: column 'u'"));
+}
+
+TEST(Csv, WrongFieldCountNamesTheLineAndTheExpectedColumns) {
+  EXPECT_EQ(parse_error("t,u,y\n0,1,2\n1,2\n"),
+            "data.csv:3: expected 3 fields (t, u, y) but found 2");
+  EXPECT_THAT(parse_error("t,u\n0,1,2\n"), HasSubstr("data.csv:2: expected 2 fields"));
+}
+
+TEST(Csv, EmptyFieldIsAnError) {
+  EXPECT_EQ(parse_error("t,u\n0,\n"),
+            "data.csv:2: column 'u' (field 2): empty field; expected a number");
+}
+
+TEST(Csv, NonFiniteValuesAreRejectedWithTheirLine) {
+  for (const std::string bad : {"nan", "NaN", "inf", "-inf", "infinity", "1e999"}) {
+    EXPECT_THAT(parse_error("t,u\n0,1\n1," + bad + "\n"),
+                HasSubstr("data.csv:3: column 'u' (field 2): value '" + bad + "' is not finite"))
+        << bad;
+  }
+}
+
+TEST(Csv, UnderflowIsAcceptedAsTheNearestDouble) {
+  const CsvTable table = parse_csv("u\n1e-400\n", "x.csv");
+  EXPECT_EQ(table.column("u")(0), 0.0);
+}
+
+TEST(Csv, EmptyFileHeaderOnlyAndMissingHeaderAreErrors) {
+  EXPECT_THAT(parse_error(""), HasSubstr("data.csv: file is empty"));
+  EXPECT_THAT(parse_error("\n# only a comment\n\n"), HasSubstr("data.csv: file is empty"));
+  EXPECT_EQ(parse_error("t,u\n"), "data.csv: no data rows after the header on line 1");
+  EXPECT_THAT(parse_error("0,1\n1,2\n"), HasSubstr("data.csv:1: the first line holds numbers"));
+}
+
+TEST(Csv, BadHeaderNamesAreErrors) {
+  EXPECT_THAT(parse_error("t,,y\n0,1,2\n"), HasSubstr("data.csv:1: header field 2 is empty"));
+  EXPECT_THAT(parse_error("t,u,u\n0,1,2\n"),
+              HasSubstr("data.csv:1: column name 'u' appears twice"));
+}
+
+TEST(Csv, MissingColumnListsTheColumnsPresent) {
+  const CsvTable table = parse_csv("t,u\n0,1\n", "data.csv");
+  try {
+    table.column("y");
+    FAIL() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "data.csv: no column 'y' (columns: t, u)");
+  }
+}
+
+TEST(Csv, FormatThenParseIsBitIdentical) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal;
+  CsvTable table;
+  Eigen::VectorXd a(200), b(200);
+  for (int k = 0; k < 200; ++k) {
+    a(k) = normal(rng) * std::pow(10.0, k % 40 - 20);
+    b(k) = std::nextafter(1.0 / 3.0 * k, 1e300);
+  }
+  a(0) = -0.0;
+  a(1) = std::numeric_limits<double>::denorm_min();
+  a(2) = std::numeric_limits<double>::max();
+  table.add_column("a", a);
+  table.add_column("b_2", b);
+  const CsvTable back = parse_csv(format_csv(table), "round.csv");
+  ASSERT_EQ(back.names, table.names);
+  for (int k = 0; k < 200; ++k) {
+    EXPECT_EQ(back.column("a")(k), a(k)) << k;
+    EXPECT_EQ(back.column("b_2")(k), b(k)) << k;
+  }
+  EXPECT_TRUE(std::signbit(back.column("a")(0)));
+}
+
+TEST(Csv, AddColumnChecksNamesAndLengths) {
+  CsvTable table;
+  table.add_column("t", Eigen::VectorXd::Zero(3));
+  EXPECT_THROW(table.add_column("t", Eigen::VectorXd::Zero(3)), InvalidArgument);
+  EXPECT_THROW(table.add_column("u", Eigen::VectorXd::Zero(2)), InvalidArgument);
+  EXPECT_THROW(table.add_column("a,b", Eigen::VectorXd::Zero(3)), InvalidArgument);
+  EXPECT_THROW(table.add_column("", Eigen::VectorXd::Zero(3)), InvalidArgument);
+}
+
+TEST(Csv, WriteRefusesToOverwriteUnlessAsked) {
+  const testing::TestDirectory dir;
+  CsvTable table;
+  table.add_column("x", Eigen::VectorXd::LinSpaced(4, 0.0, 3.0));
+  const auto path = dir / "x.csv";
+  write_csv(path, table);
+  EXPECT_EQ(read_csv(path).column("x"), table.column("x"));
+
+  CsvTable other;
+  other.add_column("x", Eigen::VectorXd::Constant(2, 9.0));
+  try {
+    write_csv(path, other);
+    FAIL() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("file exists and overwriting was not requested"));
+  }
+  EXPECT_EQ(read_csv(path).rows(), 4) << "the existing file must be left untouched";
+  write_csv(path, other, Overwrite::yes);
+  EXPECT_EQ(read_csv(path).rows(), 2);
+  // No temporary files are left behind.
+  int files = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    ++files;
+  EXPECT_EQ(files, 1);
+}
+
+TEST(Csv, ReadingAMissingFileNamesIt) {
+  try {
+    read_csv("/nonexistent/dir/data.csv");
+    FAIL() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "/nonexistent/dir/data.csv: no such file");
+  }
+}
+
+TEST(Csv, WritingIntoAMissingDirectoryIsBadInput) {
+  CsvTable table;
+  table.add_column("x", Eigen::VectorXd::Zero(2));
+  EXPECT_THROW(write_csv("/nonexistent/dir/out.csv", table), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace ctid::io

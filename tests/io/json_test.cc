@@ -1,0 +1,117 @@
+#include "ctid/io/json.h"
+
+#include <limits>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "ctid/core/error.h"
+
+namespace ctid::io {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+
+std::string parse_error(const std::string& text) {
+  try {
+    parse_json(text, "m.json");
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Json, SyntaxErrorsNameFileLineAndColumn) {
+  EXPECT_THAT(parse_error("{\n  \"a\": 1,\n  \"b\": NaN\n}\n"),
+              StartsWith("m.json:3:8: malformed JSON"));
+  EXPECT_THAT(parse_error("{\n  \"a\": [1, 2,]\n}"), StartsWith("m.json:2:14: malformed JSON"));
+  EXPECT_THAT(parse_error("{\"a\": 1"), StartsWith("m.json:1:"));
+  EXPECT_THAT(parse_error(""), StartsWith("m.json:1:"));
+  EXPECT_THAT(parse_error("{\n\"a\": 1}\n}"), StartsWith("m.json:3:1: malformed JSON"));
+}
+
+TEST(Json, LocationAgreesWithTheParsersOwnReport) {
+  // nlohmann's message carries "line L, column C"; ours must agree with it.
+  const std::string text = "{\n  \"x\": [1,\n    2 3]\n}";
+  try {
+    const nlohmann::json parsed = nlohmann::json::parse(text);
+    ADD_FAILURE() << parsed.dump();
+
+  } catch (const nlohmann::json::parse_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("line 3, column 7"));
+  }
+  EXPECT_THAT(parse_error(text), StartsWith("m.json:3:7:"));
+}
+
+TEST(JsonObject, ReadsFieldsAndRejectsUnknownOnes) {
+  const JsonObject o(
+      nlohmann::json::parse(R"({"x": 1.5, "n": 3, "s": "hi", "v": [1, 2], "typo": 0})"), "m.json");
+  EXPECT_EQ(o.number("x"), 1.5);
+  EXPECT_EQ(o.integer("n"), 3);
+  EXPECT_EQ(o.string("s"), "hi");
+  EXPECT_EQ(o.numbers("v"), Eigen::Vector2d(1, 2));
+  EXPECT_EQ(o.number_or("missing", 7.0), 7.0);
+  try {
+    o.finish();
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), StartsWith("m.json: typo: unknown field (known fields here: "));
+    EXPECT_THAT(e.what(), HasSubstr("missing, n, s, v, x"));
+  }
+}
+
+TEST(JsonObject, TypeErrorsNameThePath) {
+  const nlohmann::json doc = nlohmann::json::parse(R"({"a": {"v": [1, "2"], "n": 1.5, "w": 3}})");
+  const JsonObject root(doc, "m.json");
+  const JsonObject a = root.object("a");
+  EXPECT_EQ(a.path(), "a");
+  try {
+    a.numbers("v");
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "m.json: a.v[1]: expected a number but found a string");
+  }
+  try {
+    a.integer("n");
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "m.json: a.n: expected an integer but found 1.5");
+  }
+  try {
+    a.string("w");
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "m.json: a.w: expected a string but found a number");
+  }
+  try {
+    a.number("absent");
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "m.json: a.absent: required field is missing");
+  }
+  EXPECT_THROW(JsonObject(nlohmann::json::array(), "m.json"), InvalidArgument);
+}
+
+TEST(Json, OverflowingNumbersAreMalformedWithTheirLine) {
+  // JSON has no NaN or infinity; a literal beyond the range of a double is located too.
+  EXPECT_THAT(parse_error("{\n  \"v\": [1,\n  1e999]}"),
+              StartsWith("m.json:3:3: malformed JSON: number overflow parsing '1e999'"));
+}
+
+TEST(JsonObject, NonFiniteNumbersBuiltInCodeAreRejected) {
+  nlohmann::json doc;
+  doc["v"] = {1.0, std::numeric_limits<double>::infinity()};
+  doc["x"] = std::numeric_limits<double>::quiet_NaN();
+  const JsonObject o(doc, "m.json");
+  try {
+    o.numbers("v");
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "m.json: v[1]: value is not finite");
+  }
+  EXPECT_THROW(o.number("x"), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace ctid::io
