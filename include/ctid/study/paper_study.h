@@ -1,0 +1,167 @@
+// The Monte Carlo studies of González et al., Section 6: 6.1 open loop (four modes, white
+// input, noise (q + 0.5)/(q - 0.85) e, SRIVC with 8 poles and 6 zeros against the additive
+// estimator, DC gains b_i0 compared) and 6.2 closed loop (eq. 46 under the paper's PID, direct
+// SRIVC, CLSRIVC and the additive closed-loop estimator, all six additive parameters compared).
+// Run r at size j is a pure function of (seed, j, r): see monte_carlo.h for the seed hash.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ctid/core/additive_model.h"
+#include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/sampled_data.h"
+#include "ctid/estimation/estimation_result.h"
+
+namespace ctid {
+
+enum class StudyKind {
+  open_loop,    ///< Section 6.1
+  closed_loop,  ///< Section 6.2
+};
+
+enum class StudyEstimator {
+  srivc,             ///< unfactored SRIVC (in closed loop: the direct approach)
+  clsrivc,           ///< unfactored closed-loop SRIVC (closed loop only)
+  additive_srivc,    ///< additive open-loop iteration (29) (open loop only)
+  additive_clsrivc,  ///< additive closed-loop iteration (29) with instrument (20)
+};
+
+/// "open-loop" / "closed-loop" and "srivc", "clsrivc", "additive_srivc", "additive_clsrivc".
+std::string to_string(StudyKind kind);
+std::string to_string(StudyEstimator estimator);
+
+struct StudyOptions {
+  StudyKind kind = StudyKind::open_loop;
+  /// Monte Carlo runs per sample size (paper: 300). >= 1.
+  int runs = 300;
+  /// Number of log-spaced sample sizes (paper: 30 open loop, 50 closed loop). >= 1.
+  int sizes = 30;
+  /// Smallest and largest N (paper: 2000 and 100000; 500 and 123036). 1 <= min <= max, and
+  /// min large enough for the parameter count (>= 50).
+  int min_samples = 2000;
+  int max_samples = 100000;
+  std::uint64_t seed = 1;
+  /// Worker threads; 0: std::thread::hardware_concurrency().
+  int threads = 0;
+  /// Estimator settings (paper: 100 iterations; tolerance 1e-10 open loop, 1e-7 closed loop).
+  int max_iterations = 100;
+  double tolerance = 1e-10;
+  /// Start at beta* (1 + U(-p, p)) elementwise (paper: p = 0.05), the same start for every
+  /// estimator of a run; the unfactored estimators get it converted to one transfer function.
+  double initial_perturbation = 0.05;
+  /// Ask the estimators for their covariance, which gives the per-run standard errors and
+  /// the predicted MSE (costs time).
+  bool compute_covariance = true;
+  /// Estimators to run; empty: all of the study (open loop: srivc, additive_srivc; closed
+  /// loop: srivc, clsrivc, additive_clsrivc).
+  std::vector<StudyEstimator> estimators;
+
+  /// The paper's study of that kind at full size.
+  static StudyOptions paper(StudyKind kind);
+  /// Throws InvalidArgument naming the first bad field, its value and the rule.
+  void validate() const;
+  /// `estimators`, or the study's default set when empty.
+  std::vector<StudyEstimator> active_estimators() const;
+};
+
+/// The true system and the experiment of a study.
+struct StudySetup {
+  AdditiveModel system;
+  double sample_time = 0.05;
+  /// Closed loop: the PID C_d(q) = 0.0115 + 0.00725 q/(q-1) + 0.00454 (q-1)/q.
+  std::optional<DiscreteTransferFunction> controller;
+  /// Open loop: (q + 0.5)/(q - 0.85) driven by white noise of variance 0.02; closed loop:
+  /// none (white output noise of variance 0.01).
+  std::optional<DiscreteTransferFunction> noise_filter;
+  double noise_variance = 0.02;
+  /// The compared parameters: names ("b10", "a11", ...) and true values.
+  std::vector<std::string> parameter_names;
+  Eigen::VectorXd true_parameters;
+};
+
+StudySetup study_setup(StudyKind kind);
+
+/// The data and the start of one run.
+struct StudyRunInput {
+  SampledData data;
+  AdditiveModel initial_model;
+};
+
+/// Simulates run `run_index` at N = `samples` from the run's seed: the input (open loop) or
+/// reference (closed loop) from stream 0, the noise from stream 1, the start from stream 2.
+StudyRunInput simulate_study_run(const StudyOptions& options, int samples, std::uint64_t seed);
+
+/// One estimator's outcome in one run.
+struct StudyRecord {
+  int size_index = 0;
+  int run_index = 0;
+  int samples = 0;
+  std::uint64_t seed = 0;
+  StudyEstimator estimator = StudyEstimator::srivc;
+  Termination termination = Termination::iteration_limit;
+  int iterations = 0;
+  /// The compared parameters could be formed (the estimate splits into the true structure,
+  /// e.g. four complex-pole modes); otherwise `estimate` is NaN.
+  bool valid = false;
+  Eigen::VectorXd estimate;
+  /// Delta-method standard errors of `estimate` from the estimator's reported covariance
+  /// (NaN without covariance).
+  Eigen::VectorXd standard_error;
+  /// Non-empty if the estimator threw (InvalidArgument on data it should accept): the
+  /// message, so the run can be replayed and reported; the study goes on.
+  std::string error;
+};
+
+/// Compared parameters of a model in the study's structure (K second-order modes sorted as
+/// the truth): b_i0 (open loop) or [a_i1, a_i2, b_i0] per mode (closed loop). An unfactored
+/// model is split by partial fractions first. Empty if the structure does not fit.
+Eigen::VectorXd compared_parameters(StudyKind kind, const AdditiveModel& model);
+
+/// Runs every active estimator on run (size_index, run_index): the pure function that the
+/// full study evaluates at every index, and that `--run-index/--size-index` replays.
+std::vector<StudyRecord> run_study_case(const StudyOptions& options, int size_index, int run_index);
+
+/// MSE of one estimator and parameter at one sample size.
+struct MseRow {
+  StudyEstimator estimator = StudyEstimator::srivc;
+  int size_index = 0;
+  int samples = 0;
+  int parameter = 0;
+  double true_value = 0.0;
+  double mean_squared_error = 0.0;
+  double bias = 0.0;
+  /// Mean over the runs of the squared reported standard errors (NaN without covariance).
+  double predicted_mean_squared_error = 0.0;
+  int valid_runs = 0;
+  int converged_runs = 0;
+};
+
+struct StudyResult {
+  StudyOptions options;
+  std::vector<int> sample_sizes;
+  std::vector<std::string> parameter_names;
+  Eigen::VectorXd true_parameters;
+  /// Ordered by size index, then run index, then estimator (options.active_estimators()).
+  std::vector<StudyRecord> records;
+  /// Ordered by estimator, then size index, then parameter.
+  std::vector<MseRow> mse;
+};
+
+/// MSE rows from records (any order) for the given sizes and estimators.
+std::vector<MseRow> summarize_study(const std::vector<StudyRecord>& records,
+                                    const std::vector<int>& sample_sizes,
+                                    const std::vector<StudyEstimator>& estimators,
+                                    const Eigen::VectorXd& true_parameters);
+
+/// The whole study in parallel (options.threads). `progress`, if given, is called after each
+/// finished case with the number finished and the total (from worker threads, serialised).
+StudyResult run_study(const StudyOptions& options,
+                      const std::function<void(int, int)>& progress = {});
+
+}  // namespace ctid
