@@ -4,6 +4,7 @@
 // noise; writes CSV t,u,y[,r]. The numerics are ctid::simulate / simulate_closed_loop.
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -57,6 +58,13 @@ struct SimulateFlags {
   bool quiet = false;
 };
 
+// A user-facing number: 12 significant digits show 0.1 as "0.1", not 0.10000000000000001.
+std::string show(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.12g", x);
+  return buffer;
+}
+
 // Agreement of two sample times given in different places (flag, file, controller).
 bool same_sample_time(double a, double b) { return std::abs(a - b) <= 1e-9 * std::abs(b); }
 
@@ -77,9 +85,9 @@ InputSignal read_input_column(const SimulateFlags& f, CLI::App& app,
     in.sample_time = s.sample_time;
     in.start_time = s.start_time;
     if (app.count("--sample-time") > 0 && !same_sample_time(f.sample_time, s.sample_time)) {
-      usage_error(internal::concat("--sample-time ", f.sample_time,
+      usage_error(internal::concat("--sample-time ", show(f.sample_time),
                                    " disagrees with the time column '", f.time_column, "' of ",
-                                   f.input, " (step ", s.sample_time, " s)"));
+                                   f.input, " (step ", show(s.sample_time), " s)"));
     }
     return in;
   }
@@ -104,8 +112,9 @@ InputSignal generate_input(const SimulateFlags& f, CLI::App& app,
   if (!f.excitation_spec.empty()) {
     spec = io::read_excitation_spec(f.excitation_spec);
     if (app.count("--sample-time") > 0 && !same_sample_time(f.sample_time, spec.sample_time)) {
-      usage_error(internal::concat("--sample-time ", f.sample_time, " disagrees with sample_time ",
-                                   spec.sample_time, " in ", f.excitation_spec));
+      usage_error(internal::concat("--sample-time ", show(f.sample_time),
+                                   " disagrees with sample_time ", show(spec.sample_time), " in ",
+                                   f.excitation_spec));
     }
   } else {
     spec = f.spec;
@@ -129,8 +138,8 @@ Eigen::VectorXd raw_noise(const NoiseFlags& f, Eigen::Index n, double h, double 
   const DiscreteTransferFunction filter = io::read_discrete_transfer_function(f.filter);
   if (!same_sample_time(filter.sample_time(), h)) {
     usage_error(internal::concat("the noise filter in ", f.filter, " has sample time ",
-                                 filter.sample_time(), " s but the input is sampled every ", h,
-                                 " s"));
+                                 show(filter.sample_time()), " s but the input is sampled every ",
+                                 show(h), " s"));
   }
   return colored_noise(filter, static_cast<int>(n), std * std, f.seed);
 }
@@ -181,8 +190,8 @@ void run_simulate(const SimulateFlags& f, CLI::App& app) {
   const double h = in.sample_time;
   if (controller && !same_sample_time(controller->sample_time(), h)) {
     usage_error(internal::concat("the controller in ", f.controller, " has sample time ",
-                                 controller->sample_time(), " s but the input is sampled every ", h,
-                                 " s"));
+                                 show(controller->sample_time()),
+                                 " s but the input is sampled every ", show(h), " s"));
   }
   const Eigen::Index n = in.values.size();
 

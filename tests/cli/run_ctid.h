@@ -1,0 +1,97 @@
+// Runs the built ctid binary in a shell and captures its exit status, stdout and stderr,
+// in a fresh per-test working directory (so relative output paths land there).
+#pragma once
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace ctid::cli::testing {
+
+struct RunResult {
+  int status = -1;
+  std::string out;
+  std::string err;
+};
+
+inline std::string quote(const std::string& word) {
+  std::string quoted = "'";
+  for (char c : word) {
+    if (c == '\'') {
+      quoted += "'\\''";
+    } else {
+      quoted += c;
+    }
+  }
+  return quoted + "'";
+}
+
+inline std::string slurp(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = std::filesystem::temp_directory_path() /
+           ("ctid_cli_" + std::string(info->test_suite_name()) + "_" + info->name() + "_" +
+            std::to_string(::getpid()));
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ignored;
+    std::filesystem::remove_all(dir_, ignored);
+  }
+
+  /// Runs `ctid args...` inside the test directory.
+  RunResult ctid(const std::vector<std::string>& args) const {
+    std::string command = "cd " + quote(dir_.string()) + " && " + quote(CTID_CLI_PATH);
+    for (const auto& a : args) command += " " + quote(a);
+    command +=
+        " > " + quote((dir_ / ".stdout").string()) + " 2> " + quote((dir_ / ".stderr").string());
+    const int raw = std::system(command.c_str());
+    RunResult r;
+    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    r.out = slurp(dir_ / ".stdout");
+    r.err = slurp(dir_ / ".stderr");
+    return r;
+  }
+
+  /// Writes a file in the test directory and returns its path.
+  std::string write(const std::string& name, const std::string& content) const {
+    std::ofstream(dir_ / name, std::ios::binary) << content;
+    return (dir_ / name).string();
+  }
+
+  std::filesystem::path path(const std::string& name) const { return dir_ / name; }
+
+  /// An example model shipped in examples/models/.
+  static std::string example(const std::string& name) {
+    return std::string(CTID_SOURCE_DIR) + "/examples/models/" + name;
+  }
+
+ private:
+  std::filesystem::path dir_;
+};
+
+/// Number of lines in `text` (a final line without newline counts).
+inline int line_count(const std::string& text) {
+  int lines = 0;
+  for (char c : text) lines += c == '\n' ? 1 : 0;
+  return lines + (!text.empty() && text.back() != '\n' ? 1 : 0);
+}
+
+}  // namespace ctid::cli::testing
