@@ -1,0 +1,238 @@
+// Python bindings of the core layer: Polynomial (ascending coefficients), TransferFunction,
+// DiscreteTransferFunction, StateSpace, AdditiveModel with its submodels, SampledData.
+#include <complex>
+
+#include "common.h"
+#include "ctid/core/additive_model.h"
+#include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/polynomial.h"
+#include "ctid/core/sampled_data.h"
+#include "ctid/core/state_space.h"
+#include "ctid/core/transfer_function.h"
+
+namespace ctid::python {
+
+void bind_core(py::module_& m) {
+  using Complex = std::complex<double>;
+
+  py::class_<Polynomial>(m, "Polynomial",
+                         "Real polynomial with coefficients in ASCENDING powers: "
+                         "Polynomial([c0, c1, c2]) is c0 + c1 x + c2 x^2.")
+      .def(py::init<>(), "The zero polynomial (degree -1).")
+      .def(py::init<Eigen::VectorXd>(), py::arg("coefficients"),
+           "From ascending coefficients; a zero leading coefficient raises ValueError.")
+      .def_static("trimmed", &Polynomial::trimmed, py::arg("coefficients"),
+                  py::arg("tolerance") = 0.0,
+                  "Drop leading coefficients with |c| <= tolerance * max|c|.")
+      .def_static("from_roots", &Polynomial::from_roots, py::arg("roots"), py::arg("leading") = 1.0,
+                  "leading * prod(x - r_i); complex roots in pairs.")
+      .def_property_readonly("coefficients", &Polynomial::coefficients,
+                             "Ascending coefficients (empty for the zero polynomial).")
+      .def("degree", &Polynomial::degree, "Degree; -1 for the zero polynomial.")
+      .def("roots", &Polynomial::roots, "Roots (balanced companion eigenvalues).")
+      .def("derivative", &Polynomial::derivative, "The derivative polynomial.")
+      .def("monic", &Polynomial::monic, "Divided by its leading coefficient.")
+      .def("anti_monic", &Polynomial::anti_monic, "Divided by its constant coefficient.")
+      .def(
+          "__call__", [](const Polynomial& p, Complex x) { return p(x); }, py::arg("x"),
+          "Value at a (complex) point.")
+      .def(py::self + py::self)
+      .def(py::self - py::self)
+      .def(py::self * py::self)
+      .def(py::self == py::self)
+      .def("to_string", &Polynomial::to_string, py::arg("variable") = "s",
+           "Human-readable form, highest power first.")
+      .def("__repr__", [](const Polynomial& p) { return "Polynomial(" + p.to_string("x") + ")"; });
+  py::implicitly_convertible<py::list, Polynomial>();
+  py::implicitly_convertible<py::array, Polynomial>();
+
+  py::class_<StateSpace>(m, "StateSpace",
+                         "SISO state space dx = A x + B u, y = C x + D u (or the discrete "
+                         "x_{k+1} = A x_k + B u_k).")
+      .def(py::init([](Eigen::MatrixXd a, Eigen::VectorXd b, Eigen::RowVectorXd c, double d) {
+             StateSpace s{std::move(a), std::move(b), std::move(c), d};
+             s.validate();
+             return s;
+           }),
+           py::arg("a"), py::arg("b"), py::arg("c"), py::arg("d") = 0.0,
+           "From the matrices; inconsistent sizes or non-finite entries raise ValueError.")
+      .def_readwrite("a", &StateSpace::a, "State matrix A.")
+      .def_readwrite("b", &StateSpace::b, "Input vector B.")
+      .def_readwrite("c", &StateSpace::c, "Output row C.")
+      .def_readwrite("d", &StateSpace::d, "Feedthrough D.")
+      .def("order", &StateSpace::order, "Number of states.")
+      .def("validate", &StateSpace::validate, "Raise ValueError on inconsistent sizes.");
+
+  py::class_<TransferFunction>(m, "TransferFunction",
+                               "Continuous-time G(s) = e^{-s tau} N(s)/D(s), ascending "
+                               "coefficients, optional input delay tau in seconds.")
+      .def(py::init<Polynomial, Polynomial, double>(), py::arg("numerator"), py::arg("denominator"),
+           py::arg("input_delay") = 0.0,
+           "From numerator and denominator (Polynomial or ascending coefficient lists).")
+      .def_property_readonly("numerator", &TransferFunction::numerator, "N(s).")
+      .def_property_readonly("denominator", &TransferFunction::denominator, "D(s).")
+      .def_property_readonly("input_delay", &TransferFunction::input_delay, "tau [s].")
+      .def("with_input_delay", &TransferFunction::with_input_delay, py::arg("tau"),
+           "Copy with another input delay.")
+      .def("poles", &TransferFunction::poles, "Roots of D.")
+      .def("zeros", &TransferFunction::zeros, "Roots of N.")
+      .def("dc_gain", &TransferFunction::dc_gain, "N(0)/D(0).")
+      .def(
+          "__call__", [](const TransferFunction& g, Complex s) { return g(s); }, py::arg("s"),
+          "G(s) including the delay factor.")
+      .def("frequency_response",
+           py::overload_cast<double>(&TransferFunction::frequency_response, py::const_),
+           py::arg("omega"), "G(j omega), omega in rad/s.")
+      .def("relative_degree", &TransferFunction::relative_degree, "deg D - deg N.")
+      .def("is_proper", &TransferFunction::is_proper, "deg N <= deg D.")
+      .def("is_strictly_proper", &TransferFunction::is_strictly_proper, "deg N < deg D.")
+      .def("is_biproper", &TransferFunction::is_biproper, "deg N == deg D.")
+      .def("is_stable", &TransferFunction::is_stable, "Every pole in the open left half-plane.")
+      .def("normalized", &TransferFunction::normalized, "Same model with a monic denominator.")
+      .def("to_state_space", &TransferFunction::to_state_space,
+           "Scaled, balanced minimal realisation (delay not included).")
+      .def_static("from_state_space", &TransferFunction::from_state_space, py::arg("model"),
+                  "Transfer function of a realisation.")
+      .def(py::self + py::self)
+      .def(py::self * py::self)
+      .def("to_string", &TransferFunction::to_string, "Human-readable form.")
+      .def("__repr__", &TransferFunction::to_string);
+
+  py::class_<DiscreteTransferFunction>(
+      m, "DiscreteTransferFunction",
+      "Discrete-time G(q) = N(q)/D(q) in the shift operator q, ascending coefficients, with a "
+      "sample time (controllers, noise filters).")
+      .def(py::init<Polynomial, Polynomial, double>(), py::arg("numerator"), py::arg("denominator"),
+           py::arg("sample_time"), "Proper model, sample time > 0.")
+      .def_property_readonly("numerator", &DiscreteTransferFunction::numerator, "N(q).")
+      .def_property_readonly("denominator", &DiscreteTransferFunction::denominator, "D(q).")
+      .def_property_readonly("sample_time", &DiscreteTransferFunction::sample_time, "h [s].")
+      .def("poles", &DiscreteTransferFunction::poles, "Roots of D.")
+      .def("zeros", &DiscreteTransferFunction::zeros, "Roots of N.")
+      .def("dc_gain", &DiscreteTransferFunction::dc_gain, "N(1)/D(1).")
+      .def(
+          "__call__", [](const DiscreteTransferFunction& g, Complex z) { return g(z); },
+          py::arg("z"), "G(z).")
+      .def("frequency_response",
+           py::overload_cast<double>(&DiscreteTransferFunction::frequency_response, py::const_),
+           py::arg("omega"), "G(e^{j omega h}), omega in rad/s.")
+      .def("is_biproper", &DiscreteTransferFunction::is_biproper, "deg N == deg D.")
+      .def("is_stable", &DiscreteTransferFunction::is_stable, "Poles inside the unit circle.")
+      .def("to_state_space", &DiscreteTransferFunction::to_state_space,
+           "Controllable-form realisation.")
+      .def("filter", &DiscreteTransferFunction::filter, py::arg("x"), "y = G(q) x from rest.")
+      .def("to_string", &DiscreteTransferFunction::to_string, "Human-readable form.")
+      .def("__repr__", &DiscreteTransferFunction::to_string);
+
+  py::class_<Submodel>(m, "Submodel",
+                       "One term B(p)/(p^l A(p)) of an additive model; A anti-monic (A(0)=1).")
+      .def(py::init([](Polynomial a, Polynomial b, int integrators) {
+             return Submodel{std::move(a), std::move(b), integrators};
+           }),
+           py::arg("a"), py::arg("b"), py::arg("integrators") = 0,
+           "From A (ascending, a[0] == 1), B and the number of poles at the origin.")
+      .def_readwrite("a", &Submodel::a, "Anti-monic denominator A.")
+      .def_readwrite("b", &Submodel::b, "Numerator B.")
+      .def_readwrite("integrators", &Submodel::integrators, "Poles at the origin l.")
+      .def("n", &Submodel::n, "deg A.")
+      .def("m", &Submodel::m, "deg B.")
+      .def("parameter_count", &Submodel::parameter_count, "n + m + 1.")
+      .def("is_biproper", &Submodel::is_biproper, "m == n + l.")
+      .def("to_transfer_function", &Submodel::to_transfer_function, "B/(p^l A).");
+
+  py::class_<ModalParameters>(m, "ModalParameters",
+                              "Natural frequency [rad/s], damping ratio and modal gain of a "
+                              "second-order submodel.")
+      .def(py::init([](double w, double zeta, double gain) {
+             return ModalParameters{w, zeta, gain};
+           }),
+           py::arg("natural_frequency") = 0.0, py::arg("damping_ratio") = 0.0,
+           py::arg("gain") = 0.0, "From the three values.")
+      .def_readwrite("natural_frequency", &ModalParameters::natural_frequency, "w_n [rad/s].")
+      .def_readwrite("damping_ratio", &ModalParameters::damping_ratio, "zeta.")
+      .def_readwrite("gain", &ModalParameters::gain, "B(0).")
+      .def("__repr__", [](const ModalParameters& p) {
+        return "ModalParameters(natural_frequency=" + std::to_string(p.natural_frequency) +
+               ", damping_ratio=" + std::to_string(p.damping_ratio) +
+               ", gain=" + std::to_string(p.gain) + ")";
+      });
+
+  py::class_<SubmodelOrder>(m, "SubmodelOrder",
+                            "Requested structure of one submodel: n poles (besides the "
+                            "origin), m zeros, integrators poles at the origin.")
+      .def(py::init([](int n, int m_, int integrators) {
+             return SubmodelOrder{n, m_, integrators};
+           }),
+           py::arg("n") = 2, py::arg("m") = 0, py::arg("integrators") = 0, "From the orders.")
+      .def_readwrite("n", &SubmodelOrder::n, "deg A.")
+      .def_readwrite("m", &SubmodelOrder::m, "deg B.")
+      .def_readwrite("integrators", &SubmodelOrder::integrators, "Poles at the origin.")
+      .def("__repr__", [](const SubmodelOrder& o) {
+        return "SubmodelOrder(n=" + std::to_string(o.n) + ", m=" + std::to_string(o.m) +
+               ", integrators=" + std::to_string(o.integrators) + ")";
+      });
+
+  py::class_<AdditiveModel>(m, "AdditiveModel",
+                            "G(p) = e^{-p tau} sum_i B_i(p)/(p^l_i A_i(p)), anti-monic A_i; "
+                            "parameters theta_i = [a_i1..a_in, b_i0..b_im] stacked.")
+      .def(py::init<std::vector<Submodel>, double>(), py::arg("submodels"),
+           py::arg("input_delay") = 0.0, "From submodels; every rule is checked.")
+      .def_static("from_parameters", &AdditiveModel::from_parameters, py::arg("orders"),
+                  py::arg("theta"), py::arg("input_delay") = 0.0,
+                  "From orders and the stacked parameter vector.")
+      .def_static("from_transfer_function", &AdditiveModel::from_transfer_function, py::arg("g"),
+                  py::arg("imag_tolerance") = 1e-8,
+                  "Partial-fraction split into first/second-order submodels.")
+      .def_property_readonly("submodels", &AdditiveModel::submodels, "The submodels.")
+      .def_property_readonly("input_delay", &AdditiveModel::input_delay, "tau [s].")
+      .def("__len__", &AdditiveModel::size)
+      .def("__getitem__", &AdditiveModel::operator[], py::arg("i"))
+      .def("size", &AdditiveModel::size, "Number of submodels K.")
+      .def("with_input_delay", &AdditiveModel::with_input_delay, py::arg("tau"),
+           "Copy with another delay.")
+      .def("orders", &AdditiveModel::orders, "SubmodelOrder of each submodel.")
+      .def("parameter_count", &AdditiveModel::parameter_count, "Length of theta.")
+      .def("parameters", &AdditiveModel::parameters, "Stacked theta.")
+      .def("with_parameters", &AdditiveModel::with_parameters, py::arg("theta"),
+           "Same structure, new parameters.")
+      .def("to_transfer_function", &AdditiveModel::to_transfer_function,
+           "The sum as one transfer function.")
+      .def("frequency_response",
+           py::overload_cast<double>(&AdditiveModel::frequency_response, py::const_),
+           py::arg("omega"), "G(j omega), omega in rad/s.")
+      .def("modal_parameters", &AdditiveModel::modal_parameters, py::arg("i"),
+           "ModalParameters of submodel i if it is an underdamped mode, else None.")
+      .def("to_string", &AdditiveModel::to_string, "Human-readable form.")
+      .def("__repr__", &AdditiveModel::to_string);
+
+  py::class_<SampledData>(m, "SampledData",
+                          "Uniformly sampled input u, output y and optional reference r at "
+                          "t_k = start_time + k h.")
+      .def(py::init<double, Eigen::VectorXd, Eigen::VectorXd, std::optional<Eigen::VectorXd>,
+                    double>(),
+           py::arg("sample_time"), py::arg("input"), py::arg("output"),
+           py::arg("reference") = py::none(), py::arg("start_time") = 0.0,
+           "Checked: h > 0, equal lengths, >= 2 samples, finite values.")
+      .def_static("from_time_stamps", &SampledData::from_time_stamps, py::arg("time"),
+                  py::arg("input"), py::arg("output"), py::arg("reference") = py::none(),
+                  py::arg("relative_tolerance") = 1e-6, "From uniformly increasing time stamps.")
+      .def("__len__", &SampledData::size)
+      .def("size", &SampledData::size, "Number of samples N.")
+      .def_property_readonly("sample_time", &SampledData::sample_time, "h [s].")
+      .def_property_readonly("start_time", &SampledData::start_time, "t_0 [s].")
+      .def_property_readonly("time", &SampledData::time, "t_k [s].")
+      .def_property_readonly("input", &SampledData::input, "u_k.")
+      .def_property_readonly("output", &SampledData::output, "y_k.")
+      .def("has_reference", &SampledData::has_reference, "True if r is present.")
+      .def_property_readonly(
+          "reference",
+          [](const SampledData& d) -> std::optional<Eigen::VectorXd> {
+            if (!d.has_reference()) return std::nullopt;
+            return d.reference();
+          },
+          "r_k or None.")
+      .def("segment", &SampledData::segment, py::arg("begin"), py::arg("count"),
+           "Samples [begin, begin + count).");
+}
+
+}  // namespace ctid::python

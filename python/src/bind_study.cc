@@ -1,0 +1,118 @@
+// Python bindings of the study layer: the replayable Monte Carlo helpers (seed hash, sizes,
+// MSE summaries) and the Section 6 studies of González et al. (setups, single runs, the whole
+// study). Long runs release the GIL.
+#include "common.h"
+#include "ctid/study/monte_carlo.h"
+#include "ctid/study/paper_study.h"
+
+namespace ctid::python {
+
+void bind_study(py::module_& m) {
+  m.def("splitmix64", &splitmix64, py::arg("x"), "One splitmix64 step.");
+  m.def("run_seed", &run_seed, py::arg("study_seed"), py::arg("size_index"), py::arg("run_index"),
+        "Seed of one Monte Carlo run.");
+  m.def("stream_seed", &stream_seed, py::arg("seed"), py::arg("stream"),
+        "Independent stream of a run.");
+  m.def("log_spaced_sizes", &log_spaced_sizes, py::arg("first"), py::arg("last"), py::arg("count"),
+        "Rounded geometric sequence of sample sizes.");
+  py::class_<ErrorSummary>(m, "ErrorSummary", "MSE, bias and predicted MSE of one parameter.")
+      .def_readonly("runs", &ErrorSummary::runs, "Finite estimates used.")
+      .def_readonly("mean_squared_error", &ErrorSummary::mean_squared_error, "Mean e^2.")
+      .def_readonly("bias", &ErrorSummary::bias, "Mean e.")
+      .def_readonly("predicted_mean_squared_error", &ErrorSummary::predicted_mean_squared_error,
+                    "Mean predicted variance.")
+      .def_readonly("predicted_runs", &ErrorSummary::predicted_runs, "Finite predictions.");
+  m.def("summarize_errors", &summarize_errors, py::arg("estimates"), py::arg("truth"),
+        py::arg("predicted_variances") = Eigen::VectorXd(), "MSE summary of estimates.");
+  m.def("log_log_slope", &log_log_slope, py::arg("samples"), py::arg("mse"),
+        "Slope of log10 MSE against log10 N (-1 for 1/N).");
+
+  py::enum_<StudyKind>(m, "StudyKind", "Which Section 6 study.")
+      .value("open_loop", StudyKind::open_loop, "Section 6.1.")
+      .value("closed_loop", StudyKind::closed_loop, "Section 6.2.");
+  py::enum_<StudyEstimator>(m, "StudyEstimator", "Estimators compared in a study.")
+      .value("srivc", StudyEstimator::srivc, "Unfactored SRIVC.")
+      .value("clsrivc", StudyEstimator::clsrivc, "Unfactored CLSRIVC.")
+      .value("additive_srivc", StudyEstimator::additive_srivc, "Additive open loop.")
+      .value("additive_clsrivc", StudyEstimator::additive_clsrivc, "Additive closed loop.");
+  OptionsClass<StudyOptions>(m, "StudyOptions", "Options of a Section 6 Monte Carlo study.")
+      .field("kind", &StudyOptions::kind, "StudyKind.")
+      .field("runs", &StudyOptions::runs, "Runs per sample size.")
+      .field("sizes", &StudyOptions::sizes, "Number of sample sizes.")
+      .field("min_samples", &StudyOptions::min_samples, "Smallest N.")
+      .field("max_samples", &StudyOptions::max_samples, "Largest N.")
+      .field("seed", &StudyOptions::seed, "Study seed.")
+      .field("threads", &StudyOptions::threads, "Worker threads (0: all cores).")
+      .field("max_iterations", &StudyOptions::max_iterations, "Estimator iteration limit.")
+      .field("tolerance", &StudyOptions::tolerance, "Estimator tolerance.")
+      .field("initial_perturbation", &StudyOptions::initial_perturbation,
+             "Relative perturbation of the start.")
+      .field("compute_covariance", &StudyOptions::compute_covariance,
+             "Ask for covariances (predicted MSE).")
+      .field("estimators", &StudyOptions::estimators, "StudyEstimator list; empty: default.")
+      .finish()
+      .def_static("paper", &StudyOptions::paper, py::arg("kind"), "The paper's study at full size.")
+      .def("active_estimators", &StudyOptions::active_estimators, "Estimators that run.");
+  py::class_<StudySetup>(m, "StudySetup", "True system and experiment of a study.")
+      .def_readonly("system", &StudySetup::system, "True AdditiveModel.")
+      .def_readonly("sample_time", &StudySetup::sample_time, "h [s].")
+      .def_readonly("controller", &StudySetup::controller, "Controller or None.")
+      .def_readonly("noise_filter", &StudySetup::noise_filter, "Noise filter or None.")
+      .def_readonly("noise_variance", &StudySetup::noise_variance, "Noise variance.")
+      .def_readonly("parameter_names", &StudySetup::parameter_names, "Compared parameters.")
+      .def_readonly("true_parameters", &StudySetup::true_parameters, "Their true values.");
+  m.def("study_setup", &study_setup, py::arg("kind"), "The setup of a study kind.");
+  py::class_<StudyRunInput>(m, "StudyRunInput", "Data and start of one run.")
+      .def_readonly("data", &StudyRunInput::data, "SampledData.")
+      .def_readonly("initial_model", &StudyRunInput::initial_model, "Start.");
+  m.def("simulate_study_run", &simulate_study_run, py::arg("options"), py::arg("samples"),
+        py::arg("seed"), "Simulate one run from its seed.");
+  py::class_<StudyRecord>(m, "StudyRecord", "One estimator's outcome in one run.")
+      .def_readonly("size_index", &StudyRecord::size_index, "Size index.")
+      .def_readonly("run_index", &StudyRecord::run_index, "Run index.")
+      .def_readonly("samples", &StudyRecord::samples, "N.")
+      .def_readonly("seed", &StudyRecord::seed, "Run seed.")
+      .def_readonly("estimator", &StudyRecord::estimator, "StudyEstimator.")
+      .def_readonly("termination", &StudyRecord::termination, "Termination.")
+      .def_readonly("iterations", &StudyRecord::iterations, "Iterations.")
+      .def_readonly("valid", &StudyRecord::valid, "Compared parameters formed.")
+      .def_readonly("estimate", &StudyRecord::estimate, "Compared parameters.")
+      .def_readonly("standard_error", &StudyRecord::standard_error, "Their standard errors.")
+      .def_readonly("error", &StudyRecord::error, "Message if the estimator threw.");
+  m.def("compared_parameters", &compared_parameters, py::arg("kind"), py::arg("model"),
+        "Compared parameters of a model in the study's structure.");
+  m.def("run_study_case", &run_study_case, py::arg("options"), py::arg("size_index"),
+        py::arg("run_index"), py::call_guard<py::gil_scoped_release>(),
+        "Every active estimator on one run (replayable).");
+  py::class_<MseRow>(m, "MseRow", "MSE of one estimator and parameter at one N.")
+      .def_readonly("estimator", &MseRow::estimator, "StudyEstimator.")
+      .def_readonly("size_index", &MseRow::size_index, "Size index.")
+      .def_readonly("samples", &MseRow::samples, "N.")
+      .def_readonly("parameter", &MseRow::parameter, "Parameter index.")
+      .def_readonly("true_value", &MseRow::true_value, "True value.")
+      .def_readonly("mean_squared_error", &MseRow::mean_squared_error, "MSE.")
+      .def_readonly("bias", &MseRow::bias, "Bias.")
+      .def_readonly("predicted_mean_squared_error", &MseRow::predicted_mean_squared_error,
+                    "Asymptotic prediction.")
+      .def_readonly("valid_runs", &MseRow::valid_runs, "Valid runs.")
+      .def_readonly("converged_runs", &MseRow::converged_runs, "Converged runs.");
+  py::class_<StudyResult>(m, "StudyResult", "Records and MSE table of a study.")
+      .def_readonly("options", &StudyResult::options, "StudyOptions.")
+      .def_readonly("sample_sizes", &StudyResult::sample_sizes, "N per size index.")
+      .def_readonly("parameter_names", &StudyResult::parameter_names, "Names.")
+      .def_readonly("true_parameters", &StudyResult::true_parameters, "True values.")
+      .def_readonly("records", &StudyResult::records, "Per-run records.")
+      .def_readonly("mse", &StudyResult::mse, "MSE rows.");
+  m.def("summarize_study", &summarize_study, py::arg("records"), py::arg("sample_sizes"),
+        py::arg("estimators"), py::arg("true_parameters"), "MSE rows from records.");
+  m.def(
+      "run_study",
+      [](const std::optional<StudyOptions>& options, const py::kwargs& kwargs) {
+        const StudyOptions o = options_from<StudyOptions>("run_study", options, kwargs);
+        py::gil_scoped_release release;
+        return run_study(o);
+      },
+      py::arg("options") = py::none(), "The whole study in parallel; options as keywords.");
+}
+
+}  // namespace ctid::python

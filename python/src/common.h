@@ -1,0 +1,116 @@
+// Shared helpers of the ctid Python bindings: options structs bound with keyword-only
+// constructors that reject unknown keywords (the field list is written once per struct and
+// reused for the constructor, repr and the `fields` tuple), and functions that take their
+// options either as one options object or as keyword arguments. No numerics live here.
+#pragma once
+
+#include <algorithm>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <pybind11/complex.h>
+#include <pybind11/eigen.h>
+#include <pybind11/functional.h>
+#include <pybind11/operators.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+namespace ctid::python {
+
+namespace py = pybind11;
+
+void bind_core(py::module_& m);
+void bind_simulation(py::module_& m);
+void bind_frequency(py::module_& m);
+void bind_estimation(py::module_& m);
+void bind_study(py::module_& m);
+
+inline std::string join(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& name : names) out += (out.empty() ? "" : ", ") + name;
+  return out;
+}
+
+/// Raises TypeError unless every key of `kwargs` is one of `fields`.
+inline void check_keywords(const std::string& where, const py::kwargs& kwargs,
+                           const std::vector<std::string>& fields) {
+  for (const auto& item : kwargs) {
+    const auto key = py::cast<std::string>(item.first);
+    if (std::find(fields.begin(), fields.end(), key) == fields.end()) {
+      throw py::type_error(where + "() got an unexpected keyword argument '" + key +
+                           "'; valid keywords: " + join(fields));
+    }
+  }
+}
+
+/// An options struct bound as a Python class: Name(field=value, ...) with keyword-only
+/// arguments (unknown ones raise TypeError listing the valid fields), read/write attributes,
+/// validate(), a repr and the class attribute `fields`.
+template <class T>
+class OptionsClass {
+ public:
+  OptionsClass(py::module_& m, const char* name, const char* doc)
+      : cls_(m, name, doc), name_(name), fields_(std::make_shared<std::vector<std::string>>()) {}
+
+  template <class D>
+  OptionsClass& field(const char* name, D T::*member, const char* doc) {
+    cls_.def_readwrite(name, member, doc);
+    fields_->push_back(name);
+    return *this;
+  }
+
+  py::class_<T>& finish() {
+    auto fields = fields_;
+    const std::string name = name_;
+    cls_.def(py::init([fields, name](const py::kwargs& kwargs) {
+               check_keywords(name, kwargs, *fields);
+               py::object object = py::cast(T{});
+               for (const auto& item : kwargs) {
+                 py::setattr(object, item.first, item.second);
+               }
+               return object.cast<T>();
+             }),
+             ("Keyword-only constructor; fields: " + join(*fields) +
+              ". Unknown keywords raise TypeError.")
+                 .c_str());
+    cls_.def(
+        "validate", [](const T& self) { self.validate(); },
+        "Raise ValueError naming the first bad field, its value and the rule.");
+    cls_.def("__repr__", [fields, name](const py::object& self) {
+      std::string out = name + "(";
+      for (size_t i = 0; i < fields->size(); ++i) {
+        out += (i ? ", " : "") + (*fields)[i] + "=" +
+               py::cast<std::string>(py::repr(self.attr((*fields)[i].c_str())));
+      }
+      return out + ")";
+    });
+    py::tuple names(fields->size());
+    for (size_t i = 0; i < fields->size(); ++i) names[i] = py::str((*fields)[i]);
+    cls_.attr("fields") = names;
+    return cls_;
+  }
+
+ private:
+  py::class_<T> cls_;
+  std::string name_;
+  std::shared_ptr<std::vector<std::string>> fields_;
+};
+
+/// The options of a call: `options` itself, or T(**kwargs); both at once is a TypeError, and
+/// an unknown keyword names the function and the valid keywords.
+template <class T>
+T options_from(const std::string& function, const std::optional<T>& options,
+               const py::kwargs& kwargs) {
+  if (options && !kwargs.empty()) {
+    throw py::type_error(function + "() takes either options=... or keyword options, not both");
+  }
+  if (options) return *options;
+  const py::object type = py::type::of<T>();
+  const auto fields = py::cast<std::vector<std::string>>(type.attr("fields"));
+  check_keywords(function, kwargs, fields);
+  return type(**kwargs).template cast<T>();
+}
+
+}  // namespace ctid::python
