@@ -43,7 +43,7 @@ function(ctid_add_layer_tests name)
   set(target ctid_${name}_tests)
   add_executable(${target} ${sources})
   target_include_directories(${target} PRIVATE ${PROJECT_SOURCE_DIR}/src ${PROJECT_SOURCE_DIR}/tests)
-  target_link_libraries(${target} PRIVATE ctid::ctid ${ARG_LIBS} GTest::gtest GTest::gmock GTest::gtest_main
+  target_link_libraries(${target} PRIVATE ctid::${name} ${ARG_LIBS} GTest::gtest GTest::gmock GTest::gtest_main
     ctid_compile_options)
   target_compile_definitions(${target} PRIVATE
     CTID_SOURCE_DIR="${PROJECT_SOURCE_DIR}" CTID_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared")
