@@ -35,7 +35,7 @@ closed_loop=$out/gonzalez_6_2_closed_loop.csv
 "$ctid" simulate "${force[@]}" \
   --model "$models/gonzalez_6_2_plant.json" \
   --controller "$models/gonzalez_6_2_pid.json" \
-  --excitation multisine --samples 8192 --periods 4 --max-frequency 3 --seed 1 \
+  --excitation multisine --samples 8192 --periods 4 --max-frequency-hz 3 --seed 1 \
   --noise-std 0.1 --noise-seed 2 --output "$closed_loop"
 touch "$marker"
 

@@ -311,10 +311,10 @@ Command add_simulate_command(CLI::App& parent) {
                   "multisine: periods in the record (N must be a multiple)")
       ->capture_default_str()
       ->group("Generated input");
-  app->add_option("--min-frequency", f.spec.min_frequency, "multisine: band lower edge, Hz")
+  app->add_option("--min-frequency-hz", f.spec.min_frequency_hz, "multisine: band lower edge, Hz")
       ->capture_default_str()
       ->group("Generated input");
-  app->add_option("--max-frequency", f.spec.max_frequency,
+  app->add_option("--max-frequency-hz", f.spec.max_frequency_hz,
                   "multisine: band upper edge, Hz (0: up to Nyquist)")
       ->capture_default_str()
       ->group("Generated input");

@@ -75,8 +75,8 @@ MultisineOptions ExcitationSpec::multisine_options() const {
   options.period_length = periods >= 1 ? samples / periods : samples;
   options.periods = periods;
   options.sample_time = sample_time;
-  options.min_frequency = min_frequency;
-  options.max_frequency = max_frequency;
+  options.min_frequency = min_frequency_hz;
+  options.max_frequency = max_frequency_hz;
   options.grid = grid;
   options.rms = rms;
   options.seed = seed;
@@ -113,8 +113,8 @@ nlohmann::json to_json(const ExcitationSpec& spec) {
       break;
     case ExcitationKind::multisine:
       j["periods"] = spec.periods;
-      j["min_frequency"] = spec.min_frequency;
-      j["max_frequency"] = spec.max_frequency;
+      j["min_frequency_hz"] = spec.min_frequency_hz;
+      j["max_frequency_hz"] = spec.max_frequency_hz;
       j["grid"] = to_string(spec.grid);
       j["rms"] = spec.rms;
       break;
@@ -161,8 +161,8 @@ ExcitationSpec excitation_spec_from_json(const nlohmann::json& value, const std:
       break;
     case ExcitationKind::multisine:
       spec.periods = int_field(o, "periods", spec.periods);
-      spec.min_frequency = o.number_or("min_frequency", spec.min_frequency);
-      spec.max_frequency = o.number_or("max_frequency", spec.max_frequency);
+      spec.min_frequency_hz = o.number_or("min_frequency_hz", spec.min_frequency_hz);
+      spec.max_frequency_hz = o.number_or("max_frequency_hz", spec.max_frequency_hz);
       try {
         spec.grid = frequency_grid_from_string(o.string_or("grid", "full"));
       } catch (const InvalidArgument& e) {

@@ -62,8 +62,8 @@ TEST_F(CliTest, SimulateHelpExplainsEveryFlag) {
                            "--register-length",
                            "--samples-per-bit",
                            "--periods",
-                           "--min-frequency",
-                           "--max-frequency",
+                           "--min-frequency-hz",
+                           "--max-frequency-hz",
                            "--grid",
                            "--rms",
                            "--controller",
@@ -182,7 +182,7 @@ TEST_F(CliTest, NeverOverwritesWithoutForce) {
 TEST_F(CliTest, OpenLoopOutputEqualsTheLibrarysSimulation) {
   const std::string model = example("gonzalez_6_1_open_loop.json");
   const auto r = ctid({"simulate", "-m", model, "-o", "y.csv", "-e", "multisine", "-n", "2000",
-                       "--periods", "2", "-T", "0.05", "--max-frequency", "3", "--seed", "5"});
+                       "--periods", "2", "-T", "0.05", "--max-frequency-hz", "3", "--seed", "5"});
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("wrote 2000 samples"));
   const io::CsvTable table = io::read_csv(path("y.csv"));
@@ -256,9 +256,9 @@ TEST_F(CliTest, ExcitationSpecFileEqualsTheFlags) {
   const std::string model = write("g.json", kFirstOrder);
   const std::string spec = example("multisine_0.01_3hz.json");
   ASSERT_EQ(ctid({"simulate", "-m", model, "-o", "a.csv", "--excitation-spec", spec}).status, 0);
-  const auto flags =
-      ctid({"simulate", "-m", model, "-o", "b.csv", "-e", "multisine", "-n", "8192", "-T", "0.05",
-            "--seed", "1", "--periods", "4", "--min-frequency", "0.01", "--max-frequency", "3"});
+  const auto flags = ctid({"simulate", "-m", model, "-o", "b.csv", "-e", "multisine", "-n", "8192",
+                           "-T", "0.05", "--seed", "1", "--periods", "4", "--min-frequency-hz",
+                           "0.01", "--max-frequency-hz", "3"});
   ASSERT_EQ(flags.status, 0) << flags.err;
   EXPECT_EQ(testing::slurp(path("a.csv")), testing::slurp(path("b.csv")));
   expect_bad_input(

@@ -27,8 +27,8 @@ TEST(ExcitationSpec, MultisineMatchesTheSimulationLayerCall) {
   spec.samples = 600;
   spec.periods = 3;
   spec.sample_time = 0.01;
-  spec.min_frequency = 1.0;
-  spec.max_frequency = 20.0;
+  spec.min_frequency_hz = 1.0;
+  spec.max_frequency_hz = 20.0;
   spec.grid = FrequencyGrid::odd;
   spec.rms = 2.0;
   spec.seed = 42;
@@ -78,8 +78,8 @@ TEST(ExcitationSpec, JsonRoundTripForEachSignal) {
     spec.amplitude = 0.1;
     spec.samples_per_bit = 3;
     spec.periods = 4;
-    spec.min_frequency = 0.5;
-    spec.max_frequency = 3.0;
+    spec.min_frequency_hz = 0.5;
+    spec.max_frequency_hz = 3.0;
     spec.grid = FrequencyGrid::odd;
     spec.rms = 1.0 / 3.0;
     const ExcitationSpec back =

@@ -40,9 +40,9 @@ struct ExcitationSpec {
   double amplitude = 1.0;    ///< PRBS levels +-amplitude
   int samples_per_bit = 1;   ///< PRBS
 
-  int periods = 1;             ///< multisine repetitions; samples must be a multiple
-  double min_frequency = 0.0;  ///< multisine band lower edge, Hz
-  double max_frequency = 0.0;  ///< multisine band upper edge, Hz (0: up to Nyquist)
+  int periods = 1;                ///< multisine repetitions; samples must be a multiple
+  double min_frequency_hz = 0.0;  ///< multisine band lower edge, Hz
+  double max_frequency_hz = 0.0;  ///< multisine band upper edge, Hz (0: up to Nyquist)
   FrequencyGrid grid = FrequencyGrid::full;
   double rms = 1.0;  ///< multisine root mean square
 
