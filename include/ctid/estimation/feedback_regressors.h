@@ -1,0 +1,72 @@
+// Step 1 regressors for the delayed-feedback loop W = α/(β + γ e^{-Δs}) (De Iuliis, Germani,
+// Manes 2017, eqs. 3-12). With q = n + m, θ = [β_{q-1..0} | γ_{q-2..0} | α_{q-1..0}] (3q - 1
+// entries, the paper's descending order) and y(k) = C(k) θ. Signals are filtered by L(s) =
+// 1/s^q (the paper's Brunovsky integrator chain, eqs. 6-7) or, better conditioned, by the
+// linear integral filter 1/(s + a)^q; sampled data are interpolated linearly between samples
+// and the filter integrated exactly (eqs. 8-9). Δ need not be a multiple of δ.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "ctid/core/sampled_data.h"
+
+namespace ctid {
+
+/// Exact propagation of dx/dt = A x + B y over τ when y is linear on the step:
+/// x(t + τ) = a x(t) + b y(t) + g ẏ, with b = ∫_0^τ e^{Aθ} B dθ and
+/// g = ∫_0^τ e^{Aθ}(τ - θ) B dθ. The paper's B_δ is b(δ) and its B̄_δ is g(δ)/δ.
+struct FilterStep {
+  Eigen::MatrixXd a;
+  Eigen::VectorXd b;
+  Eigen::VectorXd g;
+};
+
+/// Brunovsky chain of order q (v_1 the q-fold integral, v_q the single integral): the closed
+/// forms a_ij = τ^{j-i}/(j-i)!, b_i = τ^{r+1}/(r+1)!, g_i = τ^{r+2}/(r+2)!, r = q - i.
+FilterStep integrator_chain_step(int q, double tau);
+/// Controllable form of 1/(s + a)^q (state i = s^{i-1}/(s+a)^q y, i = 1..q), via one
+/// matrix exponential of an augmented matrix; pole a = 0 gives integrator_chain_step.
+FilterStep integral_filter_step(int q, double pole, double tau);
+
+enum class RegressorFilter {
+  kIntegratorChain,       ///< 1/s^q, the paper's choice (eqs. 6-9)
+  kLinearIntegralFilter,  ///< 1/(s + a)^q, regressors stay bounded on long records
+};
+
+struct FeedbackRegressorOptions {
+  RegressorFilter filter = RegressorFilter::kIntegratorChain;
+  /// a > 0 of 1/(s + a)^q [rad/s]; used by kLinearIntegralFilter only.
+  double filter_pole = 1.0;
+  /// Append nuisance columns t^j e^{-at}/j! and their Δ-delayed copies (j = 0..q-1): they
+  /// absorb non-zero initial conditions (the paper's Remark 1) and the boundary terms of
+  /// the piecewise-linear interpolation, which otherwise integrate into polynomial drift.
+  /// The delayed copies are added only when equations start before Δ (after Δ they are in
+  /// the span of the undelayed ones).
+  bool initial_condition_terms = false;
+  /// First equation k; -1 uses the paper's k = p = ceil(Δ/δ).
+  int first_equation = -1;
+
+  void validate() const;
+};
+
+/// Rows are the equations k = first..N-1: target(k) = regressor.row(k) [θ; nuisance].
+/// With the chain the target is y(k); with 1/(s+a)^q it is s^q/(s+a)^q y.
+struct FeedbackRegression {
+  Eigen::MatrixXd regressor;
+  Eigen::VectorXd target;
+  Eigen::VectorXi sample_index;
+  int forward_order = 0;   ///< n
+  int feedback_order = 0;  ///< m
+  int theta_size = 0;      ///< 3(n + m) - 1
+  int nuisance_size = 0;
+  double delay = 0.0;
+  double sample_time = 0.0;
+};
+
+/// Throws InvalidArgument for orders < 1, Δ < 0, a record not longer than Δ, or fewer
+/// equations than unknowns.
+FeedbackRegression build_feedback_regression(const SampledData& data, int forward_order,
+                                             int feedback_order, double delay,
+                                             const FeedbackRegressorOptions& options = {});
+
+}  // namespace ctid
