@@ -73,15 +73,15 @@ Eigen::MatrixXd instrumental_variable_covariance(const Eigen::MatrixXd& psi,
     const double e2 =
         ar.innovation_variance * static_cast<double>(n) / static_cast<double>(n - parameter_count);
     // psi~_s = sum_j h_j psi_{s+j}, h the impulse response of 1/A: run 1/A backwards in time.
-    Eigen::MatrixXd g(n, p);
+    // Time runs along the columns of g (p x N) so each step touches contiguous memory.
+    Eigen::MatrixXd g = scaled.transpose();
     const Eigen::Index order = ar.coefficients.size() - 1;
-    for (Eigen::Index k = n - 1; k >= 0; --k) {
-      g.row(k) = scaled.row(k);
+    for (Eigen::Index k = n - 2; k >= 0; --k) {
       for (Eigen::Index j = 1; j <= order && k + j < n; ++j) {
-        g.row(k) -= ar.coefficients(j) * g.row(k + j);
+        g.col(k) -= ar.coefficients(j) * g.col(k + j);
       }
     }
-    const Eigen::MatrixXd q = e2 * (g.transpose() * g);
+    const Eigen::MatrixXd q = e2 * (g * g.transpose());
     middle_inv = r_inv * q * r_inv;
   }
   return s.cwiseInverse().asDiagonal() * middle_inv * s.cwiseInverse().asDiagonal();
