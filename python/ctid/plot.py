@@ -1,0 +1,165 @@
+"""Command-line entry point for ctid's figures, used by the C++ CLI's ``--plot`` flag.
+
+    /usr/bin/python3 -m ctid.plot KIND INPUT OUTPUT [--title TEXT]
+
+KIND is one of bode, modes, validation, residuals, mse; INPUT a JSON (bode, modes) or CSV
+(validation, residuals, mse) file in the formats of docs/python.md; OUTPUT ends in .png or
+.svg. Exit status 0 on success, 2 for bad usage or input (one line on stderr), 1 otherwise.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+
+import numpy as np
+
+KINDS = ("bode", "modes", "validation", "residuals", "mse")
+
+
+class InputError(Exception):
+    """Bad input file or arguments (exit status 2)."""
+
+
+def _polynomial(document, field, where):
+    if field not in document:
+        raise InputError(f"{where}: missing field '{field}'")
+    return [float(c) for c in document[field]]
+
+
+def model_from_json(document, where="model"):
+    """A ctid.TransferFunction or ctid.AdditiveModel from the model JSON of docs/formats.md
+    (coefficients under *_ascending, a "type" field)."""
+    import ctid
+
+    kind = document.get("type")
+    delay = float(document.get("input_delay", 0.0))
+    if kind == "transfer_function":
+        return ctid.TransferFunction(
+            _polynomial(document, "numerator_ascending", where),
+            _polynomial(document, "denominator_ascending", where), delay)
+    if kind == "additive_model":
+        submodels = [
+            ctid.Submodel(
+                ctid.Polynomial(_polynomial(s, "denominator_ascending", f"{where}.submodels")),
+                ctid.Polynomial(_polynomial(s, "numerator_ascending", f"{where}.submodels")),
+                int(s.get("integrators", 0)))
+            for s in document.get("submodels", [])
+        ]
+        return ctid.AdditiveModel(submodels, delay)
+    raise InputError(f"{where}: 'type' is {kind!r}; expected 'transfer_function' or "
+                     "'additive_model'")
+
+
+class _Frf:
+    """The fields of ctid.Frf that the plots use, read from JSON."""
+
+    def __init__(self, document):
+        try:
+            self.frequencies = np.asarray(document["frequencies"], dtype=float)
+            self.response = (np.asarray(document["real"], dtype=float)
+                             + 1j * np.asarray(document["imag"], dtype=float))
+        except KeyError as missing:
+            raise InputError(f"frf: missing field {missing}") from None
+        if self.frequencies.shape != self.response.shape:
+            raise InputError("frf: frequencies, real and imag must have the same length")
+        self.variance = np.asarray(document.get("variance", []), dtype=float)
+
+
+def _read_csv(path):
+    with open(path, newline="") as stream:
+        rows = list(csv.DictReader(stream))
+    if not rows:
+        raise InputError(f"{path}: no data rows")
+    return rows
+
+
+def _column(rows, names, path):
+    for name in names:
+        if name in rows[0]:
+            return np.array([float(r[name]) for r in rows])
+    raise InputError(f"{path}: needs a column named {' or '.join(names)}")
+
+
+def _frequency_figure(kind, path, output, title):
+    from . import plotting
+
+    with open(path) as stream:
+        document = json.load(stream)
+    if "type" in document:
+        document = {"model": document}
+    if "model" not in document:
+        raise InputError(f"{path}: needs a 'model' object or a model document")
+    model = model_from_json(document["model"], f"{path}: model")
+    frf = _Frf(document["frf"]) if "frf" in document else None
+    covariance = document.get("covariance")
+    omegas = None
+    if "frequency_range" in document:
+        low, high = document["frequency_range"]
+        omegas = np.logspace(np.log10(low), np.log10(high), 400)
+    if kind == "bode":
+        return plotting.bode(model, frf=frf, covariance=covariance, omegas=omegas,
+                             title=title, filename=output)
+    return plotting.modes(model, omegas=omegas, frf=frf, title=title, filename=output)
+
+
+def run(kind, path, output, title=None):
+    """Draw one figure; returns the Figure. Raises InputError or ValueError on bad input."""
+    import ctid
+    from . import plotting
+
+    if kind not in KINDS:
+        raise InputError(f"unknown kind '{kind}'; expected one of {', '.join(KINDS)}")
+    if not output.lower().endswith((".png", ".svg")):
+        raise InputError(f"output '{output}' must end in .png or .svg")
+    if kind in ("bode", "modes"):
+        return _frequency_figure(kind, path, output, title)
+    rows = _read_csv(path)
+    if kind == "validation":
+        t = _column(rows, ("t", "time"), path)
+        y = _column(rows, ("y",), path)
+        simulated = _column(rows, ("y_model", "y_simulated"), path)
+        h = (t[-1] - t[0]) / (len(t) - 1)
+        data = ctid.SampledData(h, np.zeros_like(y), y, start_time=float(t[0]))
+        return plotting.validation(data, simulated, title=title, filename=output)
+    if kind == "residuals":
+        u = _column(rows, ("u",), path)
+        if "residual" in rows[0]:
+            residual = _column(rows, ("residual",), path)
+        else:
+            residual = _column(rows, ("y",), path) - _column(rows, ("y_model",), path)
+        return plotting.residual_correlation(residual, u, title=title, filename=output)
+    for name in ("estimator", "N", "parameter", "mse"):
+        if name not in rows[0]:
+            raise InputError(f"{path}: needs a column named {name}")
+    return plotting.mse_against_n(rows, title=title, filename=output)
+
+
+def main(argv=None):
+    """Parse the command line, draw the figure, return the exit status."""
+    parser = argparse.ArgumentParser(
+        prog="python3 -m ctid.plot",
+        description="Draw a ctid figure (PNG or SVG) from a JSON or CSV file.")
+    parser.add_argument("kind", help="one of: " + ", ".join(KINDS))
+    parser.add_argument("input", help="JSON (bode, modes) or CSV (validation, residuals, mse)")
+    parser.add_argument("output", help="figure file, .png or .svg")
+    parser.add_argument("--title", default=None, help="figure title")
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exit_:
+        return 2 if exit_.code else 0
+    try:
+        run(args.kind, args.input, args.output, args.title)
+    except (InputError, ValueError, TypeError, OSError, json.JSONDecodeError) as error:
+        print(f"ctid.plot: {error}", file=sys.stderr)
+        return 2
+    except Exception as error:  # noqa: BLE001 - one line, exit status 1
+        print(f"ctid.plot: {type(error).__name__}: {error}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
