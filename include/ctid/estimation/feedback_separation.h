@@ -1,0 +1,62 @@
+// Step 2 of the delayed-feedback identification: F and H from α̂, β̂, γ̂ (De Iuliis, Germani,
+// Manes 2017, Section 3.2). (a) The Kronecker least-squares fit min J of eqs. (19)-(21),
+// solved by Levenberg-Marquardt (Ceres) from several starts; (b) the approximate GCD by an
+// SVD-truncated Kalman observability decomposition, eqs. (22)-(24), in the paper's basis:
+// the controllable canonical form of F̃ = α̂/β̂ and of H̃ = γ̂/α̂ (α̂ made monic first).
+// Polynomials are ascending (polynomial.h); F and H come back with monic denominators.
+#pragma once
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "ctid/core/polynomial.h"
+#include "ctid/core/transfer_function.h"
+
+namespace ctid {
+
+/// J of the paper for candidate F = N_F/D_F, H = N_H/D_H (monic denominators):
+/// |α̂ - N_F D_H|² + |β̂ - D_F D_H|² + |γ̂ - N_F N_H|² over the coefficients.
+double kronecker_cost(const Polynomial& alpha, const Polynomial& beta, const Polynomial& gamma,
+                      const TransferFunction& forward, const TransferFunction& feedback);
+
+struct KroneckerSeparationOptions {
+  /// Start from every split of the roots of β̂ into n for D_F and m for D_H (conjugate pairs
+  /// kept together; numerators fitted linearly), and from the GCD estimate. Off: GCD only.
+  bool multi_start = true;
+  int max_iterations = 200;
+  void validate() const;
+};
+
+struct KroneckerSeparationResult {
+  TransferFunction forward{Polynomial{0.0}, Polynomial{1.0}};
+  TransferFunction feedback{Polynomial{0.0}, Polynomial{1.0}};
+  double cost = 0.0;       ///< J at the returned F, H
+  int starts = 0;          ///< starts refined
+  std::string best_start;  ///< "gcd" or "roots split k"
+  bool converged = false;  ///< Ceres reported convergence for the best start
+  std::string message;
+};
+
+KroneckerSeparationResult separate_kronecker(const Polynomial& alpha, const Polynomial& beta,
+                                             const Polynomial& gamma, int forward_order,
+                                             int feedback_order,
+                                             const KroneckerSeparationOptions& options = {});
+
+struct GcdSeparationResult {
+  TransferFunction forward{Polynomial{0.0}, Polynomial{1.0}};
+  TransferFunction feedback{Polynomial{0.0}, Polynomial{1.0}};
+  Eigen::VectorXd forward_singular_values;   ///< of the observability matrix of F̃ (q values)
+  Eigen::VectorXd feedback_singular_values;  ///< of H̃ (q - 1 values)
+  double forward_gap = 0.0;       ///< σ_n / σ_{n+1}: large when cancelling m states is justified
+  double feedback_gap = 0.0;      ///< σ_m / σ_{m+1}
+  Polynomial cancelled_forward;   ///< det(sI - Â_u) for F̃, the approximate D_H
+  Polynomial cancelled_feedback;  ///< for H̃, the approximate monic N_F
+};
+
+/// Throws InvalidArgument if orders < 1, deg β̂ != n + m or α̂ has degree < n + m - 1.
+GcdSeparationResult separate_approximate_gcd(const Polynomial& alpha, const Polynomial& beta,
+                                             const Polynomial& gamma, int forward_order,
+                                             int feedback_order);
+
+}  // namespace ctid
