@@ -33,6 +33,7 @@ struct NoiseFlags {
   std::uint64_t seed = 2;
   CLI::Option* snr_option = nullptr;
   CLI::Option* std_option = nullptr;
+  CLI::Option* seed_option = nullptr;
 
   bool wanted() const { return snr_option->count() > 0 || std_option->count() > 0; }
 };
@@ -68,6 +69,39 @@ std::string show(double x) {
 // Agreement of two sample times given in different places (flag, file, controller).
 bool same_sample_time(double a, double b) { return std::abs(a - b) <= 1e-9 * std::abs(b); }
 
+// Flags of the generated input, and the one signal each applies to (none: every signal).
+struct SignalFlag {
+  const char* name;
+  std::optional<io::ExcitationKind> only;
+};
+constexpr io::ExcitationKind kWhite = io::ExcitationKind::white_noise;
+constexpr io::ExcitationKind kPrbs = io::ExcitationKind::prbs;
+constexpr io::ExcitationKind kMultisine = io::ExcitationKind::multisine;
+const SignalFlag kSignalFlags[] = {{"--samples", std::nullopt},
+                                   {"--seed", std::nullopt},
+                                   {"--std", kWhite},
+                                   {"--amplitude", kPrbs},
+                                   {"--register-length", kPrbs},
+                                   {"--samples-per-bit", kPrbs},
+                                   {"--periods", kMultisine},
+                                   {"--min-frequency-hz", kMultisine},
+                                   {"--max-frequency-hz", kMultisine},
+                                   {"--grid", kMultisine},
+                                   {"--rms", kMultisine}};
+
+// A flag that would silently have no effect is a usage error: the user meant something.
+void reject_unused_signal_flags(CLI::App& app, const std::string& source,
+                                std::optional<io::ExcitationKind> kind) {
+  for (const SignalFlag& flag : kSignalFlags) {
+    if (app.count(flag.name) == 0) continue;
+    if (!kind) usage_error(std::string(flag.name) + " has no effect with " + source);
+    if (flag.only && *flag.only != *kind) {
+      usage_error(std::string(flag.name) + " applies to --excitation " + io::to_string(*flag.only) +
+                  " only, not " + io::to_string(*kind));
+    }
+  }
+}
+
 struct InputSignal {
   Eigen::VectorXd values;
   double sample_time = 0.0;
@@ -76,6 +110,7 @@ struct InputSignal {
 
 InputSignal read_input_column(const SimulateFlags& f, CLI::App& app,
                               const std::optional<DiscreteTransferFunction>& controller) {
+  reject_unused_signal_flags(app, "--input (it applies to generated input)", std::nullopt);
   const io::CsvTable table = io::read_csv(f.input);
   InputSignal in;
   const bool time_flag_given = app.count("--time-column") > 0;
@@ -110,6 +145,7 @@ InputSignal generate_input(const SimulateFlags& f, CLI::App& app,
                            const std::optional<DiscreteTransferFunction>& controller) {
   io::ExcitationSpec spec;
   if (!f.excitation_spec.empty()) {
+    reject_unused_signal_flags(app, "--excitation-spec (the spec file sets it)", std::nullopt);
     spec = io::read_excitation_spec(f.excitation_spec);
     if (app.count("--sample-time") > 0 && !same_sample_time(f.sample_time, spec.sample_time)) {
       usage_error(internal::concat("--sample-time ", show(f.sample_time),
@@ -119,6 +155,7 @@ InputSignal generate_input(const SimulateFlags& f, CLI::App& app,
   } else {
     spec = f.spec;
     spec.kind = io::excitation_kind_from_string(f.excitation);
+    reject_unused_signal_flags(app, "", spec.kind);
     spec.grid = io::frequency_grid_from_string(f.grid);
     if (app.count("--sample-time") > 0) {
       spec.sample_time = f.sample_time;
@@ -149,6 +186,7 @@ Eigen::VectorXd raw_noise(const NoiseFlags& f, Eigen::Index n, double h, double 
 Eigen::VectorXd output_noise(const NoiseFlags& f, const Eigen::VectorXd& noise_free, double h) {
   if (!f.wanted()) {
     if (!f.filter.empty()) usage_error("--noise-filter needs --noise-std or --snr");
+    if (f.seed_option->count() > 0) usage_error("--noise-seed needs --noise-std or --snr");
     return Eigen::VectorXd();
   }
   if (f.std_option->count() > 0) return raw_noise(f, noise_free.size(), h, f.standard_deviation);
@@ -171,9 +209,9 @@ void add_noise_flags(CLI::App& app, NoiseFlags& f) {
                                 "alone)")
                      ->group("Output noise");
   f.std_option->excludes(f.snr_option);
-  app.add_option("--noise-seed", f.seed, "Seed of the noise e")
-      ->capture_default_str()
-      ->group("Output noise");
+  f.seed_option = app.add_option("--noise-seed", f.seed, "Seed of the noise e")
+                      ->capture_default_str()
+                      ->group("Output noise");
 }
 
 void run_simulate(const SimulateFlags& f, CLI::App& app) {

@@ -266,5 +266,27 @@ TEST_F(CliTest, ExcitationSpecFileEqualsTheFlags) {
       "ctid simulate: error: --excitation excludes --excitation-spec");
 }
 
+TEST_F(CliTest, FlagsThatWouldHaveNoEffectAreRejected) {
+  const std::string model = write("g.json", kFirstOrder);
+  const std::vector<std::string> base = {"simulate", "-m", model, "-o", "y.csv", "-T", "0.1"};
+  const auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = base;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return ctid(args);
+  };
+  expect_bad_input(with({"-e", "white", "--rms", "2"}),
+                   "ctid simulate: error: --rms applies to --excitation multisine only, not white");
+  expect_bad_input(with({"-e", "prbs", "--std", "2"}),
+                   "ctid simulate: error: --std applies to --excitation white only, not prbs");
+  const std::string csv = write("in.csv", "u\n1\n2\n");
+  expect_bad_input(with({"-i", csv, "--seed", "3"}),
+                   "ctid simulate: error: --seed has no effect with --input");
+  expect_bad_input(with({"--excitation-spec", example("multisine_0.01_3hz.json"), "-n", "10"}),
+                   "ctid simulate: error: --samples has no effect with --excitation-spec");
+  expect_bad_input(with({"-e", "white", "--noise-seed", "3"}),
+                   "ctid simulate: error: --noise-seed needs --noise-std or --snr");
+  EXPECT_FALSE(std::filesystem::exists(path("y.csv")));
+}
+
 }  // namespace
 }  // namespace ctid::cli
