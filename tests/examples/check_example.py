@@ -1,0 +1,88 @@
+#!/usr/bin/env python3
+"""Smoke test of one real-data example: run examples/<name>.py into a scratch folder, then
+check its figures (valid PNG files of sensible size) and its summary.json against bounds
+that come from the physics or the publications named in data/*/PROVENANCE.md, or from an
+independent computation done here with SciPy, never from ctid's own earlier output.
+
+Usage: check_example.py NAME OUT_DIR   (exit status 0 = pass, 1 = a check failed)
+"""
+
+import json
+import math
+import os
+import struct
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+failures = []
+
+
+def check(condition, what):
+    print(("ok    " if condition else "FAIL  ") + what)
+    if not condition:
+        failures.append(what)
+
+
+def check_png(path, min_width=300, min_height=200):
+    ok = os.path.isfile(path)
+    if ok:
+        with open(path, "rb") as f:
+            head = f.read(24)
+        ok = head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR"
+        if ok:
+            width, height = struct.unpack(">II", head[16:24])
+            ok = width >= min_width and height >= min_height and os.path.getsize(path) > 5000
+    check(ok, f"{os.path.basename(path)} is a PNG of sensible size")
+
+
+def flexible_structure(s, out):
+    import numpy as np
+    from scipy import signal
+
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    import flexible_structure as example
+
+    # Independent nonparametric reference: SciPy's Welch H1 estimate and its peaks.
+    h, u, y = example.load()
+    f, puu = signal.welch(u, fs=1 / h, nperseg=1024)
+    _, puy = signal.csd(u, y, fs=1 / h, nperseg=1024)
+    mag = np.abs(puy / puu)
+    peaks, _ = signal.find_peaks(20 * np.log10(mag), prominence=6)
+    peaks = peaks[f[peaks] < example.MAX_MODE_HZ]
+    check(s["termination"] == "converged", f"converged ({s['termination']})")
+    check(len(s["modes"]) == example.MODES, f"{example.MODES} modes")
+    resolution = f[1] - f[0]
+    for m in s["modes"]:
+        fn, zeta = m["natural_frequency_hz"], m["damping_ratio"]
+        nearest = float(f[peaks][np.argmin(np.abs(f[peaks] - fn))])
+        check(abs(fn - nearest) <= resolution,
+              f"mode {fn:.2f} Hz within one Welch line ({resolution} Hz) of a SciPy peak "
+              f"({nearest:.2f} Hz)")
+        check(0 < zeta < 0.05, f"mode {fn:.2f} Hz lightly damped (zeta = {zeta:.5f})")
+        check(0 < m["natural_frequency_se_hz"] < resolution,
+              f"standard error of f_n below the FRF resolution ({m['natural_frequency_se_hz']:.4f})")
+    for name in ("bode.png", "modes.png"):
+        check_png(os.path.join(out, name))
+
+
+CHECKS = {"flexible_structure": flexible_structure}
+
+
+def main():
+    name, out = sys.argv[1], sys.argv[2]
+    script = os.path.join(ROOT, "examples", name + ".py")
+    run = subprocess.run([sys.executable, script, "--out", out], capture_output=True,
+                         text=True, timeout=600)
+    sys.stdout.write(run.stdout)
+    sys.stderr.write(run.stderr)
+    check(run.returncode == 0, f"{name}.py exit status 0 (got {run.returncode})")
+    with open(os.path.join(out, "summary.json")) as f:
+        summary = json.load(f)
+    CHECKS[name](summary, out)
+    print(f"{len(failures)} check(s) failed" if failures else "all checks passed")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
