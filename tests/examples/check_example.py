@@ -66,7 +66,22 @@ def flexible_structure(s, out):
         check_png(os.path.join(out, name))
 
 
-CHECKS = {"flexible_structure": flexible_structure}
+def pt326(s, out):
+    # Published (CONTSID srivcstruc): first order, 5-sample delay.
+    check(s["termination"] == "converged", f"converged ({s['termination']})")
+    check(s["delay_samples"] == 5, f"delay = 5 samples as published (got {s['delay_samples']})")
+    check(0 < s["time_constant_s"] < 10 and s["gain"] > 0,
+          "a stable first-order lag with positive gain (heater power raises the temperature)")
+    check(s["time_constant_se_s"] < 0.1 * s["time_constant_s"], "time constant known to 10 %")
+    check(s["fit_validation_percent"] > 60, f"validation fit > 60 % "
+          f"(got {s['fit_validation_percent']:.1f})")
+    check(s["fit_validation_percent"] > s["fit_estimation_percent"] - 5,
+          "validation fit within 5 points of the estimation fit (no over-fitting)")
+    for name in ("delay_scan.png", "validation.png", "residuals.png"):
+        check_png(os.path.join(out, name))
+
+
+CHECKS = {"flexible_structure": flexible_structure, "pt326": pt326}
 
 
 def main():
