@@ -81,7 +81,25 @@ def pt326(s, out):
         check_png(os.path.join(out, name))
 
 
-CHECKS = {"flexible_structure": flexible_structure, "pt326": pt326}
+def canning_river(s, out):
+    # Published (CONTSID demo): SRIVC R^2 0.983 estimation, 0.914 validation.
+    check(s["termination"] == "converged", f"converged ({s['termination']})")
+    check(s["r2_estimation"] > 0.95, f"R^2 estimation > 0.95 (got {s['r2_estimation']:.4f})")
+    check(abs(s["r2_estimation"] - 0.983) < 0.01, "R^2 estimation within 0.01 of the published 0.983")
+    check(abs(s["r2_validation"] - 0.914) < 0.03, f"R^2 validation within 0.03 of the published "
+          f"0.914 (got {s['r2_validation']:.4f})")
+    check(s["slow_gain"] > 0 and s["fast_gain"] > 0, "both stores pass rain on (positive gains)")
+    check(s["slow_time_constant_days"] > 2 * s["fast_time_constant_days"] > 0,
+          "two distinct stable stores (slow T more than twice fast T)")
+    # The additive and the unfactored parameterisations describe one system.
+    for pa, pu in zip(s["poles_additive"], s["poles_srivc"]):
+        check(abs(pa - pu) < 1e-6 * abs(pu), f"additive pole {pa:.6f} equals SRIVC pole {pu:.6f}")
+    for name in ("flow.png", "stores.png"):
+        check_png(os.path.join(out, name))
+
+
+CHECKS = {"flexible_structure": flexible_structure, "pt326": pt326,
+          "canning_river": canning_river}
 
 
 def main():
