@@ -205,16 +205,16 @@ Command add_study_command(CLI::App& parent) {
       ->check(CLI::IsMember({"open-loop", "closed-loop"}));
   app->add_option("--output,-o", f.output, "Folder to write the results into")->required();
   app->add_option("--runs,-r", f.runs, "Monte Carlo runs per sample size (paper: 300)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1000000000));
   app->add_option("--sizes,-k", f.sizes,
                   "Number of log-spaced sample sizes (paper: 30 open loop, 50 closed loop)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1000000000));
   app->add_option("--min-samples", f.min_samples,
                   "Smallest N (paper: 2000 open loop, 500 closed loop)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1000000000));
   app->add_option("--max-samples", f.max_samples,
                   "Largest N (paper: 100000 open loop, 123036 closed loop)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1000000000));
   app->add_option("--threads,-j", f.threads, "Worker threads (0: every core)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
@@ -224,7 +224,7 @@ Command add_study_command(CLI::App& parent) {
   app->add_option("--run-index", f.run_index, "Replay one run: the run index r")
       ->check(CLI::NonNegativeNumber);
   app->add_option("--max-iterations", f.max_iterations, "Estimator iterations (paper: 100)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1000000000));
   app->add_option("--tolerance", f.tolerance,
                   "Relative parameter change that stops the iteration (paper: 1e-10 open loop, "
                   "1e-7 closed loop)")
