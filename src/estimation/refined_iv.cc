@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
@@ -182,72 +183,212 @@ std::optional<Eigen::VectorXd> sensitivity_filtered_reference(
   return out;
 }
 
-struct Evaluation {
-  Eigen::MatrixXd instrument;  // N x p
-  Eigen::MatrixXd regressor;   // N x p
-  Eigen::MatrixXd filtered;    // N x K, Upsilon (26)
-  Eigen::MatrixXd outputs;     // N x K, G_i u
+// Rows of the record processed together: the block buffers (a few times kBlock x p doubles)
+// stay in cache, and the sums of eq. (29) are formed block by block, so no N x p matrix is
+// ever stored during the iteration.
+constexpr Eigen::Index kBlock = 256;
+
+// Sums of eq. (29) over the record: Z'Phi, Z'Upsilon and the squared column norms of the
+// instrument Z and regressor Phi (for the unit-norm scaling).
+struct Moments {
+  Eigen::MatrixXd zp;  // p x p
+  Eigen::MatrixXd zy;  // p x K
+  Eigen::VectorXd zz;  // p
+  Eigen::VectorXd pp;  // p
+
+  bool all_finite() const {
+    return zp.allFinite() && zy.allFinite() && zz.allFinite() && pp.allFinite();
+  }
 };
 
-Evaluation evaluate(const Layout& layout, const Eigen::VectorXd& beta, const Eigen::VectorXd& u,
-                    const Eigen::VectorXd& y, const Eigen::VectorXd* source, double h,
-                    Interpolation output_interpolation, bool need_regressor) {
-  const Eigen::Index n = u.size();
-  const int k_count = layout.size();
-  Evaluation e;
-  e.instrument.resize(n, layout.parameters);
-  if (need_regressor) {
-    e.regressor.resize(n, layout.parameters);
-    e.filtered.resize(n, k_count);
-  }
-  e.outputs.resize(n, k_count);
-  for (int i = 0; i < k_count; ++i) {
-    const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
-    const int off = layout.offset[static_cast<size_t>(i)];
-    const Polynomial a = denominator_of(layout, beta, i);
-    const Eigen::VectorXd b = numerator_of(layout, beta, i);
-    const FilterRealization bank = derivative_filters(Polynomial::monomial(o.integrators) * a);
-    const Eigen::MatrixXd fu = SampledFilter(bank, h, Interpolation::zero_order_hold).apply(u);
-    e.outputs.col(i) = fu.leftCols(o.m + 1) * b;
-    if (need_regressor) e.regressor.middleCols(off + o.n, o.m + 1) = fu.leftCols(o.m + 1);
-    if (source == nullptr) {
-      e.instrument.middleCols(off + o.n, o.m + 1) = fu.leftCols(o.m + 1);
-    } else {
-      e.instrument.middleCols(off + o.n, o.m + 1) =
-          SampledFilter(bank, h, Interpolation::zero_order_hold).apply(*source).leftCols(o.m + 1);
-    }
-    if (o.n > 0) {
-      Eigen::VectorXd w = Eigen::VectorXd::Zero(bank.outputs());
-      w.head(o.m + 1) = b;
-      const FilterRealization chain = cascade(bank, w, derivative_filters(a));
-      const Eigen::MatrixXd fz = SampledFilter(chain, h, Interpolation::zero_order_hold)
-                                     .apply(source == nullptr ? u : *source);
-      e.instrument.middleCols(off, o.n) = -fz.middleCols(1, o.n);
-    }
-  }
-  if (need_regressor) {
-    const Eigen::VectorXd total = e.outputs.rowwise().sum();
-    for (int i = 0; i < k_count; ++i) {
-      const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
-      const int off = layout.offset[static_cast<size_t>(i)];
-      const Eigen::VectorXd residual_output = y - total + e.outputs.col(i);  // (23)
-      if (o.n > 0) {
-        const Eigen::MatrixXd fy =
-            SampledFilter(derivative_filters(denominator_of(layout, beta, i)), h,
-                          output_interpolation)
-                .apply(residual_output);
-        e.filtered.col(i) = fy.col(0);                              // (22)
-        e.regressor.middleCols(off, o.n) = -fy.middleCols(1, o.n);  // (24)
-      } else {
-        e.filtered.col(i) = residual_output;
-      }
-    }
-  }
-  return e;
+// The filters of one submodel at one iterate. Outputs of `source`: rows 0..m are
+// p^j/(p^l A) z (B-part of the instrument), rows m+1..m+n are p^k B/(p^l A^2) z, k = 1..n
+// (one cascade whose first stage is the 1/(p^l A) bank itself), and in open loop row m+n+1
+// is the model output B/(p^l A) u. `input` (closed loop, or when no instrument is needed)
+// gives p^j/(p^l A) u in rows 0..m and B/(p^l A) u in row m+1. `output` is the bank of
+// 1/A on the residual output y~_i (23).
+struct SubmodelFilters {
+  std::optional<SampledFilter> source;
+  std::optional<SampledFilter> input;
+  std::optional<SampledFilter> output;
+  SampledFilter::Stream source_stream;
+  SampledFilter::Stream input_stream;
+  SampledFilter::Stream output_stream;
+};
+
+// Block buffers reused by every pass of one estimate.
+struct Workspace {
+  Eigen::MatrixXd instrument;  // kBlock x p
+  Eigen::MatrixXd regressor;   // kBlock x p
+  Eigen::MatrixXd filtered;    // kBlock x K, Upsilon (26)
+  Eigen::MatrixXd outputs;     // kBlock x K, G_i u
+  Eigen::VectorXd total;       // kBlock
+  Eigen::VectorXd residual_output;
+  std::vector<Eigen::MatrixXd> source_out;
+  std::vector<Eigen::MatrixXd> input_out;
+  std::vector<Eigen::MatrixXd> output_out;
+
+  explicit Workspace(const Layout& layout)
+      : instrument(kBlock, layout.parameters),
+        regressor(kBlock, layout.parameters),
+        filtered(kBlock, layout.size()),
+        outputs(kBlock, layout.size()),
+        total(kBlock),
+        residual_output(kBlock),
+        source_out(static_cast<size_t>(layout.size())),
+        input_out(static_cast<size_t>(layout.size())),
+        output_out(static_cast<size_t>(layout.size())) {}
+};
+
+FilterRealization with_rows(const FilterRealization& f, const Eigen::MatrixXd& c,
+                            const Eigen::VectorXd& d) {
+  FilterRealization out;
+  out.a = f.a;
+  out.b = f.b;
+  out.c = c;
+  out.d = d;
+  return out;
 }
 
-Eigen::VectorXd column_norms(const Eigen::MatrixXd& m) {
-  Eigen::VectorXd s = m.colwise().norm().transpose();
+SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& beta, int i, double h,
+                                 Interpolation output_interpolation, bool closed_loop,
+                                 bool need_instrument, bool need_regressor) {
+  const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+  const Polynomial a = denominator_of(layout, beta, i);
+  const Eigen::VectorXd b = numerator_of(layout, beta, i);
+  const FilterRealization bank = derivative_filters(Polynomial::monomial(o.integrators) * a);
+  const int s1 = bank.order();
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank.outputs());
+  w.head(o.m + 1) = b;
+  const Eigen::RowVectorXd model_c = w.transpose() * bank.c;
+  const double model_d = w.dot(bank.d);
+  SubmodelFilters f;
+  if (need_instrument) {
+    const bool with_model = !closed_loop;
+    const int rows = o.m + 1 + o.n + (with_model ? 1 : 0);
+    FilterRealization chain = bank;
+    if (o.n > 0) chain = cascade(bank, w, derivative_filters(a));
+    const int states = chain.order();
+    Eigen::MatrixXd c = Eigen::MatrixXd::Zero(rows, states);
+    Eigen::VectorXd d = Eigen::VectorXd::Zero(rows);
+    c.topLeftCorner(o.m + 1, s1) = bank.c.topRows(o.m + 1);
+    d.head(o.m + 1) = bank.d.head(o.m + 1);
+    if (o.n > 0) {
+      c.middleRows(o.m + 1, o.n) = chain.c.middleRows(1, o.n);
+      d.segment(o.m + 1, o.n) = chain.d.segment(1, o.n);
+    }
+    if (with_model) {
+      c.block(rows - 1, 0, 1, s1) = model_c;
+      d(rows - 1) = model_d;
+    }
+    f.source.emplace(with_rows(chain, c, d), h, Interpolation::zero_order_hold);
+    f.source_stream = f.source->start();
+  }
+  if (closed_loop || !need_instrument) {
+    Eigen::MatrixXd c(o.m + 2, s1);
+    Eigen::VectorXd d(o.m + 2);
+    c.topRows(o.m + 1) = bank.c.topRows(o.m + 1);
+    d.head(o.m + 1) = bank.d.head(o.m + 1);
+    c.row(o.m + 1) = model_c;
+    d(o.m + 1) = model_d;
+    f.input.emplace(with_rows(bank, c, d), h, Interpolation::zero_order_hold);
+    f.input_stream = f.input->start();
+  }
+  if (need_regressor && o.n > 0) {
+    f.output.emplace(derivative_filters(a), h, output_interpolation);
+    f.output_stream = f.output->start();
+  }
+  return f;
+}
+
+// One pass over the record at beta (instrument source: u in open loop, S_uo r otherwise).
+// With `moments`: the sums of eq. (29); with `residual`: y - sum_i G_i u; with `psi`: the
+// N x p instrument (for the covariance).
+void evaluate(const Layout& layout, const Eigen::VectorXd& beta, const Eigen::VectorXd& u,
+              const Eigen::VectorXd& y, const Eigen::VectorXd* source, double h,
+              Interpolation output_interpolation, Workspace& w, Moments* moments,
+              Eigen::VectorXd* residual, Eigen::MatrixXd* psi) {
+  const Eigen::Index n = u.size();
+  const int k_count = layout.size();
+  const int p = layout.parameters;
+  const bool closed_loop = source != nullptr;
+  const bool need_instrument = moments != nullptr || psi != nullptr;
+  const bool need_regressor = moments != nullptr;
+  std::vector<SubmodelFilters> filters;
+  filters.reserve(static_cast<size_t>(k_count));
+  for (int i = 0; i < k_count; ++i) {
+    filters.push_back(submodel_filters(layout, beta, i, h, output_interpolation, closed_loop,
+                                       need_instrument, need_regressor));
+  }
+  if (moments != nullptr) {
+    moments->zp = Eigen::MatrixXd::Zero(p, p);
+    moments->zy = Eigen::MatrixXd::Zero(p, k_count);
+    moments->zz = Eigen::VectorXd::Zero(p);
+    moments->pp = Eigen::VectorXd::Zero(p);
+  }
+  if (residual != nullptr) residual->resize(n);
+  if (psi != nullptr) psi->resize(n, p);
+  for (Eigen::Index k0 = 0; k0 < n; k0 += kBlock) {
+    const Eigen::Index len = std::min(kBlock, n - k0);
+    for (int i = 0; i < k_count; ++i) {
+      const auto at = static_cast<size_t>(i);
+      const SubmodelOrder& o = layout.orders[at];
+      const int off = layout.offset[at];
+      SubmodelFilters& f = filters[at];
+      if (f.source) {
+        Eigen::MatrixXd& out = w.source_out[at];
+        out.resize(len, f.source->outputs());
+        f.source->run((closed_loop ? *source : u).segment(k0, len), f.source_stream, out);
+        w.instrument.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+        if (o.n > 0) w.instrument.block(0, off, len, o.n) = -out.middleCols(o.m + 1, o.n);
+        if (!closed_loop) {
+          w.outputs.col(i).head(len) = out.col(o.m + o.n + 1);
+          if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+        }
+      }
+      if (f.input) {
+        Eigen::MatrixXd& out = w.input_out[at];
+        out.resize(len, f.input->outputs());
+        f.input->run(u.segment(k0, len), f.input_stream, out);
+        w.outputs.col(i).head(len) = out.col(o.m + 1);
+        if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+      }
+    }
+    w.total.head(len) = w.outputs.topRows(len).rowwise().sum();
+    if (need_regressor) {
+      for (int i = 0; i < k_count; ++i) {
+        const auto at = static_cast<size_t>(i);
+        const SubmodelOrder& o = layout.orders[at];
+        const int off = layout.offset[at];
+        SubmodelFilters& f = filters[at];
+        w.residual_output.head(len) =
+            y.segment(k0, len) - w.total.head(len) + w.outputs.col(i).head(len);  // (23)
+        if (f.output) {
+          Eigen::MatrixXd& out = w.output_out[at];
+          out.resize(len, f.output->outputs());
+          f.output->run(w.residual_output.head(len), f.output_stream, out);
+          w.filtered.col(i).head(len) = out.col(0);                       // (22)
+          w.regressor.block(0, off, len, o.n) = -out.middleCols(1, o.n);  // (24)
+        } else {
+          w.filtered.col(i).head(len) = w.residual_output.head(len);
+        }
+      }
+    }
+    if (moments != nullptr) {
+      const auto z = w.instrument.topRows(len);
+      const auto phi = w.regressor.topRows(len);
+      moments->zp.noalias() += z.transpose() * phi;
+      moments->zy.noalias() += z.transpose() * w.filtered.topRows(len);
+      moments->zz += z.colwise().squaredNorm().transpose();
+      moments->pp += phi.colwise().squaredNorm().transpose();
+    }
+    if (residual != nullptr) residual->segment(k0, len) = y.segment(k0, len) - w.total.head(len);
+    if (psi != nullptr) psi->middleRows(k0, len) = w.instrument.topRows(len);
+  }
+}
+
+Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares) {
+  Eigen::VectorXd s = squares.cwiseSqrt();
   for (Eigen::Index j = 0; j < s.size(); ++j) {
     if (!(s(j) > 0.0) || !std::isfinite(s(j))) s(j) = 1.0;
   }
@@ -434,6 +575,7 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     return true;
   };
 
+  Workspace workspace(layout);
   result.termination = Termination::iteration_limit;
   bool stopped = false;
   if (closed_loop && !update_source(beta)) {
@@ -446,21 +588,20 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
 
   for (int iteration = 1; !stopped && iteration <= options.max_iterations; ++iteration) {
     if (closed_loop && iteration > 1 && !update_source(beta)) ++result.sensitivity_fallbacks;
-    const Evaluation e = evaluate(layout, beta, u, y, source ? &*source : nullptr, h,
-                                  options.output_interpolation, true);
-    if (!e.instrument.allFinite() || !e.regressor.allFinite() || !e.filtered.allFinite()) {
+    Moments sums;
+    evaluate(layout, beta, u, y, source ? &*source : nullptr, h, options.output_interpolation,
+             workspace, &sums, nullptr, nullptr);
+    if (!sums.all_finite()) {
       result.termination = Termination::non_finite;
       result.message = name + ": the filtered signals became non-finite at iteration " +
                        std::to_string(iteration) + "; the last finite iterate is returned";
       break;
     }
-    const Eigen::VectorXd sz = column_norms(e.instrument);
-    const Eigen::VectorXd sp = column_norms(e.regressor);
-    const Eigen::MatrixXd m = sz.cwiseInverse().asDiagonal() *
-                              (e.instrument.transpose() * e.regressor) *
-                              sp.cwiseInverse().asDiagonal();
-    const Eigen::MatrixXd rhs =
-        sz.cwiseInverse().asDiagonal() * (e.instrument.transpose() * e.filtered);
+    const Eigen::VectorXd sz = norms_from_squares(sums.zz);
+    const Eigen::VectorXd sp = norms_from_squares(sums.pp);
+    const Eigen::MatrixXd m =
+        sz.cwiseInverse().asDiagonal() * sums.zp * sp.cwiseInverse().asDiagonal();
+    const Eigen::MatrixXd rhs = sz.cwiseInverse().asDiagonal() * sums.zy;
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(m);
     const Eigen::VectorXd& sv = svd.singularValues();
     const double rcond = sv(sv.size() - 1) / sv(0);
@@ -530,17 +671,18 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   if (closed_loop && result.termination != Termination::closed_loop_unstable) {
     if (!update_source(beta)) ++result.sensitivity_fallbacks;
   }
-  const Evaluation final_eval = evaluate(layout, beta, u, y, source ? &*source : nullptr, h,
-                                         options.output_interpolation, false);
-  const Eigen::VectorXd residual = y - final_eval.outputs.rowwise().sum();
+  Eigen::VectorXd residual;
+  Eigen::MatrixXd psi;
+  evaluate(layout, beta, u, y, source ? &*source : nullptr, h, options.output_interpolation,
+           workspace, nullptr, &residual, options.compute_covariance ? &psi : nullptr);
   const double sse = residual.squaredNorm();
   result.mean_squared_error = sse / n_samples;
   result.noise_variance = sse / std::max(n_samples - p, 1);
   result.fit_percent = fit_percent(y, y - residual);
 
-  if (options.compute_covariance && final_eval.instrument.allFinite() && residual.allFinite()) {
-    result.covariance = instrumental_variable_covariance(
-        final_eval.instrument, residual, p, options.noise, options.noise_model_max_order);
+  if (options.compute_covariance && psi.allFinite() && residual.allFinite()) {
+    result.covariance = instrumental_variable_covariance(psi, residual, p, options.noise,
+                                                         options.noise_model_max_order);
     result.standard_errors = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
     result.modes = modal_estimates(result.model, result.covariance, problem.unfactored);
   }

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <utility>
 #include <vector>
 
 #include "ctid/core/error.h"
@@ -156,14 +158,144 @@ SampledFilter::SampledFilter(const FilterRealization& filter, double sample_time
     phi_ = zoh.phi;
     gamma0_ = zoh.gamma.col(0);
     gamma1_ = Eigen::VectorXd::Zero(filter.order());
+    hold_ = true;
   } else {
     const FohDiscretization foh = discretize_foh(filter.a, filter.b, sample_time);
     phi_ = foh.phi;
     gamma0_ = foh.gamma0.col(0);
     gamma1_ = foh.gamma1.col(0);
+    hold_ = false;
   }
   c_ = filter.c;
   d_ = filter.d;
+  // Exact zeros only: skipping them changes no result.
+  const int s = order();
+  phi_lo_.resize(s);
+  phi_hi_.resize(s);
+  for (int j = 0; j < s; ++j) {
+    int lo = 0;
+    int hi = s;
+    while (lo < hi && phi_(lo, j) == 0.0) ++lo;
+    while (hi > lo && phi_(hi - 1, j) == 0.0) --hi;
+    phi_lo_(j) = lo;
+    phi_hi_(j) = hi;
+  }
+  c_lo_.resize(outputs());
+  c_hi_.resize(outputs());
+  for (int j = 0; j < outputs(); ++j) {
+    int lo = 0;
+    int hi = s;
+    while (lo < hi && c_(j, lo) == 0.0) ++lo;
+    while (hi > lo && c_(j, hi - 1) == 0.0) --hi;
+    c_lo_(j) = lo;
+    c_hi_(j) = hi;
+  }
+}
+
+SampledFilter::Stream SampledFilter::start() const {
+  Stream stream;
+  stream.state = Eigen::VectorXd::Zero(order());
+  stream.scratch = Eigen::VectorXd::Zero(order());
+  return stream;
+}
+
+// S > 0 fixes the state dimension at compile time: the state lives in local arrays and the
+// dense S x S update unrolls. S == 0 is the general case, which skips the exact zeros of phi
+// column by column. Per sample: finish the step from the previous sample (the first-order
+// hold needs the current one), then read the outputs (sparse rows of C) at t_k.
+template <int S>
+void SampledFilter::run_fixed(const Eigen::Ref<const Eigen::VectorXd>& x, Stream& stream,
+                              Eigen::Ref<Eigen::MatrixXd> out, int first_output) const {
+  constexpr int kLocal = S > 0 ? S : 1;
+  const int s = S > 0 ? S : order();
+  const Eigen::Index n = x.size();
+  const int r = static_cast<int>(out.cols());
+  alignas(16) double local_z[kLocal];
+  alignas(16) double local_next[kLocal];
+  double* z = S > 0 ? local_z : stream.state.data();
+  double* next = S > 0 ? local_next : stream.scratch.data();
+  if (S > 0) {
+    for (int i = 0; i < s; ++i) z[i] = stream.state(i);
+  }
+  const double* phi = phi_.data();
+  const int* lo = phi_lo_.data();
+  const int* hi = phi_hi_.data();
+  const double* g0 = gamma0_.data();
+  const double* g1 = gamma1_.data();
+  const double* c = c_.data();
+  const double* d = d_.data() + first_output;
+  const int* clo = c_lo_.data() + first_output;
+  const int* chi = c_hi_.data() + first_output;
+  const double* c_first = c + static_cast<ptrdiff_t>(first_output) * s;
+  double previous = stream.previous;
+  bool started = stream.started;
+  double* o = out.data();
+  const Eigen::Index stride = out.outerStride();
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double xk = x(k);
+    if (started) {
+      for (int i = 0; i < s; ++i) next[i] = g0[i] * previous + g1[i] * xk;
+      if constexpr (S > 0) {
+        using Vector = Eigen::Matrix<double, kLocal, 1>;
+        Eigen::Map<Vector> zv(z);
+        Eigen::Map<Vector>(next).noalias() +=
+            Eigen::Map<const Eigen::Matrix<double, kLocal, kLocal>>(phi).lazyProduct(zv);
+        zv = Eigen::Map<const Vector>(next);
+      } else {
+        for (int j = 0; j < s; ++j) {
+          const double zj = z[j];
+          const double* col = phi + static_cast<ptrdiff_t>(j) * s;
+          for (int i = lo[j]; i < hi[j]; ++i) next[i] += col[i] * zj;
+        }
+        std::swap(z, next);
+      }
+    }
+    started = true;
+    for (int j = 0; j < r; ++j) {
+      const double* row = c_first + static_cast<ptrdiff_t>(j) * s;
+      double acc = d[j] * xk;
+      for (int i = clo[j]; i < chi[j]; ++i) acc += row[i] * z[i];
+      o[k + j * stride] = acc;
+    }
+    previous = xk;
+  }
+  if (S > 0) {
+    for (int i = 0; i < s; ++i) stream.state(i) = z[i];
+  } else if (z != stream.state.data()) {
+    stream.state.swap(stream.scratch);  // the pointers were swapped an odd number of times
+  }
+  stream.previous = previous;
+  stream.started = started;
+}
+
+void SampledFilter::run(const Eigen::Ref<const Eigen::VectorXd>& x, Stream& stream,
+                        Eigen::Ref<Eigen::MatrixXd> out, int first_output) const {
+  require(out.rows() == x.size() && first_output >= 0 && first_output + out.cols() <= outputs(),
+          "SampledFilter::run: out is ", out.rows(), " x ", out.cols(), " from output ",
+          first_output, ", expected ", x.size(), " rows and at most ", outputs(), " outputs");
+  require(stream.state.size() == order() && stream.scratch.size() == order(),
+          "SampledFilter::run: the stream has ", stream.state.size(), " states, expected ",
+          order());
+  switch (order()) {
+    case 1:
+      return run_fixed<1>(x, stream, out, first_output);
+    case 2:
+      return run_fixed<2>(x, stream, out, first_output);
+    case 3:
+      return run_fixed<3>(x, stream, out, first_output);
+    case 4:
+      return run_fixed<4>(x, stream, out, first_output);
+    case 6:
+      return run_fixed<6>(x, stream, out, first_output);
+    case 8:
+      return run_fixed<8>(x, stream, out, first_output);
+    case 12:
+      return run_fixed<12>(x, stream, out, first_output);
+    case 16:
+      return run_fixed<16>(x, stream, out, first_output);
+    default:
+      return run_fixed<0>(x, stream, out, first_output);
+  }
 }
 
 void SampledFilter::apply(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -171,33 +303,8 @@ void SampledFilter::apply(const Eigen::Ref<const Eigen::VectorXd>& x,
   const Eigen::Index n = x.size();
   require(out.rows() == n && out.cols() == outputs(), "SampledFilter::apply: out is ", out.rows(),
           " x ", out.cols(), ", expected ", n, " x ", outputs());
-  const int s = order();
-  const int r = outputs();
-  std::vector<double> z(static_cast<size_t>(s), 0.0);
-  std::vector<double> next(static_cast<size_t>(s), 0.0);
-  const double* phi = phi_.data();
-  const double* c = c_.data();
-  const double* g0 = gamma0_.data();
-  const double* g1 = gamma1_.data();
-  const double* d = d_.data();
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const double xk = x(k);
-    for (int j = 0; j < r; ++j) {
-      const double* row = c + static_cast<ptrdiff_t>(j) * s;
-      double acc = d[j] * xk;
-      for (int i = 0; i < s; ++i) acc += row[i] * z[static_cast<size_t>(i)];
-      out(k, j) = acc;
-    }
-    // The last sample is held: the state after it is never output.
-    const double xnext = k + 1 < n ? x(k + 1) : xk;
-    for (int i = 0; i < s; ++i) {
-      const double* row = phi + static_cast<ptrdiff_t>(i) * s;
-      double acc = g0[i] * xk + g1[i] * xnext;
-      for (int m = 0; m < s; ++m) acc += row[m] * z[static_cast<size_t>(m)];
-      next[static_cast<size_t>(i)] = acc;
-    }
-    z.swap(next);
-  }
+  Stream stream = start();
+  run(x, stream, out, 0);
 }
 
 Eigen::MatrixXd SampledFilter::apply(const Eigen::Ref<const Eigen::VectorXd>& x) const {

@@ -1,5 +1,6 @@
 #include "ctid/filtering/filter_bank.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -116,6 +117,38 @@ TEST(FilterBank, StartsAtRestAndIsLinear) {
   EXPECT_DOUBLE_EQ(y1(0, 0), 0.0);
   EXPECT_DOUBLE_EQ(y1(0, 1), 0.0);
   EXPECT_NEAR(y1(0, 2), x1(0) / 0.1, 1e-12);
+}
+
+TEST(FilterBank, StreamingInPiecesEqualsOnePass) {
+  // Orders 5 (general kernel) and 8/16 (fixed-size kernels), both holds, uneven pieces.
+  const Polynomial a5 =
+      Polynomial{1.0, 0.3} * Polynomial{1.0, 0.2, 0.05} * Polynomial{1.0, 0.1, 0.02};
+  const Polynomial a8 = Polynomial{1.0, 0.4, 0.1} * Polynomial{1.0, 0.1, 0.03} *
+                        Polynomial{1.0, 0.05, 0.01} * Polynomial{1.0, 0.02, 0.003};
+  const Eigen::VectorXd x = random_signal(1000, 4);
+  Eigen::VectorXd b8 = Eigen::VectorXd::Zero(9);
+  b8.head(3) << 1.0, -0.2, 0.05;
+  const FilterRealization chain = cascade(derivative_filters(a8), b8, derivative_filters(a8));
+  for (const FilterRealization& r : {derivative_filters(a5), derivative_filters(a8), chain}) {
+    for (Interpolation hold : {Interpolation::zero_order_hold, Interpolation::first_order_hold}) {
+      const SampledFilter f(r, 0.05, hold);
+      const Eigen::MatrixXd whole = f.apply(x);
+      Eigen::MatrixXd pieces(x.size(), f.outputs() - 1);
+      SampledFilter::Stream stream = f.start();
+      for (Eigen::Index k0 = 0, len = 1; k0 < x.size(); k0 += len, len = len * 3 + 1) {
+        len = std::min<Eigen::Index>(len, x.size() - k0);
+        Eigen::MatrixXd out(len, f.outputs() - 1);
+        f.run(x.segment(k0, len), stream, out, 1);
+        pieces.middleRows(k0, len) = out;
+      }
+      EXPECT_EQ((pieces - whole.rightCols(f.outputs() - 1)).cwiseAbs().maxCoeff(), 0.0)
+          << "order " << f.order();
+    }
+  }
+  const SampledFilter f(derivative_filters(a5), 0.05, Interpolation::zero_order_hold);
+  SampledFilter::Stream stream = f.start();
+  Eigen::MatrixXd too_wide(10, f.outputs() + 1);
+  EXPECT_THROW(f.run(x.head(10), stream, too_wide), InvalidArgument);
 }
 
 TEST(FilterBank, DelayShiftsWithZeros) {

@@ -47,9 +47,20 @@ FilterRealization cascade(const FilterRealization& first, const Eigen::VectorXd&
 FilterRealization combine_outputs(const FilterRealization& filter, const Eigen::VectorXd& weights);
 
 /// A filter discretised exactly for one sample time and one interpolation; apply() runs the
-/// per-sample state recursion from rest (no allocation per sample).
+/// per-sample state recursion from rest (no allocation per sample). Exact zeros of the
+/// discretised state matrix and of C (block-triangular cascades, the diagonal outputs of a
+/// derivative bank) are skipped, so a realisation with extra outputs costs little more.
 class SampledFilter {
  public:
+  /// Recursion state for feeding a record in consecutive pieces (run()): the filter state
+  /// and the last sample seen (the first-order hold needs it to finish the next step).
+  struct Stream {
+    Eigen::VectorXd state;
+    Eigen::VectorXd scratch;
+    double previous = 0.0;
+    bool started = false;
+  };
+
   SampledFilter(const FilterRealization& filter, double sample_time, Interpolation interpolation);
 
   int order() const { return static_cast<int>(phi_.rows()); }
@@ -59,11 +70,28 @@ class SampledFilter {
   void apply(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::MatrixXd> out) const;
   Eigen::MatrixXd apply(const Eigen::Ref<const Eigen::VectorXd>& x) const;
 
+  /// A stream at rest before the first sample.
+  Stream start() const;
+  /// Feeds the next x.size() samples of the record: out(k, j) = output first_output + j at
+  /// the k-th of them, for j < out.cols(). Pieces fed in order give exactly apply() of the
+  /// whole record; memory stays O(order) whatever the record length.
+  void run(const Eigen::Ref<const Eigen::VectorXd>& x, Stream& stream,
+           Eigen::Ref<Eigen::MatrixXd> out, int first_output = 0) const;
+
  private:
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> phi_;
+  template <int S>
+  void run_fixed(const Eigen::Ref<const Eigen::VectorXd>& x, Stream& stream,
+                 Eigen::Ref<Eigen::MatrixXd> out, int first_output) const;
+
+  Eigen::MatrixXd phi_;     // column-major: the recursion adds phi(:, j) z_j
+  Eigen::VectorXi phi_lo_;  // rows [lo, hi) of column j hold its non-zeros
+  Eigen::VectorXi phi_hi_;
   Eigen::VectorXd gamma0_;  // weight of x_k
   Eigen::VectorXd gamma1_;  // weight of x_{k+1} (zero for the zero-order hold)
+  bool hold_ = true;        // zero-order hold: gamma1_ is zero
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> c_;
+  Eigen::VectorXi c_lo_;  // columns [lo, hi) of row j hold its non-zeros
+  Eigen::VectorXi c_hi_;
   Eigen::VectorXd d_;
 };
 
