@@ -69,19 +69,17 @@ ValidationReport validate_model(const AdditiveModel& model, const SampledData& d
   return r;
 }
 
-int persistent_excitation_order(const Eigen::VectorXd& x, int max_order, double tolerance) {
-  require(max_order >= 1, "persistent_excitation_order: max_order is ", max_order,
-          "; it must be >= 1");
-  const Eigen::Index n = x.size();
-  const int top = static_cast<int>(std::min<Eigen::Index>(max_order, n / 2));
-  if (top < 1 || x.squaredNorm() == 0.0) return 0;
-  // G(i, j) = sum_{k = top-1}^{n-1} x_{k-i} x_{k-j}: the Gram matrix of the lag windows,
-  // exactly singular for a signal obeying a linear recursion of order < top.
+namespace {
+
+// Largest k <= top for which the Gram matrix of the windows [x_j, x_{j-d}, ..., x_{j-(k-1)d}]
+// is numerically non-singular.
+int lag_window_order(const Eigen::VectorXd& x, int top, int d, double tolerance) {
+  const Eigen::Index span = static_cast<Eigen::Index>(top - 1) * d;
+  const Eigen::Index len = x.size() - span;
   Eigen::MatrixXd g(top, top);
-  const Eigen::Index len = n - top + 1;
   for (int i = 0; i < top; ++i) {
     for (int j = i; j < top; ++j) {
-      g(i, j) = x.segment(top - 1 - i, len).dot(x.segment(top - 1 - j, len));
+      g(i, j) = x.segment(span - i * d, len).dot(x.segment(span - j * d, len));
       g(j, i) = g(i, j);
     }
   }
@@ -92,6 +90,29 @@ int persistent_excitation_order(const Eigen::VectorXd& x, int max_order, double 
     const Eigen::VectorXd& ev = eig.eigenvalues();
     if (!(ev(0) > tolerance * ev(k - 1))) break;
     order = k;
+  }
+  return order;
+}
+
+}  // namespace
+
+int persistent_excitation_order(const Eigen::VectorXd& x, int max_order, double tolerance) {
+  require(max_order >= 1, "persistent_excitation_order: max_order is ", max_order,
+          "; it must be >= 1");
+  const Eigen::Index n = x.size();
+  const int top = static_cast<int>(std::min<Eigen::Index>(max_order, n / 2));
+  if (top < 1 || x.squaredNorm() == 0.0) return 0;
+  // A signal obeying a linear recursion of order r (a constant: r = 1, one sinusoid: 2,
+  // r/2 sinusoids: r) has lag windows of rank <= r at every lag spacing d. A rich but
+  // band-limited signal (a multisine up to 500 Hz sampled at 4096 Hz) has unit-spacing
+  // windows that are numerically singular, because its spectrum fills only part of the
+  // band; windows spaced to match its band resolve it. So the order seen in the record is
+  // the largest over a few spacings; white-like signals stop after the first.
+  int order = 0;
+  for (const int d : {1, 2, 3, 4, 6, 8, 12, 16}) {
+    if (static_cast<Eigen::Index>(top - 1) * d >= n / 2) break;
+    order = std::max(order, lag_window_order(x, top, d, tolerance));
+    if (order >= top) break;
   }
   return order;
 }

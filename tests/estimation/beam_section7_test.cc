@@ -42,9 +42,7 @@ AdditiveModel true_beam() {
   return AdditiveModel::from_parameters(kOrders, paper_estimate(), kDelay * kSampleTime);
 }
 
-// The paper's excitation. A white dither 60 dB below the multisine is added because the
-// estimators' persistency-of-excitation check rejects the pure band-limited multisine (see
-// PaperMultisineWithoutDitherIsAccepted below and docs/algorithms/section7-beam.md).
+// The paper's excitation; an optional white dither can be added on top.
 Eigen::VectorXd beam_input(double dither_rms) {
   MultisineOptions options;
   options.period_length = kSamples;
@@ -57,7 +55,7 @@ Eigen::VectorXd beam_input(double dither_rms) {
   return u;
 }
 
-SampledData beam_data(double snr_db, std::uint64_t noise_seed, double dither_rms = 1e-3) {
+SampledData beam_data(double snr_db, std::uint64_t noise_seed, double dither_rms = 0.0) {
   const Eigen::VectorXd u = beam_input(dither_rms);
   Eigen::VectorXd y = simulate(true_beam(), u, kSampleTime);
   if (std::isfinite(snr_db)) {
@@ -192,10 +190,9 @@ TEST(BeamSection7, ThirtyDecibelsFromThePapersStartIsRightOrVisiblyWorse) {
 }
 
 // The paper's own excitation, without dither, must be accepted: 1000 lines in the band make
-// it persistently exciting of any order the estimator needs. Disabled while the estimators'
-// check (the lag-window Gram matrix of the sampled input, eigenvalue ratio > 1e-9) calls this
-// 4x oversampled band-limited signal exciting of order 7 only and throws.
-TEST(BeamSection7, DISABLED_PaperMultisineWithoutDitherIsAccepted) {
+// it persistently exciting of any order the estimator needs, although its unit-spacing lag
+// windows are numerically singular (it is 4x oversampled).
+TEST(BeamSection7, PaperMultisineWithoutDitherIsAccepted) {
   RefinedIvOptions options = options_from(paper_start());
   options.input_delay = kDelay;
   options.compute_covariance = false;

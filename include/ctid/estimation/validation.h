@@ -33,9 +33,10 @@ struct ValidationReport {
 ValidationReport validate_model(const AdditiveModel& model, const SampledData& data);
 
 /// Largest n <= max_order for which the sample matrix sum_k phi_k phi_k' of the windows
-/// phi_k = [x_k, x_{k-1}, ..., x_{k-n+1}] is numerically non-singular (smallest over
-/// largest eigenvalue above `tolerance`): the order of persistency of excitation seen in
-/// the record. A constant gives 1, one sinusoid 2, white noise max_order.
+/// phi_k = [x_k, x_{k-d}, ..., x_{k-(n-1)d}] is numerically non-singular (smallest over
+/// largest eigenvalue above `tolerance`) for some lag spacing d in {1, 2, 3, 4, 6, 8, 12, 16}:
+/// the order of persistency of excitation seen in the record. A constant gives 1, one
+/// sinusoid 2, white noise and band-limited rich signals (multisines) max_order.
 int persistent_excitation_order(const Eigen::VectorXd& x, int max_order, double tolerance = 1e-9);
 
 /// Largest |imaginary part| of the model's poles in rad/s (0 for real poles).
