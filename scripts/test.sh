@@ -15,6 +15,7 @@ cd "$root"
 start=$SECONDS
 
 bash scripts/setup.sh || { echo "test.sh: set-up or Release build FAILED" >&2; exit 1; }
+setup_seconds=$((SECONDS - start))
 
 failed=()
 results=()
@@ -79,6 +80,7 @@ run_step "pytest" python_tests
 
 echo
 echo "=== test.sh summary ($((SECONDS - start)) s)"
+echo "  ok     set-up + Release build ($setup_seconds s)"
 printf '  %s\n' "${results[@]}"
 if ((${#failed[@]} > 0)); then
   echo "test.sh: FAILED: ${failed[*]}"
