@@ -1,0 +1,414 @@
+// Output-error refinement, Cramér-Rao bound and delay scan for the delayed-feedback loop.
+#include "ctid/estimation/feedback_refinement.h"
+
+#include <ceres/ceres.h>
+
+#include <cmath>
+#include <limits>
+
+#include <Eigen/QR>
+#include <Eigen/SVD>
+
+#include "ctid/core/error.h"
+
+namespace ctid {
+namespace {
+
+Eigen::VectorXd padded(const Polynomial& p, int size) {
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(size);
+  for (int i = 0; i <= p.degree() && i < size; ++i) v(i) = p.coefficient(i);
+  return v;
+}
+
+TransferFunction monic_model(const Eigen::VectorXd& rho, int offset, int order) {
+  Eigen::VectorXd den(order + 1);
+  den << rho.segment(offset, order), 1.0;
+  return TransferFunction(Polynomial::trimmed(rho.segment(offset + order, order)), Polynomial(den));
+}
+
+// ŷ for ρ; +inf entries when the simulation overflows.
+Eigen::VectorXd simulate_rho(const Eigen::VectorXd& rho, int n, int m, double delay,
+                             const Eigen::VectorXd& input, double delta, InputHold hold,
+                             int substeps) {
+  const DelayedFeedbackLoop loop = loop_from_parameters(rho, n, m, delay);
+  return simulate_delayed(to_delayed_state_space(loop), input, delta, hold,
+                          DelayedSimulationOptions{substeps});
+}
+
+struct OutputErrorFunctor {
+  const SampledData* data;
+  int n, m;
+  double delay;
+  InputHold hold;
+  int substeps;
+  bool operator()(double const* const* parameters, double* residual) const {
+    const Eigen::Map<const Eigen::VectorXd> rho(parameters[0], 2 * (n + m));
+    const Eigen::VectorXd y =
+        simulate_rho(rho, n, m, delay, data->input(), data->sample_time(), hold, substeps);
+    if (!y.allFinite() || y.cwiseAbs().maxCoeff() > 1e12) return false;
+    Eigen::Map<Eigen::VectorXd>(residual, y.size()) = data->output() - y;
+    return true;
+  }
+};
+
+SeparabilityReport report_from_jacobian(const Eigen::MatrixXd& jac, const Eigen::VectorXd& rho,
+                                        double variance, double threshold) {
+  SeparabilityReport r;
+  r.parameters = rho;
+  r.noise_variance = variance;
+  Eigen::VectorXd scale = jac.colwise().norm().transpose();
+  for (Eigen::Index i = 0; i < scale.size(); ++i)
+    if (scale(i) == 0.0) scale(i) = 1.0;
+  const Eigen::MatrixXd js = jac * scale.cwiseInverse().asDiagonal();
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(js, Eigen::ComputeThinV);
+  const Eigen::VectorXd s = svd.singularValues();
+  const double smin = s(s.size() - 1);
+  r.condition_number = smin > 0.0 ? s(0) / smin : std::numeric_limits<double>::infinity();
+  Eigen::VectorXd inv2(s.size());
+  for (Eigen::Index i = 0; i < s.size(); ++i)
+    inv2(i) = s(i) > 1e-14 * s(0) ? 1.0 / (s(i) * s(i)) : std::numeric_limits<double>::infinity();
+  if (!inv2.allFinite()) {
+    const double inf = std::numeric_limits<double>::infinity();
+    r.covariance = Eigen::MatrixXd::Constant(rho.size(), rho.size(), inf);
+  } else {
+    const Eigen::MatrixXd cov_s = svd.matrixV() * inv2.asDiagonal() * svd.matrixV().transpose();
+    r.covariance =
+        variance * scale.cwiseInverse().asDiagonal() * cov_s * scale.cwiseInverse().asDiagonal();
+  }
+  r.standard_deviations = r.covariance.diagonal().cwiseSqrt();
+  r.relative_standard_deviations.resize(rho.size());
+  for (Eigen::Index i = 0; i < rho.size(); ++i)
+    r.relative_standard_deviations(i) = r.standard_deviations(i) / std::max(std::abs(rho(i)), 1e-3);
+  const double worst = r.relative_standard_deviations.maxCoeff();
+  r.separable = std::isfinite(worst) && worst < threshold;
+  r.message = r.separable
+                  ? "F and H are separable from this experiment: the largest relative standard "
+                    "deviation is " +
+                        std::to_string(worst)
+                  : "F and H are NOT reliably separable from this experiment: the largest "
+                    "relative standard deviation is " +
+                        std::to_string(worst) + " (threshold " + std::to_string(threshold) +
+                        "); any estimate reflects the prior or the start";
+  return r;
+}
+
+Eigen::MatrixXd sensitivity(const Eigen::VectorXd& rho, int n, int m, double delay,
+                            const Eigen::VectorXd& input, double delta, InputHold hold,
+                            int substeps) {
+  Eigen::MatrixXd jac(input.size(), rho.size());
+  for (Eigen::Index i = 0; i < rho.size(); ++i) {
+    const double h = 1e-6 * std::max(1.0, std::abs(rho(i)));
+    Eigen::VectorXd up = rho, down = rho;
+    up(i) += h;
+    down(i) -= h;
+    jac.col(i) = (simulate_rho(up, n, m, delay, input, delta, hold, substeps) -
+                  simulate_rho(down, n, m, delay, input, delta, hold, substeps)) /
+                 (2 * h);
+  }
+  return jac;
+}
+
+}  // namespace
+
+Eigen::VectorXd loop_parameters(const DelayedFeedbackLoop& loop) {
+  const TransferFunction f = loop.forward.normalized();
+  const TransferFunction h = loop.feedback.normalized();
+  const int n = f.denominator().degree();
+  const int m = h.denominator().degree();
+  Eigen::VectorXd rho(2 * (n + m));
+  rho << padded(f.denominator(), n), padded(f.numerator(), n), padded(h.denominator(), m),
+      padded(h.numerator(), m);
+  return rho;
+}
+
+DelayedFeedbackLoop loop_from_parameters(const Eigen::VectorXd& rho, int n, int m, double delay) {
+  require(n >= 1 && m >= 1 && rho.size() == 2 * (n + m),
+          "loop_from_parameters: need n, m >= 1 and 2(n + m) = ", 2 * (n + m), " parameters, got ",
+          rho.size());
+  return {monic_model(rho, 0, n), monic_model(rho, 2 * n, m), delay};
+}
+
+SeparabilityReport cramer_rao_bound(const DelayedFeedbackLoop& loop, const Eigen::VectorXd& input,
+                                    double sample_time, InputHold hold, double noise_sd,
+                                    double relative_threshold, int substeps) {
+  loop.validate();
+  require(std::isfinite(noise_sd) && noise_sd > 0.0,
+          "cramer_rao_bound: noise_sd must be positive, got ", noise_sd);
+  require(relative_threshold > 0.0, "cramer_rao_bound: relative_threshold must be positive");
+  const int n = loop.forward.denominator().degree();
+  const int m = loop.feedback.denominator().degree();
+  const Eigen::VectorXd rho = loop_parameters(loop);
+  require(input.size() > rho.size(), "cramer_rao_bound: too few samples (", input.size(), ") for ",
+          rho.size(), " parameters");
+  const Eigen::MatrixXd jac =
+      sensitivity(rho, n, m, loop.delay, input, sample_time, hold, substeps);
+  return report_from_jacobian(jac, rho, noise_sd * noise_sd, relative_threshold);
+}
+
+void OutputErrorOptions::validate() const {
+  require(substeps >= 1, "OutputErrorOptions: substeps must be >= 1, got ", substeps);
+  require(max_iterations >= 1, "OutputErrorOptions: max_iterations must be >= 1, got ",
+          max_iterations);
+  require(relative_threshold > 0.0, "OutputErrorOptions: relative_threshold must be > 0, got ",
+          relative_threshold);
+}
+
+OutputErrorResult refine_output_error(const SampledData& data, const DelayedFeedbackLoop& start,
+                                      const OutputErrorOptions& options) {
+  options.validate();
+  start.validate();
+  const int n = start.forward.denominator().degree();
+  const int m = start.feedback.denominator().degree();
+  Eigen::VectorXd rho = loop_parameters(start);
+  require(data.size() > rho.size(), "refine_output_error: too few samples (", data.size(), ") for ",
+          rho.size(), " parameters");
+  require((data.size() - 1) * data.sample_time() > start.delay,
+          "refine_output_error: the record must be longer than the delay");
+  OutputErrorResult result;
+  ceres::Problem problem;
+  auto* cost = new ceres::DynamicNumericDiffCostFunction<OutputErrorFunctor, ceres::CENTRAL>(
+      new OutputErrorFunctor{&data, n, m, start.delay, options.hold, options.substeps});
+  cost->AddParameterBlock(static_cast<int>(rho.size()));
+  cost->SetNumResiduals(data.size());
+  problem.AddResidualBlock(cost, nullptr, rho.data());
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = options.max_iterations;
+  so.function_tolerance = 1e-12;
+  so.parameter_tolerance = 1e-12;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  result.iterations = static_cast<int>(summary.iterations.size());
+  result.converged = summary.termination_type == ceres::CONVERGENCE;
+  result.message = summary.message;
+  result.loop = loop_from_parameters(rho, n, m, start.delay);
+  const Eigen::VectorXd y = simulate_rho(rho, n, m, start.delay, data.input(), data.sample_time(),
+                                         options.hold, options.substeps);
+  const Eigen::VectorXd e = data.output() - y;
+  result.residual_rms = std::sqrt(e.squaredNorm() / static_cast<double>(e.size()));
+  const double variance =
+      e.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, e.size() - rho.size()));
+  if (y.allFinite()) {
+    const Eigen::MatrixXd jac = sensitivity(rho, n, m, start.delay, data.input(),
+                                            data.sample_time(), options.hold, options.substeps);
+    result.quality = report_from_jacobian(jac, rho, variance, options.relative_threshold);
+  }
+  return result;
+}
+
+void DelayScanOptions::validate() const {
+  require(std::isfinite(min_delay) && min_delay >= 0.0,
+          "DelayScanOptions: min_delay must be >= 0, got ", min_delay);
+  require(std::isfinite(max_delay) && max_delay > min_delay,
+          "DelayScanOptions: max_delay must exceed min_delay, got ", max_delay);
+  require(points >= 2, "DelayScanOptions: points must be >= 2, got ", points);
+  require(substeps >= 1, "DelayScanOptions: substeps must be >= 1, got ", substeps);
+  regressors.validate();
+  least_squares.validate();
+}
+
+DelayScanResult scan_delay(const SampledData& data, int n, int m, const DelayScanOptions& options) {
+  options.validate();
+  require(n >= 1 && m >= 1, "scan_delay: orders must be >= 1, got n = ", n, ", m = ", m);
+  auto criterion = [&](double delay) {
+    try {
+      const FeedbackRegression reg =
+          build_feedback_regression(data, n, m, delay, options.regressors);
+      const ClosedLoopEstimate est = estimate_closed_loop_batch(reg, options.least_squares);
+      const Eigen::VectorXd y = simulate_delayed(
+          to_delayed_state_space(est.alpha, est.beta, est.gamma, delay), data.input(),
+          data.sample_time(), options.hold, DelayedSimulationOptions{options.substeps});
+      if (!y.allFinite()) return std::numeric_limits<double>::infinity();
+      const double mse = (data.output() - y).squaredNorm() / static_cast<double>(y.size());
+      return std::isfinite(mse) ? mse : std::numeric_limits<double>::infinity();
+    } catch (const InvalidArgument&) {
+      return std::numeric_limits<double>::infinity();
+    }
+  };
+  DelayScanResult r;
+  r.delays = Eigen::VectorXd::LinSpaced(options.points, options.min_delay, options.max_delay);
+  r.criterion.resize(options.points);
+  Eigen::Index best = 0;
+  for (int i = 0; i < options.points; ++i) {
+    r.criterion(i) = criterion(r.delays(i));
+    if (r.criterion(i) < r.criterion(best)) best = i;
+  }
+  r.delay = r.delays(best);
+  r.best_criterion = r.criterion(best);
+  if (options.refine && std::isfinite(r.best_criterion)) {
+    double lo = r.delays(std::max<Eigen::Index>(0, best - 1));
+    double hi = r.delays(std::min<Eigen::Index>(options.points - 1, best + 1));
+    const double ratio = (std::sqrt(5.0) - 1.0) / 2.0;
+    double x1 = hi - ratio * (hi - lo), x2 = lo + ratio * (hi - lo);
+    double f1 = criterion(x1), f2 = criterion(x2);
+    for (int it = 0; it < 25; ++it) {
+      if (f1 < f2) {
+        hi = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = hi - ratio * (hi - lo);
+        f1 = criterion(x1);
+      } else {
+        lo = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = lo + ratio * (hi - lo);
+        f2 = criterion(x2);
+      }
+    }
+    const double x = f1 < f2 ? x1 : x2;
+    const double f = std::min(f1, f2);
+    if (f < r.best_criterion) {
+      r.delay = x;
+      r.best_criterion = f;
+    }
+  }
+  return r;
+}
+
+}  // namespace ctid
+
+namespace ctid {
+namespace {
+
+// θ(ρ) in the paper's order [β_{q-1..0} | γ_{q-2..0} | α_{q-1..0}].
+struct ThetaOfRho {
+  int n, m;
+  template <typename T>
+  void operator()(const T* p, T* theta) const {
+    const int q = n + m;
+    std::vector<T> df(n + 1), nf(n), dh(m + 1), nh(m);
+    for (int i = 0; i < n; ++i) df[i] = p[i];
+    df[n] = T(1.0);
+    for (int i = 0; i < n; ++i) nf[i] = p[n + i];
+    for (int i = 0; i < m; ++i) dh[i] = p[2 * n + i];
+    dh[m] = T(1.0);
+    for (int i = 0; i < m; ++i) nh[i] = p[2 * n + m + i];
+    std::vector<T> a(q, T(0.0)), b(q + 1, T(0.0)), g(q - 1, T(0.0));
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; j <= m; ++j) b[i + j] += df[i] * dh[j];
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j <= m; ++j) a[i + j] += nf[i] * dh[j];
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < m; ++j) g[i + j] += nf[i] * nh[j];
+    for (int i = 0; i < q; ++i) theta[i] = b[q - 1 - i];
+    for (int i = 0; i + 1 < q; ++i) theta[q + i] = g[q - 2 - i];
+    for (int i = 0; i < q; ++i) theta[2 * q - 1 + i] = a[q - 1 - i];
+  }
+};
+
+struct StructuredResidual {
+  const Eigen::MatrixXd* c;
+  const Eigen::VectorXd* y;
+  int n, m;
+  template <typename T>
+  bool operator()(T const* const* parameters, T* residual) const {
+    const int p = 3 * (n + m) - 1;
+    std::vector<T> theta(static_cast<size_t>(p));
+    ThetaOfRho{n, m}(parameters[0], theta.data());
+    for (Eigen::Index k = 0; k < c->rows(); ++k) {
+      T sum = T((*y)(k));
+      for (int j = 0; j < p; ++j) sum -= (*c)(k, j) * theta[static_cast<size_t>(j)];
+      residual[k] = sum;
+    }
+    return true;
+  }
+};
+
+Eigen::VectorXd theta_of(const Eigen::VectorXd& rho, int n, int m) {
+  Eigen::VectorXd theta(3 * (n + m) - 1);
+  ThetaOfRho{n, m}(rho.data(), theta.data());
+  return theta;
+}
+
+// One alternating step: least squares in the block [offset, offset + size) of ρ, the rest fixed.
+void solve_block(Eigen::VectorXd& rho, int offset, int size, int n, int m, const Eigen::MatrixXd& c,
+                 const Eigen::VectorXd& y) {
+  Eigen::VectorXd base = rho;
+  base.segment(offset, size).setZero();
+  const Eigen::VectorXd theta0 = theta_of(base, n, m);
+  Eigen::MatrixXd map(theta0.size(), size);
+  for (int i = 0; i < size; ++i) {
+    Eigen::VectorXd unit = base;
+    unit(offset + i) = 1.0;
+    map.col(i) = theta_of(unit, n, m) - theta0;
+  }
+  const Eigen::MatrixXd a = c * map;
+  const Eigen::VectorXd x = a.colPivHouseholderQr().solve(y - c * theta0);
+  if (x.allFinite()) rho.segment(offset, size) = x;
+}
+
+}  // namespace
+
+void StructuredStep1Options::validate() const {
+  require(!start_frequencies.empty(), "StructuredStep1Options: start_frequencies is empty");
+  for (double w : start_frequencies)
+    require(std::isfinite(w) && w > 0.0,
+            "StructuredStep1Options: start_frequencies must be positive, got ", w);
+  require(alternating_iterations >= 0 && max_iterations >= 1,
+          "StructuredStep1Options: iteration counts must be >= 0 (alternating) and >= 1");
+}
+
+StructuredStep1Result estimate_structured_step1(const FeedbackRegression& reg,
+                                                const StructuredStep1Options& options) {
+  options.validate();
+  const int n = reg.forward_order;
+  const int m = reg.feedback_order;
+  const int p = reg.theta_size;
+  Eigen::MatrixXd c = reg.regressor.leftCols(p);
+  Eigen::VectorXd y = reg.target;
+  if (reg.nuisance_size > 0) {
+    Eigen::MatrixXd nuis = reg.regressor.rightCols(reg.nuisance_size);
+    for (Eigen::Index j = 0; j < nuis.cols(); ++j)
+      if (nuis.col(j).norm() > 0.0) nuis.col(j) /= nuis.col(j).norm();
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(nuis);
+    const Eigen::MatrixXd q =
+        qr.householderQ() * Eigen::MatrixXd::Identity(nuis.rows(), nuis.cols());
+    c -= q * (q.transpose() * c);
+    y -= q * (q.transpose() * y);
+  }
+  // Column scaling keeps the alternating solves and LM well conditioned.
+  Eigen::VectorXd scale = c.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < scale.size(); ++j)
+    if (scale(j) == 0.0) scale(j) = 1.0;
+  StructuredStep1Result best;
+  best.cost = std::numeric_limits<double>::infinity();
+  for (double w : options.start_frequencies) {
+    Eigen::VectorXd rho = Eigen::VectorXd::Zero(2 * (n + m));
+    // D_H = (s + w)^m, N_H = 0: the first F-step fits F as if there were no feedback.
+    Eigen::VectorXd dh = Eigen::VectorXd::Zero(m + 1);
+    for (int i = 0; i <= m; ++i)
+      dh(i) = std::tgamma(m + 1.0) / (std::tgamma(i + 1.0) * std::tgamma(m - i + 1.0)) *
+              std::pow(w, m - i);
+    rho.segment(2 * n, m) = dh.head(m);
+    for (int it = 0; it < options.alternating_iterations; ++it) {
+      solve_block(rho, 0, 2 * n, n, m, c, y);
+      solve_block(rho, 2 * n, 2 * m, n, m, c, y);
+    }
+    ceres::Problem problem;
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<StructuredResidual, 8>(
+        new StructuredResidual{&c, &y, n, m});
+    cost->AddParameterBlock(2 * (n + m));
+    cost->SetNumResiduals(static_cast<int>(y.size()));
+    problem.AddResidualBlock(cost, nullptr, rho.data());
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::DENSE_QR;
+    so.max_num_iterations = options.max_iterations;
+    so.function_tolerance = 1e-14;
+    so.parameter_tolerance = 1e-14;
+    so.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &problem, &summary);
+    ++best.starts;
+    const double j = 2.0 * summary.final_cost;
+    if (rho.allFinite() && j < best.cost) {
+      best.cost = j;
+      best.loop = loop_from_parameters(rho, n, m, reg.delay);
+    }
+  }
+  (void)scale;
+  return best;
+}
+
+}  // namespace ctid
