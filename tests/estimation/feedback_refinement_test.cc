@@ -73,6 +73,38 @@ TEST(FeedbackRefinement, CramerRaoSaysThePaperExperimentCannotSeparate) {
   EXPECT_NEAR(noisier.standard_deviations(0) / good.standard_deviations(0), 10.0, 1e-6);
 }
 
+TEST(FeedbackRefinement, OutputErrorIsConsistentInASeededMonteCarlo) {
+  // Random binary input (20 s), white output noise sd 2e-4, 4 seeded runs started at the
+  // truth: the mean error of every parameter must lie within 4 Cramér-Rao standard errors of
+  // the mean, and the spread must be of the size the bound predicts.
+  const DelayedFeedbackLoop loop = paper_loop();
+  const double delta = 0.05;
+  const double sigma = 2e-4;
+  std::mt19937_64 input_rng(11);
+  Eigen::VectorXd u(401);
+  for (Eigen::Index k = 0; k < u.size(); ++k) u(k) = (input_rng() % 2) ? 1.0 : -1.0;
+  const Eigen::VectorXd y = simulate_delayed(to_delayed_state_space(loop), u, delta,
+                                             InputHold::kZeroOrder, DelayedSimulationOptions{4});
+  const SeparabilityReport crb = cramer_rao_bound(loop, u, delta, InputHold::kZeroOrder, sigma);
+  const Eigen::VectorXd truth = loop_parameters(loop);
+  const int runs = 4;
+  Eigen::MatrixXd errors(truth.size(), runs);
+  for (int r = 0; r < runs; ++r) {
+    std::mt19937_64 rng(1000 + static_cast<std::uint64_t>(r));
+    std::normal_distribution<double> normal(0.0, sigma);
+    Eigen::VectorXd noisy = y;
+    for (Eigen::Index k = 0; k < noisy.size(); ++k) noisy(k) += normal(rng);
+    const OutputErrorResult fit = refine_output_error(SampledData(delta, u, noisy), loop);
+    errors.col(r) = loop_parameters(fit.loop) - truth;
+  }
+  const Eigen::VectorXd mean = errors.rowwise().mean();
+  for (Eigen::Index i = 0; i < truth.size(); ++i) {
+    EXPECT_LT(std::abs(mean(i)), 4.0 * crb.standard_deviations(i) / std::sqrt(runs)) << i;
+    const double spread = std::sqrt((errors.row(i).array() - mean(i)).square().sum() / (runs - 1));
+    EXPECT_LT(spread, 3.0 * crb.standard_deviations(i)) << i;
+  }
+}
+
 TEST(FeedbackRefinement, BadInputIsNamed) {
   const DelayedFeedbackLoop loop = paper_loop();
   const SampledData data(0.05, Eigen::VectorXd::Ones(8), Eigen::VectorXd::Ones(8));
