@@ -47,6 +47,8 @@ void RefinedIvOptions::validate() const {
           "RefinedIvOptions.tolerance is ", tolerance, "; it must be in (0, 1)");
   require(input_delay >= 0, "RefinedIvOptions.input_delay is ", input_delay,
           " samples; it must be >= 0");
+  require(max_step_halvings >= 0, "RefinedIvOptions.max_step_halvings is ", max_step_halvings,
+          "; it must be >= 0");
   require(noise_model_max_order >= 1, "RefinedIvOptions.noise_model_max_order is ",
           noise_model_max_order, "; it must be >= 1");
 }
@@ -586,25 +588,48 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     stopped = true;
   }
 
-  for (int iteration = 1; !stopped && iteration <= options.max_iterations; ++iteration) {
-    if (closed_loop && iteration > 1 && !update_source(beta)) ++result.sensitivity_fallbacks;
+  // Step control: a full step of (29) at which the equations are singular or non-finite is
+  // halved toward the last accepted iterate instead of ending the iteration. Accepted steps
+  // are the plain iteration, so every fixed point of (29) is still one of this iteration.
+  const bool control = options.step_control;
+  Eigen::VectorXd accepted;
+  int halvings = 0;  // of the current step
+  int iteration = 1;
+  while (!stopped && iteration <= options.max_iterations) {
+    bool source_ok = true;
+    if (closed_loop && iteration > 1) source_ok = update_source(beta);
     Moments sums;
     evaluate(layout, beta, u, y, source ? &*source : nullptr, h, options.output_interpolation,
              workspace, &sums, nullptr, nullptr);
-    if (!sums.all_finite()) {
+    const bool finite = sums.all_finite();
+    Eigen::VectorXd sz;
+    Eigen::VectorXd sp;
+    Eigen::MatrixXd m;
+    double rcond = 0.0;
+    std::optional<Eigen::JacobiSVD<Eigen::MatrixXd>> svd;
+    if (finite) {
+      sz = norms_from_squares(sums.zz);
+      sp = norms_from_squares(sums.pp);
+      m = sz.cwiseInverse().asDiagonal() * sums.zp * sp.cwiseInverse().asDiagonal();
+      svd.emplace(m);
+      const Eigen::VectorXd& sv = svd->singularValues();
+      rcond = sv(sv.size() - 1) / sv(0);
+    }
+    if (control && accepted.size() > 0 && halvings < options.max_step_halvings &&
+        (!finite || !(rcond > 1e-14))) {
+      beta = 0.5 * (accepted + beta);
+      ++halvings;
+      ++result.step_halvings;
+      continue;
+    }
+    if (!source_ok) ++result.sensitivity_fallbacks;
+    if (!finite) {
       result.termination = Termination::non_finite;
       result.message = name + ": the filtered signals became non-finite at iteration " +
                        std::to_string(iteration) + "; the last finite iterate is returned";
       break;
     }
-    const Eigen::VectorXd sz = norms_from_squares(sums.zz);
-    const Eigen::VectorXd sp = norms_from_squares(sums.pp);
-    const Eigen::MatrixXd m =
-        sz.cwiseInverse().asDiagonal() * sums.zp * sp.cwiseInverse().asDiagonal();
     const Eigen::MatrixXd rhs = sz.cwiseInverse().asDiagonal() * sums.zy;
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(m);
-    const Eigen::VectorXd& sv = svd.singularValues();
-    const double rcond = sv(sv.size() - 1) / sv(0);
     if (!(rcond > 1e-14)) {
       result.termination = Termination::singular_equations;
       result.message = name +
@@ -615,6 +640,8 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
                        "): the data do not excite the model enough or the orders are too high";
       break;
     }
+    accepted = beta;
+    halvings = 0;
     const Eigen::MatrixXd solution =
         sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(m.fullPivLu().solve(rhs));
     Eigen::VectorXd next(p);
@@ -646,6 +673,7 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
                        " < tolerance " + format_number(options.tolerance) + ")";
       break;
     }
+    ++iteration;
   }
   if (result.termination == Termination::iteration_limit) {
     result.message = name + ": stopped at the iteration limit (" +

@@ -254,7 +254,12 @@ void SampledFilter::run_fixed(const Eigen::Ref<const Eigen::VectorXd>& x, Stream
     for (int j = 0; j < r; ++j) {
       const double* row = c_first + static_cast<ptrdiff_t>(j) * s;
       double acc = d[j] * xk;
-      for (int i = clo[j]; i < chi[j]; ++i) acc += row[i] * z[i];
+      if constexpr (S > 0 && S <= 8) {
+        // Short rows: the unrolled dense dot costs less than tracking the non-zeros.
+        for (int i = 0; i < S; ++i) acc += row[i] * z[i];
+      } else {
+        for (int i = clo[j]; i < chi[j]; ++i) acc += row[i] * z[i];
+      }
       o[k + j * stride] = acc;
     }
     previous = xk;

@@ -88,6 +88,7 @@ struct EstimationResult {
   double off_diagonal_norm = 0.0;  ///< Lemma 4.4 at the last iteration (0 for K = 1)
   int unstable_reflections = 0;    ///< denominators reflected into the left half-plane
   int sensitivity_fallbacks = 0;   ///< closed loop: S_uo r reused because the loop was unstable
+  int step_halvings = 0;           ///< steps of (29) halved by RefinedIvOptions::step_control
 
   int input_delay = 0;              ///< samples
   double noise_variance = 0.0;      ///< sum of squared residuals / (N - parameters)

@@ -32,6 +32,14 @@ struct RefinedIvOptions {
   int input_delay = 0;
   /// Keep one IterationRecord per iteration in the result.
   bool record_history = false;
+  /// Step control: a step of (29) whose equations are singular or non-finite, whose model
+  /// the controller does not stabilise, which is unstable, or after which the scaled IV
+  /// residual ||sum zeta (y - G u)|| grows is halved toward the last accepted iterate (at
+  /// most max_step_halvings times per step). Accepted steps are the plain iteration, so the
+  /// fixed points are unchanged; halvings are counted in EstimationResult::step_halvings.
+  bool step_control = true;
+  /// Largest number of halvings of one step. >= 0.
+  int max_step_halvings = 8;
   /// Noise assumption for the covariance.
   NoiseAssumption noise = NoiseAssumption::coloured;
   /// Largest AR order tried for the coloured-noise covariance (chosen by AIC). >= 1.
