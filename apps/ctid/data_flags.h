@@ -1,0 +1,38 @@
+// The data flags shared by the estimation commands (fit, validate, frf): which CSV columns
+// hold u, y and r, and where the sample time comes from (a uniform time column, or
+// --sample-time). Errors are one line naming the file, the column and the flag to use.
+#pragma once
+
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "ctid/core/sampled_data.h"
+
+namespace ctid::cli {
+
+struct DataFlags {
+  std::string file;
+  std::string input_column = "u";
+  std::string output_column = "y";
+  std::string reference_column;  ///< empty: "r" when a reference is needed
+  std::string time_column = "t";
+  double sample_time = 0.0;
+
+  /// Adds DATA (positional, `name` in the help) and the column flags to `app`; with
+  /// `with_reference` also --reference-column.
+  void add_to(CLI::App& app, const std::string& name, bool with_reference);
+
+  /// Reads the record. With `need_reference` the reference column must be present (its
+  /// absence is a usage error naming --reference-column); without it, --reference-column is
+  /// a usage error. `app` tells which flags were given.
+  SampledData load(const CLI::App& app, bool need_reference) const;
+};
+
+/// A user-facing number: 12 significant digits (0.1 prints as 0.1).
+std::string show(double x);
+
+/// Agreement of two sample times given in different places (flag, file, controller).
+bool same_sample_time(double a, double b);
+
+}  // namespace ctid::cli

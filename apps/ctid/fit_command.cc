@@ -1,0 +1,400 @@
+// `ctid fit`: estimates a continuous-time model from sampled data (CSV) with the refined IV
+// estimators of González et al.: SRIVC / CLSRIVC for one unfactored model (Remark 4,
+// eq. 30), the additive open/closed-loop iteration (29) for K submodels, with integrators
+// (Remark 5), a known input delay or a delay scan. Writes the whole EstimationResult as JSON
+// (io/result_json.h), prints a summary, and draws figures on request (plot_support.h).
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "command.h"
+#include "ctid/core/error.h"
+#include "ctid/estimation/additive_srivc.h"
+#include "ctid/estimation/clsrivc.h"
+#include "ctid/estimation/delay_scan.h"
+#include "ctid/estimation/srivc.h"
+#include "ctid/estimation/validation.h"
+#include "ctid/io/json.h"
+#include "ctid/io/model_json.h"
+#include "ctid/io/result_json.h"
+#include "data_flags.h"
+#include "plot_support.h"
+
+namespace ctid::cli {
+namespace {
+
+struct FitFlags {
+  DataFlags data;
+
+  std::string model;  // "unfactored" or "additive"; empty: from the structure flags
+  int poles = 0;
+  int zeros = 0;
+  int integrators = 0;
+  std::vector<std::string> submodels;
+  int modes = 0;
+
+  int delay = 0;
+  std::string delay_scan;
+
+  std::string controller;
+  std::string initial;
+  int max_iterations = RefinedIvOptions{}.max_iterations;
+  double tolerance = RefinedIvOptions{}.tolerance;
+  std::string interpolation = "foh";
+  std::string noise = "coloured";
+  bool history = false;
+
+  std::string output;
+  std::string model_output;
+  std::string plot;
+  bool force = false;
+  bool quiet = false;
+};
+
+// The requested structure: one unfactored model or K additive submodels.
+struct Structure {
+  bool additive = false;
+  std::vector<SubmodelOrder> orders;
+};
+
+int parse_count(const std::string& text, const std::string& what) {
+  std::size_t used = 0;
+  int value = -1;
+  try {
+    value = std::stoi(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || text.empty() || value < 0) {
+    usage_error(what + ": '" + text + "' is not a non-negative integer");
+  }
+  return value;
+}
+
+SubmodelOrder parse_submodel(const std::string& text) {
+  std::vector<std::string> parts;
+  std::stringstream in(text);
+  for (std::string part; std::getline(in, part, ',');) parts.push_back(part);
+  if (parts.size() < 2 || parts.size() > 3 || text.back() == ',') {
+    usage_error("--submodel '" + text + "': expected n,m or n,m,l (poles, zeros, integrators)");
+  }
+  const std::string what = "--submodel '" + text + "'";
+  SubmodelOrder order;
+  order.n = parse_count(parts[0], what);
+  order.m = parse_count(parts[1], what);
+  order.integrators = parts.size() == 3 ? parse_count(parts[2], what) : 0;
+  return order;
+}
+
+Structure structure(const FitFlags& f, const CLI::App& app) {
+  const bool unfactored = app.count("--poles") > 0;
+  const bool submodels = !f.submodels.empty();
+  const bool modes = app.count("--modes") > 0;
+  const int given = (unfactored ? 1 : 0) + (submodels ? 1 : 0) + (modes ? 1 : 0);
+  if (given != 1) {
+    usage_error(
+        "give one model structure: --poles N --zeros M [--integrators L] (unfactored), "
+        "--submodel N,M[,L] (repeated, additive) or --modes K (additive)");
+  }
+  if (app.count("--zeros") > 0 && !unfactored) usage_error("--zeros needs --poles");
+  if (app.count("--integrators") > 0 && !unfactored) {
+    usage_error("--integrators goes with --poles; for an additive model write --submodel N,M,L");
+  }
+  Structure s;
+  s.additive = !unfactored;
+  if (!f.model.empty() && (f.model == "additive") != s.additive) {
+    usage_error("--model " + f.model +
+                " does not match the structure flags (--poles is "
+                "unfactored; --submodel and --modes are additive)");
+  }
+  if (unfactored) {
+    if (app.count("--zeros") == 0) usage_error("--poles needs --zeros (numerator degree)");
+    s.orders.push_back({f.poles, f.zeros, f.integrators});
+  } else if (submodels) {
+    for (const std::string& text : f.submodels) s.orders.push_back(parse_submodel(text));
+  } else {
+    if (f.modes < 1) usage_error("--modes must be at least 1, not " + std::to_string(f.modes));
+    s.orders.assign(static_cast<std::size_t>(f.modes), SubmodelOrder{2, 0, 0});
+  }
+  return s;
+}
+
+std::pair<int, int> parse_delay_range(const std::string& text) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos) {
+    usage_error("--delay-scan '" + text + "': expected MIN:MAX in samples, e.g. 0:10");
+  }
+  const int low = parse_count(text.substr(0, colon), "--delay-scan minimum");
+  const int high = parse_count(text.substr(colon + 1), "--delay-scan maximum");
+  if (high < low) usage_error("--delay-scan '" + text + "': MAX is below MIN");
+  return {low, high};
+}
+
+std::string estimator_name(const Structure& s, bool closed_loop) {
+  if (s.additive) return closed_loop ? "additive_clsrivc" : "additive_srivc";
+  return closed_loop ? "clsrivc" : "srivc";
+}
+
+// Summary numbers: 6 significant digits (the JSON keeps every digit).
+std::string brief(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", x);
+  return buffer;
+}
+
+std::string plus_minus(double value, double error) {
+  std::string text = brief(value);
+  if (std::isfinite(error)) text += " ± " + brief(error);
+  return text;
+}
+
+void print_summary(std::ostream& out, const EstimationResult& r, const std::string& estimator,
+                   const SampledData& data, const std::string& file) {
+  out << "ctid fit: " << estimator << " on " << file << " (N = " << data.size()
+      << ", h = " << show(data.sample_time()) << " s)\n";
+  out << "termination: " << to_string(r.termination) << " after " << r.iterations
+      << " iterations: " << r.message << "\n";
+  out << "input delay: " << r.input_delay << " samples (" << show(r.model.input_delay()) << " s)\n";
+  for (int i = 0; i < r.model.size(); ++i) {
+    const Submodel& s = r.model[i];
+    out << "submodel " << i + 1 << ": (" << s.b.to_string("p") << ") / (";
+    if (s.integrators > 0) out << "p^" << s.integrators << " ";
+    out << s.a.to_string("p") << ")\n";
+  }
+  if (!r.modes.empty()) {
+    out << "modes (± one standard error):\n";
+    for (const ModalEstimate& m : r.modes) {
+      const double two_pi = 2.0 * std::numbers::pi;
+      out << "  submodel " << m.submodel + 1
+          << ": w_n = " << plus_minus(m.value.natural_frequency, m.standard_error.natural_frequency)
+          << " rad/s ("
+          << plus_minus(m.value.natural_frequency / two_pi,
+                        m.standard_error.natural_frequency / two_pi)
+          << " Hz), zeta = " << plus_minus(m.value.damping_ratio, m.standard_error.damping_ratio)
+          << ", gain = " << plus_minus(m.value.gain, m.standard_error.gain) << "\n";
+    }
+  }
+  out << "fit: " << brief(r.fit_percent) << " %, noise variance " << brief(r.noise_variance)
+      << ", Lemma 4.4 norm " << brief(r.off_diagonal_norm) << "\n";
+  if (r.unstable_reflections > 0 || r.sensitivity_fallbacks > 0) {
+    out << "unstable iterates reflected: " << r.unstable_reflections
+        << ", S_uo fallbacks: " << r.sensitivity_fallbacks << "\n";
+  }
+  for (const std::string& warning : r.checks.warnings) out << "warning: " << warning << "\n";
+}
+
+void refuse_existing(const std::string& path, bool force, const std::string& flag) {
+  if (path.empty() || force) return;
+  if (std::filesystem::exists(path)) {
+    usage_error(path + ": file exists; pass --force to replace it (" + flag + ")");
+  }
+}
+
+void run_fit(const FitFlags& f, const CLI::App& app) {
+  const Structure s = structure(f, app);
+  if (app.count("--delay") > 0 && !f.delay_scan.empty()) {
+    usage_error("give --delay or --delay-scan, not both");
+  }
+  std::optional<std::pair<int, int>> scan;
+  if (!f.delay_scan.empty()) scan = parse_delay_range(f.delay_scan);
+  refuse_existing(f.output, f.force, "--output");
+  refuse_existing(f.model_output, f.force, "--model-output");
+  std::filesystem::path package;
+  if (!f.plot.empty()) {
+    package = require_plotting();
+    prepare_plot_directory(f.plot, model_figure_names(s.additive), f.force);
+  }
+
+  std::optional<DiscreteTransferFunction> controller;
+  if (!f.controller.empty()) controller = io::read_discrete_transfer_function(f.controller);
+  const SampledData data = f.data.load(app, controller.has_value());
+  if (controller && !same_sample_time(controller->sample_time(), data.sample_time())) {
+    usage_error(internal::concat("the controller in ", f.controller, " has sample time ",
+                                 show(controller->sample_time()), " s but ", f.data.file,
+                                 " is sampled every ", show(data.sample_time()), " s"));
+  }
+
+  RefinedIvOptions options;
+  options.max_iterations = f.max_iterations;
+  options.tolerance = f.tolerance;
+  options.output_interpolation =
+      f.interpolation == "zoh" ? Interpolation::zero_order_hold : Interpolation::first_order_hold;
+  options.noise = f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
+  options.record_history = f.history;
+  options.input_delay = f.delay;
+  if (!f.initial.empty()) options.initial_model = io::read_fitted_model(f.initial).model;
+  options.validate();
+
+  const std::string estimator = estimator_name(s, controller.has_value());
+  auto estimate = [&](int delay) {
+    RefinedIvOptions o = options;
+    o.input_delay = delay;
+    if (s.additive) {
+      return controller ? additive_clsrivc(data, *controller, s.orders, o)
+                        : additive_srivc(data, s.orders, o);
+    }
+    return controller ? clsrivc(data, *controller, s.orders.front(), o)
+                      : srivc(data, s.orders.front(), o);
+  };
+
+  std::optional<DelayScanResult> scanned;
+  std::optional<EstimationResult> fitted;
+  if (scan) {
+    scanned = scan_input_delay(estimate, scan->first, scan->second);
+    fitted = scanned->best;
+  } else {
+    fitted = estimate(f.delay);
+  }
+  const EstimationResult& result = *fitted;
+
+  if (!f.output.empty()) {
+    nlohmann::json document = io::to_json(result);
+    document["estimator"] = estimator;
+    document["loop"] = controller ? "closed" : "open";
+    document["data"] = {
+        {"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}};
+    if (controller) document["controller"] = io::to_json(*controller);
+    if (scanned) {
+      nlohmann::json mse = nlohmann::json::array();
+      nlohmann::json terminations = nlohmann::json::array();
+      for (std::size_t i = 0; i < scanned->delays.size(); ++i) {
+        const double e = scanned->mean_squared_errors[i];
+        mse.push_back(std::isfinite(e) ? nlohmann::json(e) : nlohmann::json(nullptr));
+        terminations.push_back(to_string(scanned->terminations[i]));
+      }
+      document["delay_scan"] = {{"delays", scanned->delays},
+                                {"mean_squared_errors", mse},
+                                {"terminations", terminations}};
+    }
+    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  }
+  if (!f.model_output.empty()) {
+    io::write_model(f.model_output, io::ContinuousModel(result.model),
+                    f.force ? io::Overwrite::yes : io::Overwrite::no);
+  }
+  if (!f.quiet) print_summary(std::cout, result, estimator, data, f.data.file);
+
+  if (!f.plot.empty()) {
+    const Eigen::VectorXd simulated = model_output(result.model, data.input(), data.sample_time());
+    const auto written = draw_model_figures(
+        package, f.plot, result.model, result.covariance, data, simulated, s.additive,
+        "ctid fit: " + estimator + " on " + std::filesystem::path(f.data.file).filename().string());
+    if (!f.quiet) {
+      for (const auto& file : written) std::cout << "wrote " << file.string() << "\n";
+    }
+  }
+}
+
+Command add_fit_command(CLI::App& parent) {
+  auto flags = std::make_shared<FitFlags>();
+  FitFlags& f = *flags;
+  CLI::App* app = parent.add_subcommand(
+      "fit",
+      "Estimate a continuous-time model from sampled data with the refined IV estimators "
+      "(SRIVC, CLSRIVC, additive open/closed loop) and write the result as JSON.");
+  app->footer(
+      "Structure: --poles N --zeros M [--integrators L] (one unfactored B/(p^L A)), or "
+      "--submodel N,M[,L] repeated, slowest first (additive), or --modes K (K second-order "
+      "modes, M = 0).\n"
+      "Closed loop: --controller C.json (discrete controller) uses CLSRIVC / additive CL and "
+      "needs the reference column.\n"
+      "Output: --output RESULT.json holds everything; its \"model\" field (or --model-output) "
+      "is a model file for 'ctid validate' and 'ctid simulate --model'.\n"
+      "Formats: docs/formats.md, docs/cli-estimation.md. Exit status: 0 ran (whatever the "
+      "termination), 2 bad usage or input, 1 other error.");
+
+  f.data.add_to(*app, "data", true);
+
+  app->add_option("--model", f.model,
+                  "Model kind: unfactored or additive (default: from the "
+                  "structure flags)")
+      ->check(CLI::IsMember({"unfactored", "additive"}))
+      ->group("Structure");
+  app->add_option("--poles", f.poles, "Unfactored: poles n (deg A), besides integrators")
+      ->check(CLI::NonNegativeNumber)
+      ->group("Structure");
+  app->add_option("--zeros", f.zeros, "Unfactored: zeros m (deg B)")
+      ->check(CLI::NonNegativeNumber)
+      ->group("Structure");
+  app->add_option("--integrators", f.integrators, "Unfactored: poles at the origin l")
+      ->check(CLI::NonNegativeNumber)
+      ->group("Structure");
+  app->add_option("--submodel", f.submodels,
+                  "Additive: one submodel N,M[,L] (poles, zeros, integrators); repeat, slowest "
+                  "first")
+      ->take_all()
+      ->allow_extra_args(false)
+      ->group("Structure");
+  app->add_option("--modes", f.modes, "Additive: K second-order modes (--submodel 2,0 K times)")
+      ->group("Structure");
+  app->add_option("--delay", f.delay, "Known input delay in samples")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber)
+      ->group("Structure");
+  app->add_option("--delay-scan", f.delay_scan,
+                  "Estimate the delay: fit every delay MIN:MAX (samples), keep the smallest "
+                  "output error")
+      ->group("Structure");
+
+  app->add_option("--controller,-c", f.controller,
+                  "Discrete controller JSON (discrete_transfer_function in q): closed loop")
+      ->check(CLI::ExistingFile)
+      ->group("Closed loop");
+
+  app->add_option("--initial", f.initial,
+                  "Starting model (model JSON or a result JSON); default: automatic start from "
+                  "the data")
+      ->check(CLI::ExistingFile)
+      ->group("Iteration");
+  app->add_option("--max-iterations", f.max_iterations, "Iteration limit")
+      ->capture_default_str()
+      ->group("Iteration");
+  app->add_option("--tolerance", f.tolerance,
+                  "Stop when the relative parameter change falls below this")
+      ->capture_default_str()
+      ->group("Iteration");
+  app->add_option("--interpolation", f.interpolation,
+                  "Output interpolation between samples before filtering: zoh or foh")
+      ->check(CLI::IsMember({"zoh", "foh"}))
+      ->capture_default_str()
+      ->group("Iteration");
+  app->add_option("--noise", f.noise,
+                  "Noise assumed by the covariance: white or coloured (sandwich, AR model of the "
+                  "residuals)")
+      ->check(CLI::IsMember({"white", "coloured"}))
+      ->capture_default_str()
+      ->group("Iteration");
+  app->add_flag("--history", f.history, "Record every iteration's parameters in the result")
+      ->group("Iteration");
+
+  app->add_option("--output,-o", f.output, "Result JSON to write (everything in the estimate)")
+      ->group("Output");
+  app->add_option("--model-output", f.model_output,
+                  "Also write the fitted model alone (additive_model JSON)")
+      ->group("Output");
+  app->add_option("--plot", f.plot,
+                  "Directory for bode.png, validation.png, residuals.png (and modes.png, "
+                  "additive) drawn by python3 -m ctid.plot")
+      ->group("Output");
+  app->add_flag("--force", f.force, "Replace output files that exist (never replaced otherwise)")
+      ->group("Output");
+  app->add_flag("--quiet,-q", f.quiet, "Print no summary")->group("Output");
+
+  Command command;
+  command.app = app;
+  command.run = [flags, app] { run_fit(*flags, *app); };
+  return command;
+}
+
+}  // namespace
+
+CTID_REGISTER_COMMAND(20, add_fit_command);
+
+}  // namespace ctid::cli

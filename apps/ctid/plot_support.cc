@@ -1,0 +1,246 @@
+#include "plot_support.h"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <numbers>
+#include <random>
+#include <sstream>
+#include <system_error>
+#include <vector>
+
+#include "ctid/core/error.h"
+#include "ctid/io/csv.h"
+#include "ctid/io/json.h"
+#include "ctid/io/model_json.h"
+
+namespace ctid::cli {
+namespace {
+
+constexpr const char* kPython = "/usr/bin/python3";
+
+std::string quote(const std::string& word) {
+  std::string quoted = "'";
+  for (char c : word) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+bool holds_package(const std::filesystem::path& dir) {
+  std::error_code ignored;
+  if (!std::filesystem::is_regular_file(dir / "ctid" / "plot.py", ignored)) return false;
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "ctid", ignored)) {
+    if (entry.path().filename().string().rfind("_ctid", 0) == 0) return true;
+  }
+  return false;
+}
+
+std::filesystem::path executable_directory() {
+  std::error_code error;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", error);
+  return error ? std::filesystem::path() : exe.parent_path();
+}
+
+// Where the package may be, in the order searched.
+std::vector<std::filesystem::path> candidates() {
+  std::vector<std::filesystem::path> dirs;
+  if (const char* env = std::getenv("CTID_PYTHONPATH"); env != nullptr && *env != '\0') {
+    dirs.emplace_back(env);
+  }
+  const std::filesystem::path exe_dir = executable_directory();
+  if (!exe_dir.empty()) {
+    dirs.push_back(exe_dir / ".." / ".." / "python");  // build tree: <build>/apps/ctid/ctid
+    dirs.push_back(exe_dir / ".." / "python");
+    dirs.push_back(exe_dir / ".." / "lib" / "ctid" / "python");  // install: <prefix>/bin/ctid
+  }
+  return dirs;
+}
+
+std::string last_line(const std::string& text) {
+  std::string trimmed = text;
+  while (!trimmed.empty() && (trimmed.back() == '\n' || trimmed.back() == ' ')) {
+    trimmed.pop_back();
+  }
+  const auto pos = trimmed.rfind('\n');
+  return pos == std::string::npos ? trimmed : trimmed.substr(pos + 1);
+}
+
+}  // namespace
+
+std::optional<std::filesystem::path> find_python_package() {
+  for (const std::filesystem::path& dir : candidates()) {
+    if (holds_package(dir)) return std::filesystem::weakly_canonical(dir);
+  }
+  return std::nullopt;
+}
+
+std::filesystem::path require_plotting() {
+  if (::access(kPython, X_OK) != 0) {
+    throw ComputationError(std::string("--plot needs ") + kPython +
+                           " with matplotlib, which is not installed");
+  }
+  if (auto dir = find_python_package()) return *dir;
+  std::string looked;
+  for (const std::filesystem::path& dir : candidates()) {
+    looked += (looked.empty() ? "" : ", ") + dir.lexically_normal().string();
+  }
+  throw ComputationError(
+      "--plot needs the ctid Python package (build with -DCTID_BUILD_PYTHON=ON, or set "
+      "CTID_PYTHONPATH to the folder holding ctid/); looked in " +
+      looked);
+}
+
+void plot(const std::filesystem::path& package_dir, const std::vector<PlotJob>& jobs) {
+  if (jobs.empty()) return;
+  const TemporaryDirectory status_dir;
+  std::string command;
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    const PlotJob& job = jobs[i];
+    const std::string stem = (status_dir.path() / std::to_string(i)).string();
+    std::string one = "PYTHONPATH=" + quote(package_dir.string()) + " MPLBACKEND=Agg " + kPython +
+                      " -m ctid.plot " + quote(job.kind) + " " + quote(job.input.string()) + " " +
+                      quote(job.output.string());
+    if (!job.title.empty()) one += " --title " + quote(job.title);
+    command += "( " + one + " > /dev/null 2> " + quote(stem + ".err") + "; echo $? > " +
+               quote(stem + ".status") + " ) & ";
+  }
+  command += "wait";
+  const int raw = std::system(command.c_str());
+  if (!WIFEXITED(raw) || WEXITSTATUS(raw) != 0) {
+    throw ComputationError("could not run " + std::string(kPython) + " for the figures");
+  }
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    const std::string stem = (status_dir.path() / std::to_string(i)).string();
+    int status = -1;
+    std::ifstream(stem + ".status") >> status;
+    if (status == 0) continue;
+    std::ifstream in(stem + ".err");
+    std::ostringstream text;
+    text << in.rdbuf();
+    const std::string message =
+        "plotting " + jobs[i].output.filename().string() + " failed: " + last_line(text.str());
+    if (status == 2) throw InvalidArgument(message);
+    throw ComputationError(message);
+  }
+}
+
+TemporaryDirectory::TemporaryDirectory() {
+  std::random_device device;
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    const std::filesystem::path candidate =
+        std::filesystem::temp_directory_path() /
+        ("ctid-" + std::to_string(::getpid()) + "-" + std::to_string(device()));
+    std::error_code error;
+    if (std::filesystem::create_directory(candidate, error)) {
+      path_ = candidate;
+      return;
+    }
+  }
+  throw ComputationError("could not create a temporary directory under " +
+                         std::filesystem::temp_directory_path().string());
+}
+
+TemporaryDirectory::~TemporaryDirectory() {
+  std::error_code ignored;
+  std::filesystem::remove_all(path_, ignored);
+}
+
+void prepare_plot_directory(const std::filesystem::path& dir,
+                            const std::vector<std::string>& figures, bool force) {
+  std::error_code error;
+  if (std::filesystem::exists(dir, error) && !std::filesystem::is_directory(dir, error)) {
+    throw InvalidArgument("--plot " + dir.string() + ": exists and is not a directory");
+  }
+  if (!force) {
+    for (const std::string& name : figures) {
+      if (std::filesystem::exists(dir / name, error)) {
+        throw InvalidArgument((dir / name).string() + ": file exists; pass --force to replace it");
+      }
+    }
+  }
+  std::filesystem::create_directories(dir, error);
+  if (error) {
+    throw InvalidArgument("--plot " + dir.string() + ": cannot create the directory (" +
+                          error.message() + ")");
+  }
+}
+
+std::vector<std::string> model_figure_names(bool modes) {
+  std::vector<std::string> names{"bode.png", "validation.png", "residuals.png"};
+  if (modes) names.emplace_back("modes.png");
+  return names;
+}
+
+int default_segment_length(int n) {
+  int length = 8;
+  while (length * 2 <= n / 8 && length < 4096) length *= 2;
+  return std::min(length, n);
+}
+
+nlohmann::json frf_json(const Frf& frf) {
+  nlohmann::json frequencies = nlohmann::json::array();
+  nlohmann::json real = nlohmann::json::array();
+  nlohmann::json imag = nlohmann::json::array();
+  nlohmann::json variance = nlohmann::json::array();
+  for (Eigen::Index k = 0; k < frf.frequencies.size(); ++k) {
+    frequencies.push_back(frf.frequencies(k));
+    real.push_back(frf.response(k).real());
+    imag.push_back(frf.response(k).imag());
+    variance.push_back(std::isfinite(frf.variance(k)) ? nlohmann::json(frf.variance(k))
+                                                      : nlohmann::json(nullptr));
+  }
+  return {{"frequencies", frequencies}, {"real", real}, {"imag", imag}, {"variance", variance}};
+}
+
+std::vector<std::filesystem::path> draw_model_figures(
+    const std::filesystem::path& package_dir, const std::filesystem::path& dir,
+    const AdditiveModel& model, const Eigen::MatrixXd& covariance, const SampledData& data,
+    const Eigen::VectorXd& simulated, bool modes, const std::string& title) {
+  const TemporaryDirectory work;
+  const double nyquist = std::numbers::pi / data.sample_time();
+
+  nlohmann::json frequency_input = {{"model", io::to_json(model)}};
+  if (covariance.size() > 0) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (Eigen::Index i = 0; i < covariance.rows(); ++i) {
+      nlohmann::json row = nlohmann::json::array();
+      for (Eigen::Index j = 0; j < covariance.cols(); ++j) row.push_back(covariance(i, j));
+      rows.push_back(row);
+    }
+    frequency_input["covariance"] = rows;
+  }
+  double low = 1e-3 * nyquist;
+  if (data.size() >= 16) {
+    WelchOptions options;
+    options.segment_length = default_segment_length(data.size());
+    const Frf frf = welch_frf(data, options);
+    frequency_input["frf"] = frf_json(frf);
+    if (frf.frequencies.size() > 0) low = frf.frequencies(0);
+  }
+  frequency_input["frequency_range"] = {low, nyquist};
+  const std::filesystem::path frequency_file = work.path() / "model.json";
+  io::write_json(frequency_file, frequency_input);
+
+  io::CsvTable table;
+  table.source = "validation";
+  table.add_column("t", data.time());
+  table.add_column("u", data.input());
+  table.add_column("y", data.output());
+  table.add_column("y_model", simulated);
+  const std::filesystem::path signals_file = work.path() / "signals.csv";
+  io::write_csv(signals_file, table);
+
+  std::vector<PlotJob> jobs{{"bode", frequency_file, dir / "bode.png", title},
+                            {"validation", signals_file, dir / "validation.png", title},
+                            {"residuals", signals_file, dir / "residuals.png", title}};
+  if (modes) jobs.push_back({"modes", frequency_file, dir / "modes.png", title});
+  plot(package_dir, jobs);
+  std::vector<std::filesystem::path> written;
+  for (const PlotJob& job : jobs) written.push_back(job.output);
+  return written;
+}
+
+}  // namespace ctid::cli

@@ -1,0 +1,81 @@
+// Figures for the CLI's --plot flags: runs the Python entry point
+// `/usr/bin/python3 -m ctid.plot KIND INPUT OUTPUT` (docs/python.md) with PYTHONPATH set to
+// the folder holding the built `ctid` package, found next to the executable (build tree
+// <build>/python, or an install's lib/ctid/python) or given by $CTID_PYTHONPATH. No
+// drawing here: matplotlib draws, through ctid.plotting.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "ctid/core/additive_model.h"
+#include "ctid/core/sampled_data.h"
+#include "ctid/frequency/frf.h"
+
+namespace ctid::cli {
+
+/// The folder holding the `ctid` Python package (ctid/plot.py and the _ctid extension), or
+/// nullopt when none is found.
+std::optional<std::filesystem::path> find_python_package();
+
+/// Throws ComputationError, naming where it looked, unless /usr/bin/python3 and the ctid
+/// package are available. Call before any work so --plot fails early.
+std::filesystem::path require_plotting();
+
+/// One figure: `python3 -m ctid.plot kind input output [--title title]`.
+struct PlotJob {
+  std::string kind;
+  std::filesystem::path input;
+  std::filesystem::path output;
+  std::string title;
+};
+
+/// Draws the figures, all at once (one Python process each, run concurrently, since the
+/// interpreter's start-up dominates). Throws InvalidArgument if a figure's input was
+/// rejected (exit status 2) and ComputationError otherwise, with the plotter's stderr line.
+void plot(const std::filesystem::path& package_dir, const std::vector<PlotJob>& jobs);
+
+/// A fresh, empty directory under the system's temporary directory, removed with the object.
+class TemporaryDirectory {
+ public:
+  TemporaryDirectory();
+  ~TemporaryDirectory();
+  TemporaryDirectory(const TemporaryDirectory&) = delete;
+  TemporaryDirectory& operator=(const TemporaryDirectory&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// Checks --plot DIR before any work: creates DIR if missing, and refuses (InvalidArgument)
+/// to replace any of `figures` there unless `force`.
+void prepare_plot_directory(const std::filesystem::path& dir,
+                            const std::vector<std::string>& figures, bool force);
+
+/// The figure files of a model judged on data: bode.png, validation.png, residuals.png and,
+/// with `modes`, modes.png.
+std::vector<std::string> model_figure_names(bool modes);
+
+/// Samples per Welch segment for a record of n samples: the largest power of two <= n/8,
+/// within [8, 4096] and at most n.
+int default_segment_length(int n);
+
+/// The FRF as the "frf" object of the ctid.plot JSON input.
+nlohmann::json frf_json(const Frf& frf);
+
+/// Draws model_figure_names(modes) into `dir`: the model over the Welch H1 FRF of `data`
+/// with the confidence band of `covariance` (of model.parameters(); may be empty), the
+/// measured against the simulated output `simulated`, the residual correlations, and the
+/// separate modes. Returns the files written.
+std::vector<std::filesystem::path> draw_model_figures(
+    const std::filesystem::path& package_dir, const std::filesystem::path& dir,
+    const AdditiveModel& model, const Eigen::MatrixXd& covariance, const SampledData& data,
+    const Eigen::VectorXd& simulated, bool modes, const std::string& title);
+
+}  // namespace ctid::cli

@@ -1,0 +1,257 @@
+// `ctid fit` run as a user would: data simulated by `ctid simulate` from the shipped
+// examples, fitted, and the JSON's parameters compared with the true ones; bad input exits
+// 2 with one line; files are never replaced without --force; --plot writes real PNGs.
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <fstream>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "cli/run_ctid.h"
+#include "ctid/core/transfer_function.h"
+#include "ctid/io/json.h"
+#include "ctid/io/model_json.h"
+
+namespace ctid::cli {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::line_count;
+using ::testing::StartsWith;
+
+class FitCommand : public testing::CliTest {
+ protected:
+  // Section 6.1: four modes under the shipped multisine, noise-free, h = 0.05 s.
+  std::string section_6_1_data() const {
+    const auto r =
+        ctid({"simulate", "-m", example("gonzalez_6_1_open_loop.json"), "--excitation-spec",
+              example("multisine_0.01_3hz.json"), "-o", "d.csv", "-q"});
+    EXPECT_EQ(r.status, 0) << r.err;
+    return path("d.csv").string();
+  }
+
+  nlohmann::json read(const std::string& name) const { return io::read_json(path(name)); }
+};
+
+void expect_bad_input(const testing::RunResult& r, const std::string& fragment) {
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_THAT(r.err, StartsWith("ctid fit: error: "));
+  EXPECT_THAT(r.err, HasSubstr(fragment));
+}
+
+// Largest |x_i - y_i| / |y_i|.
+double relative_error(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
+  return ((x - y).array() / y.array()).abs().maxCoeff();
+}
+
+Eigen::VectorXd numbers(const nlohmann::json& array) {
+  Eigen::VectorXd v(static_cast<Eigen::Index>(array.size()));
+  for (size_t i = 0; i < array.size(); ++i) v(static_cast<Eigen::Index>(i)) = array[i];
+  return v;
+}
+
+AdditiveModel example_additive(const std::string& name) {
+  return std::get<AdditiveModel>(
+      io::read_continuous_model(std::string(CTID_SOURCE_DIR) + "/examples/models/" + name));
+}
+
+TEST_F(FitCommand, AdditiveOpenLoopRecoversSection61NoiseFree) {
+  section_6_1_data();
+  const auto r = ctid({"fit", "d.csv", "--modes", "4", "-o", "r.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = read("r.json");
+  EXPECT_EQ(j.at("estimator"), "additive_srivc");
+  EXPECT_EQ(j.at("termination"), "converged");
+  const Eigen::VectorXd truth = example_additive("gonzalez_6_1_open_loop.json").parameters();
+  EXPECT_LT(relative_error(numbers(j.at("parameters")), truth), 1e-6);
+  EXPECT_GT(j.at("fit_percent").get<double>(), 99.9999);
+  ASSERT_EQ(j.at("modes").size(), 4u);
+  // Mode 1: poles -0.25 +- 1.39j, so w_n = |pole|.
+  EXPECT_NEAR(j.at("modes")[0].at("natural_frequency").get<double>(), std::hypot(0.25, 1.39), 1e-6);
+  EXPECT_EQ(j.at("covariance").size(), 12u);  // 4 modes x (a1, a2, b0)
+  // The summary names the modes in rad/s and Hz and the termination.
+  EXPECT_THAT(r.out, HasSubstr("rad/s"));
+  EXPECT_THAT(r.out, HasSubstr("Hz"));
+  EXPECT_THAT(r.out, HasSubstr("termination: converged"));
+}
+
+TEST_F(FitCommand, UnfactoredOpenLoopRecoversTheTransferFunction) {
+  // The Section 6.2 plant (two modes) as one 4-pole, 2-zero model, PRBS input.
+  const auto s = ctid({"simulate", "-m", example("gonzalez_6_2_plant.json"), "--excitation", "prbs",
+                       "--register-length", "10", "--samples-per-bit", "4", "--samples", "4000",
+                       "-T", "0.05", "-o", "d.csv", "-q"});
+  ASSERT_EQ(s.status, 0) << s.err;
+  const auto r = ctid({"fit", "d.csv", "--poles", "4", "--zeros", "2", "-o", "r.json", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = read("r.json");
+  EXPECT_EQ(j.at("estimator"), "srivc");
+  const TransferFunction fitted = io::transfer_function_from_json(j.at("transfer_function"), "r");
+  const TransferFunction truth = example_additive("gonzalez_6_2_plant.json").to_transfer_function();
+  for (double w : {0.1, 1.0, 2.0, 6.3, 20.0}) {
+    EXPECT_LT(std::abs(fitted.frequency_response(w) - truth.frequency_response(w)),
+              1e-6 * std::abs(truth.frequency_response(w)))
+        << w;
+  }
+  // Its partial-fraction view holds the two modes.
+  EXPECT_EQ(j.at("modes").size(), 2u);
+}
+
+TEST_F(FitCommand, ClosedLoopAdditiveAndClsrivcRecoverSection62) {
+  const auto s =
+      ctid({"simulate", "-m", example("gonzalez_6_2_plant.json"), "--controller",
+            example("gonzalez_6_2_pid.json"), "--excitation", "prbs", "--register-length", "10",
+            "--samples-per-bit", "3", "--samples", "3000", "-o", "d.csv", "-q"});
+  ASSERT_EQ(s.status, 0) << s.err;
+  const Eigen::VectorXd truth = example_additive("gonzalez_6_2_plant.json").parameters();
+
+  const auto additive =
+      ctid({"fit", "d.csv", "--submodel", "2,0", "--submodel", "2,0", "--controller",
+            example("gonzalez_6_2_pid.json"), "-o", "a.json", "-q"});
+  ASSERT_EQ(additive.status, 0) << additive.err;
+  const nlohmann::json a = read("a.json");
+  EXPECT_EQ(a.at("estimator"), "additive_clsrivc");
+  EXPECT_EQ(a.at("loop"), "closed");
+  EXPECT_LT(relative_error(numbers(a.at("parameters")), truth), 1e-6);
+
+  const auto unfactored = ctid({"fit", "d.csv", "--poles", "4", "--zeros", "2", "--controller",
+                                example("gonzalez_6_2_pid.json"), "-o", "u.json", "-q"});
+  ASSERT_EQ(unfactored.status, 0) << unfactored.err;
+  const nlohmann::json u = read("u.json");
+  EXPECT_EQ(u.at("estimator"), "clsrivc");
+  const TransferFunction fitted = io::transfer_function_from_json(u.at("transfer_function"), "u");
+  const TransferFunction g = example_additive("gonzalez_6_2_plant.json").to_transfer_function();
+  for (double w : {0.3, 2.0, 6.3}) {
+    EXPECT_LT(std::abs(fitted.frequency_response(w) - g.frequency_response(w)),
+              1e-6 * std::abs(g.frequency_response(w)));
+  }
+}
+
+TEST_F(FitCommand, DelayScanFindsTheDelayAndIntegratorsAreFitted) {
+  // 0.3696 e^{-3h s}/(s (s + 2.14)): an integrator and a 3-sample delay, h = 0.01 s.
+  write("g.json", R"({"type": "transfer_function", "numerator_ascending": [0.3696],
+    "denominator_ascending": [0, 2.14, 1], "input_delay": 0.03})");
+  const auto s = ctid({"simulate", "-m", "g.json", "--excitation", "prbs", "--samples", "2000",
+                       "--samples-per-bit", "5", "-T", "0.01", "-o", "d.csv", "-q"});
+  ASSERT_EQ(s.status, 0) << s.err;
+  const auto r = ctid({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--integrators", "1",
+                       "--delay-scan", "0:6", "-o", "r.json", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = read("r.json");
+  EXPECT_EQ(j.at("input_delay_samples"), 3);
+  EXPECT_EQ(j.at("delay_scan").at("delays").size(), 7u);
+  EXPECT_EQ(j.at("model").at("submodels")[0].at("integrators"), 1);
+  // B/(p A) with A = 1 + p/2.14, B = 0.3696/2.14.
+  const Eigen::VectorXd truth = (Eigen::VectorXd(2) << 1.0 / 2.14, 0.3696 / 2.14).finished();
+  EXPECT_LT(relative_error(numbers(j.at("parameters")), truth), 1e-6);
+}
+
+TEST_F(FitCommand, FittedModelIsReadBySimulateAndAnInitialModelIsAccepted) {
+  section_6_1_data();
+  ASSERT_EQ(ctid({"fit", "d.csv", "--modes", "4", "-o", "r.json", "--model-output", "m.json", "-q"})
+                .status,
+            0);
+  // The "model" field alone and --model-output are model files for ctid simulate.
+  std::ofstream(path("inner.json")) << read("r.json").at("model").dump();
+  for (const char* model : {"inner.json", "m.json"}) {
+    const auto s = ctid(
+        {"simulate", "-m", model, "--input", "d.csv", "-o", std::string(model) + ".csv", "-q"});
+    ASSERT_EQ(s.status, 0) << s.err;
+  }
+  // A result file is accepted as --initial; starting at the answer converges at once.
+  const auto again = ctid({"fit", "d.csv", "--modes", "4", "--initial", "r.json", "-o", "r2.json",
+                           "-q", "--max-iterations", "5", "--interpolation", "zoh"});
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_LE(read("r2.json").at("iterations").get<int>(), 5);
+}
+
+TEST_F(FitCommand, BadInputExitsTwoWithOneLine) {
+  section_6_1_data();
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "4", "--output-column", "z"}), "'z'");
+  expect_bad_input(ctid({"fit", "d.csv"}), "give one model structure");
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--poles", "2", "--zeros", "0"}),
+                   "give one model structure");
+  expect_bad_input(ctid({"fit", "d.csv", "--poles", "2"}), "--poles needs --zeros");
+  expect_bad_input(ctid({"fit", "d.csv", "--poles", "0", "--zeros", "0"}), "");
+  expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--zeros", "5"}), "");
+  expect_bad_input(ctid({"fit", "d.csv", "--submodel", "2,x"}), "--submodel '2,x'");
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--delay", "1", "--delay-scan", "0:3"}),
+                   "not both");
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--delay-scan", "5:2"}), "MAX is below");
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--max-iterations", "0"}),
+                   "max_iterations");
+  // Closed loop without a reference column.
+  expect_bad_input(
+      ctid({"fit", "d.csv", "--modes", "2", "--controller", example("gonzalez_6_2_pid.json")}),
+      "--reference-column");
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--reference-column", "r"}),
+                   "no effect without --controller");
+  // A malformed controller file.
+  write("bad.json", R"({"type": "discrete_transfer_function", "numerator_ascending": [1],)");
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--controller", "bad.json"}), "bad.json:");
+  // Too few samples for the parameter count.
+  write("short.csv", "t,u,y\n0,1,0\n1,-1,0.5\n2,1,0.2\n3,1,0.1\n4,-1,0.3\n");
+  expect_bad_input(ctid({"fit", "short.csv", "--modes", "4"}), "");
+  // NaN in the data.
+  write("nan.csv", "t,u,y\n0,1,0\n1,-1,nan\n2,1,0.2\n");
+  expect_bad_input(ctid({"fit", "nan.csv", "--modes", "1"}), "nan.csv:3");
+  // No time column and no sample time.
+  write("untimed.csv", "u,y\n1,0\n-1,0.5\n1,0.2\n");
+  expect_bad_input(ctid({"fit", "untimed.csv", "--modes", "1"}), "--sample-time");
+}
+
+TEST_F(FitCommand, NeverReplacesAFileWithoutForce) {
+  section_6_1_data();
+  write("r.json", "keep me");
+  const auto r = ctid({"fit", "d.csv", "--modes", "4", "-o", "r.json"});
+  expect_bad_input(r, "file exists; pass --force");
+  EXPECT_EQ(testing::slurp(path("r.json")), "keep me");
+  ASSERT_EQ(ctid({"fit", "d.csv", "--modes", "4", "-o", "r.json", "--force", "-q"}).status, 0);
+  EXPECT_EQ(read("r.json").at("type"), "estimation_result");
+}
+
+// The folder of the built ctid Python package, as plot_support.cc looks for it.
+std::string python_package() {
+  if (const char* env = std::getenv("CTID_PYTHONPATH"); env != nullptr && *env != '\0') {
+    return env;
+  }
+  const std::filesystem::path dir =
+      std::filesystem::path(CTID_CLI_PATH).parent_path() / ".." / ".." / "python";
+  return std::filesystem::exists(dir / "ctid" / "plot.py") ? dir.string() : "";
+}
+
+// A PNG file of at least 300 x 200 pixels.
+void expect_png(const std::filesystem::path& file) {
+  const std::string bytes = testing::slurp(file);
+  ASSERT_GT(bytes.size(), 10000u) << file;
+  EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << file;
+  auto be32 = [&](size_t at) {
+    std::uint32_t v = 0;
+    for (size_t i = 0; i < 4; ++i) v = (v << 8) | static_cast<unsigned char>(bytes[at + i]);
+    return v;
+  };
+  EXPECT_EQ(bytes.substr(12, 4), "IHDR");
+  EXPECT_GE(be32(16), 300u) << file;
+  EXPECT_GE(be32(20), 200u) << file;
+}
+
+TEST_F(FitCommand, PlotWritesPngFigures) {
+  if (python_package().empty()) {
+    GTEST_SKIP() << "the ctid Python package is not built (CTID_BUILD_PYTHON=OFF); set "
+                    "CTID_PYTHONPATH to test --plot";
+  }
+  section_6_1_data();
+  const auto r = ctid({"fit", "d.csv", "--modes", "4", "--plot", "figures", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  for (const char* name : {"bode.png", "validation.png", "residuals.png", "modes.png"}) {
+    expect_png(path("figures") / name);
+  }
+  // The figures are not replaced without --force.
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "4", "--plot", "figures", "-q"}),
+                   "file exists");
+}
+
+}  // namespace
+}  // namespace ctid::cli
