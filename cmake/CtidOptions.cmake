@@ -7,7 +7,7 @@ target_compile_options(ctid_compile_options INTERFACE
   -Wunused -Woverloaded-virtual -Wdouble-promotion -Wformat=2
   -Wimplicit-fallthrough
   # GCC 12 reports false -Wrestrict positives inside std::string concatenation at -O3.
-  -Wno-restrict
+  $<$<CXX_COMPILER_ID:GNU>:-Wno-restrict>
   $<$<BOOL:${CTID_WERROR}>:-Werror>)
 
 # Sanitizers apply to the whole build (libraries, tests, CLI, benchmarks) rather than
