@@ -1,0 +1,166 @@
+// `ctid validate`: judges a fitted model (a result or model JSON) against a data record:
+// the exact ZOH response of the model to the measured input, fit %, residual mean and
+// standard deviation, the whiteness test of the residual autocorrelation (lags 1-20) and the
+// residual-input cross-correlation (lags -20..20), both against the 99 % band 2.58/sqrt(N).
+// The numerics are ctid::validate_model and ctid::model_output (estimation/validation.h).
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "command.h"
+#include "ctid/core/error.h"
+#include "ctid/estimation/validation.h"
+#include "ctid/io/json.h"
+#include "ctid/io/result_json.h"
+#include "data_flags.h"
+#include "plot_support.h"
+
+namespace ctid::cli {
+namespace {
+
+constexpr int kMaxLag = 20;
+
+struct ValidateFlags {
+  std::string model;
+  DataFlags data;
+  std::string output;
+  std::string plot;
+  bool force = false;
+  bool quiet = false;
+};
+
+// Normalised cross-correlation of the residual e and the input u (means removed),
+// r(k) = sum_t e(t + k) u(t) / sqrt(sum e^2 sum u^2), at k = -max_lag..max_lag. Small
+// enough to live here; it belongs in ValidationReport (estimation/validation.h) once the
+// estimation layer reports it.
+Eigen::VectorXd residual_input_correlation(const Eigen::VectorXd& residual,
+                                           const Eigen::VectorXd& input, int max_lag) {
+  const Eigen::VectorXd e = residual.array() - residual.mean();
+  const Eigen::VectorXd u = input.array() - input.mean();
+  const Eigen::Index n = e.size();
+  const double scale = std::sqrt(e.squaredNorm() * u.squaredNorm());
+  const int lags = static_cast<int>(std::min<Eigen::Index>(max_lag, n - 1));
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(2 * lags + 1);
+  if (scale == 0.0) return r;
+  for (int k = -lags; k <= lags; ++k) {
+    const Eigen::Index m = n - std::abs(k);
+    const double sum = k >= 0 ? e.tail(m).dot(u.head(m)) : e.head(m).dot(u.tail(m));
+    r(k + lags) = sum / scale;
+  }
+  return r;
+}
+
+void run_validate(const ValidateFlags& f, const CLI::App& app) {
+  if (!f.output.empty() && !f.force && std::filesystem::exists(f.output)) {
+    usage_error(f.output + ": file exists; pass --force to replace it (--output)");
+  }
+  const io::FittedModel fitted = io::read_fitted_model(f.model);
+  const bool modes = fitted.model.size() > 1;
+  std::filesystem::path package;
+  if (!f.plot.empty()) {
+    package = require_plotting();
+    prepare_plot_directory(f.plot, model_figure_names(modes), f.force);
+  }
+  const SampledData data = f.data.load(app, false);
+  const double delay_samples = fitted.model.input_delay() / data.sample_time();
+  if (std::abs(delay_samples - std::round(delay_samples)) > 1e-9 * std::max(1.0, delay_samples)) {
+    usage_error(internal::concat("the model's input delay ", show(fitted.model.input_delay()),
+                                 " s is not a whole number of samples of ", f.data.file,
+                                 " (h = ", show(data.sample_time()), " s)"));
+  }
+
+  const ValidationReport report = validate_model(fitted.model, data);
+  const Eigen::VectorXd simulated = model_output(fitted.model, data.input(), data.sample_time());
+  const Eigen::VectorXd residual = data.output() - simulated;
+  const Eigen::VectorXd cross = residual_input_correlation(residual, data.input(), kMaxLag);
+  const double max_cross = cross.size() > 0 ? cross.cwiseAbs().maxCoeff() : 0.0;
+  const double bound = report.whiteness_bound;
+  const bool white = report.max_residual_autocorrelation <= bound;
+  const bool uncorrelated = max_cross <= bound;
+
+  if (!f.output.empty()) {
+    nlohmann::json lags = nlohmann::json::array();
+    nlohmann::json values = nlohmann::json::array();
+    const int half = static_cast<int>(cross.size() / 2);
+    for (int k = -half; k <= half; ++k) {
+      lags.push_back(k);
+      values.push_back(cross(k + half));
+    }
+    const nlohmann::json document = {
+        {"type", "validation_report"},
+        {"model_file", f.model},
+        {"data",
+         {{"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}}},
+        {"fit_percent", report.fit_percent},
+        {"mean_squared_error", report.mean_squared_error},
+        {"residual_mean", report.residual_mean},
+        {"residual_std", report.residual_std},
+        {"max_residual_autocorrelation", report.max_residual_autocorrelation},
+        {"autocorrelation_lags", {1, kMaxLag}},
+        {"residual_white", white},
+        {"max_cross_correlation", max_cross},
+        {"cross_correlation_lags", lags},
+        {"cross_correlation", values},
+        {"residual_uncorrelated_with_input", uncorrelated},
+        {"bound_99", bound}};
+    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  }
+  if (!f.quiet) {
+    std::cout << "ctid validate: " << f.model << " on " << f.data.file << " (N = " << data.size()
+              << ", h = " << show(data.sample_time()) << " s)\n"
+              << "fit: " << show(report.fit_percent) << " %, mean squared error "
+              << show(report.mean_squared_error) << "\n"
+              << "residual: mean " << show(report.residual_mean) << ", std "
+              << show(report.residual_std) << "\n"
+              << "whiteness (autocorrelation, lags 1-" << kMaxLag
+              << "): max |r| = " << show(report.max_residual_autocorrelation) << " against "
+              << show(bound) << " (99 %): " << (white ? "white" : "not white") << "\n"
+              << "cross-correlation with the input (lags -" << kMaxLag << ".." << kMaxLag
+              << "): max |r| = " << show(max_cross) << " against " << show(bound)
+              << " (99 %): " << (uncorrelated ? "uncorrelated" : "correlated") << "\n";
+  }
+  if (!f.plot.empty()) {
+    const auto written = draw_model_figures(
+        package, f.plot, fitted.model, fitted.covariance, data, simulated, modes,
+        "ctid validate on " + std::filesystem::path(f.data.file).filename().string());
+    if (!f.quiet) {
+      for (const auto& file : written) std::cout << "wrote " << file.string() << "\n";
+    }
+  }
+}
+
+Command add_validate_command(CLI::App& parent) {
+  auto flags = std::make_shared<ValidateFlags>();
+  ValidateFlags& f = *flags;
+  CLI::App* app = parent.add_subcommand(
+      "validate",
+      "Judge a fitted model against a data record: fit %, residual statistics, whiteness "
+      "and cross-correlation tests.");
+  app->footer(
+      "MODEL: the result JSON of 'ctid fit' or a transfer_function / additive_model JSON.\n"
+      "The model is simulated from rest with the measured input (exact ZOH). Tests use lags "
+      "1-20 (autocorrelation) and -20..20 (cross-correlation) against 2.58/sqrt(N).\n"
+      "Exit status: 0 ran (whatever the verdict), 2 bad usage or input, 1 other error.");
+  app->add_option("model", f.model, "Model or result JSON")->required()->check(CLI::ExistingFile);
+  f.data.add_to(*app, "data", false);
+  app->add_option("--output,-o", f.output, "Report JSON to write")->group("Output");
+  app->add_option("--plot", f.plot,
+                  "Directory for bode.png, validation.png, residuals.png (and modes.png)")
+      ->group("Output");
+  app->add_flag("--force", f.force, "Replace output files that exist")->group("Output");
+  app->add_flag("--quiet,-q", f.quiet, "Print nothing")->group("Output");
+
+  Command command;
+  command.app = app;
+  command.run = [flags, app] { run_validate(*flags, *app); };
+  return command;
+}
+
+}  // namespace
+
+CTID_REGISTER_COMMAND(30, add_validate_command);
+
+}  // namespace ctid::cli

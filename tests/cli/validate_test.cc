@@ -1,0 +1,154 @@
+// `ctid validate` run as a user would: a fitted or true model on noise-free data fits to
+// ~100 %, on noisy data the residual statistics are those of the added noise, a model that
+// misses a mode fails the tests; bad input exits 2 with one line.
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "cli/run_ctid.h"
+#include "ctid/io/csv.h"
+#include "ctid/io/json.h"
+#include "ctid/io/model_json.h"
+
+namespace ctid::cli {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::line_count;
+using ::testing::StartsWith;
+
+class ValidateCommand : public testing::CliTest {
+ protected:
+  void simulate(const std::vector<std::string>& extra) const {
+    std::vector<std::string> args{"simulate",
+                                  "-m",
+                                  example("gonzalez_6_1_open_loop.json"),
+                                  "--excitation-spec",
+                                  example("multisine_0.01_3hz.json"),
+                                  "-q"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto r = ctid(args);
+    ASSERT_EQ(r.status, 0) << r.err;
+  }
+  nlohmann::json report(const std::string& name) const { return io::read_json(path(name)); }
+};
+
+void expect_bad_input(const testing::RunResult& r, const std::string& fragment) {
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_THAT(r.err, StartsWith("ctid validate: error: "));
+  EXPECT_THAT(r.err, HasSubstr(fragment));
+}
+
+TEST_F(ValidateCommand, FittedModelFitsNoiseFreeDataToAHundredPercent) {
+  simulate({"-o", "d.csv"});
+  ASSERT_EQ(ctid({"fit", "d.csv", "--modes", "4", "-o", "r.json", "-q"}).status, 0);
+  // On other data: a white-noise input the model was not fitted on.
+  const auto other = ctid({"simulate", "-m", example("gonzalez_6_1_open_loop.json"), "--excitation",
+                           "white", "--samples", "3000", "-T", "0.05", "-o", "v.csv", "-q"});
+  ASSERT_EQ(other.status, 0) << other.err;
+  const auto r = ctid({"validate", "r.json", "v.csv", "-o", "report.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = report("report.json");
+  EXPECT_GT(j.at("fit_percent").get<double>(), 99.9999);
+  EXPECT_LT(j.at("residual_std").get<double>(), 1e-6);
+  EXPECT_EQ(j.at("data").at("samples"), 3000);
+  EXPECT_THAT(r.out, HasSubstr("fit: "));
+  EXPECT_THAT(r.out, HasSubstr("whiteness"));
+  EXPECT_THAT(r.out, HasSubstr("cross-correlation"));
+  // A plain model file is accepted too.
+  const auto plain =
+      ctid({"validate", example("gonzalez_6_1_open_loop.json"), "v.csv", "-o", "plain.json"});
+  ASSERT_EQ(plain.status, 0) << plain.err;
+  EXPECT_GT(report("plain.json").at("fit_percent").get<double>(), 99.99999);
+}
+
+TEST_F(ValidateCommand, TrueModelOnNoisyDataShowsTheNoise) {
+  const double sigma = 0.1;
+  simulate({"-o", "d.csv", "--noise-std", "0.1", "--noise-seed", "7"});
+  ASSERT_EQ(
+      ctid({"validate", example("gonzalez_6_1_open_loop.json"), "d.csv", "-o", "j.json", "-q"})
+          .status,
+      0);
+  const nlohmann::json j = report("j.json");
+  const double n = 8192.0;
+  // The residual is the added white noise: its std within 4 standard errors sigma/sqrt(2N),
+  // its mean within 4 sigma/sqrt(N).
+  EXPECT_NEAR(j.at("residual_std").get<double>(), sigma, 4.0 * sigma / std::sqrt(2.0 * n));
+  EXPECT_LT(std::abs(j.at("residual_mean").get<double>()), 4.0 * sigma / std::sqrt(n));
+  EXPECT_NEAR(j.at("bound_99").get<double>(), 2.58 / std::sqrt(n), 1e-12);
+  // White noise independent of u: correlations of the size of the band, not far above it.
+  EXPECT_LT(j.at("max_residual_autocorrelation").get<double>(),
+            1.5 * j.at("bound_99").get<double>());
+  EXPECT_LT(j.at("max_cross_correlation").get<double>(), 1.5 * j.at("bound_99").get<double>());
+  EXPECT_EQ(j.at("cross_correlation").size(), 41u);
+}
+
+TEST_F(ValidateCommand, ModelMissingAModeFailsBothTests) {
+  simulate({"-o", "d.csv"});
+  nlohmann::json model = io::read_json(example("gonzalez_6_1_open_loop.json"));
+  model["submodels"].erase(1);  // drop the 0.4 / w_n = 3.16 rad/s mode
+  io::write_json(path("three.json"), model);
+  const auto r = ctid({"validate", "three.json", "d.csv", "-o", "j.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = report("j.json");
+  EXPECT_LT(j.at("fit_percent").get<double>(), 90.0);
+  EXPECT_FALSE(j.at("residual_white").get<bool>());
+  EXPECT_FALSE(j.at("residual_uncorrelated_with_input").get<bool>());
+  EXPECT_THAT(r.out, HasSubstr("not white"));
+
+  // The lag-0 cross-correlation, computed here from the residual of `ctid simulate`.
+  ASSERT_EQ(ctid({"simulate", "-m", "three.json", "--input", "d.csv", "-o", "s.csv", "-q"}).status,
+            0);
+  const io::CsvTable data = io::read_csv(path("d.csv"));
+  const io::CsvTable sim = io::read_csv(path("s.csv"));
+  const Eigen::VectorXd e = data.column("y") - sim.column("y");
+  const Eigen::VectorXd ec = e.array() - e.mean();
+  const Eigen::VectorXd uc = data.column("u").array() - data.column("u").mean();
+  const double r0 = ec.dot(uc) / std::sqrt(ec.squaredNorm() * uc.squaredNorm());
+  EXPECT_NEAR(j.at("cross_correlation")[20].get<double>(), r0, 1e-12);
+  EXPECT_EQ(j.at("cross_correlation_lags")[20], 0);
+}
+
+TEST_F(ValidateCommand, BadInputExitsTwoWithOneLine) {
+  simulate({"-o", "d.csv"});
+  write("bad.json", R"({"type": "additive_model", "submodels": [)");
+  expect_bad_input(ctid({"validate", "bad.json", "d.csv"}), "bad.json:");
+  expect_bad_input(
+      ctid({"validate", example("gonzalez_6_1_open_loop.json"), "d.csv", "--input-column", "x"}),
+      "'x'");
+  write("late.json", R"({"type": "transfer_function", "numerator_ascending": [1],
+    "denominator_ascending": [1, 1], "input_delay": 0.013})");
+  expect_bad_input(ctid({"validate", "late.json", "d.csv"}), "not a whole number of samples");
+  expect_bad_input(ctid({"validate", example("gonzalez_6_2_pid.json"), "d.csv"}), "type");
+  write("out.json", "keep");
+  expect_bad_input(
+      ctid({"validate", example("gonzalez_6_1_open_loop.json"), "d.csv", "-o", "out.json"}),
+      "file exists; pass --force");
+  EXPECT_EQ(testing::slurp(path("out.json")), "keep");
+}
+
+TEST_F(ValidateCommand, PlotWritesPngFigures) {
+  const char* env = std::getenv("CTID_PYTHONPATH");
+  const std::filesystem::path built =
+      std::filesystem::path(CTID_CLI_PATH).parent_path() / ".." / ".." / "python" / "ctid";
+  if ((env == nullptr || *env == '\0') && !std::filesystem::exists(built / "plot.py")) {
+    GTEST_SKIP() << "the ctid Python package is not built (CTID_BUILD_PYTHON=OFF); set "
+                    "CTID_PYTHONPATH to test --plot";
+  }
+  simulate({"-o", "d.csv"});
+  const auto r =
+      ctid({"validate", example("gonzalez_6_1_open_loop.json"), "d.csv", "--plot", "fig", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  for (const char* name : {"bode.png", "validation.png", "residuals.png", "modes.png"}) {
+    const std::string bytes = testing::slurp(path("fig") / name);
+    EXPECT_GT(bytes.size(), 10000u) << name;
+    EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << name;
+  }
+}
+
+}  // namespace
+}  // namespace ctid::cli
