@@ -1,0 +1,243 @@
+// `ctid frf`: the nonparametric frequency response of a record, by Welch's H1 estimate with
+// coherence (non-periodic data) or averaged over the periods of a periodic excitation
+// (--period N), written as CSV, with the resonance peaks listed (for choosing orders and
+// initial modes). The numerics are ctid::welch_frf, ctid::periodic_frf and
+// ctid::resonance_peaks (frequency/frf.h); figures are drawn by matplotlib.
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "command.h"
+#include "ctid/core/error.h"
+#include "ctid/frequency/frf.h"
+#include "ctid/io/csv.h"
+#include "ctid/io/json.h"
+#include "ctid/io/model_json.h"
+#include "ctid/io/result_json.h"
+#include "data_flags.h"
+#include "plot_support.h"
+
+namespace ctid::cli {
+namespace {
+
+struct FrfFlags {
+  DataFlags data;
+  int period = 0;
+  int transient_periods = PeriodicFrfOptions{}.transient_periods;
+  int segment_length = 0;  // 0: default_segment_length(N)
+  double overlap = WelchOptions{}.overlap;
+  double min_prominence_db = PeakOptions{}.min_prominence_db;
+  int max_peaks = PeakOptions{}.max_peaks;
+  std::string output;
+  std::string plot;
+  std::string model;
+  bool force = false;
+  bool quiet = false;
+};
+
+// Draws frf.png from the CSV this command writes: magnitude, phase and (Welch) coherence.
+constexpr const char* kFrfScript = R"PY(# Written by `ctid frf`: draws its CSV output.
+import csv, sys
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+rows = list(csv.DictReader(open(sys.argv[1])))
+w = [float(r["frequency"]) for r in rows]
+coherent = "coherence" in rows[0]
+fig, axes = plt.subplots(3 if coherent else 2, 1, sharex=True, figsize=(7.5, 7 if coherent else 5.5))
+axes[0].semilogx(w, [float(r["magnitude_db"]) for r in rows], ".-", ms=3, label="FRF")
+axes[0].set_ylabel("magnitude [dB]")
+axes[1].semilogx(w, [float(r["phase_deg"]) for r in rows], ".-", ms=3)
+axes[1].set_ylabel("phase [deg]")
+if coherent:
+    axes[2].semilogx(w, [float(r["coherence"]) for r in rows], ".-", ms=3)
+    axes[2].set_ylabel("coherence")
+    axes[2].set_ylim(0, 1.05)
+for ax in axes:
+    ax.grid(True, which="both", alpha=0.3)
+axes[-1].set_xlabel("frequency [rad/s]")
+axes[0].set_title(sys.argv[3])
+fig.tight_layout()
+fig.savefig(sys.argv[2], dpi=100)
+)PY";
+
+io::CsvTable frf_table(const Frf& frf) {
+  const Eigen::Index n = frf.frequencies.size();
+  Eigen::VectorXd hz(n), db(n), deg(n), re(n), im(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const std::complex<double> g = frf.response(k);
+    hz(k) = frf.frequencies(k) / (2.0 * std::numbers::pi);
+    db(k) = 20.0 * std::log10(std::abs(g));
+    deg(k) = std::arg(g) * 180.0 / std::numbers::pi;
+    re(k) = g.real();
+    im(k) = g.imag();
+  }
+  io::CsvTable table;
+  table.add_column("frequency", frf.frequencies);
+  table.add_column("frequency_hz", hz);
+  table.add_column("magnitude_db", db);
+  table.add_column("phase_deg", deg);
+  table.add_column("real", re);
+  table.add_column("imag", im);
+  table.add_column("variance", frf.variance);
+  if (frf.coherence.size() == n) table.add_column("coherence", frf.coherence);
+  return table;
+}
+
+void draw_frf(const FrfFlags& f, const Frf& frf, const io::CsvTable& table) {
+  const TemporaryDirectory work;
+  const std::string title = "ctid frf: " + std::filesystem::path(f.data.file).filename().string();
+  io::write_csv(work.path() / "frf.csv", table);
+  io::write_text_file(work.path() / "plot_frf.py", kFrfScript);
+  const std::filesystem::path png = std::filesystem::path(f.plot) / "frf.png";
+  auto quote = [](const std::string& w) {
+    std::string q = "'";
+    for (char c : w) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+  };
+  const std::string command = "/usr/bin/python3 " + quote((work.path() / "plot_frf.py").string()) +
+                              " " + quote((work.path() / "frf.csv").string()) + " " +
+                              quote(png.string()) + " " + quote(title) + " > /dev/null 2> " +
+                              quote((work.path() / "err").string());
+  if (std::system(command.c_str()) != 0) {
+    throw ComputationError("plotting frf.png failed (does /usr/bin/python3 have matplotlib?)");
+  }
+  if (!f.model.empty()) {
+    const io::FittedModel fitted = io::read_fitted_model(f.model);
+    nlohmann::json input = {{"model", io::to_json(fitted.model)}, {"frf", frf_json(frf)}};
+    input["frequency_range"] = {frf.frequencies(0), frf.frequencies(frf.frequencies.size() - 1)};
+    io::write_json(work.path() / "bode.json", input);
+    plot(require_plotting(),
+         {{"bode", work.path() / "bode.json", std::filesystem::path(f.plot) / "bode.png", title}});
+  }
+}
+
+void run_frf(const FrfFlags& f, const CLI::App& app) {
+  if (!f.output.empty() && !f.force && std::filesystem::exists(f.output)) {
+    usage_error(f.output + ": file exists; pass --force to replace it (--output)");
+  }
+  const bool periodic = app.count("--period") > 0;
+  if (periodic && (app.count("--segment-length") > 0 || app.count("--overlap") > 0)) {
+    usage_error(
+        "--segment-length and --overlap are Welch flags; they have no effect with --period");
+  }
+  if (!periodic && app.count("--transient-periods") > 0) {
+    usage_error("--transient-periods needs --period");
+  }
+  if (!f.model.empty() && f.plot.empty())
+    usage_error("--model needs --plot (it is drawn over the FRF)");
+  if (!f.plot.empty()) {
+    if (!f.model.empty()) require_plotting();
+    std::vector<std::string> figures{"frf.png"};
+    if (!f.model.empty()) figures.emplace_back("bode.png");
+    prepare_plot_directory(f.plot, figures, f.force);
+  }
+  const SampledData data = f.data.load(app, false);
+
+  Frf frf;
+  if (periodic) {
+    PeriodicFrfOptions options;
+    options.period_length = f.period;
+    options.transient_periods = f.transient_periods;
+    options.validate();
+    frf = periodic_frf(data, options);
+  } else {
+    WelchOptions options;
+    options.segment_length =
+        f.segment_length > 0 ? f.segment_length : default_segment_length(data.size());
+    options.overlap = f.overlap;
+    options.validate();
+    frf = welch_frf(data, options);
+  }
+  PeakOptions peak_options;
+  peak_options.min_prominence_db = f.min_prominence_db;
+  peak_options.max_peaks = f.max_peaks;
+  peak_options.validate();
+  const std::vector<ResonancePeak> peaks =
+      frf.frequencies.size() >= 3 ? resonance_peaks(frf.frequencies, frf.response, peak_options)
+                                  : std::vector<ResonancePeak>{};
+
+  const io::CsvTable table = frf_table(frf);
+  if (!f.output.empty()) {
+    io::write_csv(f.output, table, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  }
+  if (!f.quiet) {
+    std::cout << "ctid frf: " << (periodic ? "periodic" : "Welch H1") << " on " << f.data.file
+              << ": " << frf.frequencies.size() << " lines, " << frf.averages
+              << (periodic ? " periods" : " segments") << " of " << frf.block_length
+              << " samples\n";
+    std::cout << peaks.size() << " resonance peak" << (peaks.size() == 1 ? "" : "s")
+              << " (prominence >= " << show(f.min_prominence_db) << " dB):\n";
+    for (const ResonancePeak& p : peaks) {
+      char line[200];
+      std::snprintf(line, sizeof line,
+                    "  w = %.6g rad/s (%.6g Hz), |G| = %.4g dB, prominence %.3g dB, "
+                    "damping ~ %.3g\n",
+                    p.frequency, p.frequency / (2.0 * std::numbers::pi),
+                    20.0 * std::log10(p.magnitude), p.prominence_db, p.damping_ratio);
+      std::cout << line;
+    }
+    if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
+  }
+  if (!f.plot.empty()) draw_frf(f, frf, table);
+}
+
+Command add_frf_command(CLI::App& parent) {
+  auto flags = std::make_shared<FrfFlags>();
+  FrfFlags& f = *flags;
+  CLI::App* app = parent.add_subcommand(
+      "frf",
+      "Nonparametric frequency response of a record (Welch H1 with coherence, or averaged "
+      "over periods) as CSV, with its resonance peaks.");
+  app->footer(
+      "CSV columns: frequency (rad/s), frequency_hz, magnitude_db, phase_deg, real, imag, "
+      "variance (of the complex estimate) and, for Welch, coherence (squared, 0-1).\n"
+      "Exit status: 0 ran, 2 bad usage or input, 1 other error.");
+  f.data.add_to(*app, "data", false);
+  app->add_option("--period", f.period,
+                  "Samples per period of a periodic excitation: average the FRF over periods")
+      ->group("Periodic");
+  app->add_option("--transient-periods", f.transient_periods,
+                  "Periods dropped at the start (transient)")
+      ->capture_default_str()
+      ->group("Periodic");
+  app->add_option("--segment-length", f.segment_length,
+                  "Welch: samples per segment (default: largest power of 2 <= N/8, 8..4096)")
+      ->group("Welch");
+  app->add_option("--overlap", f.overlap, "Welch: fraction shared by consecutive segments")
+      ->capture_default_str()
+      ->group("Welch");
+  app->add_option("--min-prominence-db", f.min_prominence_db,
+                  "Peaks: height above the surrounding minima, dB")
+      ->capture_default_str()
+      ->group("Peaks");
+  app->add_option("--max-peaks", f.max_peaks, "Peaks: keep at most this many (0: all)")
+      ->capture_default_str()
+      ->group("Peaks");
+  app->add_option("--output,-o", f.output, "CSV file to write")->group("Output");
+  app->add_option("--plot", f.plot, "Directory for frf.png (and bode.png of --model over the FRF)")
+      ->group("Output");
+  app->add_option("--model", f.model, "Model or result JSON drawn over the FRF in bode.png")
+      ->check(CLI::ExistingFile)
+      ->group("Output");
+  app->add_flag("--force", f.force, "Replace output files that exist")->group("Output");
+  app->add_flag("--quiet,-q", f.quiet, "Print nothing")->group("Output");
+
+  Command command;
+  command.app = app;
+  command.run = [flags, app] { run_frf(*flags, *app); };
+  return command;
+}
+
+}  // namespace
+
+CTID_REGISTER_COMMAND(40, add_frf_command);
+
+}  // namespace ctid::cli
