@@ -34,7 +34,7 @@ struct FrfFlags {
   int segment_length = 0;  // 0: default_segment_length(N)
   double overlap = WelchOptions{}.overlap;
   double min_prominence_db = PeakOptions{}.min_prominence_db;
-  int max_peaks = PeakOptions{}.max_peaks;
+  int max_peaks = 10;  // a noisy FRF has many small local maxima; list the main ones
   std::string output;
   std::string plot;
   std::string model;
