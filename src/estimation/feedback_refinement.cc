@@ -3,8 +3,11 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <utility>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -215,7 +218,14 @@ DelayScanResult scan_delay(const SampledData& data, int n, int m, const DelaySca
     try {
       const FeedbackRegression reg =
           build_feedback_regression(data, n, m, delay, options.regressors);
+      if (options.criterion == DelayCriterion::kStructuredOutputError) {
+        const StructuredStep1Result st = estimate_structured_step1(reg);
+        const double rms = loop_output_rms(data, st.loop, options.hold, options.substeps);
+        return rms * rms;
+      }
       const ClosedLoopEstimate est = estimate_closed_loop_batch(reg, options.least_squares);
+      if (options.criterion == DelayCriterion::kEquationError)
+        return est.residual_rms * est.residual_rms;
       const Eigen::VectorXd y = simulate_delayed(
           to_delayed_state_space(est.alpha, est.beta, est.gamma, delay), data.input(),
           data.sample_time(), options.hold, DelayedSimulationOptions{options.substeps});
@@ -263,6 +273,230 @@ DelayScanResult scan_delay(const SampledData& data, int n, int m, const DelaySca
       r.delay = x;
       r.best_criterion = f;
     }
+  }
+  return r;
+}
+
+double loop_output_rms(const SampledData& data, const DelayedFeedbackLoop& loop, InputHold hold,
+                       int substeps) {
+  const double inf = std::numeric_limits<double>::infinity();
+  try {
+    const Eigen::VectorXd y =
+        simulate_delayed(to_delayed_state_space(loop), data.input(), data.sample_time(), hold,
+                         DelayedSimulationOptions{substeps});
+    if (!y.allFinite() || y.cwiseAbs().maxCoeff() > 1e12) return inf;
+    const double rms = std::sqrt((data.output() - y).squaredNorm() / static_cast<double>(y.size()));
+    return std::isfinite(rms) ? rms : inf;
+  } catch (const InvalidArgument&) {
+    return inf;
+  }
+}
+
+void FeedbackIdentificationOptions::validate() const {
+  regressors.validate();
+  batch.validate();
+  recursive.validate();
+  kronecker.validate();
+  output_error.validate();
+  structured.validate();
+  require(screening_iterations >= 1,
+          "FeedbackIdentificationOptions: screening_iterations must be >= 1, got ",
+          screening_iterations);
+}
+
+FeedbackIdentificationResult identify_delayed_feedback(
+    const SampledData& data, int n, int m, double delay,
+    const FeedbackIdentificationOptions& options) {
+  require(n >= 1 && m >= 1, "identify_delayed_feedback: orders must be >= 1, got n = ", n,
+          ", m = ", m);
+  require(std::isfinite(delay) && delay >= 0.0,
+          "identify_delayed_feedback: delay must be >= 0, got ", delay);
+  options.validate();
+  const double inf = std::numeric_limits<double>::infinity();
+  const FeedbackRegression reg = build_feedback_regression(data, n, m, delay, options.regressors);
+  FeedbackIdentificationResult r;
+  bool have_step1 = true;
+  try {
+    r.step1 = options.step1 == Step1Method::kBatch
+                  ? estimate_closed_loop_batch(reg, options.batch)
+                  : estimate_closed_loop_recursive(reg, options.recursive);
+  } catch (const InvalidArgument& e) {
+    // A singular unstructured regression: only the structured candidate remains.
+    have_step1 = false;
+    r.message = std::string("step 1: ") + e.what() + "; ";
+  }
+  const InputHold hold = options.output_error.hold;
+  const int substeps = options.output_error.substeps;
+  r.step1_output_rms = inf;
+  if (have_step1) {
+    try {
+      const Eigen::VectorXd y = simulate_delayed(
+          to_delayed_state_space(r.step1.alpha, r.step1.beta, r.step1.gamma, delay), data.input(),
+          data.sample_time(), hold, DelayedSimulationOptions{substeps});
+      r.step1_output_rms =
+          y.allFinite() && y.cwiseAbs().maxCoeff() < 1e12
+              ? std::sqrt((data.output() - y).squaredNorm() / static_cast<double>(y.size()))
+              : inf;
+    } catch (const InvalidArgument&) {
+      r.step1_output_rms = inf;
+    }
+  }
+  const Polynomial& a = r.step1.alpha;
+  const Polynomial& b = r.step1.beta;
+  const Polynomial& g = r.step1.gamma;
+  auto add = [&](std::string source, const TransferFunction& f, const TransferFunction& h) {
+    if (f.denominator().degree() != n || h.denominator().degree() != m) return;
+    SeparationCandidateReport c;
+    c.source = std::move(source);
+    c.start = DelayedFeedbackLoop{f.normalized(), h.normalized(), delay};
+    try {
+      c.start.validate();
+    } catch (const InvalidArgument&) {
+      return;
+    }
+    c.kronecker_cost =
+        have_step1 ? kronecker_cost(a, b, g, c.start.forward, c.start.feedback) : inf;
+    c.start_rms = loop_output_rms(data, c.start, hold, substeps);
+    c.refined_rms = c.start_rms;
+    r.candidates.push_back(std::move(c));
+  };
+  if (have_step1 && options.separation != SeparationMethod::kKronecker) {
+    try {
+      const GcdSeparationResult gcd = separate_approximate_gcd(a, b, g, n, m);
+      add("gcd", gcd.forward, gcd.feedback);
+    } catch (const InvalidArgument&) {
+      // α̂ of low degree: no GCD candidate.
+    }
+  }
+  if (have_step1 && options.separation != SeparationMethod::kGcd) {
+    try {
+      const KroneckerSeparationResult kr = separate_kronecker(a, b, g, n, m, options.kronecker);
+      for (const KroneckerCandidate& c : kr.candidates)
+        add("kronecker: " + c.start, c.forward, c.feedback);
+    } catch (const InvalidArgument&) {
+      // No usable start.
+    }
+  }
+  if (options.structured_candidate) {
+    try {
+      const StructuredStep1Result st = estimate_structured_step1(reg, options.structured);
+      add("structured step 1", st.loop.forward, st.loop.feedback);
+    } catch (const InvalidArgument&) {
+      // Degenerate structured fit: no candidate.
+    }
+  }
+  if (r.candidates.empty()) {
+    r.message += "no separation candidate with the requested orders";
+    r.output_rms = inf;
+    return r;
+  }
+  // Every candidate gets a short output-error refinement; the best then runs to convergence.
+  double best = inf;
+  OutputErrorOptions screen = options.output_error;
+  screen.max_iterations = std::min(options.screening_iterations, screen.max_iterations);
+  for (std::size_t i = 0; i < r.candidates.size(); ++i) {
+    SeparationCandidateReport& c = r.candidates[i];
+    if (options.refine && std::isfinite(c.start_rms)) {
+      c.refinement = refine_output_error(data, c.start, screen);
+      c.refined_rms = std::isfinite(c.refinement.residual_rms) ? c.refinement.residual_rms : inf;
+    }
+    if (c.refined_rms < best || r.best_candidate < 0) {
+      best = c.refined_rms;
+      r.best_candidate = static_cast<int>(i);
+    }
+  }
+  if (options.refine && std::isfinite(best)) {
+    SeparationCandidateReport& c = r.candidates[static_cast<std::size_t>(r.best_candidate)];
+    if (!c.refinement.converged &&
+        options.output_error.max_iterations > options.screening_iterations) {
+      OutputErrorOptions rest = options.output_error;
+      rest.max_iterations = options.output_error.max_iterations - options.screening_iterations;
+      OutputErrorResult more = refine_output_error(data, c.refinement.loop, rest);
+      if (std::isfinite(more.residual_rms) && more.residual_rms <= c.refined_rms) {
+        more.iterations += c.refinement.iterations;
+        c.refinement = std::move(more);
+        c.refined_rms = c.refinement.residual_rms;
+      }
+    }
+    best = c.refined_rms;
+  }
+  const SeparationCandidateReport& chosen =
+      r.candidates[static_cast<std::size_t>(r.best_candidate)];
+  const bool refined = options.refine && std::isfinite(chosen.start_rms);
+  r.loop = refined ? chosen.refinement.loop : chosen.start;
+  r.output_rms = chosen.refined_rms;
+  if (refined) r.cramer_rao = chosen.refinement.quality;
+  r.message += std::isfinite(best) ? "best candidate: " + chosen.source
+                                   : "every candidate is unstable or overflowed";
+  return r;
+}
+
+void DelayIdentificationOptions::validate() const {
+  scan.validate();
+  identification.validate();
+  require(golden_iterations >= 0,
+          "DelayIdentificationOptions: golden_iterations must be >= 0, got ", golden_iterations);
+}
+
+DelayIdentificationResult identify_delayed_feedback_with_delay_scan(
+    const SampledData& data, int n, int m, const DelayIdentificationOptions& options) {
+  options.validate();
+  DelayIdentificationResult r;
+  DelayScanOptions scan = options.scan;
+  scan.refine = false;
+  r.scan = scan_delay(data, n, m, scan);
+  r.identification = identify_delayed_feedback(data, n, m, r.scan.delay, options.identification);
+  r.delay = r.scan.delay;
+  if (r.identification.best_candidate < 0 || !std::isfinite(r.identification.output_rms) ||
+      options.golden_iterations == 0)
+    return r;
+  const double step = (scan.max_delay - scan.min_delay) / (scan.points - 1);
+  DelayedFeedbackLoop warm = r.identification.loop;
+  OutputErrorResult best_fit;
+  double best_cost = r.identification.output_rms;
+  double best_delay = r.scan.delay;
+  auto cost = [&](double d) {
+    ++r.evaluations;
+    DelayedFeedbackLoop start = warm;
+    start.delay = d;
+    const OutputErrorResult fit =
+        refine_output_error(data, start, options.identification.output_error);
+    const double c = std::isfinite(fit.residual_rms) ? fit.residual_rms
+                                                     : std::numeric_limits<double>::infinity();
+    if (c < best_cost) {
+      best_cost = c;
+      best_delay = d;
+      best_fit = fit;
+      warm = fit.loop;
+    }
+    return c;
+  };
+  double lo = std::max(scan.min_delay, r.scan.delay - step);
+  double hi = std::min(scan.max_delay, r.scan.delay + step);
+  const double ratio = (std::sqrt(5.0) - 1.0) / 2.0;
+  double x1 = hi - ratio * (hi - lo), x2 = lo + ratio * (hi - lo);
+  double f1 = cost(x1), f2 = cost(x2);
+  for (int it = 0; it < options.golden_iterations; ++it) {
+    if (f1 < f2) {
+      hi = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = hi - ratio * (hi - lo);
+      f1 = cost(x1);
+    } else {
+      lo = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = lo + ratio * (hi - lo);
+      f2 = cost(x2);
+    }
+  }
+  if (best_delay != r.scan.delay) {
+    r.delay = best_delay;
+    r.identification.loop = best_fit.loop;
+    r.identification.output_rms = best_cost;
+    r.identification.cramer_rao = best_fit.quality;
+    r.identification.message += "; delay refined by golden section";
   }
   return r;
 }

@@ -289,6 +289,7 @@ KroneckerSeparationResult separate_kronecker(const Polynomial& alpha, const Poly
     ceres::Solve(so, &problem, &summary);
     ++best.starts;
     const double j = 2.0 * summary.final_cost;
+    best.candidates.push_back({name, unpack(p, 0, n), unpack(p, 2 * n, m), j});
     if (j < best.cost) {
       best.cost = j;
       best.best_start = name;

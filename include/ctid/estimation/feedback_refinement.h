@@ -14,6 +14,7 @@
 #include "ctid/core/sampled_data.h"
 #include "ctid/estimation/feedback_least_squares.h"
 #include "ctid/estimation/feedback_regressors.h"
+#include "ctid/estimation/feedback_separation.h"
 #include "ctid/simulation/delayed_feedback.h"
 
 namespace ctid {
@@ -67,7 +68,7 @@ StructuredStep1Result estimate_structured_step1(const FeedbackRegression& regres
 struct OutputErrorOptions {
   InputHold hold = InputHold::kZeroOrder;  ///< how the measured input is continued
   int substeps = 4;                        ///< RK4 steps per sample in the simulations
-  int max_iterations = 50;
+  int max_iterations = 200;
   double relative_threshold = 0.1;  ///< for the separability verdict
   void validate() const;
 };
@@ -87,7 +88,15 @@ struct OutputErrorResult {
 OutputErrorResult refine_output_error(const SampledData& data, const DelayedFeedbackLoop& start,
                                       const OutputErrorOptions& options = {});
 
+enum class DelayCriterion {
+  kOutputError,    ///< mean squared output error of the step-1 model (inf when unstable)
+  kEquationError,  ///< mean squared residual of the step-1 regression
+  /// mean squared output error of the structured step-1 loop (2(n+m) unknowns)
+  kStructuredOutputError,
+};
+
 struct DelayScanOptions {
+  DelayCriterion criterion = DelayCriterion::kOutputError;
   double min_delay = 0.0;
   double max_delay = 1.0;
   int points = 41;     ///< grid (finer than δ is allowed: fractional delays)
@@ -101,7 +110,7 @@ struct DelayScanOptions {
 
 struct DelayScanResult {
   Eigen::VectorXd delays;
-  Eigen::VectorXd criterion;  ///< mean squared output error of the step-1 model (inf: unstable)
+  Eigen::VectorXd criterion;  ///< per DelayCriterion (inf: unstable or degenerate)
   double delay = 0.0;         ///< the minimiser
   double best_criterion = 0.0;
 };
@@ -109,5 +118,85 @@ struct DelayScanResult {
 /// For each Δ: step 1 (batch) and the output error of W = α̂/(β̂ + γ̂ e^{-Δs}) on the data.
 DelayScanResult scan_delay(const SampledData& data, int forward_order, int feedback_order,
                            const DelayScanOptions& options = {});
+
+/// The whole identification: step 1 (batch or RLS) gives Ŵ = α̂/(β̂ + γ̂ e^{-Δs}); the
+/// separation candidates are the approximate-GCD estimate and every refined start of min J
+/// (the GCD start and each root split of β̂); the output-error refinement in the 2(n+m) true
+/// unknowns runs from EACH candidate (screening_iterations steps), the smallest output-error
+/// cost decides, and that candidate is refined to convergence. Candidates
+/// whose simulation overflows or whose refinement fails are kept with an infinite cost.
+enum class Step1Method { kBatch, kRecursive };
+enum class SeparationMethod { kKronecker, kGcd, kBoth };
+
+struct FeedbackIdentificationOptions {
+  FeedbackRegressorOptions regressors{RegressorFilter::kLinearIntegralFilter, 1.0, true, -1};
+  Step1Method step1 = Step1Method::kBatch;
+  BatchLeastSquaresOptions batch;
+  RecursiveLeastSquaresOptions recursive;
+  SeparationMethod separation = SeparationMethod::kBoth;
+  KroneckerSeparationOptions kronecker;
+  OutputErrorOptions output_error;
+  /// Also start from the structured step 1 (equation error in the 2(n+m) true unknowns).
+  bool structured_candidate = true;
+  StructuredStep1Options structured;
+  /// Output-error iterations given to every candidate before the best one continues up to
+  /// output_error.max_iterations in total.
+  int screening_iterations = 15;
+  bool refine = true;  ///< false: keep the candidate with the smallest step-1 output error
+  void validate() const;
+};
+
+struct SeparationCandidateReport {
+  std::string source;  ///< "gcd", "kronecker: gcd", "kronecker: roots split k"
+  DelayedFeedbackLoop start{TransferFunction(Polynomial{0.0}, Polynomial{1.0}),
+                            TransferFunction(Polynomial{0.0}, Polynomial{1.0}), 0.0};
+  double kronecker_cost = 0.0;   ///< J of the start
+  double start_rms = 0.0;        ///< output-error rms of the start (inf: unstable/overflow)
+  double refined_rms = 0.0;      ///< after refinement (= start_rms when not refined)
+  OutputErrorResult refinement;  ///< valid when refined
+};
+
+struct FeedbackIdentificationResult {
+  DelayedFeedbackLoop loop{TransferFunction(Polynomial{0.0}, Polynomial{1.0}),
+                           TransferFunction(Polynomial{0.0}, Polynomial{1.0}), 0.0};
+  ClosedLoopEstimate step1;       ///< α̂, β̂, γ̂ (Ŵ)
+  double step1_output_rms = 0.0;  ///< output-error rms of Ŵ (inf: unstable)
+  std::vector<SeparationCandidateReport> candidates;
+  int best_candidate = -1;        ///< index into candidates
+  double output_rms = 0.0;        ///< output-error rms of the returned loop
+  SeparabilityReport cramer_rao;  ///< at the returned loop, σ² from the residuals
+  std::string message;
+};
+
+/// Throws InvalidArgument for orders < 1, Δ < 0, too few samples or a record not longer than Δ.
+FeedbackIdentificationResult identify_delayed_feedback(
+    const SampledData& data, int forward_order, int feedback_order, double delay,
+    const FeedbackIdentificationOptions& options = {});
+
+/// Output-error rms of a loop on the data (+inf when the simulation overflows).
+double loop_output_rms(const SampledData& data, const DelayedFeedbackLoop& loop, InputHold hold,
+                       int substeps);
+
+/// Δ unknown: a grid scan with the step-1 output-error criterion (scan_delay, which may be
+/// finer than δ), the full identification at the best grid point, then a golden-section
+/// search of the output-error cost of the refined loop over Δ within one grid step on each
+/// side (each evaluation re-refines from the best loop so far).
+struct DelayIdentificationOptions {
+  DelayScanOptions scan;
+  FeedbackIdentificationOptions identification;
+  int golden_iterations = 20;
+  void validate() const;
+};
+
+struct DelayIdentificationResult {
+  DelayScanResult scan;
+  FeedbackIdentificationResult identification;  ///< at the returned Δ (loop.delay)
+  double delay = 0.0;
+  int evaluations = 0;
+};
+
+DelayIdentificationResult identify_delayed_feedback_with_delay_scan(
+    const SampledData& data, int forward_order, int feedback_order,
+    const DelayIdentificationOptions& options = {});
 
 }  // namespace ctid

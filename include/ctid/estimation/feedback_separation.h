@@ -7,6 +7,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -28,6 +29,14 @@ struct KroneckerSeparationOptions {
   void validate() const;
 };
 
+/// One refined start of min J.
+struct KroneckerCandidate {
+  std::string start;  ///< "gcd" or "roots split k"
+  TransferFunction forward{Polynomial{0.0}, Polynomial{1.0}};
+  TransferFunction feedback{Polynomial{0.0}, Polynomial{1.0}};
+  double cost = 0.0;  ///< J after Levenberg-Marquardt from this start
+};
+
 struct KroneckerSeparationResult {
   TransferFunction forward{Polynomial{0.0}, Polynomial{1.0}};
   TransferFunction feedback{Polynomial{0.0}, Polynomial{1.0}};
@@ -36,6 +45,7 @@ struct KroneckerSeparationResult {
   std::string best_start;  ///< "gcd" or "roots split k"
   bool converged = false;  ///< Ceres reported convergence for the best start
   std::string message;
+  std::vector<KroneckerCandidate> candidates;  ///< every refined start, in start order
 };
 
 KroneckerSeparationResult separate_kronecker(const Polynomial& alpha, const Polynomial& beta,
