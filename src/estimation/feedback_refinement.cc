@@ -44,10 +44,13 @@ struct OutputErrorFunctor {
   double delay;
   InputHold hold;
   int substeps;
+  bool with_delay = false;  // parameters[0] ends with Δ
   bool operator()(double const* const* parameters, double* residual) const {
     const Eigen::Map<const Eigen::VectorXd> rho(parameters[0], 2 * (n + m));
+    const double d = with_delay ? parameters[0][2 * (n + m)] : delay;
+    if (!(d >= 0.0)) return false;
     const Eigen::VectorXd y =
-        simulate_rho(rho, n, m, delay, data->input(), data->sample_time(), hold, substeps);
+        simulate_rho(rho, n, m, d, data->input(), data->sample_time(), hold, substeps);
     if (!y.allFinite() || y.cwiseAbs().maxCoeff() > 1e12) return false;
     Eigen::Map<Eigen::VectorXd>(residual, y.size()) = data->output() - y;
     return true;
@@ -168,12 +171,18 @@ OutputErrorResult refine_output_error(const SampledData& data, const DelayedFeed
   require((data.size() - 1) * data.sample_time() > start.delay,
           "refine_output_error: the record must be longer than the delay");
   OutputErrorResult result;
+  const int np = static_cast<int>(rho.size());
+  Eigen::VectorXd params(np + (options.estimate_delay ? 1 : 0));
+  params.head(np) = rho;
+  if (options.estimate_delay) params(np) = start.delay;
   ceres::Problem problem;
   auto* cost = new ceres::DynamicNumericDiffCostFunction<OutputErrorFunctor, ceres::CENTRAL>(
-      new OutputErrorFunctor{&data, n, m, start.delay, options.hold, options.substeps});
-  cost->AddParameterBlock(static_cast<int>(rho.size()));
+      new OutputErrorFunctor{&data, n, m, start.delay, options.hold, options.substeps,
+                             options.estimate_delay});
+  cost->AddParameterBlock(static_cast<int>(params.size()));
   cost->SetNumResiduals(data.size());
-  problem.AddResidualBlock(cost, nullptr, rho.data());
+  problem.AddResidualBlock(cost, nullptr, params.data());
+  if (options.estimate_delay) problem.SetParameterLowerBound(params.data(), np, 0.0);
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
   so.max_num_iterations = options.max_iterations;
@@ -185,16 +194,18 @@ OutputErrorResult refine_output_error(const SampledData& data, const DelayedFeed
   result.iterations = static_cast<int>(summary.iterations.size());
   result.converged = summary.termination_type == ceres::CONVERGENCE;
   result.message = summary.message;
-  result.loop = loop_from_parameters(rho, n, m, start.delay);
-  const Eigen::VectorXd y = simulate_rho(rho, n, m, start.delay, data.input(), data.sample_time(),
+  rho = params.head(np);
+  const double delay = options.estimate_delay ? params(np) : start.delay;
+  result.loop = loop_from_parameters(rho, n, m, delay);
+  const Eigen::VectorXd y = simulate_rho(rho, n, m, delay, data.input(), data.sample_time(),
                                          options.hold, options.substeps);
   const Eigen::VectorXd e = data.output() - y;
   result.residual_rms = std::sqrt(e.squaredNorm() / static_cast<double>(e.size()));
   const double variance =
       e.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, e.size() - rho.size()));
   if (y.allFinite()) {
-    const Eigen::MatrixXd jac = sensitivity(rho, n, m, start.delay, data.input(),
-                                            data.sample_time(), options.hold, options.substeps);
+    const Eigen::MatrixXd jac = sensitivity(rho, n, m, delay, data.input(), data.sample_time(),
+                                            options.hold, options.substeps);
     result.quality = report_from_jacobian(jac, rho, variance, options.relative_threshold);
   }
   return result;
@@ -207,6 +218,8 @@ void DelayScanOptions::validate() const {
           "DelayScanOptions: max_delay must exceed min_delay, got ", max_delay);
   require(points >= 2, "DelayScanOptions: points must be >= 2, got ", points);
   require(substeps >= 1, "DelayScanOptions: substeps must be >= 1, got ", substeps);
+  require(refined_iterations >= 1, "DelayScanOptions: refined_iterations must be >= 1, got ",
+          refined_iterations);
   regressors.validate();
   least_squares.validate();
 }
@@ -218,9 +231,18 @@ DelayScanResult scan_delay(const SampledData& data, int n, int m, const DelaySca
     try {
       const FeedbackRegression reg =
           build_feedback_regression(data, n, m, delay, options.regressors);
-      if (options.criterion == DelayCriterion::kStructuredOutputError) {
+      if (options.criterion == DelayCriterion::kStructuredOutputError ||
+          options.criterion == DelayCriterion::kRefinedOutputError) {
         const StructuredStep1Result st = estimate_structured_step1(reg);
-        const double rms = loop_output_rms(data, st.loop, options.hold, options.substeps);
+        double rms = loop_output_rms(data, st.loop, options.hold, options.substeps);
+        if (options.criterion == DelayCriterion::kRefinedOutputError && std::isfinite(rms)) {
+          OutputErrorOptions oe;
+          oe.hold = options.hold;
+          oe.substeps = options.substeps;
+          oe.max_iterations = options.refined_iterations;
+          const OutputErrorResult fit = refine_output_error(data, st.loop, oe);
+          if (std::isfinite(fit.residual_rms)) rms = std::min(rms, fit.residual_rms);
+        }
         return rms * rms;
       }
       const ClosedLoopEstimate est = estimate_closed_loop_batch(reg, options.least_squares);
@@ -447,9 +469,22 @@ DelayIdentificationResult identify_delayed_feedback_with_delay_scan(
   r.scan = scan_delay(data, n, m, scan);
   r.identification = identify_delayed_feedback(data, n, m, r.scan.delay, options.identification);
   r.delay = r.scan.delay;
-  if (r.identification.best_candidate < 0 || !std::isfinite(r.identification.output_rms) ||
-      options.golden_iterations == 0)
+  if (r.identification.best_candidate < 0 || !std::isfinite(r.identification.output_rms)) return r;
+  if (options.joint_delay) {
+    OutputErrorOptions joint = options.identification.output_error;
+    joint.estimate_delay = true;
+    ++r.evaluations;
+    const OutputErrorResult fit = refine_output_error(data, r.identification.loop, joint);
+    if (std::isfinite(fit.residual_rms) && fit.residual_rms <= r.identification.output_rms) {
+      r.delay = fit.loop.delay;
+      r.identification.loop = fit.loop;
+      r.identification.output_rms = fit.residual_rms;
+      r.identification.cramer_rao = fit.quality;
+      r.identification.message += "; delay refined jointly with F and H";
+    }
     return r;
+  }
+  if (options.golden_iterations == 0) return r;
   const double step = (scan.max_delay - scan.min_delay) / (scan.points - 1);
   DelayedFeedbackLoop warm = r.identification.loop;
   OutputErrorResult best_fit;

@@ -101,6 +101,26 @@ TEST(FeedbackPipeline, NoisyRecordLandsWithinThreeCramerRaoDeviations) {
   EXPECT_GT(r.output_rms, 0.8 * sigma);
 }
 
+TEST(FeedbackPipeline, JointRefinementFindsAFractionalDelay) {
+  // Δ = 0.523 s (not a multiple of δ = 0.05 s); the refinement starts at Δ = 0.56 s with F and H
+  // perturbed by 2 %, and must land within δ/10 of the truth with the other parameters.
+  DelayedFeedbackLoop loop = paper_loop();
+  loop.delay = 0.523;
+  const double delta = 0.05;
+  const Eigen::VectorXd u = multisine(delta, 20.0, 10.0, 8);
+  const Eigen::VectorXd y = simulate_delayed(to_delayed_state_space(loop), u, delta,
+                                             InputHold::kFirstOrder, DelayedSimulationOptions{4});
+  Eigen::VectorXd start = loop_parameters(loop);
+  for (Eigen::Index i = 0; i < start.size(); ++i) start(i) *= (i % 2 == 0) ? 0.98 : 1.02;
+  OutputErrorOptions options;
+  options.hold = InputHold::kFirstOrder;
+  options.estimate_delay = true;
+  const OutputErrorResult fit = refine_output_error(
+      SampledData(delta, u, y), loop_from_parameters(start, 3, 3, 0.56), options);
+  EXPECT_LT(std::abs(fit.loop.delay - 0.523), delta / 10.0) << fit.message;
+  EXPECT_LT((loop_parameters(fit.loop) - loop_parameters(loop)).cwiseAbs().maxCoeff(), 1e-5);
+}
+
 TEST(FeedbackPipeline, BadInputIsNamed) {
   const SampledData data(0.05, Eigen::VectorXd::Ones(200), Eigen::VectorXd::Ones(200));
   EXPECT_THAT([&] { identify_delayed_feedback(data, 0, 3, 0.5); },

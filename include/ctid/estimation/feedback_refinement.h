@@ -69,6 +69,8 @@ struct OutputErrorOptions {
   InputHold hold = InputHold::kZeroOrder;  ///< how the measured input is continued
   int substeps = 4;                        ///< RK4 steps per sample in the simulations
   int max_iterations = 200;
+  /// Also estimate Δ (>= 0) jointly with ρ; the covariance still covers ρ only.
+  bool estimate_delay = false;
   double relative_threshold = 0.1;  ///< for the separability verdict
   void validate() const;
 };
@@ -83,7 +85,8 @@ struct OutputErrorResult {
   SeparabilityReport quality;  ///< covariance at the estimate, σ² from the residuals
 };
 
-/// Minimises sum_k (y_k - ŷ_k(ρ))² by Levenberg-Marquardt from `start` (Δ kept fixed).
+/// Minimises sum_k (y_k - ŷ_k(ρ))² by Levenberg-Marquardt from `start` (Δ kept fixed unless
+/// options.estimate_delay).
 /// An unstable or overflowing iterate is rejected as a failed step, never thrown.
 OutputErrorResult refine_output_error(const SampledData& data, const DelayedFeedbackLoop& start,
                                       const OutputErrorOptions& options = {});
@@ -93,10 +96,13 @@ enum class DelayCriterion {
   kEquationError,  ///< mean squared residual of the step-1 regression
   /// mean squared output error of the structured step-1 loop (2(n+m) unknowns)
   kStructuredOutputError,
+  /// ... after refined_iterations output-error steps from it (slower, much sharper)
+  kRefinedOutputError,
 };
 
 struct DelayScanOptions {
   DelayCriterion criterion = DelayCriterion::kOutputError;
+  int refined_iterations = 10;  ///< for kRefinedOutputError
   double min_delay = 0.0;
   double max_delay = 1.0;
   int points = 41;     ///< grid (finer than δ is allowed: fractional delays)
@@ -177,13 +183,19 @@ FeedbackIdentificationResult identify_delayed_feedback(
 double loop_output_rms(const SampledData& data, const DelayedFeedbackLoop& loop, InputHold hold,
                        int substeps);
 
-/// Δ unknown: a grid scan with the step-1 output-error criterion (scan_delay, which may be
-/// finer than δ), the full identification at the best grid point, then a golden-section
-/// search of the output-error cost of the refined loop over Δ within one grid step on each
-/// side (each evaluation re-refines from the best loop so far).
+/// Δ unknown: a grid scan (scan_delay; kRefinedOutputError is the criterion that works on
+/// informative records, the grid may be finer than δ), the full identification at the best
+/// grid point, then either a joint output-error refinement of (ρ, Δ) from there (default) or a
+/// golden-section search of the refined output-error cost over Δ within one grid step on each
+/// side (each evaluation re-refines ρ from the best loop so far).
 struct DelayIdentificationOptions {
-  DelayScanOptions scan;
+  DelayScanOptions scan = [] {
+    DelayScanOptions s;
+    s.criterion = DelayCriterion::kRefinedOutputError;
+    return s;
+  }();
   FeedbackIdentificationOptions identification;
+  bool joint_delay = true;  ///< joint (ρ, Δ) refinement; false: golden section
   int golden_iterations = 20;
   void validate() const;
 };
