@@ -1,0 +1,105 @@
+// `ctid feedback`: bad input gives exit 2 and one line; a run on a simulated informative
+// record (smooth multisine, continued linearly between samples) recovers F and H.
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "cli/run_ctid.h"
+#include "ctid/io/json.h"
+#include "ctid/io/sampled_data_csv.h"
+#include "ctid/simulation/delayed_feedback.h"
+
+namespace ctid::cli {
+namespace {
+
+using testing::CliTest;
+using ::testing::HasSubstr;
+using testing::line_count;
+using ::testing::StartsWith;
+
+DelayedFeedbackLoop paper_loop() {
+  return {TransferFunction(Polynomial{2.0, 1.0, 2.0}, Polynomial{3.0, 2.0, 3.0, 1.0}),
+          TransferFunction(Polynomial{1.0, 5.0, 1.0}, Polynomial{2.0, 2.0, 3.0, 1.0}), 0.5};
+}
+
+// 30 s, δ = 50 ms, 8 harmonics of a 15 s period with seeded random phases.
+SampledData informative_record(int samples = 601) {
+  const double delta = 0.05;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
+  std::vector<double> phases(8);
+  for (double& p : phases) p = phase(rng);
+  Eigen::VectorXd u(samples);
+  for (int k = 0; k < samples; ++k) {
+    double sum = 0.0;
+    for (int j = 1; j <= 8; ++j)
+      sum += std::cos(2.0 * M_PI * j * k * delta / 15.0 + phases[static_cast<std::size_t>(j - 1)]);
+    u(k) = sum / 2.0;
+  }
+  const Eigen::VectorXd y = simulate_delayed(to_delayed_state_space(paper_loop()), u, delta,
+                                             InputHold::kFirstOrder, DelayedSimulationOptions{4});
+  return SampledData(delta, u, y);
+}
+
+void expect_bad_input(const testing::RunResult& r, const std::string& what) {
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_THAT(r.err, StartsWith("ctid feedback: error: "));
+  EXPECT_THAT(r.err, HasSubstr(what));
+}
+
+TEST_F(CliTest, FeedbackBadInputIsOneLineAndExitTwo) {
+  io::write_sampled_data(path("short.csv"), informative_record(20));
+  const std::string data = path("short.csv").string();
+  expect_bad_input(
+      ctid({"feedback", data, "--forward-order", "3", "--feedback-order", "3", "--delay", "-0.5"}),
+      "--delay");
+  expect_bad_input(
+      ctid({"feedback", data, "--forward-order", "0", "--feedback-order", "3", "--delay", "0.5"}),
+      "order");
+  // 20 samples: 10 equations after Δ, fewer than the 17 unknowns of step 1.
+  expect_bad_input(
+      ctid({"feedback", data, "--forward-order", "3", "--feedback-order", "3", "--delay", "0.5"}),
+      "");
+  // A record (0.95 s) shorter than the delay.
+  expect_bad_input(
+      ctid({"feedback", data, "--forward-order", "1", "--feedback-order", "1", "--delay", "5"}),
+      "");
+  expect_bad_input(ctid({"feedback", data, "--forward-order", "1", "--feedback-order", "1"}),
+                   "--delay");
+  expect_bad_input(ctid({"feedback", data, "--forward-order", "1", "--feedback-order", "1",
+                         "--delay-scan", "0.6:0.2"}),
+                   "--delay-scan");
+}
+
+TEST_F(CliTest, FeedbackRecoversTheLoopAndWritesJson) {
+  io::write_sampled_data(path("loop.csv"), informative_record());
+  const auto r = ctid({"feedback", path("loop.csv").string(), "--forward-order", "3",
+                       "--feedback-order", "3", "--delay", "0.5", "--output", "result.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("F(s) ="));
+  const nlohmann::json j = io::read_json(path("result.json"));
+  const DelayedFeedbackLoop truth = paper_loop();
+  const auto expect_poly = [](const nlohmann::json& a, const Polynomial& p) {
+    ASSERT_EQ(a.size(), static_cast<std::size_t>(p.degree() + 1));
+    for (int i = 0; i <= p.degree(); ++i)
+      EXPECT_NEAR(a[static_cast<std::size_t>(i)].get<double>(), p.coefficient(i), 1e-6) << i;
+  };
+  expect_poly(j["forward"]["numerator"], truth.forward.numerator());
+  expect_poly(j["forward"]["denominator"], truth.forward.denominator());
+  expect_poly(j["feedback"]["numerator"], truth.feedback.numerator());
+  expect_poly(j["feedback"]["denominator"], truth.feedback.denominator());
+  EXPECT_DOUBLE_EQ(j["delay"].get<double>(), 0.5);
+  EXPECT_FALSE(j["diagnostics"]["candidates"].empty());
+  // No clobbering without --force.
+  const auto again = ctid({"feedback", path("loop.csv").string(), "--forward-order", "3",
+                           "--feedback-order", "3", "--delay", "0.5", "--output", "result.json"});
+  EXPECT_EQ(again.status, 2);
+  EXPECT_THAT(again.err, HasSubstr("--force"));
+}
+
+}  // namespace
+}  // namespace ctid::cli
