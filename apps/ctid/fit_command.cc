@@ -159,8 +159,10 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
                    const SampledData& data, const std::string& file) {
   out << "ctid fit: " << estimator << " on " << file << " (N = " << data.size()
       << ", h = " << show(data.sample_time()) << " s)\n";
-  out << "termination: " << to_string(r.termination) << " after " << r.iterations
-      << " iterations: " << r.message << "\n";
+  // The estimator's message restates the reason; print it only when it explains a failure.
+  out << "termination: " << to_string(r.termination) << " after " << r.iterations << " iterations";
+  if (!r.converged()) out << " (" << r.message << ")";
+  out << "\n";
   out << "input delay: " << r.input_delay << " samples (" << show(r.model.input_delay()) << " s)\n";
   for (int i = 0; i < r.model.size(); ++i) {
     const Submodel& s = r.model[i];

@@ -16,7 +16,9 @@
 #include "ctid/core/error.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/excitation_spec.h"
+#include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/result_json.h"
 #include "ctid/io/sampled_data_csv.h"
 #include "ctid/simulation/closed_loop.h"
 #include "ctid/simulation/excitation.h"
@@ -214,12 +216,22 @@ void add_noise_flags(CLI::App& app, NoiseFlags& f) {
                       ->group("Output noise");
 }
 
+// A model file, or the result document of `ctid fit` (its fitted model is simulated).
+io::ContinuousModel read_model_or_result(const std::string& path) {
+  const nlohmann::json document = io::read_json(path);
+  const auto type = document.find("type");
+  if (type != document.end() && type->is_string() && *type == "estimation_result") {
+    return io::fitted_model_from_json(document, path).model;
+  }
+  return io::continuous_model_from_json(document, path);
+}
+
 void run_simulate(const SimulateFlags& f, CLI::App& app) {
   const std::filesystem::path output = f.output;
   if (!f.force && std::filesystem::exists(output)) {
     usage_error(output.string() + ": file exists; pass --force to replace it");
   }
-  const io::ContinuousModel model = io::read_continuous_model(f.model);
+  const io::ContinuousModel model = read_model_or_result(f.model);
   std::optional<DiscreteTransferFunction> controller;
   if (!f.controller.empty()) controller = io::read_discrete_transfer_function(f.controller);
 

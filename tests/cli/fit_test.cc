@@ -11,6 +11,7 @@
 
 #include "cli/run_ctid.h"
 #include "ctid/core/transfer_function.h"
+#include "ctid/io/file.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
 
@@ -33,6 +34,7 @@ class FitCommand : public testing::CliTest {
   }
 
   nlohmann::json read(const std::string& name) const { return io::read_json(path(name)); }
+  std::string read_text(const std::string& name) const { return io::read_text_file(path(name)); }
 };
 
 void expect_bad_input(const testing::RunResult& r, const std::string& fragment) {
@@ -153,13 +155,16 @@ TEST_F(FitCommand, FittedModelIsReadBySimulateAndAnInitialModelIsAccepted) {
   ASSERT_EQ(ctid({"fit", "d.csv", "--modes", "4", "-o", "r.json", "--model-output", "m.json", "-q"})
                 .status,
             0);
-  // The "model" field alone and --model-output are model files for ctid simulate.
+  // The result itself, its "model" field alone and --model-output all feed ctid simulate,
+  // and all three simulate the same model.
   std::ofstream(path("inner.json")) << read("r.json").at("model").dump();
-  for (const char* model : {"inner.json", "m.json"}) {
+  for (const char* model : {"r.json", "inner.json", "m.json"}) {
     const auto s = ctid(
         {"simulate", "-m", model, "--input", "d.csv", "-o", std::string(model) + ".csv", "-q"});
     ASSERT_EQ(s.status, 0) << s.err;
   }
+  EXPECT_EQ(read_text("r.json.csv"), read_text("m.json.csv"));
+  EXPECT_EQ(read_text("inner.json.csv"), read_text("m.json.csv"));
   // A result file is accepted as --initial; starting at the answer converges at once.
   const auto again = ctid({"fit", "d.csv", "--modes", "4", "--initial", "r.json", "-o", "r2.json",
                            "-q", "--max-iterations", "5", "--interpolation", "zoh"});
