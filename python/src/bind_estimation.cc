@@ -8,6 +8,7 @@
 #include "ctid/estimation/delay_scan.h"
 #include "ctid/estimation/estimation_result.h"
 #include "ctid/estimation/feedback_least_squares.h"
+#include "ctid/estimation/feedback_refinement.h"
 #include "ctid/estimation/feedback_regressors.h"
 #include "ctid/estimation/initialization.h"
 #include "ctid/estimation/refined_iv_options.h"
@@ -353,6 +354,47 @@ void bind_feedback(py::module_& m) {
       .def("update", &RecursiveLeastSquares::update, py::arg("c"), py::arg("y"), "One update.")
       .def_property_readonly("theta", &RecursiveLeastSquares::theta, "Current theta.")
       .def_property_readonly("covariance", &RecursiveLeastSquares::covariance, "Current P.");
+  py::class_<SeparationCandidateReport>(m, "SeparationCandidateReport",
+                                        "One separation candidate of identify_delayed_feedback.")
+      .def_readonly("source", &SeparationCandidateReport::source,
+                    "'gcd', 'kronecker: <start>' or 'structured step 1'.")
+      .def_readonly("start", &SeparationCandidateReport::start, "DelayedFeedbackLoop start.")
+      .def_readonly("kronecker_cost", &SeparationCandidateReport::kronecker_cost, "J of the start.")
+      .def_readonly("start_rms", &SeparationCandidateReport::start_rms,
+                    "Output-error rms of the start (inf: unstable).")
+      .def_readonly("refined_rms", &SeparationCandidateReport::refined_rms,
+                    "Output-error rms after refinement.");
+  py::class_<FeedbackIdentificationResult>(m, "FeedbackIdentificationResult",
+                                           "F, H and diagnostics of identify_delayed_feedback.")
+      .def_readonly("loop", &FeedbackIdentificationResult::loop,
+                    "DelayedFeedbackLoop (F, H, delay).")
+      .def_readonly("step1", &FeedbackIdentificationResult::step1, "ClosedLoopEstimate (W).")
+      .def_readonly("step1_output_rms", &FeedbackIdentificationResult::step1_output_rms,
+                    "Output-error rms of the step-1 W (inf: unstable).")
+      .def_readonly("candidates", &FeedbackIdentificationResult::candidates,
+                    "SeparationCandidateReport list.")
+      .def_readonly("best_candidate", &FeedbackIdentificationResult::best_candidate,
+                    "Index of the chosen candidate (-1: none).")
+      .def_readonly("output_rms", &FeedbackIdentificationResult::output_rms,
+                    "Output-error rms of the returned loop.")
+      .def_readonly("message", &FeedbackIdentificationResult::message, "Summary.")
+      .def_property_readonly(
+          "cramer_rao_standard_deviations",
+          [](const FeedbackIdentificationResult& r) { return r.cramer_rao.standard_deviations; },
+          "Cramer-Rao standard deviations of [a_F | b_F | a_H | b_H] at the estimate.");
+  m.def(
+      "identify_delayed_feedback",
+      [](const SampledData& data, int forward_order, int feedback_order, double delay,
+         InputHold hold, double filter_pole) {
+        FeedbackIdentificationOptions options;
+        options.output_error.hold = hold;
+        options.regressors.filter_pole = filter_pole;
+        return identify_delayed_feedback(data, forward_order, feedback_order, delay, options);
+      },
+      py::arg("data"), py::arg("forward_order"), py::arg("feedback_order"), py::arg("delay"),
+      py::arg("hold") = InputHold::kFirstOrder, py::arg("filter_pole") = 1.0,
+      "F and H of a loop with a delayed feedback: step 1, separation candidates (GCD, min J, "
+      "structured step 1), output-error refinement from each; the smallest output error wins.");
 }
 
 }  // namespace

@@ -211,20 +211,21 @@ OutputErrorResult refine_output_error(const SampledData& data, const DelayedFeed
   return result;
 }
 
-void DelayScanOptions::validate() const {
+void FeedbackDelayScanOptions::validate() const {
   require(std::isfinite(min_delay) && min_delay >= 0.0,
-          "DelayScanOptions: min_delay must be >= 0, got ", min_delay);
+          "FeedbackDelayScanOptions: min_delay must be >= 0, got ", min_delay);
   require(std::isfinite(max_delay) && max_delay > min_delay,
-          "DelayScanOptions: max_delay must exceed min_delay, got ", max_delay);
-  require(points >= 2, "DelayScanOptions: points must be >= 2, got ", points);
-  require(substeps >= 1, "DelayScanOptions: substeps must be >= 1, got ", substeps);
-  require(refined_iterations >= 1, "DelayScanOptions: refined_iterations must be >= 1, got ",
-          refined_iterations);
+          "FeedbackDelayScanOptions: max_delay must exceed min_delay, got ", max_delay);
+  require(points >= 2, "FeedbackDelayScanOptions: points must be >= 2, got ", points);
+  require(substeps >= 1, "FeedbackDelayScanOptions: substeps must be >= 1, got ", substeps);
+  require(refined_iterations >= 1,
+          "FeedbackDelayScanOptions: refined_iterations must be >= 1, got ", refined_iterations);
   regressors.validate();
   least_squares.validate();
 }
 
-DelayScanResult scan_delay(const SampledData& data, int n, int m, const DelayScanOptions& options) {
+FeedbackDelayScanResult scan_delay(const SampledData& data, int n, int m,
+                                   const FeedbackDelayScanOptions& options) {
   options.validate();
   require(n >= 1 && m >= 1, "scan_delay: orders must be >= 1, got n = ", n, ", m = ", m);
   auto criterion = [&](double delay) {
@@ -258,7 +259,7 @@ DelayScanResult scan_delay(const SampledData& data, int n, int m, const DelaySca
       return std::numeric_limits<double>::infinity();
     }
   };
-  DelayScanResult r;
+  FeedbackDelayScanResult r;
   r.delays = Eigen::VectorXd::LinSpaced(options.points, options.min_delay, options.max_delay);
   r.criterion.resize(options.points);
   Eigen::Index best = 0;
@@ -464,7 +465,7 @@ DelayIdentificationResult identify_delayed_feedback_with_delay_scan(
     const SampledData& data, int n, int m, const DelayIdentificationOptions& options) {
   options.validate();
   DelayIdentificationResult r;
-  DelayScanOptions scan = options.scan;
+  FeedbackDelayScanOptions scan = options.scan;
   scan.refine = false;
   r.scan = scan_delay(data, n, m, scan);
   r.identification = identify_delayed_feedback(data, n, m, r.scan.delay, options.identification);

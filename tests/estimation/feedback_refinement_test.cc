@@ -113,7 +113,7 @@ TEST(FeedbackRefinement, BadInputIsNamed) {
   EXPECT_THAT(
       [&] { cramer_rao_bound(loop, Eigen::VectorXd::Ones(50), 0.05, InputHold::kZeroOrder, -1.0); },
       testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("noise_sd")));
-  DelayScanOptions scan;
+  FeedbackDelayScanOptions scan;
   scan.max_delay = -1.0;
   EXPECT_THAT([&] { scan.validate(); },
               testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("max_delay")));

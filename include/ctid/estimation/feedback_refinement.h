@@ -100,7 +100,7 @@ enum class DelayCriterion {
   kRefinedOutputError,
 };
 
-struct DelayScanOptions {
+struct FeedbackDelayScanOptions {
   DelayCriterion criterion = DelayCriterion::kOutputError;
   int refined_iterations = 10;  ///< for kRefinedOutputError
   double min_delay = 0.0;
@@ -114,7 +114,7 @@ struct DelayScanOptions {
   void validate() const;
 };
 
-struct DelayScanResult {
+struct FeedbackDelayScanResult {
   Eigen::VectorXd delays;
   Eigen::VectorXd criterion;  ///< per DelayCriterion (inf: unstable or degenerate)
   double delay = 0.0;         ///< the minimiser
@@ -122,8 +122,8 @@ struct DelayScanResult {
 };
 
 /// For each Δ: step 1 (batch) and the output error of W = α̂/(β̂ + γ̂ e^{-Δs}) on the data.
-DelayScanResult scan_delay(const SampledData& data, int forward_order, int feedback_order,
-                           const DelayScanOptions& options = {});
+FeedbackDelayScanResult scan_delay(const SampledData& data, int forward_order, int feedback_order,
+                                   const FeedbackDelayScanOptions& options = {});
 
 /// The whole identification: step 1 (batch or RLS) gives Ŵ = α̂/(β̂ + γ̂ e^{-Δs}); the
 /// separation candidates are the approximate-GCD estimate and every refined start of min J
@@ -189,8 +189,8 @@ double loop_output_rms(const SampledData& data, const DelayedFeedbackLoop& loop,
 /// golden-section search of the refined output-error cost over Δ within one grid step on each
 /// side (each evaluation re-refines ρ from the best loop so far).
 struct DelayIdentificationOptions {
-  DelayScanOptions scan = [] {
-    DelayScanOptions s;
+  FeedbackDelayScanOptions scan = [] {
+    FeedbackDelayScanOptions s;
     s.criterion = DelayCriterion::kRefinedOutputError;
     return s;
   }();
@@ -201,7 +201,7 @@ struct DelayIdentificationOptions {
 };
 
 struct DelayIdentificationResult {
-  DelayScanResult scan;
+  FeedbackDelayScanResult scan;
   FeedbackIdentificationResult identification;  ///< at the returned Δ (loop.delay)
   double delay = 0.0;
   int evaluations = 0;
