@@ -10,23 +10,13 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "support/paper_systems.h"
 
 namespace ctid {
 namespace {
 
 using ::testing::HasSubstr;
 using Complex = std::complex<double>;
-
-Submodel mode(double sigma, double omega_d, double gain) {
-  const double magnitude2 = sigma * sigma + omega_d * omega_d;
-  return Submodel{Polynomial{1.0, 2.0 * sigma / magnitude2, 1.0 / magnitude2}, Polynomial{gain}};
-}
-
-/// González et al. Section 6.1.
-AdditiveModel paper_open_loop_system() {
-  return AdditiveModel(
-      {mode(0.25, 1.39, 3.0), mode(0.15, 3.16, 0.4), mode(0.17, 5.77, 0.2), mode(0.5, 9.99, 0.05)});
-}
 
 TEST(LogFrequencyGrid, EndpointsAndConstantRatio) {
   const Eigen::VectorXd grid = log_frequency_grid(0.1, 1000.0, 41);
@@ -74,7 +64,7 @@ TEST(FrequencyResponse, DiscreteClosedForm) {
 
 TEST(FrequencyResponse, NegativeFrequencyGivesConjugate) {
   const Eigen::VectorXd omegas = log_frequency_grid(0.05, 50.0, 25);
-  const AdditiveModel additive = paper_open_loop_system().with_input_delay(0.15);
+  const AdditiveModel additive = testing::open_loop_four_modes().with_input_delay(0.15);
   const TransferFunction tf(Polynomial{1.0, -0.3, 0.02}, Polynomial{1.0, 0.7, 0.2, 0.01}, 0.1);
   const DiscreteTransferFunction dtf(Polynomial{0.1, 0.2}, Polynomial{0.3, -1.1, 1.0}, 0.05);
   const auto check = [&](const Eigen::VectorXcd& plus, const Eigen::VectorXcd& minus) {
@@ -89,7 +79,7 @@ TEST(FrequencyResponse, NegativeFrequencyGivesConjugate) {
 }
 
 TEST(FrequencyResponse, AdditiveIsSumOfSubmodelsAndEqualsUnfactored) {
-  const AdditiveModel additive = paper_open_loop_system().with_input_delay(0.1);
+  const AdditiveModel additive = testing::open_loop_four_modes().with_input_delay(0.1);
   const Eigen::VectorXd omegas = log_frequency_grid(0.01, 100.0, 200);
   const Eigen::VectorXcd response = frequency_response(additive, omegas);
   const Eigen::MatrixXcd parts = submodel_frequency_responses(additive, omegas);

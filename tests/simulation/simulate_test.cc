@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "support/paper_systems.h"
 
 namespace ctid {
 namespace {
@@ -29,12 +30,6 @@ Eigen::VectorXd gaussian(int n, std::uint64_t seed) {
 Submodel mode(double sigma, double omega_d, double gain) {
   const double magnitude2 = sigma * sigma + omega_d * omega_d;
   return Submodel{Polynomial{1.0, 2.0 * sigma / magnitude2, 1.0 / magnitude2}, Polynomial{gain}};
-}
-
-/// González et al., Section 6.1: four lightly damped modes, 8 poles in all.
-AdditiveModel paper_open_loop_system() {
-  return AdditiveModel(
-      {mode(0.25, 1.39, 3.0), mode(0.15, 3.16, 0.4), mode(0.17, 5.77, 0.2), mode(0.5, 9.99, 0.05)});
 }
 
 TEST(Simulate, FirstOrderStepResponseMatchesClosedForm) {
@@ -87,7 +82,7 @@ TEST(Simulate, PulseResponseOfModeIsDifferenceOfShiftedSteps) {
 }
 
 TEST(Simulate, AdditivePaperSystemEqualsUnfactoredEquivalent) {
-  const AdditiveModel additive = paper_open_loop_system();
+  const AdditiveModel additive = testing::open_loop_four_modes();
   const TransferFunction unfactored = additive.to_transfer_function();
   ASSERT_EQ(unfactored.denominator().degree(), 8);
   const double h = 0.05;
@@ -101,7 +96,7 @@ TEST(Simulate, AdditivePaperSystemEqualsUnfactoredEquivalent) {
 }
 
 TEST(Simulate, SubmodelColumnsSumToModelResponse) {
-  const AdditiveModel g = paper_open_loop_system();
+  const AdditiveModel g = testing::open_loop_four_modes();
   const Eigen::VectorXd u = gaussian(1000, 5);
   const Eigen::MatrixXd parts = simulate_submodels(g, u, 0.05);
   ASSERT_EQ(parts.cols(), 4);
@@ -148,7 +143,7 @@ TEST(Simulate, IntegerInputDelayShiftsTheResponse) {
       simulate_discrete(zoh_equivalent(g.with_input_delay(4 * h), h), u);
   EXPECT_LT(max_abs(y_equivalent - y4), 1e-14 * max_abs(y4));
   // Additive models carry the delay the same way.
-  const AdditiveModel additive = paper_open_loop_system();
+  const AdditiveModel additive = testing::open_loop_four_modes();
   const Eigen::VectorXd ya = simulate(additive, u, h);
   const Eigen::VectorXd ya2 = simulate(additive.with_input_delay(2 * h), u, h);
   EXPECT_LT(max_abs(ya2.tail(298) - ya.head(298)), 1e-15);
