@@ -154,9 +154,9 @@ void run_feedback(const FeedbackFlags& f) {
   if (!f.output.empty())
     io::write_json(output, result, f.force ? io::Overwrite::yes : io::Overwrite::no);
   if (!f.quiet) {
-    std::cout << "F(s) = " << r.loop.forward.numerator().to_string() << " / ("
+    std::cout << "F(s) = (" << r.loop.forward.numerator().to_string() << ") / ("
               << r.loop.forward.denominator().to_string() << ")\n"
-              << "H(s) = " << r.loop.feedback.numerator().to_string() << " / ("
+              << "H(s) = (" << r.loop.feedback.numerator().to_string() << ") / ("
               << r.loop.feedback.denominator().to_string() << ")\n"
               << "delay = " << r.loop.delay << " s, output rms = " << r.output_rms << ", "
               << r.message << "\n";

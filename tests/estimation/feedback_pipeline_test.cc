@@ -121,6 +121,26 @@ TEST(FeedbackPipeline, JointRefinementFindsAFractionalDelay) {
   EXPECT_LT((loop_parameters(fit.loop) - loop_parameters(loop)).cwiseAbs().maxCoeff(), 1e-5);
 }
 
+TEST(FeedbackPipeline, DelayScanFindsTheDelayFromAGridThatMissesIt) {
+  // Grid 0.44, 0.48, 0.52 s (none is the true 0.5 s): refined-output-error criterion, the
+  // pipeline at the best grid point, then the joint (ρ, Δ) refinement; Δ within δ/10.
+  const DelayedFeedbackLoop loop = paper_loop();
+  DelayIdentificationOptions options;
+  options.identification = foh_options();
+  options.scan.min_delay = 0.44;
+  options.scan.max_delay = 0.52;
+  options.scan.points = 3;
+  options.scan.hold = InputHold::kFirstOrder;
+  options.scan.regressors = options.identification.regressors;
+  const DelayIdentificationResult r =
+      identify_delayed_feedback_with_delay_scan(informative_data(loop), 3, 3, options);
+  EXPECT_NE(r.scan.delay, 0.5);
+  EXPECT_LT(std::abs(r.delay - 0.5), 0.005) << r.identification.message;
+  EXPECT_DOUBLE_EQ(r.identification.loop.delay, r.delay);
+  EXPECT_LT((loop_parameters(r.identification.loop) - loop_parameters(loop)).cwiseAbs().maxCoeff(),
+            1e-5);
+}
+
 TEST(FeedbackPipeline, BadInputIsNamed) {
   const SampledData data(0.05, Eigen::VectorXd::Ones(200), Eigen::VectorXd::Ones(200));
   EXPECT_THAT([&] { identify_delayed_feedback(data, 0, 3, 0.5); },
