@@ -10,6 +10,8 @@
 #include "ctid/estimation/feedback_least_squares.h"
 #include "ctid/estimation/feedback_refinement.h"
 #include "ctid/estimation/feedback_regressors.h"
+#include "ctid/estimation/feedback_separation.h"
+#include "ctid/estimation/feedback_validation.h"
 #include "ctid/estimation/initialization.h"
 #include "ctid/estimation/refined_iv_options.h"
 #include "ctid/estimation/srivc.h"
@@ -397,6 +399,162 @@ void bind_feedback(py::module_& m) {
       "structured step 1), output-error refinement from each; the smallest output error wins.");
 }
 
+// Step 2 (separation), refinement, quality and validation of the delayed-feedback methods
+// (De Iuliis et al., eqs. 19-24, and docs/algorithms/feedback-delay.md).
+void bind_feedback_separation(py::module_& m) {
+  py::class_<KroneckerCandidate>(m, "KroneckerCandidate", "One refined start of min J.")
+      .def_readonly("start", &KroneckerCandidate::start, "'gcd' or 'roots split k'.")
+      .def_readonly("forward", &KroneckerCandidate::forward, "F of this start.")
+      .def_readonly("feedback", &KroneckerCandidate::feedback, "H of this start.")
+      .def_readonly("cost", &KroneckerCandidate::cost, "J after Levenberg-Marquardt.");
+  py::class_<KroneckerSeparationResult>(m, "KroneckerSeparationResult",
+                                        "F and H from min J (eqs. 19-21).")
+      .def_readonly("forward", &KroneckerSeparationResult::forward, "F(s).")
+      .def_readonly("feedback", &KroneckerSeparationResult::feedback, "H(s).")
+      .def_readonly("cost", &KroneckerSeparationResult::cost, "J at the returned F, H.")
+      .def_readonly("starts", &KroneckerSeparationResult::starts, "Starts refined.")
+      .def_readonly("best_start", &KroneckerSeparationResult::best_start, "Winning start.")
+      .def_readonly("converged", &KroneckerSeparationResult::converged,
+                    "Ceres converged for the best start.")
+      .def_readonly("message", &KroneckerSeparationResult::message, "Summary.")
+      .def_readonly("candidates", &KroneckerSeparationResult::candidates,
+                    "Every refined start (KroneckerCandidate list).");
+  m.def(
+      "separate_kronecker",
+      [](const Polynomial& alpha, const Polynomial& beta, const Polynomial& gamma,
+         int forward_order, int feedback_order, bool multi_start, int max_iterations) {
+        KroneckerSeparationOptions options;
+        options.multi_start = multi_start;
+        options.max_iterations = max_iterations;
+        py::gil_scoped_release release;
+        return separate_kronecker(alpha, beta, gamma, forward_order, feedback_order, options);
+      },
+      py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("forward_order"),
+      py::arg("feedback_order"), py::kw_only(), py::arg("multi_start") = true,
+      py::arg("max_iterations") = 200,
+      "Separate F and H from alpha, beta, gamma (ascending) by min J with Levenberg-Marquardt "
+      "from the GCD estimate and every split of the roots of beta.");
+  py::class_<GcdSeparationResult>(m, "GcdSeparationResult",
+                                  "F and H from the approximate GCD (eqs. 22-24).")
+      .def_readonly("forward", &GcdSeparationResult::forward, "F(s).")
+      .def_readonly("feedback", &GcdSeparationResult::feedback, "H(s).")
+      .def_readonly("forward_singular_values", &GcdSeparationResult::forward_singular_values,
+                    "Singular values of the observability matrix of alpha/beta.")
+      .def_readonly("feedback_singular_values", &GcdSeparationResult::feedback_singular_values,
+                    "Singular values of the observability matrix of gamma/alpha.")
+      .def_readonly("forward_gap", &GcdSeparationResult::forward_gap, "sigma_n / sigma_{n+1}.")
+      .def_readonly("feedback_gap", &GcdSeparationResult::feedback_gap, "sigma_m / sigma_{m+1}.")
+      .def_readonly("cancelled_forward", &GcdSeparationResult::cancelled_forward,
+                    "The cancelled part of alpha/beta (approximate D_H).")
+      .def_readonly("cancelled_feedback", &GcdSeparationResult::cancelled_feedback,
+                    "The cancelled part of gamma/alpha (approximate monic N_F).");
+  m.def("separate_approximate_gcd", &separate_approximate_gcd, py::arg("alpha"), py::arg("beta"),
+        py::arg("gamma"), py::arg("forward_order"), py::arg("feedback_order"),
+        "Separate F and H by Kalman observability decomposition and SVD (approximate GCD).");
+  m.def("kronecker_cost", &kronecker_cost, py::arg("alpha"), py::arg("beta"), py::arg("gamma"),
+        py::arg("forward"), py::arg("feedback"), "J of eqs. (19)-(21) at F and H.");
+
+  py::class_<SeparabilityReport>(m, "SeparabilityReport",
+                                 "Covariance of [a_F | b_F | a_H | b_H]: are F, H separable?")
+      .def_readonly("parameters", &SeparabilityReport::parameters, "rho.")
+      .def_readonly("covariance", &SeparabilityReport::covariance, "sigma^2 (J'J)^-1.")
+      .def_readonly("standard_deviations", &SeparabilityReport::standard_deviations,
+                    "Square roots of the covariance diagonal.")
+      .def_readonly("relative_standard_deviations",
+                    &SeparabilityReport::relative_standard_deviations, "sd / max(|rho_i|, 1e-3).")
+      .def_readonly("noise_variance", &SeparabilityReport::noise_variance, "sigma^2.")
+      .def_readonly("condition_number", &SeparabilityReport::condition_number,
+                    "Of the column-scaled sensitivity matrix.")
+      .def_readonly("separable", &SeparabilityReport::separable,
+                    "Every relative sd below the threshold.")
+      .def_readonly("message", &SeparabilityReport::message, "Verdict in one sentence.");
+  m.def("cramer_rao_bound", &cramer_rao_bound, py::arg("loop"), py::arg("input"),
+        py::arg("sample_time"), py::arg("hold"), py::arg("noise_sd"),
+        py::arg("relative_threshold") = 0.1, py::arg("substeps") = 4,
+        "Cramer-Rao bound of rho for this loop, input and white output noise.");
+
+  py::class_<OutputErrorResult>(m, "OutputErrorResult", "Output-error refinement of F and H.")
+      .def_readonly("loop", &OutputErrorResult::loop, "DelayedFeedbackLoop (F, H, delay).")
+      .def_readonly("residual_rms", &OutputErrorResult::residual_rms, "rms of y - y_hat.")
+      .def_readonly("iterations", &OutputErrorResult::iterations, "Iterations.")
+      .def_readonly("converged", &OutputErrorResult::converged, "Converged.")
+      .def_readonly("message", &OutputErrorResult::message, "Summary.")
+      .def_readonly("quality", &OutputErrorResult::quality, "SeparabilityReport at the estimate.");
+  m.def(
+      "refine_output_error",
+      [](const SampledData& data, const DelayedFeedbackLoop& start, InputHold hold, int substeps,
+         int max_iterations, bool estimate_delay) {
+        OutputErrorOptions options;
+        options.hold = hold;
+        options.substeps = substeps;
+        options.max_iterations = max_iterations;
+        options.estimate_delay = estimate_delay;
+        py::gil_scoped_release release;
+        return refine_output_error(data, start, options);
+      },
+      py::arg("data"), py::arg("start"), py::kw_only(), py::arg("hold") = InputHold::kZeroOrder,
+      py::arg("substeps") = 4, py::arg("max_iterations") = 200, py::arg("estimate_delay") = false,
+      "Minimise the output error over F and H (and the delay) from a start.");
+
+  py::class_<ResponseComparison>(m, "ResponseComparison",
+                                 "Responses of a true and an estimated model to white noise.")
+      .def_readonly("mse", &ResponseComparison::mse, "MSE of this realisation (inf: overflow).")
+      .def_readonly("expected_mse", &ResponseComparison::expected_mse,
+                    "Expected MSE over realisations.")
+      .def_readonly("estimate_stable", &ResponseComparison::estimate_stable, "Estimate stable.")
+      .def_readonly("truth", &ResponseComparison::truth, "True response.")
+      .def_readonly("estimate", &ResponseComparison::estimate, "Estimated response.");
+  m.def(
+      "compare_white_noise_response",
+      [](const TransferFunction& truth, const TransferFunction& estimate, double sample_time,
+         double duration, std::uint64_t seed) {
+        WhiteNoiseValidationOptions options;
+        options.sample_time = sample_time;
+        options.duration = duration;
+        options.seed = seed;
+        return compare_white_noise_response(truth, estimate, options);
+      },
+      py::arg("truth"), py::arg("estimate"), py::kw_only(), py::arg("sample_time") = 0.005,
+      py::arg("duration") = 5.0, py::arg("seed") = 1,
+      "The paper's validation: both models driven by unit-variance white noise held at "
+      "sample_time for duration seconds.");
+  m.def("expected_white_noise_mse", &expected_white_noise_mse, py::arg("truth"),
+        py::arg("estimate"), py::arg("sample_time"), py::arg("samples"),
+        "Exact expected MSE of the white-noise validation.");
+
+  py::class_<FeedbackDelayScanResult>(m, "FeedbackDelayScanResult", "A scan over the delay.")
+      .def_readonly("delays", &FeedbackDelayScanResult::delays, "Delays tried [s].")
+      .def_readonly("criterion", &FeedbackDelayScanResult::criterion, "Criterion per delay.")
+      .def_readonly("delay", &FeedbackDelayScanResult::delay, "The minimiser [s].")
+      .def_readonly("best_criterion", &FeedbackDelayScanResult::best_criterion, "Its value.");
+  py::class_<DelayIdentificationResult>(m, "DelayIdentificationResult",
+                                        "F, H and the delay when the delay is unknown.")
+      .def_readonly("scan", &DelayIdentificationResult::scan, "FeedbackDelayScanResult.")
+      .def_readonly("identification", &DelayIdentificationResult::identification,
+                    "FeedbackIdentificationResult at the returned delay.")
+      .def_readonly("delay", &DelayIdentificationResult::delay, "Estimated delay [s].")
+      .def_readonly("evaluations", &DelayIdentificationResult::evaluations, "Identifications run.");
+  m.def(
+      "identify_delayed_feedback_with_delay_scan",
+      [](const SampledData& data, int forward_order, int feedback_order, double min_delay,
+         double max_delay, int points, InputHold hold) {
+        DelayIdentificationOptions options;
+        options.scan.min_delay = min_delay;
+        options.scan.max_delay = max_delay;
+        options.scan.points = points;
+        options.scan.hold = hold;
+        options.identification.output_error.hold = hold;
+        py::gil_scoped_release release;
+        return identify_delayed_feedback_with_delay_scan(data, forward_order, feedback_order,
+                                                         options);
+      },
+      py::arg("data"), py::arg("forward_order"), py::arg("feedback_order"), py::kw_only(),
+      py::arg("min_delay"), py::arg("max_delay"), py::arg("points") = 41,
+      py::arg("hold") = InputHold::kFirstOrder,
+      "identify_delayed_feedback with the delay unknown: a scan of the refined output error "
+      "over [min_delay, max_delay], then a joint refinement of F, H and the delay.");
+}
+
 }  // namespace
 
 void bind_estimation(py::module_& m) {
@@ -405,6 +563,7 @@ void bind_estimation(py::module_& m) {
   bind_initialization(m);
   bind_covariance_and_validation(m);
   bind_feedback(m);
+  bind_feedback_separation(m);
 }
 
 }  // namespace ctid::python
