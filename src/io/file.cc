@@ -51,7 +51,20 @@ void write_text_file(const fs::path& path, std::string_view content, Overwrite o
   require(fs::is_directory(parent, ec), path.string(), ": directory '", parent.string(),
           "' does not exist");
   require(!fs::is_directory(path, ec), path.string(), ": is a directory, not a file");
-  require(overwrite == Overwrite::yes || !fs::exists(path, ec), path.string(),
+  const fs::file_status status = fs::status(path, ec);
+  if (fs::exists(status) && !fs::is_regular_file(status)) {
+    // A device, pipe or socket (/dev/null, /dev/stdout, a FIFO): write into it. Moving a
+    // temporary file over it would replace the node itself, and nothing is overwritten here.
+    std::ofstream out(path, std::ios::binary);
+    if (!out) {
+      throw IoError(path.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
+    }
+    out.write(content.data(), static_cast<std::streamsize>(content.size()));
+    out.flush();
+    if (!out) throw IoError(path.string() + ": write failed (" + std::strerror(errno) + ")");
+    return;
+  }
+  require(overwrite == Overwrite::yes || !fs::exists(status), path.string(),
           ": file exists and overwriting was not requested");
 
   const fs::path temporary = temporary_path_for(path);
