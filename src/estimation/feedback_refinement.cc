@@ -114,6 +114,32 @@ Eigen::MatrixXd sensitivity(const Eigen::VectorXd& rho, int n, int m, double del
   return jac;
 }
 
+// Golden-section search for a minimum of f on [lo, hi] with `iterations` reductions; returns
+// the better of the two final interior points and its value.
+template <class Function>
+std::pair<double, double> golden_section_minimum(Function&& f, double lo, double hi,
+                                                 int iterations) {
+  const double ratio = (std::sqrt(5.0) - 1.0) / 2.0;
+  double x1 = hi - ratio * (hi - lo), x2 = lo + ratio * (hi - lo);
+  double f1 = f(x1), f2 = f(x2);
+  for (int it = 0; it < iterations; ++it) {
+    if (f1 < f2) {
+      hi = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = hi - ratio * (hi - lo);
+      f1 = f(x1);
+    } else {
+      lo = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = lo + ratio * (hi - lo);
+      f2 = f(x2);
+    }
+  }
+  return f1 < f2 ? std::make_pair(x1, f1) : std::make_pair(x2, f2);
+}
+
 }  // namespace
 
 Eigen::VectorXd loop_parameters(const DelayedFeedbackLoop& loop) {
@@ -270,28 +296,9 @@ FeedbackDelayScanResult scan_delay(const SampledData& data, int n, int m,
   r.delay = r.delays(best);
   r.best_criterion = r.criterion(best);
   if (options.refine && std::isfinite(r.best_criterion)) {
-    double lo = r.delays(std::max<Eigen::Index>(0, best - 1));
-    double hi = r.delays(std::min<Eigen::Index>(options.points - 1, best + 1));
-    const double ratio = (std::sqrt(5.0) - 1.0) / 2.0;
-    double x1 = hi - ratio * (hi - lo), x2 = lo + ratio * (hi - lo);
-    double f1 = criterion(x1), f2 = criterion(x2);
-    for (int it = 0; it < 25; ++it) {
-      if (f1 < f2) {
-        hi = x2;
-        x2 = x1;
-        f2 = f1;
-        x1 = hi - ratio * (hi - lo);
-        f1 = criterion(x1);
-      } else {
-        lo = x1;
-        x1 = x2;
-        f1 = f2;
-        x2 = lo + ratio * (hi - lo);
-        f2 = criterion(x2);
-      }
-    }
-    const double x = f1 < f2 ? x1 : x2;
-    const double f = std::min(f1, f2);
+    const double lo = r.delays(std::max<Eigen::Index>(0, best - 1));
+    const double hi = r.delays(std::min<Eigen::Index>(options.points - 1, best + 1));
+    const auto [x, f] = golden_section_minimum(criterion, lo, hi, 25);
     if (f < r.best_criterion) {
       r.delay = x;
       r.best_criterion = f;
@@ -507,26 +514,9 @@ DelayIdentificationResult identify_delayed_feedback_with_delay_scan(
     }
     return c;
   };
-  double lo = std::max(scan.min_delay, r.scan.delay - step);
-  double hi = std::min(scan.max_delay, r.scan.delay + step);
-  const double ratio = (std::sqrt(5.0) - 1.0) / 2.0;
-  double x1 = hi - ratio * (hi - lo), x2 = lo + ratio * (hi - lo);
-  double f1 = cost(x1), f2 = cost(x2);
-  for (int it = 0; it < options.golden_iterations; ++it) {
-    if (f1 < f2) {
-      hi = x2;
-      x2 = x1;
-      f2 = f1;
-      x1 = hi - ratio * (hi - lo);
-      f1 = cost(x1);
-    } else {
-      lo = x1;
-      x1 = x2;
-      f1 = f2;
-      x2 = lo + ratio * (hi - lo);
-      f2 = cost(x2);
-    }
-  }
+  // The cost keeps the best fit it has seen; the search only drives it.
+  golden_section_minimum(cost, std::max(scan.min_delay, r.scan.delay - step),
+                         std::min(scan.max_delay, r.scan.delay + step), options.golden_iterations);
   if (best_delay != r.scan.delay) {
     r.delay = best_delay;
     r.identification.loop = best_fit.loop;
