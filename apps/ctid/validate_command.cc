@@ -32,27 +32,6 @@ struct ValidateFlags {
   bool quiet = false;
 };
 
-// Normalised cross-correlation of the residual e and the input u (means removed),
-// r(k) = sum_t e(t + k) u(t) / sqrt(sum e^2 sum u^2), at k = -max_lag..max_lag. Small
-// enough to live here; it belongs in ValidationReport (estimation/validation.h) once the
-// estimation layer reports it.
-Eigen::VectorXd residual_input_correlation(const Eigen::VectorXd& residual,
-                                           const Eigen::VectorXd& input, int max_lag) {
-  const Eigen::VectorXd e = residual.array() - residual.mean();
-  const Eigen::VectorXd u = input.array() - input.mean();
-  const Eigen::Index n = e.size();
-  const double scale = std::sqrt(e.squaredNorm() * u.squaredNorm());
-  const int lags = static_cast<int>(std::min<Eigen::Index>(max_lag, n - 1));
-  Eigen::VectorXd r = Eigen::VectorXd::Zero(2 * lags + 1);
-  if (scale == 0.0) return r;
-  for (int k = -lags; k <= lags; ++k) {
-    const Eigen::Index m = n - std::abs(k);
-    const double sum = k >= 0 ? e.tail(m).dot(u.head(m)) : e.head(m).dot(u.tail(m));
-    r(k + lags) = sum / scale;
-  }
-  return r;
-}
-
 void run_validate(const ValidateFlags& f, const CLI::App& app) {
   if (!f.output.empty() && !f.force && std::filesystem::exists(f.output)) {
     usage_error(f.output + ": file exists; pass --force to replace it (--output)");
@@ -72,22 +51,19 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
                                  " (h = ", show(data.sample_time()), " s)"));
   }
 
-  const ValidationReport report = validate_model(fitted.model, data);
+  const ValidationReport report = validate_model(fitted.model, data, kMaxLag);
   const Eigen::VectorXd simulated = model_output(fitted.model, data.input(), data.sample_time());
-  const Eigen::VectorXd residual = data.output() - simulated;
-  const Eigen::VectorXd cross = residual_input_correlation(residual, data.input(), kMaxLag);
-  const double max_cross = cross.size() > 0 ? cross.cwiseAbs().maxCoeff() : 0.0;
   const double bound = report.whiteness_bound;
-  const bool white = report.max_residual_autocorrelation <= bound;
-  const bool uncorrelated = max_cross <= bound;
+  const bool white = report.residual_white();
+  const bool uncorrelated = report.residual_uncorrelated_with_input();
+  const double max_cross = report.max_cross_correlation;
 
   if (!f.output.empty()) {
     nlohmann::json lags = nlohmann::json::array();
     nlohmann::json values = nlohmann::json::array();
-    const int half = static_cast<int>(cross.size() / 2);
-    for (int k = -half; k <= half; ++k) {
+    for (int k = -report.max_lag; k <= report.max_lag; ++k) {
       lags.push_back(k);
-      values.push_back(cross(k + half));
+      values.push_back(report.cross_correlation(k + report.max_lag));
     }
     const nlohmann::json document = {
         {"type", "validation_report"},

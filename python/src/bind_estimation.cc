@@ -245,11 +245,23 @@ void bind_covariance_and_validation(py::module_& m) {
       .def_readonly("mean_squared_error", &ValidationReport::mean_squared_error, "MSE.")
       .def_readonly("residual_mean", &ValidationReport::residual_mean, "Mean residual.")
       .def_readonly("residual_std", &ValidationReport::residual_std, "Residual std.")
+      .def_readonly("max_lag", &ValidationReport::max_lag, "Lags used.")
+      .def_readonly("residual_autocorrelation", &ValidationReport::residual_autocorrelation,
+                    "Normalised residual autocorrelation at lags 1..max_lag.")
+      .def_readonly("cross_correlation", &ValidationReport::cross_correlation,
+                    "Normalised residual-input cross-correlation at lags -max_lag..max_lag.")
       .def_readonly("max_residual_autocorrelation", &ValidationReport::max_residual_autocorrelation,
-                    "Largest |autocorrelation| at lags 1..20.")
-      .def_readonly("whiteness_bound", &ValidationReport::whiteness_bound, "2.58/sqrt(N).");
+                    "Largest |autocorrelation| at lags 1..max_lag.")
+      .def_readonly("max_cross_correlation", &ValidationReport::max_cross_correlation,
+                    "Largest |cross-correlation| at lags -max_lag..max_lag.")
+      .def_readonly("whiteness_bound", &ValidationReport::whiteness_bound, "2.58/sqrt(N).")
+      .def_property_readonly("residual_white", &ValidationReport::residual_white,
+                             "Autocorrelation within the 99 % band.")
+      .def_property_readonly("residual_uncorrelated_with_input",
+                             &ValidationReport::residual_uncorrelated_with_input,
+                             "Cross-correlation within the 99 % band.");
   m.def("validate_model", &validate_model, py::arg("model"), py::arg("data"),
-        "Fit and residual statistics of a model on data.");
+        py::arg("max_lag") = 20, "Fit and residual statistics of a model on data.");
   m.def("persistent_excitation_order", &persistent_excitation_order, py::arg("x"),
         py::arg("max_order"), py::arg("tolerance") = 1e-9, "Order of PE seen in the record.");
   m.def("largest_pole_frequency", &largest_pole_frequency, py::arg("model"),

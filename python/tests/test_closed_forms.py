@@ -77,3 +77,20 @@ def test_peaks_from_a_measured_frf():
     peaks = ctid.resonance_peaks(w, ctid.frequency_response(model, w), max_peaks=2)
     assert [round(p.frequency, 1) for p in peaks] == [2.0, 12.0]
     assert peaks[0].damping_ratio == pytest.approx(0.02, rel=0.1)
+
+
+def test_validation_correlations_match_numpy():
+    model = ctid.AdditiveModel([ctid.Submodel(ctid.Polynomial([1.0, 0.5]), ctid.Polynomial([2.0]))])
+    wrong = ctid.AdditiveModel([ctid.Submodel(ctid.Polynomial([1.0, 0.5]), ctid.Polynomial([1.5]))])
+    u = ctid.white_noise(1000, 1.0, 3)
+    y = ctid.model_output(model, u, H) + ctid.white_noise(1000, 0.1, 4)
+    report = ctid.validate_model(wrong, ctid.SampledData(H, u, y), max_lag=7)
+    e = y - ctid.model_output(wrong, u, H)
+    e, v = e - e.mean(), u - u.mean()
+    full = np.correlate(e, v, mode="full") / np.sqrt(e @ e * (v @ v))  # lag k at index N-1+k
+    mid = len(u) - 1
+    np.testing.assert_allclose(report.cross_correlation, full[mid - 7:mid + 8], atol=1e-12)
+    auto = np.correlate(e, e, mode="full")[mid + 1:mid + 8] / (e @ e)
+    np.testing.assert_allclose(report.residual_autocorrelation, auto, atol=1e-12)
+    assert report.max_lag == 7
+    assert not report.residual_uncorrelated_with_input

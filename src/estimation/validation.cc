@@ -47,24 +47,35 @@ double fit_percent(const Eigen::VectorXd& measured, const Eigen::VectorXd& model
   return 100.0 * (1.0 - error / spread);
 }
 
-ValidationReport validate_model(const AdditiveModel& model, const SampledData& data) {
+ValidationReport validate_model(const AdditiveModel& model, const SampledData& data, int max_lag) {
+  require(max_lag >= 1, "validate_model: max_lag must be at least 1, got ", max_lag);
   const Eigen::VectorXd yhat = model_output(model, data.input(), data.sample_time());
   const Eigen::VectorXd e = data.output() - yhat;
-  const auto n = static_cast<double>(e.size());
+  const Eigen::Index n = e.size();
   ValidationReport r;
   r.fit_percent = fit_percent(data.output(), yhat);
-  r.mean_squared_error = e.squaredNorm() / n;
+  r.mean_squared_error = e.squaredNorm() / static_cast<double>(n);
   r.residual_mean = e.mean();
   const Eigen::VectorXd c = e.array() - r.residual_mean;
+  const Eigen::VectorXd u = data.input().array() - data.input().mean();
   const double c0 = c.squaredNorm();
-  r.residual_std = std::sqrt(c0 / n);
-  r.whiteness_bound = 2.58 / std::sqrt(n);
-  if (c0 > 0.0) {
-    const Eigen::Index lags = std::min<Eigen::Index>(20, e.size() - 1);
-    for (Eigen::Index k = 1; k <= lags; ++k) {
-      const double rk = c.head(e.size() - k).dot(c.tail(e.size() - k)) / c0;
-      r.max_residual_autocorrelation = std::max(r.max_residual_autocorrelation, std::abs(rk));
-    }
+  r.residual_std = std::sqrt(c0 / static_cast<double>(n));
+  r.whiteness_bound = 2.58 / std::sqrt(static_cast<double>(n));
+  r.max_lag = static_cast<int>(std::min<Eigen::Index>(max_lag, n - 1));
+  r.residual_autocorrelation = Eigen::VectorXd::Zero(r.max_lag);
+  r.cross_correlation = Eigen::VectorXd::Zero(2 * r.max_lag + 1);
+  const double cross_scale = std::sqrt(c0 * u.squaredNorm());
+  for (int k = 1; k <= r.max_lag && c0 > 0.0; ++k) {
+    r.residual_autocorrelation(k - 1) = c.head(n - k).dot(c.tail(n - k)) / c0;
+  }
+  for (int k = -r.max_lag; k <= r.max_lag && cross_scale > 0.0; ++k) {
+    const Eigen::Index m = n - std::abs(k);
+    const double sum = k >= 0 ? c.tail(m).dot(u.head(m)) : c.head(m).dot(u.tail(m));
+    r.cross_correlation(k + r.max_lag) = sum / cross_scale;
+  }
+  if (r.max_lag > 0) {
+    r.max_residual_autocorrelation = r.residual_autocorrelation.cwiseAbs().maxCoeff();
+    r.max_cross_correlation = r.cross_correlation.cwiseAbs().maxCoeff();
   }
   return r;
 }

@@ -19,18 +19,27 @@ Eigen::VectorXd model_output(const AdditiveModel& model, const Eigen::VectorXd& 
 /// 100 (1 - ||y - y_model|| / ||y - mean(y)||); 100 is a perfect fit. Sizes must agree.
 double fit_percent(const Eigen::VectorXd& measured, const Eigen::VectorXd& modelled);
 
-/// Residual statistics of a model on data (for `ctid validate`).
+/// Residual statistics of a model on data (for `ctid validate`). Correlations are normalised
+/// (means removed): r_ee(k) = sum e(t+k) e(t) / sum e(t)^2 at lags 1..max_lag, and
+/// r_eu(k) = sum e(t+k) u(t) / sqrt(sum e^2 sum u^2) at lags -max_lag..max_lag; both are judged
+/// against the 99 % band 2.58/sqrt(N) of a white residual independent of the input.
 struct ValidationReport {
   double fit_percent = 0.0;
   double mean_squared_error = 0.0;
   double residual_mean = 0.0;
   double residual_std = 0.0;
-  /// Largest |normalised autocorrelation| of the residual at lags 1..20, and the 99 %
-  /// whiteness bound 2.58/sqrt(N) it is judged against.
+  int max_lag = 0;                           ///< lags used: min(max_lag asked, N - 1)
+  Eigen::VectorXd residual_autocorrelation;  ///< r_ee(1..max_lag)
+  Eigen::VectorXd cross_correlation;         ///< r_eu(-max_lag..max_lag)
   double max_residual_autocorrelation = 0.0;
-  double whiteness_bound = 0.0;
+  double max_cross_correlation = 0.0;
+  double whiteness_bound = 0.0;  ///< 2.58/sqrt(N)
+  bool residual_white() const { return max_residual_autocorrelation <= whiteness_bound; }
+  bool residual_uncorrelated_with_input() const { return max_cross_correlation <= whiteness_bound; }
 };
-ValidationReport validate_model(const AdditiveModel& model, const SampledData& data);
+/// max_lag >= 1; 20 by default.
+ValidationReport validate_model(const AdditiveModel& model, const SampledData& data,
+                                int max_lag = 20);
 
 /// Largest n <= max_order for which the sample matrix sum_k phi_k phi_k' of the windows
 /// phi_k = [x_k, x_{k-d}, ..., x_{k-(n-1)d}] is numerically non-singular (smallest over
