@@ -2,7 +2,7 @@
 // coherence (non-periodic data) or averaged over the periods of a periodic excitation
 // (--period N), written as CSV, with the resonance peaks listed (for choosing orders and
 // initial modes). The numerics are ctid::welch_frf, ctid::periodic_frf and
-// ctid::resonance_peaks (frequency/frf.h); figures are drawn by matplotlib.
+// ctid::resonance_peaks (frequency/frf.h); figures by `python3 -m ctid.plot` (plot_support.h).
 #include <cmath>
 #include <complex>
 #include <cstdio>
@@ -42,32 +42,6 @@ struct FrfFlags {
   bool quiet = false;
 };
 
-// Draws frf.png from the CSV this command writes: magnitude, phase and (Welch) coherence.
-constexpr const char* kFrfScript = R"PY(# Written by `ctid frf`: draws its CSV output.
-import csv, sys
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-rows = list(csv.DictReader(open(sys.argv[1])))
-w = [float(r["frequency"]) for r in rows]
-coherent = "coherence" in rows[0]
-fig, axes = plt.subplots(3 if coherent else 2, 1, sharex=True, figsize=(7.5, 7 if coherent else 5.5))
-axes[0].semilogx(w, [float(r["magnitude_db"]) for r in rows], ".-", ms=3, label="FRF")
-axes[0].set_ylabel("magnitude [dB]")
-axes[1].semilogx(w, [float(r["phase_deg"]) for r in rows], ".-", ms=3)
-axes[1].set_ylabel("phase [deg]")
-if coherent:
-    axes[2].semilogx(w, [float(r["coherence"]) for r in rows], ".-", ms=3)
-    axes[2].set_ylabel("coherence")
-    axes[2].set_ylim(0, 1.05)
-for ax in axes:
-    ax.grid(True, which="both", alpha=0.3)
-axes[-1].set_xlabel("frequency [rad/s]")
-axes[0].set_title(sys.argv[3])
-fig.tight_layout()
-fig.savefig(sys.argv[2], dpi=100)
-)PY";
-
 io::CsvTable frf_table(const Frf& frf) {
   const Eigen::Index n = frf.frequencies.size();
   Eigen::VectorXd hz(n), db(n), deg(n), re(n), im(n);
@@ -91,32 +65,23 @@ io::CsvTable frf_table(const Frf& frf) {
   return table;
 }
 
-void draw_frf(const FrfFlags& f, const Frf& frf, const io::CsvTable& table) {
+// frf.png (the FRF with its coherence) and, with --model, bode.png (the model over the FRF),
+// drawn by `python3 -m ctid.plot` from files in a temporary folder.
+void draw_frf(const FrfFlags& f, const std::filesystem::path& package, const Frf& frf,
+              const io::CsvTable& table) {
   const TemporaryDirectory work;
   const std::string title = "ctid frf: " + std::filesystem::path(f.data.file).filename().string();
+  const std::filesystem::path dir(f.plot);
   io::write_csv(work.path() / "frf.csv", table);
-  io::write_text_file(work.path() / "plot_frf.py", kFrfScript);
-  const std::filesystem::path png = std::filesystem::path(f.plot) / "frf.png";
-  auto quote = [](const std::string& w) {
-    std::string q = "'";
-    for (char c : w) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-  };
-  const std::string command = "/usr/bin/python3 " + quote((work.path() / "plot_frf.py").string()) +
-                              " " + quote((work.path() / "frf.csv").string()) + " " +
-                              quote(png.string()) + " " + quote(title) + " > /dev/null 2> " +
-                              quote((work.path() / "err").string());
-  if (std::system(command.c_str()) != 0) {
-    throw ComputationError("plotting frf.png failed (does /usr/bin/python3 have matplotlib?)");
-  }
+  std::vector<PlotJob> jobs{{"frf", work.path() / "frf.csv", dir / "frf.png", title}};
   if (!f.model.empty()) {
     const io::FittedModel fitted = io::read_fitted_model(f.model);
     nlohmann::json input = {{"model", io::to_json(fitted.model)}, {"frf", frf_json(frf)}};
     input["frequency_range"] = {frf.frequencies(0), frf.frequencies(frf.frequencies.size() - 1)};
     io::write_json(work.path() / "bode.json", input);
-    plot(require_plotting(),
-         {{"bode", work.path() / "bode.json", std::filesystem::path(f.plot) / "bode.png", title}});
+    jobs.push_back({"bode", work.path() / "bode.json", dir / "bode.png", title});
   }
+  plot(package, jobs);
 }
 
 void run_frf(const FrfFlags& f, const CLI::App& app) {
@@ -133,8 +98,9 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
   }
   if (!f.model.empty() && f.plot.empty())
     usage_error("--model needs --plot (it is drawn over the FRF)");
+  std::filesystem::path package;
   if (!f.plot.empty()) {
-    if (!f.model.empty()) require_plotting();
+    package = require_plotting();
     std::vector<std::string> figures{"frf.png"};
     if (!f.model.empty()) figures.emplace_back("bode.png");
     prepare_plot_directory(f.plot, figures, f.force);
@@ -186,7 +152,7 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
     }
     if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
   }
-  if (!f.plot.empty()) draw_frf(f, frf, table);
+  if (!f.plot.empty()) draw_frf(f, package, frf, table);
 }
 
 Command add_frf_command(CLI::App& parent) {

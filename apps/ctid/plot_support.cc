@@ -149,10 +149,11 @@ TemporaryDirectory::~TemporaryDirectory() {
 }
 
 void prepare_plot_directory(const std::filesystem::path& dir,
-                            const std::vector<std::string>& figures, bool force) {
+                            const std::vector<std::string>& figures, bool force,
+                            const std::string& flag) {
   std::error_code error;
   if (std::filesystem::exists(dir, error) && !std::filesystem::is_directory(dir, error)) {
-    throw InvalidArgument("--plot " + dir.string() + ": exists and is not a directory");
+    throw InvalidArgument(flag + " " + dir.string() + ": exists and is not a directory");
   }
   if (!force) {
     for (const std::string& name : figures) {
@@ -163,7 +164,7 @@ void prepare_plot_directory(const std::filesystem::path& dir,
   }
   std::filesystem::create_directories(dir, error);
   if (error) {
-    throw InvalidArgument("--plot " + dir.string() + ": cannot create the directory (" +
+    throw InvalidArgument(flag + " " + dir.string() + ": cannot create the directory (" +
                           error.message() + ")");
   }
 }

@@ -53,10 +53,11 @@ class TemporaryDirectory {
   std::filesystem::path path_;
 };
 
-/// Checks --plot DIR before any work: creates DIR if missing, and refuses (InvalidArgument)
-/// to replace any of `figures` there unless `force`.
+/// Checks an output folder (`flag` DIR, e.g. --plot) before any work: creates DIR if missing,
+/// and refuses (InvalidArgument) to replace any of `figures` (file names) there unless `force`.
 void prepare_plot_directory(const std::filesystem::path& dir,
-                            const std::vector<std::string>& figures, bool force);
+                            const std::vector<std::string>& figures, bool force,
+                            const std::string& flag = "--plot");
 
 /// The figure files of a model judged on data: bode.png, validation.png, residuals.png and,
 /// with `modes`, modes.png.

@@ -1,7 +1,8 @@
 // `ctid study open-loop|closed-loop`: the Monte Carlo studies of González et al., Section 6
 // (ctid/study/paper_study.h), at the paper's size by default. Writes runs.csv (per-run
 // estimates), mse.csv (MSE per N and parameter beside the covariance prediction), trends.csv
-// and mse.png (MSE against N, log-log, drawn by matplotlib through /usr/bin/python3).
+// and mse.png (MSE against N, log-log, by `python3 -m ctid.plot mse`; plot_support.h).
+// Existing result files are not replaced without --force.
 // --size-index/--run-index replay one run and write only its records.
 #include <chrono>
 #include <cstdint>
@@ -18,50 +19,10 @@
 #include "ctid/study/monte_carlo.h"
 #include "ctid/study/paper_study.h"
 #include "ctid/study/study_output.h"
+#include "plot_support.h"
 
 namespace ctid::cli {
 namespace {
-
-// Draws mse.png from mse.csv: one panel per parameter, one line per estimator (Monte Carlo
-// MSE, solid with markers) and its covariance prediction (dashed).
-constexpr const char* kPlotScript =
-    R"PY(# Written by `ctid study`: plots mse.csv as MSE against N (log-log).
-import csv, sys, math
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-
-folder = sys.argv[1]
-title = sys.argv[2] if len(sys.argv) > 2 else ""
-rows = list(csv.DictReader(open(folder + "/mse.csv")))
-params = list(dict.fromkeys(r["parameter"] for r in rows))
-estimators = list(dict.fromkeys(r["estimator"] for r in rows))
-cols = 2 if len(params) <= 4 else 3
-nrows = math.ceil(len(params) / cols)
-fig, axes = plt.subplots(nrows, cols, figsize=(4.2 * cols, 3.2 * nrows), squeeze=False)
-colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-for ax, p in zip(axes.flat, params):
-    for k, e in enumerate(estimators):
-        sel = [r for r in rows if r["parameter"] == p and r["estimator"] == e]
-        n = [float(r["N"]) for r in sel]
-        mse = [float(r["mse"]) for r in sel]
-        pred = [float(r["predicted_mse"]) for r in sel]
-        c = colors[k % len(colors)]
-        ax.loglog(n, mse, "o-", ms=3, lw=1, color=c, label=e)
-        if any(math.isfinite(v) and v > 0 for v in pred):
-            ax.loglog(n, pred, "--", lw=1, color=c, label=e + " (predicted)")
-    ax.set_title(p)
-    ax.set_xlabel("N")
-    ax.set_ylabel("MSE")
-    ax.grid(True, which="both", alpha=0.3)
-for ax in list(axes.flat)[len(params):]:
-    ax.axis("off")
-axes.flat[0].legend(fontsize=7)
-if title:
-    fig.suptitle(title)
-fig.tight_layout()
-fig.savefig(folder + "/mse.png", dpi=110)
-)PY";
 
 struct StudyFlags {
   std::string kind;
@@ -79,6 +40,7 @@ struct StudyFlags {
   std::vector<std::string> estimators;
   bool no_covariance = false;
   bool no_plot = false;
+  bool force = false;
   bool quiet = false;
 };
 
@@ -119,10 +81,18 @@ std::ofstream open_output(const std::filesystem::path& path) {
 void run_study_command(const StudyFlags& f) {
   const StudyOptions options = options_from_flags(f);
   const std::filesystem::path folder(f.output);
-  std::filesystem::create_directories(folder);
+  const bool replay = f.size_index >= 0 || f.run_index >= 0;
+  const bool draw = !f.no_plot && !replay;
+  // Before any work: plotting must be possible, and no earlier result is replaced silently.
+  std::filesystem::path package;
+  if (draw) package = require_plotting();
+  std::vector<std::string> files{"runs.csv"};
+  if (!replay) files.insert(files.end(), {"mse.csv", "trends.csv"});
+  if (draw) files.emplace_back("mse.png");
+  prepare_plot_directory(folder, files, f.force, "--output");
   const StudySetup setup = study_setup(options.kind);
 
-  if (f.size_index >= 0 || f.run_index >= 0) {
+  if (replay) {
     if (f.size_index < 0 || f.run_index < 0) {
       usage_error("--size-index and --run-index replay one run: give both");
     }
@@ -168,21 +138,12 @@ void run_study_command(const StudyFlags& f) {
               << resolve_thread_count(options.threads) << " threads\n";
     write_trends_csv(result, std::cout);
   }
-  if (!f.no_plot) {
-    const std::filesystem::path script = folder / "plot_study.py";
-    {
-      std::ofstream out = open_output(script);
-      out << kPlotScript;
-    }
+  if (draw) {
     const std::string title =
         "Section " + std::string(options.kind == StudyKind::open_loop ? "6.1" : "6.2") + " " +
         to_string(options.kind) + ", " + std::to_string(options.runs) + " runs per N";
-    const std::string command =
-        "/usr/bin/python3 '" + script.string() + "' '" + folder.string() + "' '" + title + "'";
-    if (std::system(command.c_str()) != 0) {
-      throw ComputationError("plotting failed (" + command +
-                             "); the CSV files are written, rerun with --no-plot to skip");
-    }
+    plot(package, {{"mse", folder / "mse.csv", folder / "mse.png", title}});
+    if (!f.quiet) std::cout << "wrote " << (folder / "mse.png").string() << "\n";
   }
 }
 
@@ -234,6 +195,7 @@ Command add_study_command(CLI::App& parent) {
   app->add_flag("--no-covariance", f.no_covariance,
                 "Skip the estimators' covariance (no standard errors or predicted MSE; faster)");
   app->add_flag("--no-plot", f.no_plot, "Do not draw mse.png");
+  app->add_flag("--force", f.force, "Replace result files that exist in the folder");
   app->add_flag("--quiet,-q", f.quiet, "Print nothing on success");
 
   Command command;

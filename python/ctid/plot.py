@@ -2,8 +2,8 @@
 
     /usr/bin/python3 -m ctid.plot KIND INPUT OUTPUT [--title TEXT]
 
-KIND is one of bode, modes, validation, residuals, mse; INPUT a JSON (bode, modes) or CSV
-(validation, residuals, mse) file in the formats of docs/python.md; OUTPUT ends in .png or
+KIND is one of bode, modes, frf, validation, residuals, mse; INPUT a JSON (bode, modes) or
+CSV (frf, validation, residuals, mse) file in the formats of docs/python.md; OUTPUT ends in .png or
 .svg. Exit status 0 on success, 2 for bad usage or input (one line on stderr), 1 otherwise.
 """
 
@@ -16,7 +16,7 @@ import sys
 
 import numpy as np
 
-KINDS = ("bode", "modes", "validation", "residuals", "mse")
+KINDS = ("bode", "modes", "frf", "validation", "residuals", "mse")
 
 
 class InputError(Exception):
@@ -54,7 +54,16 @@ def model_from_json(document, where="model"):
 
 
 class _Frf:
-    """The fields of ctid.Frf that the plots use, read from JSON."""
+    """The fields of ctid.Frf that the plots use, read from JSON or from the CSV of ctid frf."""
+
+    @classmethod
+    def from_rows(cls, rows, path):
+        frf = cls.__new__(cls)
+        frf.frequencies = _column(rows, ("frequency",), path)
+        frf.response = _column(rows, ("real",), path) + 1j * _column(rows, ("imag",), path)
+        frf.coherence = _column(rows, ("coherence",), path) if "coherence" in rows[0] else []
+        frf.variance = _column(rows, ("variance",), path) if "variance" in rows[0] else []
+        return frf
 
     def __init__(self, document):
         try:
@@ -117,6 +126,8 @@ def run(kind, path, output, title=None):
     if kind in ("bode", "modes"):
         return _frequency_figure(kind, path, output, title)
     rows = _read_csv(path)
+    if kind == "frf":
+        return plotting.frf(_Frf.from_rows(rows, path), title=title, filename=output)
     if kind == "validation":
         t = _column(rows, ("t", "time"), path)
         y = _column(rows, ("y",), path)
@@ -143,7 +154,8 @@ def main(argv=None):
         prog="python3 -m ctid.plot",
         description="Draw a ctid figure (PNG or SVG) from a JSON or CSV file.")
     parser.add_argument("kind", help="one of: " + ", ".join(KINDS))
-    parser.add_argument("input", help="JSON (bode, modes) or CSV (validation, residuals, mse)")
+    parser.add_argument("input",
+                        help="JSON (bode, modes) or CSV (frf, validation, residuals, mse)")
     parser.add_argument("output", help="figure file, .png or .svg")
     parser.add_argument("--title", default=None, help="figure title")
     try:

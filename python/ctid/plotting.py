@@ -28,6 +28,7 @@ from . import _ctid  # noqa: E402
 
 __all__ = [
     "bode",
+    "frf",
     "modes",
     "validation",
     "residual_correlation",
@@ -176,6 +177,35 @@ def bode(model, frf=None, covariance=None, omegas=None, confidence=0.95, title=N
     ax_mag.legend(fontsize=8)
     if title:
         ax_mag.set_title(title)
+    return _finish(figure, filename)
+
+
+def frf(estimate, title=None, filename=None):
+    """A nonparametric FRF on its own: magnitude (dB), phase (deg) and, when the estimate has
+    one (Welch), the squared coherence.
+
+    ``estimate``: a ctid.Frf or any object with ``frequencies`` [rad/s], complex ``response``
+    and optionally ``coherence``. Lines: "FRF" in each panel, "coherence". Returns the Figure.
+    """
+    w = np.asarray(estimate.frequencies, dtype=float)
+    g = np.asarray(estimate.response)
+    coherence = np.asarray(getattr(estimate, "coherence", []), dtype=float)
+    coherent = coherence.size == w.size and w.size > 0
+    figure, axes = plt.subplots(3 if coherent else 2, 1, sharex=True,
+                                figsize=(7.0, 7.0 if coherent else 5.5))
+    axes[0].semilogx(w, _db(g), ".-", ms=3, lw=0.8, label="FRF")
+    axes[0].set_ylabel("magnitude [dB]")
+    axes[1].semilogx(w, np.degrees(np.unwrap(np.angle(g))), ".-", ms=3, lw=0.8, label="FRF")
+    axes[1].set_ylabel("phase [deg]")
+    if coherent:
+        axes[2].semilogx(w, coherence, ".-", ms=3, lw=0.8, label="coherence")
+        axes[2].set_ylabel("coherence")
+        axes[2].set_ylim(0.0, 1.05)
+    for ax in axes:
+        ax.grid(True, which="both", alpha=0.3)
+    axes[-1].set_xlabel("frequency [rad/s]")
+    if title:
+        axes[0].set_title(title)
     return _finish(figure, filename)
 
 

@@ -178,12 +178,36 @@ def test_command_line_entry_point(tmp_path, experiment, fitted):
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "mse.svg").stat().st_size > 1000
 
+    rows = ["frequency,real,imag,coherence"] + [
+        f"{w!r},{g.real!r},{g.imag!r},0.9" for w, g in zip(frf.frequencies, frf.response)]
+    (tmp_path / "frf.csv").write_text("\n".join(rows) + "\n")
+    result = run_plot("frf", tmp_path / "frf.csv", tmp_path / "frf.png")
+    assert result.returncode == 0, result.stderr
+    check_png(tmp_path / "frf.png")
+    (tmp_path / "frf.csv").write_text("frequency,real\n1,2\n")
+    result = run_plot("frf", tmp_path / "frf.csv", tmp_path / "frf.png")
+    assert result.returncode == 2 and "needs a column named imag" in result.stderr
+
+
+def test_frf_figure_draws_magnitude_phase_and_coherence(experiment):
+    data = experiment["data"]
+    welch = ctid.welch_frf(data, segment_length=128)
+    figure = plotting.frf(welch, title="t")
+    axes = figure.axes
+    assert len(axes) == 3
+    (magnitude,) = [l for l in axes[0].get_lines() if l.get_label() == "FRF"]
+    np.testing.assert_allclose(magnitude.get_ydata(), 20 * np.log10(np.abs(welch.response)))
+    (coherence,) = [l for l in axes[2].get_lines() if l.get_label() == "coherence"]
+    np.testing.assert_allclose(coherence.get_ydata(), welch.coherence)
+    periodic = plotting.frf(ctid.periodic_frf(data, period_length=256))
+    assert len(periodic.axes) == 2
+
 
 def test_command_line_bad_input_exits_2(tmp_path):
     result = run_plot("nyquist", tmp_path / "x.json", tmp_path / "x.png")
     assert result.returncode == 2
     assert result.stderr.strip() == ("ctid.plot: unknown kind 'nyquist'; expected one of "
-                                     "bode, modes, validation, residuals, mse")
+                                     "bode, modes, frf, validation, residuals, mse")
     (tmp_path / "bad.json").write_text('{"type": "state_space"}')
     result = run_plot("bode", tmp_path / "bad.json", tmp_path / "x.png")
     assert result.returncode == 2 and "'type' is 'state_space'" in result.stderr

@@ -114,15 +114,20 @@ TEST_F(FrfCommand, BadInputExitsTwoWithOneLine) {
   EXPECT_EQ(testing::slurp(path("f.csv")), "keep");
 }
 
-TEST_F(FrfCommand, PlotWritesAPng) {
-  if (std::system("/usr/bin/python3 -c 'import matplotlib' > /dev/null 2>&1") != 0) {
-    GTEST_SKIP() << "/usr/bin/python3 has no matplotlib";
+TEST_F(FrfCommand, PlotWritesTheFrfAndTheModelOverIt) {
+  if (testing::python_package().empty()) {
+    GTEST_SKIP() << "the ctid Python package is not built (CTID_BUILD_PYTHON=OFF); set "
+                    "CTID_PYTHONPATH to test --plot";
   }
-  const auto r = ctid({"frf", "d.csv", "--plot", "fig", "-q"});
+  const auto r = ctid(
+      {"frf", "d.csv", "--plot", "fig", "--model", example("gonzalez_6_1_open_loop.json"), "-q"});
   ASSERT_EQ(r.status, 0) << r.err;
-  const std::string bytes = testing::slurp(path("fig") / "frf.png");
-  EXPECT_GT(bytes.size(), 10000u);
-  EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  for (const char* name : {"frf.png", "bode.png"}) {
+    const std::string bytes = testing::slurp(path("fig") / name);
+    EXPECT_GT(bytes.size(), 10000u) << name;
+    EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << name;
+  }
+  expect_bad_input(ctid({"frf", "d.csv", "--plot", "fig", "-q"}), "file exists");
 }
 
 }  // namespace

@@ -94,4 +94,16 @@ inline int line_count(const std::string& text) {
   return lines + (!text.empty() && text.back() != '\n' ? 1 : 0);
 }
 
+/// The folder of the built ctid Python package, found as plot_support.cc finds it
+/// ($CTID_PYTHONPATH, else <build>/python next to the binary); empty when there is none, so
+/// --plot tests can skip on builds without Python.
+inline std::string python_package() {
+  if (const char* env = std::getenv("CTID_PYTHONPATH"); env != nullptr && *env != '\0') {
+    return env;
+  }
+  const std::filesystem::path dir =
+      std::filesystem::path(CTID_CLI_PATH).parent_path() / ".." / ".." / "python";
+  return std::filesystem::exists(dir / "ctid" / "plot.py") ? dir.string() : "";
+}
+
 }  // namespace ctid::cli::testing

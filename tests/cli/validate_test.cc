@@ -132,10 +132,7 @@ TEST_F(ValidateCommand, BadInputExitsTwoWithOneLine) {
 }
 
 TEST_F(ValidateCommand, PlotWritesPngFigures) {
-  const char* env = std::getenv("CTID_PYTHONPATH");
-  const std::filesystem::path built =
-      std::filesystem::path(CTID_CLI_PATH).parent_path() / ".." / ".." / "python" / "ctid";
-  if ((env == nullptr || *env == '\0') && !std::filesystem::exists(built / "plot.py")) {
+  if (testing::python_package().empty()) {
     GTEST_SKIP() << "the ctid Python package is not built (CTID_BUILD_PYTHON=OFF); set "
                     "CTID_PYTHONPATH to test --plot";
   }
