@@ -169,6 +169,12 @@ def bode(model, frf=None, covariance=None, omegas=None, confidence=0.95, title=N
         model_at_w = np.interp(np.log(w), np.log(omegas), phase)
         frf_phase += 360.0 * np.round((model_at_w - frf_phase) / 360.0)
         ax_phase.semilogx(w, frf_phase, "o", ms=2.5, color="C1", label="FRF")
+    # The axis follows the model and the FRF, not the band: a band reaching to |G| ~ 0 near an
+    # antiresonance would otherwise squash the plot to a few pixels.
+    shown = [_db(response)] + ([_db(np.asarray(frf.response))] if frf is not None else [])
+    shown = np.concatenate([v[np.isfinite(v)] for v in shown])
+    if shown.size:
+        ax_mag.set_ylim(shown.min() - 10.0, shown.max() + 10.0)
     ax_mag.set_ylabel("magnitude [dB]")
     ax_phase.set_ylabel("phase [deg]")
     ax_phase.set_xlabel("frequency [rad/s]")

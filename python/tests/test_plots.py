@@ -55,6 +55,9 @@ def test_bode_draws_the_model_frf_and_band(tmp_path, experiment, fitted):
     assert len(bands) == 1
     vertices = bands[0].get_paths()[0].vertices
     assert vertices[:, 1].min() <= model.get_ydata().min() + 1e-9
+    # The magnitude axis spans the model and the FRF with a 10 dB margin, whatever the band.
+    curves = np.concatenate([model.get_ydata(), measured.get_ydata()])
+    np.testing.assert_allclose(ax_mag.get_ylim(), (curves.min() - 10, curves.max() + 10))
 
 
 def test_confidence_band_matches_sampling(fitted):
