@@ -25,3 +25,30 @@ run("configuring the consumer" ${CMAKE_COMMAND} -S ${CONSUMER_DIR} -B ${WORK_DIR
 run("building the consumer" ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run("running the consumer" ${WORK_DIR}/build/consumer)
 message(STATUS "install test: find_package(ctid) consumer built and ran against ${prefix}")
+
+# With the Python package built, the installed tree imports under /usr/bin/python3 and the
+# installed CLI finds it for --plot (it looks in <prefix>/lib/ctid/python).
+if(EXISTS ${BUILD_DIR}/python/ctid/plot.py AND EXISTS /usr/bin/python3)
+  execute_process(
+    COMMAND ${CMAKE_COMMAND} -E env PYTHONPATH=${prefix}/lib/ctid/python
+            /usr/bin/python3 -c "import ctid, ctid.plot; assert ctid.__file__.startswith('${prefix}'); print(ctid.fit_percent([1.0, 2.0], [1.0, 2.0]))"
+    RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "^100")
+    message(FATAL_ERROR "install test: the installed Python package does not import: ${out}${err}")
+  endif()
+  if(EXISTS ${prefix}/bin/ctid)
+    file(WRITE ${WORK_DIR}/d.csv "t,u,y\n")
+    foreach(k RANGE 0 99)
+      math(EXPR u "(${k} * 37) % 11 - 5")
+      file(APPEND ${WORK_DIR}/d.csv "${k},${u},${u}\n")
+    endforeach()
+    execute_process(
+      COMMAND ${CMAKE_COMMAND} -E env --unset=CTID_PYTHONPATH
+              ${prefix}/bin/ctid frf ${WORK_DIR}/d.csv --plot ${WORK_DIR}/fig -q
+      RESULT_VARIABLE rc ERROR_VARIABLE err)
+    if(NOT rc EQUAL 0 OR NOT EXISTS ${WORK_DIR}/fig/frf.png)
+      message(FATAL_ERROR "install test: the installed ctid could not plot: ${err}")
+    endif()
+  endif()
+  message(STATUS "install test: the installed Python package imports and ctid --plot uses it")
+endif()
