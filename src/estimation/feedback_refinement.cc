@@ -8,6 +8,7 @@
 #include <limits>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -114,6 +115,19 @@ Eigen::MatrixXd sensitivity(const Eigen::VectorXd& rho, int n, int m, double del
   return jac;
 }
 
+// Structured step 1 with the 1/(s + a)^q filter at `pole`, then the bias-corrected IV
+// iterations from it; InvalidArgument when no stable start exists.
+StructuredIvResult iv_start(const SampledData& data, int n, int m, double delay,
+                            FeedbackRegressorOptions regressors, double pole,
+                            const StructuredIvOptions& iv) {
+  regressors.filter = RegressorFilter::kLinearIntegralFilter;
+  regressors.filter_pole = pole;
+  const FeedbackRegression reg = build_feedback_regression(data, n, m, delay, regressors);
+  const StructuredStep1Result st = estimate_structured_step1(reg);
+  require(std::isfinite(st.cost), "structured step 1 found no start");
+  return estimate_structured_step1_iv(data, st.loop, regressors, iv);
+}
+
 // Golden-section search for a minimum of f on [lo, hi] with `iterations` reductions; returns
 // the better of the two final interior points and its value.
 template <class Function>
@@ -202,7 +216,9 @@ OutputErrorResult refine_output_error(const SampledData& data, const DelayedFeed
   params.head(np) = rho;
   if (options.estimate_delay) params(np) = start.delay;
   ceres::Problem problem;
-  auto* cost = new ceres::DynamicNumericDiffCostFunction<OutputErrorFunctor, ceres::CENTRAL>(
+  // Forward differences: half the simulations of central ones; the minimiser is unaffected
+  // (the covariance below still uses central differences).
+  auto* cost = new ceres::DynamicNumericDiffCostFunction<OutputErrorFunctor, ceres::FORWARD>(
       new OutputErrorFunctor{&data, n, m, start.delay, options.hold, options.substeps,
                              options.estimate_delay});
   cost->AddParameterBlock(static_cast<int>(params.size()));
@@ -212,6 +228,9 @@ OutputErrorResult refine_output_error(const SampledData& data, const DelayedFeed
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
   so.max_num_iterations = options.max_iterations;
+  // The cost has long curved valleys (F and H trade at low frequency); non-monotonic steps
+  // cross them in far fewer iterations (measured: 200 -> ~60 at noise sd 1e-3).
+  so.use_nonmonotonic_steps = true;
   so.function_tolerance = 1e-12;
   so.parameter_tolerance = 1e-12;
   so.logging_type = ceres::SILENT;
@@ -248,6 +267,10 @@ void FeedbackDelayScanOptions::validate() const {
           "FeedbackDelayScanOptions: refined_iterations must be >= 1, got ", refined_iterations);
   regressors.validate();
   least_squares.validate();
+  iv.validate();
+  for (double pole : iv_filter_poles)
+    require(std::isfinite(pole) && pole > 0.0,
+            "FeedbackDelayScanOptions: iv_filter_poles must be positive, got ", pole);
 }
 
 FeedbackDelayScanResult scan_delay(const SampledData& data, int n, int m,
@@ -262,13 +285,30 @@ FeedbackDelayScanResult scan_delay(const SampledData& data, int n, int m,
           options.criterion == DelayCriterion::kRefinedOutputError) {
         const StructuredStep1Result st = estimate_structured_step1(reg);
         double rms = loop_output_rms(data, st.loop, options.hold, options.substeps);
-        if (options.criterion == DelayCriterion::kRefinedOutputError && std::isfinite(rms)) {
+        if (options.criterion == DelayCriterion::kRefinedOutputError) {
           OutputErrorOptions oe;
           oe.hold = options.hold;
           oe.substeps = options.substeps;
           oe.max_iterations = options.refined_iterations;
-          const OutputErrorResult fit = refine_output_error(data, st.loop, oe);
-          if (std::isfinite(fit.residual_rms)) rms = std::min(rms, fit.residual_rms);
+          std::vector<DelayedFeedbackLoop> starts;
+          if (std::isfinite(rms)) starts.push_back(st.loop);
+          StructuredIvOptions iv = options.iv;
+          iv.hold = options.hold;
+          iv.substeps = options.substeps;
+          for (double pole : options.iv_filter_poles) {
+            try {
+              const StructuredIvResult r =
+                  iv_start(data, n, m, delay, options.regressors, pole, iv);
+              if (std::isfinite(r.output_rms)) starts.push_back(r.loop);
+              rms = std::min(rms, r.output_rms);
+            } catch (const InvalidArgument&) {
+              // No start at this pole.
+            }
+          }
+          for (const DelayedFeedbackLoop& start : starts) {
+            const OutputErrorResult fit = refine_output_error(data, start, oe);
+            if (std::isfinite(fit.residual_rms)) rms = std::min(rms, fit.residual_rms);
+          }
         }
         return rms * rms;
       }
@@ -329,6 +369,10 @@ void FeedbackIdentificationOptions::validate() const {
   kronecker.validate();
   output_error.validate();
   structured.validate();
+  iv.validate();
+  for (double pole : iv_filter_poles)
+    require(std::isfinite(pole) && pole > 0.0,
+            "FeedbackIdentificationOptions: iv_filter_poles must be positive, got ", pole);
   require(screening_iterations >= 1,
           "FeedbackIdentificationOptions: screening_iterations must be >= 1, got ",
           screening_iterations);
@@ -413,6 +457,20 @@ FeedbackIdentificationResult identify_delayed_feedback(
       add("structured step 1", st.loop.forward, st.loop.feedback);
     } catch (const InvalidArgument&) {
       // Degenerate structured fit: no candidate.
+    }
+  }
+  {
+    StructuredIvOptions iv = options.iv;
+    iv.hold = hold;
+    iv.substeps = substeps;
+    for (double pole : options.iv_filter_poles) {
+      try {
+        const StructuredIvResult st = iv_start(data, n, m, delay, options.regressors, pole, iv);
+        if (std::isfinite(st.output_rms))
+          add("structured iv a = " + std::to_string(pole), st.loop.forward, st.loop.feedback);
+      } catch (const InvalidArgument&) {
+        // No stable start at this pole.
+      }
     }
   }
   if (r.candidates.empty()) {
@@ -599,6 +657,51 @@ void solve_block(Eigen::VectorXd& rho, int offset, int size, int n, int m, const
   if (x.allFinite()) rho.segment(offset, size) = x;
 }
 
+// The θ block and target with the nuisance columns projected out; `nuisance` is the
+// orthonormal basis used, so instruments can be projected the same way.
+struct ProjectedSystem {
+  Eigen::MatrixXd c;
+  Eigen::VectorXd y;
+  Eigen::MatrixXd nuisance;
+};
+
+ProjectedSystem project_nuisance(const FeedbackRegression& reg) {
+  ProjectedSystem s;
+  s.c = reg.regressor.leftCols(reg.theta_size);
+  s.y = reg.target;
+  s.nuisance.resize(reg.regressor.rows(), 0);
+  if (reg.nuisance_size > 0) {
+    Eigen::MatrixXd nuis = reg.regressor.rightCols(reg.nuisance_size);
+    for (Eigen::Index j = 0; j < nuis.cols(); ++j)
+      if (nuis.col(j).norm() > 0.0) nuis.col(j) /= nuis.col(j).norm();
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(nuis);
+    s.nuisance = qr.householderQ() * Eigen::MatrixXd::Identity(nuis.rows(), nuis.cols());
+    s.c -= s.nuisance * (s.nuisance.transpose() * s.c);
+    s.y -= s.nuisance * (s.nuisance.transpose() * s.y);
+  }
+  return s;
+}
+
+// Levenberg-Marquardt on |y - c θ(ρ)|² from rho (updated in place); returns the cost.
+double structured_least_squares(const Eigen::MatrixXd& c, const Eigen::VectorXd& y, int n, int m,
+                                int max_iterations, Eigen::VectorXd& rho) {
+  ceres::Problem problem;
+  auto* cost = new ceres::DynamicAutoDiffCostFunction<StructuredResidual, 8>(
+      new StructuredResidual{&c, &y, n, m});
+  cost->AddParameterBlock(2 * (n + m));
+  cost->SetNumResiduals(static_cast<int>(y.size()));
+  problem.AddResidualBlock(cost, nullptr, rho.data());
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = max_iterations;
+  so.function_tolerance = 1e-14;
+  so.parameter_tolerance = 1e-14;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  return 2.0 * summary.final_cost;
+}
+
 }  // namespace
 
 void StructuredStep1Options::validate() const {
@@ -615,23 +718,7 @@ StructuredStep1Result estimate_structured_step1(const FeedbackRegression& reg,
   options.validate();
   const int n = reg.forward_order;
   const int m = reg.feedback_order;
-  const int p = reg.theta_size;
-  Eigen::MatrixXd c = reg.regressor.leftCols(p);
-  Eigen::VectorXd y = reg.target;
-  if (reg.nuisance_size > 0) {
-    Eigen::MatrixXd nuis = reg.regressor.rightCols(reg.nuisance_size);
-    for (Eigen::Index j = 0; j < nuis.cols(); ++j)
-      if (nuis.col(j).norm() > 0.0) nuis.col(j) /= nuis.col(j).norm();
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(nuis);
-    const Eigen::MatrixXd q =
-        qr.householderQ() * Eigen::MatrixXd::Identity(nuis.rows(), nuis.cols());
-    c -= q * (q.transpose() * c);
-    y -= q * (q.transpose() * y);
-  }
-  // Column scaling keeps the alternating solves and LM well conditioned.
-  Eigen::VectorXd scale = c.colwise().norm().transpose();
-  for (Eigen::Index j = 0; j < scale.size(); ++j)
-    if (scale(j) == 0.0) scale(j) = 1.0;
+  const ProjectedSystem sys = project_nuisance(reg);
   StructuredStep1Result best;
   best.cost = std::numeric_limits<double>::infinity();
   for (double w : options.start_frequencies) {
@@ -643,32 +730,97 @@ StructuredStep1Result estimate_structured_step1(const FeedbackRegression& reg,
               std::pow(w, m - i);
     rho.segment(2 * n, m) = dh.head(m);
     for (int it = 0; it < options.alternating_iterations; ++it) {
-      solve_block(rho, 0, 2 * n, n, m, c, y);
-      solve_block(rho, 2 * n, 2 * m, n, m, c, y);
+      solve_block(rho, 0, 2 * n, n, m, sys.c, sys.y);
+      solve_block(rho, 2 * n, 2 * m, n, m, sys.c, sys.y);
     }
-    ceres::Problem problem;
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<StructuredResidual, 8>(
-        new StructuredResidual{&c, &y, n, m});
-    cost->AddParameterBlock(2 * (n + m));
-    cost->SetNumResiduals(static_cast<int>(y.size()));
-    problem.AddResidualBlock(cost, nullptr, rho.data());
-    ceres::Solver::Options so;
-    so.linear_solver_type = ceres::DENSE_QR;
-    so.max_num_iterations = options.max_iterations;
-    so.function_tolerance = 1e-14;
-    so.parameter_tolerance = 1e-14;
-    so.logging_type = ceres::SILENT;
-    ceres::Solver::Summary summary;
-    ceres::Solve(so, &problem, &summary);
+    const double j = structured_least_squares(sys.c, sys.y, n, m, options.max_iterations, rho);
     ++best.starts;
-    const double j = 2.0 * summary.final_cost;
     if (rho.allFinite() && j < best.cost) {
       best.cost = j;
       best.loop = loop_from_parameters(rho, n, m, reg.delay);
     }
   }
-  (void)scale;
   return best;
+}
+
+void StructuredIvOptions::validate() const {
+  require(iterations >= 1, "StructuredIvOptions: iterations must be >= 1, got ", iterations);
+  require(max_iterations >= 1, "StructuredIvOptions: max_iterations must be >= 1, got ",
+          max_iterations);
+  require(substeps >= 1, "StructuredIvOptions: substeps must be >= 1, got ", substeps);
+}
+
+StructuredIvResult estimate_structured_step1_iv(const SampledData& data,
+                                                const DelayedFeedbackLoop& start,
+                                                const FeedbackRegressorOptions& regressors,
+                                                const StructuredIvOptions& options) {
+  options.validate();
+  start.validate();
+  const int n = start.forward.denominator().degree();
+  const int m = start.feedback.denominator().degree();
+  const double delay = start.delay;
+  const FeedbackRegression reg = build_feedback_regression(data, n, m, delay, regressors);
+  const ProjectedSystem sys = project_nuisance(reg);
+  StructuredIvResult r;
+  r.loop = DelayedFeedbackLoop{start.forward.normalized(), start.feedback.normalized(), delay};
+  r.output_rms = loop_output_rms(data, r.loop, options.hold, options.substeps);
+  r.output_rms_history.push_back(r.output_rms);
+  if (!std::isfinite(r.output_rms)) {
+    r.message = "the start is unstable or overflows";
+    return r;
+  }
+  Eigen::VectorXd rho = loop_parameters(r.loop);
+  DelayedFeedbackLoop current = r.loop;
+  for (int it = 0; it < options.iterations; ++it) {
+    // Instruments: the regressors rebuilt from the current model's noise-free output.
+    const Eigen::VectorXd y_model =
+        simulate_delayed(to_delayed_state_space(current), data.input(), data.sample_time(),
+                         options.hold, DelayedSimulationOptions{options.substeps});
+    if (!y_model.allFinite() || y_model.cwiseAbs().maxCoeff() > 1e12) break;
+    const FeedbackRegression zreg = build_feedback_regression(
+        SampledData(data.sample_time(), data.input(), y_model), n, m, delay, regressors);
+    Eigen::MatrixXd z = zreg.regressor.leftCols(zreg.theta_size);
+    if (sys.nuisance.cols() > 0) z -= sys.nuisance * (sys.nuisance.transpose() * z);
+    for (Eigen::Index j = 0; j < z.cols(); ++j)
+      if (z.col(j).norm() > 0.0) z.col(j) /= z.col(j).norm();
+    // Two-stage least squares: the residual projected on the span of the instruments.
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(z);
+    const Eigen::MatrixXd qz = qr.householderQ() * Eigen::MatrixXd::Identity(z.rows(), z.cols());
+    const Eigen::MatrixXd c = qz.transpose() * sys.c;
+    const Eigen::VectorXd y = qz.transpose() * sys.y;
+    Eigen::VectorXd next = rho;
+    structured_least_squares(c, y, n, m, options.max_iterations, next);
+    if (options.bias_correction) {
+      // The same estimator applied to the model's own output: its departure from ρ is the
+      // systematic error of the regression (interpolation, filter transients), removed here.
+      const ProjectedSystem model_sys = project_nuisance(zreg);
+      const Eigen::MatrixXd cm = qz.transpose() * model_sys.c;
+      const Eigen::VectorXd ym = qz.transpose() * model_sys.y;
+      Eigen::VectorXd self = rho;
+      structured_least_squares(cm, ym, n, m, options.max_iterations, self);
+      next += rho - self;
+    }
+    ++r.iterations;
+    if (!next.allFinite()) break;
+    const DelayedFeedbackLoop candidate = loop_from_parameters(next, n, m, delay);
+    const double rms = loop_output_rms(data, candidate, options.hold, options.substeps);
+    r.output_rms_history.push_back(rms);
+    if (!std::isfinite(rms)) break;
+    const double change = (next - rho).norm() / std::max(1.0, rho.norm());
+    rho = next;
+    current = candidate;
+    if (rms < r.output_rms) {
+      r.output_rms = rms;
+      r.loop = candidate;
+    }
+    if (change < options.tolerance) {
+      r.converged = true;
+      break;
+    }
+  }
+  r.message = r.converged ? "instrumental-variable iterations converged"
+                          : "instrumental-variable iterations stopped at the limit";
+  return r;
 }
 
 }  // namespace ctid

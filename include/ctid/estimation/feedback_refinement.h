@@ -65,6 +65,40 @@ struct StructuredStep1Result {
 StructuredStep1Result estimate_structured_step1(const FeedbackRegression& regression,
                                                 const StructuredStep1Options& options = {});
 
+/// Iterated instrumental variables in the same 2(n+m) unknowns (beyond the paper, after
+/// Young's SRIVC): the noisy output inside the regressors makes the equation error biased,
+/// so each iteration rebuilds the regressors from the current loop's noise-free simulated
+/// output as instruments and minimises the projection of the equation error on their span
+/// (two-stage least squares, Levenberg-Marquardt from the current ρ). Δ stays fixed. The
+/// iterate with the smallest output-error rms is returned: it is a start for the output error.
+struct StructuredIvOptions {
+  int iterations = 4;
+  int max_iterations = 100;                 ///< Levenberg-Marquardt steps per iteration
+  double tolerance = 1e-8;                  ///< stop when |Δρ| / max(1, |ρ|) falls below
+  InputHold hold = InputHold::kFirstOrder;  ///< for the simulated instruments
+  /// Subtract the estimator's error on the current model's own simulated output (indirect
+  /// inference): ρ ← ρ + IV(data) − IV(simulated), so systematic regression errors cancel.
+  bool bias_correction = true;
+  int substeps = 4;
+  void validate() const;
+};
+
+struct StructuredIvResult {
+  DelayedFeedbackLoop loop{TransferFunction(Polynomial{0.0}, Polynomial{1.0}),
+                           TransferFunction(Polynomial{0.0}, Polynomial{1.0}), 0.0};
+  double output_rms = 0.0;                 ///< of the returned loop on the data
+  std::vector<double> output_rms_history;  ///< start, then each iterate (inf: unstable)
+  int iterations = 0;
+  bool converged = false;
+  std::string message;
+};
+
+/// Throws InvalidArgument for an invalid start or data too short for the regression.
+StructuredIvResult estimate_structured_step1_iv(const SampledData& data,
+                                                const DelayedFeedbackLoop& start,
+                                                const FeedbackRegressorOptions& regressors,
+                                                const StructuredIvOptions& options = {});
+
 struct OutputErrorOptions {
   InputHold hold = InputHold::kZeroOrder;  ///< how the measured input is continued
   int substeps = 4;                        ///< RK4 steps per sample in the simulations
@@ -103,6 +137,10 @@ enum class DelayCriterion {
 struct FeedbackDelayScanOptions {
   DelayCriterion criterion = DelayCriterion::kOutputError;
   int refined_iterations = 10;  ///< for kRefinedOutputError
+  /// kRefinedOutputError also refines from the bias-corrected IV start at each of these filter
+  /// poles and keeps the smallest cost (empty: the structured start only).
+  std::vector<double> iv_filter_poles;
+  StructuredIvOptions iv;
   double min_delay = 0.0;
   double max_delay = 1.0;
   int points = 41;     ///< grid (finer than δ is allowed: fractional delays)
@@ -145,6 +183,13 @@ struct FeedbackIdentificationOptions {
   /// Also start from the structured step 1 (equation error in the 2(n+m) true unknowns).
   bool structured_candidate = true;
   StructuredStep1Options structured;
+  /// Also start from the bias-corrected instrumental-variable iterations
+  /// (estimate_structured_step1_iv) after a structured step 1 with the 1/(s + a)^q filter at
+  /// each of these poles a; one candidate per pole ("structured iv a = ..."). Different poles
+  /// weight different bands and land in different basins; empty: none. The IV hold and
+  /// substeps follow output_error.
+  std::vector<double> iv_filter_poles{0.3, 0.5, 1.0, 2.0};
+  StructuredIvOptions iv;
   /// Output-error iterations given to every candidate before the best one continues up to
   /// output_error.max_iterations in total.
   int screening_iterations = 15;
