@@ -5,12 +5,17 @@
 // numbers these tests bound are discussed in docs/algorithms/section7-beam.md.
 #include <cmath>
 #include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "ctid/estimation/additive_srivc.h"
 #include "ctid/estimation/delay_scan.h"
+#include "ctid/estimation/mode_relocation.h"
+#include "ctid/filtering/filter_bank.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
@@ -165,28 +170,91 @@ TEST(BeamSection7, ThirtyDecibelsWeakModesDegradeAndTheirStandardErrorsSaySo) {
   }
 }
 
-// From the paper's start at 30 dB the weak modes need not reach the truth (the iteration can
-// stop at another stationary point, see the doc). Whatever it returns must then be detectable:
-// either every mode is within 3 standard errors of the truth, or the output-error fit is
-// worse than the one reached from the true modes.
-TEST(BeamSection7, ThirtyDecibelsFromThePapersStartIsRightOrVisiblyWorse) {
-  const SampledData data = beam_data(30.0, 9);
-  RefinedIvOptions from_paper = options_from(paper_start());
-  from_paper.input_delay = kDelay;
-  RefinedIvOptions from_truth = options_from(paper_estimate());
-  from_truth.input_delay = kDelay;
-  const EstimationResult r = additive_srivc(data, kOrders, from_paper);
-  const EstimationResult reference = additive_srivc(data, kOrders, from_truth);
-  bool within = r.modes.size() == 4;
+// From the paper's start at 30-50 dB the plain iteration stops with modes 3-4 near their
+// wrong starting frequencies (a stationary point with a slightly larger output error, see the
+// doc). Mode relocation moves them.
+ModeRelocationResult relocate(const SampledData& data) {
+  RefinedIvOptions options = options_from(paper_start());
+  options.input_delay = kDelay;
+  return additive_srivc_relocated(data, kOrders, options);
+}
+
+// |error| / standard error of the natural frequency and of the damping ratio.
+std::pair<double, double> errors_in_standard_errors(const EstimationResult& r,
+                                                    const ModalParameters& t) {
+  const ModalEstimate& m = closest_mode(r, t);
+  return {std::abs(m.value.natural_frequency - t.natural_frequency) /
+              m.standard_error.natural_frequency,
+          std::abs(m.value.damping_ratio - t.damping_ratio) / m.standard_error.damping_ratio};
+}
+
+// Output error of the true denominators with every numerator re-fitted by least squares:
+// what the truth's poles can explain of these data (an independent reference for the
+// relocation's projected criterion).
+double true_poles_projected_mse(const SampledData& data) {
+  const Eigen::VectorXd u = delay_samples(data.input(), kDelay);
+  const AdditiveModel g = true_beam();
+  Eigen::MatrixXd x(kSamples, g.size());
+  for (int i = 0; i < g.size(); ++i) {
+    x.col(i) = filter_derivatives(g[i].a, u, kSampleTime, Interpolation::zero_order_hold).col(0);
+  }
+  const Eigen::VectorXd norms = x.colwise().norm().transpose();
+  const Eigen::MatrixXd scaled = x * norms.cwiseInverse().asDiagonal();
+  const Eigen::VectorXd fitted = scaled * scaled.colPivHouseholderQr().solve(data.output());
+  return (data.output() - fitted).squaredNorm() / kSamples;
+}
+
+void expect_all_modes_within_three_standard_errors(double snr_db, std::uint64_t seed) {
+  const ModeRelocationResult r = relocate(beam_data(snr_db, seed));
+  const std::string where =
+      "SNR " + std::to_string(snr_db) + " dB, seed " + std::to_string(seed) + ": " + r.message;
+  ASSERT_TRUE(r.estimate.converged()) << where;
+  ASSERT_EQ(r.estimate.modes.size(), 4U) << where;
+  EXPECT_LE(r.estimate.mean_squared_error, r.initial_mean_squared_error) << where;
   for (const ModalParameters& t : true_modes()) {
-    if (!within) break;
-    const ModalEstimate& m = closest_mode(r, t);
-    within = std::abs(m.value.natural_frequency - t.natural_frequency) <
-             3.0 * m.standard_error.natural_frequency;
+    const auto [w, z] = errors_in_standard_errors(r.estimate, t);
+    EXPECT_LT(w, 3.0) << where << "; mode at " << t.natural_frequency << " rad/s";
+    EXPECT_LT(z, 3.0) << where << "; mode at " << t.natural_frequency << " rad/s";
   }
-  if (!within) {
-    EXPECT_GT(r.mean_squared_error, 1.001 * reference.mean_squared_error) << r.message;
+}
+
+TEST(BeamSection7, FortyDecibelsFromThePapersStartRelocationReachesEveryMode) {
+  for (std::uint64_t seed : {7U, 8U, 9U}) expect_all_modes_within_three_standard_errors(40.0, seed);
+}
+
+TEST(BeamSection7, FiftyDecibelsFromThePapersStartRelocationReachesEveryMode) {
+  for (std::uint64_t seed : {10U, 11U, 12U}) {
+    expect_all_modes_within_three_standard_errors(50.0, seed);
   }
+}
+
+// At 30 dB mode 4 explains about 9 noise variances of the output's sum of squares, about as
+// much as the largest noise peak a lightly damped mode can fit in the 0.5-500 Hz band. Modes
+// 1-3 must always be found; mode 4 must be found unless the data themselves prefer the
+// noise peak, i.e. unless the estimate's poles fit better than the true poles do.
+TEST(BeamSection7, ThirtyDecibelsFromThePapersStartRelocationFindsTheWeakModesTheDataSupport) {
+  const std::vector<ModalParameters> truth = true_modes();
+  int mode_4_found = 0;
+  for (std::uint64_t seed : {7U, 8U, 9U, 10U, 11U, 12U}) {
+    const SampledData data = beam_data(30.0, seed);
+    const ModeRelocationResult r = relocate(data);
+    const std::string where = "seed " + std::to_string(seed) + ": " + r.message;
+    ASSERT_TRUE(r.estimate.converged()) << where;
+    ASSERT_EQ(r.estimate.modes.size(), 4U) << where;
+    EXPECT_GE(r.relocations, 1) << where;
+    for (size_t i = 0; i < 3; ++i) {
+      const auto [w, z] = errors_in_standard_errors(r.estimate, truth[i]);
+      EXPECT_LT(w, 3.0) << where << "; mode " << i + 1;
+      EXPECT_LT(z, 3.0) << where << "; mode " << i + 1;
+    }
+    const auto [w4, z4] = errors_in_standard_errors(r.estimate, truth[3]);
+    if (w4 < 3.0 && z4 < 3.0) {
+      ++mode_4_found;
+    } else {
+      EXPECT_LT(r.projected_mean_squared_error, true_poles_projected_mse(data)) << where;
+    }
+  }
+  EXPECT_GE(mode_4_found, 5);
 }
 
 // The paper's own excitation, without dither, must be accepted: 1000 lines in the band make
