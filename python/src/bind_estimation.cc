@@ -13,6 +13,7 @@
 #include "ctid/estimation/feedback_separation.h"
 #include "ctid/estimation/feedback_validation.h"
 #include "ctid/estimation/initialization.h"
+#include "ctid/estimation/mode_relocation.h"
 #include "ctid/estimation/refined_iv_options.h"
 #include "ctid/estimation/srivc.h"
 #include "ctid/estimation/validation.h"
@@ -156,6 +157,77 @@ void bind_refined_iv(py::module_& m) {
       },
       py::arg("data"), py::arg("controller"), py::arg("orders"), py::arg("options") = py::none(),
       "Additive closed-loop refined IV (eq. 29 with instrument (20)).");
+
+  py::enum_<RelocationCriterion>(m, "RelocationCriterion", "How relocated estimates compare.")
+      .value("projected_output_error", RelocationCriterion::projected_output_error,
+             "Output error of the estimate's poles (numerators re-fitted).")
+      .value("output_error", RelocationCriterion::output_error, "The estimate's output error.");
+  OptionsClass<ModeRelocationOptions>(m, "ModeRelocationOptions",
+                                      "Options of additive_srivc_relocated.")
+      .field("max_relocations", &ModeRelocationOptions::max_relocations, "Moves kept at most.")
+      .field("peaks_per_round", &ModeRelocationOptions::peaks_per_round,
+             "Residual peaks examined per round.")
+      .field("min_peak_to_floor", &ModeRelocationOptions::min_peak_to_floor,
+             "Peak over local floor that counts.")
+      .field("min_input_level", &ModeRelocationOptions::min_input_level,
+             "Excited band: input level relative to its largest.")
+      .field("floor_half_width", &ModeRelocationOptions::floor_half_width,
+             "Half-width of the floor window [lines].")
+      .field("zero_padding", &ModeRelocationOptions::zero_padding, "DFT length / record length.")
+      .field("search_half_width", &ModeRelocationOptions::search_half_width,
+             "Peak search half-width [lines].")
+      .field("search_points", &ModeRelocationOptions::search_points, "Frequencies searched.")
+      .field("damping_ratios", &ModeRelocationOptions::damping_ratios, "Damping ratios tried.")
+      .field("trials_per_round", &ModeRelocationOptions::trials_per_round,
+             "Starts re-run per round.")
+      .field("criterion", &ModeRelocationOptions::criterion, "RelocationCriterion.")
+      .field("min_relative_decrease", &ModeRelocationOptions::min_relative_decrease,
+             "Relative decrease that keeps a move.")
+      .finish();
+  py::class_<RelocationTrial>(m, "RelocationTrial", "One relocated start re-run.")
+      .def_readonly("round", &RelocationTrial::round, "Round (0 first).")
+      .def_readonly("submodel", &RelocationTrial::submodel, "Submodel moved.")
+      .def_readonly("moved_from", &RelocationTrial::moved_from, "Its w_n before [rad/s].")
+      .def_readonly("peak_frequency", &RelocationTrial::peak_frequency, "Residual peak [rad/s].")
+      .def_readonly("peak_to_floor", &RelocationTrial::peak_to_floor, "Peak over floor.")
+      .def_readonly("start_frequency", &RelocationTrial::start_frequency, "Start w_n [rad/s].")
+      .def_readonly("start_damping", &RelocationTrial::start_damping, "Start damping ratio.")
+      .def_readonly("start_mean_squared_error", &RelocationTrial::start_mean_squared_error,
+                    "LS output error of the start.")
+      .def_readonly("mean_squared_error", &RelocationTrial::mean_squared_error,
+                    "Output error after the iteration.")
+      .def_readonly("projected_mean_squared_error", &RelocationTrial::projected_mean_squared_error,
+                    "The same, numerators re-fitted.")
+      .def_readonly("termination", &RelocationTrial::termination, "Termination.")
+      .def_readonly("accepted", &RelocationTrial::accepted, "Kept.");
+  py::class_<ModeRelocationResult>(m, "ModeRelocationResult", "Outcome of mode relocation.")
+      .def_readonly("estimate", &ModeRelocationResult::estimate, "Final EstimationResult.")
+      .def_readonly("initial_mean_squared_error", &ModeRelocationResult::initial_mean_squared_error,
+                    "Plain estimate's MSE.")
+      .def_readonly("initial_projected_mean_squared_error",
+                    &ModeRelocationResult::initial_projected_mean_squared_error,
+                    "Plain estimate's MSE, numerators re-fitted.")
+      .def_readonly("projected_mean_squared_error",
+                    &ModeRelocationResult::projected_mean_squared_error,
+                    "Final estimate's MSE, numerators re-fitted.")
+      .def_readonly("rounds", &ModeRelocationResult::rounds, "Rounds that looked for peaks.")
+      .def_readonly("relocations", &ModeRelocationResult::relocations, "Moves kept.")
+      .def_readonly("trials", &ModeRelocationResult::trials, "Every re-run, in order.")
+      .def_readonly("message", &ModeRelocationResult::message, "One sentence.");
+  m.def(
+      "additive_srivc_relocated",
+      [](const SampledData& data, const std::vector<SubmodelOrder>& orders,
+         const std::optional<RefinedIvOptions>& options,
+         const std::optional<ModeRelocationOptions>& relocation, const py::kwargs& kwargs) {
+        const auto o = refined("additive_srivc_relocated", options, kwargs);
+        const ModeRelocationOptions r = relocation.value_or(ModeRelocationOptions{});
+        py::gil_scoped_release release;
+        return additive_srivc_relocated(data, orders, o, r);
+      },
+      py::arg("data"), py::arg("orders"), py::arg("options") = py::none(),
+      py::arg("relocation") = py::none(),
+      "additive_srivc, then moves of second-order submodels to the residual's spectral peaks, "
+      "each kept only if the output error falls (a global restart).");
 
   py::class_<DelayScanResult>(m, "DelayScanResult", "Outcome of a delay scan.")
       .def_readonly("best", &DelayScanResult::best, "EstimationResult at the best delay.")
