@@ -237,6 +237,7 @@ struct DelayIdentificationOptions {
   FeedbackDelayScanOptions scan = [] {
     FeedbackDelayScanOptions s;
     s.criterion = DelayCriterion::kRefinedOutputError;
+    s.iv_filter_poles = {0.5};
     return s;
   }();
   FeedbackIdentificationOptions identification;
