@@ -293,12 +293,15 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
   out.initial_mean_squared_error = out.estimate.mean_squared_error;
   out.initial_projected_mean_squared_error = projected_mse(out.estimate, orders, data);
   EstimationResult current = out.estimate;
+  // The criterion's value of the current estimate. Projected criterion: the output error of
+  // the poles, at the iteration's fixed point or, if smaller, at the start it was reached
+  // from (when the moved mode stayed within the search window of it). The refined IV fixed
+  // point of a weak, very lightly damped mode can fit clearly worse than that nearby start,
+  // and a later move must beat the better of the two.
   double current_score =
       projected ? out.initial_projected_mean_squared_error : current.mean_squared_error;
-  // Projected criterion: the smallest output error seen for the current poles, at the start
-  // the search found for them or after the iteration. The refined IV fixed point of a weak
-  // mode can fit worse than that start, and a later move must beat the better of the two.
-  double current_best_seen = current_score;
+  out.initial_score = current_score;
+  out.score = current_score;
   const double h = data.sample_time();
   const Eigen::VectorXd& y = data.output();
   std::vector<int> movable_submodels;
@@ -329,7 +332,20 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
             .leftCols(qr.rank());
 
     std::vector<Candidate> candidates;
+    // A peak at a mode the model already has is that mode's misfit, for the iteration to fix;
+    // a second submodel there would make the equations of (29) nearly singular.
+    const double line = 2.0 * M_PI / (static_cast<double>(data.size()) * h);
+    std::vector<double> present;
+    for (int i = 0; i < model.size(); ++i) {
+      if (const std::optional<ModalParameters> m = model.modal_parameters(i)) {
+        present.push_back(m->natural_frequency);
+      }
+    }
     for (const Peak& peak : residual_peaks(base.fit.residual, excited, h, relocation)) {
+      const bool taken = std::any_of(present.begin(), present.end(), [&](double w) {
+        return std::abs(w - peak.frequency) < relocation.search_half_width * line;
+      });
+      if (taken) continue;
       const ModeStart start = search_mode(peak, q, base.fit.residual, u, h, search_m, relocation);
       if (start.reduction <= 0.0) continue;
       for (int moved : movable_submodels) {
@@ -384,18 +400,24 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
       trial.projected_mean_squared_error = projected_mse(r, orders, data);
       trial.termination = r.termination;
       out.trials.push_back(trial);
-      const double score = projected ? trial.projected_mean_squared_error : r.mean_squared_error;
-      const double seen = projected ? std::min(score, c.mean_squared_error) : score;
-      if (r.converged() && score < keep * current_score && seen < keep * current_best_seen) {
+      double score = projected ? trial.projected_mean_squared_error : r.mean_squared_error;
+      const std::optional<ModalParameters> after = r.model.modal_parameters(c.submodel);
+      const bool stayed = after && std::abs(after->natural_frequency - c.start.frequency) <
+                                       relocation.search_half_width * line;
+      if (projected && stayed) score = std::min(score, c.mean_squared_error);
+      out.trials.back().score = score;
+      // A trial that did not converge may replace a current estimate that did not either.
+      const bool settled = r.converged() || !current.converged();
+      if (settled && score < keep * current_score) {
         kept = std::move(r);
         kept_trial = out.trials.size() - 1;
         current_score = score;
-        current_best_seen = seen;
         break;
       }
     }
     if (!kept) break;
     out.trials[kept_trial].accepted = true;
+    out.score = current_score;
     ++out.relocations;
     current = std::move(*kept);
   }

@@ -19,9 +19,11 @@ namespace ctid {
 /// How a candidate estimate is compared with the current one.
 enum class RelocationCriterion {
   /// Mean squared output error with every numerator re-fitted by least squares for the
-  /// estimate's denominators (the output error of its poles). Default: for a weak, very
-  /// lightly damped mode the refined IV fixed point can fit worse than leaving the mode out
-  /// (docs/algorithms/section7-beam.md), so its own output error misranks the poles.
+  /// estimate's denominators (the output error of its poles), or that of the start the
+  /// iteration was run from if smaller and the moved mode stayed within the search window.
+  /// Default: for a weak, very lightly damped mode the refined IV fixed point can fit worse
+  /// than leaving the mode out (docs/algorithms/section7-beam.md), so the fixed point's own
+  /// output error misranks the poles.
   projected_output_error,
   /// The estimate's own mean squared output error (EstimationResult::mean_squared_error):
   /// the final estimate's output error never exceeds the plain one.
@@ -78,6 +80,7 @@ struct RelocationTrial {
   double start_mean_squared_error = 0.0;      ///< least-squares output error of the start
   double mean_squared_error = 0.0;            ///< after the iteration
   double projected_mean_squared_error = 0.0;  ///< after the iteration, numerators re-fitted
+  double score = 0.0;  ///< the criterion's value for this trial (see RelocationCriterion)
   Termination termination = Termination::iteration_limit;
   bool accepted = false;
 };
@@ -90,19 +93,21 @@ struct ModeRelocationResult {
   double initial_mean_squared_error = 0.0;            ///< of the plain estimate, before any move
   double initial_projected_mean_squared_error = 0.0;  ///< the same, numerators re-fitted
   double projected_mean_squared_error = 0.0;          ///< of the final estimate
-  int rounds = 0;                                     ///< rounds that looked for peaks
-  int relocations = 0;                                ///< moves kept
-  std::vector<RelocationTrial> trials;                ///< every re-run, in order
-  std::string message;                                ///< one sentence: what was tried and kept
+  double initial_score = 0.0;           ///< the criterion's value for the plain estimate
+  double score = 0.0;                   ///< ... and for the kept one (never larger)
+  int rounds = 0;                       ///< rounds that looked for peaks
+  int relocations = 0;                  ///< moves kept
+  std::vector<RelocationTrial> trials;  ///< every re-run, in order
+  std::string message;                  ///< one sentence: what was tried and kept
 };
 
 /// additive_srivc (open loop, options.input_delay fixed), then up to max_relocations rounds
 /// of: peaks of the residual (numerators re-fitted) on the excited band; for each, the mode
 /// (frequency, damping) that explains most of it; candidate starts with one movable submodel
 /// (second order, no integrators) replaced by that mode and every numerator re-fitted; the
-/// iteration from the best candidates; the first that converges and is better by
-/// ModeRelocationOptions::criterion is kept. Deterministic. Throws InvalidArgument for bad
-/// options or data (as additive_srivc does).
+/// iteration from the best candidates; the first that converges (or any, while the current
+/// estimate has not converged) and is better by ModeRelocationOptions::criterion is kept.
+/// Deterministic. Throws InvalidArgument for bad options or data (as additive_srivc does).
 ///
 /// With a delay scan: run additive_srivc_delay_scan first, then this with
 /// options.input_delay = scan.best.input_delay and options.initial_model = scan.best.model
