@@ -3,13 +3,16 @@
 // Δ = 0.5 s, δ = 50 ms, smooth multisine continued linearly, 30 s): step 1 by batch QR and by
 // RLS, the two separations on the step-1 polynomials, one output-error refinement from a start
 // 2 % off, and the whole pipeline. Time per call.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
 #include "ctid/estimation/feedback_refinement.h"
+#include "ctid/study/monte_carlo.h"
 
 namespace {
 
@@ -100,3 +103,56 @@ void BM_Pipeline(benchmark::State& state) {
 BENCHMARK(BM_Pipeline)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
+
+// Monte Carlo of consistency: M noisy copies of the record (white output noise of sd σ, run
+// r seeded by ctid::run_seed(2024, level, r), runs in parallel with results stored by index
+// so the outcome equals the serial one), the whole pipeline on each at the true Δ. Printed per
+// parameter: mean error over its standard error σ_CR/√M (no bias: |z| < 3) and the sample
+// variance over the Cramér-Rao variance at the truth (efficiency: ≈ 1). Run with
+//   build/benchmarks/feedback_benchmark --benchmark_filter=MonteCarlo
+void BM_PipelineMonteCarlo(benchmark::State& state) {
+  const double sigma = static_cast<double>(state.range(0)) * 1e-5;
+  const int runs = static_cast<int>(state.range(1));
+  const ctid::DelayedFeedbackLoop loop = paper_loop();
+  const Eigen::VectorXd truth = ctid::loop_parameters(loop);
+  const ctid::SeparabilityReport crb = ctid::cramer_rao_bound(
+      loop, record().input(), record().sample_time(), ctid::InputHold::kFirstOrder, sigma);
+  ctid::FeedbackIdentificationOptions o;
+  o.output_error.hold = ctid::InputHold::kFirstOrder;
+  Eigen::MatrixXd errors(truth.size(), runs);
+  for (auto _ : state) {
+    ctid::parallel_for(runs, 2, [&](int r) {
+      std::mt19937_64 rng(ctid::run_seed(2024, static_cast<int>(state.range(0)), r));
+      std::normal_distribution<double> normal(0.0, sigma);
+      Eigen::VectorXd y = record().output();
+      for (Eigen::Index k = 0; k < y.size(); ++k) y(k) += normal(rng);
+      const ctid::FeedbackIdentificationResult fit = ctid::identify_delayed_feedback(
+          ctid::SampledData(record().sample_time(), record().input(), y), 3, 3, 0.5, o);
+      errors.col(r) = ctid::loop_parameters(fit.loop) - truth;
+    });
+  }
+  const Eigen::VectorXd mean = errors.rowwise().mean();
+  const Eigen::MatrixXd centred = errors.colwise() - mean;
+  const Eigen::VectorXd variance = centred.rowwise().squaredNorm() / (runs - 1);
+  double max_z = 0.0, min_ratio = 1e300, max_ratio = 0.0;
+  std::printf("sigma %.1e, %d runs\n  i   truth   mean error   z(mean)   var/CR var\n", sigma,
+              runs);
+  for (Eigen::Index i = 0; i < truth.size(); ++i) {
+    const double z = mean(i) / (crb.standard_deviations(i) / std::sqrt(runs));
+    const double ratio = variance(i) / (crb.standard_deviations(i) * crb.standard_deviations(i));
+    std::printf("%3d %7.3f %12.3e %9.2f %10.2f\n", static_cast<int>(i), truth(i), mean(i), z,
+                ratio);
+    max_z = std::max(max_z, std::abs(z));
+    min_ratio = std::min(min_ratio, ratio);
+    max_ratio = std::max(max_ratio, ratio);
+  }
+  state.counters["max_abs_z"] = max_z;
+  state.counters["min_var_ratio"] = min_ratio;
+  state.counters["max_var_ratio"] = max_ratio;
+}
+// σ in units of 1e-5 (10: 1e-4, 30: 3e-4, 100: 1e-3), runs.
+BENCHMARK(BM_PipelineMonteCarlo)
+    ->Args({10, 40})
+    ->Args({30, 40})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <utility>
@@ -113,6 +114,12 @@ Eigen::MatrixXd sensitivity(const Eigen::VectorXd& rho, int n, int m, double del
                  (2 * h);
   }
   return jac;
+}
+
+std::string short_number(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", x);
+  return buffer;
 }
 
 // Structured step 1 with the 1/(s + a)^q filter at `pole`, then the bias-corrected IV
@@ -467,7 +474,7 @@ FeedbackIdentificationResult identify_delayed_feedback(
       try {
         const StructuredIvResult st = iv_start(data, n, m, delay, options.regressors, pole, iv);
         if (std::isfinite(st.output_rms))
-          add("structured iv a = " + std::to_string(pole), st.loop.forward, st.loop.feedback);
+          add("structured iv a = " + short_number(pole), st.loop.forward, st.loop.feedback);
       } catch (const InvalidArgument&) {
         // No stable start at this pole.
       }
