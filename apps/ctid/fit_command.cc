@@ -19,6 +19,7 @@
 #include "ctid/estimation/additive_srivc.h"
 #include "ctid/estimation/clsrivc.h"
 #include "ctid/estimation/delay_scan.h"
+#include "ctid/estimation/mode_relocation.h"
 #include "ctid/estimation/srivc.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/io/json.h"
@@ -50,6 +51,7 @@ struct FitFlags {
   std::string interpolation = "foh";
   std::string noise = "coloured";
   bool history = false;
+  bool relocate_modes = false;
 
   std::string output;
   std::string model_output;
@@ -192,6 +194,37 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
   for (const std::string& warning : r.checks.warnings) out << "warning: " << warning << "\n";
 }
 
+// What relocation tried and kept (frequencies in rad/s, as everywhere in the result).
+nlohmann::json relocation_json(const ModeRelocationResult& r) {
+  auto number = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
+  nlohmann::json trials = nlohmann::json::array();
+  for (const RelocationTrial& t : r.trials) {
+    trials.push_back({{"round", t.round},
+                      {"submodel", t.submodel},
+                      {"moved_from", number(t.moved_from)},
+                      {"peak_frequency", number(t.peak_frequency)},
+                      {"peak_to_floor", number(t.peak_to_floor)},
+                      {"start_frequency", number(t.start_frequency)},
+                      {"start_damping", number(t.start_damping)},
+                      {"start_mean_squared_error", number(t.start_mean_squared_error)},
+                      {"mean_squared_error", number(t.mean_squared_error)},
+                      {"projected_mean_squared_error", number(t.projected_mean_squared_error)},
+                      {"score", number(t.score)},
+                      {"termination", to_string(t.termination)},
+                      {"accepted", t.accepted}});
+  }
+  return {{"criterion", "projected_output_error"},
+          {"relocations", r.relocations},
+          {"rounds", r.rounds},
+          {"initial_mean_squared_error", number(r.initial_mean_squared_error)},
+          {"initial_projected_mean_squared_error", number(r.initial_projected_mean_squared_error)},
+          {"projected_mean_squared_error", number(r.projected_mean_squared_error)},
+          {"initial_score", number(r.initial_score)},
+          {"score", number(r.score)},
+          {"message", r.message},
+          {"trials", trials}};
+}
+
 void refuse_existing(const std::string& path, bool force, const std::string& flag) {
   if (path.empty() || force) return;
   if (std::filesystem::exists(path)) {
@@ -206,6 +239,13 @@ void run_fit(const FitFlags& f, const CLI::App& app) {
   }
   std::optional<std::pair<int, int>> scan;
   if (!f.delay_scan.empty()) scan = parse_delay_range(f.delay_scan);
+  if (f.relocate_modes && !s.additive) {
+    usage_error(
+        "--relocate-modes moves submodels of an additive model; give --modes or --submodel");
+  }
+  if (f.relocate_modes && !f.controller.empty()) {
+    usage_error("--relocate-modes is for open-loop data; drop --controller");
+  }
   refuse_existing(f.output, f.force, "--output");
   refuse_existing(f.model_output, f.force, "--model-output");
   std::filesystem::path package;
@@ -254,6 +294,16 @@ void run_fit(const FitFlags& f, const CLI::App& app) {
   } else {
     fitted = estimate(f.delay);
   }
+  // Relocation starts from the plain (or delay-scanned) estimate at its delay, so that
+  // iteration stops at once and the delay scan is not repeated for every move.
+  std::optional<ModeRelocationResult> relocated;
+  if (f.relocate_modes) {
+    RefinedIvOptions o = options;
+    o.input_delay = fitted->input_delay;
+    o.initial_model = fitted->model;
+    relocated = additive_srivc_relocated(data, s.orders, o);
+    fitted = relocated->estimate;
+  }
   const EstimationResult& result = *fitted;
 
   if (!f.output.empty()) {
@@ -275,13 +325,17 @@ void run_fit(const FitFlags& f, const CLI::App& app) {
                                 {"mean_squared_errors", mse},
                                 {"terminations", terminations}};
     }
+    if (relocated) document["mode_relocation"] = relocation_json(*relocated);
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
   if (!f.model_output.empty()) {
     io::write_model(f.model_output, io::ContinuousModel(result.model),
                     f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
-  if (!f.quiet) print_summary(std::cout, result, estimator, data, f.data.file);
+  if (!f.quiet) {
+    print_summary(std::cout, result, estimator, data, f.data.file);
+    if (relocated) std::cout << "mode relocation: " << relocated->message << "\n";
+  }
 
   if (!f.plot.empty()) {
     const Eigen::VectorXd simulated = model_output(result.model, data.input(), data.sample_time());
@@ -374,6 +428,11 @@ Command add_fit_command(CLI::App& parent) {
       ->capture_default_str()
       ->group("Iteration");
   app->add_flag("--history", f.history, "Record every iteration's parameters in the result")
+      ->group("Iteration");
+  app->add_flag("--relocate-modes", f.relocate_modes,
+                "Additive, open loop: after the fit, move second-order submodels to peaks of "
+                "the residual spectrum and keep moves that fit better (finds weak, lightly "
+                "damped modes a wrong start missed)")
       ->group("Iteration");
 
   app->add_option("--output,-o", f.output, "Result JSON to write (everything in the estimate)")

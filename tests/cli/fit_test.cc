@@ -1,10 +1,12 @@
 // `ctid fit` run as a user would: data simulated by `ctid simulate` from the shipped
 // examples, fitted, and the JSON's parameters compared with the true ones; bad input exits
 // 2 with one line; files are never replaced without --force; --plot writes real PNGs.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
+#include <sstream>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -170,6 +172,71 @@ TEST_F(FitCommand, FittedModelIsReadBySimulateAndAnInitialModelIsAccepted) {
                            "-q", "--max-iterations", "5", "--interpolation", "zoh"});
   ASSERT_EQ(again.status, 0) << again.err;
   EXPECT_LE(read("r2.json").at("iterations").get<int>(), 5);
+}
+
+// Three modes, h = 1/512 s: strong at 2 Hz, moderate at 9 Hz, weak and very lightly damped
+// at 31.3 Hz (the beam of Section 7 in small); the start puts the weak mode at 20 Hz.
+std::string three_modes(double weak_hz) {
+  auto mode = [](double hz, double zeta, double gain) {
+    const double w = 2.0 * M_PI * hz;
+    std::ostringstream out;
+    out.precision(17);
+    out << R"({"denominator_ascending": [1, )" << 2.0 * zeta / w << ", " << 1.0 / (w * w)
+        << R"(], "numerator_ascending": [)" << gain << R"(], "integrators": 0})";
+    return out.str();
+  };
+  return R"({"type": "additive_model", "input_delay": 0, "submodels": [)" + mode(2.0, 0.01, 1.0) +
+         ", " + mode(9.0, 2e-3, 0.02) + ", " +
+         mode(weak_hz, weak_hz == 31.3 ? 5e-4 : 1e-3, weak_hz == 31.3 ? 1e-3 : 1e-2) + "]}";
+}
+
+TEST_F(FitCommand, RelocateModesFindsAWeakModeTheStartMissed) {
+  write("g.json", three_modes(31.3));
+  write("start.json", three_modes(20.0));
+  const auto s = ctid({"simulate",    "-m",
+                       "g.json",      "--excitation",
+                       "multisine",   "--samples",
+                       "2048",        "-T",
+                       "0.001953125", "--min-frequency-hz",
+                       "0.25",        "--max-frequency-hz",
+                       "60",          "--seed",
+                       "3",           "--snr",
+                       "30",          "--noise-seed",
+                       "1",           "-o",
+                       "d.csv",       "-q"});
+  ASSERT_EQ(s.status, 0) << s.err;
+  // The weak mode's estimate nearest 31.3 Hz, in standard errors from it.
+  auto weak_error = [&](const nlohmann::json& j) {
+    double best = INFINITY;
+    for (const auto& m : j.at("modes")) {
+      const double e = std::abs(m.at("natural_frequency_hz").get<double>() - 31.3) /
+                       m.at("natural_frequency_hz_standard_error").get<double>();
+      best = std::min(best, e);
+    }
+    return best;
+  };
+  const auto plain = ctid({"fit", "d.csv", "--modes", "3", "--initial", "start.json", "--noise",
+                           "white", "-o", "plain.json", "-q"});
+  ASSERT_EQ(plain.status, 0) << plain.err;
+  EXPECT_GT(weak_error(read("plain.json")), 10.0);
+  EXPECT_FALSE(read("plain.json").contains("mode_relocation"));
+
+  const auto r = ctid({"fit", "d.csv", "--modes", "3", "--initial", "start.json", "--noise",
+                       "white", "--relocate-modes", "-o", "r.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = read("r.json");
+  EXPECT_EQ(j.at("termination"), "converged");
+  EXPECT_LT(weak_error(j), 3.0);
+  const nlohmann::json& report = j.at("mode_relocation");
+  EXPECT_GE(report.at("relocations").get<int>(), 1);
+  EXPECT_LE(report.at("score").get<double>(), report.at("initial_score").get<double>());
+  int accepted = 0;
+  for (const auto& t : report.at("trials")) accepted += t.at("accepted").get<bool>() ? 1 : 0;
+  EXPECT_EQ(accepted, report.at("relocations").get<int>());
+  EXPECT_THAT(r.out, HasSubstr("mode relocation: "));
+  // Only additive, open-loop fits can relocate.
+  expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--zeros", "0", "--relocate-modes"}),
+                   "--relocate-modes moves submodels of an additive model");
 }
 
 TEST_F(FitCommand, BadInputExitsTwoWithOneLine) {
