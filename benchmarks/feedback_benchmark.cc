@@ -154,5 +154,6 @@ void BM_PipelineMonteCarlo(benchmark::State& state) {
 BENCHMARK(BM_PipelineMonteCarlo)
     ->Args({10, 40})
     ->Args({30, 40})
+    ->Args({100, 20})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
