@@ -1,6 +1,6 @@
-// Mode relocation for additive estimates: residual periodogram peaks, a least-squares search
-// for a start at each peak, the refined IV iteration from the best starts, kept only if the
-// output error falls.
+// Mode relocation for additive estimates: residual periodogram peaks in the excited band, a
+// least-squares search for a start at each peak, the refined IV iteration from the best
+// starts, a move kept only if the poles fit better.
 #include "ctid/estimation/mode_relocation.h"
 
 #include <algorithm>

@@ -1,6 +1,7 @@
 // Mode relocation (mode_relocation.h) on a small three-mode system: a weak, lightly damped
 // mode started far from the truth makes the additive iteration stop at a wrong stationary
 // point; relocation must move it to the truth without ever worsening its criterion.
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -124,6 +125,11 @@ TEST(ModeRelocation, WeakModeStartedFarOffIsMovedToTheTruth) {
       }
     }
     EXPECT_TRUE(moved) << r.message;
+    // Peaks are taken only in the excited band (0.25-60 Hz; the floor's window blurs its edge
+    // by half of +-64 lines of 0.25 Hz), never up to the Nyquist frequency (256 Hz).
+    for (const RelocationTrial& t : r.trials) {
+      EXPECT_LT(t.peak_frequency / (2.0 * M_PI), 60.0 + 8.0) << r.message;
+    }
     EXPECT_THAT(r.message, HasSubstr("relocation(s) kept"));
   }
 }
@@ -198,6 +204,22 @@ TEST(ModeRelocation, OnlySecondOrderSubmodelsWithoutIntegratorsMove) {
   const ModeRelocationResult r = additive_srivc_relocated(SampledData(0.01, u, y), orders);
   EXPECT_EQ(r.rounds, 0);
   EXPECT_EQ(r.relocations, 0);
+}
+
+// Outside the excited band a lightly damped mode can only fit the start-up transient, i.e.
+// noise; with the band check off (min_input_level = 0) such peaks are tried.
+TEST(ModeRelocation, PeaksOutsideTheExcitedBandAreTriedOnlyWithoutTheBandCheck) {
+  const SampledData d = data(30.0, 2);
+  auto highest_peak_hz = [&](double level) {
+    ModeRelocationOptions o;
+    o.min_input_level = level;
+    const ModeRelocationResult r = additive_srivc_relocated(d, kOrders, options_from(20.0), o);
+    double highest = 0.0;
+    for (const RelocationTrial& t : r.trials) highest = std::max(highest, t.peak_frequency);
+    return highest / (2.0 * M_PI);
+  };
+  EXPECT_LT(highest_peak_hz(1e-2), 68.0);
+  EXPECT_GT(highest_peak_hz(0.0), 68.0);
 }
 
 TEST(ModeRelocation, OptionsNameTheBadField) {
