@@ -138,7 +138,7 @@ std::vector<Peak> residual_peaks(const Eigen::VectorXd& r, const std::vector<boo
   Eigen::VectorXcd spectrum;
   fft.fwd(spectrum, padded);
   const Eigen::Index half = length / 2;  // bins 1..half-1 are inside (0, Nyquist)
-  if (half < 3) return {};
+  if (half < 3 || n < 4) return {};
   Eigen::VectorXd power(half);
   for (Eigen::Index k = 0; k < half; ++k) power(k) = std::norm(spectrum(k));
   // Local floor on the record's own lines (every zero_padding-th bin), by medians.
