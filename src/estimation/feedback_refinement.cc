@@ -380,6 +380,10 @@ void FeedbackIdentificationOptions::validate() const {
   for (double pole : iv_filter_poles)
     require(std::isfinite(pole) && pole > 0.0,
             "FeedbackIdentificationOptions: iv_filter_poles must be positive, got ", pole);
+  for (double fraction : continuation_fractions)
+    require(std::isfinite(fraction) && fraction > 0.0 && fraction < 1.0,
+            "FeedbackIdentificationOptions: continuation_fractions must lie in (0, 1), got ",
+            fraction);
   require(screening_iterations >= 1,
           "FeedbackIdentificationOptions: screening_iterations must be >= 1, got ",
           screening_iterations);
@@ -492,7 +496,20 @@ FeedbackIdentificationResult identify_delayed_feedback(
   for (std::size_t i = 0; i < r.candidates.size(); ++i) {
     SeparationCandidateReport& c = r.candidates[i];
     if (options.refine && std::isfinite(c.start_rms)) {
-      c.refinement = refine_output_error(data, c.start, screen);
+      // Continuation over the record length: the first part is dominated by the transient,
+      // whose cost has fewer local minima; each stage starts where the shorter one ended.
+      DelayedFeedbackLoop current = c.start;
+      for (double fraction : options.continuation_fractions) {
+        const auto samples = static_cast<Eigen::Index>(std::lround(fraction * data.size()));
+        if (samples <= 2 * (n + m) + 1 || samples >= data.size() ||
+            static_cast<double>(samples - 1) * data.sample_time() <= delay)
+          continue;
+        const SampledData part(data.sample_time(), data.input().head(samples),
+                               data.output().head(samples));
+        const OutputErrorResult stage = refine_output_error(part, current, screen);
+        if (std::isfinite(stage.residual_rms)) current = stage.loop;
+      }
+      c.refinement = refine_output_error(data, current, screen);
       c.refined_rms = std::isfinite(c.refinement.residual_rms) ? c.refinement.residual_rms : inf;
     }
     if (c.refined_rms < best || r.best_candidate < 0) {

@@ -73,6 +73,10 @@ TEST(FeedbackIv, BadInputIsNamed) {
   f.iv_filter_poles = {-1.0};
   EXPECT_THAT([&] { f.validate(); },
               testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("iv_filter_poles")));
+  f.iv_filter_poles = {1.0};
+  f.continuation_fractions = {1.5};
+  EXPECT_THAT([&] { f.validate(); }, testing::ThrowsMessage<InvalidArgument>(
+                                         testing::HasSubstr("continuation_fractions")));
   const SampledData tiny(0.05, Eigen::VectorXd::Ones(12), Eigen::VectorXd::Ones(12));
   EXPECT_THROW(estimate_structured_step1_iv(tiny, paper_loop(), regressors()), InvalidArgument);
 }

@@ -193,6 +193,10 @@ struct FeedbackIdentificationOptions {
   /// Output-error iterations given to every candidate before the best one continues up to
   /// output_error.max_iterations in total.
   int screening_iterations = 15;
+  /// Before its screening on the whole record, each candidate is refined (screening_iterations
+  /// each) on the first fraction of the record for each of these fractions in turn
+  /// (continuation over the record length); empty: straight to the whole record.
+  std::vector<double> continuation_fractions;
   bool refine = true;  ///< false: keep the candidate with the smallest step-1 output error
   void validate() const;
 };
