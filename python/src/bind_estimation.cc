@@ -468,19 +468,58 @@ void bind_feedback(py::module_& m) {
           "cramer_rao_standard_deviations",
           [](const FeedbackIdentificationResult& r) { return r.cramer_rao.standard_deviations; },
           "Cramer-Rao standard deviations of [a_F | b_F | a_H | b_H] at the estimate.");
+  const FeedbackIdentificationOptions default_identification;
   m.def(
       "identify_delayed_feedback",
       [](const SampledData& data, int forward_order, int feedback_order, double delay,
-         InputHold hold, double filter_pole) {
+         InputHold hold, double filter_pole, const std::vector<double>& iv_filter_poles) {
         FeedbackIdentificationOptions options;
         options.output_error.hold = hold;
         options.regressors.filter_pole = filter_pole;
+        options.iv_filter_poles = iv_filter_poles;
+        options.validate();
+        py::gil_scoped_release release;
         return identify_delayed_feedback(data, forward_order, feedback_order, delay, options);
       },
       py::arg("data"), py::arg("forward_order"), py::arg("feedback_order"), py::arg("delay"),
       py::arg("hold") = InputHold::kFirstOrder, py::arg("filter_pole") = 1.0,
+      py::arg("iv_filter_poles") = default_identification.iv_filter_poles,
       "F and H of a loop with a delayed feedback: step 1, separation candidates (GCD, min J, "
-      "structured step 1), output-error refinement from each; the smallest output error wins.");
+      "structured step 1, a bias-corrected IV start per pole in iv_filter_poles), output-error "
+      "refinement from each; the smallest output error wins.");
+
+  OptionsClass<StructuredIvOptions>(m, "StructuredIvOptions",
+                                    "Options of estimate_structured_step1_iv.")
+      .field("iterations", &StructuredIvOptions::iterations, "IV iterations.")
+      .field("max_iterations", &StructuredIvOptions::max_iterations,
+             "Levenberg-Marquardt steps per iteration.")
+      .field("tolerance", &StructuredIvOptions::tolerance, "|d rho| / max(1, |rho|) to stop.")
+      .field("hold", &StructuredIvOptions::hold, "InputHold of the simulated instruments.")
+      .field("bias_correction", &StructuredIvOptions::bias_correction,
+             "Subtract the estimator's error on the model's own simulated output.")
+      .field("substeps", &StructuredIvOptions::substeps, "RK4 steps per sample.")
+      .finish();
+  py::class_<StructuredIvResult>(m, "StructuredIvResult", "Outcome of the structured IV.")
+      .def_readonly("loop", &StructuredIvResult::loop, "DelayedFeedbackLoop.")
+      .def_readonly("output_rms", &StructuredIvResult::output_rms, "Output-error rms.")
+      .def_readonly("output_rms_history", &StructuredIvResult::output_rms_history,
+                    "Start, then each iterate (inf: unstable).")
+      .def_readonly("iterations", &StructuredIvResult::iterations, "Iterations run.")
+      .def_readonly("converged", &StructuredIvResult::converged, "Tolerance reached.")
+      .def_readonly("message", &StructuredIvResult::message, "Summary.");
+  m.def(
+      "estimate_structured_step1_iv",
+      [](const SampledData& data, const DelayedFeedbackLoop& start,
+         const FeedbackRegressorOptions& regressors,
+         const std::optional<StructuredIvOptions>& options, const py::kwargs& kwargs) {
+        const auto o =
+            options_from<StructuredIvOptions>("estimate_structured_step1_iv", options, kwargs);
+        py::gil_scoped_release release;
+        return estimate_structured_step1_iv(data, start, regressors, o);
+      },
+      py::arg("data"), py::arg("start"), py::arg("regressors"), py::arg("options") = py::none(),
+      "Bias-corrected instrumental variables in F and H's 2(n+m) unknowns, from a start loop: "
+      "instruments from the loop's simulated output; the best iterate by output error.");
 }
 
 // Step 2 (separation), refinement, quality and validation of the delayed-feedback methods

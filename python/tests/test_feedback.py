@@ -78,3 +78,45 @@ def test_white_noise_validation_of_a_perfect_estimate_is_zero():
     assert comparison.expected_mse == pytest.approx(0.0, abs=1e-30)
     assert comparison.estimate_stable
     assert len(comparison.truth) == 200
+
+
+def informative_record(delay, noise_sd=0.0, seed=0):
+    """30 s of a smooth multisine (8 harmonics of a 15-s period), continued linearly between
+    samples of 50 ms, through the loop with feedback delay `delay`."""
+    h = 0.05
+    rng = np.random.default_rng(3)
+    phases = rng.uniform(0, 2 * np.pi, 8)
+    t = h * np.arange(601)
+    u = sum(np.cos(2 * np.pi * j * t / 15.0 + phases[j - 1]) for j in range(1, 9)) / 2.0
+    loop = ctid.DelayedFeedbackLoop(F, H, delay)
+    y = ctid.simulate_delayed(ctid.to_delayed_state_space(loop), u, h, ctid.InputHold.first_order,
+                              substeps=4)
+    y = y + np.random.default_rng(seed).normal(0.0, noise_sd, y.size) if noise_sd else y
+    return ctid.SampledData(h, u, y)
+
+
+def test_pipeline_recovers_f_and_h_at_a_fractional_delay():
+    data = informative_record(0.523)
+    result = ctid.identify_delayed_feedback(data, 3, 3, 0.523)
+    assert result.output_rms < 1e-8, result.message
+    assert_same_transfer_function(result.loop.forward, F, 1e-5)
+    assert_same_transfer_function(result.loop.feedback, H, 1e-5)
+    assert any(c.source.startswith("structured iv") for c in result.candidates)
+    with pytest.raises(ValueError):
+        ctid.identify_delayed_feedback(data, 3, 3, 0.523, iv_filter_poles=[-1.0])
+
+
+def test_structured_iv_improves_a_perturbed_start():
+    data = informative_record(0.5)
+    start = ctid.DelayedFeedbackLoop(
+        ctid.TransferFunction([2.1, 0.95, 2.0], [3.1, 2.05, 2.9, 1.0]),
+        ctid.TransferFunction([1.05, 4.8, 1.0], [2.1, 1.9, 3.05, 1.0]), 0.5)
+    regressors = ctid.FeedbackRegressorOptions(filter=ctid.RegressorFilter.linear_integral_filter,
+                                               filter_pole=1.0, initial_condition_terms=True)
+    result = ctid.estimate_structured_step1_iv(data, start, regressors, iterations=4)
+    history = result.output_rms_history
+    assert history[0] > 1e-3
+    assert result.output_rms == min(h for h in history if np.isfinite(h))
+    assert result.output_rms < 1e-2 * history[0], result.message
+    with pytest.raises(TypeError):
+        ctid.estimate_structured_step1_iv(data, start, regressors, iteration=4)
