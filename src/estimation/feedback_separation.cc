@@ -14,6 +14,7 @@
 
 #include "ctid/core/error.h"
 #include "ctid/core/state_space.h"
+#include "estimation/internal/ceres_solve.h"
 
 namespace ctid {
 namespace {
@@ -278,23 +279,20 @@ KroneckerSeparationResult separate_kronecker(const Polynomial& alpha, const Poly
     cost->AddParameterBlock(2 * q);
     cost->SetNumResiduals(3 * q - 1);
     problem.AddResidualBlock(cost, nullptr, p.data());
-    ceres::Solver::Options so;
-    so.linear_solver_type = ceres::DENSE_QR;
-    so.max_num_iterations = options.max_iterations;
-    so.function_tolerance = 1e-15;
-    so.gradient_tolerance = 1e-16;
-    so.parameter_tolerance = 1e-14;
-    so.logging_type = ceres::SILENT;
-    ceres::Solver::Summary summary;
-    ceres::Solve(so, &problem, &summary);
+    internal::LeastSquaresSettings settings;
+    settings.max_iterations = options.max_iterations;
+    settings.function_tolerance = 1e-15;
+    settings.gradient_tolerance = 1e-16;
+    settings.parameter_tolerance = 1e-14;
+    const internal::LeastSquaresOutcome outcome = internal::solve_least_squares(problem, settings);
     ++best.starts;
-    const double j = 2.0 * summary.final_cost;
+    const double j = outcome.sum_of_squares;
     best.candidates.push_back({name, unpack(p, 0, n), unpack(p, 2 * n, m), j});
     if (j < best.cost) {
       best.cost = j;
       best.best_start = name;
-      best.converged = summary.termination_type == ceres::CONVERGENCE;
-      best.message = summary.message;
+      best.converged = outcome.converged;
+      best.message = outcome.message;
       best_p = p;
     }
   }
