@@ -48,7 +48,8 @@ struct ModeRelocationOptions {
   /// so that peaks between lines are located. >= 1.
   int zero_padding = 4;
   /// Each peak is refined by an output-error least-squares search over
-  /// +-search_half_width lines around it ... > 0,
+  /// +-search_half_width lines around it (peaks this close to a mode the model already has
+  /// are skipped) ... > 0,
   double search_half_width = 1.0;
   /// ... on this many equally spaced frequencies (>= 3) ...
   int search_points = 41;
