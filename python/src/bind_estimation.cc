@@ -198,6 +198,7 @@ void bind_refined_iv(py::module_& m) {
                     "Output error after the iteration.")
       .def_readonly("projected_mean_squared_error", &RelocationTrial::projected_mean_squared_error,
                     "The same, numerators re-fitted.")
+      .def_readonly("score", &RelocationTrial::score, "The criterion's value for this trial.")
       .def_readonly("termination", &RelocationTrial::termination, "Termination.")
       .def_readonly("accepted", &RelocationTrial::accepted, "Kept.");
   py::class_<ModeRelocationResult>(m, "ModeRelocationResult", "Outcome of mode relocation.")
@@ -210,6 +211,10 @@ void bind_refined_iv(py::module_& m) {
       .def_readonly("projected_mean_squared_error",
                     &ModeRelocationResult::projected_mean_squared_error,
                     "Final estimate's MSE, numerators re-fitted.")
+      .def_readonly("initial_score", &ModeRelocationResult::initial_score,
+                    "The criterion's value for the plain estimate.")
+      .def_readonly("score", &ModeRelocationResult::score,
+                    "The criterion's value for the kept one (never larger).")
       .def_readonly("rounds", &ModeRelocationResult::rounds, "Rounds that looked for peaks.")
       .def_readonly("relocations", &ModeRelocationResult::relocations, "Moves kept.")
       .def_readonly("trials", &ModeRelocationResult::trials, "Every re-run, in order.")
