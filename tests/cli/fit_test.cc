@@ -284,16 +284,6 @@ TEST_F(FitCommand, NeverReplacesAFileWithoutForce) {
   EXPECT_EQ(read("r.json").at("type"), "estimation_result");
 }
 
-// The folder of the built ctid Python package, as plot_support.cc looks for it.
-std::string python_package() {
-  if (const char* env = std::getenv("CTID_PYTHONPATH"); env != nullptr && *env != '\0') {
-    return env;
-  }
-  const std::filesystem::path dir =
-      std::filesystem::path(CTID_CLI_PATH).parent_path() / ".." / ".." / "python";
-  return std::filesystem::exists(dir / "ctid" / "plot.py") ? dir.string() : "";
-}
-
 // A PNG file of at least 300 x 200 pixels.
 void expect_png(const std::filesystem::path& file) {
   const std::string bytes = testing::slurp(file);
@@ -310,7 +300,7 @@ void expect_png(const std::filesystem::path& file) {
 }
 
 TEST_F(FitCommand, PlotWritesPngFigures) {
-  if (python_package().empty()) {
+  if (testing::python_package().empty()) {
     GTEST_SKIP() << "the ctid Python package is not built (CTID_BUILD_PYTHON=OFF); set "
                     "CTID_PYTHONPATH to test --plot";
   }
