@@ -177,6 +177,7 @@ void BM_PipelineMonteCarlo(benchmark::State& state) {
       loop, data.input(), data.sample_time(), ctid::InputHold::kFirstOrder, sigma);
   ctid::FeedbackIdentificationOptions o;
   o.output_error.hold = ctid::InputHold::kFirstOrder;
+  o.extra_finalists = static_cast<int>(state.range(3));
   Eigen::MatrixXd errors(truth.size(), runs), reference_errors(truth.size(), runs);
   std::vector<int> local(static_cast<std::size_t>(runs), 0);
   for (auto _ : state) {
@@ -218,13 +219,14 @@ void BM_PipelineMonteCarlo(benchmark::State& state) {
   state.counters["truth_max_var_ratio"] = t.max_ratio;
 }
 // σ in units of 1e-5 (10: 1e-4, 30: 3e-4, 100: 1e-3), runs, record (0: 30 s / 8 lines of
-// 15 s; 1, 2, 3: 40, 80, 120 s of 12 lines of 20 s).
+// 15 s; 1, 2, 3: 40, 80, 120 s of 12 lines of 20 s), extra_finalists of the pipeline.
 BENCHMARK(BM_PipelineMonteCarlo)
-    ->Args({10, 40, 0})
-    ->Args({30, 40, 0})
-    ->Args({100, 20, 0})
-    ->Args({100, 30, 1})
-    ->Args({100, 30, 2})
-    ->Args({100, 20, 3})
+    ->Args({10, 40, 0, 0})
+    ->Args({30, 40, 0, 0})
+    ->Args({100, 20, 0, 0})
+    ->Args({100, 30, 1, 0})
+    ->Args({100, 30, 2, 0})
+    ->Args({100, 30, 2, 2})
+    ->Args({100, 20, 3, 0})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);

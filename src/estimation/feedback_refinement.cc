@@ -385,6 +385,10 @@ void FeedbackIdentificationOptions::validate() const {
   require(screening_iterations >= 1,
           "FeedbackIdentificationOptions: screening_iterations must be >= 1, got ",
           screening_iterations);
+  require(extra_finalists >= 0, "FeedbackIdentificationOptions: extra_finalists must be >= 0, got ",
+          extra_finalists);
+  require(std::isfinite(finalist_ratio) && finalist_ratio >= 1.0,
+          "FeedbackIdentificationOptions: finalist_ratio must be >= 1, got ", finalist_ratio);
 }
 
 FeedbackIdentificationResult identify_delayed_feedback(
@@ -516,19 +520,40 @@ FeedbackIdentificationResult identify_delayed_feedback(
     }
   }
   if (options.refine && std::isfinite(best)) {
-    SeparationCandidateReport& c = r.candidates[static_cast<std::size_t>(r.best_candidate)];
-    if (!c.refinement.converged &&
-        options.output_error.max_iterations > options.screening_iterations) {
-      OutputErrorOptions rest = options.output_error;
-      rest.max_iterations = options.output_error.max_iterations - options.screening_iterations;
-      OutputErrorResult more = refine_output_error(data, c.refinement.loop, rest);
-      if (std::isfinite(more.residual_rms) && more.residual_rms <= c.refined_rms) {
-        more.iterations += c.refinement.iterations;
-        c.refinement = std::move(more);
-        c.refined_rms = c.refinement.residual_rms;
+    // The finalists: the best screened candidate and up to extra_finalists runner-ups within
+    // finalist_ratio of it, each continued to convergence; the smallest final cost wins.
+    std::vector<std::size_t> finalists{static_cast<std::size_t>(r.best_candidate)};
+    {
+      std::vector<std::size_t> others;
+      for (std::size_t i = 0; i < r.candidates.size(); ++i)
+        if (i != finalists[0] && r.candidates[i].refined_rms <= options.finalist_ratio * best)
+          others.push_back(i);
+      std::sort(others.begin(), others.end(), [&](std::size_t x, std::size_t y) {
+        return r.candidates[x].refined_rms < r.candidates[y].refined_rms;
+      });
+      for (std::size_t k = 0;
+           k < others.size() && k < static_cast<std::size_t>(options.extra_finalists); ++k)
+        finalists.push_back(others[k]);
+    }
+    for (std::size_t i : finalists) {
+      SeparationCandidateReport& c = r.candidates[i];
+      if (!c.refinement.converged &&
+          options.output_error.max_iterations > options.screening_iterations) {
+        OutputErrorOptions rest = options.output_error;
+        rest.max_iterations = options.output_error.max_iterations - options.screening_iterations;
+        OutputErrorResult more = refine_output_error(data, c.refinement.loop, rest);
+        if (std::isfinite(more.residual_rms) && more.residual_rms <= c.refined_rms) {
+          more.iterations += c.refinement.iterations;
+          c.refinement = std::move(more);
+          c.refined_rms = c.refinement.residual_rms;
+        }
       }
     }
-    best = c.refined_rms;
+    for (std::size_t i : finalists)
+      if (r.candidates[i].refined_rms <
+          r.candidates[static_cast<std::size_t>(r.best_candidate)].refined_rms)
+        r.best_candidate = static_cast<int>(i);
+    best = r.candidates[static_cast<std::size_t>(r.best_candidate)].refined_rms;
   }
   const SeparationCandidateReport& chosen =
       r.candidates[static_cast<std::size_t>(r.best_candidate)];

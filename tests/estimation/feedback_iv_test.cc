@@ -77,6 +77,14 @@ TEST(FeedbackIv, BadInputIsNamed) {
   f.continuation_fractions = {1.5};
   EXPECT_THAT([&] { f.validate(); }, testing::ThrowsMessage<InvalidArgument>(
                                          testing::HasSubstr("continuation_fractions")));
+  f.continuation_fractions = {};
+  f.extra_finalists = -1;
+  EXPECT_THAT([&] { f.validate(); },
+              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("extra_finalists")));
+  f.extra_finalists = 2;
+  f.finalist_ratio = 0.5;
+  EXPECT_THAT([&] { f.validate(); },
+              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("finalist_ratio")));
   const SampledData tiny(0.05, Eigen::VectorXd::Ones(12), Eigen::VectorXd::Ones(12));
   EXPECT_THROW(estimate_structured_step1_iv(tiny, paper_loop(), regressors()), InvalidArgument);
 }

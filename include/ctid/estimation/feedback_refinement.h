@@ -197,6 +197,13 @@ struct FeedbackIdentificationOptions {
   /// each) on the first fraction of the record for each of these fractions in turn
   /// (continuation over the record length); empty: straight to the whole record.
   std::vector<double> continuation_fractions;
+  /// Besides the best screened candidate, up to this many runner-ups whose screened output
+  /// rms is within finalist_ratio of the best also continue to convergence, and the smallest
+  /// final cost decides. A start far from the data can need more than the screening
+  /// iterations to overtake a closer one that sits in a local minimum (seen at noise sd 1e-3;
+  /// docs/algorithms/feedback-delay.md). 0: only the best continues.
+  int extra_finalists = 0;
+  double finalist_ratio = 1.1;
   bool refine = true;  ///< false: keep the candidate with the smallest step-1 output error
   void validate() const;
 };
