@@ -14,36 +14,16 @@
 
 #include "ctid/estimation/feedback_refinement.h"
 #include "ctid/study/monte_carlo.h"
+#include "estimation/feedback_records.h"
 
 namespace {
 
-ctid::DelayedFeedbackLoop paper_loop() {
-  return {
-      ctid::TransferFunction(ctid::Polynomial{2.0, 1.0, 2.0}, ctid::Polynomial{3.0, 2.0, 3.0, 1.0}),
-      ctid::TransferFunction(ctid::Polynomial{1.0, 5.0, 1.0}, ctid::Polynomial{2.0, 2.0, 3.0, 1.0}),
-      0.5};
-}
+ctid::DelayedFeedbackLoop paper_loop() { return ctid::test_support::paper_feedback_loop(); }
 
-// Noise-free record of `duration` s: a smooth multisine of `harmonics` lines of a `period` s
-// fundamental (random phases from seed 3, rms 1, continued linearly between samples).
+// Noise-free record of `duration` s: the tests' smooth multisine of `harmonics` lines of a
+// `period` s fundamental through the paper's loop (estimation/feedback_records.h).
 ctid::SampledData multisine_record(double duration, double period, int harmonics) {
-  const double delta = 0.05;
-  std::mt19937_64 rng(3);
-  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
-  std::vector<double> phases(static_cast<std::size_t>(harmonics));
-  for (double& p : phases) p = phase(rng);
-  Eigen::VectorXd u(std::lround(duration / delta) + 1);
-  for (Eigen::Index k = 0; k < u.size(); ++k) {
-    double sum = 0.0;
-    for (int j = 1; j <= harmonics; ++j)
-      sum += std::cos(2.0 * M_PI * j * static_cast<double>(k) * delta / period +
-                      phases[static_cast<std::size_t>(j - 1)]);
-    u(k) = sum / std::sqrt(harmonics / 2.0);
-  }
-  const Eigen::VectorXd y =
-      ctid::simulate_delayed(ctid::to_delayed_state_space(paper_loop()), u, delta,
-                             ctid::InputHold::kFirstOrder, ctid::DelayedSimulationOptions{4});
-  return ctid::SampledData(delta, u, y);
+  return ctid::test_support::feedback_record(paper_loop(), duration, period, harmonics);
 }
 
 // 30 s, 8 harmonics of 15 s (601 samples): the record of feedback_pipeline_test.cc.

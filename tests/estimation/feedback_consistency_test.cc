@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/estimation/feedback_refinement.h"
+#include "estimation/feedback_records.h"
 
 namespace ctid {
 namespace {
@@ -20,26 +21,9 @@ namespace {
 constexpr double kSampleTime = 0.05;
 constexpr double kSigma = 1e-4;
 
-DelayedFeedbackLoop paper_loop() {
-  return {TransferFunction(Polynomial{2.0, 1.0, 2.0}, Polynomial{3.0, 2.0, 3.0, 1.0}),
-          TransferFunction(Polynomial{1.0, 5.0, 1.0}, Polynomial{2.0, 2.0, 3.0, 1.0}), 0.5};
-}
+DelayedFeedbackLoop paper_loop() { return test_support::paper_feedback_loop(); }
 
-Eigen::VectorXd multisine() {
-  std::mt19937_64 rng(3);
-  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
-  std::vector<double> phases(8);
-  for (double& p : phases) p = phase(rng);
-  Eigen::VectorXd u(601);
-  for (Eigen::Index k = 0; k < u.size(); ++k) {
-    double sum = 0.0;
-    for (int j = 1; j <= 8; ++j)
-      sum += std::cos(2.0 * M_PI * j * static_cast<double>(k) * kSampleTime / 15.0 +
-                      phases[static_cast<std::size_t>(j - 1)]);
-    u(k) = sum / 2.0;
-  }
-  return u;
-}
+Eigen::VectorXd multisine() { return test_support::smooth_multisine(30.0, 15.0, 8, kSampleTime); }
 
 SampledData noisy_copy(const SampledData& clean, std::uint64_t seed, int run) {
   std::seed_seq sequence{seed, static_cast<std::uint64_t>(run)};

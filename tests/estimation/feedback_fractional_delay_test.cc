@@ -12,6 +12,7 @@
 #include <Eigen/LU>
 
 #include "ctid/estimation/feedback_refinement.h"
+#include "estimation/feedback_records.h"
 
 namespace ctid {
 namespace {
@@ -19,32 +20,11 @@ namespace {
 constexpr double kDelay = 0.523;
 constexpr double kSampleTime = 0.05;
 
-DelayedFeedbackLoop paper_loop() {
-  return {TransferFunction(Polynomial{2.0, 1.0, 2.0}, Polynomial{3.0, 2.0, 3.0, 1.0}),
-          TransferFunction(Polynomial{1.0, 5.0, 1.0}, Polynomial{2.0, 2.0, 3.0, 1.0}), kDelay};
-}
+DelayedFeedbackLoop paper_loop() { return test_support::paper_feedback_loop(kDelay); }
 
 SampledData record(double noise_sd, std::uint64_t seed) {
-  std::mt19937_64 rng(3);
-  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
-  std::vector<double> phases(8);
-  for (double& p : phases) p = phase(rng);
-  Eigen::VectorXd u(601);
-  for (Eigen::Index k = 0; k < u.size(); ++k) {
-    double sum = 0.0;
-    for (int j = 1; j <= 8; ++j)
-      sum += std::cos(2.0 * M_PI * j * static_cast<double>(k) * kSampleTime / 15.0 +
-                      phases[static_cast<std::size_t>(j - 1)]);
-    u(k) = sum / 2.0;
-  }
-  Eigen::VectorXd y = simulate_delayed(to_delayed_state_space(paper_loop()), u, kSampleTime,
-                                       InputHold::kFirstOrder, DelayedSimulationOptions{4});
-  if (noise_sd > 0.0) {
-    std::mt19937_64 noise_rng(seed);
-    std::normal_distribution<double> normal(0.0, noise_sd);
-    for (Eigen::Index k = 0; k < y.size(); ++k) y(k) += normal(noise_rng);
-  }
-  return SampledData(kSampleTime, u, y);
+  const SampledData clean = test_support::feedback_record(paper_loop());
+  return noise_sd > 0.0 ? test_support::with_white_noise(clean, noise_sd, seed) : clean;
 }
 
 DelayIdentificationOptions scan_options() {

@@ -11,33 +11,14 @@
 
 #include "ctid/core/error.h"
 #include "ctid/estimation/feedback_refinement.h"
+#include "estimation/feedback_records.h"
 
 namespace ctid {
 namespace {
 
-DelayedFeedbackLoop paper_loop() {
-  return {TransferFunction(Polynomial{2.0, 1.0, 2.0}, Polynomial{3.0, 2.0, 3.0, 1.0}),
-          TransferFunction(Polynomial{1.0, 5.0, 1.0}, Polynomial{2.0, 2.0, 3.0, 1.0}), 0.5};
-}
+DelayedFeedbackLoop paper_loop() { return test_support::paper_feedback_loop(); }
 
-SampledData clean_record() {
-  const double delta = 0.05;
-  std::mt19937_64 rng(3);
-  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
-  std::vector<double> phases(8);
-  for (double& p : phases) p = phase(rng);
-  Eigen::VectorXd u(601);
-  for (Eigen::Index k = 0; k < u.size(); ++k) {
-    double sum = 0.0;
-    for (int j = 1; j <= 8; ++j)
-      sum += std::cos(2.0 * M_PI * j * static_cast<double>(k) * delta / 15.0 +
-                      phases[static_cast<std::size_t>(j - 1)]);
-    u(k) = sum / 2.0;
-  }
-  return SampledData(delta, u,
-                     simulate_delayed(to_delayed_state_space(paper_loop()), u, delta,
-                                      InputHold::kFirstOrder, DelayedSimulationOptions{4}));
-}
+SampledData clean_record() { return test_support::feedback_record(paper_loop()); }
 
 FeedbackRegressorOptions regressors() {
   return {RegressorFilter::kLinearIntegralFilter, 1.0, true, -1};

@@ -12,36 +12,17 @@
 #include <gtest/gtest.h>
 
 #include "ctid/estimation/feedback_refinement.h"
+#include "estimation/feedback_records.h"
 
 namespace ctid {
 namespace {
 
-DelayedFeedbackLoop paper_loop() {
-  return {TransferFunction(Polynomial{2.0, 1.0, 2.0}, Polynomial{3.0, 2.0, 3.0, 1.0}),
-          TransferFunction(Polynomial{1.0, 5.0, 1.0}, Polynomial{2.0, 2.0, 3.0, 1.0}), 0.5};
-}
+DelayedFeedbackLoop paper_loop() { return test_support::paper_feedback_loop(); }
 
 SampledData noisy_record(double duration, double period, int harmonics, double sigma,
                          std::uint64_t seed) {
-  const double delta = 0.05;
-  std::mt19937_64 rng(3);
-  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
-  std::vector<double> phases(static_cast<std::size_t>(harmonics));
-  for (double& p : phases) p = phase(rng);
-  Eigen::VectorXd u(std::lround(duration / delta) + 1);
-  for (Eigen::Index k = 0; k < u.size(); ++k) {
-    double sum = 0.0;
-    for (int j = 1; j <= harmonics; ++j)
-      sum += std::cos(2.0 * M_PI * j * static_cast<double>(k) * delta / period +
-                      phases[static_cast<std::size_t>(j - 1)]);
-    u(k) = sum / std::sqrt(harmonics / 2.0);
-  }
-  Eigen::VectorXd y = simulate_delayed(to_delayed_state_space(paper_loop()), u, delta,
-                                       InputHold::kFirstOrder, DelayedSimulationOptions{4});
-  std::mt19937_64 noise_rng(seed);
-  std::normal_distribution<double> normal(0.0, sigma);
-  for (Eigen::Index k = 0; k < y.size(); ++k) y(k) += normal(noise_rng);
-  return SampledData(delta, u, y);
+  return test_support::with_white_noise(
+      test_support::feedback_record(paper_loop(), duration, period, harmonics), sigma, seed);
 }
 
 void expect_global_and_within_bound(const SampledData& data, double sigma) {

@@ -11,39 +11,17 @@
 
 #include "ctid/core/error.h"
 #include "ctid/estimation/feedback_refinement.h"
+#include "estimation/feedback_records.h"
 
 namespace ctid {
 namespace {
 
-DelayedFeedbackLoop paper_loop() {
-  return {TransferFunction(Polynomial{2.0, 1.0, 2.0}, Polynomial{3.0, 2.0, 3.0, 1.0}),
-          TransferFunction(Polynomial{1.0, 5.0, 1.0}, Polynomial{2.0, 2.0, 3.0, 1.0}), 0.5};
-}
+using test_support::feedback_record;
+using test_support::smooth_multisine;
 
-Eigen::VectorXd multisine(double delta, double duration, double period, int harmonics) {
-  std::mt19937_64 rng(3);
-  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
-  std::vector<double> phases(static_cast<std::size_t>(harmonics));
-  for (double& p : phases) p = phase(rng);
-  const int samples = static_cast<int>(std::lround(duration / delta)) + 1;
-  Eigen::VectorXd u(samples);
-  for (int k = 0; k < samples; ++k) {
-    double sum = 0.0;
-    for (int j = 1; j <= harmonics; ++j)
-      sum +=
-          std::cos(2.0 * M_PI * j * k * delta / period + phases[static_cast<std::size_t>(j - 1)]);
-    u(k) = sum / std::sqrt(harmonics / 2.0);
-  }
-  return u;
-}
+DelayedFeedbackLoop paper_loop() { return test_support::paper_feedback_loop(); }
 
-SampledData informative_data(const DelayedFeedbackLoop& loop) {
-  const double delta = 0.05;
-  const Eigen::VectorXd u = multisine(delta, 30.0, 15.0, 8);
-  const Eigen::VectorXd y = simulate_delayed(to_delayed_state_space(loop), u, delta,
-                                             InputHold::kFirstOrder, DelayedSimulationOptions{4});
-  return SampledData(delta, u, y);
-}
+SampledData informative_data(const DelayedFeedbackLoop& loop) { return feedback_record(loop); }
 
 FeedbackIdentificationOptions foh_options() {
   FeedbackIdentificationOptions o;
@@ -107,7 +85,7 @@ TEST(FeedbackPipeline, JointRefinementFindsAFractionalDelay) {
   DelayedFeedbackLoop loop = paper_loop();
   loop.delay = 0.523;
   const double delta = 0.05;
-  const Eigen::VectorXd u = multisine(delta, 20.0, 10.0, 8);
+  const Eigen::VectorXd u = smooth_multisine(20.0, 10.0, 8, delta);
   const Eigen::VectorXd y = simulate_delayed(to_delayed_state_space(loop), u, delta,
                                              InputHold::kFirstOrder, DelayedSimulationOptions{4});
   Eigen::VectorXd start = loop_parameters(loop);
