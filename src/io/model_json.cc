@@ -89,6 +89,20 @@ DiscreteTransferFunction read_discrete_transfer_function(const JsonObject& objec
   });
 }
 
+DelayedFeedbackLoop read_delayed_feedback_loop(const JsonObject& object) {
+  check_type(object, kDelayedFeedbackLoopType);
+  TransferFunction forward = read_transfer_function(object.object("forward"));
+  TransferFunction feedback = read_transfer_function(object.object("feedback"));
+  const double delay = object.number("delay");
+  object.finish();
+  DelayedFeedbackLoop loop{std::move(forward), std::move(feedback), delay};
+  construct(object, "delayed feedback loop", [&] {
+    loop.validate();
+    return 0;
+  });
+  return loop;
+}
+
 }  // namespace
 
 nlohmann::json to_json(const TransferFunction& model) {
@@ -121,6 +135,13 @@ nlohmann::json to_json(const ContinuousModel& model) {
   return std::visit([](const auto& m) { return to_json(m); }, model);
 }
 
+nlohmann::json to_json(const DelayedFeedbackLoop& model) {
+  return {{"type", kDelayedFeedbackLoopType},
+          {"forward", to_json(model.forward)},
+          {"feedback", to_json(model.feedback)},
+          {"delay", model.delay}};
+}
+
 TransferFunction transfer_function_from_json(const nlohmann::json& value,
                                              const std::string& source) {
   return read_transfer_function(JsonObject(value, source));
@@ -133,6 +154,17 @@ AdditiveModel additive_model_from_json(const nlohmann::json& value, const std::s
 DiscreteTransferFunction discrete_transfer_function_from_json(const nlohmann::json& value,
                                                               const std::string& source) {
   return read_discrete_transfer_function(JsonObject(value, source));
+}
+
+DelayedFeedbackLoop delayed_feedback_loop_from_json(const nlohmann::json& value,
+                                                    const std::string& source) {
+  return read_delayed_feedback_loop(JsonObject(value, source));
+}
+
+bool is_delayed_feedback_loop(const nlohmann::json& value) {
+  if (!value.is_object()) return false;
+  const auto type = value.find("type");
+  return type != value.end() && type->is_string() && *type == kDelayedFeedbackLoopType;
 }
 
 ContinuousModel continuous_model_from_json(const nlohmann::json& value, const std::string& source) {

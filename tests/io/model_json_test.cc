@@ -155,5 +155,66 @@ TEST(ModelJson, DiscreteSampleTimeMustBePositive) {
               StartsWith("c.json: type: is 'transfer_function' but a discrete_transfer_function"));
 }
 
+std::string loop_error(const std::string& text) {
+  try {
+    delayed_feedback_loop_from_json(parse_json(text, "loop.json"), "loop.json");
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// The loop of De Iuliis et al. (2017), Section 4, in a JSON text with `forward_numerator`
+// in place of F's numerator so that tests can break one field at a time.
+std::string loop_text(const std::string& forward_numerator, const std::string& delay = "0.5") {
+  return R"({"type": "delayed_feedback_loop", "description": "paper",
+      "forward": {"type": "transfer_function", "numerator_ascending": )" +
+         forward_numerator + R"(, "denominator_ascending": [3, 2, 3, 1]},
+      "feedback": {"type": "transfer_function", "numerator_ascending": [1, 5, 1],
+                   "denominator_ascending": [2, 2, 3, 1]},
+      "delay": )" +
+         delay + "}";
+}
+
+TEST(ModelJson, DelayedFeedbackLoopIsReadAscendingAndRoundTrips) {
+  const nlohmann::json text = parse_json(loop_text("[2, 1, 2]"), "loop.json");
+  EXPECT_TRUE(is_delayed_feedback_loop(text));
+  EXPECT_FALSE(
+      is_delayed_feedback_loop(to_json(TransferFunction(Polynomial{1.0}, Polynomial{1.0, 1.0}))));
+  EXPECT_FALSE(is_delayed_feedback_loop(nlohmann::json::array()));
+  const DelayedFeedbackLoop loop = delayed_feedback_loop_from_json(text, "loop.json");
+  EXPECT_EQ(loop.forward.numerator(), Polynomial({2.0, 1.0, 2.0}));
+  EXPECT_EQ(loop.forward.denominator(), Polynomial({3.0, 2.0, 3.0, 1.0}));
+  EXPECT_EQ(loop.feedback.numerator(), Polynomial({1.0, 5.0, 1.0}));
+  EXPECT_EQ(loop.feedback.denominator(), Polynomial({2.0, 2.0, 3.0, 1.0}));
+  EXPECT_EQ(loop.delay, 0.5);
+
+  const DelayedFeedbackLoop back =
+      delayed_feedback_loop_from_json(nlohmann::json::parse(to_json(loop).dump()), "again.json");
+  EXPECT_EQ(back.forward.numerator(), loop.forward.numerator());
+  EXPECT_EQ(back.feedback.denominator(), loop.feedback.denominator());
+  EXPECT_EQ(back.delay, loop.delay);
+}
+
+TEST(ModelJson, DelayedFeedbackLoopErrorsNameTheFileAndField) {
+  // Biproper F: the loop's own rule, prefixed with the file.
+  EXPECT_THAT(loop_error(loop_text("[2, 1, 2, 1]")),
+              StartsWith("loop.json: delayed feedback loop: DelayedFeedbackLoop: forward F must "
+                         "be strictly proper"));
+  EXPECT_THAT(loop_error(loop_text("[2, 1, 2]", "-0.1")),
+              HasSubstr("loop.json: delayed feedback loop: DelayedFeedbackLoop: delay must be"));
+  EXPECT_THAT(loop_error(loop_text("\"x\"")), StartsWith("loop.json: forward.numerator_ascending"));
+  EXPECT_THAT(loop_error(R"({"type": "delayed_feedback_loop", "delay": 0.5,
+      "feedback": {"type": "transfer_function", "numerator_ascending": [1],
+                   "denominator_ascending": [1, 1]}})"),
+              StartsWith("loop.json: forward: required field is missing"));
+  EXPECT_THAT(loop_error(R"({"type": "transfer_function", "numerator_ascending": [1],
+      "denominator_ascending": [1, 1]})"),
+              StartsWith("loop.json: type: is 'transfer_function' but a delayed_feedback_loop"));
+  // Fit and validate read ContinuousModel, which a loop is not.
+  EXPECT_THAT(continuous_error(loop_text("[2, 1, 2]")),
+              StartsWith("m.json: type: is 'delayed_feedback_loop'"));
+}
+
 }  // namespace
 }  // namespace ctid::io

@@ -1,5 +1,7 @@
-// JSON files for models (docs/formats.md): continuous TransferFunction, AdditiveModel and
-// DiscreteTransferFunction (controllers C_d(q), noise filters). Coefficients are stored in
+// JSON files for models (docs/formats.md): continuous TransferFunction, AdditiveModel,
+// DiscreteTransferFunction (controllers C_d(q), noise filters) and DelayedFeedbackLoop (the
+// loop of De Iuliis et al. 2017, Fig. 1; kept out of ContinuousModel, which fit and
+// validate consume, because it is not a plain transfer function). Coefficients are stored in
 // ASCENDING powers under fields named *_ascending (polynomial.h), e.g. 1 + 0.5 s is
 // [1, 0.5]. Every document has a "type" field; unknown fields are rejected; errors name the
 // file and the field.
@@ -15,6 +17,7 @@
 #include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/transfer_function.h"
 #include "ctid/io/file.h"
+#include "ctid/simulation/delayed_feedback.h"
 
 namespace ctid::io {
 
@@ -22,6 +25,7 @@ namespace ctid::io {
 inline constexpr const char* kTransferFunctionType = "transfer_function";
 inline constexpr const char* kAdditiveModelType = "additive_model";
 inline constexpr const char* kDiscreteTransferFunctionType = "discrete_transfer_function";
+inline constexpr const char* kDelayedFeedbackLoopType = "delayed_feedback_loop";
 
 /// A continuous-time model as read from a file: unfactored or additive.
 using ContinuousModel = std::variant<TransferFunction, AdditiveModel>;
@@ -30,6 +34,8 @@ nlohmann::json to_json(const TransferFunction& model);
 nlohmann::json to_json(const AdditiveModel& model);
 nlohmann::json to_json(const DiscreteTransferFunction& model);
 nlohmann::json to_json(const ContinuousModel& model);
+/// {"type": "delayed_feedback_loop", "forward": F, "feedback": H, "delay": Δ}.
+nlohmann::json to_json(const DelayedFeedbackLoop& model);
 
 /// Readers of one format; `source` names the document in error messages. The model's own
 /// validation (finite coefficients, non-zero leading coefficient, anti-monic A_i, ...) is
@@ -39,6 +45,13 @@ TransferFunction transfer_function_from_json(const nlohmann::json& value,
 AdditiveModel additive_model_from_json(const nlohmann::json& value, const std::string& source);
 DiscreteTransferFunction discrete_transfer_function_from_json(const nlohmann::json& value,
                                                               const std::string& source);
+/// Reads a delayed_feedback_loop; F and H are transfer_function objects. The loop is
+/// checked by DelayedFeedbackLoop::validate() (F, H strictly proper, Δ >= 0), its message
+/// prefixed with the source.
+DelayedFeedbackLoop delayed_feedback_loop_from_json(const nlohmann::json& value,
+                                                    const std::string& source);
+/// True when `value` is an object whose "type" is "delayed_feedback_loop".
+bool is_delayed_feedback_loop(const nlohmann::json& value);
 /// Dispatches on "type": transfer_function or additive_model.
 ContinuousModel continuous_model_from_json(const nlohmann::json& value, const std::string& source);
 
