@@ -1,7 +1,9 @@
 // `ctid simulate`: the sampled response of a continuous-time model (JSON) to an input read
 // from a CSV column or generated from an excitation spec, in open loop or in closed loop
 // with a discrete controller (the input then is the reference r), with optional output
-// noise; writes CSV t,u,y[,r]. The numerics are ctid::simulate / simulate_closed_loop.
+// noise; writes CSV t,u,y[,r]. The numerics are ctid::simulate / simulate_closed_loop, and
+// simulate_delayed for a delayed_feedback_loop model (De Iuliis et al. 2017, Fig. 1), whose
+// sampled input is continued by --hold (default foh, what `ctid feedback` assumes).
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -21,6 +23,7 @@
 #include "ctid/io/result_json.h"
 #include "ctid/io/sampled_data_csv.h"
 #include "ctid/simulation/closed_loop.h"
+#include "ctid/simulation/delayed_feedback.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
@@ -58,8 +61,16 @@ struct SimulateFlags {
   std::string controller;
 
   NoiseFlags noise;
+  double nsr = 0.0;
   bool quiet = false;
+
+  // Delayed-feedback loop only.
+  std::string hold = "foh";
+  int substeps = 4;
 };
+
+// Flags that mean something for a delayed_feedback_loop model only.
+const char* const kLoopOnlyFlags[] = {"--hold", "--substeps", "--nsr"};
 
 // A user-facing number: 12 significant digits show 0.1 as "0.1", not 0.10000000000000001.
 std::string show(double x) {
@@ -217,8 +228,7 @@ void add_noise_flags(CLI::App& app, NoiseFlags& f) {
 }
 
 // A model file, or the result document of `ctid fit` (its fitted model is simulated).
-io::ContinuousModel read_model_or_result(const std::string& path) {
-  const nlohmann::json document = io::read_json(path);
+io::ContinuousModel read_model_or_result(const nlohmann::json& document, const std::string& path) {
   const auto type = document.find("type");
   if (type != document.end() && type->is_string() && *type == "estimation_result") {
     return io::fitted_model_from_json(document, path).model;
@@ -226,12 +236,65 @@ io::ContinuousModel read_model_or_result(const std::string& path) {
   return io::continuous_model_from_json(document, path);
 }
 
+// The loop is already closed and its noise model is the paper's (white, at the output), so
+// the flags of the discrete closed loop and of coloured noise have no meaning here.
+void run_simulate_loop(const SimulateFlags& f, CLI::App& app, const nlohmann::json& document) {
+  const std::filesystem::path output = f.output;
+  if (!f.controller.empty()) {
+    usage_error(internal::concat("--controller does not apply to ", f.model,
+                                 ": a delayed_feedback_loop is already a closed loop"));
+  }
+  if (!f.noise.filter.empty()) {
+    usage_error(internal::concat("--noise-filter does not apply to ", f.model,
+                                 ": a delayed_feedback_loop gets white output noise only "
+                                 "(--noise-std, --snr or --nsr)"));
+  }
+  const DelayedFeedbackLoop loop = io::delayed_feedback_loop_from_json(document, f.model);
+  const DelayedSimulationOptions options{f.substeps};
+  options.validate();
+  const InputHold hold = f.hold == "zoh" ? InputHold::kZeroOrder : InputHold::kFirstOrder;
+
+  const InputSignal in = f.input.empty() ? generate_input(f, app, std::nullopt)
+                                         : read_input_column(f, app, std::nullopt);
+  const double h = in.sample_time;
+  const Eigen::VectorXd& u = in.values;
+  const Eigen::VectorXd noise_free =
+      simulate_delayed(to_delayed_state_space(loop), u, h, hold, options);
+  Eigen::VectorXd y = noise_free;
+  if (app.count("--nsr") > 0) {
+    y = add_noise_at_nsr(noise_free, f.nsr, f.noise.seed).output;
+  } else {
+    const Eigen::VectorXd v = output_noise(f.noise, noise_free, h);
+    if (v.size() != 0) y += v;
+  }
+
+  const SampledData data(h, u, y, std::nullopt, in.start_time);
+  io::write_sampled_data(output, data, io::CsvColumns{},
+                         f.force ? io::Overwrite::yes : io::Overwrite::no);
+  if (!f.quiet) {
+    std::cout << "wrote " << u.size() << " samples (t,u,y, h = " << h
+              << " s, delayed feedback loop, delay " << loop.delay << " s, " << f.hold
+              << " input) to " << output.string() << "\n";
+  }
+}
+
 void run_simulate(const SimulateFlags& f, CLI::App& app) {
   const std::filesystem::path output = f.output;
   if (!f.force && std::filesystem::exists(output)) {
     usage_error(output.string() + ": file exists; pass --force to replace it");
   }
-  const io::ContinuousModel model = read_model_or_result(f.model);
+  const nlohmann::json document = io::read_json(f.model);
+  if (io::is_delayed_feedback_loop(document)) {
+    run_simulate_loop(f, app, document);
+    return;
+  }
+  for (const char* flag : kLoopOnlyFlags) {
+    if (app.count(flag) > 0) {
+      usage_error(internal::concat(flag, " applies to a delayed_feedback_loop model only; ",
+                                   f.model, " is simulated with a zero-order hold, exactly"));
+    }
+  }
+  const io::ContinuousModel model = read_model_or_result(document, f.model);
   std::optional<DiscreteTransferFunction> controller;
   if (!f.controller.empty()) controller = io::read_discrete_transfer_function(f.controller);
 
@@ -289,18 +352,21 @@ Command add_simulate_command(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand(
       "simulate",
       "Simulate a continuous-time model (JSON) driven by a zero-order-hold input, in open loop "
-      "or in closed loop with a discrete controller, and write CSV t,u,y[,r].");
+      "or in closed loop with a discrete controller, or a delayed_feedback_loop model, and "
+      "write CSV t,u,y[,r].");
   app->footer(
       "Input: exactly one of --input (a CSV column) or --excitation/--excitation-spec.\n"
       "Closed loop (--controller): the input is the reference r, u_k = C_d(q)(r_k - y_k), and "
       "the CSV gets an r column.\n"
+      "Delayed feedback loop (model type delayed_feedback_loop): y = F e, e = u - (H y)(t - "
+      "delay), input continued by --hold, RK4 with --substeps per sample; white noise only.\n"
       "Noise: v_k = H(q) e_k added to y at the samples; H = 1 unless --noise-filter; its size "
       "from --noise-std (std of e) or --snr (dB, 10 log10 var(y without noise)/var(v)).\n"
       "Formats: docs/formats.md. Exit status: 0 ran, 2 bad usage or input, 1 other error.");
 
   app->add_option("--model,-m", f.model,
-                  "Model JSON file: a transfer_function or an additive_model (coefficients in "
-                  "ascending powers of s)")
+                  "Model JSON file: a transfer_function, an additive_model or a "
+                  "delayed_feedback_loop (coefficients in ascending powers of s)")
       ->required()
       ->check(CLI::ExistingFile);
   app->add_option("--output,-o", f.output, "CSV file to write (columns t,u,y and r in closed loop)")
@@ -384,6 +450,24 @@ Command add_simulate_command(CLI::App& parent) {
       ->group("Closed loop");
 
   add_noise_flags(*app, f.noise);
+  auto* nsr = app->add_option("--nsr", f.nsr,
+                              "delayed_feedback_loop: white noise scaled to the noise-to-signal "
+                              "ratio mean|v| / mean|y0| (De Iuliis et al.), e.g. 0.05")
+                  ->check(CLI::PositiveNumber)
+                  ->group("Output noise");
+  nsr->excludes(f.noise.std_option);
+  nsr->excludes(f.noise.snr_option);
+
+  app->add_option("--hold", f.hold,
+                  "delayed_feedback_loop: the input between samples, zoh (held) or foh "
+                  "(linear, what `ctid feedback` assumes)")
+      ->check(CLI::IsMember({"zoh", "foh"}))
+      ->capture_default_str()
+      ->group("Delayed feedback loop");
+  app->add_option("--substeps", f.substeps, "delayed_feedback_loop: RK4 steps per sample period")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str()
+      ->group("Delayed feedback loop");
 
   input->excludes(excitation);
   input->excludes(spec_file);
