@@ -199,7 +199,8 @@ Eigen::VectorXd raw_noise(const NoiseFlags& f, Eigen::Index n, double h, double 
 Eigen::VectorXd output_noise(const NoiseFlags& f, const Eigen::VectorXd& noise_free, double h) {
   if (!f.wanted()) {
     if (!f.filter.empty()) usage_error("--noise-filter needs --noise-std or --snr");
-    if (f.seed_option->count() > 0) usage_error("--noise-seed needs --noise-std or --snr");
+    if (f.seed_option->count() > 0)
+      usage_error("--noise-seed needs a noise level: --noise-std or --snr (or --nsr for a loop)");
     return Eigen::VectorXd();
   }
   if (f.std_option->count() > 0) return raw_noise(f, noise_free.size(), h, f.standard_deviation);

@@ -283,8 +283,10 @@ TEST_F(CliTest, FlagsThatWouldHaveNoEffectAreRejected) {
                    "ctid simulate: error: --seed has no effect with --input");
   expect_bad_input(with({"--excitation-spec", example("multisine_0.01_3hz.json"), "-n", "10"}),
                    "ctid simulate: error: --samples has no effect with --excitation-spec");
-  expect_bad_input(with({"-e", "white", "--noise-seed", "3"}),
-                   "ctid simulate: error: --noise-seed needs --noise-std or --snr");
+  expect_bad_input(
+      with({"-e", "white", "--noise-seed", "3"}),
+      "ctid simulate: error: --noise-seed needs a noise level: --noise-std or --snr (or "
+      "--nsr for a loop)");
   EXPECT_FALSE(std::filesystem::exists(path("y.csv")));
 }
 
