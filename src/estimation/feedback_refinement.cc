@@ -16,6 +16,7 @@
 
 #include "ctid/core/error.h"
 #include "estimation/internal/ceres_solve.h"
+#include "estimation/internal/loop_polynomials.h"
 
 namespace ctid {
 namespace {
@@ -643,20 +644,10 @@ struct ThetaOfRho {
   template <typename T>
   void operator()(const T* p, T* theta) const {
     const int q = n + m;
-    std::vector<T> df(n + 1), nf(n), dh(m + 1), nh(m);
-    for (int i = 0; i < n; ++i) df[i] = p[i];
-    df[n] = T(1.0);
-    for (int i = 0; i < n; ++i) nf[i] = p[n + i];
-    for (int i = 0; i < m; ++i) dh[i] = p[2 * n + i];
-    dh[m] = T(1.0);
-    for (int i = 0; i < m; ++i) nh[i] = p[2 * n + m + i];
-    std::vector<T> a(q, T(0.0)), b(q + 1, T(0.0)), g(q - 1, T(0.0));
-    for (int i = 0; i <= n; ++i)
-      for (int j = 0; j <= m; ++j) b[i + j] += df[i] * dh[j];
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j <= m; ++j) a[i + j] += nf[i] * dh[j];
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < m; ++j) g[i + j] += nf[i] * nh[j];
+    const internal::LoopPolynomials<T> poly = internal::loop_polynomials(p, n, m);
+    const std::vector<T>& a = poly.alpha;
+    const std::vector<T>& b = poly.beta;
+    const std::vector<T>& g = poly.gamma;
     for (int i = 0; i < q; ++i) theta[i] = b[q - 1 - i];
     for (int i = 0; i + 1 < q; ++i) theta[q + i] = g[q - 2 - i];
     for (int i = 0; i < q; ++i) theta[2 * q - 1 + i] = a[q - 1 - i];

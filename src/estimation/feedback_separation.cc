@@ -15,6 +15,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/state_space.h"
 #include "estimation/internal/ceres_solve.h"
+#include "estimation/internal/loop_polynomials.h"
 
 namespace ctid {
 namespace {
@@ -37,23 +38,10 @@ struct KroneckerResidual {
   bool operator()(T const* const* parameters, T* residual) const {
     const T* p = parameters[0];
     const int q = n + m;
-    std::vector<T> df(n + 1), nf(n), dh(m + 1), nh(m);
-    for (int i = 0; i < n; ++i) df[i] = p[i];
-    df[n] = T(1.0);
-    for (int i = 0; i < n; ++i) nf[i] = p[n + i];
-    for (int i = 0; i < m; ++i) dh[i] = p[2 * n + i];
-    dh[m] = T(1.0);
-    for (int i = 0; i < m; ++i) nh[i] = p[2 * n + m + i];
-    auto conv = [](const std::vector<T>& a, const std::vector<T>& b, int size) {
-      std::vector<T> c(size, T(0.0));
-      for (size_t i = 0; i < a.size(); ++i)
-        for (size_t j = 0; j < b.size(); ++j)
-          if (static_cast<int>(i + j) < size) c[i + j] += a[i] * b[j];
-      return c;
-    };
-    const std::vector<T> a = conv(nf, dh, q);
-    const std::vector<T> b = conv(df, dh, q);
-    const std::vector<T> g = conv(nf, nh, q - 1);
+    const internal::LoopPolynomials<T> poly = internal::loop_polynomials(p, n, m);
+    const std::vector<T>& a = poly.alpha;
+    const std::vector<T>& b = poly.beta;
+    const std::vector<T>& g = poly.gamma;
     for (int i = 0; i < q; ++i) residual[i] = T(alpha(i)) - a[i];
     for (int i = 0; i < q; ++i) residual[q + i] = T(beta(i)) - b[i];
     for (int i = 0; i + 1 < q; ++i) residual[2 * q + i] = T(gamma(i)) - g[i];
