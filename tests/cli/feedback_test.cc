@@ -1,8 +1,5 @@
 // `ctid feedback`: bad input gives exit 2 and one line; a run on a simulated informative
 // record (smooth multisine, continued linearly between samples) recovers F and H.
-#include <cmath>
-#include <random>
-#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -11,6 +8,7 @@
 #include "ctid/io/json.h"
 #include "ctid/io/sampled_data_csv.h"
 #include "ctid/simulation/delayed_feedback.h"
+#include "estimation/feedback_records.h"
 
 namespace ctid::cli {
 namespace {
@@ -20,28 +18,13 @@ using ::testing::HasSubstr;
 using testing::line_count;
 using ::testing::StartsWith;
 
-DelayedFeedbackLoop paper_loop() {
-  return {TransferFunction(Polynomial{2.0, 1.0, 2.0}, Polynomial{3.0, 2.0, 3.0, 1.0}),
-          TransferFunction(Polynomial{1.0, 5.0, 1.0}, Polynomial{2.0, 2.0, 3.0, 1.0}), 0.5};
-}
+DelayedFeedbackLoop paper_loop() { return test_support::paper_feedback_loop(); }
 
-// 30 s, δ = 50 ms, 8 harmonics of a 15 s period with seeded random phases.
+// `samples` samples (601: 30 s) of the delayed-feedback tests' record, δ = 50 ms, 8 harmonics
+// of a 15 s period.
 SampledData informative_record(int samples = 601) {
-  const double delta = 0.05;
-  std::mt19937_64 rng(3);
-  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
-  std::vector<double> phases(8);
-  for (double& p : phases) p = phase(rng);
-  Eigen::VectorXd u(samples);
-  for (int k = 0; k < samples; ++k) {
-    double sum = 0.0;
-    for (int j = 1; j <= 8; ++j)
-      sum += std::cos(2.0 * M_PI * j * k * delta / 15.0 + phases[static_cast<std::size_t>(j - 1)]);
-    u(k) = sum / 2.0;
-  }
-  const Eigen::VectorXd y = simulate_delayed(to_delayed_state_space(paper_loop()), u, delta,
-                                             InputHold::kFirstOrder, DelayedSimulationOptions{4});
-  return SampledData(delta, u, y);
+  return test_support::feedback_record(paper_loop(),
+                                       (samples - 1) * test_support::kFeedbackSampleTime);
 }
 
 void expect_bad_input(const testing::RunResult& r, const std::string& what) {
