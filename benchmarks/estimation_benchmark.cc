@@ -7,8 +7,8 @@
 
 #include <benchmark/benchmark.h>
 
-#include "ctid/estimation/additive_srivc.h"
-#include "ctid/estimation/srivc.h"
+#include "ctid/refined_iv/additive_srivc.h"
+#include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"

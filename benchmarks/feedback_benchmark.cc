@@ -1,5 +1,5 @@
 // The delayed-feedback identification pieces on the informative record of
-// tests/estimation/feedback_pipeline_test.cc (F, H of De Iuliis et al. 2017 Section 4,
+// tests/delayed_feedback/pipeline_test.cc (F, H of De Iuliis et al. 2017 Section 4,
 // Δ = 0.5 s, δ = 50 ms, smooth multisine continued linearly, 30 s): step 1 by batch QR and by
 // RLS, the two separations on the step-1 polynomials, one output-error refinement from a start
 // 2 % off, and the whole pipeline. Time per call.
@@ -12,16 +12,16 @@
 
 #include <benchmark/benchmark.h>
 
-#include "ctid/estimation/feedback_refinement.h"
+#include "ctid/delayed_feedback/refinement.h"
 #include "ctid/study/monte_carlo.h"
-#include "estimation/feedback_records.h"
+#include "delayed_feedback/records.h"
 
 namespace {
 
 ctid::DelayedFeedbackLoop paper_loop() { return ctid::test_support::paper_feedback_loop(); }
 
 // Noise-free record of `duration` s: the tests' smooth multisine of `harmonics` lines of a
-// `period` s fundamental through the paper's loop (estimation/feedback_records.h).
+// `period` s fundamental through the paper's loop (delayed_feedback/records.h).
 ctid::SampledData multisine_record(double duration, double period, int harmonics) {
   return ctid::test_support::feedback_record(paper_loop(), duration, period, harmonics);
 }
@@ -102,7 +102,7 @@ void BM_OutputErrorRefinement(benchmark::State& state) {
   Eigen::VectorXd start = ctid::loop_parameters(paper_loop());
   for (Eigen::Index i = 0; i < start.size(); ++i) start(i) *= (i % 2 == 0) ? 0.98 : 1.02;
   ctid::OutputErrorOptions o;
-  o.hold = ctid::InputHold::kFirstOrder;
+  o.hold = ctid::Hold::first_order_hold;
   const ctid::DelayedFeedbackLoop loop = ctid::loop_from_parameters(start, 3, 3, 0.5);
   for (auto _ : state) benchmark::DoNotOptimize(ctid::refine_output_error(record(), loop, o));
 }
@@ -110,7 +110,7 @@ BENCHMARK(BM_OutputErrorRefinement)->Unit(benchmark::kMillisecond)->Iterations(2
 
 void BM_Pipeline(benchmark::State& state) {
   ctid::FeedbackIdentificationOptions o;
-  o.output_error.hold = ctid::InputHold::kFirstOrder;
+  o.output_error.hold = ctid::Hold::first_order_hold;
   for (auto _ : state)
     benchmark::DoNotOptimize(ctid::identify_delayed_feedback(record(), 3, 3, 0.5, o));
 }
@@ -159,9 +159,9 @@ void BM_PipelineMonteCarlo(benchmark::State& state) {
   const ctid::DelayedFeedbackLoop loop = paper_loop();
   const Eigen::VectorXd truth = ctid::loop_parameters(loop);
   const ctid::SeparabilityReport crb = ctid::cramer_rao_bound(
-      loop, data.input(), data.sample_time(), ctid::InputHold::kFirstOrder, sigma);
+      loop, data.input(), data.sample_time(), ctid::Hold::first_order_hold, sigma);
   ctid::FeedbackIdentificationOptions o;
-  o.output_error.hold = ctid::InputHold::kFirstOrder;
+  o.output_error.hold = ctid::Hold::first_order_hold;
   o.extra_finalists = static_cast<int>(state.range(3));
   Eigen::MatrixXd errors(truth.size(), runs), reference_errors(truth.size(), runs);
   std::vector<int> local(static_cast<std::size_t>(runs), 0);

@@ -7,11 +7,11 @@
 #include <cstdio>
 #include <functional>
 
-#include "ctid/estimation/feedback_least_squares.h"
-#include "ctid/estimation/feedback_refinement.h"
-#include "ctid/estimation/feedback_regressors.h"
-#include "ctid/estimation/feedback_separation.h"
-#include "ctid/estimation/feedback_validation.h"
+#include "ctid/delayed_feedback/least_squares.h"
+#include "ctid/delayed_feedback/refinement.h"
+#include "ctid/delayed_feedback/regressors.h"
+#include "ctid/delayed_feedback/separation.h"
+#include "ctid/delayed_feedback/validation.h"
 #include "ctid/simulation/delayed_feedback.h"
 
 using namespace ctid;
@@ -67,7 +67,7 @@ int main() {
     const double sigma = nsr > 0.0 ? nsr * y.cwiseAbs().mean() * std::sqrt(M_PI / 2.0) : 1e-3;
     const Eigen::VectorXd uz = u;
     const SeparabilityReport crb =
-        cramer_rao_bound(truth, uz, delta, InputHold::kFirstOrder, sigma);
+        cramer_rao_bound(truth, uz, delta, Hold::first_order_hold, sigma);
     std::printf("Cramér-Rao (noise sd %.3g): max sd %.3g: %s\n", sigma,
                 crb.standard_deviations.maxCoeff(), crb.message.c_str());
   }

@@ -12,7 +12,7 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
-#include "ctid/estimation/feedback_refinement.h"
+#include "ctid/delayed_feedback/refinement.h"
 #include "ctid/io/json.h"
 #include "ctid/io/sampled_data_csv.h"
 
@@ -81,7 +81,7 @@ void run_feedback(const FeedbackFlags& f) {
   options.separation = f.separation == "gcd"         ? SeparationMethod::kGcd
                        : f.separation == "kronecker" ? SeparationMethod::kKronecker
                                                      : SeparationMethod::kBoth;
-  options.output_error.hold = f.hold == "zoh" ? InputHold::kZeroOrder : InputHold::kFirstOrder;
+  options.output_error.hold = f.hold == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
 
   FeedbackIdentificationResult r;
   nlohmann::json scan_json = nullptr;

@@ -16,11 +16,11 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
-#include "ctid/estimation/additive_srivc.h"
-#include "ctid/estimation/clsrivc.h"
-#include "ctid/estimation/delay_scan.h"
-#include "ctid/estimation/mode_relocation.h"
-#include "ctid/estimation/srivc.h"
+#include "ctid/refined_iv/additive_srivc.h"
+#include "ctid/refined_iv/clsrivc.h"
+#include "ctid/refined_iv/input_delay_scan.h"
+#include "ctid/refined_iv/mode_relocation.h"
+#include "ctid/refined_iv/srivc.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
@@ -162,9 +162,7 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
   out << "ctid fit: " << estimator << " on " << file << " (N = " << data.size()
       << ", h = " << show(data.sample_time()) << " s)\n";
   // The estimator's message restates the reason; print it only when it explains a failure.
-  out << "termination: " << to_string(r.termination) << " after " << r.iterations << " iterations";
-  if (!r.converged()) out << " (" << r.message << ")";
-  out << "\n";
+  out << "termination: " << r.brief_report() << "\n";
   out << "input delay: " << r.input_delay << " samples (" << show(r.model.input_delay()) << " s)\n";
   for (int i = 0; i < r.model.size(); ++i) {
     const Submodel& s = r.model[i];
@@ -267,7 +265,7 @@ void run_fit(const FitFlags& f, const CLI::App& app) {
   options.max_iterations = f.max_iterations;
   options.tolerance = f.tolerance;
   options.output_interpolation =
-      f.interpolation == "zoh" ? Interpolation::zero_order_hold : Interpolation::first_order_hold;
+      f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
   options.noise = f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
   options.record_history = f.history;
   options.input_delay = f.delay;
@@ -286,7 +284,7 @@ void run_fit(const FitFlags& f, const CLI::App& app) {
                       : srivc(data, s.orders.front(), o);
   };
 
-  std::optional<DelayScanResult> scanned;
+  std::optional<InputDelayScanResult> scanned;
   std::optional<EstimationResult> fitted;
   if (scan) {
     scanned = scan_input_delay(estimate, scan->first, scan->second);

@@ -253,7 +253,7 @@ void run_simulate_loop(const SimulateFlags& f, CLI::App& app, const nlohmann::js
   const DelayedFeedbackLoop loop = io::delayed_feedback_loop_from_json(document, f.model);
   const DelayedSimulationOptions options{f.substeps};
   options.validate();
-  const InputHold hold = f.hold == "zoh" ? InputHold::kZeroOrder : InputHold::kFirstOrder;
+  const Hold hold = f.hold == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
 
   const InputSignal in = f.input.empty() ? generate_input(f, app, std::nullopt)
                                          : read_input_column(f, app, std::nullopt);

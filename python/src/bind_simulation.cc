@@ -175,9 +175,6 @@ void bind_simulation(py::module_& m) {
             &to_delayed_state_space),
         py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("delay"),
         "Realisation of W = alpha / (beta + gamma e^{-Delta s}).");
-  py::enum_<InputHold>(m, "InputHold", "How a sampled input continues between samples.")
-      .value("zero_order", InputHold::kZeroOrder, "Held constant.")
-      .value("first_order", InputHold::kFirstOrder, "Linear between samples.");
   OptionsClass<DelayedSimulationOptions>(m, "DelayedSimulationOptions",
                                          "Options of simulate_delayed.")
       .field("substeps", &DelayedSimulationOptions::substeps, "RK4 steps per sample period.")
@@ -197,7 +194,7 @@ void bind_simulation(py::module_& m) {
   m.def(
       "simulate_delayed",
       [](const DelayedStateSpace& model, const Eigen::VectorXd& input, double sample_time,
-         InputHold hold, const std::optional<DelayedSimulationOptions>& options,
+         Hold hold, const std::optional<DelayedSimulationOptions>& options,
          const py::kwargs& kwargs) {
         return simulate_delayed(
             model, input, sample_time, hold,

@@ -25,6 +25,8 @@ void bind_core(py::module_& m);
 void bind_simulation(py::module_& m);
 void bind_frequency(py::module_& m);
 void bind_estimation(py::module_& m);
+void bind_refined_iv(py::module_& m);
+void bind_delayed_feedback(py::module_& m);
 void bind_study(py::module_& m);
 
 inline std::string join(const std::vector<std::string>& names) {

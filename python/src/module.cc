@@ -20,5 +20,7 @@ PYBIND11_MODULE(_ctid, m) {
   ctid::python::bind_simulation(m);
   ctid::python::bind_frequency(m);
   ctid::python::bind_estimation(m);
+  ctid::python::bind_refined_iv(m);
+  ctid::python::bind_delayed_feedback(m);
   ctid::python::bind_study(m);
 }

@@ -89,7 +89,7 @@ def informative_record(delay, noise_sd=0.0, seed=0):
     t = h * np.arange(601)
     u = sum(np.cos(2 * np.pi * j * t / 15.0 + phases[j - 1]) for j in range(1, 9)) / 2.0
     loop = ctid.DelayedFeedbackLoop(F, H, delay)
-    y = ctid.simulate_delayed(ctid.to_delayed_state_space(loop), u, h, ctid.InputHold.first_order,
+    y = ctid.simulate_delayed(ctid.to_delayed_state_space(loop), u, h, ctid.Hold.first_order_hold,
                               substeps=4)
     y = y + np.random.default_rng(seed).normal(0.0, noise_sd, y.size) if noise_sd else y
     return ctid.SampledData(h, u, y)

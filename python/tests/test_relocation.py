@@ -1,5 +1,5 @@
 """additive_srivc_relocated from Python: the three-mode case of
-tests/estimation/mode_relocation_test.cc, where a weak, lightly damped mode started far off
+tests/refined_iv/mode_relocation_test.cc, where a weak, lightly damped mode started far off
 makes the plain iteration stop at a wrong stationary point."""
 
 import math

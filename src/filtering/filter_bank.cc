@@ -149,11 +149,11 @@ FilterRealization combine_outputs(const FilterRealization& filter, const Eigen::
 }
 
 SampledFilter::SampledFilter(const FilterRealization& filter, double sample_time,
-                             Interpolation interpolation) {
+                             Hold interpolation) {
   filter.validate();
   require(std::isfinite(sample_time) && sample_time > 0.0,
           "SampledFilter: sample_time must be positive and finite, got ", sample_time);
-  if (interpolation == Interpolation::zero_order_hold) {
+  if (interpolation == Hold::zero_order_hold) {
     const ZohDiscretization zoh = discretize_zoh(filter.a, filter.b, sample_time);
     phi_ = zoh.phi;
     gamma0_ = zoh.gamma.col(0);
@@ -320,7 +320,7 @@ Eigen::MatrixXd SampledFilter::apply(const Eigen::Ref<const Eigen::VectorXd>& x)
 
 Eigen::MatrixXd filter_derivatives(const Polynomial& denominator,
                                    const Eigen::Ref<const Eigen::VectorXd>& x, double sample_time,
-                                   Interpolation interpolation) {
+                                   Hold interpolation) {
   return SampledFilter(derivative_filters(denominator), sample_time, interpolation).apply(x);
 }
 

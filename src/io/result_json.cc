@@ -95,14 +95,10 @@ std::vector<std::string> parameter_names(const AdditiveModel& model) {
 }
 
 Termination termination_from_string(const std::string& name) {
-  for (Termination t :
-       {Termination::converged, Termination::iteration_limit, Termination::singular_equations,
-        Termination::non_finite, Termination::closed_loop_unstable}) {
-    if (to_string(t) == name) return t;
-  }
-  throw InvalidArgument("unknown termination '" + name +
-                        "' (expected converged, iteration_limit, singular_equations, "
-                        "non_finite or closed_loop_unstable)");
+  if (auto t = termination_from_name(name)) return *t;
+  std::string names;
+  for (Termination t : all_terminations) names += (names.empty() ? "" : ", ") + to_string(t);
+  throw InvalidArgument("unknown termination '" + name + "' (expected one of " + names + ")");
 }
 
 nlohmann::json to_json(const EstimationResult& result) {

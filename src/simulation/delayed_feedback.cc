@@ -240,12 +240,12 @@ Eigen::VectorXd simulate_delayed(const DelayedStateSpace& model,
 }
 
 Eigen::VectorXd simulate_delayed(const DelayedStateSpace& model, const Eigen::VectorXd& input,
-                                 double sample_time, InputHold hold,
+                                 double sample_time, Hold hold,
                                  const DelayedSimulationOptions& options) {
   const int samples = static_cast<int>(input.size());
   check_common(model, sample_time, samples, options);
   require(input.allFinite(), "simulate_delayed: the input has a non-finite sample");
-  if (hold == InputHold::kZeroOrder) {
+  if (hold == Hold::zero_order_hold) {
     return integrate(
         model, [&](double, int k) { return input(k); }, sample_time, samples, options);
   }

@@ -11,9 +11,9 @@
 #include <utility>
 
 #include "ctid/core/error.h"
-#include "ctid/estimation/additive_srivc.h"
-#include "ctid/estimation/clsrivc.h"
-#include "ctid/estimation/srivc.h"
+#include "ctid/refined_iv/additive_srivc.h"
+#include "ctid/refined_iv/clsrivc.h"
+#include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/closed_loop.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"

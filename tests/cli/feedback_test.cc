@@ -8,7 +8,7 @@
 #include "ctid/io/json.h"
 #include "ctid/io/sampled_data_csv.h"
 #include "ctid/simulation/delayed_feedback.h"
-#include "estimation/feedback_records.h"
+#include "delayed_feedback/records.h"
 
 namespace ctid::cli {
 namespace {

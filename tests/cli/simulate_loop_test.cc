@@ -51,7 +51,7 @@ DelayedFeedbackLoop shipped_loop() {
       "shipped");
 }
 
-Eigen::VectorXd reference_output(InputHold hold) {
+Eigen::VectorXd reference_output(Hold hold) {
   return simulate_delayed(to_delayed_state_space(shipped_loop()),
                           io::generate_excitation(multisine_spec()), 0.05, hold,
                           DelayedSimulationOptions{4});
@@ -77,7 +77,7 @@ TEST_F(CliTest, SimulateLoopEqualsSimulateDelayedAndFeedbackRecoversIt) {
   const auto sim = ctid(simulate_args(model, data, {"--hold", "foh"}));
   ASSERT_EQ(sim.status, 0) << sim.err;
   const SampledData d = io::read_sampled_data(data);
-  const Eigen::VectorXd y = reference_output(InputHold::kFirstOrder);
+  const Eigen::VectorXd y = reference_output(Hold::first_order_hold);
   ASSERT_EQ(d.output().size(), 600);
   EXPECT_EQ(d.input(), io::generate_excitation(multisine_spec()));
   EXPECT_LT((d.output() - y).cwiseAbs().maxCoeff(), 1e-12);
@@ -106,11 +106,11 @@ TEST_F(CliTest, SimulateLoopHoldAndNoiseToSignalRatio) {
   const std::string model = example("de_iuliis_section4_loop.json");
   const auto zoh = ctid(simulate_args(model, path("zoh.csv").string(), {"--hold", "zoh"}));
   ASSERT_EQ(zoh.status, 0) << zoh.err;
-  const Eigen::VectorXd y0 = reference_output(InputHold::kZeroOrder);
+  const Eigen::VectorXd y0 = reference_output(Hold::zero_order_hold);
   const Eigen::VectorXd y_zoh = io::read_sampled_data(path("zoh.csv")).output();
   EXPECT_LT((y_zoh - y0).cwiseAbs().maxCoeff(), 1e-12);
   // The hold matters: foh and zoh differ by far more than the simulation error.
-  EXPECT_GT((reference_output(InputHold::kFirstOrder) - y0).cwiseAbs().maxCoeff(), 1e-3);
+  EXPECT_GT((reference_output(Hold::first_order_hold) - y0).cwiseAbs().maxCoeff(), 1e-3);
 
   const auto noisy = ctid(simulate_args(model, path("nsr.csv").string(),
                                         {"--hold", "zoh", "--nsr", "0.05", "--noise-seed", "9"}));

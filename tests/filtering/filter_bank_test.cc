@@ -26,7 +26,7 @@ TEST(FilterBank, FirstOrderStepResponseMatchesClosedForm) {
   const double h = 0.05;
   const int n = 100;
   const Eigen::MatrixXd out = filter_derivatives(Polynomial{1.0, tau}, Eigen::VectorXd::Ones(n), h,
-                                                 Interpolation::zero_order_hold);
+                                                 Hold::zero_order_hold);
   for (int k = 0; k < n; ++k) {
     const double t = k * h;
     EXPECT_NEAR(out(k, 0), 1.0 - std::exp(-t / tau), 1e-14);
@@ -42,9 +42,9 @@ TEST(FilterBank, FirstOrderHoldIsExactForARamp) {
   Eigen::VectorXd ramp(n);
   for (int k = 0; k < n; ++k) ramp(k) = k * h;
   const Eigen::MatrixXd foh =
-      filter_derivatives(Polynomial{1.0, tau}, ramp, h, Interpolation::first_order_hold);
+      filter_derivatives(Polynomial{1.0, tau}, ramp, h, Hold::first_order_hold);
   const Eigen::MatrixXd zoh =
-      filter_derivatives(Polynomial{1.0, tau}, ramp, h, Interpolation::zero_order_hold);
+      filter_derivatives(Polynomial{1.0, tau}, ramp, h, Hold::zero_order_hold);
   for (int k = 0; k < n; ++k) {
     const double t = k * h;
     EXPECT_NEAR(foh(k, 0), t - tau + tau * std::exp(-t / tau), 1e-13);
@@ -58,7 +58,7 @@ TEST(FilterBank, IntegratorChainsGivePolynomials) {
   const double h = 0.01;
   const int n = 200;
   const Eigen::MatrixXd out = filter_derivatives(
-      Polynomial{0.0, 0.0, 1.0}, Eigen::VectorXd::Ones(n), h, Interpolation::zero_order_hold);
+      Polynomial{0.0, 0.0, 1.0}, Eigen::VectorXd::Ones(n), h, Hold::zero_order_hold);
   for (int k = 0; k < n; ++k) {
     const double t = k * h;
     EXPECT_NEAR(out(k, 0), 0.5 * t * t, 1e-13);
@@ -75,7 +75,7 @@ TEST(FilterBank, WeightedSumOfDerivativesReproducesTheSignalAtTheSamples) {
       Polynomial{1.0, 0.5 / 1.96, 1.0 / 1.96} * Polynomial{1.0, 0.3 / 10.0, 1.0 / 10.0} *
       Polynomial{1.0, 0.34 / 33.3, 1.0 / 33.3} * Polynomial{1.0, 1.0 / 100.0, 1.0 / 100.0};
   const Eigen::VectorXd x = random_signal(2000, 7);
-  for (Interpolation hold : {Interpolation::zero_order_hold, Interpolation::first_order_hold}) {
+  for (Hold hold : {Hold::zero_order_hold, Hold::first_order_hold}) {
     const Eigen::MatrixXd out = filter_derivatives(a, x, 0.05, hold);
     const Eigen::VectorXd recombined = out * a.coefficients();
     EXPECT_LT((recombined - x).cwiseAbs().maxCoeff(), 1e-11 * x.cwiseAbs().maxCoeff());
@@ -93,8 +93,8 @@ TEST(FilterBank, CascadeEqualsOneBankOfTheSquaredDenominator) {
   const FilterRealization chain = cascade(first, weights, derivative_filters(a));
   const Eigen::VectorXd u = random_signal(500, 3);
   const double h = 0.02;
-  const Eigen::MatrixXd cascaded = SampledFilter(chain, h, Interpolation::zero_order_hold).apply(u);
-  const Eigen::MatrixXd squared = filter_derivatives(a * a, u, h, Interpolation::zero_order_hold);
+  const Eigen::MatrixXd cascaded = SampledFilter(chain, h, Hold::zero_order_hold).apply(u);
+  const Eigen::MatrixXd squared = filter_derivatives(a * a, u, h, Hold::zero_order_hold);
   ASSERT_EQ(cascaded.cols(), 3);
   for (int k = 0; k <= 2; ++k) {
     const Eigen::VectorXd reference = b[0] * squared.col(k) + b[1] * squared.col(k + 1);
@@ -108,7 +108,7 @@ TEST(FilterBank, StartsAtRestAndIsLinear) {
   const Polynomial a{1.0, 0.4, 0.1};
   const Eigen::VectorXd x1 = random_signal(300, 1);
   const Eigen::VectorXd x2 = random_signal(300, 2);
-  const SampledFilter f(derivative_filters(a), 0.05, Interpolation::first_order_hold);
+  const SampledFilter f(derivative_filters(a), 0.05, Hold::first_order_hold);
   const Eigen::MatrixXd y1 = f.apply(x1);
   const Eigen::MatrixXd y2 = f.apply(x2);
   const Eigen::MatrixXd y12 = f.apply(2.0 * x1 - x2);
@@ -130,7 +130,7 @@ TEST(FilterBank, StreamingInPiecesEqualsOnePass) {
   b8.head(3) << 1.0, -0.2, 0.05;
   const FilterRealization chain = cascade(derivative_filters(a8), b8, derivative_filters(a8));
   for (const FilterRealization& r : {derivative_filters(a5), derivative_filters(a8), chain}) {
-    for (Interpolation hold : {Interpolation::zero_order_hold, Interpolation::first_order_hold}) {
+    for (Hold hold : {Hold::zero_order_hold, Hold::first_order_hold}) {
       const SampledFilter f(r, 0.05, hold);
       const Eigen::MatrixXd whole = f.apply(x);
       Eigen::MatrixXd pieces(x.size(), f.outputs() - 1);
@@ -145,7 +145,7 @@ TEST(FilterBank, StreamingInPiecesEqualsOnePass) {
           << "order " << f.order();
     }
   }
-  const SampledFilter f(derivative_filters(a5), 0.05, Interpolation::zero_order_hold);
+  const SampledFilter f(derivative_filters(a5), 0.05, Hold::zero_order_hold);
   SampledFilter::Stream stream = f.start();
   Eigen::MatrixXd too_wide(10, f.outputs() + 1);
   EXPECT_THROW(f.run(x.head(10), stream, too_wide), InvalidArgument);
@@ -163,7 +163,7 @@ TEST(FilterBank, DelayShiftsWithZeros) {
 TEST(FilterBank, RejectsBadArguments) {
   EXPECT_THROW(derivative_filters(Polynomial{2.0}), InvalidArgument);
   EXPECT_THROW(
-      SampledFilter(derivative_filters(Polynomial{1.0, 1.0}), 0.0, Interpolation::zero_order_hold),
+      SampledFilter(derivative_filters(Polynomial{1.0, 1.0}), 0.0, Hold::zero_order_hold),
       InvalidArgument);
   const FilterRealization f = derivative_filters(Polynomial{1.0, 1.0});
   EXPECT_THROW(cascade(f, Eigen::VectorXd::Ones(5), f), InvalidArgument);

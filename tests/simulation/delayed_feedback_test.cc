@@ -97,7 +97,7 @@ TEST(DelayedFeedbackSimulation, MatchesNeumannSeriesForZohInputWithIntegerDelay)
   Eigen::VectorXd u(samples);
   for (int k = 0; k < samples; ++k) u(k) = std::sin(0.7 * k) + 0.3 * std::cos(2.1 * k);
   const Eigen::VectorXd y =
-      simulate_delayed(to_delayed_state_space(simple_loop(1.0)), u, delta, InputHold::kZeroOrder);
+      simulate_delayed(to_delayed_state_space(simple_loop(1.0)), u, delta, Hold::zero_order_hold);
   const Eigen::VectorXd ref = neumann_reference(u, delta, 1.0, 5);
   EXPECT_LT((y - ref).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_GT(ref.cwiseAbs().maxCoeff(), 0.1);
@@ -110,7 +110,7 @@ TEST(DelayedFeedbackSimulation, MatchesNeumannSeriesForFractionalDelay) {
   Eigen::VectorXd u(samples);
   for (int k = 0; k < samples; ++k) u(k) = (k % 7 < 3) ? 1.0 : -0.5;
   const Eigen::VectorXd y =
-      simulate_delayed(to_delayed_state_space(simple_loop(delay)), u, delta, InputHold::kZeroOrder);
+      simulate_delayed(to_delayed_state_space(simple_loop(delay)), u, delta, Hold::zero_order_hold);
   const Eigen::VectorXd ref = neumann_reference(u, delta, delay, 6);
   EXPECT_LT((y - ref).cwiseAbs().maxCoeff(), 1e-7);
 }
@@ -151,17 +151,17 @@ TEST(DelayedFeedbackSimulation, ClosedLoopPolynomialFormGivesTheSameResponse) {
   Eigen::VectorXd u(81);
   for (int k = 0; k < 81; ++k) u(k) = std::cos(0.37 * k * k);
   const Eigen::VectorXd y1 =
-      simulate_delayed(to_delayed_state_space(loop), u, 0.05, InputHold::kFirstOrder);
+      simulate_delayed(to_delayed_state_space(loop), u, 0.05, Hold::first_order_hold);
   const Eigen::VectorXd y2 =
       simulate_delayed(to_delayed_state_space(loop.alpha(), loop.beta(), loop.gamma(), loop.delay),
-                       u, 0.05, InputHold::kFirstOrder);
+                       u, 0.05, Hold::first_order_hold);
   EXPECT_LT((y1 - y2).cwiseAbs().maxCoeff(), 1e-8);
 }
 
 TEST(DelayedFeedbackSimulation, ZeroDelayIsAnOrdinaryFeedbackLoop) {
   // F = 1/(s+1), H = 2/(s+3), Δ = 0: W = (s+3)/((s+1)(s+3)+2) = (s+3)/(s^2+4s+5).
   const Eigen::VectorXd y = simulate_delayed(to_delayed_state_space(simple_loop(0.0)),
-                                             Eigen::VectorXd::Ones(21), 0.1, InputHold::kZeroOrder);
+                                             Eigen::VectorXd::Ones(21), 0.1, Hold::zero_order_hold);
   Cascade w;
   w.a = Eigen::MatrixXd(2, 2);
   w.a << 0, 1, -5, -4;
@@ -201,7 +201,7 @@ TEST(DelayedFeedbackSimulation, BadInputIsNamed) {
   EXPECT_THAT(
       [] {
         simulate_delayed(to_delayed_state_space(simple_loop(0.5)), Eigen::VectorXd::Ones(5), 0.0,
-                         InputHold::kZeroOrder);
+                         Hold::zero_order_hold);
       },
       testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("sample_time")));
   EXPECT_THROW(add_noise_at_nsr(Eigen::VectorXd::Ones(3), -1.0, 1), InvalidArgument);

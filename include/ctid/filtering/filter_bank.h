@@ -7,16 +7,10 @@
 
 #include <Eigen/Core>
 
+#include "ctid/core/hold.h"
 #include "ctid/core/polynomial.h"
 
 namespace ctid {
-
-/// How a sampled signal is continued between the samples before it enters a
-/// continuous-time filter.
-enum class Interpolation {
-  zero_order_hold,   ///< x(t) = x_k on [t_k, t_k+1): exact for ZOH inputs
-  first_order_hold,  ///< x(t) linear between x_k and x_k+1 (the last sample is held)
-};
 
 /// A single-input, multi-output continuous-time filter dz/dt = A z + b x, y = C z + d x
 /// (r outputs). Built by the functions below; any realisation with consistent sizes works.
@@ -61,7 +55,7 @@ class SampledFilter {
     bool started = false;
   };
 
-  SampledFilter(const FilterRealization& filter, double sample_time, Interpolation interpolation);
+  SampledFilter(const FilterRealization& filter, double sample_time, Hold interpolation);
 
   int order() const { return static_cast<int>(phi_.rows()); }
   int outputs() const { return static_cast<int>(c_.rows()); }
@@ -98,7 +92,7 @@ class SampledFilter {
 /// Convenience: the N x (deg D + 1) matrix whose column k is p^k / D(p) x at the samples.
 Eigen::MatrixXd filter_derivatives(const Polynomial& denominator,
                                    const Eigen::Ref<const Eigen::VectorXd>& x, double sample_time,
-                                   Interpolation interpolation);
+                                   Hold interpolation);
 
 /// Shifts a sampled signal by `delay` samples: out_k = x_{k - delay}, zero before the start.
 Eigen::VectorXd delay_samples(const Eigen::Ref<const Eigen::VectorXd>& x, int delay);

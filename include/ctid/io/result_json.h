@@ -14,7 +14,7 @@
 
 #include "ctid/core/additive_model.h"
 #include "ctid/core/transfer_function.h"
-#include "ctid/estimation/estimation_result.h"
+#include "ctid/refined_iv/estimation_result.h"
 #include "ctid/io/file.h"
 
 namespace ctid::io {

@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 
+#include "ctid/core/hold.h"
 #include "ctid/core/polynomial.h"
 #include "ctid/core/transfer_function.h"
 
@@ -52,12 +53,6 @@ DelayedStateSpace to_delayed_state_space(const DelayedFeedbackLoop& loop);
 DelayedStateSpace to_delayed_state_space(const Polynomial& alpha, const Polynomial& beta,
                                          const Polynomial& gamma, double delay);
 
-/// How a sampled input is continued between samples.
-enum class InputHold {
-  kZeroOrder,   ///< u(t) = u_k on [kδ, (k+1)δ)
-  kFirstOrder,  ///< linear between u_k and u_{k+1} (held after the last sample)
-};
-
 struct DelayedSimulationOptions {
   /// RK4 steps per sample period (more are added when Δ is shorter than a step).
   int substeps = 20;
@@ -70,7 +65,7 @@ Eigen::VectorXd simulate_delayed(const DelayedStateSpace& model,
                                  int samples, const DelayedSimulationOptions& options = {});
 /// Output samples for a sampled input continued by `hold`; y has the size of u.
 Eigen::VectorXd simulate_delayed(const DelayedStateSpace& model, const Eigen::VectorXd& input,
-                                 double sample_time, InputHold hold,
+                                 double sample_time, Hold hold,
                                  const DelayedSimulationOptions& options = {});
 
 /// The identification input of the paper's Section 4:

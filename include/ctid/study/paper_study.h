@@ -16,7 +16,7 @@
 #include "ctid/core/additive_model.h"
 #include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/sampled_data.h"
-#include "ctid/estimation/estimation_result.h"
+#include "ctid/refined_iv/estimation_result.h"
 
 namespace ctid {
 

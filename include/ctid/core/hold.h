@@ -1,0 +1,13 @@
+// How a sampled signal is continued between its samples: the one intersample assumption used
+// by the simulators (ZOH/FOH inputs), the estimators' filters (measured input and output) and
+// validation, so that every part of ctid that meets a sampled signal reads it the same way.
+#pragma once
+
+namespace ctid {
+
+enum class Hold {
+  zero_order_hold,   ///< x(t) = x_k on [t_k, t_k+1): exact for inputs held by a DAC
+  first_order_hold,  ///< x(t) linear between x_k and x_k+1 (held after the last sample)
+};
+
+}  // namespace ctid

@@ -1,0 +1,91 @@
+// Step 1 solvers for the delayed-feedback regression y = C θ (De Iuliis, Germani, Manes
+// 2017, Section 3.1): batch least squares by column-pivoted QR or SVD on unit-norm columns
+// (never the normal equations: cond(C) reaches 1e11), optional ridge with the weight chosen by
+// generalised cross-validation (nuisance columns are projected out, not penalised), and the
+// recursive least squares of eq. (13) with forgetting factor λ, θ(0) and P(0).
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ctid/core/polynomial.h"
+#include "ctid/delayed_feedback/regressors.h"
+
+namespace ctid {
+
+/// α̂, β̂ (monic), γ̂ of W = α/(β + γ e^{-Δs}) with the diagnostics of the fit.
+struct ClosedLoopEstimate {
+  Polynomial alpha;
+  Polynomial beta;
+  Polynomial gamma;
+  Eigen::VectorXd theta;          ///< [β_{q-1..0} | γ_{q-2..0} | α_{q-1..0}], the paper's θ
+  Eigen::VectorXd nuisance;       ///< initial-condition / boundary coefficients (may be empty)
+  double residual_rms = 0.0;      ///< rms of target - C [θ; nuisance]
+  double condition_number = 0.0;  ///< of the column-scaled regressor (θ part)
+  double ridge = 0.0;  ///< ridge weight used, relative to σ_max² of the scaled θ block
+  int equations = 0;
+  /// θ̂(k) after each RLS update (only when asked for).
+  std::vector<Eigen::VectorXd> theta_history;
+};
+
+/// Splits θ into α, β (monic, degree q), γ; theta.size() must be 3q - 1.
+ClosedLoopEstimate closed_loop_polynomials(const Eigen::VectorXd& theta, int q);
+/// θ of known polynomials (β monic of degree q, deg α < q, deg γ < q - 1).
+Eigen::VectorXd closed_loop_theta(const Polynomial& alpha, const Polynomial& beta,
+                                  const Polynomial& gamma);
+
+enum class LeastSquaresSolver { kQr, kSvd };
+enum class Regularisation {
+  kNone,   ///< plain least squares; a rank-deficient regressor throws InvalidArgument
+  kFixed,  ///< ridge with weight `ridge` (relative to σ_max² of the scaled θ block)
+  kGcv,    ///< ridge with the weight minimising generalised cross-validation
+};
+
+struct BatchLeastSquaresOptions {
+  LeastSquaresSolver solver = LeastSquaresSolver::kQr;
+  Regularisation regularisation = Regularisation::kNone;
+  double ridge = 1e-8;
+  /// Log-spaced GCV grid of relative weights in [gcv_min, gcv_max].
+  double gcv_min = 1e-14;
+  double gcv_max = 1e-1;
+  int gcv_points = 80;
+  /// Singular values below this times σ_max (scaled columns) count as zero.
+  double rank_tolerance = 1e-14;
+
+  void validate() const;
+};
+
+ClosedLoopEstimate estimate_closed_loop_batch(const FeedbackRegression& regression,
+                                              const BatchLeastSquaresOptions& options = {});
+
+struct RecursiveLeastSquaresOptions {
+  double forgetting = 0.99;                                  ///< λ in (0, 1]
+  std::optional<Eigen::VectorXd> initial_theta;              ///< θ(0); zero when absent
+  double initial_covariance = 1.0;                           ///< P(0) = initial_covariance * I ...
+  std::optional<Eigen::MatrixXd> initial_covariance_matrix;  ///< ... unless given in full
+  bool keep_history = false;                                 ///< fill theta_history
+
+  void validate() const;
+};
+
+/// Eq. (13): L = P c^T/(c P c^T + λ), P <- (P - L c P)/λ, θ <- θ + L (y - c θ).
+class RecursiveLeastSquares {
+ public:
+  RecursiveLeastSquares(Eigen::VectorXd theta0, Eigen::MatrixXd p0, double forgetting);
+  void update(const Eigen::RowVectorXd& c, double y);
+  const Eigen::VectorXd& theta() const { return theta_; }
+  const Eigen::MatrixXd& covariance() const { return p_; }
+
+ private:
+  Eigen::VectorXd theta_;
+  Eigen::MatrixXd p_;
+  double forgetting_;
+};
+
+/// Runs eq. (13) over the equations in order (all columns, nuisance included).
+ClosedLoopEstimate estimate_closed_loop_recursive(const FeedbackRegression& regression,
+                                                  const RecursiveLeastSquaresOptions& options = {});
+
+}  // namespace ctid

@@ -1,0 +1,88 @@
+// What a refined instrumental-variable estimate returns (González et al., Sections 3-5): the
+// model in its additive and unfactored views, beta = [theta_1; ...; theta_K] (eq. 3 order),
+// why the iteration (29) stopped, the Lemma 4.4 check, the asymptotic covariance (Theorem 3.2)
+// with standard errors of modal parameters, and the checks of Assumptions 1 and 4.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ctid/core/additive_model.h"
+#include "ctid/core/transfer_function.h"
+#include "ctid/estimation/termination.h"
+
+namespace ctid {
+
+/// Natural frequency, damping ratio and modal gain of one second-order mode with their
+/// delta-method standard errors (NaN where no covariance is available).
+struct ModalEstimate {
+  int submodel = 0;  ///< index in the model's additive view
+  ModalParameters value;
+  ModalParameters standard_error;
+};
+
+/// One iteration of (29), recorded when RefinedIvOptions::record_history is set.
+struct IterationRecord {
+  int iteration = 0;
+  Eigen::VectorXd parameters;      ///< beta after this iteration
+  double relative_change = 0.0;    ///< ||beta_{j+1} - beta_j|| / ||beta_j||
+  double off_diagonal_norm = 0.0;  ///< Lemma 4.4: ||off-block-diagonal part|| / ||beta||
+};
+
+/// Checks of the paper's assumptions on the data (Assumptions 1 and 4).
+struct DataChecks {
+  /// Largest order (up to the required one) at which the input (open loop) or reference
+  /// (closed loop) is persistently exciting.
+  int excitation_order = 0;
+  /// 2 n open loop, 2 n + n_c closed loop (n = total number of poles).
+  int excitation_order_required = 0;
+  bool persistently_exciting = true;
+  /// Largest |imaginary part| of the estimated poles [rad/s] against the Nyquist
+  /// frequency pi/h: Assumption 4 asks for the former to be smaller.
+  double largest_pole_frequency = 0.0;
+  double nyquist_frequency = 0.0;
+  bool sampling_rate_ok = true;
+  /// One sentence per failed check.
+  std::vector<std::string> warnings;
+};
+
+/// Derives termination, message and iterations (the iteration count of (29)) from Outcome.
+struct EstimationResult : Outcome {
+  EstimationResult(AdditiveModel estimated, TransferFunction unfactored)
+      : model(std::move(estimated)), transfer_function(std::move(unfactored)) {}
+
+  /// The estimated parameterisation: K submodels for the additive estimators, one unfactored
+  /// submodel B/(p^l A) for SRIVC/CLSRIVC. Input delay in seconds.
+  AdditiveModel model;
+  /// The same model as one transfer function (the unfactored view).
+  TransferFunction transfer_function;
+  /// Partial-fraction view of an unfactored estimate (second-order modes, an integrator
+  /// submodel); equals `model` for the additive estimators; empty if it cannot be formed
+  /// (e.g. repeated poles).
+  std::optional<AdditiveModel> additive_view;
+
+  Eigen::VectorXd parameters;        ///< beta, stacked theta_i (eq. 3)
+  Eigen::MatrixXd covariance;        ///< of `parameters` (already divided by N); empty if unknown
+  Eigen::VectorXd standard_errors;   ///< sqrt of its diagonal
+  std::vector<ModalEstimate> modes;  ///< every second-order mode of `additive_view`
+
+  double relative_change = 0.0;    ///< at the last iteration
+  double off_diagonal_norm = 0.0;  ///< Lemma 4.4 at the last iteration (0 for K = 1)
+  int unstable_reflections = 0;    ///< denominators reflected into the left half-plane
+  int sensitivity_fallbacks = 0;   ///< closed loop: S_uo r reused because the loop was unstable
+  int step_halvings = 0;           ///< steps of (29) halved by RefinedIvOptions::step_control
+
+  int input_delay = 0;              ///< samples
+  double noise_variance = 0.0;      ///< sum of squared residuals / (N - parameters)
+  double mean_squared_error = 0.0;  ///< sum of squared residuals / N (output error)
+  double fit_percent = 0.0;         ///< 100 (1 - ||y - y_model|| / ||y - mean(y)||)
+
+  DataChecks checks;
+  std::vector<IterationRecord> history;
+};
+
+}  // namespace ctid

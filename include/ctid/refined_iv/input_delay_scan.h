@@ -1,0 +1,38 @@
+// Input-delay estimation for the refined IV estimators: run the estimator for every integer
+// delay in a range and keep the best output-error fit (González et al., Section 7 reports a
+// 4-sample delay found this way). Works with any estimator through a callback.
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include "ctid/core/additive_model.h"
+#include "ctid/core/sampled_data.h"
+#include "ctid/refined_iv/estimation_result.h"
+#include "ctid/refined_iv/refined_iv_options.h"
+
+namespace ctid {
+
+struct InputDelayScanResult {
+  EstimationResult best;  ///< the estimate at the delay with the smallest mean squared error
+  std::vector<int> delays;
+  std::vector<double> mean_squared_errors;  ///< per delay; +inf where the estimator threw
+  std::vector<Termination> terminations;    ///< per delay (not_run where the estimator refused it)
+};
+
+/// Calls `estimate(delay)` for delay = min_delay..max_delay. Estimates that did not converge
+/// are kept in the table but chosen only if none converged. Throws InvalidArgument for a bad
+/// range or if every delay throws (the first message is passed on).
+InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>& estimate,
+                                 int min_delay, int max_delay);
+
+/// additive_srivc over a delay range (options.input_delay is overridden).
+InputDelayScanResult additive_srivc_delay_scan(const SampledData& data,
+                                          const std::vector<SubmodelOrder>& orders, int min_delay,
+                                          int max_delay, const RefinedIvOptions& options = {});
+
+/// srivc over a delay range.
+InputDelayScanResult srivc_delay_scan(const SampledData& data, const SubmodelOrder& order, int min_delay,
+                                 int max_delay, const RefinedIvOptions& options = {});
+
+}  // namespace ctid

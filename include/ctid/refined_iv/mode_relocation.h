@@ -1,0 +1,121 @@
+// Mode relocation, a global restart for the additive open-loop iteration (29) of González et
+// al.: when it stops at a stationary point that leaves a lightly damped mode unexplained
+// (Section 7: the beam's weak modes 3-4 from theta_i^1), a second-order submodel is moved to
+// the residual's largest spectral peak and the iteration re-run; the move is kept only if the
+// output error (of the poles, by default) falls. Ours, beyond the paper.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ctid/core/additive_model.h"
+#include "ctid/core/sampled_data.h"
+#include "ctid/refined_iv/estimation_result.h"
+#include "ctid/refined_iv/refined_iv_options.h"
+
+namespace ctid {
+
+/// How a candidate estimate is compared with the current one.
+enum class RelocationCriterion {
+  /// Mean squared output error with every numerator re-fitted by least squares for the
+  /// estimate's denominators (the output error of its poles), or that of the start the
+  /// iteration was run from if smaller and the moved mode stayed within the search window.
+  /// Default: for a weak, very lightly damped mode the refined IV fixed point can fit worse
+  /// than leaving the mode out (docs/algorithms/section7-beam.md), so the fixed point's own
+  /// output error misranks the poles.
+  projected_output_error,
+  /// The estimate's own mean squared output error (EstimationResult::mean_squared_error):
+  /// the final estimate's output error never exceeds the plain one.
+  output_error,
+};
+
+struct ModeRelocationOptions {
+  /// Largest number of moves kept (0: the plain estimate). >= 0.
+  int max_relocations = 4;
+  /// Residual peaks examined per round, the highest above the local floor first. >= 1.
+  int peaks_per_round = 6;
+  /// A residual periodogram peak counts if it is at least this many times its local floor
+  /// (the median periodogram over +-floor_half_width lines). > 1.
+  double min_peak_to_floor = 8.0;
+  /// Peaks are looked for only on lines where the input's local median periodogram is at
+  /// least this fraction of its largest value (the excited band): outside it a mode can only
+  /// fit the start-up transient, i.e. noise. In [0, 1].
+  double min_input_level = 1e-2;
+  /// Half-width of the window of the local floor, in DFT lines of the record. >= 1.
+  int floor_half_width = 64;
+  /// The residual's DFT is taken over this multiple of the record length (zero padding),
+  /// so that peaks between lines are located. >= 1.
+  int zero_padding = 4;
+  /// Each peak is refined by an output-error least-squares search over
+  /// +-search_half_width lines around it (peaks this close to a mode the model already has
+  /// are skipped) ... > 0,
+  double search_half_width = 1.0;
+  /// ... on this many equally spaced frequencies (>= 3) ...
+  int search_points = 41;
+  /// ... and these damping ratios (each in (0, 1), at least one).
+  std::vector<double> damping_ratios = {1e-4, 1e-3, 1e-2};
+  /// Candidate starts (peak, submodel moved) re-run through the iteration per round, those
+  /// with the smallest least-squares output error first; the first one that is kept ends the
+  /// round. >= 1.
+  int trials_per_round = 3;
+  /// How candidates are compared.
+  RelocationCriterion criterion = RelocationCriterion::projected_output_error;
+  /// A move is kept if the iteration converges and the criterion falls below
+  /// (1 - min_relative_decrease) times the current value. In [0, 1).
+  double min_relative_decrease = 1e-6;
+
+  /// Throws InvalidArgument naming the first bad field, its value and the rule.
+  void validate() const;
+};
+
+/// One candidate start that was re-run through the iteration.
+struct RelocationTrial {
+  int round = 0;                 ///< 0 for the first round
+  int submodel = 0;              ///< index of the submodel that was moved
+  double moved_from = 0.0;       ///< its natural frequency before the move [rad/s]
+  double peak_frequency = 0.0;   ///< the residual peak [rad/s]
+  double peak_to_floor = 0.0;    ///< its periodogram over the local floor
+  double start_frequency = 0.0;  ///< natural frequency of the start after the search [rad/s]
+  double start_damping = 0.0;    ///< damping ratio of the start
+  double start_mean_squared_error = 0.0;      ///< least-squares output error of the start
+  double mean_squared_error = 0.0;            ///< after the iteration
+  double projected_mean_squared_error = 0.0;  ///< after the iteration, numerators re-fitted
+  double score = 0.0;  ///< the criterion's value for this trial (see RelocationCriterion)
+  Termination termination = Termination::iteration_limit;
+  bool accepted = false;
+};
+
+struct ModeRelocationResult {
+  explicit ModeRelocationResult(EstimationResult result) : estimate(std::move(result)) {}
+
+  /// The final estimate (with covariance if RefinedIvOptions::compute_covariance).
+  EstimationResult estimate;
+  double initial_mean_squared_error = 0.0;            ///< of the plain estimate, before any move
+  double initial_projected_mean_squared_error = 0.0;  ///< the same, numerators re-fitted
+  double projected_mean_squared_error = 0.0;          ///< of the final estimate
+  double initial_score = 0.0;           ///< the criterion's value for the plain estimate
+  double score = 0.0;                   ///< ... and for the kept one (never larger)
+  int rounds = 0;                       ///< rounds that looked for peaks
+  int relocations = 0;                  ///< moves kept
+  std::vector<RelocationTrial> trials;  ///< every re-run, in order
+  std::string message;                  ///< one sentence: what was tried and kept
+};
+
+/// additive_srivc (open loop, options.input_delay fixed), then up to max_relocations rounds
+/// of: peaks of the residual (numerators re-fitted) on the excited band; for each, the mode
+/// (frequency, damping) that explains most of it; candidate starts with one movable submodel
+/// (second order, no integrators) replaced by that mode and every numerator re-fitted; the
+/// iteration from the best candidates; the first that converges (or any, while the current
+/// estimate has not converged) and is better by ModeRelocationOptions::criterion is kept.
+/// Deterministic. Throws InvalidArgument for bad options or data (as additive_srivc does).
+///
+/// With a delay scan: run additive_srivc_delay_scan first, then this with
+/// options.input_delay = scan.best.input_delay and options.initial_model = scan.best.model
+/// (the plain run then stops at once); or pass a lambda calling this to scan_input_delay.
+ModeRelocationResult additive_srivc_relocated(const SampledData& data,
+                                              const std::vector<SubmodelOrder>& orders,
+                                              const RefinedIvOptions& options = {},
+                                              const ModeRelocationOptions& relocation = {});
+
+}  // namespace ctid

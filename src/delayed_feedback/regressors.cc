@@ -1,0 +1,185 @@
+// Step 1 regressors of the delayed-feedback identification (eqs. 6-12).
+#include "ctid/delayed_feedback/regressors.h"
+
+#include <cmath>
+
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "ctid/core/error.h"
+
+namespace ctid {
+namespace {
+
+double factorial(int k) {
+  double f = 1.0;
+  for (int i = 2; i <= k; ++i) f *= i;
+  return f;
+}
+
+// Filter states of a whole sampled signal, X.row(k) = state at kδ, and the state at kδ - Δ.
+class FilteredSignal {
+ public:
+  FilteredSignal(const Eigen::VectorXd& s, const FilterStep& full, const FilterStep& part,
+                 double delta, int whole, bool fractional)
+      : s_(s), part_(part), delta_(delta), whole_(whole), fractional_(fractional) {
+    const Eigen::Index q = full.a.rows();
+    states_ = Eigen::MatrixXd::Zero(s.size(), q);
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(q);
+    for (Eigen::Index k = 0; k + 1 < s.size(); ++k) {
+      x = full.a * x + full.b * s(k) + full.g * ((s(k + 1) - s(k)) / delta);
+      states_.row(k + 1) = x.transpose();
+    }
+  }
+  Eigen::VectorXd at(Eigen::Index k) const { return states_.row(k).transpose(); }
+  // State at kδ - Δ, Δ = whole δ + f: zero before t = 0 (the loop is at rest there).
+  Eigen::VectorXd delayed(Eigen::Index k) const {
+    const Eigen::Index q = states_.cols();
+    if (!fractional_) {
+      return k - whole_ >= 0 ? at(k - whole_) : Eigen::VectorXd::Zero(q);
+    }
+    const Eigen::Index j = k - whole_ - 1;
+    if (j < 0) return Eigen::VectorXd::Zero(q);
+    return part_.a * at(j) + part_.b * s_(j) + part_.g * ((s_(j + 1) - s_(j)) / delta_);
+  }
+
+ private:
+  const Eigen::VectorXd& s_;
+  FilterStep part_;
+  double delta_;
+  Eigen::Index whole_;
+  bool fractional_;
+  Eigen::MatrixXd states_;
+};
+
+}  // namespace
+
+FilterStep integrator_chain_step(int q, double tau) {
+  require(q >= 1, "integrator_chain_step: order q must be >= 1, got ", q);
+  require(std::isfinite(tau) && tau >= 0.0, "integrator_chain_step: tau must be >= 0, got ", tau);
+  FilterStep r;
+  r.a = Eigen::MatrixXd::Zero(q, q);
+  r.b.resize(q);
+  r.g.resize(q);
+  for (int i = 0; i < q; ++i) {
+    for (int j = i; j < q; ++j) r.a(i, j) = std::pow(tau, j - i) / factorial(j - i);
+    const int rr = q - 1 - i;  // r = q - i with 1-based i
+    r.b(i) = std::pow(tau, rr + 1) / factorial(rr + 1);
+    r.g(i) = std::pow(tau, rr + 2) / factorial(rr + 2);
+  }
+  return r;
+}
+
+FilterStep integral_filter_step(int q, double pole, double tau) {
+  require(q >= 1, "integral_filter_step: order q must be >= 1, got ", q);
+  require(std::isfinite(pole) && pole >= 0.0,
+          "integral_filter_step: pole a must be finite and >= 0, got ", pole);
+  require(std::isfinite(tau) && tau >= 0.0, "integral_filter_step: tau must be >= 0, got ", tau);
+  if (pole == 0.0) return integrator_chain_step(q, tau);
+  // (s + a)^q = sum_i C(q, i) a^{q-i} s^i.
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(q + 2, q + 2);
+  for (int i = 0; i + 1 < q; ++i) m(i, i + 1) = 1.0;
+  for (int i = 0; i < q; ++i)
+    m(q - 1, i) = -factorial(q) / (factorial(i) * factorial(q - i)) * std::pow(pole, q - i);
+  m(q - 1, q) = 1.0;
+  m(q, q + 1) = 1.0;
+  const Eigen::MatrixXd e = (m * tau).exp();
+  FilterStep r;
+  r.a = e.topLeftCorner(q, q);
+  r.b = e.block(0, q, q, 1);
+  r.g = e.block(0, q + 1, q, 1);
+  return r;
+}
+
+void FeedbackRegressorOptions::validate() const {
+  require(filter == RegressorFilter::kIntegratorChain ||
+              (std::isfinite(filter_pole) && filter_pole > 0.0),
+          "FeedbackRegressorOptions: filter_pole must be positive and finite for the linear "
+          "integral filter, got ",
+          filter_pole);
+  require(first_equation >= -1, "FeedbackRegressorOptions: first_equation must be >= 0 or -1 ",
+          "(paper's k = p), got ", first_equation);
+}
+
+FeedbackRegression build_feedback_regression(const SampledData& data, int forward_order,
+                                             int feedback_order, double delay,
+                                             const FeedbackRegressorOptions& options) {
+  options.validate();
+  require(forward_order >= 1, "feedback identification: forward order n must be >= 1, got ",
+          forward_order);
+  require(feedback_order >= 1, "feedback identification: feedback order m must be >= 1, got ",
+          feedback_order);
+  require(std::isfinite(delay) && delay >= 0.0,
+          "feedback identification: delay must be finite and >= 0, got ", delay);
+  const double delta = data.sample_time();
+  const int samples = data.size();
+  const double duration = (samples - 1) * delta;
+  require(duration > delay, "feedback identification: the record (", duration,
+          " s) must be longer than the delay (", delay, " s)");
+  const int q = forward_order + feedback_order;
+  const double pole =
+      options.filter == RegressorFilter::kIntegratorChain ? 0.0 : options.filter_pole;
+
+  int whole = static_cast<int>(std::floor(delay / delta + 1e-9));
+  double frac = delay - whole * delta;
+  if (frac < 1e-9 * delta) frac = 0.0;
+  const bool fractional = frac > 0.0;
+  const FilterStep full = integral_filter_step(q, pole, delta);
+  const FilterStep part = integral_filter_step(q, pole, fractional ? delta - frac : 0.0);
+  const FilteredSignal y(data.output(), full, part, delta, whole, fractional);
+  const FilteredSignal u(data.input(), full, part, delta, whole, fractional);
+
+  const int first = options.first_equation >= 0 ? options.first_equation
+                                                : static_cast<int>(std::ceil(delay / delta - 1e-9));
+  const int rows = samples - first;
+  const int theta_size = 3 * q - 1;
+  // For t >= Δ the delayed terms (t - Δ)^j e^{-a(t-Δ)} lie in the span of t^j e^{-at}: they
+  // add information only when some equations precede Δ.
+  const bool delayed_terms =
+      options.initial_condition_terms && first * delta < delay - 1e-9 * delta;
+  const int nuisance = options.initial_condition_terms ? (delayed_terms ? 2 * q : q) : 0;
+  require(rows >= theta_size + nuisance + 1, "feedback identification: too few samples: ", rows,
+          " equations for ", theta_size + nuisance,
+          " unknowns (need more equations than unknowns; record more samples)");
+
+  // Coefficients of (s + a)^q below s^q: the target is s^q/(s+a)^q y = y - sum c_i x_{i+1}.
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(q);
+  for (int i = 0; i < q; ++i)
+    c(i) = factorial(q) / (factorial(i) * factorial(q - i)) * std::pow(pole, q - i);
+
+  FeedbackRegression r;
+  r.regressor = Eigen::MatrixXd::Zero(rows, theta_size + nuisance);
+  r.target.resize(rows);
+  r.sample_index.resize(rows);
+  for (int row = 0; row < rows; ++row) {
+    const int k = first + row;
+    const Eigen::VectorXd xy = y.at(k);
+    const Eigen::VectorXd xd = y.delayed(k);
+    const Eigen::VectorXd xu = u.at(k);
+    for (int j = 0; j < q; ++j) r.regressor(row, j) = -xy(q - 1 - j);
+    for (int j = 0; j + 1 < q; ++j) r.regressor(row, q + j) = -xd(q - 2 - j);
+    for (int j = 0; j < q; ++j) r.regressor(row, 2 * q - 1 + j) = xu(q - 1 - j);
+    r.target(row) = data.output()(k) - (pole == 0.0 ? 0.0 : c.dot(xy));
+    r.sample_index(row) = k;
+    if (nuisance > 0) {
+      const double t = k * delta;
+      const double td = t - delay;
+      for (int j = 0; j < q; ++j) {
+        r.regressor(row, theta_size + j) = std::pow(t, j) * std::exp(-pole * t) / factorial(j);
+        if (!delayed_terms) continue;
+        r.regressor(row, theta_size + q + j) =
+            td >= -1e-9 * delta
+                ? std::pow(std::max(td, 0.0), j) * std::exp(-pole * td) / factorial(j)
+                : 0.0;
+      }
+    }
+  }
+  r.forward_order = forward_order;
+  r.feedback_order = feedback_order;
+  r.theta_size = theta_size;
+  r.nuisance_size = nuisance;
+  r.delay = delay;
+  r.sample_time = delta;
+  return r;
+}
+
+}  // namespace ctid

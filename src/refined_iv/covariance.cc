@@ -1,0 +1,192 @@
+// Sandwich covariance of IV estimates with an AR noise model, and delta-method modal errors.
+#include "ctid/refined_iv/covariance.h"
+
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Dense>
+
+#include "ctid/core/error.h"
+
+namespace ctid {
+
+AutoregressiveModel fit_autoregressive(const Eigen::VectorXd& x, int max_order) {
+  const Eigen::Index n = x.size();
+  require(n >= 2, "fit_autoregressive: needs at least 2 samples, got ", n);
+  require(max_order >= 0, "fit_autoregressive: max_order is ", max_order, "; it must be >= 0");
+  const int top = static_cast<int>(std::min<Eigen::Index>(max_order, n / 4));
+  const double mean = x.mean();
+  const Eigen::VectorXd c = x.array() - mean;
+  Eigen::VectorXd r(top + 1);
+  for (int k = 0; k <= top; ++k) r(k) = c.head(n - k).dot(c.tail(n - k)) / static_cast<double>(n);
+  AutoregressiveModel best;
+  best.coefficients = Eigen::VectorXd::Ones(1);
+  best.innovation_variance = r(0);
+  if (!(r(0) > 0.0)) return best;
+  double best_aic = static_cast<double>(n) * std::log(r(0));
+  Eigen::VectorXd a = Eigen::VectorXd::Zero(top + 1);
+  a(0) = 1.0;
+  double err = r(0);
+  for (int k = 1; k <= top; ++k) {
+    double acc = r(k);
+    for (int j = 1; j < k; ++j) acc += a(j) * r(k - j);
+    const double reflection = -acc / err;
+    const Eigen::VectorXd previous = a;
+    for (int j = 1; j < k; ++j) a(j) = previous(j) + reflection * previous(k - j);
+    a(k) = reflection;
+    err *= 1.0 - reflection * reflection;
+    if (!(err > 0.0)) break;
+    const double aic = static_cast<double>(n) * std::log(err) + 2.0 * k;
+    if (aic < best_aic) {
+      best_aic = aic;
+      best.coefficients = a.head(k + 1);
+      best.innovation_variance = err;
+    }
+  }
+  return best;
+}
+
+Eigen::MatrixXd instrumental_variable_covariance(const Eigen::MatrixXd& psi,
+                                                 const Eigen::VectorXd& residual,
+                                                 int parameter_count, NoiseAssumption noise,
+                                                 int max_ar_order) {
+  const Eigen::Index n = psi.rows();
+  const Eigen::Index p = psi.cols();
+  require(residual.size() == n, "instrumental_variable_covariance: residual has ", residual.size(),
+          " samples, psi has ", n);
+  require(n > parameter_count, "instrumental_variable_covariance: ", n, " samples are too few for ",
+          parameter_count, " parameters");
+  // Scale columns to unit norm so that the inverse is formed on a well-conditioned matrix.
+  Eigen::VectorXd s = psi.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < p; ++j) {
+    if (!(s(j) > 0.0)) s(j) = 1.0;
+  }
+  const Eigen::MatrixXd scaled = psi * s.cwiseInverse().asDiagonal();
+  const Eigen::MatrixXd r = scaled.transpose() * scaled;
+  const Eigen::MatrixXd r_inv = r.completeOrthogonalDecomposition().pseudoInverse();
+  Eigen::MatrixXd middle_inv;
+  if (noise == NoiseAssumption::white) {
+    const double sigma2 = residual.squaredNorm() / static_cast<double>(n - parameter_count);
+    middle_inv = sigma2 * r_inv;
+  } else {
+    const AutoregressiveModel ar = fit_autoregressive(residual, max_ar_order);
+    const double e2 =
+        ar.innovation_variance * static_cast<double>(n) / static_cast<double>(n - parameter_count);
+    // psi~_s = sum_j h_j psi_{s+j}, h the impulse response of 1/A: run 1/A backwards in time.
+    // Time runs along the columns of g (p x N) so each step touches contiguous memory.
+    Eigen::MatrixXd g = scaled.transpose();
+    const Eigen::Index order = ar.coefficients.size() - 1;
+    for (Eigen::Index k = n - 2; k >= 0; --k) {
+      for (Eigen::Index j = 1; j <= order && k + j < n; ++j) {
+        g.col(k) -= ar.coefficients(j) * g.col(k + j);
+      }
+    }
+    const Eigen::MatrixXd q = e2 * (g * g.transpose());
+    middle_inv = r_inv * q * r_inv;
+  }
+  return s.cwiseInverse().asDiagonal() * middle_inv * s.cwiseInverse().asDiagonal();
+}
+
+namespace {
+
+// (natural frequency, damping, gain) of every second-order mode, in submodel order.
+std::vector<std::pair<int, ModalParameters>> modes_of(const AdditiveModel& model) {
+  std::vector<std::pair<int, ModalParameters>> out;
+  for (int i = 0; i < model.size(); ++i) {
+    if (const auto m = model.modal_parameters(i)) out.emplace_back(i, *m);
+  }
+  return out;
+}
+
+ModalParameters nan_modal() {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  return {nan, nan, nan};
+}
+
+}  // namespace
+
+std::vector<ModalEstimate> modal_estimates(const AdditiveModel& model,
+                                           const Eigen::MatrixXd& covariance, bool unfactored) {
+  std::vector<ModalEstimate> out;
+  const Eigen::VectorXd theta = model.parameters();
+  const bool have_cov = covariance.rows() == theta.size() && covariance.cols() == theta.size();
+  if (!unfactored) {
+    std::vector<int> offset;
+    int at = 0;
+    for (const SubmodelOrder& o : model.orders()) {
+      offset.push_back(at);
+      at += o.n + o.m + 1;
+    }
+    for (const auto& [i, m] : modes_of(model)) {
+      ModalEstimate e{i, m, nan_modal()};
+      if (have_cov) {
+        const int o = offset[static_cast<size_t>(i)];
+        const double a1 = theta(o);
+        const double a2 = theta(o + 1);
+        // w = a2^-1/2, zeta = a1 / (2 sqrt(a2)), gain = b0.
+        Eigen::Matrix3d j = Eigen::Matrix3d::Zero();
+        j(0, 1) = -0.5 * std::pow(a2, -1.5);
+        j(1, 0) = 0.5 / std::sqrt(a2);
+        j(1, 1) = -0.25 * a1 * std::pow(a2, -1.5);
+        j(2, 2) = 1.0;
+        const Eigen::Matrix3d c = j * covariance.block(o, o, 3, 3) * j.transpose();
+        e.standard_error = {std::sqrt(c(0, 0)), std::sqrt(c(1, 1)), std::sqrt(c(2, 2))};
+      }
+      out.push_back(e);
+    }
+    return out;
+  }
+  // Unfactored: modes of the partial-fraction view, Jacobian by central differences.
+  auto view_of = [&](const Eigen::VectorXd& t) {
+    return AdditiveModel::from_transfer_function(
+        AdditiveModel::from_parameters(model.orders(), t).to_transfer_function());
+  };
+  std::vector<std::pair<int, ModalParameters>> base;
+  try {
+    base = modes_of(view_of(theta));
+  } catch (const InvalidArgument&) {
+    return out;
+  }
+  const Eigen::Index p = theta.size();
+  const Eigen::Index q = static_cast<Eigen::Index>(3 * base.size());
+  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(q, p);
+  bool ok = have_cov;
+  for (Eigen::Index k = 0; ok && k < p; ++k) {
+    const double step = 1e-6 * std::max(std::abs(theta(k)), 1e-6);
+    Eigen::VectorXd plus = theta;
+    Eigen::VectorXd minus = theta;
+    plus(k) += step;
+    minus(k) -= step;
+    try {
+      const auto mp = modes_of(view_of(plus));
+      const auto mm = modes_of(view_of(minus));
+      if (mp.size() != base.size() || mm.size() != base.size()) {
+        ok = false;
+        break;
+      }
+      for (size_t r = 0; r < base.size(); ++r) {
+        const auto idx = static_cast<Eigen::Index>(3 * r);
+        jac(idx, k) =
+            (mp[r].second.natural_frequency - mm[r].second.natural_frequency) / (2 * step);
+        jac(idx + 1, k) = (mp[r].second.damping_ratio - mm[r].second.damping_ratio) / (2 * step);
+        jac(idx + 2, k) = (mp[r].second.gain - mm[r].second.gain) / (2 * step);
+      }
+    } catch (const InvalidArgument&) {
+      ok = false;
+    }
+  }
+  Eigen::MatrixXd c;
+  if (ok) c = jac * covariance * jac.transpose();
+  for (size_t r = 0; r < base.size(); ++r) {
+    ModalEstimate e{base[r].first, base[r].second, nan_modal()};
+    if (ok) {
+      const auto idx = static_cast<Eigen::Index>(3 * r);
+      e.standard_error = {std::sqrt(c(idx, idx)), std::sqrt(c(idx + 1, idx + 1)),
+                          std::sqrt(c(idx + 2, idx + 2))};
+    }
+    out.push_back(e);
+  }
+  return out;
+}
+
+}  // namespace ctid

@@ -1,0 +1,236 @@
+// LSSVF starts refined by SRIVC, and grouping of poles into a requested additive structure.
+#include "ctid/refined_iv/initialization.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <deque>
+#include <limits>
+
+#include <Eigen/Dense>
+
+#include "ctid/core/error.h"
+#include "ctid/refined_iv/srivc.h"
+#include "ctid/estimation/validation.h"
+#include "ctid/filtering/filter_bank.h"
+#include "refined_iv/internal/refined_iv_engine.h"
+
+namespace ctid {
+
+namespace {
+
+// Least squares with columns scaled to unit norm (column-pivoted QR).
+Eigen::VectorXd scaled_least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
+  Eigen::VectorXd s = x.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < s.size(); ++j) {
+    if (!(s(j) > 0.0)) s(j) = 1.0;
+  }
+  const Eigen::MatrixXd scaled = x * s.cwiseInverse().asDiagonal();
+  const Eigen::VectorXd z = scaled.colPivHouseholderQr().solve(y);
+  return z.cwiseQuotient(s);
+}
+
+}  // namespace
+
+void InitializationOptions::validate() const {
+  for (size_t i = 0; i < filter_bandwidths.size(); ++i) {
+    require(std::isfinite(filter_bandwidths[i]) && filter_bandwidths[i] > 0.0,
+            "InitializationOptions.filter_bandwidths[", i, "] is ", filter_bandwidths[i],
+            "; it must be positive and finite");
+  }
+  require(refinement_iterations >= 0, "InitializationOptions.refinement_iterations is ",
+          refinement_iterations, "; it must be >= 0");
+  require(input_delay >= 0, "InitializationOptions.input_delay is ", input_delay,
+          "; it must be >= 0");
+}
+
+SubmodelOrder unfactored_order(const std::vector<SubmodelOrder>& orders) {
+  require(!orders.empty(), "unfactored_order: the structure has no submodels");
+  SubmodelOrder total{0, 0, 0};
+  for (const SubmodelOrder& o : orders) {
+    total.n += o.n;
+    total.integrators += o.integrators;
+  }
+  for (const SubmodelOrder& o : orders) {
+    total.m = std::max(total.m, o.m + (total.n - o.n) + (total.integrators - o.integrators));
+  }
+  return total;
+}
+
+TransferFunction lssvf(const SampledData& data, const SubmodelOrder& order, double bandwidth,
+                       int input_delay) {
+  require(order.n >= 0 && order.m >= 0 && order.integrators >= 0 &&
+              order.n + order.integrators >= 1 && order.m <= order.n + order.integrators,
+          "lssvf: impossible orders n = ", order.n, ", m = ", order.m,
+          ", integrators = ", order.integrators);
+  require(std::isfinite(bandwidth) && bandwidth > 0.0, "lssvf: bandwidth is ", bandwidth,
+          "; it must be positive");
+  const int d = order.n + order.integrators;
+  const Polynomial one_pole{1.0, 1.0 / bandwidth};
+  Polynomial f{1.0};
+  for (int k = 0; k < d; ++k) f = f * one_pole;
+  const double h = data.sample_time();
+  const Eigen::MatrixXd fy =
+      filter_derivatives(f, data.output(), h, Hold::first_order_hold);
+  const Eigen::MatrixXd fu = filter_derivatives(f, delay_samples(data.input(), input_delay), h,
+                                                Hold::zero_order_hold);
+  const int l = order.integrators;
+  Eigen::MatrixXd x(data.size(), order.n + order.m + 1);
+  for (int k = 1; k <= order.n; ++k) x.col(k - 1) = -fy.col(k + l);
+  x.rightCols(order.m + 1) = fu.leftCols(order.m + 1);
+  const Eigen::VectorXd theta = scaled_least_squares(x, fy.col(l));
+  Eigen::VectorXd a(order.n + 1);
+  a(0) = 1.0;
+  a.tail(order.n) = theta.head(order.n);
+  return TransferFunction(Polynomial::trimmed(theta.tail(order.m + 1)),
+                          Polynomial::monomial(l) * Polynomial::trimmed(a));
+}
+
+TransferFunction initial_transfer_function(const SampledData& data, const SubmodelOrder& order,
+                                           const InitializationOptions& options) {
+  options.validate();
+  std::vector<double> grid = options.filter_bandwidths;
+  const double nyquist = M_PI / data.sample_time();
+  if (grid.empty()) {
+    for (double w = nyquist / 128.0; w <= nyquist * 1.0001; w *= 2.0) grid.push_back(w);
+  }
+  double best_cost = std::numeric_limits<double>::infinity();
+  std::optional<TransferFunction> best;
+  for (double lambda : grid) {
+    try {
+      const TransferFunction start = lssvf(data, order, lambda, options.input_delay);
+      const Eigen::VectorXd theta = internal::unfactored_parameters(start, order);
+      if (!theta.allFinite()) continue;
+      AdditiveModel model = AdditiveModel::from_parameters({order}, theta);
+      if (options.refinement_iterations > 0) {
+        RefinedIvOptions o;
+        o.initial_model = model;
+        o.max_iterations = options.refinement_iterations;
+        o.tolerance = 1e-8;
+        o.input_delay = options.input_delay;
+        o.compute_covariance = false;
+        const EstimationResult r = srivc(data, order, o);
+        if (!std::isfinite(r.mean_squared_error)) continue;
+        if (r.mean_squared_error < best_cost) {
+          best_cost = r.mean_squared_error;
+          best = r.transfer_function.with_input_delay(0.0);
+        }
+      } else {
+        // Judge the (stabilised) LSSVF model by its output error.
+        bool reflected = false;
+        const Polynomial a = internal::reflect_unstable_roots(model[0].a, reflected);
+        model = AdditiveModel({Submodel{a, model[0].b, order.integrators}},
+                              options.input_delay * data.sample_time());
+        const double cost =
+            (data.output() - model_output(model, data.input(), data.sample_time())).squaredNorm();
+        if (std::isfinite(cost) && cost < best_cost) {
+          best_cost = cost;
+          best = model.to_transfer_function().with_input_delay(0.0);
+        }
+      }
+    } catch (const InvalidArgument&) {
+      continue;  // a bandwidth that gives a degenerate start is skipped
+    }
+  }
+  require(best.has_value(), "initial_transfer_function: no filter bandwidth gave a usable start;",
+          " give an initial model");
+  return *best;
+}
+
+AdditiveModel group_into_submodels(const TransferFunction& g,
+                                   const std::vector<SubmodelOrder>& orders,
+                                   const SampledData& data, int input_delay) {
+  require(!orders.empty(), "group_into_submodels: the structure has no submodels");
+  const Polynomial& den = g.denominator();
+  int origin = 0;
+  while (origin <= den.degree() && den[origin] == 0.0) ++origin;
+  int n_total = 0;
+  int l_total = 0;
+  for (const SubmodelOrder& o : orders) {
+    n_total += o.n;
+    l_total += o.integrators;
+  }
+  const int nonzero = den.degree() - origin;
+  require(nonzero == n_total && origin == l_total, "group_into_submodels: the model has ", nonzero,
+          " non-zero poles and ", origin, " at the origin; the structure asks for ", n_total,
+          " and ", l_total);
+  std::vector<std::complex<double>> poles;
+  if (nonzero > 0) {
+    const Polynomial reduced(den.coefficients().tail(nonzero + 1));
+    const Eigen::VectorXcd r = reduced.roots();
+    for (Eigen::Index k = 0; k < r.size(); ++k) {
+      std::complex<double> z = r(k);
+      if (z.real() > 0.0) z = {-z.real(), z.imag()};
+      if (z.imag() >= -1e-9 * std::abs(z)) poles.push_back(z);  // one of each pair
+    }
+  }
+  std::sort(poles.begin(), poles.end(),
+            [](const std::complex<double>& a, const std::complex<double>& b) {
+              return std::abs(a) < std::abs(b);
+            });
+  // Units: a complex pair (two poles) or one real pole.
+  std::deque<std::vector<std::complex<double>>> units;
+  for (const auto& z : poles) {
+    if (std::abs(z.imag()) > 1e-9 * std::abs(z)) {
+      units.push_back({z, std::conj(z)});
+    } else {
+      units.push_back({std::complex<double>(z.real(), 0.0)});
+    }
+  }
+  const Eigen::VectorXd u = delay_samples(data.input(), input_delay);
+  const double h = data.sample_time();
+  std::vector<Polynomial> denominators;
+  int columns = 0;
+  for (const SubmodelOrder& o : orders) {
+    std::vector<std::complex<double>> mine;
+    while (static_cast<int>(mine.size()) < o.n) {
+      require(!units.empty(), "group_into_submodels: ran out of poles");
+      std::vector<std::complex<double>> unit = units.front();
+      units.pop_front();
+      if (static_cast<int>(mine.size() + unit.size()) > o.n) {
+        // A pair does not fit: split it into two real poles of the same magnitude.
+        const double m = -std::abs(unit[0]);
+        mine.emplace_back(m, 0.0);
+        units.push_front({std::complex<double>(m, 0.0)});
+      } else {
+        mine.insert(mine.end(), unit.begin(), unit.end());
+      }
+    }
+    Polynomial a{1.0};
+    if (!mine.empty()) {
+      Eigen::VectorXcd roots(static_cast<Eigen::Index>(mine.size()));
+      for (size_t k = 0; k < mine.size(); ++k) roots(static_cast<Eigen::Index>(k)) = mine[k];
+      a = Polynomial::from_roots(roots).anti_monic();
+    }
+    denominators.push_back(a);
+    columns += o.m + 1;
+  }
+  // Numerators by output-error least squares with the denominators fixed.
+  Eigen::MatrixXd x(data.size(), columns);
+  int at = 0;
+  for (size_t i = 0; i < orders.size(); ++i) {
+    const Polynomial d = Polynomial::monomial(orders[i].integrators) * denominators[i];
+    const Eigen::MatrixXd f = filter_derivatives(d, u, h, Hold::zero_order_hold);
+    x.middleCols(at, orders[i].m + 1) = f.leftCols(orders[i].m + 1);
+    at += orders[i].m + 1;
+  }
+  const Eigen::VectorXd b = scaled_least_squares(x, data.output());
+  Eigen::VectorXd beta(n_total + columns);
+  int pos = 0;
+  at = 0;
+  for (size_t i = 0; i < orders.size(); ++i) {
+    for (int k = 1; k <= orders[i].n; ++k) beta(pos++) = denominators[i][k];
+    for (int k = 0; k <= orders[i].m; ++k) beta(pos++) = b(at++);
+  }
+  return AdditiveModel::from_parameters(orders, beta, input_delay * h);
+}
+
+AdditiveModel initial_additive_model(const SampledData& data,
+                                     const std::vector<SubmodelOrder>& orders,
+                                     const InitializationOptions& options) {
+  const SubmodelOrder total = unfactored_order(orders);
+  const TransferFunction g = initial_transfer_function(data, total, options);
+  return group_into_submodels(g, orders, data, options.input_delay);
+}
+
+}  // namespace ctid

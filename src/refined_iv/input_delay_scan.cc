@@ -1,0 +1,75 @@
+// Delay estimation by scanning whole-sample delays and keeping the best output-error fit.
+#include "ctid/refined_iv/input_delay_scan.h"
+
+#include <limits>
+#include <optional>
+#include <string>
+
+#include "ctid/core/error.h"
+#include "ctid/refined_iv/additive_srivc.h"
+#include "ctid/refined_iv/srivc.h"
+
+namespace ctid {
+
+InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>& estimate,
+                                 int min_delay, int max_delay) {
+  require(min_delay >= 0 && max_delay >= min_delay, "scan_input_delay: the delay range [",
+          min_delay, ", ", max_delay, "] must satisfy 0 <= min_delay <= max_delay");
+  std::optional<EstimationResult> best;
+  bool best_converged = false;
+  std::string first_error;
+  InputDelayScanResult table{
+      EstimationResult(AdditiveModel({{Polynomial{1.0, 1.0}, Polynomial{1.0}, 0}}),
+                       TransferFunction(Polynomial{1.0}, Polynomial{1.0, 1.0})),
+      {},
+      {},
+      {}};
+  for (int d = min_delay; d <= max_delay; ++d) {
+    table.delays.push_back(d);
+    try {
+      EstimationResult r = estimate(d);
+      table.mean_squared_errors.push_back(r.mean_squared_error);
+      table.terminations.push_back(r.termination);
+      const bool better =
+          !best || (r.converged() && !best_converged) ||
+          (r.converged() == best_converged && r.mean_squared_error < best->mean_squared_error);
+      if (better) {
+        best_converged = r.converged();
+        best = std::move(r);
+      }
+    } catch (const InvalidArgument& e) {
+      if (first_error.empty()) first_error = e.what();
+      table.mean_squared_errors.push_back(std::numeric_limits<double>::infinity());
+      table.terminations.push_back(Termination::not_run);  // the estimator refused this delay
+    }
+  }
+  require(best.has_value(),
+          "scan_input_delay: every delay failed; the first error was: ", first_error);
+  table.best = std::move(*best);
+  return table;
+}
+
+InputDelayScanResult additive_srivc_delay_scan(const SampledData& data,
+                                          const std::vector<SubmodelOrder>& orders, int min_delay,
+                                          int max_delay, const RefinedIvOptions& options) {
+  return scan_input_delay(
+      [&](int d) {
+        RefinedIvOptions o = options;
+        o.input_delay = d;
+        return additive_srivc(data, orders, o);
+      },
+      min_delay, max_delay);
+}
+
+InputDelayScanResult srivc_delay_scan(const SampledData& data, const SubmodelOrder& order, int min_delay,
+                                 int max_delay, const RefinedIvOptions& options) {
+  return scan_input_delay(
+      [&](int d) {
+        RefinedIvOptions o = options;
+        o.input_delay = d;
+        return srivc(data, order, o);
+      },
+      min_delay, max_delay);
+}
+
+}  // namespace ctid

@@ -1,0 +1,41 @@
+// The one iteration behind SRIVC, CLSRIVC and the additive estimators: eq. (29) of
+// González et al. with K = 1 giving eq. (30). Private to the estimation layer.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ctid/core/additive_model.h"
+#include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/sampled_data.h"
+#include "ctid/refined_iv/estimation_result.h"
+#include "ctid/refined_iv/refined_iv_options.h"
+
+namespace ctid::internal {
+
+struct RefinedIvProblem {
+  const SampledData* data = nullptr;
+  std::vector<SubmodelOrder> orders;
+  /// nullptr: open loop (instrument (10)); otherwise closed loop (instrument (20)).
+  const DiscreteTransferFunction* controller = nullptr;
+  /// One unfactored model whose additive view comes from partial fractions.
+  bool unfactored = false;
+  const char* name = "estimator";
+};
+
+EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIvOptions& options);
+
+/// Parameters of `model` laid out for `orders` (b padded with zeros up to m_i); throws
+/// InvalidArgument if the structure does not fit.
+Eigen::VectorXd parameters_for_orders(const AdditiveModel& model,
+                                      const std::vector<SubmodelOrder>& orders);
+
+/// The single-submodel parameterisation of an unfactored transfer function B/(p^l A).
+Eigen::VectorXd unfactored_parameters(const TransferFunction& g, const SubmodelOrder& order);
+
+/// Anti-monic polynomial with the right-half-plane roots of `a` mirrored; `reflected` tells
+/// whether anything changed.
+Polynomial reflect_unstable_roots(const Polynomial& a, bool& reflected);
+
+}  // namespace ctid::internal

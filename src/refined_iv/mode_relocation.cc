@@ -1,0 +1,451 @@
+// Mode relocation for additive estimates: residual periodogram peaks in the excited band, a
+// least-squares search for a start at each peak, the refined IV iteration from the best
+// starts, a move kept only if the poles fit better.
+#include "ctid/refined_iv/mode_relocation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+#include <Eigen/Dense>
+#include <unsupported/Eigen/FFT>
+
+#include "ctid/core/error.h"
+#include "ctid/refined_iv/additive_srivc.h"
+#include "ctid/filtering/filter_bank.h"
+
+namespace ctid {
+
+void ModeRelocationOptions::validate() const {
+  require(max_relocations >= 0, "ModeRelocationOptions.max_relocations is ", max_relocations,
+          "; it must be >= 0");
+  require(peaks_per_round >= 1, "ModeRelocationOptions.peaks_per_round is ", peaks_per_round,
+          "; it must be >= 1");
+  require(std::isfinite(min_peak_to_floor) && min_peak_to_floor > 1.0,
+          "ModeRelocationOptions.min_peak_to_floor is ", min_peak_to_floor,
+          "; it must be finite and > 1");
+  require(min_input_level >= 0.0 && min_input_level <= 1.0,
+          "ModeRelocationOptions.min_input_level is ", min_input_level, "; it must be in [0, 1]");
+  require(floor_half_width >= 1, "ModeRelocationOptions.floor_half_width is ", floor_half_width,
+          "; it must be >= 1");
+  require(zero_padding >= 1, "ModeRelocationOptions.zero_padding is ", zero_padding,
+          "; it must be >= 1");
+  require(std::isfinite(search_half_width) && search_half_width > 0.0,
+          "ModeRelocationOptions.search_half_width is ", search_half_width,
+          "; it must be finite and > 0");
+  require(search_points >= 3, "ModeRelocationOptions.search_points is ", search_points,
+          "; it must be >= 3");
+  require(!damping_ratios.empty(),
+          "ModeRelocationOptions.damping_ratios is empty; give at least one damping ratio");
+  for (size_t k = 0; k < damping_ratios.size(); ++k) {
+    require(damping_ratios[k] > 0.0 && damping_ratios[k] < 1.0,
+            "ModeRelocationOptions.damping_ratios[", k, "] is ", damping_ratios[k],
+            "; it must be in (0, 1)");
+  }
+  require(trials_per_round >= 1, "ModeRelocationOptions.trials_per_round is ", trials_per_round,
+          "; it must be >= 1");
+  require(min_relative_decrease >= 0.0 && min_relative_decrease < 1.0,
+          "ModeRelocationOptions.min_relative_decrease is ", min_relative_decrease,
+          "; it must be in [0, 1)");
+}
+
+namespace {
+
+// Anti-monic second-order denominator with natural frequency w and damping ratio z.
+Polynomial mode_denominator(double w, double z) {
+  return Polynomial{1.0, 2.0 * z / w, 1.0 / (w * w)};
+}
+
+// Columns p^k / (p^l A) u, k = 0..m: the numerator regressors of one submodel.
+Eigen::MatrixXd numerator_columns(const Polynomial& a, int integrators, int m,
+                                  const Eigen::VectorXd& u, double h) {
+  const Polynomial d = Polynomial::monomial(integrators) * a;
+  return filter_derivatives(d, u, h, Hold::zero_order_hold).leftCols(m + 1);
+}
+
+// Output-error least squares of y on the columns of x, columns scaled to unit norm.
+struct LeastSquares {
+  Eigen::VectorXd coefficients;
+  Eigen::VectorXd residual;
+};
+
+LeastSquares least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
+  Eigen::VectorXd s = x.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < s.size(); ++j) {
+    if (!(s(j) > 0.0)) s(j) = 1.0;
+  }
+  const Eigen::MatrixXd scaled = x * s.cwiseInverse().asDiagonal();
+  const Eigen::VectorXd z = scaled.colPivHouseholderQr().solve(y);
+  LeastSquares out;
+  out.coefficients = z.cwiseQuotient(s);
+  out.residual = y - scaled * z;
+  return out;
+}
+
+struct Peak {
+  double frequency = 0.0;  // rad/s
+  double ratio = 0.0;      // periodogram over local floor
+};
+
+// Median of power(j * stride) over lines j' in [j - w, j + w] (clipped to 1..lines-1), for
+// every line j.
+Eigen::VectorXd local_median(const Eigen::VectorXd& power, Eigen::Index stride, Eigen::Index lines,
+                             Eigen::Index w) {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(std::max<Eigen::Index>(lines, 1));
+  std::vector<double> window;
+  for (Eigen::Index j = 1; j < lines; ++j) {
+    window.clear();
+    const Eigen::Index lo = std::max<Eigen::Index>(1, j - w);
+    const Eigen::Index hi = std::min<Eigen::Index>(lines - 1, j + w);
+    for (Eigen::Index i = lo; i <= hi; ++i) window.push_back(power(i * stride));
+    const auto mid = window.begin() + static_cast<std::ptrdiff_t>(window.size() / 2);
+    std::nth_element(window.begin(), mid, window.end());
+    out(j) = *mid;
+  }
+  return out;
+}
+
+// Lines of the record where the input's local median periodogram reaches min_input_level
+// times its largest value.
+std::vector<bool> excited_lines(const Eigen::VectorXd& u, const ModeRelocationOptions& o) {
+  Eigen::FFT<double> fft;
+  Eigen::VectorXcd spectrum;
+  fft.fwd(spectrum, u);
+  const Eigen::Index lines = u.size() / 2;
+  Eigen::VectorXd power(std::max<Eigen::Index>(lines, 1));
+  for (Eigen::Index k = 0; k < lines; ++k) power(k) = std::norm(spectrum(k));
+  const Eigen::VectorXd level = local_median(power, 1, lines, o.floor_half_width);
+  const double top = level.maxCoeff();
+  std::vector<bool> out(static_cast<size_t>(std::max<Eigen::Index>(lines, 1)), false);
+  for (Eigen::Index j = 1; j < lines; ++j) {
+    out[static_cast<size_t>(j)] = top > 0.0 && level(j) >= o.min_input_level * top;
+  }
+  return out;
+}
+
+// Peaks of the zero-padded periodogram of r on excited lines, highest ratio first, at least
+// search_half_width lines apart.
+std::vector<Peak> residual_peaks(const Eigen::VectorXd& r, const std::vector<bool>& excited,
+                                 double h, const ModeRelocationOptions& o) {
+  const Eigen::Index n = r.size();
+  const Eigen::Index length = n * o.zero_padding;
+  Eigen::VectorXd padded = Eigen::VectorXd::Zero(length);
+  padded.head(n) = r;
+  Eigen::FFT<double> fft;
+  Eigen::VectorXcd spectrum;
+  fft.fwd(spectrum, padded);
+  const Eigen::Index half = length / 2;  // bins 1..half-1 are inside (0, Nyquist)
+  if (half < 3 || n < 4) return {};
+  Eigen::VectorXd power(half);
+  for (Eigen::Index k = 0; k < half; ++k) power(k) = std::norm(spectrum(k));
+  // Local floor on the record's own lines (every zero_padding-th bin), by medians.
+  const Eigen::Index lines = n / 2;
+  const Eigen::VectorXd floor_line = local_median(power, o.zero_padding, lines, o.floor_half_width);
+  const double bin = 2.0 * M_PI / (static_cast<double>(length) * h);
+  std::vector<Peak> peaks;
+  for (Eigen::Index k = 2; k + 1 < half; ++k) {
+    if (!(power(k) > power(k - 1) && power(k) >= power(k + 1))) continue;
+    const Eigen::Index j = std::clamp<Eigen::Index>((k + o.zero_padding / 2) / o.zero_padding, 1,
+                                                    std::max<Eigen::Index>(lines - 1, 1));
+    if (!excited[static_cast<size_t>(j)]) continue;
+    const double floor = floor_line(j);
+    if (!(floor > 0.0)) continue;
+    const double ratio = power(k) / floor;
+    if (ratio < o.min_peak_to_floor) continue;
+    // Parabolic interpolation of log power around the maximum.
+    const double l0 = std::log(power(k - 1));
+    const double l1 = std::log(power(k));
+    const double l2 = std::log(power(k + 1));
+    const double curvature = l0 - 2.0 * l1 + l2;
+    double offset = 0.0;
+    if (std::isfinite(curvature) && curvature < 0.0) {
+      offset = std::clamp(0.5 * (l0 - l2) / curvature, -0.5, 0.5);
+    }
+    peaks.push_back({(static_cast<double>(k) + offset) * bin, ratio});
+  }
+  std::sort(peaks.begin(), peaks.end(), [](const Peak& a, const Peak& b) {
+    return a.ratio > b.ratio || (a.ratio == b.ratio && a.frequency < b.frequency);
+  });
+  const double separation = o.search_half_width * 2.0 * M_PI / (static_cast<double>(n) * h);
+  std::vector<Peak> kept;
+  for (const Peak& p : peaks) {
+    bool near = false;
+    for (const Peak& q : kept) near = near || std::abs(p.frequency - q.frequency) < separation;
+    if (!near) kept.push_back(p);
+    if (static_cast<int>(kept.size()) >= o.peaks_per_round) break;
+  }
+  return kept;
+}
+
+// A second-order mode (w, z) with numerator degree m that explains most of the residual r once
+// the span of q (an orthonormal basis of the current regressors) is projected out.
+struct ModeStart {
+  double frequency = 0.0;
+  double damping = 0.0;
+  double reduction = -1.0;
+};
+
+ModeStart search_mode(const Peak& peak, const Eigen::MatrixXd& q, const Eigen::VectorXd& r,
+                      const Eigen::VectorXd& u, double h, int m, const ModeRelocationOptions& o) {
+  const double line = 2.0 * M_PI / (static_cast<double>(u.size()) * h);
+  const double lo = std::max(peak.frequency - o.search_half_width * line, 0.25 * line);
+  const double hi = std::min(peak.frequency + o.search_half_width * line, M_PI / h * 0.999);
+  ModeStart best;
+  if (!(hi > lo)) return best;
+  for (double z : o.damping_ratios) {
+    for (int s = 0; s < o.search_points; ++s) {
+      const double w = lo + (hi - lo) * s / (o.search_points - 1);
+      Eigen::MatrixXd c = numerator_columns(mode_denominator(w, z), 0, m, u, h);
+      c -= q * (q.transpose() * c);
+      for (Eigen::Index j = 0; j < c.cols(); ++j) {
+        const double norm = c.col(j).norm();
+        if (norm > 0.0) c.col(j) /= norm;
+      }
+      const Eigen::MatrixXd gram = c.transpose() * c;
+      const Eigen::VectorXd cr = c.transpose() * r;
+      const Eigen::LDLT<Eigen::MatrixXd> ldlt(gram);
+      if (ldlt.info() != Eigen::Success) continue;
+      const double reduction = cr.dot(ldlt.solve(cr));
+      if (std::isfinite(reduction) && reduction > best.reduction) best = {w, z, reduction};
+    }
+  }
+  return best;
+}
+
+bool movable(const SubmodelOrder& o) { return o.n == 2 && o.integrators == 0; }
+
+// The numerator regressors of every submodel for given denominators, side by side, and the
+// output-error least-squares fit of the numerators.
+struct ProjectedFit {
+  Eigen::MatrixXd x;
+  std::vector<Eigen::Index> first_column;  // of each submodel
+  LeastSquares fit;
+  double mean_squared_error = 0.0;
+};
+
+ProjectedFit projected_fit(const std::vector<Polynomial>& denominators,
+                           const std::vector<SubmodelOrder>& orders, const Eigen::VectorXd& u,
+                           const Eigen::VectorXd& y, double h) {
+  ProjectedFit out;
+  Eigen::Index total = 0;
+  for (const SubmodelOrder& o : orders) {
+    out.first_column.push_back(total);
+    total += o.m + 1;
+  }
+  out.x.resize(y.size(), total);
+  for (size_t i = 0; i < orders.size(); ++i) {
+    out.x.middleCols(out.first_column[i], orders[i].m + 1) =
+        numerator_columns(denominators[i], orders[i].integrators, orders[i].m, u, h);
+  }
+  out.fit = least_squares(out.x, y);
+  out.mean_squared_error = out.fit.residual.squaredNorm() / static_cast<double>(y.size());
+  return out;
+}
+
+std::vector<Polynomial> denominators_of(const AdditiveModel& model) {
+  std::vector<Polynomial> out;
+  for (int i = 0; i < model.size(); ++i) out.push_back(model[i].a);
+  return out;
+}
+
+double projected_mse(const EstimationResult& r, const std::vector<SubmodelOrder>& orders,
+                     const SampledData& data) {
+  if (!r.parameters.allFinite()) return std::numeric_limits<double>::infinity();
+  const Eigen::VectorXd u = delay_samples(data.input(), r.input_delay);
+  const double mse =
+      projected_fit(denominators_of(r.model), orders, u, data.output(), data.sample_time())
+          .mean_squared_error;
+  return std::isfinite(mse) ? mse : std::numeric_limits<double>::infinity();
+}
+
+struct Candidate {
+  int submodel = 0;
+  Peak peak;
+  ModeStart start;
+  double mean_squared_error = 0.0;
+  Eigen::VectorXd beta;
+};
+
+std::string format_hz(double w) {
+  std::ostringstream out;
+  out.precision(6);
+  out << w / (2.0 * M_PI) << " Hz";
+  return out.str();
+}
+
+}  // namespace
+
+ModeRelocationResult additive_srivc_relocated(const SampledData& data,
+                                              const std::vector<SubmodelOrder>& orders,
+                                              const RefinedIvOptions& options,
+                                              const ModeRelocationOptions& relocation) {
+  relocation.validate();
+  options.validate();
+  RefinedIvOptions trial_options = options;
+  trial_options.compute_covariance = false;
+  trial_options.record_history = false;
+  const bool projected = relocation.criterion == RelocationCriterion::projected_output_error;
+
+  ModeRelocationResult out(additive_srivc(data, orders, options));
+  out.initial_mean_squared_error = out.estimate.mean_squared_error;
+  out.initial_projected_mean_squared_error = projected_mse(out.estimate, orders, data);
+  EstimationResult current = out.estimate;
+  // The criterion's value of the current estimate. Projected criterion: the output error of
+  // the poles, at the iteration's fixed point or, if smaller, at the start it was reached
+  // from (when the moved mode stayed within the search window of it). The refined IV fixed
+  // point of a weak, very lightly damped mode can fit clearly worse than that nearby start,
+  // and a later move must beat the better of the two.
+  double current_score =
+      projected ? out.initial_projected_mean_squared_error : current.mean_squared_error;
+  out.initial_score = current_score;
+  out.score = current_score;
+  const double h = data.sample_time();
+  const Eigen::VectorXd& y = data.output();
+  std::vector<int> movable_submodels;
+  for (size_t i = 0; i < orders.size(); ++i) {
+    if (movable(orders[i])) movable_submodels.push_back(static_cast<int>(i));
+  }
+  const std::vector<bool> excited = excited_lines(data.input(), relocation);
+  // The search uses the simplest numerator among the movable submodels.
+  int search_m = std::numeric_limits<int>::max();
+  for (int i : movable_submodels) search_m = std::min(search_m, orders[static_cast<size_t>(i)].m);
+
+  for (int round = 0; round < relocation.max_relocations && !movable_submodels.empty(); ++round) {
+    if (!std::isfinite(current_score) || !current.parameters.allFinite()) break;
+    ++out.rounds;
+    const Eigen::VectorXd u = delay_samples(data.input(), current.input_delay);
+    const AdditiveModel& model = current.model;
+    const std::vector<Polynomial> denominators = denominators_of(model);
+    const ProjectedFit base = projected_fit(denominators, orders, u, y, h);
+    // Orthonormal basis of the current regressors (columns scaled first for the rank).
+    Eigen::VectorXd norms = base.x.colwise().norm().transpose();
+    for (Eigen::Index j = 0; j < norms.size(); ++j) {
+      if (!(norms(j) > 0.0)) norms(j) = 1.0;
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(base.x *
+                                                         norms.cwiseInverse().asDiagonal());
+    const Eigen::MatrixXd q =
+        (qr.householderQ() * Eigen::MatrixXd::Identity(base.x.rows(), base.x.cols()))
+            .leftCols(qr.rank());
+
+    std::vector<Candidate> candidates;
+    // A peak at a mode the model already has is that mode's misfit, for the iteration to fix;
+    // a second submodel there would make the equations of (29) nearly singular.
+    const double line = 2.0 * M_PI / (static_cast<double>(data.size()) * h);
+    std::vector<double> present;
+    for (int i = 0; i < model.size(); ++i) {
+      if (const std::optional<ModalParameters> m = model.modal_parameters(i)) {
+        present.push_back(m->natural_frequency);
+      }
+    }
+    for (const Peak& peak : residual_peaks(base.fit.residual, excited, h, relocation)) {
+      const bool taken = std::any_of(present.begin(), present.end(), [&](double w) {
+        return std::abs(w - peak.frequency) < relocation.search_half_width * line;
+      });
+      if (taken) continue;
+      const ModeStart start = search_mode(peak, q, base.fit.residual, u, h, search_m, relocation);
+      if (start.reduction <= 0.0) continue;
+      for (int moved : movable_submodels) {
+        const auto mi = static_cast<size_t>(moved);
+        std::vector<Polynomial> moved_denominators = denominators;
+        moved_denominators[mi] = mode_denominator(start.frequency, start.damping);
+        const ProjectedFit fit = projected_fit(moved_denominators, orders, u, y, h);
+        Candidate c;
+        c.submodel = moved;
+        c.peak = peak;
+        c.start = start;
+        c.mean_squared_error = fit.mean_squared_error;
+        c.beta.resize(model.parameter_count());
+        Eigen::Index pos = 0;
+        Eigen::Index col = 0;
+        for (size_t i = 0; i < orders.size(); ++i) {
+          const Polynomial& a = moved_denominators[i];
+          for (int k = 1; k <= orders[i].n; ++k) c.beta(pos++) = k <= a.degree() ? a[k] : 0.0;
+          for (int k = 0; k <= orders[i].m; ++k) c.beta(pos++) = fit.fit.coefficients(col++);
+        }
+        if (c.beta.allFinite()) candidates.push_back(std::move(c));
+      }
+    }
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const Candidate& a, const Candidate& b) {
+                       return a.mean_squared_error < b.mean_squared_error;
+                     });
+    if (candidates.size() > static_cast<size_t>(relocation.trials_per_round)) {
+      candidates.resize(static_cast<size_t>(relocation.trials_per_round));
+    }
+
+    std::optional<EstimationResult> kept;
+    size_t kept_trial = 0;
+    const double keep = 1.0 - relocation.min_relative_decrease;
+    for (const Candidate& c : candidates) {
+      RelocationTrial trial;
+      trial.round = round;
+      trial.submodel = c.submodel;
+      const std::optional<ModalParameters> before = model.modal_parameters(c.submodel);
+      trial.moved_from =
+          before ? before->natural_frequency : std::numeric_limits<double>::quiet_NaN();
+      trial.peak_frequency = c.peak.frequency;
+      trial.peak_to_floor = c.peak.ratio;
+      trial.start_frequency = c.start.frequency;
+      trial.start_damping = c.start.damping;
+      trial.start_mean_squared_error = c.mean_squared_error;
+      RefinedIvOptions o = trial_options;
+      o.initial_model = AdditiveModel::from_parameters(orders, c.beta, current.input_delay * h);
+      o.input_delay = current.input_delay;
+      EstimationResult r = additive_srivc(data, orders, o);
+      trial.mean_squared_error = r.mean_squared_error;
+      trial.projected_mean_squared_error = projected_mse(r, orders, data);
+      trial.termination = r.termination;
+      out.trials.push_back(trial);
+      double score = projected ? trial.projected_mean_squared_error : r.mean_squared_error;
+      const std::optional<ModalParameters> after = r.model.modal_parameters(c.submodel);
+      const bool stayed = after && std::abs(after->natural_frequency - c.start.frequency) <
+                                       relocation.search_half_width * line;
+      if (projected && stayed) score = std::min(score, c.mean_squared_error);
+      out.trials.back().score = score;
+      // A trial that did not converge may replace a current estimate that did not either.
+      const bool settled = r.converged() || !current.converged();
+      if (settled && score < keep * current_score) {
+        kept = std::move(r);
+        kept_trial = out.trials.size() - 1;
+        current_score = score;
+        break;
+      }
+    }
+    if (!kept) break;
+    out.trials[kept_trial].accepted = true;
+    out.score = current_score;
+    ++out.relocations;
+    current = std::move(*kept);
+  }
+
+  if (out.relocations > 0) {
+    // The kept estimate was found without covariance; one more run from it (a fixed point, so
+    // it stops at once) fills in what the caller asked for.
+    RefinedIvOptions o = options;
+    o.initial_model = current.model;
+    o.input_delay = current.input_delay;
+    out.estimate = additive_srivc(data, orders, o);
+  }
+  out.projected_mean_squared_error = projected_mse(out.estimate, orders, data);
+  std::ostringstream message;
+  message.precision(6);
+  message << out.relocations << " relocation(s) kept of " << out.trials.size() << " tried in "
+          << out.rounds << " round(s); mean squared output error " << out.initial_mean_squared_error
+          << " -> " << out.estimate.mean_squared_error
+          << " (numerators re-fitted: " << out.initial_projected_mean_squared_error << " -> "
+          << out.projected_mean_squared_error << ")";
+  for (const RelocationTrial& t : out.trials) {
+    if (t.accepted) {
+      message << "; submodel " << t.submodel << " moved from " << format_hz(t.moved_from) << " to "
+              << format_hz(t.start_frequency);
+    }
+  }
+  out.message = message.str();
+  return out;
+}
+
+}  // namespace ctid

@@ -1,0 +1,717 @@
+// The refined IV iteration (29) shared by every estimator of González et al.: per iteration
+// and submodel, one filter bank of u through 1/(p^l A_i) (regressor B-part, model output),
+// one cascade p^k B_i/(p^l A_i^2) of the instrument source (u or S_uo r), and one bank of the
+// residual output y~_i (23) through 1/A_i. Columns are scaled to unit norm before solving.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
+
+#include "ctid/core/error.h"
+#include "ctid/refined_iv/covariance.h"
+#include "ctid/refined_iv/initialization.h"
+#include "ctid/estimation/validation.h"
+#include "ctid/filtering/filter_bank.h"
+#include "ctid/simulation/discretization.h"
+#include "refined_iv/internal/refined_iv_engine.h"
+
+namespace ctid {
+
+void RefinedIvOptions::validate() const {
+  require(max_iterations >= 1, "RefinedIvOptions.max_iterations is ", max_iterations,
+          "; it must be >= 1");
+  require(std::isfinite(tolerance) && tolerance > 0.0 && tolerance < 1.0,
+          "RefinedIvOptions.tolerance is ", tolerance, "; it must be in (0, 1)");
+  require(input_delay >= 0, "RefinedIvOptions.input_delay is ", input_delay,
+          " samples; it must be >= 0");
+  require(max_step_halvings >= 0, "RefinedIvOptions.max_step_halvings is ", max_step_halvings,
+          "; it must be >= 0");
+  require(noise_model_max_order >= 1, "RefinedIvOptions.noise_model_max_order is ",
+          noise_model_max_order, "; it must be >= 1");
+}
+
+namespace internal {
+namespace {
+
+struct Layout {
+  std::vector<SubmodelOrder> orders;
+  std::vector<int> offset;
+  int parameters = 0;
+  int poles = 0;  // sum n_i + l_i
+
+  explicit Layout(std::vector<SubmodelOrder> o) : orders(std::move(o)) {
+    for (const SubmodelOrder& s : orders) {
+      offset.push_back(parameters);
+      parameters += s.n + s.m + 1;
+      poles += s.n + s.integrators;
+    }
+  }
+  int size() const { return static_cast<int>(orders.size()); }
+  int count(int i) const {
+    return orders[static_cast<size_t>(i)].n + orders[static_cast<size_t>(i)].m + 1;
+  }
+};
+
+Polynomial denominator_of(const Layout& layout, const Eigen::VectorXd& beta, int i) {
+  const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+  Eigen::VectorXd a(o.n + 1);
+  a(0) = 1.0;
+  a.tail(o.n) = beta.segment(layout.offset[static_cast<size_t>(i)], o.n);
+  return Polynomial::trimmed(a);
+}
+
+Eigen::VectorXd numerator_of(const Layout& layout, const Eigen::VectorXd& beta, int i) {
+  const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+  return beta.segment(layout.offset[static_cast<size_t>(i)] + o.n, o.m + 1);
+}
+
+// Realisation of B/(p^l A): the bank of 1/(p^l A) with the outputs combined by b.
+FilterRealization submodel_realization(const Polynomial& a, const Eigen::VectorXd& b, int l) {
+  const FilterRealization bank = derivative_filters(Polynomial::monomial(l) * a);
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank.outputs());
+  w.head(b.size()) = b;
+  return combine_outputs(bank, w);
+}
+
+// S_uo(q) r with S_uo = C_d / (1 + G_d C_d), G_d = ZOH equivalent of the model with the input
+// delay; std::nullopt when the loop is unstable or ill-posed.
+std::optional<Eigen::VectorXd> sensitivity_filtered_reference(
+    const Layout& layout, const Eigen::VectorXd& beta, const DiscreteTransferFunction& controller,
+    const Eigen::VectorXd& r, double h, int delay) {
+  // Plant: submodels side by side.
+  std::vector<ZohDiscretization> parts;
+  std::vector<Eigen::RowVectorXd> outs;
+  double dg = 0.0;
+  int ng = 0;
+  for (int i = 0; i < layout.size(); ++i) {
+    const FilterRealization f =
+        submodel_realization(denominator_of(layout, beta, i), numerator_of(layout, beta, i),
+                             layout.orders[static_cast<size_t>(i)].integrators);
+    parts.push_back(discretize_zoh(f.a, f.b, h));
+    outs.push_back(f.c.row(0));
+    dg += f.d(0);
+    ng += f.order();
+  }
+  const StateSpace c = controller.to_state_space();
+  const int nc = c.order();
+  const int n = ng + delay + nc;
+  // State X = [x_g; u_{k-1} .. u_{k-delay}; x_c]; u_k = ku X + kr r_k, y_k = yx X + yr r_k.
+  Eigen::RowVectorXd cg = Eigen::RowVectorXd::Zero(n);
+  Eigen::MatrixXd phig = Eigen::MatrixXd::Zero(ng, ng);
+  Eigen::VectorXd gammag(ng);
+  int at = 0;
+  for (size_t i = 0; i < parts.size(); ++i) {
+    const Eigen::Index s = parts[i].phi.rows();
+    phig.block(at, at, s, s) = parts[i].phi;
+    gammag.segment(at, s) = parts[i].gamma.col(0);
+    cg.segment(at, s) = outs[i];
+    at += static_cast<int>(s);
+  }
+  Eigen::RowVectorXd cc = Eigen::RowVectorXd::Zero(n);
+  cc.tail(nc) = c.c;
+  Eigen::RowVectorXd ku(n);
+  double kr = 0.0;
+  Eigen::RowVectorXd yx(n);
+  double yr = 0.0;
+  if (delay > 0) {
+    // y_k = C_g x_g + D_g u_{k-delay}: no algebraic loop.
+    yx = cg;
+    yx(ng + delay - 1) += dg;
+    yr = 0.0;
+    ku = cc - c.d * yx;
+    kr = c.d;
+  } else {
+    const double loop = 1.0 + c.d * dg;
+    if (!(std::abs(loop) > 1e-12)) return std::nullopt;
+    ku = (cc - c.d * cg) / loop;
+    kr = c.d / loop;
+    yx = cg + dg * ku;
+    yr = dg * kr;
+  }
+  Eigen::MatrixXd acl = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd bcl = Eigen::VectorXd::Zero(n);
+  acl.topLeftCorner(ng, ng) = phig;
+  if (delay > 0) {
+    acl.block(0, ng + delay - 1, ng, 1) += gammag;
+    acl.row(ng) = ku;
+    bcl(ng) = kr;
+    for (int j = 1; j < delay; ++j) acl(ng + j, ng + j - 1) = 1.0;
+  } else {
+    acl.topRows(ng) += gammag * ku;
+    bcl.head(ng) = gammag * kr;
+  }
+  // x_c+ = A_c x_c + B_c (r - y)
+  acl.bottomRows(nc) += -c.b * yx;
+  acl.bottomRightCorner(nc, nc) += c.a;
+  bcl.tail(nc) += c.b * (1.0 - yr);
+  if (!acl.allFinite()) return std::nullopt;
+  if (n > 0) {
+    const Eigen::VectorXcd eig = acl.eigenvalues();
+    if (eig.cwiseAbs().maxCoeff() >= 1.0 - 1e-9) return std::nullopt;
+  }
+  Eigen::VectorXd out(r.size());
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd next(n);
+  for (Eigen::Index k = 0; k < r.size(); ++k) {
+    out(k) = ku.dot(x) + kr * r(k);
+    next.noalias() = acl * x;
+    next += bcl * r(k);
+    x.swap(next);
+  }
+  if (!out.allFinite()) return std::nullopt;
+  return out;
+}
+
+// Rows of the record processed together: the block buffers (a few times kBlock x p doubles)
+// stay in cache, and the sums of eq. (29) are formed block by block, so no N x p matrix is
+// ever stored during the iteration.
+constexpr Eigen::Index kBlock = 256;
+
+// Sums of eq. (29) over the record: Z'Phi, Z'Upsilon and the squared column norms of the
+// instrument Z and regressor Phi (for the unit-norm scaling).
+struct Moments {
+  Eigen::MatrixXd zp;  // p x p
+  Eigen::MatrixXd zy;  // p x K
+  Eigen::VectorXd zz;  // p
+  Eigen::VectorXd pp;  // p
+
+  bool all_finite() const {
+    return zp.allFinite() && zy.allFinite() && zz.allFinite() && pp.allFinite();
+  }
+};
+
+// The filters of one submodel at one iterate. Outputs of `source`: rows 0..m are
+// p^j/(p^l A) z (B-part of the instrument), rows m+1..m+n are p^k B/(p^l A^2) z, k = 1..n
+// (one cascade whose first stage is the 1/(p^l A) bank itself), and in open loop row m+n+1
+// is the model output B/(p^l A) u. `input` (closed loop, or when no instrument is needed)
+// gives p^j/(p^l A) u in rows 0..m and B/(p^l A) u in row m+1. `output` is the bank of
+// 1/A on the residual output y~_i (23).
+struct SubmodelFilters {
+  std::optional<SampledFilter> source;
+  std::optional<SampledFilter> input;
+  std::optional<SampledFilter> output;
+  SampledFilter::Stream source_stream;
+  SampledFilter::Stream input_stream;
+  SampledFilter::Stream output_stream;
+};
+
+// Block buffers reused by every pass of one estimate.
+struct Workspace {
+  Eigen::MatrixXd instrument;  // kBlock x p
+  Eigen::MatrixXd regressor;   // kBlock x p
+  Eigen::MatrixXd filtered;    // kBlock x K, Upsilon (26)
+  Eigen::MatrixXd outputs;     // kBlock x K, G_i u
+  Eigen::VectorXd total;       // kBlock
+  Eigen::VectorXd residual_output;
+  std::vector<Eigen::MatrixXd> source_out;
+  std::vector<Eigen::MatrixXd> input_out;
+  std::vector<Eigen::MatrixXd> output_out;
+
+  explicit Workspace(const Layout& layout)
+      : instrument(kBlock, layout.parameters),
+        regressor(kBlock, layout.parameters),
+        filtered(kBlock, layout.size()),
+        outputs(kBlock, layout.size()),
+        total(kBlock),
+        residual_output(kBlock),
+        source_out(static_cast<size_t>(layout.size())),
+        input_out(static_cast<size_t>(layout.size())),
+        output_out(static_cast<size_t>(layout.size())) {}
+};
+
+FilterRealization with_rows(const FilterRealization& f, const Eigen::MatrixXd& c,
+                            const Eigen::VectorXd& d) {
+  FilterRealization out;
+  out.a = f.a;
+  out.b = f.b;
+  out.c = c;
+  out.d = d;
+  return out;
+}
+
+SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& beta, int i, double h,
+                                 Hold output_interpolation, bool closed_loop,
+                                 bool need_instrument, bool need_regressor) {
+  const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+  const Polynomial a = denominator_of(layout, beta, i);
+  const Eigen::VectorXd b = numerator_of(layout, beta, i);
+  const FilterRealization bank = derivative_filters(Polynomial::monomial(o.integrators) * a);
+  const int s1 = bank.order();
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank.outputs());
+  w.head(o.m + 1) = b;
+  const Eigen::RowVectorXd model_c = w.transpose() * bank.c;
+  const double model_d = w.dot(bank.d);
+  SubmodelFilters f;
+  if (need_instrument) {
+    const bool with_model = !closed_loop;
+    const int rows = o.m + 1 + o.n + (with_model ? 1 : 0);
+    FilterRealization chain = bank;
+    if (o.n > 0) chain = cascade(bank, w, derivative_filters(a));
+    const int states = chain.order();
+    Eigen::MatrixXd c = Eigen::MatrixXd::Zero(rows, states);
+    Eigen::VectorXd d = Eigen::VectorXd::Zero(rows);
+    c.topLeftCorner(o.m + 1, s1) = bank.c.topRows(o.m + 1);
+    d.head(o.m + 1) = bank.d.head(o.m + 1);
+    if (o.n > 0) {
+      c.middleRows(o.m + 1, o.n) = chain.c.middleRows(1, o.n);
+      d.segment(o.m + 1, o.n) = chain.d.segment(1, o.n);
+    }
+    if (with_model) {
+      c.block(rows - 1, 0, 1, s1) = model_c;
+      d(rows - 1) = model_d;
+    }
+    f.source.emplace(with_rows(chain, c, d), h, Hold::zero_order_hold);
+    f.source_stream = f.source->start();
+  }
+  if (closed_loop || !need_instrument) {
+    Eigen::MatrixXd c(o.m + 2, s1);
+    Eigen::VectorXd d(o.m + 2);
+    c.topRows(o.m + 1) = bank.c.topRows(o.m + 1);
+    d.head(o.m + 1) = bank.d.head(o.m + 1);
+    c.row(o.m + 1) = model_c;
+    d(o.m + 1) = model_d;
+    f.input.emplace(with_rows(bank, c, d), h, Hold::zero_order_hold);
+    f.input_stream = f.input->start();
+  }
+  if (need_regressor && o.n > 0) {
+    f.output.emplace(derivative_filters(a), h, output_interpolation);
+    f.output_stream = f.output->start();
+  }
+  return f;
+}
+
+// One pass over the record at beta (instrument source: u in open loop, S_uo r otherwise).
+// With `moments`: the sums of eq. (29); with `residual`: y - sum_i G_i u; with `psi`: the
+// N x p instrument (for the covariance).
+void evaluate(const Layout& layout, const Eigen::VectorXd& beta, const Eigen::VectorXd& u,
+              const Eigen::VectorXd& y, const Eigen::VectorXd* source, double h,
+              Hold output_interpolation, Workspace& w, Moments* moments,
+              Eigen::VectorXd* residual, Eigen::MatrixXd* psi) {
+  const Eigen::Index n = u.size();
+  const int k_count = layout.size();
+  const int p = layout.parameters;
+  const bool closed_loop = source != nullptr;
+  const bool need_instrument = moments != nullptr || psi != nullptr;
+  const bool need_regressor = moments != nullptr;
+  std::vector<SubmodelFilters> filters;
+  filters.reserve(static_cast<size_t>(k_count));
+  for (int i = 0; i < k_count; ++i) {
+    filters.push_back(submodel_filters(layout, beta, i, h, output_interpolation, closed_loop,
+                                       need_instrument, need_regressor));
+  }
+  if (moments != nullptr) {
+    moments->zp = Eigen::MatrixXd::Zero(p, p);
+    moments->zy = Eigen::MatrixXd::Zero(p, k_count);
+    moments->zz = Eigen::VectorXd::Zero(p);
+    moments->pp = Eigen::VectorXd::Zero(p);
+  }
+  if (residual != nullptr) residual->resize(n);
+  if (psi != nullptr) psi->resize(n, p);
+  for (Eigen::Index k0 = 0; k0 < n; k0 += kBlock) {
+    const Eigen::Index len = std::min(kBlock, n - k0);
+    for (int i = 0; i < k_count; ++i) {
+      const auto at = static_cast<size_t>(i);
+      const SubmodelOrder& o = layout.orders[at];
+      const int off = layout.offset[at];
+      SubmodelFilters& f = filters[at];
+      if (f.source) {
+        Eigen::MatrixXd& out = w.source_out[at];
+        out.resize(len, f.source->outputs());
+        f.source->run((closed_loop ? *source : u).segment(k0, len), f.source_stream, out);
+        w.instrument.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+        if (o.n > 0) w.instrument.block(0, off, len, o.n) = -out.middleCols(o.m + 1, o.n);
+        if (!closed_loop) {
+          w.outputs.col(i).head(len) = out.col(o.m + o.n + 1);
+          if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+        }
+      }
+      if (f.input) {
+        Eigen::MatrixXd& out = w.input_out[at];
+        out.resize(len, f.input->outputs());
+        f.input->run(u.segment(k0, len), f.input_stream, out);
+        w.outputs.col(i).head(len) = out.col(o.m + 1);
+        if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+      }
+    }
+    w.total.head(len) = w.outputs.topRows(len).rowwise().sum();
+    if (need_regressor) {
+      for (int i = 0; i < k_count; ++i) {
+        const auto at = static_cast<size_t>(i);
+        const SubmodelOrder& o = layout.orders[at];
+        const int off = layout.offset[at];
+        SubmodelFilters& f = filters[at];
+        w.residual_output.head(len) =
+            y.segment(k0, len) - w.total.head(len) + w.outputs.col(i).head(len);  // (23)
+        if (f.output) {
+          Eigen::MatrixXd& out = w.output_out[at];
+          out.resize(len, f.output->outputs());
+          f.output->run(w.residual_output.head(len), f.output_stream, out);
+          w.filtered.col(i).head(len) = out.col(0);                       // (22)
+          w.regressor.block(0, off, len, o.n) = -out.middleCols(1, o.n);  // (24)
+        } else {
+          w.filtered.col(i).head(len) = w.residual_output.head(len);
+        }
+      }
+    }
+    if (moments != nullptr) {
+      const auto z = w.instrument.topRows(len);
+      const auto phi = w.regressor.topRows(len);
+      moments->zp.noalias() += z.transpose() * phi;
+      moments->zy.noalias() += z.transpose() * w.filtered.topRows(len);
+      moments->zz += z.colwise().squaredNorm().transpose();
+      moments->pp += phi.colwise().squaredNorm().transpose();
+    }
+    if (residual != nullptr) residual->segment(k0, len) = y.segment(k0, len) - w.total.head(len);
+    if (psi != nullptr) psi->middleRows(k0, len) = w.instrument.topRows(len);
+  }
+}
+
+Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares) {
+  Eigen::VectorXd s = squares.cwiseSqrt();
+  for (Eigen::Index j = 0; j < s.size(); ++j) {
+    if (!(s(j) > 0.0) || !std::isfinite(s(j))) s(j) = 1.0;
+  }
+  return s;
+}
+
+std::string format_number(double x) {
+  std::ostringstream out;
+  out.precision(3);
+  out << x;
+  return out.str();
+}
+
+}  // namespace
+
+Polynomial reflect_unstable_roots(const Polynomial& a, bool& reflected) {
+  reflected = false;
+  if (a.degree() < 1) return a;
+  Eigen::VectorXcd roots = a.roots();
+  for (Eigen::Index j = 0; j < roots.size(); ++j) {
+    if (roots(j).real() > 0.0) {
+      roots(j) = std::complex<double>(-roots(j).real(), roots(j).imag());
+      reflected = true;
+    }
+  }
+  if (!reflected) return a;
+  return Polynomial::from_roots(roots).anti_monic();
+}
+
+Eigen::VectorXd parameters_for_orders(const AdditiveModel& model,
+                                      const std::vector<SubmodelOrder>& orders) {
+  require(model.size() == static_cast<int>(orders.size()), "initial model has ", model.size(),
+          " submodels; the structure asks for ", orders.size());
+  const Layout layout(orders);
+  Eigen::VectorXd beta = Eigen::VectorXd::Zero(layout.parameters);
+  for (int i = 0; i < model.size(); ++i) {
+    const Submodel& s = model[i];
+    const SubmodelOrder& o = orders[static_cast<size_t>(i)];
+    require(s.n() == o.n && s.integrators == o.integrators && s.m() <= o.m, "initial submodel ", i,
+            " has n = ", s.n(), ", m = ", s.m(), ", integrators = ", s.integrators,
+            "; the structure asks for n = ", o.n, ", m <= ", o.m,
+            ", integrators = ", o.integrators);
+    const int off = layout.offset[static_cast<size_t>(i)];
+    for (int k = 1; k <= o.n; ++k) beta(off + k - 1) = s.a[k];
+    for (int k = 0; k <= s.m(); ++k) beta(off + o.n + k) = s.b[k];
+  }
+  return beta;
+}
+
+Eigen::VectorXd unfactored_parameters(const TransferFunction& g, const SubmodelOrder& order) {
+  const Polynomial& den = g.denominator();
+  int l = 0;
+  while (l <= den.degree() && den[l] == 0.0) ++l;
+  require(
+      l == order.integrators && den.degree() - l == order.n && g.numerator().degree() <= order.m,
+      "initial transfer function has ", den.degree() - l, " non-zero poles, ", l,
+      " poles at the origin and numerator degree ", g.numerator().degree(),
+      "; the structure asks for n = ", order.n, ", integrators = ", order.integrators,
+      ", m <= ", order.m);
+  const double scale = den[l];
+  Eigen::VectorXd beta = Eigen::VectorXd::Zero(order.n + order.m + 1);
+  for (int k = 1; k <= order.n; ++k) beta(k - 1) = den[l + k] / scale;
+  for (int k = 0; k <= g.numerator().degree(); ++k) beta(order.n + k) = g.numerator()[k] / scale;
+  return beta;
+}
+
+EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIvOptions& options) {
+  options.validate();
+  const SampledData& data = *problem.data;
+  const Layout layout(problem.orders);
+  const std::string name = problem.name;
+  require(layout.size() >= 1, name, ": the model structure has no submodels");
+  {
+    int biproper = 0;
+    int integrating = 0;
+    for (size_t i = 0; i < layout.orders.size(); ++i) {
+      const SubmodelOrder& o = layout.orders[i];
+      require(o.n >= 0 && o.m >= 0 && o.integrators >= 0, name, ": submodel ", i,
+              " has a negative order (n = ", o.n, ", m = ", o.m, ", integrators = ", o.integrators,
+              ")");
+      require(o.n + o.integrators >= 1, name, ": submodel ", i,
+              " has no poles (n = 0 and no integrators)");
+      require(o.m <= o.n + o.integrators, name, ": submodel ", i, " has m = ", o.m,
+              " > n + integrators = ", o.n + o.integrators, " (improper)");
+      if (o.m == o.n + o.integrators) ++biproper;
+      if (o.integrators > 0) ++integrating;
+    }
+    require(biproper <= 1, name, ": ", biproper,
+            " submodels are biproper; at most one may be (the split would not be unique)");
+    require(integrating <= 1, name, ": ", integrating,
+            " submodels have integrators; at most one may have poles at the origin");
+  }
+  const int delay = options.input_delay;
+  const int n_samples = data.size();
+  const int p = layout.parameters;
+  require(n_samples - delay >= std::max(3 * p, p + 20), name, ": ", n_samples,
+          " samples (input delay ", delay, ") are too few for ", p, " parameters; at least ",
+          std::max(3 * p, p + 20) + delay, " are needed");
+  const bool closed_loop = problem.controller != nullptr;
+  const double h = data.sample_time();
+  if (closed_loop) {
+    require(data.has_reference(), name, ": closed-loop estimation needs a measured reference r");
+    require(std::abs(problem.controller->sample_time() - h) <= 1e-9 * h, name,
+            ": the controller's sample time ", problem.controller->sample_time(),
+            " differs from the data's ", h);
+  }
+
+  // Assumption 1: persistency of excitation.
+  DataChecks checks;
+  const Eigen::VectorXd& excitation = closed_loop ? data.reference() : data.input();
+  const int nc = closed_loop ? problem.controller->denominator().degree() : 0;
+  checks.excitation_order_required = 2 * layout.poles + nc;
+  checks.excitation_order =
+      persistent_excitation_order(excitation, std::max(checks.excitation_order_required, p));
+  require(checks.excitation_order >= p, name, ": the ", closed_loop ? "reference" : "input",
+          " is persistently exciting of order ", checks.excitation_order, " only; the ", p,
+          " parameters need at least order ", p, " (e.g. a constant or a single sine cannot)");
+  checks.persistently_exciting = checks.excitation_order >= checks.excitation_order_required;
+  if (!checks.persistently_exciting) {
+    checks.warnings.push_back("the " + std::string(closed_loop ? "reference" : "input") +
+                              " is persistently exciting of order " +
+                              std::to_string(checks.excitation_order) + ", below the " +
+                              std::to_string(checks.excitation_order_required) +
+                              " of Assumption 1; consistency is not guaranteed");
+  }
+
+  // Starting point.
+  Eigen::VectorXd beta;
+  if (options.initial_model) {
+    const AdditiveModel& given = *options.initial_model;
+    bool fits = given.size() == layout.size();
+    for (int i = 0; fits && i < given.size(); ++i) {
+      const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+      fits = given[i].n() == o.n && given[i].integrators == o.integrators && given[i].m() <= o.m;
+    }
+    if (fits) {
+      beta = parameters_for_orders(given, layout.orders);
+    } else if (layout.size() == 1) {
+      beta = unfactored_parameters(given.to_transfer_function().with_input_delay(0.0),
+                                   layout.orders[0]);
+    } else {
+      beta = parameters_for_orders(
+          group_into_submodels(given.to_transfer_function().with_input_delay(0.0), layout.orders,
+                               data, delay),
+          layout.orders);
+    }
+  } else {
+    InitializationOptions init;
+    init.input_delay = delay;
+    if (layout.size() == 1) {
+      beta = unfactored_parameters(initial_transfer_function(data, layout.orders[0], init),
+                                   layout.orders[0]);
+    } else {
+      beta =
+          parameters_for_orders(initial_additive_model(data, layout.orders, init), layout.orders);
+    }
+  }
+  require(beta.allFinite(), name, ": the initial model has a non-finite parameter");
+
+  EstimationResult result{AdditiveModel::from_parameters(layout.orders, beta, delay * h),
+                          TransferFunction(Polynomial{1.0}, Polynomial{1.0})};
+  auto reflect_all = [&](Eigen::VectorXd& b) {
+    for (int i = 0; i < layout.size(); ++i) {
+      const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+      if (o.n < 1) continue;
+      bool reflected = false;
+      const Polynomial a = reflect_unstable_roots(denominator_of(layout, b, i), reflected);
+      if (reflected) {
+        ++result.unstable_reflections;
+        for (int k = 1; k <= o.n; ++k) b(layout.offset[static_cast<size_t>(i)] + k - 1) = a[k];
+      }
+    }
+  };
+  reflect_all(beta);
+
+  const Eigen::VectorXd u = delay_samples(data.input(), delay);
+  const Eigen::VectorXd& y = data.output();
+  std::optional<Eigen::VectorXd> source;  // S_uo r, delayed (closed loop)
+  auto update_source = [&](const Eigen::VectorXd& b) -> bool {
+    std::optional<Eigen::VectorXd> s =
+        sensitivity_filtered_reference(layout, b, *problem.controller, data.reference(), h, delay);
+    if (!s) return false;
+    source = delay_samples(*s, delay);
+    return true;
+  };
+
+  Workspace workspace(layout);
+  result.termination = Termination::iteration_limit;
+  bool stopped = false;
+  if (closed_loop && !update_source(beta)) {
+    result.termination = Termination::closed_loop_unstable;
+    result.message = name +
+                     ": the controller does not stabilise the initial model, so S_uo r "
+                     "(instrument (20)) cannot be formed; give a model the controller stabilises";
+    stopped = true;
+  }
+
+  // Step control: a full step of (29) at which the equations are singular or non-finite is
+  // halved toward the last accepted iterate instead of ending the iteration. Accepted steps
+  // are the plain iteration, so every fixed point of (29) is still one of this iteration.
+  const bool control = options.step_control;
+  Eigen::VectorXd accepted;
+  int halvings = 0;  // of the current step
+  int iteration = 1;
+  while (!stopped && iteration <= options.max_iterations) {
+    bool source_ok = true;
+    if (closed_loop && iteration > 1) source_ok = update_source(beta);
+    Moments sums;
+    evaluate(layout, beta, u, y, source ? &*source : nullptr, h, options.output_interpolation,
+             workspace, &sums, nullptr, nullptr);
+    const bool finite = sums.all_finite();
+    Eigen::VectorXd sz;
+    Eigen::VectorXd sp;
+    Eigen::MatrixXd m;
+    double rcond = 0.0;
+    std::optional<Eigen::JacobiSVD<Eigen::MatrixXd>> svd;
+    if (finite) {
+      sz = norms_from_squares(sums.zz);
+      sp = norms_from_squares(sums.pp);
+      m = sz.cwiseInverse().asDiagonal() * sums.zp * sp.cwiseInverse().asDiagonal();
+      svd.emplace(m);
+      const Eigen::VectorXd& sv = svd->singularValues();
+      rcond = sv(sv.size() - 1) / sv(0);
+    }
+    if (control && accepted.size() > 0 && halvings < options.max_step_halvings &&
+        (!finite || !(rcond > 1e-14))) {
+      beta = 0.5 * (accepted + beta);
+      ++halvings;
+      ++result.step_halvings;
+      continue;
+    }
+    if (!source_ok) ++result.sensitivity_fallbacks;
+    if (!finite) {
+      result.termination = Termination::non_finite;
+      result.message = name + ": the filtered signals became non-finite at iteration " +
+                       std::to_string(iteration) + "; the last finite iterate is returned";
+      break;
+    }
+    const Eigen::MatrixXd rhs = sz.cwiseInverse().asDiagonal() * sums.zy;
+    if (!(rcond > 1e-14)) {
+      result.termination = Termination::singular_equations;
+      result.message = name +
+                       ": the instrument-regressor matrix of eq. (29) is numerically "
+                       "singular at iteration " +
+                       std::to_string(iteration) + " (reciprocal condition " +
+                       format_number(rcond) +
+                       "): the data do not excite the model enough or the orders are too high";
+      break;
+    }
+    accepted = beta;
+    halvings = 0;
+    const Eigen::MatrixXd solution =
+        sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(m.fullPivLu().solve(rhs));
+    Eigen::VectorXd next(p);
+    Eigen::MatrixXd off = solution;
+    for (int i = 0; i < layout.size(); ++i) {
+      const int o = layout.offset[static_cast<size_t>(i)];
+      next.segment(o, layout.count(i)) = solution.block(o, i, layout.count(i), 1);
+      off.block(o, i, layout.count(i), 1).setZero();
+    }
+    if (!next.allFinite()) {
+      result.termination = Termination::non_finite;
+      result.message = name + ": iteration " + std::to_string(iteration) +
+                       " produced a non-finite parameter; the last finite iterate is returned";
+      break;
+    }
+    reflect_all(next);
+    const double change = (next - beta).norm() / std::max(beta.norm(), 1e-300);
+    result.off_diagonal_norm = off.norm() / std::max(next.norm(), 1e-300);
+    result.relative_change = change;
+    result.iterations = iteration;
+    beta = next;
+    if (options.record_history) {
+      result.history.push_back({iteration, beta, change, result.off_diagonal_norm});
+    }
+    if (change < options.tolerance) {
+      result.termination = Termination::converged;
+      result.message = name + ": converged after " + std::to_string(iteration) +
+                       " iterations (relative parameter change " + format_number(change) +
+                       " < tolerance " + format_number(options.tolerance) + ")";
+      break;
+    }
+    ++iteration;
+  }
+  if (result.termination == Termination::iteration_limit) {
+    result.message = name + ": stopped at the iteration limit (" +
+                     std::to_string(options.max_iterations) + ") with relative parameter change " +
+                     format_number(result.relative_change) + ", above the tolerance " +
+                     format_number(options.tolerance);
+  }
+
+  // The estimate and its statistics.
+  result.parameters = beta;
+  result.input_delay = delay;
+  result.model = AdditiveModel::from_parameters(layout.orders, beta, delay * h);
+  result.transfer_function = result.model.to_transfer_function();
+  if (problem.unfactored) {
+    try {
+      result.additive_view = AdditiveModel::from_transfer_function(result.transfer_function);
+    } catch (const InvalidArgument&) {
+      result.additive_view.reset();
+    }
+  } else {
+    result.additive_view = result.model;
+  }
+  if (closed_loop && result.termination != Termination::closed_loop_unstable) {
+    if (!update_source(beta)) ++result.sensitivity_fallbacks;
+  }
+  Eigen::VectorXd residual;
+  Eigen::MatrixXd psi;
+  evaluate(layout, beta, u, y, source ? &*source : nullptr, h, options.output_interpolation,
+           workspace, nullptr, &residual, options.compute_covariance ? &psi : nullptr);
+  const double sse = residual.squaredNorm();
+  result.mean_squared_error = sse / n_samples;
+  result.noise_variance = sse / std::max(n_samples - p, 1);
+  result.fit_percent = fit_percent(y, y - residual);
+
+  if (options.compute_covariance && psi.allFinite() && residual.allFinite()) {
+    result.covariance = instrumental_variable_covariance(psi, residual, p, options.noise,
+                                                         options.noise_model_max_order);
+    result.standard_errors = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+    result.modes = modal_estimates(result.model, result.covariance, problem.unfactored);
+  }
+
+  // Assumption 4.
+  checks.nyquist_frequency = M_PI / h;
+  checks.largest_pole_frequency = largest_pole_frequency(result.model);
+  checks.sampling_rate_ok = checks.largest_pole_frequency < checks.nyquist_frequency;
+  if (!checks.sampling_rate_ok) {
+    checks.warnings.push_back(
+        "a pole's imaginary part " + format_number(checks.largest_pole_frequency) +
+        " rad/s is not below the Nyquist frequency " + format_number(checks.nyquist_frequency) +
+        " rad/s (Assumption 4): sample faster or lower the model order");
+  }
+  result.checks = std::move(checks);
+  return result;
+}
+
+}  // namespace internal
+}  // namespace ctid

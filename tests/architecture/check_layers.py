@@ -1,0 +1,78 @@
+"""Layering check: every #include "ctid/<layer>/..." in a layer's headers, sources and tests
+names that layer or one it depends on, as declared by ctid_add_layer(<layer> DEPENDS ...) in
+the top-level CMakeLists.txt (so the CMake dependencies and the includes cannot drift apart),
+and each declared ctid dependency is used by at least one include. The two paper modules
+(refined_iv, delayed_feedback) never reach each other.
+
+    python3 tests/architecture/check_layers.py SOURCE_DIR
+Exit 0 when the tree is layered; otherwise one line per offending include, exit 1.
+"""
+import pathlib
+import re
+import sys
+
+PAPER_MODULES = ("refined_iv", "delayed_feedback")
+
+
+def declared_layers(cmake_text):
+    """{layer: set of direct ctid layer dependencies}, in declaration order."""
+    layers = {}
+    for name, deps in re.findall(r"ctid_add_layer\((\w+)\s+DEPENDS([^)]*)\)", cmake_text):
+        layers[name] = {d[len("ctid_"):] for d in deps.split() if d.startswith("ctid_")}
+    return layers
+
+
+def closure(layers, name):
+    seen, stack = set(), [name]
+    while stack:
+        for dep in layers[stack.pop()]:
+            if dep not in seen:
+                seen.add(dep)
+                stack.append(dep)
+    return seen
+
+
+def included_layers(path):
+    text = path.read_text(encoding="utf-8")
+    return [(m.group(1), text.count("\n", 0, m.start()) + 1)
+            for m in re.finditer(r'#include\s+"(?:ctid/)?(\w+)/', text)]
+
+
+def main(root):
+    root = pathlib.Path(root)
+    layers = declared_layers((root / "CMakeLists.txt").read_text(encoding="utf-8"))
+    problems = []
+    for module in PAPER_MODULES:
+        if module not in layers:
+            problems.append(f"CMakeLists.txt: no ctid_add_layer({module} ...)")
+    a, b = PAPER_MODULES
+    if a in layers and b in layers and (a in closure(layers, b) or b in closure(layers, a)):
+        problems.append(f"CMakeLists.txt: {a} and {b} must not depend on each other")
+    for layer, direct in layers.items():
+        allowed = closure(layers, layer) | {layer}
+        used = set()
+        folders = [root / "include" / "ctid" / layer, root / "src" / layer, root / "tests" / layer]
+        for folder in folders:
+            for path in sorted(folder.rglob("*")) if folder.is_dir() else []:
+                if path.suffix not in (".h", ".cc"):
+                    continue
+                for included, line in included_layers(path):
+                    if included not in layers:
+                        continue  # e.g. "internal/..." or a test-support folder
+                    used.add(included)
+                    if included not in allowed:
+                        problems.append(
+                            f"{path.relative_to(root)}:{line}: layer '{layer}' includes "
+                            f"'{included}', which is not below it (allowed: "
+                            f"{', '.join(sorted(allowed))})")
+        for dep in sorted(direct - used):
+            problems.append(f"CMakeLists.txt: layer '{layer}' declares a dependency on "
+                            f"'{dep}' but includes nothing from it")
+    for problem in problems:
+        print(problem)
+    print(f"check_layers: {len(layers)} layers, {len(problems)} problem(s)")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1] if len(sys.argv) > 1 else "."))
