@@ -3,20 +3,19 @@
 #include <complex>
 
 #include "common.h"
-#include "ctid/core/hold.h"
 #include "ctid/core/additive_model.h"
 #include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/hold.h"
 #include "ctid/core/polynomial.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/core/state_space.h"
 #include "ctid/core/transfer_function.h"
+#include "fields.h"
 
 namespace ctid::python {
 
 void bind_core(py::module_& m) {
-  py::enum_<Hold>(m, "Hold", "How a sampled signal continues between samples (core/hold.h).")
-      .value("zero_order_hold", Hold::zero_order_hold, "Held constant.")
-      .value("first_order_hold", Hold::first_order_hold, "Linear between samples.");
+  bind_enum<Hold>(m, "Hold", "How a sampled signal continues between samples (core/hold.h).");
   using Complex = std::complex<double>;
 
   py::class_<Polynomial>(m, "Polynomial",

@@ -143,8 +143,8 @@ void bind_feedback(py::module_& m) {
   const FeedbackIdentificationOptions default_identification;
   m.def(
       "identify_delayed_feedback",
-      [](const SampledData& data, int forward_order, int feedback_order, double delay,
-         InputHold hold, double filter_pole, const std::vector<double>& iv_filter_poles) {
+      [](const SampledData& data, int forward_order, int feedback_order, double delay, Hold hold,
+         double filter_pole, const std::vector<double>& iv_filter_poles) {
         FeedbackIdentificationOptions options;
         options.output_error.hold = hold;
         options.regressors.filter_pole = filter_pole;
@@ -154,7 +154,7 @@ void bind_feedback(py::module_& m) {
         return identify_delayed_feedback(data, forward_order, feedback_order, delay, options);
       },
       py::arg("data"), py::arg("forward_order"), py::arg("feedback_order"), py::arg("delay"),
-      py::arg("hold") = InputHold::kFirstOrder, py::arg("filter_pole") = 1.0,
+      py::arg("hold") = Hold::first_order_hold, py::arg("filter_pole") = 1.0,
       py::arg("iv_filter_poles") = default_identification.iv_filter_poles,
       "F and H of a loop with a delayed feedback: step 1, separation candidates (GCD, min J, "
       "structured step 1, a bias-corrected IV start per pole in iv_filter_poles), output-error "
@@ -166,7 +166,7 @@ void bind_feedback(py::module_& m) {
       .field("max_iterations", &StructuredIvOptions::max_iterations,
              "Levenberg-Marquardt steps per iteration.")
       .field("tolerance", &StructuredIvOptions::tolerance, "|d rho| / max(1, |rho|) to stop.")
-      .field("hold", &StructuredIvOptions::hold, "InputHold of the simulated instruments.")
+      .field("hold", &StructuredIvOptions::hold, "Hold of the simulated instruments.")
       .field("bias_correction", &StructuredIvOptions::bias_correction,
              "Subtract the estimator's error on the model's own simulated output.")
       .field("substeps", &StructuredIvOptions::substeps, "RK4 steps per sample.")
@@ -277,7 +277,7 @@ void bind_feedback_separation(py::module_& m) {
       .def_readonly("quality", &OutputErrorResult::quality, "SeparabilityReport at the estimate.");
   m.def(
       "refine_output_error",
-      [](const SampledData& data, const DelayedFeedbackLoop& start, InputHold hold, int substeps,
+      [](const SampledData& data, const DelayedFeedbackLoop& start, Hold hold, int substeps,
          int max_iterations, bool estimate_delay) {
         OutputErrorOptions options;
         options.hold = hold;
@@ -287,7 +287,7 @@ void bind_feedback_separation(py::module_& m) {
         py::gil_scoped_release release;
         return refine_output_error(data, start, options);
       },
-      py::arg("data"), py::arg("start"), py::kw_only(), py::arg("hold") = InputHold::kZeroOrder,
+      py::arg("data"), py::arg("start"), py::kw_only(), py::arg("hold") = Hold::zero_order_hold,
       py::arg("substeps") = 4, py::arg("max_iterations") = 200, py::arg("estimate_delay") = false,
       "Minimise the output error over F and H (and the delay) from a start.");
 
@@ -332,7 +332,7 @@ void bind_feedback_separation(py::module_& m) {
   m.def(
       "identify_delayed_feedback_with_delay_scan",
       [](const SampledData& data, int forward_order, int feedback_order, double min_delay,
-         double max_delay, int points, InputHold hold) {
+         double max_delay, int points, Hold hold) {
         DelayIdentificationOptions options;
         options.scan.min_delay = min_delay;
         options.scan.max_delay = max_delay;
@@ -345,7 +345,7 @@ void bind_feedback_separation(py::module_& m) {
       },
       py::arg("data"), py::arg("forward_order"), py::arg("feedback_order"), py::kw_only(),
       py::arg("min_delay"), py::arg("max_delay"), py::arg("points") = 41,
-      py::arg("hold") = InputHold::kFirstOrder,
+      py::arg("hold") = Hold::first_order_hold,
       "identify_delayed_feedback with the delay unknown: a scan of the refined output error "
       "over [min_delay, max_delay], then a joint refinement of F, H and the delay.");
 }

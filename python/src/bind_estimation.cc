@@ -1,21 +1,14 @@
-// Python bindings of the shared estimation base: the Termination of every iterative method, model output, fit and the residual tests of a
-// model on data (validation.h).
+// Python bindings of the shared estimation base: the Termination of every iterative method, model
+// output, fit and the residual tests of a model on data (validation.h).
 #include "common.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/validation.h"
+#include "fields.h"
 
 namespace ctid::python {
 
 void bind_estimation(py::module_& m) {
-  py::enum_<Termination>(m, "Termination", "Why an iterative method stopped (termination.h).")
-      .value("not_run", Termination::not_run, "Nothing was computed.")
-      .value("converged", Termination::converged, "The stopping rule was met.")
-      .value("iteration_limit", Termination::iteration_limit, "The iteration budget ran out.")
-      .value("singular_equations", Termination::singular_equations, "Singular equations.")
-      .value("non_finite", Termination::non_finite, "NaN/Inf appeared.")
-      .value("closed_loop_unstable", Termination::closed_loop_unstable,
-             "The controller does not stabilise the model the method needs.")
-      .value("no_solution", Termination::no_solution, "Every start or candidate failed.");
+  bind_enum<Termination>(m, "Termination", "Why an iterative method stopped (termination.h).");
   m.def("model_output", &model_output, py::arg("model"), py::arg("input"), py::arg("sample_time"),
         "Exact ZOH response of the model (from rest).");
   m.def("fit_percent", &fit_percent, py::arg("measured"), py::arg("modelled"),

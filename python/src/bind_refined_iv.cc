@@ -11,6 +11,7 @@
 #include "ctid/refined_iv/mode_relocation.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 #include "ctid/refined_iv/srivc.h"
+#include "fields.h"
 
 namespace ctid::python {
 
@@ -81,28 +82,8 @@ void bind_results(py::module_& m) {
 }
 
 void bind_refined_iv_estimators(py::module_& m) {
-  py::enum_<NoiseAssumption>(m, "NoiseAssumption", "Noise model of the covariance.")
-      .value("white", NoiseAssumption::white, "sigma^2 R^-1.")
-      .value("coloured", NoiseAssumption::coloured, "Sandwich with an AR noise model.");
-  py::enum_<Interpolation>(m, "Interpolation", "Interpolation of a signal between samples.")
-      .value("zero_order_hold", Interpolation::zero_order_hold, "Held.")
-      .value("first_order_hold", Interpolation::first_order_hold, "Linear.");
-  OptionsClass<RefinedIvOptions>(m, "RefinedIvOptions",
-                                 "Options of srivc, clsrivc, additive_srivc, additive_clsrivc.")
-      .field("max_iterations", &RefinedIvOptions::max_iterations, "Iteration limit (>= 1).")
-      .field("tolerance", &RefinedIvOptions::tolerance, "Relative parameter change to stop.")
-      .field("initial_model", &RefinedIvOptions::initial_model,
-             "Starting AdditiveModel or None (automatic).")
-      .field("output_interpolation", &RefinedIvOptions::output_interpolation,
-             "Interpolation of the output.")
-      .field("input_delay", &RefinedIvOptions::input_delay, "Known delay [samples].")
-      .field("record_history", &RefinedIvOptions::record_history, "Keep per-iteration history.")
-      .field("noise", &RefinedIvOptions::noise, "NoiseAssumption for the covariance.")
-      .field("noise_model_max_order", &RefinedIvOptions::noise_model_max_order,
-             "Largest AR order of the noise model.")
-      .field("compute_covariance", &RefinedIvOptions::compute_covariance,
-             "Compute covariance and standard errors.")
-      .finish();
+  bind_enum<NoiseAssumption>(m, "NoiseAssumption", "Noise model of the covariance.");
+  bind_options<RefinedIvOptions>(m, "Options of srivc, clsrivc, additive_srivc, additive_clsrivc.");
 
   m.def(
       "srivc",

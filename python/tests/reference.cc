@@ -9,10 +9,10 @@
 
 #include "ctid/core/sampled_data.h"
 #include "ctid/core/transfer_function.h"
-#include "ctid/refined_iv/additive_srivc.h"
-#include "ctid/refined_iv/srivc.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/frequency/response.h"
+#include "ctid/refined_iv/additive_srivc.h"
+#include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
 

@@ -35,8 +35,7 @@ TransferFunction monic_model(const Eigen::VectorXd& rho, int offset, int order) 
 
 // ŷ for ρ; +inf entries when the simulation overflows.
 Eigen::VectorXd simulate_rho(const Eigen::VectorXd& rho, int n, int m, double delay,
-                             const Eigen::VectorXd& input, double delta, Hold hold,
-                             int substeps) {
+                             const Eigen::VectorXd& input, double delta, Hold hold, int substeps) {
   const DelayedFeedbackLoop loop = loop_from_parameters(rho, n, m, delay);
   return simulate_delayed(to_delayed_state_space(loop), input, delta, hold,
                           DelayedSimulationOptions{substeps});
@@ -103,8 +102,7 @@ SeparabilityReport report_from_jacobian(const Eigen::MatrixXd& jac, const Eigen:
 }
 
 Eigen::MatrixXd sensitivity(const Eigen::VectorXd& rho, int n, int m, double delay,
-                            const Eigen::VectorXd& input, double delta, Hold hold,
-                            int substeps) {
+                            const Eigen::VectorXd& input, double delta, Hold hold, int substeps) {
   Eigen::MatrixXd jac(input.size(), rho.size());
   for (Eigen::Index i = 0; i < rho.size(); ++i) {
     const double h = 1e-6 * std::max(1.0, std::abs(rho(i)));
@@ -280,7 +278,7 @@ void FeedbackDelayScanOptions::validate() const {
 }
 
 FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int n, int m,
-                                   const FeedbackDelayScanOptions& options) {
+                                            const FeedbackDelayScanOptions& options) {
   options.validate();
   require(n >= 1 && m >= 1, "scan_feedback_delay: orders must be >= 1, got n = ", n, ", m = ", m);
   auto criterion = [&](double delay) {

@@ -30,8 +30,7 @@ Eigen::VectorXd model_output(const AdditiveModel& model, const Eigen::VectorXd& 
       y += (s.b[0] / den[0]) * u;
       continue;
     }
-    const Eigen::MatrixXd f =
-        filter_derivatives(den, u, sample_time, Hold::zero_order_hold);
+    const Eigen::MatrixXd f = filter_derivatives(den, u, sample_time, Hold::zero_order_hold);
     for (int k = 0; k <= s.m(); ++k) y += s.b[k] * f.col(k);
   }
   return y;

@@ -95,10 +95,9 @@ std::vector<std::string> parameter_names(const AdditiveModel& model) {
 }
 
 Termination termination_from_string(const std::string& name) {
-  if (auto t = termination_from_name(name)) return *t;
-  std::string names;
-  for (Termination t : all_terminations) names += (names.empty() ? "" : ", ") + to_string(t);
-  throw InvalidArgument("unknown termination '" + name + "' (expected one of " + names + ")");
+  if (auto t = enum_from_name<Termination>(name)) return *t;
+  throw InvalidArgument("unknown termination '" + name + "' (expected " +
+                        enum_names<Termination>() + ")");
 }
 
 nlohmann::json to_json(const EstimationResult& result) {

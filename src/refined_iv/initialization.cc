@@ -10,9 +10,9 @@
 #include <Eigen/Dense>
 
 #include "ctid/core/error.h"
-#include "ctid/refined_iv/srivc.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/filtering/filter_bank.h"
+#include "ctid/refined_iv/srivc.h"
 #include "refined_iv/internal/refined_iv_engine.h"
 
 namespace ctid {
@@ -70,10 +70,9 @@ TransferFunction lssvf(const SampledData& data, const SubmodelOrder& order, doub
   Polynomial f{1.0};
   for (int k = 0; k < d; ++k) f = f * one_pole;
   const double h = data.sample_time();
-  const Eigen::MatrixXd fy =
-      filter_derivatives(f, data.output(), h, Hold::first_order_hold);
-  const Eigen::MatrixXd fu = filter_derivatives(f, delay_samples(data.input(), input_delay), h,
-                                                Hold::zero_order_hold);
+  const Eigen::MatrixXd fy = filter_derivatives(f, data.output(), h, Hold::first_order_hold);
+  const Eigen::MatrixXd fu =
+      filter_derivatives(f, delay_samples(data.input(), input_delay), h, Hold::zero_order_hold);
   const int l = order.integrators;
   Eigen::MatrixXd x(data.size(), order.n + order.m + 1);
   for (int k = 1; k <= order.n; ++k) x.col(k - 1) = -fy.col(k + l);

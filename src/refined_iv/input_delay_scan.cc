@@ -12,7 +12,7 @@
 namespace ctid {
 
 InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>& estimate,
-                                 int min_delay, int max_delay) {
+                                      int min_delay, int max_delay) {
   require(min_delay >= 0 && max_delay >= min_delay, "scan_input_delay: the delay range [",
           min_delay, ", ", max_delay, "] must satisfy 0 <= min_delay <= max_delay");
   std::optional<EstimationResult> best;
@@ -50,8 +50,9 @@ InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>
 }
 
 InputDelayScanResult additive_srivc_delay_scan(const SampledData& data,
-                                          const std::vector<SubmodelOrder>& orders, int min_delay,
-                                          int max_delay, const RefinedIvOptions& options) {
+                                               const std::vector<SubmodelOrder>& orders,
+                                               int min_delay, int max_delay,
+                                               const RefinedIvOptions& options) {
   return scan_input_delay(
       [&](int d) {
         RefinedIvOptions o = options;
@@ -61,8 +62,9 @@ InputDelayScanResult additive_srivc_delay_scan(const SampledData& data,
       min_delay, max_delay);
 }
 
-InputDelayScanResult srivc_delay_scan(const SampledData& data, const SubmodelOrder& order, int min_delay,
-                                 int max_delay, const RefinedIvOptions& options) {
+InputDelayScanResult srivc_delay_scan(const SampledData& data, const SubmodelOrder& order,
+                                      int min_delay, int max_delay,
+                                      const RefinedIvOptions& options) {
   return scan_input_delay(
       [&](int d) {
         RefinedIvOptions o = options;

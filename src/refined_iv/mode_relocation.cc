@@ -14,8 +14,8 @@
 #include <unsupported/Eigen/FFT>
 
 #include "ctid/core/error.h"
-#include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/filtering/filter_bank.h"
+#include "ctid/refined_iv/additive_srivc.h"
 
 namespace ctid {
 

@@ -15,27 +15,14 @@
 #include <Eigen/Eigenvalues>
 
 #include "ctid/core/error.h"
-#include "ctid/refined_iv/covariance.h"
-#include "ctid/refined_iv/initialization.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/filtering/filter_bank.h"
+#include "ctid/refined_iv/covariance.h"
+#include "ctid/refined_iv/initialization.h"
 #include "ctid/simulation/discretization.h"
 #include "refined_iv/internal/refined_iv_engine.h"
 
 namespace ctid {
-
-void RefinedIvOptions::validate() const {
-  require(max_iterations >= 1, "RefinedIvOptions.max_iterations is ", max_iterations,
-          "; it must be >= 1");
-  require(std::isfinite(tolerance) && tolerance > 0.0 && tolerance < 1.0,
-          "RefinedIvOptions.tolerance is ", tolerance, "; it must be in (0, 1)");
-  require(input_delay >= 0, "RefinedIvOptions.input_delay is ", input_delay,
-          " samples; it must be >= 0");
-  require(max_step_halvings >= 0, "RefinedIvOptions.max_step_halvings is ", max_step_halvings,
-          "; it must be >= 0");
-  require(noise_model_max_order >= 1, "RefinedIvOptions.noise_model_max_order is ",
-          noise_model_max_order, "; it must be >= 1");
-}
 
 namespace internal {
 namespace {
@@ -237,8 +224,8 @@ FilterRealization with_rows(const FilterRealization& f, const Eigen::MatrixXd& c
 }
 
 SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& beta, int i, double h,
-                                 Hold output_interpolation, bool closed_loop,
-                                 bool need_instrument, bool need_regressor) {
+                                 Hold output_interpolation, bool closed_loop, bool need_instrument,
+                                 bool need_regressor) {
   const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
   const Polynomial a = denominator_of(layout, beta, i);
   const Eigen::VectorXd b = numerator_of(layout, beta, i);
@@ -292,8 +279,8 @@ SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& be
 // N x p instrument (for the covariance).
 void evaluate(const Layout& layout, const Eigen::VectorXd& beta, const Eigen::VectorXd& u,
               const Eigen::VectorXd& y, const Eigen::VectorXd* source, double h,
-              Hold output_interpolation, Workspace& w, Moments* moments,
-              Eigen::VectorXd* residual, Eigen::MatrixXd* psi) {
+              Hold output_interpolation, Workspace& w, Moments* moments, Eigen::VectorXd* residual,
+              Eigen::MatrixXd* psi) {
   const Eigen::Index n = u.size();
   const int k_count = layout.size();
   const int p = layout.parameters;

@@ -25,8 +25,8 @@ TEST(FilterBank, FirstOrderStepResponseMatchesClosedForm) {
   const double tau = 0.7;
   const double h = 0.05;
   const int n = 100;
-  const Eigen::MatrixXd out = filter_derivatives(Polynomial{1.0, tau}, Eigen::VectorXd::Ones(n), h,
-                                                 Hold::zero_order_hold);
+  const Eigen::MatrixXd out =
+      filter_derivatives(Polynomial{1.0, tau}, Eigen::VectorXd::Ones(n), h, Hold::zero_order_hold);
   for (int k = 0; k < n; ++k) {
     const double t = k * h;
     EXPECT_NEAR(out(k, 0), 1.0 - std::exp(-t / tau), 1e-14);
@@ -162,9 +162,8 @@ TEST(FilterBank, DelayShiftsWithZeros) {
 
 TEST(FilterBank, RejectsBadArguments) {
   EXPECT_THROW(derivative_filters(Polynomial{2.0}), InvalidArgument);
-  EXPECT_THROW(
-      SampledFilter(derivative_filters(Polynomial{1.0, 1.0}), 0.0, Hold::zero_order_hold),
-      InvalidArgument);
+  EXPECT_THROW(SampledFilter(derivative_filters(Polynomial{1.0, 1.0}), 0.0, Hold::zero_order_hold),
+               InvalidArgument);
   const FilterRealization f = derivative_filters(Polynomial{1.0, 1.0});
   EXPECT_THROW(cascade(f, Eigen::VectorXd::Ones(5), f), InvalidArgument);
 }

@@ -12,10 +12,10 @@
 #include <gtest/gtest.h>
 #include <Eigen/Dense>
 
+#include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/mode_relocation.h"
-#include "ctid/filtering/filter_bank.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"

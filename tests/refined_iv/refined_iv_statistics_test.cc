@@ -7,12 +7,12 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "ctid/estimation/validation.h"
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/clsrivc.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/srivc.h"
-#include "ctid/estimation/validation.h"
 #include "ctid/simulation/closed_loop.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"

@@ -12,10 +12,10 @@
 #include <Eigen/Core>
 
 #include "ctid/core/sampled_data.h"
-#include "ctid/estimation/termination.h"
 #include "ctid/delayed_feedback/least_squares.h"
 #include "ctid/delayed_feedback/regressors.h"
 #include "ctid/delayed_feedback/separation.h"
+#include "ctid/estimation/termination.h"
 #include "ctid/simulation/delayed_feedback.h"
 
 namespace ctid {
@@ -74,8 +74,8 @@ StructuredStep1Result estimate_structured_step1(const FeedbackRegression& regres
 /// iterate with the smallest output-error rms is returned: it is a start for the output error.
 struct StructuredIvOptions {
   int iterations = 4;
-  int max_iterations = 100;                 ///< Levenberg-Marquardt steps per iteration
-  double tolerance = 1e-8;                  ///< stop when |Δρ| / max(1, |ρ|) falls below
+  int max_iterations = 100;            ///< Levenberg-Marquardt steps per iteration
+  double tolerance = 1e-8;             ///< stop when |Δρ| / max(1, |ρ|) falls below
   Hold hold = Hold::first_order_hold;  ///< for the simulated instruments
   /// Subtract the estimator's error on the current model's own simulated output (indirect
   /// inference): ρ ← ρ + IV(data) − IV(simulated), so systematic regression errors cancel.
@@ -102,7 +102,7 @@ StructuredIvResult estimate_structured_step1_iv(const SampledData& data,
 
 struct OutputErrorOptions {
   Hold hold = Hold::zero_order_hold;  ///< how the measured input is continued
-  int substeps = 4;                        ///< RK4 steps per sample in the simulations
+  int substeps = 4;                   ///< RK4 steps per sample in the simulations
   int max_iterations = 200;
   /// Also estimate Δ (>= 0) jointly with ρ; the covariance still covers ρ only.
   bool estimate_delay = false;
@@ -161,8 +161,9 @@ struct FeedbackDelayScanResult {
 };
 
 /// For each Δ: step 1 (batch) and the output error of W = α̂/(β̂ + γ̂ e^{-Δs}) on the data.
-FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int forward_order, int feedback_order,
-                                   const FeedbackDelayScanOptions& options = {});
+FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int forward_order,
+                                            int feedback_order,
+                                            const FeedbackDelayScanOptions& options = {});
 
 /// The whole identification: step 1 (batch or RLS) gives Ŵ = α̂/(β̂ + γ̂ e^{-Δs}); the
 /// separation candidates are the approximate-GCD estimate and every refined start of min J

@@ -6,9 +6,12 @@
 #pragma once
 
 #include <array>
-#include <optional>
+#include <span>
 #include <string>
 #include <string_view>
+#include <tuple>
+
+#include "ctid/core/fields.h"
 
 namespace ctid {
 
@@ -24,18 +27,25 @@ enum class Termination {
   no_solution,           ///< every start or candidate failed (unstable or non-finite)
 };
 
-/// Every Termination, in declaration order (for readers, tables and tests).
-inline constexpr std::array<Termination, 7> all_terminations{
-    Termination::not_run,          Termination::converged,
-    Termination::iteration_limit,  Termination::singular_equations,
-    Termination::non_finite,       Termination::closed_loop_unstable,
-    Termination::no_solution};
+inline constexpr std::array<Enumerator<Termination>, 7> termination_enumerators{{
+    {Termination::not_run, "not_run", "Nothing was computed."},
+    {Termination::converged, "converged", "The stopping rule was met."},
+    {Termination::iteration_limit, "iteration_limit", "The iteration budget ran out first."},
+    {Termination::singular_equations, "singular_equations",
+     "The equations of a step are numerically singular."},
+    {Termination::non_finite, "non_finite", "An iterate, a cost or a signal became NaN/Inf."},
+    {Termination::closed_loop_unstable, "closed_loop_unstable",
+     "The controller does not stabilise the model the method needs."},
+    {Termination::no_solution, "no_solution", "Every start or candidate failed."},
+}};
+constexpr std::span<const Enumerator<Termination>> enumerators(Termination) {
+  return termination_enumerators;
+}
 
 /// Short name: "not_run", "converged", "iteration_limit", ...
-std::string to_string(Termination termination);
-
-/// The Termination named `name`, or nullopt.
-std::optional<Termination> termination_from_name(std::string_view name);
+inline std::string to_string(Termination termination) {
+  return std::string(enum_name(termination));
+}
 
 /// Termination, message and iteration count: the fields every iterative result carries (by
 /// deriving from it), with the one-line report the CLI prints, Python shows and JSON stores.
@@ -43,6 +53,15 @@ struct Outcome {
   Termination termination = Termination::not_run;
   std::string message;  ///< one sentence: why it stopped and where
   int iterations = 0;
+
+  static constexpr std::string_view type_name = "Outcome";
+  static constexpr auto fields() {
+    return std::tuple{
+        field("termination", &Outcome::termination, "Why the method stopped."),
+        field("message", &Outcome::message, "One sentence: why it stopped and where."),
+        field("iterations", &Outcome::iterations, AtLeast{0}, "Iterations run."),
+    };
+  }
 
   bool converged() const { return termination == Termination::converged; }
   /// "converged after 8 iterations", followed by ": <message>" unless converged or empty.

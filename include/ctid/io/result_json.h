@@ -14,8 +14,8 @@
 
 #include "ctid/core/additive_model.h"
 #include "ctid/core/transfer_function.h"
-#include "ctid/refined_iv/estimation_result.h"
 #include "ctid/io/file.h"
+#include "ctid/refined_iv/estimation_result.h"
 
 namespace ctid::io {
 

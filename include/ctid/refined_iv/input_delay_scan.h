@@ -24,15 +24,17 @@ struct InputDelayScanResult {
 /// are kept in the table but chosen only if none converged. Throws InvalidArgument for a bad
 /// range or if every delay throws (the first message is passed on).
 InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>& estimate,
-                                 int min_delay, int max_delay);
+                                      int min_delay, int max_delay);
 
 /// additive_srivc over a delay range (options.input_delay is overridden).
 InputDelayScanResult additive_srivc_delay_scan(const SampledData& data,
-                                          const std::vector<SubmodelOrder>& orders, int min_delay,
-                                          int max_delay, const RefinedIvOptions& options = {});
+                                               const std::vector<SubmodelOrder>& orders,
+                                               int min_delay, int max_delay,
+                                               const RefinedIvOptions& options = {});
 
 /// srivc over a delay range.
-InputDelayScanResult srivc_delay_scan(const SampledData& data, const SubmodelOrder& order, int min_delay,
-                                 int max_delay, const RefinedIvOptions& options = {});
+InputDelayScanResult srivc_delay_scan(const SampledData& data, const SubmodelOrder& order,
+                                      int min_delay, int max_delay,
+                                      const RefinedIvOptions& options = {});
 
 }  // namespace ctid

@@ -3,10 +3,15 @@
 // validate() names the field, its value and the rule.
 #pragma once
 
+#include <array>
 #include <optional>
+#include <span>
+#include <string_view>
+#include <tuple>
 
 #include "ctid/core/additive_model.h"
-#include "ctid/filtering/filter_bank.h"
+#include "ctid/core/fields.h"
+#include "ctid/core/hold.h"
 
 namespace ctid {
 
@@ -15,6 +20,15 @@ enum class NoiseAssumption {
   white,     ///< sigma^2 (sum psi psi')^-1
   coloured,  ///< sandwich R^-1 Q R^-1 with Q from an AR model of the residuals
 };
+
+inline constexpr std::array<Enumerator<NoiseAssumption>, 2> noise_assumption_enumerators{{
+    {NoiseAssumption::white, "white", "sigma^2 (sum psi psi')^-1."},
+    {NoiseAssumption::coloured, "coloured",
+     "Sandwich R^-1 Q R^-1, Q from an AR model of the residuals."},
+}};
+constexpr std::span<const Enumerator<NoiseAssumption>> enumerators(NoiseAssumption) {
+  return noise_assumption_enumerators;
+}
 
 struct RefinedIvOptions {
   /// Upper bound on the iterations of (29)/(30). >= 1.
@@ -47,8 +61,33 @@ struct RefinedIvOptions {
   /// Compute covariance, standard errors and modal standard errors (skip to save time).
   bool compute_covariance = true;
 
-  /// Throws InvalidArgument naming the first bad field.
-  void validate() const;
+  static constexpr std::string_view type_name = "RefinedIvOptions";
+  static constexpr auto fields() {
+    using O = RefinedIvOptions;
+    return std::tuple{
+        field("max_iterations", &O::max_iterations, AtLeast{1},
+              "Upper bound on the iterations of (29)/(30)."),
+        field("tolerance", &O::tolerance, Between{0.0, 1.0},
+              "Stop when the relative parameter change falls below this."),
+        field("initial_model", &O::initial_model,
+              "Starting AdditiveModel, or none: found from the data."),
+        field("output_interpolation", &O::output_interpolation,
+              "How the measured output is continued between samples before filtering."),
+        field("input_delay", &O::input_delay, AtLeast{0}, "Known input delay [samples]."),
+        field("record_history", &O::record_history, "Keep one IterationRecord per iteration."),
+        field("step_control", &O::step_control,
+              "Halve steps that fail or increase the scaled IV residual."),
+        field("max_step_halvings", &O::max_step_halvings, AtLeast{0},
+              "Largest number of halvings of one step."),
+        field("noise", &O::noise, "Noise assumption of the covariance."),
+        field("noise_model_max_order", &O::noise_model_max_order, AtLeast{1},
+              "Largest AR order of the coloured-noise covariance (chosen by AIC)."),
+        field("compute_covariance", &O::compute_covariance,
+              "Compute covariance, standard errors and modal standard errors."),
+    };
+  }
+  /// Throws InvalidArgument naming the first bad field, its value and the rule.
+  void validate() const { validate_fields(*this); }
 };
 
 }  // namespace ctid

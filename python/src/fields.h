@@ -1,0 +1,99 @@
+// Python classes derived from a struct's field list (ctid/core/fields.h): attributes with the
+// fields' docs, a keyword-only constructor that rejects unknown keywords, validate(), a repr,
+// equality, and the class attributes `fields` (names in order) and `field_docs`. Options are
+// read/write; results are read-only. Enumerations are bound from their enumerators. No field
+// is named here: adding one to the C++ list adds it to Python.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "common.h"
+#include "ctid/core/fields.h"
+
+namespace ctid::python {
+
+/// Binds E as a Python enum named `name`, its values and docs from enumerators(E).
+template <NamedEnum E>
+py::enum_<E> bind_enum(py::module_& m, const char* name, const char* doc) {
+  py::enum_<E> e(m, name, doc);
+  for (const auto& each : enumerators(E{})) e.value(each.name.data(), each.value, each.doc.data());
+  return e;
+}
+
+namespace internal {
+
+template <HasFields S>
+std::string fields_repr(const py::object& self) {
+  std::string out = std::string(S::type_name) + "(";
+  bool first = true;
+  for_each_field<S>([&](const auto& f) {
+    out += (first ? "" : ", ") + std::string(f.name) + "=" +
+           py::cast<std::string>(py::repr(self.attr(f.name.data())));
+    first = false;
+  });
+  return out + ")";
+}
+
+template <HasFields S, class Class>
+void add_common(Class& cls) {
+  const auto names = field_names<S>();
+  py::tuple fields(names.size());
+  py::dict docs;
+  std::size_t i = 0;
+  for_each_field<S>([&](const auto& f) {
+    fields[i++] = py::str(f.name.data());
+    docs[py::str(f.name.data())] = py::str(f.doc.data());
+  });
+  cls.attr("fields") = fields;
+  cls.attr("field_docs") = docs;
+  cls.def("__repr__", &fields_repr<S>);
+  cls.def("__eq__", [](const py::object& a, const py::object& b) {
+    if (!py::isinstance(b, py::type::of(a))) return false;
+    bool equal = true;
+    for_each_field<S>([&](const auto& f) {
+      equal = equal && a.attr(f.name.data()).equal(b.attr(f.name.data()));
+    });
+    return equal;
+  });
+}
+
+}  // namespace internal
+
+/// An options struct as a Python class S.type_name: S(field=value, ...), read/write attributes,
+/// validate() (ValueError naming the field path, value and rule), repr, ==, `fields`.
+template <HasFields S>
+py::class_<S> bind_options(py::module_& m, const char* doc) {
+  py::class_<S> cls(m, S::type_name.data(), doc);
+  for_each_field<S>(
+      [&](const auto& f) { cls.def_readwrite(f.name.data(), f.member, f.doc.data()); });
+  const std::string name(S::type_name);
+  const auto names = field_names<S>();
+  cls.def(
+      py::init([name, names](const py::kwargs& kwargs) {
+        check_keywords(name, kwargs, names);
+        py::object object = py::cast(S{});
+        for (const auto& item : kwargs) py::setattr(object, item.first, item.second);
+        return object.cast<S>();
+      }),
+      ("Keyword-only constructor; fields: " + join(names) + ". Unknown keywords raise TypeError.")
+          .c_str());
+  cls.def(
+      "validate", [](const S& self) { self.validate(); },
+      "Raise ValueError naming the first bad field (its full path), its value and the rule.");
+  internal::add_common<S>(cls);
+  return cls;
+}
+
+/// A result struct as a Python class: read-only attributes, repr, ==, `fields`. Further methods
+/// (converged(), brief_report(), ...) are added by the caller on the returned class.
+template <HasFields S, class... Bases>
+py::class_<S, Bases...> bind_result(py::module_& m, const char* doc) {
+  py::class_<S, Bases...> cls(m, S::type_name.data(), doc);
+  for_each_field<S>(
+      [&](const auto& f) { cls.def_readonly(f.name.data(), f.member, f.doc.data()); });
+  internal::add_common<S>(cls);
+  return cls;
+}
+
+}  // namespace ctid::python

@@ -1,0 +1,83 @@
+"""Compare two folders written by scripts/behaviour_snapshot.sh (before and after a change).
+
+Text and CSV files must be identical line for line; JSON documents are compared value by
+value at every path present in both, so a refactoring may add fields or rename the ones listed
+in RENAMED, but every number it kept must be bit-identical. Prints each difference and exits 1
+if there is one.
+    python3 scripts/compare_snapshots.py BEFORE AFTER
+"""
+import json
+import pathlib
+import re
+import sys
+
+# Document keys that a refactoring renamed on purpose: {old path suffix: new path suffix}.
+RENAMED = {}
+# Lines of the text outputs that may differ in wording (not in numbers), as prefixes.
+REWORDED_PREFIXES = ("termination:",)
+# Wall-clock times in progress and summary lines are not results.
+TIMING = re.compile(r"(\d+(\.\d+)? s on \d+ threads?|cases \(\d+ %\), \d+ s)")
+
+
+def flatten(value, path=""):
+    if isinstance(value, dict):
+        for key, element in value.items():
+            yield from flatten(element, f"{path}.{key}" if path else key)
+    elif isinstance(value, list):
+        for i, element in enumerate(value):
+            yield from flatten(element, f"{path}[{i}]")
+    else:
+        yield path, value
+
+
+def compare_json(before, after, name):
+    old = dict(flatten(json.loads(before.read_text())))
+    new = dict(flatten(json.loads(after.read_text())))
+    for old_suffix, new_suffix in RENAMED.items():
+        for path in list(old):
+            if path.endswith(old_suffix):
+                old[path[: -len(old_suffix)] + new_suffix] = old.pop(path)
+    problems = []
+    for path, value in old.items():
+        if path not in new:
+            problems.append(f"{name}: {path} is gone")
+        elif new[path] != value:
+            problems.append(f"{name}: {path}: {value!r} -> {new[path]!r}")
+    return problems
+
+
+def compare_text(before, after, name):
+    old = before.read_text().splitlines()
+    new = after.read_text().splitlines()
+    problems = []
+    if len(old) != len(new):
+        problems.append(f"{name}: {len(old)} lines -> {len(new)} lines")
+    for i, (a, b) in enumerate(zip(old, new)):
+        a, b = TIMING.sub("<time>", a), TIMING.sub("<time>", b)
+        if a != b and not (a.startswith(REWORDED_PREFIXES) and b.startswith(REWORDED_PREFIXES)):
+            problems.append(f"{name}:{i + 1}: {a!r} -> {b!r}")
+    return problems
+
+
+def main(before, after):
+    before, after = pathlib.Path(before), pathlib.Path(after)
+    problems = []
+    for old in sorted(p for p in before.rglob("*") if p.is_file()):
+        name = str(old.relative_to(before))
+        new = after / name
+        if not new.exists():
+            problems.append(f"{name}: missing")
+        elif old.suffix == ".json":
+            problems += compare_json(old, new, name)
+        elif old.suffix == ".png":
+            continue
+        else:
+            problems += compare_text(old, new, name)
+    for problem in problems:
+        print(problem)
+    print(f"compare_snapshots: {len(problems)} difference(s)")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(*sys.argv[1:3]))
