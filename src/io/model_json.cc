@@ -195,3 +195,30 @@ void write_model(const std::filesystem::path& path, const DiscreteTransferFuncti
 }
 
 }  // namespace ctid::io
+
+namespace ctid {
+
+nlohmann::json to_json_value(const TransferFunction& model) { return io::to_json(model); }
+nlohmann::json to_json_value(const AdditiveModel& model) { return io::to_json(model); }
+nlohmann::json to_json_value(const DiscreteTransferFunction& model) { return io::to_json(model); }
+nlohmann::json to_json_value(const DelayedFeedbackLoop& model) { return io::to_json(model); }
+TransferFunction from_json_value(const nlohmann::json& value, std::type_identity<TransferFunction>,
+                                 const std::string& where) {
+  return io::transfer_function_from_json(value, where);
+}
+AdditiveModel from_json_value(const nlohmann::json& value, std::type_identity<AdditiveModel>,
+                              const std::string& where) {
+  return io::additive_model_from_json(value, where);
+}
+DiscreteTransferFunction from_json_value(const nlohmann::json& value,
+                                         std::type_identity<DiscreteTransferFunction>,
+                                         const std::string& where) {
+  return io::discrete_transfer_function_from_json(value, where);
+}
+DelayedFeedbackLoop from_json_value(const nlohmann::json& value,
+                                    std::type_identity<DelayedFeedbackLoop>,
+                                    const std::string& where) {
+  return io::delayed_feedback_loop_from_json(value, where);
+}
+
+}  // namespace ctid

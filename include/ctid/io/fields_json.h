@@ -5,8 +5,9 @@
 // full precision (they read back bit-identical); a non-finite double is written as null and
 // read back as NaN; enumerations by name; vectors, optionals and nested structs recursively.
 // Other types (models, transfer functions) are written by an overload
-// `nlohmann::json to_json_value(const T&)` and read by `void from_json_value(const
-// nlohmann::json&, T&, const std::string& where)`, found by argument-dependent lookup.
+// `nlohmann::json to_json_value(const T&)` and read by `T from_json_value(const
+// nlohmann::json&, std::type_identity<T>, const std::string& where)`, both found by
+// argument-dependent lookup (io/model_json.h has them for the model types).
 #pragma once
 
 #include <cmath>
@@ -86,25 +87,40 @@ inline double number_json(const nlohmann::json& value, const std::string& where)
 }
 
 template <class T>
+void value_from_json(const nlohmann::json& value, T& out, const std::string& where);
+
+/// A T read from `value`: default-constructed and filled, or (types without a default) made
+/// by the hook `T from_json_value(const nlohmann::json&, std::type_identity<T>, where)`.
+template <class T>
+T read_value(const nlohmann::json& value, const std::string& where) {
+  if constexpr (std::is_default_constructible_v<T>) {
+    T out{};
+    value_from_json(value, out, where);
+    return out;
+  } else {
+    return from_json_value(value, std::type_identity<T>{}, where);
+  }
+}
+
+template <class T>
 void value_from_json(const nlohmann::json& value, T& out, const std::string& where) {
   if constexpr (HasFields<T>) {
     fields_from_json(value, out, where);
   } else if constexpr (is_optional<T>::value) {
     if (value.is_null()) {
       out.reset();
+    } else if (out) {
+      value_from_json(value, *out, where);
     } else {
-      typename T::value_type inner = out ? *out : typename T::value_type{};
-      value_from_json(value, inner, where);
-      out = std::move(inner);
+      out = read_value<typename T::value_type>(value, where);
     }
   } else if constexpr (is_vector<T>::value) {
     if (!value.is_array()) wrong_type(where, "an array", value);
     T result;
     result.reserve(value.size());
     for (std::size_t i = 0; i < value.size(); ++i) {
-      typename T::value_type element{};
-      value_from_json(value[i], element, where + "[" + std::to_string(i) + "]");
-      result.push_back(std::move(element));
+      result.push_back(
+          read_value<typename T::value_type>(value[i], where + "[" + std::to_string(i) + "]"));
     }
     out = std::move(result);
   } else if constexpr (NamedEnum<T>) {
@@ -158,7 +174,7 @@ void value_from_json(const nlohmann::json& value, T& out, const std::string& whe
       }
     }
   } else {
-    from_json_value(value, out, where);
+    out = from_json_value(value, std::type_identity<T>{}, where);
   }
 }
 

@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <string>
+#include <type_traits>
 #include <variant>
 
 #include <nlohmann/json.hpp>
@@ -64,3 +65,24 @@ void write_model(const std::filesystem::path& path, const DiscreteTransferFuncti
                  Overwrite overwrite = Overwrite::no);
 
 }  // namespace ctid::io
+
+namespace ctid {
+
+/// The hooks of io/fields_json.h for model types inside a field list (found by
+/// argument-dependent lookup): the model documents above, read with `where` as the source.
+nlohmann::json to_json_value(const TransferFunction& model);
+nlohmann::json to_json_value(const AdditiveModel& model);
+nlohmann::json to_json_value(const DiscreteTransferFunction& model);
+nlohmann::json to_json_value(const DelayedFeedbackLoop& model);
+TransferFunction from_json_value(const nlohmann::json& value, std::type_identity<TransferFunction>,
+                                 const std::string& where);
+AdditiveModel from_json_value(const nlohmann::json& value, std::type_identity<AdditiveModel>,
+                              const std::string& where);
+DiscreteTransferFunction from_json_value(const nlohmann::json& value,
+                                         std::type_identity<DiscreteTransferFunction>,
+                                         const std::string& where);
+DelayedFeedbackLoop from_json_value(const nlohmann::json& value,
+                                    std::type_identity<DelayedFeedbackLoop>,
+                                    const std::string& where);
+
+}  // namespace ctid
