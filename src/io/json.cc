@@ -41,9 +41,44 @@ std::string kind_of(const nlohmann::json& value) {
   return "an object";
 }
 
+// The deepest nesting of arrays and objects a document may have. nlohmann's parser is
+// iterative, but copying, comparing and printing a document recurse once per level, so a
+// hostile file (140 000 nested '[') would overflow the stack after parsing; ctid's own
+// documents nest fewer than ten levels.
+constexpr int kMaxNestingDepth = 256;
+
+// The byte offset of the first bracket that opens level kMaxNestingDepth + 1, or npos.
+// Brackets inside strings (with their escapes) do not count.
+size_t too_deep_at(std::string_view text) {
+  int depth = 0;
+  bool in_string = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxNestingDepth) return i;
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return std::string_view::npos;
+}
+
 }  // namespace
 
 nlohmann::json parse_json(std::string_view text, const std::string& source) {
+  if (const size_t at = too_deep_at(text); at != std::string_view::npos) {
+    throw InvalidArgument(source + ":" + parse_error_location(text, at + 1) +
+                          ": malformed JSON: arrays and objects nested deeper than " +
+                          std::to_string(kMaxNestingDepth) + " levels");
+  }
   try {
     return nlohmann::json::parse(text.begin(), text.end());
   } catch (const nlohmann::json::parse_error& e) {

@@ -22,6 +22,20 @@ std::string parse_error(const std::string& text) {
   return "";
 }
 
+TEST(Json, DeepNestingIsRefusedBeforeParsing) {
+  // 140 000 nested arrays used to overflow the stack when the document was copied.
+  const std::string deep = std::string(140000, '[') + std::string(140000, ']');
+  EXPECT_EQ(parse_error(deep),
+            "m.json:1:257: malformed JSON: arrays and objects nested deeper than 256 levels");
+  // The same depth inside a string is text, and 256 levels are accepted.
+  const std::string quoted = "{\"d\": \"" + std::string(1000, '[') + "\\\"[\"}";
+  EXPECT_EQ(parse_error(quoted), "");
+  const std::string deepest = std::string(256, '[') + std::string(256, ']');
+  EXPECT_EQ(parse_error(deepest), "");
+  EXPECT_EQ(parse_error("{\"a\":\n" + std::string(300, '{')),
+            "m.json:2:256: malformed JSON: arrays and objects nested deeper than 256 levels");
+}
+
 TEST(Json, SyntaxErrorsNameFileLineAndColumn) {
   EXPECT_THAT(parse_error("{\n  \"a\": 1,\n  \"b\": NaN\n}\n"),
               StartsWith("m.json:3:8: malformed JSON"));
