@@ -17,6 +17,7 @@
 #include "ctid/frequency/peaks.h"
 #include "ctid/frequency/periodogram.h"
 #include "ctid/refined_iv/additive_srivc.h"
+#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
 
@@ -65,25 +66,6 @@ Eigen::MatrixXd numerator_columns(const Polynomial& a, int integrators, int m,
                                   const Eigen::VectorXd& u, double h) {
   const Polynomial d = Polynomial::monomial(integrators) * a;
   return filter_derivatives(d, u, h, Hold::zero_order_hold).leftCols(m + 1);
-}
-
-// Output-error least squares of y on the columns of x, columns scaled to unit norm.
-struct LeastSquares {
-  Eigen::VectorXd coefficients;
-  Eigen::VectorXd residual;
-};
-
-LeastSquares least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
-  Eigen::VectorXd s = x.colwise().norm().transpose();
-  for (Eigen::Index j = 0; j < s.size(); ++j) {
-    if (!(s(j) > 0.0)) s(j) = 1.0;
-  }
-  const Eigen::MatrixXd scaled = x * s.cwiseInverse().asDiagonal();
-  const Eigen::VectorXd z = scaled.colPivHouseholderQr().solve(y);
-  LeastSquares out;
-  out.coefficients = z.cwiseQuotient(s);
-  out.residual = y - scaled * z;
-  return out;
 }
 
 // The residual's periodogram peaks as ModeRelocationOptions asks for them.
@@ -142,7 +124,7 @@ bool movable(const SubmodelOrder& o) { return o.n == 2 && o.integrators == 0; }
 struct ProjectedFit {
   Eigen::MatrixXd x;
   std::vector<Eigen::Index> first_column;  // of each submodel
-  LeastSquares fit;
+  internal::ScaledLeastSquares fit;
   double mean_squared_error = 0.0;
 };
 
@@ -160,7 +142,7 @@ ProjectedFit projected_fit(const std::vector<Polynomial>& denominators,
     out.x.middleCols(out.first_column[i], orders[i].m + 1) =
         numerator_columns(denominators[i], orders[i].integrators, orders[i].m, u, h);
   }
-  out.fit = least_squares(out.x, y);
+  out.fit = internal::scaled_least_squares(out.x, y);
   out.mean_squared_error = out.fit.residual.squaredNorm() / static_cast<double>(y.size());
   return out;
 }
@@ -242,10 +224,7 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
     const std::vector<Polynomial> denominators = denominators_of(model);
     const ProjectedFit base = projected_fit(denominators, orders, u, y, h);
     // Orthonormal basis of the current regressors (columns scaled first for the rank).
-    Eigen::VectorXd norms = base.x.colwise().norm().transpose();
-    for (Eigen::Index j = 0; j < norms.size(); ++j) {
-      if (!(norms(j) > 0.0)) norms(j) = 1.0;
-    }
+    const Eigen::VectorXd norms = internal::column_scales(base.x);
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(base.x *
                                                          norms.cwiseInverse().asDiagonal());
     const Eigen::MatrixXd q =
