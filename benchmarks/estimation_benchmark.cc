@@ -12,13 +12,9 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
+#include "support/paper_systems.h"
 
 namespace {
-
-ctid::Submodel mode(double sigma, double omega, double gain) {
-  const double m2 = sigma * sigma + omega * omega;
-  return {ctid::Polynomial({1.0, -2.0 * sigma / m2, 1.0 / m2}), ctid::Polynomial({gain}), 0};
-}
 
 struct Setup {
   ctid::AdditiveModel truth;
@@ -27,11 +23,9 @@ struct Setup {
 };
 
 Setup make_setup(int n) {
-  ctid::AdditiveModel truth({mode(-0.25, 1.39, 3.0), mode(-0.15, 3.16, 0.4), mode(-0.17, 5.77, 0.2),
-                             mode(-0.5, 9.99, 0.05)});
+  ctid::AdditiveModel truth = ctid::testing::open_loop_four_modes();
   const Eigen::VectorXd u = ctid::white_noise(n, 1.0, 1);
-  const ctid::DiscreteTransferFunction h(ctid::Polynomial{0.5, 1.0}, ctid::Polynomial{-0.85, 1.0},
-                                         0.05);
+  const ctid::DiscreteTransferFunction h = ctid::testing::open_loop_noise_filter();
   const Eigen::VectorXd y = ctid::simulate(truth, u, 0.05) + ctid::colored_noise(h, n, 0.02, 2);
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> uniform(-0.05, 0.05);

@@ -11,28 +11,13 @@
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
+#include "support/paper_systems.h"
 
 namespace {
 
 constexpr double kH = 0.05;
 
-ctid::Submodel mode(double sigma, double omega_d, double gain) {
-  const double magnitude2 = sigma * sigma + omega_d * omega_d;
-  return ctid::Submodel{ctid::Polynomial{1.0, 2.0 * sigma / magnitude2, 1.0 / magnitude2},
-                        ctid::Polynomial{gain}};
-}
-
-ctid::AdditiveModel eighth_order_system() {
-  return ctid::AdditiveModel(
-      {mode(0.25, 1.39, 3.0), mode(0.15, 3.16, 0.4), mode(0.17, 5.77, 0.2), mode(0.5, 9.99, 0.05)});
-}
-
-ctid::DiscreteTransferFunction paper_pid() {
-  const ctid::Polynomial q{0.0, 1.0};
-  const ctid::Polynomial q1{-1.0, 1.0};
-  return ctid::DiscreteTransferFunction(0.0115 * q * q1 + 0.00725 * q * q + 0.00454 * q1 * q1,
-                                        q * q1, kH);
-}
+ctid::AdditiveModel eighth_order_system() { return ctid::testing::open_loop_four_modes(); }
 
 void BM_SimulateUnfactored8(benchmark::State& state) {
   const ctid::TransferFunction g = eighth_order_system().to_transfer_function();
@@ -50,7 +35,7 @@ void BM_SimulateAdditive4Modes(benchmark::State& state) {
 
 void BM_SimulateClosedLoop8(benchmark::State& state) {
   const ctid::AdditiveModel g = eighth_order_system();
-  const ctid::DiscreteTransferFunction c = paper_pid();
+  const ctid::DiscreteTransferFunction c = ctid::testing::closed_loop_pid();
   const Eigen::VectorXd r = ctid::white_noise(static_cast<int>(state.range(0)), 1.0, 1);
   for (auto _ : state) {
     benchmark::DoNotOptimize(ctid::simulate_closed_loop(g, c, r).output.data());

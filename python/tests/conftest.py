@@ -1,5 +1,5 @@
-"""Shared fixtures: the build folder holding ctid_python_reference, and a seeded experiment
-that mirrors the inputs of reference.cc."""
+"""Shared fixtures: the build folder holding ctid_python_reference, a seeded experiment
+that mirrors the inputs of reference.cc, and the example systems of the papers."""
 
 import os
 import pathlib
@@ -49,6 +49,20 @@ def experiment():
 @pytest.fixture(scope="session")
 def fitted(experiment):
     return ctid.srivc(experiment["data"], ctid.SubmodelOrder(2, 0), max_iterations=30)
+
+
+@pytest.fixture(scope="session")
+def paper_systems():
+    """González et al. Section 6: the open-loop system (6.1, four modes) and its noise filter
+    (q + 0.5)/(q - 0.85), the closed-loop plant of eq. (46) and the PID (6.2), and their sample
+    time. Taken from the library's study set-up, which tests/study checks bit for bit against
+    the C++ tests' fixtures (tests/support/paper_systems.h), so the systems are written once."""
+    open_loop = ctid.study_setup(ctid.StudyKind.open_loop)
+    closed_loop = ctid.study_setup(ctid.StudyKind.closed_loop)
+    assert open_loop.sample_time == closed_loop.sample_time
+    return {"open_loop": open_loop.system, "noise_filter": open_loop.noise_filter,
+            "closed_loop": closed_loop.system, "pid": closed_loop.controller,
+            "sample_time": open_loop.sample_time}
 
 
 def rng(seed=0):

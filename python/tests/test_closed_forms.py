@@ -94,3 +94,21 @@ def test_validation_correlations_match_numpy():
     np.testing.assert_allclose(report.residual_autocorrelation, auto, atol=1e-12)
     assert report.max_lag == 7
     assert not report.residual_uncorrelated_with_input
+
+
+def test_paper_systems_have_the_papers_poles_gains_and_pid(paper_systems):
+    poles = np.concatenate([s.to_transfer_function().poles()
+                            for s in paper_systems["open_loop"].submodels])
+    expected = [complex(-0.25, 1.39), complex(-0.15, 3.16), complex(-0.17, 5.77),
+                complex(-0.5, 9.99)]
+    expected = np.concatenate([expected, np.conj(expected)])
+    np.testing.assert_allclose(np.sort_complex(poles), np.sort_complex(expected), rtol=1e-12)
+    gains = [s.b.coefficients[0] for s in paper_systems["open_loop"].submodels]
+    np.testing.assert_array_equal(gains, [3.0, 0.4, 0.2, 0.05])
+    np.testing.assert_array_equal(paper_systems["closed_loop"].parameters(),
+                                  [0.25, 0.25, 3.0, 0.01, 0.025, 1.0])
+    for z in (complex(0.3, 0.8), complex(-2.0, 0.1)):
+        pid = 0.0115 + 0.00725 * z / (z - 1) + 0.00454 * (z - 1) / z
+        assert abs(paper_systems["pid"](z) - pid) < 1e-15
+        assert abs(paper_systems["noise_filter"](z) - (z + 0.5) / (z - 0.85)) < 1e-14
+    assert paper_systems["sample_time"] == 0.05

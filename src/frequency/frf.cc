@@ -10,6 +10,7 @@
 #include <unsupported/Eigen/FFT>
 
 #include "ctid/core/error.h"
+#include "ctid/frequency/peaks.h"
 
 namespace ctid {
 namespace {
@@ -215,29 +216,15 @@ std::vector<ResonancePeak> resonance_peaks(const Eigen::VectorXd& frequencies,
 
   std::vector<ResonancePeak> peaks;
   for (Eigen::Index i = 1; i + 1 < size; ++i) {
-    if (!(db(i) > db(i - 1) && db(i) >= db(i + 1))) continue;
-    // Prominence: the lowest point on each side before a higher value (or the grid's end).
-    double left_min = db(i);
-    for (Eigen::Index j = i - 1; j >= 0 && db(j) <= db(i); --j)
-      left_min = std::min(left_min, db(j));
-    double right_min = db(i);
-    for (Eigen::Index j = i + 1; j < size && db(j) <= db(i); ++j) {
-      right_min = std::min(right_min, db(j));
-    }
+    if (!is_local_maximum(db, i)) continue;
     ResonancePeak peak;
     peak.index = static_cast<int>(i);
     peak.magnitude = magnitude(i);
-    peak.prominence_db = db(i) - std::max(left_min, right_min);
+    peak.prominence_db = prominence(db, i);
     if (peak.prominence_db < options.min_prominence_db) continue;
-
-    // Vertex of the parabola through the three points (x, log|G|) around the maximum.
-    const double x0 = frequencies(i - 1), x1 = frequencies(i), x2 = frequencies(i + 1);
-    const double y0 = db(i - 1), y1 = db(i), y2 = db(i + 1);
-    const double denominator = (x0 - x1) * (x0 - x2) * (x1 - x2);
-    const double a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denominator;
-    const double b =
-        (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denominator;
-    peak.frequency = a < 0.0 ? std::clamp(-b / (2.0 * a), x0, x2) : x1;
+    // Vertex of the parabola through the three points (w, dB) around the maximum.
+    peak.frequency = parabolic_vertex(frequencies(i - 1), frequencies(i), frequencies(i + 1),
+                                      db(i - 1), db(i), db(i + 1));
 
     // Half-power points, linearly interpolated in frequency.
     const double half_power = magnitude(i) / std::sqrt(2.0);

@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 
 #include "ctid/core/error.h"
+#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
 
@@ -51,16 +52,12 @@ Eigen::MatrixXd instrumental_variable_covariance(const Eigen::MatrixXd& psi,
                                                  int parameter_count, NoiseAssumption noise,
                                                  int max_ar_order) {
   const Eigen::Index n = psi.rows();
-  const Eigen::Index p = psi.cols();
   require(residual.size() == n, "instrumental_variable_covariance: residual has ", residual.size(),
           " samples, psi has ", n);
   require(n > parameter_count, "instrumental_variable_covariance: ", n, " samples are too few for ",
           parameter_count, " parameters");
   // Scale columns to unit norm so that the inverse is formed on a well-conditioned matrix.
-  Eigen::VectorXd s = psi.colwise().norm().transpose();
-  for (Eigen::Index j = 0; j < p; ++j) {
-    if (!(s(j) > 0.0)) s(j) = 1.0;
-  }
+  const Eigen::VectorXd s = internal::column_scales(psi);
   const Eigen::MatrixXd scaled = psi * s.cwiseInverse().asDiagonal();
   const Eigen::MatrixXd r = scaled.transpose() * scaled;
   const Eigen::MatrixXd r_inv = r.completeOrthogonalDecomposition().pseudoInverse();

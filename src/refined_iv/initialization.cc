@@ -14,23 +14,9 @@
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/srivc.h"
 #include "refined_iv/internal/refined_iv_engine.h"
+#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
-
-namespace {
-
-// Least squares with columns scaled to unit norm (column-pivoted QR).
-Eigen::VectorXd scaled_least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
-  Eigen::VectorXd s = x.colwise().norm().transpose();
-  for (Eigen::Index j = 0; j < s.size(); ++j) {
-    if (!(s(j) > 0.0)) s(j) = 1.0;
-  }
-  const Eigen::MatrixXd scaled = x * s.cwiseInverse().asDiagonal();
-  const Eigen::VectorXd z = scaled.colPivHouseholderQr().solve(y);
-  return z.cwiseQuotient(s);
-}
-
-}  // namespace
 
 void InitializationOptions::validate() const {
   for (size_t i = 0; i < filter_bandwidths.size(); ++i) {
@@ -77,7 +63,7 @@ TransferFunction lssvf(const SampledData& data, const SubmodelOrder& order, doub
   Eigen::MatrixXd x(data.size(), order.n + order.m + 1);
   for (int k = 1; k <= order.n; ++k) x.col(k - 1) = -fy.col(k + l);
   x.rightCols(order.m + 1) = fu.leftCols(order.m + 1);
-  const Eigen::VectorXd theta = scaled_least_squares(x, fy.col(l));
+  const Eigen::VectorXd theta = internal::scaled_least_squares(x, fy.col(l)).coefficients;
   Eigen::VectorXd a(order.n + 1);
   a(0) = 1.0;
   a.tail(order.n) = theta.head(order.n);
@@ -213,7 +199,7 @@ AdditiveModel group_into_submodels(const TransferFunction& g,
     x.middleCols(at, orders[i].m + 1) = f.leftCols(orders[i].m + 1);
     at += orders[i].m + 1;
   }
-  const Eigen::VectorXd b = scaled_least_squares(x, data.output());
+  const Eigen::VectorXd b = internal::scaled_least_squares(x, data.output()).coefficients;
   Eigen::VectorXd beta(n_total + columns);
   int pos = 0;
   at = 0;

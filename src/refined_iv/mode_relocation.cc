@@ -11,11 +11,13 @@
 #include <sstream>
 
 #include <Eigen/Dense>
-#include <unsupported/Eigen/FFT>
 
 #include "ctid/core/error.h"
 #include "ctid/filtering/filter_bank.h"
+#include "ctid/frequency/peaks.h"
+#include "ctid/frequency/periodogram.h"
 #include "ctid/refined_iv/additive_srivc.h"
+#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
 
@@ -66,118 +68,17 @@ Eigen::MatrixXd numerator_columns(const Polynomial& a, int integrators, int m,
   return filter_derivatives(d, u, h, Hold::zero_order_hold).leftCols(m + 1);
 }
 
-// Output-error least squares of y on the columns of x, columns scaled to unit norm.
-struct LeastSquares {
-  Eigen::VectorXd coefficients;
-  Eigen::VectorXd residual;
-};
-
-LeastSquares least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
-  Eigen::VectorXd s = x.colwise().norm().transpose();
-  for (Eigen::Index j = 0; j < s.size(); ++j) {
-    if (!(s(j) > 0.0)) s(j) = 1.0;
-  }
-  const Eigen::MatrixXd scaled = x * s.cwiseInverse().asDiagonal();
-  const Eigen::VectorXd z = scaled.colPivHouseholderQr().solve(y);
-  LeastSquares out;
-  out.coefficients = z.cwiseQuotient(s);
-  out.residual = y - scaled * z;
-  return out;
-}
-
-struct Peak {
-  double frequency = 0.0;  // rad/s
-  double ratio = 0.0;      // periodogram over local floor
-};
-
-// Median of power(j * stride) over lines j' in [j - w, j + w] (clipped to 1..lines-1), for
-// every line j.
-Eigen::VectorXd local_median(const Eigen::VectorXd& power, Eigen::Index stride, Eigen::Index lines,
-                             Eigen::Index w) {
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(std::max<Eigen::Index>(lines, 1));
-  std::vector<double> window;
-  for (Eigen::Index j = 1; j < lines; ++j) {
-    window.clear();
-    const Eigen::Index lo = std::max<Eigen::Index>(1, j - w);
-    const Eigen::Index hi = std::min<Eigen::Index>(lines - 1, j + w);
-    for (Eigen::Index i = lo; i <= hi; ++i) window.push_back(power(i * stride));
-    const auto mid = window.begin() + static_cast<std::ptrdiff_t>(window.size() / 2);
-    std::nth_element(window.begin(), mid, window.end());
-    out(j) = *mid;
-  }
-  return out;
-}
-
-// Lines of the record where the input's local median periodogram reaches min_input_level
-// times its largest value.
-std::vector<bool> excited_lines(const Eigen::VectorXd& u, const ModeRelocationOptions& o) {
-  Eigen::FFT<double> fft;
-  Eigen::VectorXcd spectrum;
-  fft.fwd(spectrum, u);
-  const Eigen::Index lines = u.size() / 2;
-  Eigen::VectorXd power(std::max<Eigen::Index>(lines, 1));
-  for (Eigen::Index k = 0; k < lines; ++k) power(k) = std::norm(spectrum(k));
-  const Eigen::VectorXd level = local_median(power, 1, lines, o.floor_half_width);
-  const double top = level.maxCoeff();
-  std::vector<bool> out(static_cast<size_t>(std::max<Eigen::Index>(lines, 1)), false);
-  for (Eigen::Index j = 1; j < lines; ++j) {
-    out[static_cast<size_t>(j)] = top > 0.0 && level(j) >= o.min_input_level * top;
-  }
-  return out;
-}
-
-// Peaks of the zero-padded periodogram of r on excited lines, highest ratio first, at least
-// search_half_width lines apart.
-std::vector<Peak> residual_peaks(const Eigen::VectorXd& r, const std::vector<bool>& excited,
-                                 double h, const ModeRelocationOptions& o) {
-  const Eigen::Index n = r.size();
-  const Eigen::Index length = n * o.zero_padding;
-  Eigen::VectorXd padded = Eigen::VectorXd::Zero(length);
-  padded.head(n) = r;
-  Eigen::FFT<double> fft;
-  Eigen::VectorXcd spectrum;
-  fft.fwd(spectrum, padded);
-  const Eigen::Index half = length / 2;  // bins 1..half-1 are inside (0, Nyquist)
-  if (half < 3 || n < 4) return {};
-  Eigen::VectorXd power(half);
-  for (Eigen::Index k = 0; k < half; ++k) power(k) = std::norm(spectrum(k));
-  // Local floor on the record's own lines (every zero_padding-th bin), by medians.
-  const Eigen::Index lines = n / 2;
-  const Eigen::VectorXd floor_line = local_median(power, o.zero_padding, lines, o.floor_half_width);
-  const double bin = 2.0 * M_PI / (static_cast<double>(length) * h);
-  std::vector<Peak> peaks;
-  for (Eigen::Index k = 2; k + 1 < half; ++k) {
-    if (!(power(k) > power(k - 1) && power(k) >= power(k + 1))) continue;
-    const Eigen::Index j = std::clamp<Eigen::Index>((k + o.zero_padding / 2) / o.zero_padding, 1,
-                                                    std::max<Eigen::Index>(lines - 1, 1));
-    if (!excited[static_cast<size_t>(j)]) continue;
-    const double floor = floor_line(j);
-    if (!(floor > 0.0)) continue;
-    const double ratio = power(k) / floor;
-    if (ratio < o.min_peak_to_floor) continue;
-    // Parabolic interpolation of log power around the maximum.
-    const double l0 = std::log(power(k - 1));
-    const double l1 = std::log(power(k));
-    const double l2 = std::log(power(k + 1));
-    const double curvature = l0 - 2.0 * l1 + l2;
-    double offset = 0.0;
-    if (std::isfinite(curvature) && curvature < 0.0) {
-      offset = std::clamp(0.5 * (l0 - l2) / curvature, -0.5, 0.5);
-    }
-    peaks.push_back({(static_cast<double>(k) + offset) * bin, ratio});
-  }
-  std::sort(peaks.begin(), peaks.end(), [](const Peak& a, const Peak& b) {
-    return a.ratio > b.ratio || (a.ratio == b.ratio && a.frequency < b.frequency);
-  });
-  const double separation = o.search_half_width * 2.0 * M_PI / (static_cast<double>(n) * h);
-  std::vector<Peak> kept;
-  for (const Peak& p : peaks) {
-    bool near = false;
-    for (const Peak& q : kept) near = near || std::abs(p.frequency - q.frequency) < separation;
-    if (!near) kept.push_back(p);
-    if (static_cast<int>(kept.size()) >= o.peaks_per_round) break;
-  }
-  return kept;
+// The residual's periodogram peaks as ModeRelocationOptions asks for them.
+std::vector<PeriodogramPeak> residual_peaks(const Eigen::VectorXd& r,
+                                            const std::vector<bool>& excited, double h,
+                                            const ModeRelocationOptions& o) {
+  PeriodogramPeakOptions peaks;
+  peaks.zero_padding = o.zero_padding;
+  peaks.floor_half_width = o.floor_half_width;
+  peaks.min_peak_to_floor = o.min_peak_to_floor;
+  peaks.min_separation = o.search_half_width;
+  peaks.max_peaks = o.peaks_per_round;
+  return periodogram_peaks(r, h, peaks, excited);
 }
 
 // A second-order mode (w, z) with numerator degree m that explains most of the residual r once
@@ -188,8 +89,9 @@ struct ModeStart {
   double reduction = -1.0;
 };
 
-ModeStart search_mode(const Peak& peak, const Eigen::MatrixXd& q, const Eigen::VectorXd& r,
-                      const Eigen::VectorXd& u, double h, int m, const ModeRelocationOptions& o) {
+ModeStart search_mode(const PeriodogramPeak& peak, const Eigen::MatrixXd& q,
+                      const Eigen::VectorXd& r, const Eigen::VectorXd& u, double h, int m,
+                      const ModeRelocationOptions& o) {
   const double line = 2.0 * M_PI / (static_cast<double>(u.size()) * h);
   const double lo = std::max(peak.frequency - o.search_half_width * line, 0.25 * line);
   const double hi = std::min(peak.frequency + o.search_half_width * line, M_PI / h * 0.999);
@@ -222,7 +124,7 @@ bool movable(const SubmodelOrder& o) { return o.n == 2 && o.integrators == 0; }
 struct ProjectedFit {
   Eigen::MatrixXd x;
   std::vector<Eigen::Index> first_column;  // of each submodel
-  LeastSquares fit;
+  internal::ScaledLeastSquares fit;
   double mean_squared_error = 0.0;
 };
 
@@ -240,7 +142,7 @@ ProjectedFit projected_fit(const std::vector<Polynomial>& denominators,
     out.x.middleCols(out.first_column[i], orders[i].m + 1) =
         numerator_columns(denominators[i], orders[i].integrators, orders[i].m, u, h);
   }
-  out.fit = least_squares(out.x, y);
+  out.fit = internal::scaled_least_squares(out.x, y);
   out.mean_squared_error = out.fit.residual.squaredNorm() / static_cast<double>(y.size());
   return out;
 }
@@ -263,7 +165,7 @@ double projected_mse(const EstimationResult& r, const std::vector<SubmodelOrder>
 
 struct Candidate {
   int submodel = 0;
-  Peak peak;
+  PeriodogramPeak peak;
   ModeStart start;
   double mean_squared_error = 0.0;
   Eigen::VectorXd beta;
@@ -308,7 +210,8 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
   for (size_t i = 0; i < orders.size(); ++i) {
     if (movable(orders[i])) movable_submodels.push_back(static_cast<int>(i));
   }
-  const std::vector<bool> excited = excited_lines(data.input(), relocation);
+  const std::vector<bool> excited =
+      excited_band(data.input(), relocation.floor_half_width, relocation.min_input_level);
   // The search uses the simplest numerator among the movable submodels.
   int search_m = std::numeric_limits<int>::max();
   for (int i : movable_submodels) search_m = std::min(search_m, orders[static_cast<size_t>(i)].m);
@@ -321,10 +224,7 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
     const std::vector<Polynomial> denominators = denominators_of(model);
     const ProjectedFit base = projected_fit(denominators, orders, u, y, h);
     // Orthonormal basis of the current regressors (columns scaled first for the rank).
-    Eigen::VectorXd norms = base.x.colwise().norm().transpose();
-    for (Eigen::Index j = 0; j < norms.size(); ++j) {
-      if (!(norms(j) > 0.0)) norms(j) = 1.0;
-    }
+    const Eigen::VectorXd norms = internal::column_scales(base.x);
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(base.x *
                                                          norms.cwiseInverse().asDiagonal());
     const Eigen::MatrixXd q =
@@ -341,7 +241,7 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
         present.push_back(m->natural_frequency);
       }
     }
-    for (const Peak& peak : residual_peaks(base.fit.residual, excited, h, relocation)) {
+    for (const PeriodogramPeak& peak : residual_peaks(base.fit.residual, excited, h, relocation)) {
       const bool taken = std::any_of(present.begin(), present.end(), [&](double w) {
         return std::abs(w - peak.frequency) < relocation.search_half_width * line;
       });

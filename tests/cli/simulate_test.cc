@@ -10,6 +10,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
+#include "support/paper_systems.h"
 
 namespace ctid::cli {
 namespace {
@@ -216,6 +217,37 @@ TEST_F(CliTest, InputColumnWithTimeColumnGivesTheSampleTime) {
   expect_bad_input(ctid({"simulate", "-m", model, "-o", "z.csv", "-i", csv, "--input-column", "x",
                          "--time-column", "time", "-T", "0.1"}),
                    "ctid simulate: error: --sample-time 0.1 disagrees");
+}
+
+// The shipped models of González et al. are the tests' fixtures, to the 17 digits of JSON.
+TEST_F(CliTest, ShippedPaperModelsAreTheTestFixtures) {
+  const auto expect_same_model = [](const AdditiveModel& read, const AdditiveModel& fixture) {
+    ASSERT_EQ(read.size(), fixture.size());
+    for (int i = 0; i < read.size(); ++i) {
+      EXPECT_TRUE(read[i].a.coefficients().isApprox(fixture[i].a.coefficients(), 1e-15)) << i;
+      EXPECT_TRUE(read[i].b.coefficients().isApprox(fixture[i].b.coefficients(), 1e-15)) << i;
+      EXPECT_EQ(read[i].integrators, fixture[i].integrators) << i;
+    }
+    EXPECT_EQ(read.input_delay(), fixture.input_delay());
+  };
+  const auto expect_same_filter = [](const DiscreteTransferFunction& read,
+                                     const DiscreteTransferFunction& fixture) {
+    EXPECT_TRUE(
+        read.numerator().coefficients().isApprox(fixture.numerator().coefficients(), 1e-15));
+    EXPECT_TRUE(
+        read.denominator().coefficients().isApprox(fixture.denominator().coefficients(), 1e-15));
+    EXPECT_EQ(read.sample_time(), fixture.sample_time());
+  };
+  expect_same_model(
+      std::get<AdditiveModel>(io::read_continuous_model(example("gonzalez_6_1_open_loop.json"))),
+      ctid::testing::open_loop_four_modes());
+  expect_same_filter(io::read_discrete_transfer_function(example("gonzalez_6_1_noise_filter.json")),
+                     ctid::testing::open_loop_noise_filter());
+  expect_same_model(
+      std::get<AdditiveModel>(io::read_continuous_model(example("gonzalez_6_2_plant.json"))),
+      ctid::testing::closed_loop_two_modes());
+  expect_same_filter(io::read_discrete_transfer_function(example("gonzalez_6_2_pid.json")),
+                     ctid::testing::closed_loop_pid());
 }
 
 TEST_F(CliTest, ClosedLoopWithColouredNoiseEqualsTheLibrarysSimulation) {

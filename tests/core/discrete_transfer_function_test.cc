@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "support/paper_systems.h"
 
 namespace ctid {
 namespace {
@@ -14,7 +15,7 @@ using ::testing::HasSubstr;
 
 TEST(DiscreteTransferFunction, NoiseFilterImpulseResponseClosedForm) {
   // (q + 0.5)/(q - 0.85): h_0 = 1, h_k = 1.35 * 0.85^(k-1).
-  const DiscreteTransferFunction f(Polynomial({0.5, 1.0}), Polynomial({-0.85, 1.0}), 0.05);
+  const DiscreteTransferFunction f = testing::open_loop_noise_filter();
   Eigen::VectorXd impulse = Eigen::VectorXd::Zero(40);
   impulse(0) = 1.0;
   const Eigen::VectorXd h = f.filter(impulse);

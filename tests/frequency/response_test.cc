@@ -48,8 +48,8 @@ TEST(FrequencyResponse, FirstOrderWithDelayClosedForm) {
 }
 
 TEST(FrequencyResponse, DiscreteClosedForm) {
-  const double h = 0.05;
-  const DiscreteTransferFunction g(Polynomial{0.5, 1.0}, Polynomial{-0.85, 1.0}, h);
+  const DiscreteTransferFunction g = testing::open_loop_noise_filter();  // (q + 0.5)/(q - 0.85)
+  const double h = g.sample_time();
   Eigen::VectorXd omegas(4);
   omegas << 0.0, 1.0, 10.0, std::numbers::pi / h;
   const Eigen::VectorXcd response = frequency_response(g, omegas);

@@ -19,33 +19,17 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
+#include "support/paper_systems.h"
 
 namespace ctid {
 namespace {
 
-constexpr double kSampleTime = 1.0 / 4096.0;
-constexpr int kSamples = 8192;
-constexpr int kDelay = 4;
+// The beam of tests/support/paper_systems.h, sampled over one period of the multisine.
+constexpr double kSampleTime = testing::kBeamSampleTime;
+constexpr int kSamples = testing::kBeamPeriod;
+constexpr int kDelay = testing::kBeamDelay;
 
-const std::vector<SubmodelOrder> kOrders(4, SubmodelOrder{2, 0, 0});
-
-// theta_i = [a_i1, a_i2, b_i0] of A_i = 1 + a_i1 p + a_i2 p^2 (eq. 3).
-Eigen::VectorXd paper_estimate() {
-  Eigen::VectorXd theta(12);
-  theta << 0.0024, 0.023, 11.81, 2.33e-5, 1.65e-4, 0.159, 8.59e-7, 1.03e-5, 3.19e-4, 7.55e-7,
-      3.55e-6, 1.27e-4;
-  return theta;
-}
-
-Eigen::VectorXd paper_start() {
-  Eigen::VectorXd theta(12);
-  theta << 0.001, 0.025, 10.0, 5e-5, 1.5e-4, 0.2, 8.5e-7, 2e-5, 0.001, 7.5e-7, 5e-6, 0.01;
-  return theta;
-}
-
-AdditiveModel true_beam() {
-  return AdditiveModel::from_parameters(kOrders, paper_estimate(), kDelay * kSampleTime);
-}
+const std::vector<SubmodelOrder> kOrders = testing::beam_orders();
 
 // The paper's excitation; an optional white dither can be added on top.
 Eigen::VectorXd beam_input(double dither_rms) {
@@ -62,7 +46,7 @@ Eigen::VectorXd beam_input(double dither_rms) {
 
 SampledData beam_data(double snr_db, std::uint64_t noise_seed, double dither_rms = 0.0) {
   const Eigen::VectorXd u = beam_input(dither_rms);
-  Eigen::VectorXd y = simulate(true_beam(), u, kSampleTime);
+  Eigen::VectorXd y = simulate(testing::beam(), u, kSampleTime);
   if (std::isfinite(snr_db)) {
     y += scale_noise_to_snr(y, white_noise(kSamples, 1.0, noise_seed), snr_db);
   }
@@ -79,7 +63,7 @@ RefinedIvOptions options_from(const Eigen::VectorXd& start) {
 
 // Modal parameters of the truth, in the order of the submodels.
 std::vector<ModalParameters> true_modes() {
-  const AdditiveModel g = true_beam();
+  const AdditiveModel g = testing::beam();
   std::vector<ModalParameters> modes;
   for (int i = 0; i < g.size(); ++i) modes.push_back(*g.modal_parameters(i));
   return modes;
@@ -99,7 +83,7 @@ const ModalEstimate& closest_mode(const EstimationResult& r, const ModalParamete
 }
 
 TEST(BeamSection7, NoiseFreeConvergesFromThePapersStartWithTheDelayEstimated) {
-  RefinedIvOptions options = options_from(paper_start());
+  RefinedIvOptions options = options_from(testing::beam_start_parameters());
   options.compute_covariance = false;
   const InputDelayScanResult scan =
       additive_srivc_delay_scan(beam_data(INFINITY, 0), kOrders, 2, 6, options);
@@ -126,8 +110,8 @@ TEST(BeamSection7, NoiseFreeConvergesFromThePapersStartWithTheDelayEstimated) {
 }
 
 TEST(BeamSection7, SixtyDecibelsConvergesFromThePapersStartWithinThreeStandardErrors) {
-  const InputDelayScanResult scan =
-      additive_srivc_delay_scan(beam_data(60.0, 7), kOrders, 3, 5, options_from(paper_start()));
+  const InputDelayScanResult scan = additive_srivc_delay_scan(
+      beam_data(60.0, 7), kOrders, 3, 5, options_from(testing::beam_start_parameters()));
   const EstimationResult& r = scan.best;
   EXPECT_EQ(r.input_delay, kDelay);
   ASSERT_TRUE(r.converged()) << r.message;
@@ -149,7 +133,7 @@ TEST(BeamSection7, SixtyDecibelsConvergesFromThePapersStartWithinThreeStandardEr
 TEST(BeamSection7, ThirtyDecibelsWeakModesDegradeAndTheirStandardErrorsSaySo) {
   const std::vector<ModalParameters> truth = true_modes();
   for (std::uint64_t seed : {7U, 8U}) {
-    RefinedIvOptions options = options_from(paper_estimate());
+    RefinedIvOptions options = options_from(testing::beam_parameters());
     options.input_delay = kDelay;
     const EstimationResult r = additive_srivc(beam_data(30.0, seed), kOrders, options);
     ASSERT_TRUE(r.converged()) << r.message;
@@ -174,7 +158,7 @@ TEST(BeamSection7, ThirtyDecibelsWeakModesDegradeAndTheirStandardErrorsSaySo) {
 // wrong starting frequencies (a stationary point with a slightly larger output error, see the
 // doc). Mode relocation moves them.
 ModeRelocationResult relocate(const SampledData& data) {
-  RefinedIvOptions options = options_from(paper_start());
+  RefinedIvOptions options = options_from(testing::beam_start_parameters());
   options.input_delay = kDelay;
   return additive_srivc_relocated(data, kOrders, options);
 }
@@ -193,7 +177,7 @@ std::pair<double, double> errors_in_standard_errors(const EstimationResult& r,
 // relocation's projected criterion).
 double true_poles_projected_mse(const SampledData& data) {
   const Eigen::VectorXd u = delay_samples(data.input(), kDelay);
-  const AdditiveModel g = true_beam();
+  const AdditiveModel g = testing::beam();
   Eigen::MatrixXd x(kSamples, g.size());
   for (int i = 0; i < g.size(); ++i) {
     x.col(i) = filter_derivatives(g[i].a, u, kSampleTime, Hold::zero_order_hold).col(0);
@@ -262,11 +246,11 @@ TEST(BeamSection7, ThirtyDecibelsFromThePapersStartRelocationFindsTheWeakModesTh
 // relocate at the chosen delay, starting from the scan's estimate.
 TEST(BeamSection7, DelayScanThenRelocationFromThePapersStart) {
   const SampledData data = beam_data(40.0, 13);
-  RefinedIvOptions options = options_from(paper_start());
+  RefinedIvOptions options = options_from(testing::beam_start_parameters());
   options.compute_covariance = false;
   const InputDelayScanResult scan = additive_srivc_delay_scan(data, kOrders, 3, 5, options);
   ASSERT_EQ(scan.best.input_delay, kDelay);
-  RefinedIvOptions from_scan = options_from(paper_start());
+  RefinedIvOptions from_scan = options_from(testing::beam_start_parameters());
   from_scan.input_delay = scan.best.input_delay;
   from_scan.initial_model = scan.best.model;
   const ModeRelocationResult r = additive_srivc_relocated(data, kOrders, from_scan);
@@ -283,7 +267,7 @@ TEST(BeamSection7, DelayScanThenRelocationFromThePapersStart) {
 // it persistently exciting of any order the estimator needs, although its unit-spacing lag
 // windows are numerically singular (it is 4x oversampled).
 TEST(BeamSection7, PaperMultisineWithoutDitherIsAccepted) {
-  RefinedIvOptions options = options_from(paper_start());
+  RefinedIvOptions options = options_from(testing::beam_start_parameters());
   options.input_delay = kDelay;
   options.compute_covariance = false;
   const EstimationResult r = additive_srivc(beam_data(INFINITY, 0, 0.0), kOrders, options);

@@ -32,18 +32,6 @@ Eigen::VectorXd perturbed(const Eigen::VectorXd& beta, std::uint64_t seed) {
   return out;
 }
 
-DiscreteTransferFunction paper_pid() {
-  const Polynomial den{0.0, -1.0, 1.0};
-  const Polynomial num = Polynomial{0.0115} * den +
-                         Polynomial{0.0, 0.00725} * Polynomial{0.0, 1.0} +
-                         Polynomial{0.00454} * Polynomial{-1.0, 1.0} * Polynomial{-1.0, 1.0};
-  return DiscreteTransferFunction(num, den, 0.05);
-}
-
-DiscreteTransferFunction coloured_filter() {
-  return DiscreteTransferFunction(Polynomial{0.5, 1.0}, Polynomial{-0.85, 1.0}, 0.05);
-}
-
 // [a_i1, a_i2, b_i0] of every submodel: comparable across parameterisations (an unfactored
 // estimate's partial fractions have first-order numerators).
 Eigen::VectorXd modes(const AdditiveModel& model) {
@@ -87,8 +75,8 @@ TEST(RefinedIvMonteCarlo, OpenLoopColouredNoiseIsUnbiasedAndMatchesTheCovariance
   std::vector<Eigen::VectorXd> variances;
   for (int run = 0; run < runs; ++run) {
     const Eigen::VectorXd u = white_noise(n, 1.0, 1000 + static_cast<std::uint64_t>(run));
-    const Eigen::VectorXd v =
-        colored_noise(coloured_filter(), n, 0.02, 5000 + static_cast<std::uint64_t>(run));
+    const Eigen::VectorXd v = colored_noise(testing::open_loop_noise_filter(), n, 0.02,
+                                            5000 + static_cast<std::uint64_t>(run));
     const SampledData data(0.05, u, simulate(truth, u, 0.05) + v);
     RefinedIvOptions options;
     options.initial_model = truth.with_parameters(
@@ -110,7 +98,7 @@ TEST(RefinedIvMonteCarlo, OpenLoopColouredNoiseIsUnbiasedAndMatchesTheCovariance
 
 TEST(RefinedIvMonteCarlo, ClosedLoopColouredNoiseBiasesDirectSrivcOnly) {
   const AdditiveModel truth = testing::closed_loop_two_modes();
-  const DiscreteTransferFunction controller = paper_pid();
+  const DiscreteTransferFunction controller = testing::closed_loop_pid();
   const int n = 4000;
   const int runs = 20;
   std::vector<Eigen::VectorXd> direct;
@@ -120,7 +108,8 @@ TEST(RefinedIvMonteCarlo, ClosedLoopColouredNoiseBiasesDirectSrivcOnly) {
   for (int run = 0; run < runs; ++run) {
     const auto seed = static_cast<std::uint64_t>(run);
     const Eigen::VectorXd r = white_noise(n, 1.0, 100 + seed);
-    const Eigen::VectorXd v = colored_noise(coloured_filter(), n, 0.005, 200 + seed);
+    const Eigen::VectorXd v =
+        colored_noise(testing::open_loop_noise_filter(), n, 0.005, 200 + seed);
     const ClosedLoopSimulation loop = simulate_closed_loop(truth, controller, r, v);
     const SampledData data(0.05, loop.input, loop.output, r);
     RefinedIvOptions options;
@@ -154,7 +143,7 @@ TEST(RefinedIvInitialisation, OpenLoopSection61FromDataAlone) {
   const AdditiveModel truth = testing::open_loop_four_modes();
   const int n = 4000;
   const Eigen::VectorXd u = white_noise(n, 1.0, 41);
-  const Eigen::VectorXd v = colored_noise(coloured_filter(), n, 0.02, 42);
+  const Eigen::VectorXd v = colored_noise(testing::open_loop_noise_filter(), n, 0.02, 42);
   const SampledData data(0.05, u, simulate(truth, u, 0.05) + v);
   const EstimationResult automatic = additive_srivc(data, truth.orders());
   ASSERT_TRUE(automatic.converged()) << automatic.message;
@@ -168,7 +157,7 @@ TEST(RefinedIvInitialisation, OpenLoopSection61FromDataAlone) {
 
 TEST(RefinedIvInitialisation, ClosedLoopSection62FromDataAlone) {
   const AdditiveModel truth = testing::closed_loop_two_modes();
-  const DiscreteTransferFunction controller = paper_pid();
+  const DiscreteTransferFunction controller = testing::closed_loop_pid();
   const int n = 4000;
   const Eigen::VectorXd r = white_noise(n, 1.0, 51);
   const Eigen::VectorXd v = white_noise(n, 0.1, 52);
@@ -270,7 +259,7 @@ TEST(RefinedIvBadInput, ClearErrors) {
   // Closed loop without a reference.
   EXPECT_THAT(
       [&] {
-        clsrivc(data, paper_pid(), {4, 2, 0});
+        clsrivc(data, testing::closed_loop_pid(), {4, 2, 0});
       },
       ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("reference")));
 }
@@ -278,7 +267,7 @@ TEST(RefinedIvBadInput, ClearErrors) {
 TEST(RefinedIvBadInput, ControllerThatDoesNotStabiliseTheModelIsATermination) {
   const AdditiveModel truth = testing::closed_loop_two_modes();
   const Eigen::VectorXd r = white_noise(1000, 1.0, 91);
-  const ClosedLoopSimulation loop = simulate_closed_loop(truth, paper_pid(), r);
+  const ClosedLoopSimulation loop = simulate_closed_loop(truth, testing::closed_loop_pid(), r);
   const SampledData data(0.05, loop.input, loop.output, r);
   // A pure gain of -5 (positive feedback) cannot stabilise this plant.
   const DiscreteTransferFunction wrong(Polynomial{-5.0}, Polynomial{1.0}, 0.05);

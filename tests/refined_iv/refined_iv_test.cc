@@ -41,15 +41,6 @@ Eigen::VectorXd unfactored_beta(const TransferFunction& g, int n, int m, int l) 
   return beta;
 }
 
-DiscreteTransferFunction paper_pid() {
-  // C_d(q) = 0.0115 + 0.00725 q/(q - 1) + 0.00454 (q - 1)/q over the common denominator q(q-1).
-  const Polynomial den{0.0, -1.0, 1.0};
-  const Polynomial num = Polynomial{0.0115} * den +
-                         Polynomial{0.0, 0.00725} * Polynomial{0.0, 1.0} +
-                         Polynomial{0.00454} * Polynomial{-1.0, 1.0} * Polynomial{-1.0, 1.0};
-  return DiscreteTransferFunction(num, den, 0.05);
-}
-
 class OpenLoopFourModes : public ::testing::Test {
  protected:
   OpenLoopFourModes()
@@ -147,7 +138,7 @@ TEST(RefinedIv, BiproperSubmodelIsRecovered) {
 
 TEST(RefinedIv, ClosedLoopEstimatorsRecoverSection62System) {
   const AdditiveModel truth = testing::closed_loop_two_modes();
-  const DiscreteTransferFunction controller = paper_pid();
+  const DiscreteTransferFunction controller = testing::closed_loop_pid();
   const Eigen::VectorXd r = white_noise(3000, 1.0, 21);
   const ClosedLoopSimulation loop = simulate_closed_loop(truth, controller, r);
   const SampledData data(0.05, loop.input, loop.output, r);

@@ -10,6 +10,7 @@
 
 #include "ctid/core/error.h"
 #include "ctid/simulation/simulate.h"
+#include "support/paper_systems.h"
 
 namespace ctid {
 namespace {
@@ -28,21 +29,6 @@ Eigen::VectorXd gaussian(int n, double sd, std::uint64_t seed) {
   return v;
 }
 
-/// González et al. Section 6.2: C_d(q) = 0.0115 + 0.00725 q/(q - 1) + 0.00454 (q - 1)/q.
-DiscreteTransferFunction paper_pid() {
-  const Polynomial q{0.0, 1.0};
-  const Polynomial q_minus_1{-1.0, 1.0};
-  const Polynomial numerator =
-      0.0115 * q * q_minus_1 + 0.00725 * q * q + 0.00454 * q_minus_1 * q_minus_1;
-  return DiscreteTransferFunction(numerator, q * q_minus_1, kH);
-}
-
-/// Section 6.2 plant: 3/(0.25p^2 + 0.25p + 1) + 1/(0.025p^2 + 0.01p + 1).
-AdditiveModel paper_closed_loop_plant() {
-  return AdditiveModel({Submodel{Polynomial{1.0, 0.25, 0.25}, Polynomial{3.0}},
-                        Submodel{Polynomial{1.0, 0.01, 0.025}, Polynomial{1.0}}});
-}
-
 void expect_loop_equations(const ClosedLoopSimulation& loop, const DiscreteTransferFunction& c,
                            const Eigen::VectorXd& r, const Eigen::VectorXd& v) {
   // u = C_d(q)(r - y) at every sample, y = noise-free output + v.
@@ -52,8 +38,8 @@ void expect_loop_equations(const ClosedLoopSimulation& loop, const DiscreteTrans
 }
 
 TEST(ClosedLoop, PaperSystemWithPidSatisfiesLoopEquations) {
-  const AdditiveModel plant = paper_closed_loop_plant();
-  const DiscreteTransferFunction pid = paper_pid();
+  const AdditiveModel plant = testing::closed_loop_two_modes();
+  const DiscreteTransferFunction pid = testing::closed_loop_pid();
   const Eigen::VectorXd r = gaussian(4000, 1.0, 1);
   const Eigen::VectorXd v = gaussian(4000, 0.1, 2);
   const ClosedLoopSimulation loop = simulate_closed_loop(plant, pid, r, v);
@@ -69,15 +55,16 @@ TEST(ClosedLoop, PaperSystemWithPidSatisfiesLoopEquations) {
 
 TEST(ClosedLoop, WithoutNoiseOutputIsNoiseFree) {
   const Eigen::VectorXd r = gaussian(500, 1.0, 3);
-  const ClosedLoopSimulation loop = simulate_closed_loop(paper_closed_loop_plant(), paper_pid(), r);
+  const ClosedLoopSimulation loop =
+      simulate_closed_loop(testing::closed_loop_two_modes(), testing::closed_loop_pid(), r);
   EXPECT_EQ(loop.output, loop.noise_free_output);
-  expect_loop_equations(loop, paper_pid(), r, Eigen::VectorXd::Zero(500));
+  expect_loop_equations(loop, testing::closed_loop_pid(), r, Eigen::VectorXd::Zero(500));
 }
 
 TEST(ClosedLoop, BiproperPlantAndControllerAlgebraicLoop) {
   // (1 + 2p)/(1 + p) has D_g = 2; the PID has D_c = 0.02329.
   const TransferFunction plant(Polynomial{1.0, 2.0}, Polynomial{1.0, 1.0});
-  const DiscreteTransferFunction pid = paper_pid();
+  const DiscreteTransferFunction pid = testing::closed_loop_pid();
   const Eigen::VectorXd r = gaussian(1000, 1.0, 4);
   const Eigen::VectorXd v = gaussian(1000, 0.05, 5);
   const ClosedLoopSimulation loop = simulate_closed_loop(plant, pid, r, v);
@@ -92,10 +79,10 @@ TEST(ClosedLoop, BiproperPlantAndControllerAlgebraicLoop) {
 }
 
 TEST(ClosedLoop, DelayedPlant) {
-  const AdditiveModel plant = paper_closed_loop_plant().with_input_delay(2 * kH);
+  const AdditiveModel plant = testing::closed_loop_two_modes().with_input_delay(2 * kH);
   const Eigen::VectorXd r = gaussian(1000, 1.0, 6);
-  const ClosedLoopSimulation loop = simulate_closed_loop(plant, paper_pid(), r);
-  expect_loop_equations(loop, paper_pid(), r, Eigen::VectorXd::Zero(1000));
+  const ClosedLoopSimulation loop = simulate_closed_loop(plant, testing::closed_loop_pid(), r);
+  expect_loop_equations(loop, testing::closed_loop_pid(), r, Eigen::VectorXd::Zero(1000));
   const Eigen::VectorXd y = simulate(plant, loop.input, kH);
   EXPECT_LT(max_abs(y - loop.noise_free_output), 1e-12 * max_abs(y));
 }
@@ -141,7 +128,7 @@ TEST(ClosedLoop, RefusesIllPosedLoopAndBadSignals) {
   } catch (const InvalidArgument& error) {
     EXPECT_THAT(error.what(), HasSubstr("ill-posed"));
   }
-  const DiscreteTransferFunction pid = paper_pid();
+  const DiscreteTransferFunction pid = testing::closed_loop_pid();
   EXPECT_THROW(
       simulate_closed_loop(plant, pid, Eigen::VectorXd::Ones(10), Eigen::VectorXd::Ones(9)),
       InvalidArgument);

@@ -9,19 +9,15 @@
 
 #include "ctid/core/error.h"
 #include "ctid/simulation/excitation.h"
+#include "support/paper_systems.h"
 
 namespace ctid {
 namespace {
 
 using ::testing::HasSubstr;
 
-/// González et al. Section 6.1: H(q) = (q + 0.5)/(q - 0.85).
-DiscreteTransferFunction paper_noise_filter() {
-  return DiscreteTransferFunction(Polynomial{0.5, 1.0}, Polynomial{-0.85, 1.0}, 0.05);
-}
-
 TEST(ColoredNoise, IsTheFilteredWhiteNoiseAfterRunIn) {
-  const DiscreteTransferFunction h = paper_noise_filter();
+  const DiscreteTransferFunction h = testing::open_loop_noise_filter();
   const int run_in = stationary_run_in(h);
   // 0.85^run_in <= 1e-12 < 0.85^(run_in - 1).
   EXPECT_LE(std::pow(0.85, run_in), 1e-12);
@@ -34,12 +30,12 @@ TEST(ColoredNoise, IsTheFilteredWhiteNoiseAfterRunIn) {
 TEST(ColoredNoise, StationaryVarianceMatchesClosedForm) {
   // Impulse response 1, 1.35 * 0.85^(k-1): sum of squares 1 + 1.35^2 / (1 - 0.85^2).
   const double gain = 1.0 + 1.35 * 1.35 / (1.0 - 0.85 * 0.85);
-  EXPECT_NEAR(stationary_variance_gain(paper_noise_filter()), gain, 1e-13 * gain);
+  EXPECT_NEAR(stationary_variance_gain(testing::open_loop_noise_filter()), gain, 1e-13 * gain);
 }
 
 TEST(ColoredNoise, FirstSampleAlreadyHasStationaryVariance) {
   // Across seeds, var(v_0) is the stationary variance; without run-in it would be var e.
-  const DiscreteTransferFunction h = paper_noise_filter();
+  const DiscreteTransferFunction h = testing::open_loop_noise_filter();
   const double expected = 0.02 * stationary_variance_gain(h);
   const int runs = 4000;
   double sum_sq = 0.0;
@@ -63,12 +59,12 @@ TEST(ColoredNoise, RejectsUnstableFilter) {
   } catch (const InvalidArgument& error) {
     EXPECT_THAT(error.what(), HasSubstr("must be stable"));
   }
-  EXPECT_THROW(colored_noise(paper_noise_filter(), 10, -1.0, 0), InvalidArgument);
+  EXPECT_THROW(colored_noise(testing::open_loop_noise_filter(), 10, -1.0, 0), InvalidArgument);
 }
 
 TEST(Snr, DefinitionAndScaling) {
   const Eigen::VectorXd signal = white_noise(2000, 2.0, 1);
-  const Eigen::VectorXd noise = colored_noise(paper_noise_filter(), 2000, 0.02, 2);
+  const Eigen::VectorXd noise = colored_noise(testing::open_loop_noise_filter(), 2000, 0.02, 2);
   const double var_s = (signal.array() - signal.mean()).square().sum() / 1999.0;
   const double var_n = (noise.array() - noise.mean()).square().sum() / 1999.0;
   EXPECT_NEAR(snr_db(signal, noise), 10.0 * std::log10(var_s / var_n), 1e-12);

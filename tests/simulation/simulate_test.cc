@@ -26,12 +26,6 @@ Eigen::VectorXd gaussian(int n, std::uint64_t seed) {
   return v;
 }
 
-/// b / (1 + a1 p + a2 p^2) with poles at -sigma +- j omega_d.
-Submodel mode(double sigma, double omega_d, double gain) {
-  const double magnitude2 = sigma * sigma + omega_d * omega_d;
-  return Submodel{Polynomial{1.0, 2.0 * sigma / magnitude2, 1.0 / magnitude2}, Polynomial{gain}};
-}
-
 TEST(Simulate, FirstOrderStepResponseMatchesClosedForm) {
   const double gain = 2.5;
   const double time_constant = 0.8;
@@ -49,7 +43,7 @@ TEST(Simulate, SecondOrderModeStepResponseMatchesClosedForm) {
   const double sigma = 0.25;
   const double omega_d = 1.39;
   const double gain = 3.0;
-  const AdditiveModel g({mode(sigma, omega_d, gain)});
+  const AdditiveModel g({testing::mode_from_pole(-sigma, omega_d, gain)});
   const double h = 0.05;
   const int n = 800;
   const Eigen::VectorXd y = simulate(g, Eigen::VectorXd::Ones(n), h);
@@ -67,7 +61,7 @@ TEST(Simulate, PulseResponseOfModeIsDifferenceOfShiftedSteps) {
   const double sigma = 0.5;
   const double omega_d = 9.99;
   const double h = 0.05;
-  const AdditiveModel g({mode(sigma, omega_d, 1.0)});
+  const AdditiveModel g({testing::mode_from_pole(-sigma, omega_d, 1.0)});
   Eigen::VectorXd u = Eigen::VectorXd::Zero(200);
   u(3) = 1.0;
   const Eigen::VectorXd y = simulate(g, u, h);

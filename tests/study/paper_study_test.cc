@@ -15,6 +15,7 @@
 #include "ctid/core/error.h"
 #include "ctid/study/monte_carlo.h"
 #include "ctid/study/study_output.h"
+#include "support/paper_systems.h"
 
 namespace ctid {
 namespace {
@@ -49,6 +50,36 @@ StudyOptions tiny(StudyKind kind) {
   return options;
 }
 
+// The library's systems and the tests' fixtures are two copies of the paper: bit for bit equal.
+void expect_same_model(const AdditiveModel& a, const AdditiveModel& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (int i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].a, b[i].a) << "submodel " << i;
+    EXPECT_EQ(a[i].b, b[i].b) << "submodel " << i;
+    EXPECT_EQ(a[i].integrators, b[i].integrators) << "submodel " << i;
+  }
+  EXPECT_EQ(a.input_delay(), b.input_delay());
+}
+
+void expect_same_filter(const DiscreteTransferFunction& a, const DiscreteTransferFunction& b) {
+  EXPECT_EQ(a.numerator(), b.numerator());
+  EXPECT_EQ(a.denominator(), b.denominator());
+  EXPECT_EQ(a.sample_time(), b.sample_time());
+}
+
+TEST(StudySetup, SystemsAreTheTestFixturesBitForBit) {
+  const StudySetup open = study_setup(StudyKind::open_loop);
+  expect_same_model(open.system, testing::open_loop_four_modes());
+  ASSERT_TRUE(open.noise_filter.has_value());
+  expect_same_filter(*open.noise_filter, testing::open_loop_noise_filter());
+  EXPECT_EQ(open.sample_time, testing::kPaperSampleTime);
+  const StudySetup closed = study_setup(StudyKind::closed_loop);
+  expect_same_model(closed.system, testing::closed_loop_two_modes());
+  ASSERT_TRUE(closed.controller.has_value());
+  expect_same_filter(*closed.controller, testing::closed_loop_pid());
+  EXPECT_EQ(closed.sample_time, testing::kPaperSampleTime);
+}
+
 TEST(StudySetup, ClosedLoopControllerIsThePapersPid) {
   const StudySetup setup = study_setup(StudyKind::closed_loop);
   ASSERT_TRUE(setup.controller.has_value());
@@ -59,7 +90,7 @@ TEST(StudySetup, ClosedLoopControllerIsThePapersPid) {
   EXPECT_TRUE(setup.controller->is_biproper());
   EXPECT_DOUBLE_EQ(setup.sample_time, 0.05);
   EXPECT_THAT(setup.parameter_names,
-              testing::ElementsAre("a11", "a12", "b10", "a21", "a22", "b20"));
+              ::testing::ElementsAre("a11", "a12", "b10", "a21", "a22", "b20"));
 }
 
 TEST(StudySetup, OpenLoopSystemHasThePapersPolesAndGains) {
@@ -111,12 +142,12 @@ TEST(SimulateStudyRun, StartsWithinThePerturbationAndIsReplayable) {
 TEST(StudyOptions, ValidateNamesTheField) {
   StudyOptions options;
   options.runs = 0;
-  EXPECT_THAT([&] { options.validate(); }, testing::ThrowsMessage<InvalidArgument>(
-                                               testing::HasSubstr("StudyOptions.runs is 0")));
+  EXPECT_THAT([&] { options.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(
+                                               ::testing::HasSubstr("StudyOptions.runs is 0")));
   options = StudyOptions::paper(StudyKind::open_loop);
   options.estimators = {StudyEstimator::clsrivc};
   EXPECT_THAT([&] { options.validate(); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("clsrivc")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("clsrivc")));
   EXPECT_EQ(StudyOptions::paper(StudyKind::closed_loop).sizes, 50);
   EXPECT_EQ(StudyOptions::paper(StudyKind::closed_loop).max_samples, 123036);
   EXPECT_DOUBLE_EQ(StudyOptions::paper(StudyKind::closed_loop).tolerance, 1e-7);

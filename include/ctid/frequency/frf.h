@@ -4,7 +4,7 @@
 // with variance s^2 / P (Pintelon & Schoukens, System Identification, Ch. 2). Non-periodic
 // data: the H1 estimate S_yu / S_uu with Hann-windowed, overlapping Welch segments, and the
 // coherence |S_yu|^2 / (S_uu S_yy). Frequencies in rad/s; DFT line k of a block of L samples
-// sits at 2 pi k / (L h).
+// sits at 2 pi k / (L h). Peaks are picked with the kernels of peaks.h.
 #pragma once
 
 #include <vector>

@@ -1,0 +1,34 @@
+// Least squares on regressors with columns scaled to unit norm first (column-pivoted QR), so
+// that columns of very different size (filtered derivatives of different order) do not spoil
+// the rank decision. Private to refined_iv: the initialisation, mode relocation and the
+// covariance use the same scaling.
+#pragma once
+
+#include <Eigen/Dense>
+
+namespace ctid::internal {
+
+/// The Euclidean norm of each column of x, with 1 for a column whose norm is not positive
+/// (or NaN), so that dividing by it is always defined.
+inline Eigen::VectorXd column_scales(const Eigen::MatrixXd& x) {
+  Eigen::VectorXd s = x.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < s.size(); ++j) {
+    if (!(s(j) > 0.0)) s(j) = 1.0;
+  }
+  return s;
+}
+
+struct ScaledLeastSquares {
+  Eigen::VectorXd coefficients;  ///< minimising |y - x coefficients|
+  Eigen::VectorXd residual;      ///< y - x coefficients (formed on the scaled columns)
+};
+
+/// Least squares of y on the columns of x, each scaled by column_scales first.
+inline ScaledLeastSquares scaled_least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
+  const Eigen::VectorXd s = column_scales(x);
+  const Eigen::MatrixXd scaled = x * s.cwiseInverse().asDiagonal();
+  const Eigen::VectorXd z = scaled.colPivHouseholderQr().solve(y);
+  return {z.cwiseQuotient(s), y - scaled * z};
+}
+
+}  // namespace ctid::internal
