@@ -4,7 +4,6 @@
 // (Remark 5), a known input delay or a delay scan. Writes the whole EstimationResult as JSON
 // (io/result_json.h), prints a summary, and draws figures on request (plot_support.h).
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -16,6 +15,7 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
@@ -144,26 +144,20 @@ std::string estimator_name(const Structure& s, bool closed_loop) {
   return closed_loop ? "clsrivc" : "srivc";
 }
 
-// Summary numbers: 6 significant digits (the JSON keeps every digit).
-std::string brief(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.6g", x);
-  return buffer;
-}
-
 std::string plus_minus(double value, double error) {
-  std::string text = brief(value);
-  if (std::isfinite(error)) text += " ± " + brief(error);
+  std::string text = format_brief(value);
+  if (std::isfinite(error)) text += " ± " + format_brief(error);
   return text;
 }
 
 void print_summary(std::ostream& out, const EstimationResult& r, const std::string& estimator,
                    const SampledData& data, const std::string& file) {
   out << "ctid fit: " << estimator << " on " << file << " (N = " << data.size()
-      << ", h = " << show(data.sample_time()) << " s)\n";
+      << ", h = " << format_number(data.sample_time()) << " s)\n";
   // The estimator's message restates the reason; print it only when it explains a failure.
   out << "termination: " << r.brief_report() << "\n";
-  out << "input delay: " << r.input_delay << " samples (" << show(r.model.input_delay()) << " s)\n";
+  out << "input delay: " << r.input_delay << " samples (" << format_number(r.model.input_delay())
+      << " s)\n";
   for (int i = 0; i < r.model.size(); ++i) {
     const Submodel& s = r.model[i];
     out << "submodel " << i + 1 << ": (" << s.b.to_string("p") << ") / (";
@@ -183,8 +177,9 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
           << ", gain = " << plus_minus(m.value.gain, m.standard_error.gain) << "\n";
     }
   }
-  out << "fit: " << brief(r.fit_percent) << " %, noise variance " << brief(r.noise_variance)
-      << ", Lemma 4.4 norm " << brief(r.off_diagonal_norm) << "\n";
+  out << "fit: " << format_brief(r.fit_percent) << " %, noise variance "
+      << format_brief(r.noise_variance) << ", Lemma 4.4 norm " << format_brief(r.off_diagonal_norm)
+      << "\n";
   if (r.unstable_reflections > 0 || r.sensitivity_fallbacks > 0) {
     out << "unstable iterates reflected: " << r.unstable_reflections
         << ", S_uo fallbacks: " << r.sensitivity_fallbacks << "\n";
@@ -257,8 +252,8 @@ void run_fit(const FitFlags& f, const CLI::App& app) {
   const SampledData data = f.data.load(app, controller.has_value());
   if (controller && !same_sample_time(controller->sample_time(), data.sample_time())) {
     usage_error(internal::concat("the controller in ", f.controller, " has sample time ",
-                                 show(controller->sample_time()), " s but ", f.data.file,
-                                 " is sampled every ", show(data.sample_time()), " s"));
+                                 format_number(controller->sample_time()), " s but ", f.data.file,
+                                 " is sampled every ", format_number(data.sample_time()), " s"));
   }
 
   RefinedIvOptions options;

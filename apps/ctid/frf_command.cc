@@ -16,6 +16,7 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/json.h"
@@ -140,7 +141,7 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
               << (periodic ? " periods" : " segments") << " of " << frf.block_length
               << " samples\n";
     std::cout << peaks.size() << " resonance peak" << (peaks.size() == 1 ? "" : "s")
-              << " (prominence >= " << show(f.min_prominence_db) << " dB):\n";
+              << " (prominence >= " << format_number(f.min_prominence_db) << " dB):\n";
     for (const ResonancePeak& p : peaks) {
       char line[200];
       std::snprintf(line, sizeof line,

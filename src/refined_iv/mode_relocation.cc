@@ -14,6 +14,7 @@
 #include <unsupported/Eigen/FFT>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/additive_srivc.h"
 
@@ -269,13 +270,6 @@ struct Candidate {
   Eigen::VectorXd beta;
 };
 
-std::string format_hz(double w) {
-  std::ostringstream out;
-  out.precision(6);
-  out << w / (2.0 * M_PI) << " Hz";
-  return out.str();
-}
-
 }  // namespace
 
 ModeRelocationResult additive_srivc_relocated(const SampledData& data,
@@ -440,8 +434,9 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
           << out.projected_mean_squared_error << ")";
   for (const RelocationTrial& t : out.trials) {
     if (t.accepted) {
-      message << "; submodel " << t.submodel << " moved from " << format_hz(t.moved_from) << " to "
-              << format_hz(t.start_frequency);
+      message << "; submodel " << t.submodel << " moved from "
+              << format_brief(t.moved_from / (2.0 * M_PI)) << " Hz to "
+              << format_brief(t.start_frequency / (2.0 * M_PI)) << " Hz";
     }
   }
   out.message = message.str();
