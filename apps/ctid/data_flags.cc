@@ -1,11 +1,11 @@
 #include "data_flags.h"
 
 #include <cmath>
-#include <cstdio>
 #include <optional>
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/sampled_data_csv.h"
 
@@ -19,12 +19,6 @@ std::string column_list(const io::CsvTable& table) {
 }
 
 }  // namespace
-
-std::string show(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.12g", x);
-  return buffer;
-}
 
 bool same_sample_time(double a, double b) { return std::abs(a - b) <= 1e-9 * std::abs(b); }
 
@@ -81,9 +75,9 @@ SampledData DataFlags::load(const CLI::App& app, bool need_reference) const {
     columns.reference = reference_name;
     SampledData data = io::sampled_data_from_table(table, columns);
     if (h_flag && !same_sample_time(sample_time, data.sample_time())) {
-      usage_error(internal::concat("--sample-time ", show(sample_time),
+      usage_error(internal::concat("--sample-time ", format_number(sample_time),
                                    " disagrees with the time column '", time_column, "' of ", file,
-                                   " (step ", show(data.sample_time()), " s)"));
+                                   " (step ", format_number(data.sample_time()), " s)"));
     }
     return data;
   }

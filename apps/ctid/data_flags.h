@@ -29,9 +29,6 @@ struct DataFlags {
   SampledData load(const CLI::App& app, bool need_reference) const;
 };
 
-/// A user-facing number: 12 significant digits (0.1 prints as 0.1).
-std::string show(double x);
-
 /// Agreement of two sample times given in different places (flag, file, controller).
 bool same_sample_time(double a, double b);
 

@@ -1,10 +1,10 @@
 // `ctid fit`: estimates a continuous-time model from sampled data (CSV) with the refined IV
-// estimators of González et al.: SRIVC / CLSRIVC for one unfactored model (Remark 4,
-// eq. 30), the additive open/closed-loop iteration (29) for K submodels, with integrators
-// (Remark 5), a known input delay or a delay scan. Writes the whole EstimationResult as JSON
-// (io/result_json.h), prints a summary, and draws figures on request (plot_support.h).
+// estimators of González et al. through the library's front door, identify()
+// (refined_iv/identification.h), which chooses SRIVC / CLSRIVC or the additive open/closed-loop
+// iteration (29) and runs the delay scan and mode relocation. This file turns the flags into a
+// ModelStructure and IdentificationOptions, writes the result as JSON (io/result_json.h plus
+// what was run on what), prints a summary, and draws figures on request (plot_support.h).
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -16,15 +16,12 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/result_json.h"
-#include "ctid/refined_iv/additive_srivc.h"
-#include "ctid/refined_iv/clsrivc.h"
-#include "ctid/refined_iv/input_delay_scan.h"
-#include "ctid/refined_iv/mode_relocation.h"
-#include "ctid/refined_iv/srivc.h"
+#include "ctid/refined_iv/identification.h"
 #include "data_flags.h"
 #include "plot_support.h"
 
@@ -60,12 +57,6 @@ struct FitFlags {
   bool quiet = false;
 };
 
-// The requested structure: one unfactored model or K additive submodels.
-struct Structure {
-  bool additive = false;
-  std::vector<SubmodelOrder> orders;
-};
-
 int parse_count(const std::string& text, const std::string& what) {
   std::size_t used = 0;
   int value = -1;
@@ -95,7 +86,9 @@ SubmodelOrder parse_submodel(const std::string& text) {
   return order;
 }
 
-Structure structure(const FitFlags& f, const CLI::App& app) {
+// The structure flags as a ModelStructure; which flags go together is checked here, what the
+// structure then means (the estimator) is decided by identify().
+ModelStructure model_structure(const FitFlags& f, const CLI::App& app) {
   const bool unfactored = app.count("--poles") > 0;
   const bool submodels = !f.submodels.empty();
   const bool modes = app.count("--modes") > 0;
@@ -109,61 +102,49 @@ Structure structure(const FitFlags& f, const CLI::App& app) {
   if (app.count("--integrators") > 0 && !unfactored) {
     usage_error("--integrators goes with --poles; for an additive model write --submodel N,M,L");
   }
-  Structure s;
-  s.additive = !unfactored;
-  if (!f.model.empty() && (f.model == "additive") != s.additive) {
+  if (!f.model.empty() && (f.model == "additive") == unfactored) {
     usage_error("--model " + f.model +
                 " does not match the structure flags (--poles is "
                 "unfactored; --submodel and --modes are additive)");
   }
   if (unfactored) {
     if (app.count("--zeros") == 0) usage_error("--poles needs --zeros (numerator degree)");
-    s.orders.push_back({f.poles, f.zeros, f.integrators});
-  } else if (submodels) {
-    for (const std::string& text : f.submodels) s.orders.push_back(parse_submodel(text));
-  } else {
-    if (f.modes < 1) usage_error("--modes must be at least 1, not " + std::to_string(f.modes));
-    s.orders.assign(static_cast<std::size_t>(f.modes), SubmodelOrder{2, 0, 0});
+    return ModelStructure::unfactored(f.poles, f.zeros, f.integrators);
   }
-  return s;
+  if (submodels) {
+    std::vector<SubmodelOrder> orders;
+    for (const std::string& text : f.submodels) orders.push_back(parse_submodel(text));
+    return ModelStructure::additive(std::move(orders));
+  }
+  if (f.modes < 1) usage_error("--modes must be at least 1, not " + std::to_string(f.modes));
+  return ModelStructure::modes(f.modes);
 }
 
-std::pair<int, int> parse_delay_range(const std::string& text) {
+DelayRange parse_delay_range(const std::string& text) {
   const auto colon = text.find(':');
   if (colon == std::string::npos) {
     usage_error("--delay-scan '" + text + "': expected MIN:MAX in samples, e.g. 0:10");
   }
-  const int low = parse_count(text.substr(0, colon), "--delay-scan minimum");
-  const int high = parse_count(text.substr(colon + 1), "--delay-scan maximum");
-  if (high < low) usage_error("--delay-scan '" + text + "': MAX is below MIN");
-  return {low, high};
-}
-
-std::string estimator_name(const Structure& s, bool closed_loop) {
-  if (s.additive) return closed_loop ? "additive_clsrivc" : "additive_srivc";
-  return closed_loop ? "clsrivc" : "srivc";
-}
-
-// Summary numbers: 6 significant digits (the JSON keeps every digit).
-std::string brief(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.6g", x);
-  return buffer;
+  DelayRange range;
+  range.min = parse_count(text.substr(0, colon), "--delay-scan minimum");
+  range.max = parse_count(text.substr(colon + 1), "--delay-scan maximum");
+  return range;
 }
 
 std::string plus_minus(double value, double error) {
-  std::string text = brief(value);
-  if (std::isfinite(error)) text += " ± " + brief(error);
+  std::string text = format_brief(value);
+  if (std::isfinite(error)) text += " ± " + format_brief(error);
   return text;
 }
 
 void print_summary(std::ostream& out, const EstimationResult& r, const std::string& estimator,
                    const SampledData& data, const std::string& file) {
   out << "ctid fit: " << estimator << " on " << file << " (N = " << data.size()
-      << ", h = " << show(data.sample_time()) << " s)\n";
+      << ", h = " << format_number(data.sample_time()) << " s)\n";
   // The estimator's message restates the reason; print it only when it explains a failure.
   out << "termination: " << r.brief_report() << "\n";
-  out << "input delay: " << r.input_delay << " samples (" << show(r.model.input_delay()) << " s)\n";
+  out << "input delay: " << r.input_delay << " samples (" << format_number(r.model.input_delay())
+      << " s)\n";
   for (int i = 0; i < r.model.size(); ++i) {
     const Submodel& s = r.model[i];
     out << "submodel " << i + 1 << ": (" << s.b.to_string("p") << ") / (";
@@ -183,8 +164,9 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
           << ", gain = " << plus_minus(m.value.gain, m.standard_error.gain) << "\n";
     }
   }
-  out << "fit: " << brief(r.fit_percent) << " %, noise variance " << brief(r.noise_variance)
-      << ", Lemma 4.4 norm " << brief(r.off_diagonal_norm) << "\n";
+  out << "fit: " << format_brief(r.fit_percent) << " %, noise variance "
+      << format_brief(r.noise_variance) << ", Lemma 4.4 norm " << format_brief(r.off_diagonal_norm)
+      << "\n";
   if (r.unstable_reflections > 0 || r.sensitivity_fallbacks > 0) {
     out << "unstable iterates reflected: " << r.unstable_reflections
         << ", S_uo fallbacks: " << r.sensitivity_fallbacks << "\n";
@@ -193,7 +175,7 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
 }
 
 // What relocation tried and kept (frequencies in rad/s, as everywhere in the result).
-nlohmann::json relocation_json(const ModeRelocationResult& r) {
+nlohmann::json relocation_json(const ModeRelocationResult& r, RelocationCriterion criterion) {
   auto number = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
   nlohmann::json trials = nlohmann::json::array();
   for (const RelocationTrial& t : r.trials) {
@@ -211,7 +193,9 @@ nlohmann::json relocation_json(const ModeRelocationResult& r) {
                       {"termination", to_string(t.termination)},
                       {"accepted", t.accepted}});
   }
-  return {{"criterion", "projected_output_error"},
+  const char* criterion_name =
+      criterion == RelocationCriterion::output_error ? "output_error" : "projected_output_error";
+  return {{"criterion", criterion_name},
           {"relocations", r.relocations},
           {"rounds", r.rounds},
           {"initial_mean_squared_error", number(r.initial_mean_squared_error)},
@@ -230,84 +214,57 @@ void refuse_existing(const std::string& path, bool force, const std::string& fla
   }
 }
 
+// The flags as IdentificationOptions (the controller and --initial read from their files).
+IdentificationOptions identification_options(const FitFlags& f) {
+  IdentificationOptions options;
+  if (!f.controller.empty()) options.controller = io::read_discrete_transfer_function(f.controller);
+  if (!f.delay_scan.empty()) options.delay_scan = parse_delay_range(f.delay_scan);
+  options.relocate_modes = f.relocate_modes;
+  RefinedIvOptions& refined = options.refined_iv;
+  refined.max_iterations = f.max_iterations;
+  refined.tolerance = f.tolerance;
+  refined.output_interpolation =
+      f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
+  refined.noise = f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
+  refined.record_history = f.history;
+  refined.input_delay = f.delay;
+  if (!f.initial.empty()) refined.initial_model = io::read_fitted_model(f.initial).model;
+  return options;
+}
+
 void run_fit(const FitFlags& f, const CLI::App& app) {
-  const Structure s = structure(f, app);
+  const ModelStructure structure = model_structure(f, app);
   if (app.count("--delay") > 0 && !f.delay_scan.empty()) {
     usage_error("give --delay or --delay-scan, not both");
-  }
-  std::optional<std::pair<int, int>> scan;
-  if (!f.delay_scan.empty()) scan = parse_delay_range(f.delay_scan);
-  if (f.relocate_modes && !s.additive) {
-    usage_error(
-        "--relocate-modes moves submodels of an additive model; give --modes or --submodel");
-  }
-  if (f.relocate_modes && !f.controller.empty()) {
-    usage_error("--relocate-modes is for open-loop data; drop --controller");
   }
   refuse_existing(f.output, f.force, "--output");
   refuse_existing(f.model_output, f.force, "--model-output");
   std::filesystem::path package;
   if (!f.plot.empty()) {
     package = require_plotting();
-    prepare_plot_directory(f.plot, model_figure_names(s.additive), f.force);
+    prepare_plot_directory(f.plot, model_figure_names(structure.is_additive()), f.force);
   }
 
-  std::optional<DiscreteTransferFunction> controller;
-  if (!f.controller.empty()) controller = io::read_discrete_transfer_function(f.controller);
+  const IdentificationOptions options = identification_options(f);
+  validate_identification(structure, options);  // before the data is read
+  const std::optional<DiscreteTransferFunction>& controller = options.controller;
   const SampledData data = f.data.load(app, controller.has_value());
   if (controller && !same_sample_time(controller->sample_time(), data.sample_time())) {
     usage_error(internal::concat("the controller in ", f.controller, " has sample time ",
-                                 show(controller->sample_time()), " s but ", f.data.file,
-                                 " is sampled every ", show(data.sample_time()), " s"));
+                                 format_number(controller->sample_time()), " s but ", f.data.file,
+                                 " is sampled every ", format_number(data.sample_time()), " s"));
   }
 
-  RefinedIvOptions options;
-  options.max_iterations = f.max_iterations;
-  options.tolerance = f.tolerance;
-  options.output_interpolation =
-      f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
-  options.noise = f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
-  options.record_history = f.history;
-  options.input_delay = f.delay;
-  if (!f.initial.empty()) options.initial_model = io::read_fitted_model(f.initial).model;
-  options.validate();
-
-  const std::string estimator = estimator_name(s, controller.has_value());
-  auto estimate = [&](int delay) {
-    RefinedIvOptions o = options;
-    o.input_delay = delay;
-    if (s.additive) {
-      return controller ? additive_clsrivc(data, *controller, s.orders, o)
-                        : additive_srivc(data, s.orders, o);
-    }
-    return controller ? clsrivc(data, *controller, s.orders.front(), o)
-                      : srivc(data, s.orders.front(), o);
-  };
-
-  std::optional<InputDelayScanResult> scanned;
-  std::optional<EstimationResult> fitted;
-  if (scan) {
-    scanned = scan_input_delay(estimate, scan->first, scan->second);
-    fitted = scanned->best;
-  } else {
-    fitted = estimate(f.delay);
-  }
-  // Relocation starts from the plain (or delay-scanned) estimate at its delay, so that
-  // iteration stops at once and the delay scan is not repeated for every move.
-  std::optional<ModeRelocationResult> relocated;
-  if (f.relocate_modes) {
-    RefinedIvOptions o = options;
-    o.input_delay = fitted->input_delay;
-    o.initial_model = fitted->model;
-    relocated = additive_srivc_relocated(data, s.orders, o);
-    fitted = relocated->estimate;
-  }
-  const EstimationResult& result = *fitted;
+  const IdentificationResult identified = identify(data, structure, options);
+  const EstimationResult& result = identified.estimate;
+  const std::string estimator(enum_name(identified.estimator));
+  const std::optional<InputDelayScanResult>& scanned = identified.delay_scan;
+  const std::optional<ModeRelocationResult>& relocated = identified.mode_relocation;
 
   if (!f.output.empty()) {
     nlohmann::json document = io::to_json(result);
     document["estimator"] = estimator;
-    document["loop"] = controller ? "closed" : "open";
+    document["loop"] = identified.closed_loop ? "closed" : "open";
     document["data"] = {
         {"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}};
     if (controller) document["controller"] = io::to_json(*controller);
@@ -323,7 +280,9 @@ void run_fit(const FitFlags& f, const CLI::App& app) {
                                 {"mean_squared_errors", mse},
                                 {"terminations", terminations}};
     }
-    if (relocated) document["mode_relocation"] = relocation_json(*relocated);
+    if (relocated) {
+      document["mode_relocation"] = relocation_json(*relocated, options.relocation.criterion);
+    }
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
   if (!f.model_output.empty()) {
@@ -338,7 +297,7 @@ void run_fit(const FitFlags& f, const CLI::App& app) {
   if (!f.plot.empty()) {
     const Eigen::VectorXd simulated = model_output(result.model, data.input(), data.sample_time());
     const auto written = draw_model_figures(
-        package, f.plot, result.model, result.covariance, data, simulated, s.additive,
+        package, f.plot, result.model, result.covariance, data, simulated, structure.is_additive(),
         "ctid fit: " + estimator + " on " + std::filesystem::path(f.data.file).filename().string());
     if (!f.quiet) {
       for (const auto& file : written) std::cout << "wrote " << file.string() << "\n";

@@ -5,7 +5,6 @@
 // ctid::resonance_peaks (frequency/frf.h); figures by `python3 -m ctid.plot` (plot_support.h).
 #include <cmath>
 #include <complex>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -16,6 +15,7 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/json.h"
@@ -140,15 +140,13 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
               << (periodic ? " periods" : " segments") << " of " << frf.block_length
               << " samples\n";
     std::cout << peaks.size() << " resonance peak" << (peaks.size() == 1 ? "" : "s")
-              << " (prominence >= " << show(f.min_prominence_db) << " dB):\n";
+              << " (prominence >= " << format_number(f.min_prominence_db) << " dB):\n";
     for (const ResonancePeak& p : peaks) {
-      char line[200];
-      std::snprintf(line, sizeof line,
-                    "  w = %.6g rad/s (%.6g Hz), |G| = %.4g dB, prominence %.3g dB, "
-                    "damping ~ %.3g\n",
-                    p.frequency, p.frequency / (2.0 * std::numbers::pi),
-                    20.0 * std::log10(p.magnitude), p.prominence_db, p.damping_ratio);
-      std::cout << line;
+      std::cout << "  w = " << format_brief(p.frequency) << " rad/s ("
+                << format_brief(p.frequency / (2.0 * std::numbers::pi))
+                << " Hz), |G| = " << format_significant(20.0 * std::log10(p.magnitude), 4)
+                << " dB, prominence " << format_significant(p.prominence_db, 3) << " dB, damping ~ "
+                << format_significant(p.damping_ratio, 3) << "\n";
     }
     if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
   }

@@ -6,7 +6,6 @@
 // sampled input is continued by --hold (default foh, what `ctid feedback` assumes).
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -16,6 +15,7 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/excitation_spec.h"
 #include "ctid/io/json.h"
@@ -72,13 +72,6 @@ struct SimulateFlags {
 // Flags that mean something for a delayed_feedback_loop model only.
 const char* const kLoopOnlyFlags[] = {"--hold", "--substeps", "--nsr"};
 
-// A user-facing number: 12 significant digits show 0.1 as "0.1", not 0.10000000000000001.
-std::string show(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.12g", x);
-  return buffer;
-}
-
 // Agreement of two sample times given in different places (flag, file, controller).
 bool same_sample_time(double a, double b) { return std::abs(a - b) <= 1e-9 * std::abs(b); }
 
@@ -133,9 +126,9 @@ InputSignal read_input_column(const SimulateFlags& f, CLI::App& app,
     in.sample_time = s.sample_time;
     in.start_time = s.start_time;
     if (app.count("--sample-time") > 0 && !same_sample_time(f.sample_time, s.sample_time)) {
-      usage_error(internal::concat("--sample-time ", show(f.sample_time),
+      usage_error(internal::concat("--sample-time ", format_number(f.sample_time),
                                    " disagrees with the time column '", f.time_column, "' of ",
-                                   f.input, " (step ", show(s.sample_time), " s)"));
+                                   f.input, " (step ", format_number(s.sample_time), " s)"));
     }
     return in;
   }
@@ -161,9 +154,9 @@ InputSignal generate_input(const SimulateFlags& f, CLI::App& app,
     reject_unused_signal_flags(app, "--excitation-spec (the spec file sets it)", std::nullopt);
     spec = io::read_excitation_spec(f.excitation_spec);
     if (app.count("--sample-time") > 0 && !same_sample_time(f.sample_time, spec.sample_time)) {
-      usage_error(internal::concat("--sample-time ", show(f.sample_time),
-                                   " disagrees with sample_time ", show(spec.sample_time), " in ",
-                                   f.excitation_spec));
+      usage_error(internal::concat("--sample-time ", format_number(f.sample_time),
+                                   " disagrees with sample_time ", format_number(spec.sample_time),
+                                   " in ", f.excitation_spec));
     }
   } else {
     spec = f.spec;
@@ -188,8 +181,8 @@ Eigen::VectorXd raw_noise(const NoiseFlags& f, Eigen::Index n, double h, double 
   const DiscreteTransferFunction filter = io::read_discrete_transfer_function(f.filter);
   if (!same_sample_time(filter.sample_time(), h)) {
     usage_error(internal::concat("the noise filter in ", f.filter, " has sample time ",
-                                 show(filter.sample_time()), " s but the input is sampled every ",
-                                 show(h), " s"));
+                                 format_number(filter.sample_time()),
+                                 " s but the input is sampled every ", format_number(h), " s"));
   }
   return colored_noise(filter, static_cast<int>(n), std * std, f.seed);
 }
@@ -304,8 +297,8 @@ void run_simulate(const SimulateFlags& f, CLI::App& app) {
   const double h = in.sample_time;
   if (controller && !same_sample_time(controller->sample_time(), h)) {
     usage_error(internal::concat("the controller in ", f.controller, " has sample time ",
-                                 show(controller->sample_time()),
-                                 " s but the input is sampled every ", show(h), " s"));
+                                 format_number(controller->sample_time()),
+                                 " s but the input is sampled every ", format_number(h), " s"));
   }
   const Eigen::Index n = in.values.size();
 

@@ -12,6 +12,7 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/io/json.h"
 #include "ctid/io/result_json.h"
@@ -46,9 +47,10 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
   const SampledData data = f.data.load(app, false);
   const double delay_samples = fitted.model.input_delay() / data.sample_time();
   if (std::abs(delay_samples - std::round(delay_samples)) > 1e-9 * std::max(1.0, delay_samples)) {
-    usage_error(internal::concat("the model's input delay ", show(fitted.model.input_delay()),
+    usage_error(internal::concat("the model's input delay ",
+                                 format_number(fitted.model.input_delay()),
                                  " s is not a whole number of samples of ", f.data.file,
-                                 " (h = ", show(data.sample_time()), " s)"));
+                                 " (h = ", format_number(data.sample_time()), " s)"));
   }
 
   const ValidationReport report = validate_model(fitted.model, data, kMaxLag);
@@ -86,16 +88,17 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
   }
   if (!f.quiet) {
     std::cout << "ctid validate: " << f.model << " on " << f.data.file << " (N = " << data.size()
-              << ", h = " << show(data.sample_time()) << " s)\n"
-              << "fit: " << show(report.fit_percent) << " %, mean squared error "
-              << show(report.mean_squared_error) << "\n"
-              << "residual: mean " << show(report.residual_mean) << ", std "
-              << show(report.residual_std) << "\n"
+              << ", h = " << format_number(data.sample_time()) << " s)\n"
+              << "fit: " << format_number(report.fit_percent) << " %, mean squared error "
+              << format_number(report.mean_squared_error) << "\n"
+              << "residual: mean " << format_number(report.residual_mean) << ", std "
+              << format_number(report.residual_std) << "\n"
               << "whiteness (autocorrelation, lags 1-" << kMaxLag
-              << "): max |r| = " << show(report.max_residual_autocorrelation) << " against "
-              << show(bound) << " (99 %): " << (white ? "white" : "not white") << "\n"
+              << "): max |r| = " << format_number(report.max_residual_autocorrelation)
+              << " against " << format_number(bound)
+              << " (99 %): " << (white ? "white" : "not white") << "\n"
               << "cross-correlation with the input (lags -" << kMaxLag << ".." << kMaxLag
-              << "): max |r| = " << show(max_cross) << " against " << show(bound)
+              << "): max |r| = " << format_number(max_cross) << " against " << format_number(bound)
               << " (99 %): " << (uncorrelated ? "uncorrelated" : "correlated") << "\n";
   }
   if (!f.plot.empty()) {

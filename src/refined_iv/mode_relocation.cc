@@ -13,6 +13,7 @@
 #include <Eigen/Dense>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/frequency/peaks.h"
 #include "ctid/frequency/periodogram.h"
@@ -170,13 +171,6 @@ struct Candidate {
   double mean_squared_error = 0.0;
   Eigen::VectorXd beta;
 };
-
-std::string format_hz(double w) {
-  std::ostringstream out;
-  out.precision(6);
-  out << w / (2.0 * M_PI) << " Hz";
-  return out.str();
-}
 
 }  // namespace
 
@@ -340,8 +334,9 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
           << out.projected_mean_squared_error << ")";
   for (const RelocationTrial& t : out.trials) {
     if (t.accepted) {
-      message << "; submodel " << t.submodel << " moved from " << format_hz(t.moved_from) << " to "
-              << format_hz(t.start_frequency);
+      message << "; submodel " << t.submodel << " moved from "
+              << format_brief(t.moved_from / (2.0 * M_PI)) << " Hz to "
+              << format_brief(t.start_frequency / (2.0 * M_PI)) << " Hz";
     }
   }
   out.message = message.str();

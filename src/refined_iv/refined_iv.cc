@@ -6,7 +6,6 @@
 #include <cmath>
 #include <limits>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,6 +14,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/covariance.h"
@@ -368,13 +368,6 @@ Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares) {
   return s;
 }
 
-std::string format_number(double x) {
-  std::ostringstream out;
-  out.precision(3);
-  out << x;
-  return out.str();
-}
-
 }  // namespace
 
 Polynomial reflect_unstable_roots(const Polynomial& a, bool& reflected) {
@@ -607,7 +600,7 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
                        ": the instrument-regressor matrix of eq. (29) is numerically "
                        "singular at iteration " +
                        std::to_string(iteration) + " (reciprocal condition " +
-                       format_number(rcond) +
+                       format_significant(rcond, 3) +
                        "): the data do not excite the model enough or the orders are too high";
       break;
     }
@@ -640,8 +633,8 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     if (change < options.tolerance) {
       result.termination = Termination::converged;
       result.message = name + ": converged after " + std::to_string(iteration) +
-                       " iterations (relative parameter change " + format_number(change) +
-                       " < tolerance " + format_number(options.tolerance) + ")";
+                       " iterations (relative parameter change " + format_significant(change, 3) +
+                       " < tolerance " + format_significant(options.tolerance, 3) + ")";
       break;
     }
     ++iteration;
@@ -649,8 +642,8 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   if (result.termination == Termination::iteration_limit) {
     result.message = name + ": stopped at the iteration limit (" +
                      std::to_string(options.max_iterations) + ") with relative parameter change " +
-                     format_number(result.relative_change) + ", above the tolerance " +
-                     format_number(options.tolerance);
+                     format_significant(result.relative_change, 3) + ", above the tolerance " +
+                     format_significant(options.tolerance, 3);
   }
 
   // The estimate and its statistics.
@@ -691,10 +684,11 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   checks.largest_pole_frequency = largest_pole_frequency(result.model);
   checks.sampling_rate_ok = checks.largest_pole_frequency < checks.nyquist_frequency;
   if (!checks.sampling_rate_ok) {
-    checks.warnings.push_back(
-        "a pole's imaginary part " + format_number(checks.largest_pole_frequency) +
-        " rad/s is not below the Nyquist frequency " + format_number(checks.nyquist_frequency) +
-        " rad/s (Assumption 4): sample faster or lower the model order");
+    checks.warnings.push_back("a pole's imaginary part " +
+                              format_significant(checks.largest_pole_frequency, 3) +
+                              " rad/s is not below the Nyquist frequency " +
+                              format_significant(checks.nyquist_frequency, 3) +
+                              " rad/s (Assumption 4): sample faster or lower the model order");
   }
   result.checks = std::move(checks);
   return result;

@@ -234,9 +234,10 @@ TEST_F(FitCommand, RelocateModesFindsAWeakModeTheStartMissed) {
   for (const auto& t : report.at("trials")) accepted += t.at("accepted").get<bool>() ? 1 : 0;
   EXPECT_EQ(accepted, report.at("relocations").get<int>());
   EXPECT_THAT(r.out, HasSubstr("mode relocation: "));
-  // Only additive, open-loop fits can relocate.
+  // Only additive, open-loop fits can relocate (identify() checks it, naming the option).
   expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--zeros", "0", "--relocate-modes"}),
-                   "--relocate-modes moves submodels of an additive model");
+                   "relocate_modes is true but the structure is unfactored; mode relocation "
+                   "moves submodels of an additive model");
 }
 
 TEST_F(FitCommand, BadInputExitsTwoWithOneLine) {
@@ -251,13 +252,18 @@ TEST_F(FitCommand, BadInputExitsTwoWithOneLine) {
   expect_bad_input(ctid({"fit", "d.csv", "--submodel", "2,x"}), "--submodel '2,x'");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--delay", "1", "--delay-scan", "0:3"}),
                    "not both");
-  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--delay-scan", "5:2"}), "MAX is below");
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--delay-scan", "5:2"}),
+                   "delay_scan.max is 2; it must be >= min (5)");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--max-iterations", "0"}),
                    "max_iterations");
   // Closed loop without a reference column.
   expect_bad_input(
       ctid({"fit", "d.csv", "--modes", "2", "--controller", example("gonzalez_6_2_pid.json")}),
       "--reference-column");
+  // Relocation is for open-loop data; the options are checked before the data is read.
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--controller",
+                         example("gonzalez_6_2_pid.json"), "--relocate-modes"}),
+                   "mode relocation is for open-loop data");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--reference-column", "r"}),
                    "no effect without --controller");
   // A malformed controller file.

@@ -1,0 +1,187 @@
+// The front door of the refined IV module (González et al.): one call that takes data, a model
+// structure and options and runs what `ctid fit` runs: the estimator the structure and the
+// loop call for (SRIVC / CLSRIVC, Remark 4 eq. 30; the additive iteration (29) in open or
+// closed loop), its automatic start, an optional input-delay scan (Section 7), optional mode
+// relocation, the covariance (Theorem 3.2) and the data checks (Assumptions 1 and 4).
+#pragma once
+
+#include <array>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "ctid/core/additive_model.h"
+#include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/fields.h"
+#include "ctid/core/sampled_data.h"
+#include "ctid/refined_iv/estimation_result.h"
+#include "ctid/refined_iv/input_delay_scan.h"
+#include "ctid/refined_iv/mode_relocation.h"
+#include "ctid/refined_iv/refined_iv_options.h"
+
+namespace ctid {
+
+/// One unfactored transfer function or a sum of submodels.
+enum class ModelKind {
+  unfactored,  ///< B(p) / (p^l A(p)): SRIVC or CLSRIVC
+  additive,    ///< sum of B_i / (p^l_i A_i): the iteration (29)
+};
+
+inline constexpr std::array<Enumerator<ModelKind>, 2> model_kind_enumerators{{
+    {ModelKind::unfactored, "unfactored", "One transfer function B/(p^l A) (SRIVC, CLSRIVC)."},
+    {ModelKind::additive, "additive", "A sum of submodels B_i/(p^l_i A_i) (iteration (29))."},
+}};
+constexpr std::span<const Enumerator<ModelKind>> enumerators(ModelKind) {
+  return model_kind_enumerators;
+}
+
+/// The model to estimate: its kind and the orders {n, m, l} of its one (unfactored) or K
+/// (additive, slowest first) submodels.
+struct ModelStructure {
+  ModelKind kind = ModelKind::unfactored;
+  std::vector<SubmodelOrder> orders{SubmodelOrder{}};
+
+  /// B(p) / (p^integrators A(p)) with deg A = poles, deg B = zeros.
+  static ModelStructure unfactored(int poles, int zeros, int integrators = 0);
+  /// Submodels with these orders, listed from the slowest to the fastest.
+  static ModelStructure additive(std::vector<SubmodelOrder> orders);
+  /// `count` second-order modes b_0 / (1 + a_1 p + a_2 p^2).
+  static ModelStructure modes(int count);
+
+  bool is_additive() const { return kind == ModelKind::additive; }
+
+  static constexpr std::string_view type_name = "ModelStructure";
+  static constexpr auto fields() {
+    using S = ModelStructure;
+    return std::tuple{
+        field("kind", &S::kind, "unfactored (one transfer function) or additive (submodels)."),
+        field("orders", &S::orders,
+              "SubmodelOrder {n, m, integrators} of each submodel (one if unfactored)."),
+    };
+  }
+  /// Unfactored: exactly one order; additive: at least one.
+  void check_relations(const std::string& path) const;
+  /// Throws InvalidArgument naming the bad field (the orders themselves are checked by the
+  /// estimator, which knows the data).
+  void validate() const { validate_fields(*this); }
+};
+
+/// An inclusive range of whole-sample input delays to scan.
+struct DelayRange {
+  int min = 0;
+  int max = 0;
+
+  static constexpr std::string_view type_name = "DelayRange";
+  static constexpr auto fields() {
+    return std::tuple{
+        field("min", &DelayRange::min, AtLeast{0}, "Smallest delay tried [samples]."),
+        field("max", &DelayRange::max, AtLeast{0}, "Largest delay tried [samples], >= min."),
+    };
+  }
+  void check_relations(const std::string& path) const;
+  void validate() const { validate_fields(*this); }
+};
+
+/// Which refined IV estimator identify() ran.
+enum class RefinedIvEstimator {
+  srivc,             ///< unfactored, open loop
+  clsrivc,           ///< unfactored, closed loop
+  additive_srivc,    ///< additive, open loop
+  additive_clsrivc,  ///< additive, closed loop
+};
+
+inline constexpr std::array<Enumerator<RefinedIvEstimator>, 4> refined_iv_estimator_enumerators{{
+    {RefinedIvEstimator::srivc, "srivc", "SRIVC: unfactored, open loop (eq. 30, instrument (10))."},
+    {RefinedIvEstimator::clsrivc, "clsrivc",
+     "CLSRIVC: unfactored, closed loop (eq. 30, instrument (20))."},
+    {RefinedIvEstimator::additive_srivc, "additive_srivc",
+     "Additive, open loop (eq. 29, instrument (10))."},
+    {RefinedIvEstimator::additive_clsrivc, "additive_clsrivc",
+     "Additive, closed loop (eq. 29, instrument (20))."},
+}};
+constexpr std::span<const Enumerator<RefinedIvEstimator>> enumerators(RefinedIvEstimator) {
+  return refined_iv_estimator_enumerators;
+}
+
+/// The estimator for a structure: unfactored or additive, closed loop when a controller is known.
+RefinedIvEstimator choose_estimator(const ModelStructure& structure, bool closed_loop);
+
+struct IdentificationOptions {
+  /// The known discrete controller u_k = C_d(q)(r_k - y_k) of closed-loop data (the data
+  /// must then hold the reference); none: open loop.
+  std::optional<DiscreteTransferFunction> controller;
+  /// Scan these whole-sample input delays and keep the best output-error fit (converged fits
+  /// first); none: the known delay refined_iv.input_delay (which must then be 0 if set).
+  std::optional<DelayRange> delay_scan;
+  /// After the fit (at the delay the scan chose), move second-order submodels to peaks of
+  /// the residual spectrum and keep moves that fit better (mode_relocation.h). Additive
+  /// structure, open loop only.
+  bool relocate_modes = false;
+  /// Options of the relocation (used with relocate_modes).
+  ModeRelocationOptions relocation;
+  /// Options of the estimator (iterations, tolerance, start, known delay, covariance, ...).
+  RefinedIvOptions refined_iv;
+
+  static constexpr std::string_view type_name = "IdentificationOptions";
+  static constexpr auto fields() {
+    using O = IdentificationOptions;
+    return std::tuple{
+        field("controller", &O::controller,
+              "Known discrete controller of closed-loop data, or none (open loop)."),
+        field("delay_scan", &O::delay_scan,
+              "DelayRange of input delays to scan, or none (the known refined_iv.input_delay)."),
+        field("relocate_modes", &O::relocate_modes,
+              "Move second-order submodels to residual peaks after the fit (additive, open loop)."),
+        field("relocation", &O::relocation, "ModeRelocationOptions of relocate_modes."),
+        field("refined_iv", &O::refined_iv, "RefinedIvOptions of the estimator."),
+    };
+  }
+  void check_relations(const std::string& path) const;
+  /// Throws InvalidArgument naming the first bad field by its full path, its value and the rule.
+  void validate() const { validate_fields(*this); }
+};
+
+/// What identify() ran and found.
+struct IdentificationResult {
+  explicit IdentificationResult(EstimationResult result) : estimate(std::move(result)) {}
+
+  RefinedIvEstimator estimator = RefinedIvEstimator::srivc;
+  bool closed_loop = false;
+  /// The final estimate (after the delay scan and the relocation, when asked for).
+  EstimationResult estimate;
+  /// Every delay tried, with IdentificationOptions::delay_scan.
+  std::optional<InputDelayScanResult> delay_scan;
+  /// What the relocation tried and kept, with IdentificationOptions::relocate_modes.
+  std::optional<ModeRelocationResult> mode_relocation;
+
+  static constexpr std::string_view type_name = "IdentificationResult";
+  static constexpr auto fields() {
+    using R = IdentificationResult;
+    return std::tuple{
+        field("estimator", &R::estimator, "The refined IV estimator that ran."),
+        field("closed_loop", &R::closed_loop, "Closed loop (a controller was given)."),
+        field("estimate", &R::estimate, "The final EstimationResult."),
+        field("delay_scan", &R::delay_scan, "InputDelayScanResult of the delay scan, or none."),
+        field("mode_relocation", &R::mode_relocation,
+              "ModeRelocationResult of the relocation, or none."),
+    };
+  }
+};
+
+/// Throws InvalidArgument if the structure or the options are bad or do not go together
+/// (relocation of an unfactored or closed-loop model). identify() calls it first.
+void validate_identification(const ModelStructure& structure, const IdentificationOptions& options);
+
+/// Estimates `structure` from `data` with the estimator choose_estimator() names: over the
+/// delay scan if one is asked for (scan_input_delay), then with mode relocation if asked for
+/// (additive_srivc_relocated, started from that estimate at its delay, so the plain iteration
+/// stops at once and the scan is not repeated). Throws InvalidArgument for bad input (as the
+/// estimators do); how the iteration ended is result.estimate.termination.
+IdentificationResult identify(const SampledData& data, const ModelStructure& structure,
+                              const IdentificationOptions& options = {});
+
+}  // namespace ctid

@@ -1,0 +1,45 @@
+// Python binding of the refined IV front door (refined_iv/identification.h): ctid.identify(data,
+// structure, options=None, **keywords) runs what `ctid fit` runs. Every class here is derived
+// from its C++ field list (fields.h); no field is named in this file.
+#include "common.h"
+#include "ctid/refined_iv/identification.h"
+#include "fields.h"
+
+namespace ctid::python {
+
+void bind_identification(py::module_& m) {
+  bind_enum<ModelKind>(m, "ModelKind", "One transfer function or a sum of submodels.");
+  bind_enum<RefinedIvEstimator>(m, "RefinedIvEstimator", "The refined IV estimator identify ran.");
+
+  bind_options<ModelStructure>(
+      m, "The model to estimate: its kind and the SubmodelOrder of each submodel.")
+      .def_static("unfactored", &ModelStructure::unfactored, py::arg("poles"), py::arg("zeros"),
+                  py::arg("integrators") = 0,
+                  "One transfer function B/(p^integrators A), deg A = poles, deg B = zeros.")
+      .def_static("additive", &ModelStructure::additive, py::arg("orders"),
+                  "Submodels with these SubmodelOrders, slowest first.")
+      .def_static("modes", &ModelStructure::modes, py::arg("count"),
+                  "count second-order modes b0 / (1 + a1 p + a2 p^2).")
+      .def("is_additive", &ModelStructure::is_additive, "kind == ModelKind.additive.");
+  bind_options<DelayRange>(m, "Whole-sample input delays min..max (inclusive) to scan.");
+  bind_options<IdentificationOptions>(
+      m, "Options of identify: controller (closed loop), delay scan, mode relocation, estimator.");
+  bind_result<IdentificationResult>(
+      m, "What identify ran (estimator, loop) and found (estimate, delay scan, relocation).");
+
+  m.def(
+      "identify",
+      [](const SampledData& data, const ModelStructure& structure,
+         const std::optional<IdentificationOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<IdentificationOptions>("identify", options, kwargs);
+        py::gil_scoped_release release;
+        return identify(data, structure, o);
+      },
+      py::arg("data"), py::arg("structure"), py::arg("options") = py::none(),
+      "Estimate `structure` from `data` as `ctid fit` does: SRIVC / CLSRIVC (unfactored) or the "
+      "additive iteration (29), closed loop when options.controller is set, over "
+      "options.delay_scan, then mode relocation if options.relocate_modes. Options are one "
+      "IdentificationOptions or its fields as keywords.");
+}
+
+}  // namespace ctid::python

@@ -1,0 +1,30 @@
+#include "ctid/core/format.h"
+
+#include <charconv>
+#include <cstdio>
+#include <system_error>
+
+#include "ctid/core/error.h"
+
+namespace ctid {
+
+std::string format_significant(double x, int digits) {
+  require(digits >= 1 && digits <= 17, "format_significant: digits is ", digits,
+          "; it must be in [1, 17]");
+  char buffer[40];
+  const int length = std::snprintf(buffer, sizeof buffer, "%.*g", digits, x);
+  return std::string(buffer, static_cast<std::size_t>(length));
+}
+
+std::string format_number(double x) { return format_significant(x, 12); }
+
+std::string format_brief(double x) { return format_significant(x, 6); }
+
+std::string format_round_trip(double x) {
+  char buffer[40];
+  const auto [end, error] = std::to_chars(buffer, buffer + sizeof buffer, x);
+  if (error != std::errc()) return format_significant(x, 17);  // not reached: 40 chars suffice
+  return std::string(buffer, end);
+}
+
+}  // namespace ctid
