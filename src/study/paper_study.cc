@@ -101,19 +101,7 @@ std::string to_string(StudyKind kind) {
   return kind == StudyKind::open_loop ? "open-loop" : "closed-loop";
 }
 
-std::string to_string(StudyEstimator estimator) {
-  switch (estimator) {
-    case StudyEstimator::srivc:
-      return "srivc";
-    case StudyEstimator::clsrivc:
-      return "clsrivc";
-    case StudyEstimator::additive_srivc:
-      return "additive_srivc";
-    case StudyEstimator::additive_clsrivc:
-      return "additive_clsrivc";
-  }
-  return "unknown";
-}
+std::string to_string(StudyEstimator estimator) { return std::string(enum_name(estimator)); }
 
 StudyOptions StudyOptions::paper(StudyKind kind) {
   StudyOptions options;
