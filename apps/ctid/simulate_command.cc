@@ -49,13 +49,13 @@ struct SimulateFlags {
   bool force = false;
 
   std::string input;
-  std::string input_column = "u";
-  std::string time_column = "t";
+  std::string input_column = io::CsvColumns{}.input;
+  std::string time_column = io::CsvColumns{}.time;
 
   std::string excitation;
   std::string excitation_spec;
   io::ExcitationSpec spec;
-  std::string grid = "full";
+  std::string grid = io::to_string(io::ExcitationSpec{}.grid);
   double sample_time = 0.0;
 
   std::string controller;
@@ -66,6 +66,8 @@ struct SimulateFlags {
 
   // Delayed-feedback loop only.
   std::string hold = "foh";
+  // Not DelayedSimulationOptions{}.substeps (20): `ctid simulate` has documented 4
+  // (docs/cli.md) since it was written, and changing it would change the data it writes.
   int substeps = 4;
 };
 

@@ -31,8 +31,8 @@ struct StudyFlags {
   int sizes = -1;
   int min_samples = -1;
   int max_samples = -1;
-  int threads = 0;
-  std::uint64_t seed = 1;
+  int threads = StudyOptions{}.threads;
+  std::uint64_t seed = StudyOptions{}.seed;
   int size_index = -1;
   int run_index = -1;
   int max_iterations = -1;
@@ -45,12 +45,9 @@ struct StudyFlags {
 };
 
 StudyEstimator estimator_from_string(const std::string& name) {
-  if (name == "srivc") return StudyEstimator::srivc;
-  if (name == "clsrivc") return StudyEstimator::clsrivc;
-  if (name == "additive_srivc") return StudyEstimator::additive_srivc;
-  if (name == "additive_clsrivc") return StudyEstimator::additive_clsrivc;
-  usage_error("--estimators: unknown estimator '" + name +
-              "' (srivc, clsrivc, additive_srivc, additive_clsrivc)");
+  if (const auto estimator = enum_from_name<StudyEstimator>(name)) return *estimator;
+  usage_error("--estimators: unknown estimator '" + name + "' (" +
+              enum_names<StudyEstimator>(", ") + ")");
 }
 
 StudyOptions options_from_flags(const StudyFlags& f) {

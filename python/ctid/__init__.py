@@ -13,3 +13,32 @@ from ._ctid import *  # noqa: F401,F403
 from ._ctid import InvalidArgument, ComputationError  # noqa: F401
 
 __version__ = "0.1.0"
+
+
+def options_to_json(options):
+    """Every field of an options object as a JSON-ready dict (enumerations by name)."""
+    import json
+
+    from . import _ctid
+
+    return json.loads(_ctid._options_to_json_text(options))
+
+
+def options_from_json(cls_or_name, document):
+    """An options object from a dict or JSON text: the class's defaults, overridden by the keys
+    given (unknown keys raise ValueError), then validated. ``cls_or_name`` is the class (e.g.
+    ``ctid.RefinedIvOptions``) or its name."""
+    import json
+
+    from . import _ctid
+
+    name = cls_or_name if isinstance(cls_or_name, str) else cls_or_name.__name__
+    text = document if isinstance(document, str) else json.dumps(document, allow_nan=False)
+    return _ctid._options_from_json_text(name, text)
+
+
+def options_classes():
+    """Names of the options classes that options_to_json / options_from_json reach."""
+    from . import _ctid
+
+    return list(_ctid._options_classes())

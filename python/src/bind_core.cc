@@ -16,6 +16,7 @@ namespace ctid::python {
 
 void bind_core(py::module_& m) {
   bind_enum<Hold>(m, "Hold", "How a sampled signal continues between samples (core/hold.h).");
+  bind_options_json(m);
   using Complex = std::complex<double>;
 
   py::class_<Polynomial>(m, "Polynomial",

@@ -3,6 +3,7 @@
 #include "common.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/frequency/response.h"
+#include "fields.h"
 
 namespace ctid::python {
 
@@ -32,18 +33,8 @@ void bind_frequency(py::module_& m) {
       .def_readonly("coherence", &Frf::coherence, "Squared coherence (Welch); empty otherwise.")
       .def_readonly("averages", &Frf::averages, "Periods or segments averaged.")
       .def_readonly("block_length", &Frf::block_length, "Samples per period or segment.");
-  OptionsClass<PeriodicFrfOptions>(m, "PeriodicFrfOptions", "Options of periodic_frf.")
-      .field("period_length", &PeriodicFrfOptions::period_length, "N samples per period.")
-      .field("transient_periods", &PeriodicFrfOptions::transient_periods,
-             "Periods dropped at the start.")
-      .field("lines", &PeriodicFrfOptions::lines, "DFT lines to estimate; empty: excited ones.")
-      .field("line_threshold", &PeriodicFrfOptions::line_threshold,
-             "Relative input amplitude that counts as excited.")
-      .finish();
-  OptionsClass<WelchOptions>(m, "WelchOptions", "Options of welch_frf.")
-      .field("segment_length", &WelchOptions::segment_length, "L samples per segment.")
-      .field("overlap", &WelchOptions::overlap, "Fraction shared by neighbours, [0, 1).")
-      .finish();
+  bind_options<PeriodicFrfOptions>(m, "Options of periodic_frf.");
+  bind_options<WelchOptions>(m, "Options of welch_frf.");
   m.def(
       "periodic_frf",
       [](const SampledData& data, const std::optional<PeriodicFrfOptions>& options,
@@ -75,10 +66,7 @@ void bind_frequency(py::module_& m) {
                ", damping_ratio=" + std::to_string(p.damping_ratio) +
                ", prominence_db=" + std::to_string(p.prominence_db) + ")";
       });
-  OptionsClass<PeakOptions>(m, "PeakOptions", "Options of resonance_peaks.")
-      .field("min_prominence_db", &PeakOptions::min_prominence_db, "Smallest prominence [dB].")
-      .field("max_peaks", &PeakOptions::max_peaks, "Keep the most prominent (0: all).")
-      .finish();
+  bind_options<PeakOptions>(m, "Options of resonance_peaks.");
   m.def(
       "resonance_peaks",
       [](const Eigen::VectorXd& frequencies, const Eigen::VectorXcd& response,

@@ -128,32 +128,8 @@ void bind_refined_iv_estimators(py::module_& m) {
       py::arg("data"), py::arg("controller"), py::arg("orders"), py::arg("options") = py::none(),
       "Additive closed-loop refined IV (eq. 29 with instrument (20)).");
 
-  py::enum_<RelocationCriterion>(m, "RelocationCriterion", "How relocated estimates compare.")
-      .value("projected_output_error", RelocationCriterion::projected_output_error,
-             "Output error of the estimate's poles (numerators re-fitted).")
-      .value("output_error", RelocationCriterion::output_error, "The estimate's output error.");
-  OptionsClass<ModeRelocationOptions>(m, "ModeRelocationOptions",
-                                      "Options of additive_srivc_relocated.")
-      .field("max_relocations", &ModeRelocationOptions::max_relocations, "Moves kept at most.")
-      .field("peaks_per_round", &ModeRelocationOptions::peaks_per_round,
-             "Residual peaks examined per round.")
-      .field("min_peak_to_floor", &ModeRelocationOptions::min_peak_to_floor,
-             "Peak over local floor that counts.")
-      .field("min_input_level", &ModeRelocationOptions::min_input_level,
-             "Excited band: input level relative to its largest.")
-      .field("floor_half_width", &ModeRelocationOptions::floor_half_width,
-             "Half-width of the floor window [lines].")
-      .field("zero_padding", &ModeRelocationOptions::zero_padding, "DFT length / record length.")
-      .field("search_half_width", &ModeRelocationOptions::search_half_width,
-             "Peak search half-width [lines].")
-      .field("search_points", &ModeRelocationOptions::search_points, "Frequencies searched.")
-      .field("damping_ratios", &ModeRelocationOptions::damping_ratios, "Damping ratios tried.")
-      .field("trials_per_round", &ModeRelocationOptions::trials_per_round,
-             "Starts re-run per round.")
-      .field("criterion", &ModeRelocationOptions::criterion, "RelocationCriterion.")
-      .field("min_relative_decrease", &ModeRelocationOptions::min_relative_decrease,
-             "Relative decrease that keeps a move.")
-      .finish();
+  bind_enum<RelocationCriterion>(m, "RelocationCriterion", "How relocated estimates compare.");
+  bind_options<ModeRelocationOptions>(m, "Options of additive_srivc_relocated.");
   py::class_<RelocationTrial>(m, "RelocationTrial", "One relocated start re-run.")
       .def_readonly("round", &RelocationTrial::round, "Round (0 first).")
       .def_readonly("submodel", &RelocationTrial::submodel, "Submodel moved.")
@@ -233,14 +209,7 @@ void bind_refined_iv_estimators(py::module_& m) {
 }
 
 void bind_initialization(py::module_& m) {
-  OptionsClass<InitializationOptions>(m, "InitializationOptions",
-                                      "Options of the automatic initialisation.")
-      .field("filter_bandwidths", &InitializationOptions::filter_bandwidths,
-             "SVF bandwidths [rad/s]; empty: automatic grid.")
-      .field("refinement_iterations", &InitializationOptions::refinement_iterations,
-             "SRIVC iterations per start.")
-      .field("input_delay", &InitializationOptions::input_delay, "Delay [samples].")
-      .finish();
+  bind_options<InitializationOptions>(m, "Options of the data-driven start (LSSVF + SRIVC).");
   m.def("lssvf", &lssvf, py::arg("data"), py::arg("order"), py::arg("bandwidth"),
         py::arg("input_delay") = 0, "Least-squares state-variable-filter estimate.");
   m.def("unfactored_order", &unfactored_order, py::arg("orders"),

@@ -8,6 +8,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
+#include "fields.h"
 
 namespace ctid::python {
 
@@ -78,12 +79,7 @@ void bind_simulation(py::module_& m) {
   // Excitation.
   m.def("white_noise", &white_noise, py::arg("length"), py::arg("standard_deviation"),
         py::arg("seed"), "Seeded zero-mean Gaussian white noise (std::mt19937_64).");
-  OptionsClass<PrbsOptions>(m, "PrbsOptions", "Options of a maximum-length PRBS.")
-      .field("register_length", &PrbsOptions::register_length, "n in [2, 24]; period 2^n - 1.")
-      .field("amplitude", &PrbsOptions::amplitude, "Levels +-amplitude.")
-      .field("samples_per_bit", &PrbsOptions::samples_per_bit, "Samples each bit is held.")
-      .field("initial_state", &PrbsOptions::initial_state, "Register start, 1..2^n - 1.")
-      .finish();
+  bind_options<PrbsOptions>(m, "Options of a maximum-length PRBS.");
   m.def(
       "prbs_period",
       [](const std::optional<PrbsOptions>& options, const py::kwargs& kwargs) {
@@ -97,20 +93,8 @@ void bind_simulation(py::module_& m) {
       },
       py::arg("length"), py::arg("options") = py::none(),
       "length samples of a maximum-length PRBS; options as PrbsOptions or keywords.");
-  py::enum_<FrequencyGrid>(m, "FrequencyGrid", "Which DFT lines a multisine excites.")
-      .value("full", FrequencyGrid::full, "Every line in the band.")
-      .value("odd", FrequencyGrid::odd, "Odd lines only.");
-  OptionsClass<MultisineOptions>(m, "MultisineOptions", "Options of a random-phase multisine.")
-      .field("period_length", &MultisineOptions::period_length, "N samples per period (>= 4).")
-      .field("sample_time", &MultisineOptions::sample_time, "h [s].")
-      .field("min_frequency", &MultisineOptions::min_frequency, "Band lower edge [Hz].")
-      .field("max_frequency", &MultisineOptions::max_frequency,
-             "Band upper edge [Hz]; 0 = Nyquist.")
-      .field("grid", &MultisineOptions::grid, "FrequencyGrid.full or .odd.")
-      .field("periods", &MultisineOptions::periods, "Repetitions of the period.")
-      .field("rms", &MultisineOptions::rms, "Root mean square of the signal.")
-      .field("seed", &MultisineOptions::seed, "Seeds the phases.")
-      .finish();
+  bind_enum<FrequencyGrid>(m, "FrequencyGrid", "Which DFT lines a multisine excites.");
+  bind_options<MultisineOptions>(m, "Options of a random-phase multisine.");
   py::class_<Multisine>(m, "Multisine", "A multisine: signal, excited lines, phases.")
       .def_readonly("signal", &Multisine::signal, "periods * period_length samples.")
       .def_readonly("lines", &Multisine::lines, "Excited DFT lines k (k / (N h) Hz).")
@@ -175,10 +159,7 @@ void bind_simulation(py::module_& m) {
             &to_delayed_state_space),
         py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("delay"),
         "Realisation of W = alpha / (beta + gamma e^{-Delta s}).");
-  OptionsClass<DelayedSimulationOptions>(m, "DelayedSimulationOptions",
-                                         "Options of simulate_delayed.")
-      .field("substeps", &DelayedSimulationOptions::substeps, "RK4 steps per sample period.")
-      .finish();
+  bind_options<DelayedSimulationOptions>(m, "Options of simulate_delayed.");
   m.def(
       "simulate_delayed",
       [](const DelayedStateSpace& model, const std::function<double(double)>& input,

@@ -4,6 +4,7 @@
 #include "common.h"
 #include "ctid/study/monte_carlo.h"
 #include "ctid/study/paper_study.h"
+#include "fields.h"
 
 namespace ctid::python {
 
@@ -27,30 +28,9 @@ void bind_study(py::module_& m) {
   m.def("log_log_slope", &log_log_slope, py::arg("samples"), py::arg("mse"),
         "Slope of log10 MSE against log10 N (-1 for 1/N).");
 
-  py::enum_<StudyKind>(m, "StudyKind", "Which Section 6 study.")
-      .value("open_loop", StudyKind::open_loop, "Section 6.1.")
-      .value("closed_loop", StudyKind::closed_loop, "Section 6.2.");
-  py::enum_<StudyEstimator>(m, "StudyEstimator", "Estimators compared in a study.")
-      .value("srivc", StudyEstimator::srivc, "Unfactored SRIVC.")
-      .value("clsrivc", StudyEstimator::clsrivc, "Unfactored CLSRIVC.")
-      .value("additive_srivc", StudyEstimator::additive_srivc, "Additive open loop.")
-      .value("additive_clsrivc", StudyEstimator::additive_clsrivc, "Additive closed loop.");
-  OptionsClass<StudyOptions>(m, "StudyOptions", "Options of a Section 6 Monte Carlo study.")
-      .field("kind", &StudyOptions::kind, "StudyKind.")
-      .field("runs", &StudyOptions::runs, "Runs per sample size.")
-      .field("sizes", &StudyOptions::sizes, "Number of sample sizes.")
-      .field("min_samples", &StudyOptions::min_samples, "Smallest N.")
-      .field("max_samples", &StudyOptions::max_samples, "Largest N.")
-      .field("seed", &StudyOptions::seed, "Study seed.")
-      .field("threads", &StudyOptions::threads, "Worker threads (0: all cores).")
-      .field("max_iterations", &StudyOptions::max_iterations, "Estimator iteration limit.")
-      .field("tolerance", &StudyOptions::tolerance, "Estimator tolerance.")
-      .field("initial_perturbation", &StudyOptions::initial_perturbation,
-             "Relative perturbation of the start.")
-      .field("compute_covariance", &StudyOptions::compute_covariance,
-             "Ask for covariances (predicted MSE).")
-      .field("estimators", &StudyOptions::estimators, "StudyEstimator list; empty: default.")
-      .finish()
+  bind_enum<StudyKind>(m, "StudyKind", "Which Section 6 study.");
+  bind_enum<StudyEstimator>(m, "StudyEstimator", "Estimators compared in a study.");
+  bind_options<StudyOptions>(m, "Options of a Section 6 Monte Carlo study.")
       .def_static("paper", &StudyOptions::paper, py::arg("kind"), "The paper's study at full size.")
       .def("active_estimators", &StudyOptions::active_estimators, "Estimators that run.");
   py::class_<StudySetup>(m, "StudySetup", "True system and experiment of a study.")

@@ -2,14 +2,21 @@
 // fields' docs, a keyword-only constructor that rejects unknown keywords, validate(), a repr,
 // equality, and the class attributes `fields` (names in order) and `field_docs`. Options are
 // read/write; results are read-only. Enumerations are bound from their enumerators. No field
-// is named here: adding one to the C++ list adds it to Python.
+// is named here: adding one to the C++ list adds it to Python. Every options class is also
+// registered for JSON (io/fields_json.h): ctid.options_to_json / ctid.options_from_json.
 #pragma once
 
+#include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "common.h"
 #include "ctid/core/fields.h"
+#include "ctid/io/fields_json.h"
+#include "ctid/io/model_json.h"
 
 namespace ctid::python {
 
@@ -58,10 +65,80 @@ void add_common(Class& cls) {
   });
 }
 
+/// JSON text of an options object, and an options object (as a Python object) from JSON text.
+struct OptionsJson {
+  std::function<std::string(const py::object&)> write;
+  std::function<py::object(const std::string&)> read;
+};
+
+/// Every options class bound by bind_options, by its type_name.
+inline std::map<std::string, OptionsJson>& options_json_registry() {
+  static std::map<std::string, OptionsJson> registry;
+  return registry;
+}
+
+template <HasFields S>
+void register_options_json() {
+  const std::string name(S::type_name);
+  options_json_registry()[name] = OptionsJson{
+      [](const py::object& object) { return io::fields_to_json(object.cast<const S&>()).dump(); },
+      [name](const std::string& text) {
+        const std::string source = "options_from_json";
+        nlohmann::json document;
+        try {
+          document = nlohmann::json::parse(text);
+        } catch (const nlohmann::json::parse_error& e) {
+          throw InvalidArgument(source + ": " + name + ": malformed JSON: " + e.what());
+        }
+        return py::cast(io::options_from_json<S>(document, source));
+      }};
+}
+
+inline const OptionsJson& options_json_of(const std::string& name) {
+  const auto& registry = options_json_registry();
+  const auto found = registry.find(name);
+  if (found == registry.end()) {
+    std::vector<std::string> names;
+    for (const auto& [each, json] : registry) names.push_back(each);
+    throw py::value_error("'" + name + "' is not an options class; the options classes are " +
+                          join(names));
+  }
+  return found->second;
+}
+
 }  // namespace internal
 
+/// The module functions behind ctid.options_to_json / ctid.options_from_json (python/ctid):
+/// `_options_to_json_text(options) -> str`, `_options_from_json_text(name, text)` and
+/// `_options_classes() -> list of names`, over the classes bound by bind_options.
+inline void bind_options_json(py::module_& m) {
+  m.def(
+      "_options_to_json_text",
+      [](const py::object& options) {
+        const auto name = py::cast<std::string>(py::type::of(options).attr("__name__"));
+        return internal::options_json_of(name).write(options);
+      },
+      py::arg("options"), "JSON text of an options object (every field, by name).");
+  m.def(
+      "_options_from_json_text",
+      [](const std::string& name, const std::string& text) {
+        return internal::options_json_of(name).read(text);
+      },
+      py::arg("name"), py::arg("text"),
+      "Options class `name` from JSON text: defaults, then the keys given, then validate().");
+  m.def(
+      "_options_classes",
+      [] {
+        std::vector<std::string> names;
+        for (const auto& [name, json] : internal::options_json_registry()) names.push_back(name);
+        return names;
+      },
+      "Names of the options classes reachable from JSON.");
+}
+
 /// An options struct as a Python class S.type_name: S(field=value, ...), read/write attributes,
-/// validate() (ValueError naming the field path, value and rule), repr, ==, `fields`.
+/// validate() (ValueError naming the field path, value and rule), repr, ==, `fields`, and
+/// `field_rules` (each field's rule as text, "" for none); registered for JSON.
 template <HasFields S>
 py::class_<S> bind_options(py::module_& m, const char* doc) {
   py::class_<S> cls(m, S::type_name.data(), doc);
@@ -72,7 +149,8 @@ py::class_<S> bind_options(py::module_& m, const char* doc) {
   cls.def(
       py::init([name, names](const py::kwargs& kwargs) {
         check_keywords(name, kwargs, names);
-        py::object object = py::cast(S{});
+        const S defaults{};
+        py::object object = py::cast(defaults);
         for (const auto& item : kwargs) py::setattr(object, item.first, item.second);
         return object.cast<S>();
       }),
@@ -81,7 +159,11 @@ py::class_<S> bind_options(py::module_& m, const char* doc) {
   cls.def(
       "validate", [](const S& self) { self.validate(); },
       "Raise ValueError naming the first bad field (its full path), its value and the rule.");
+  py::dict rules;
+  for_each_field<S>([&](const auto& f) { rules[py::str(f.name.data())] = py::str(f.rule.text()); });
+  cls.attr("field_rules") = rules;
   internal::add_common<S>(cls);
+  internal::register_options_json<S>();
   return cls;
 }
 

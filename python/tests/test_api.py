@@ -90,9 +90,9 @@ def test_invalid_argument_is_a_value_error_with_the_cpp_message(experiment):
     assert str(info.value) == ("periodic_frf: the record length 1024 is not a multiple of "
                                "period_length 250")
     assert isinstance(info.value, ctid.InvalidArgument)
-    with pytest.raises(ValueError, match=r"^WelchOptions.overlap = 1: must lie in \[0, 1\)$"):
+    with pytest.raises(ValueError, match=r"^WelchOptions.overlap is 1; it must be in \[0, 1\)$"):
         ctid.welch_frf(data, overlap=1.0)
-    with pytest.raises(ValueError, match="PeriodicFrfOptions.period_length = 2"):
+    with pytest.raises(ValueError, match="PeriodicFrfOptions.period_length is 2; it must be >= 4"):
         ctid.PeriodicFrfOptions(period_length=2).validate()
     with pytest.raises(ValueError):
         ctid.SampledData(0.0, np.ones(4), np.ones(4))

@@ -30,30 +30,11 @@ double line_frequency(int k, int block_length, double sample_time) {
 
 }  // namespace
 
-void PeriodicFrfOptions::validate() const {
-  require(period_length >= 4, "PeriodicFrfOptions.period_length = ", period_length,
-          ": must be at least 4 samples");
-  require(transient_periods >= 0, "PeriodicFrfOptions.transient_periods = ", transient_periods,
-          ": must be >= 0");
-  require(std::isfinite(line_threshold) && line_threshold > 0.0 && line_threshold < 1.0,
-          "PeriodicFrfOptions.line_threshold = ", line_threshold, ": must lie in (0, 1)");
-  for (int k : lines) {
-    require(k >= 1 && k <= period_length / 2, "PeriodicFrfOptions.lines contains ", k,
-            ": every line must lie in [1, period_length/2 = ", period_length / 2, "]");
+void PeriodicFrfOptions::check_relations(const std::string& path) const {
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    require(lines[i] <= period_length / 2, path, ".lines[", i, "] is ", lines[i],
+            "; it must be <= period_length/2 = ", period_length / 2);
   }
-}
-
-void WelchOptions::validate() const {
-  require(segment_length >= 8, "WelchOptions.segment_length = ", segment_length,
-          ": must be at least 8 samples");
-  require(std::isfinite(overlap) && overlap >= 0.0 && overlap < 1.0,
-          "WelchOptions.overlap = ", overlap, ": must lie in [0, 1)");
-}
-
-void PeakOptions::validate() const {
-  require(std::isfinite(min_prominence_db) && min_prominence_db >= 0.0,
-          "PeakOptions.min_prominence_db = ", min_prominence_db, ": must be finite and >= 0");
-  require(max_peaks >= 0, "PeakOptions.max_peaks = ", max_peaks, ": must be >= 0 (0 keeps all)");
 }
 
 Frf periodic_frf(const SampledData& data, const PeriodicFrfOptions& options) {

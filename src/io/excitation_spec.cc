@@ -27,11 +27,10 @@ ExcitationKind excitation_kind_from_string(std::string_view name) {
       internal::concat("excitation signal '", name, "' is unknown; use white, prbs or multisine"));
 }
 
-std::string to_string(FrequencyGrid grid) { return grid == FrequencyGrid::odd ? "odd" : "full"; }
+std::string to_string(FrequencyGrid grid) { return std::string(enum_name(grid)); }
 
 FrequencyGrid frequency_grid_from_string(std::string_view name) {
-  if (name == "full") return FrequencyGrid::full;
-  if (name == "odd") return FrequencyGrid::odd;
+  if (const auto grid = enum_from_name<FrequencyGrid>(name)) return *grid;
   throw InvalidArgument(
       internal::concat("frequency grid '", name, "' is unknown; use full or odd"));
 }

@@ -7,16 +7,14 @@
 
 namespace ctid::io {
 
-void CsvColumns::validate() const {
-  require(!time.empty(), "CsvColumns.time is empty; it must name the time column");
-  require(!input.empty(), "CsvColumns.input is empty; it must name the input column");
-  require(!output.empty(), "CsvColumns.output is empty; it must name the output column");
-  require(std::isfinite(relative_tolerance) && relative_tolerance > 0.0 && relative_tolerance < 1.0,
-          "CsvColumns.relative_tolerance is ", relative_tolerance, "; it must be in (0, 1)");
+void CsvColumns::check_relations(const std::string& path) const {
+  require(!time.empty(), path, ".time is empty; it must name the time column");
+  require(!input.empty(), path, ".input is empty; it must name the input column");
+  require(!output.empty(), path, ".output is empty; it must name the output column");
   require(
       time != input && time != output && input != output &&
           (reference.empty() || (reference != time && reference != input && reference != output)),
-      "CsvColumns names '", time, "', '", input, "', '", output, "', '", reference,
+      path, " names '", time, "', '", input, "', '", output, "', '", reference,
       "' must differ from each other");
 }
 

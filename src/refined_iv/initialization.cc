@@ -18,18 +18,6 @@
 
 namespace ctid {
 
-void InitializationOptions::validate() const {
-  for (size_t i = 0; i < filter_bandwidths.size(); ++i) {
-    require(std::isfinite(filter_bandwidths[i]) && filter_bandwidths[i] > 0.0,
-            "InitializationOptions.filter_bandwidths[", i, "] is ", filter_bandwidths[i],
-            "; it must be positive and finite");
-  }
-  require(refinement_iterations >= 0, "InitializationOptions.refinement_iterations is ",
-          refinement_iterations, "; it must be >= 0");
-  require(input_delay >= 0, "InitializationOptions.input_delay is ", input_delay,
-          "; it must be >= 0");
-}
-
 SubmodelOrder unfactored_order(const std::vector<SubmodelOrder>& orders) {
   require(!orders.empty(), "unfactored_order: the structure has no submodels");
   SubmodelOrder total{0, 0, 0};

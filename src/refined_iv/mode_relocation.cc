@@ -22,37 +22,8 @@
 
 namespace ctid {
 
-void ModeRelocationOptions::validate() const {
-  require(max_relocations >= 0, "ModeRelocationOptions.max_relocations is ", max_relocations,
-          "; it must be >= 0");
-  require(peaks_per_round >= 1, "ModeRelocationOptions.peaks_per_round is ", peaks_per_round,
-          "; it must be >= 1");
-  require(std::isfinite(min_peak_to_floor) && min_peak_to_floor > 1.0,
-          "ModeRelocationOptions.min_peak_to_floor is ", min_peak_to_floor,
-          "; it must be finite and > 1");
-  require(min_input_level >= 0.0 && min_input_level <= 1.0,
-          "ModeRelocationOptions.min_input_level is ", min_input_level, "; it must be in [0, 1]");
-  require(floor_half_width >= 1, "ModeRelocationOptions.floor_half_width is ", floor_half_width,
-          "; it must be >= 1");
-  require(zero_padding >= 1, "ModeRelocationOptions.zero_padding is ", zero_padding,
-          "; it must be >= 1");
-  require(std::isfinite(search_half_width) && search_half_width > 0.0,
-          "ModeRelocationOptions.search_half_width is ", search_half_width,
-          "; it must be finite and > 0");
-  require(search_points >= 3, "ModeRelocationOptions.search_points is ", search_points,
-          "; it must be >= 3");
-  require(!damping_ratios.empty(),
-          "ModeRelocationOptions.damping_ratios is empty; give at least one damping ratio");
-  for (size_t k = 0; k < damping_ratios.size(); ++k) {
-    require(damping_ratios[k] > 0.0 && damping_ratios[k] < 1.0,
-            "ModeRelocationOptions.damping_ratios[", k, "] is ", damping_ratios[k],
-            "; it must be in (0, 1)");
-  }
-  require(trials_per_round >= 1, "ModeRelocationOptions.trials_per_round is ", trials_per_round,
-          "; it must be >= 1");
-  require(min_relative_decrease >= 0.0 && min_relative_decrease < 1.0,
-          "ModeRelocationOptions.min_relative_decrease is ", min_relative_decrease,
-          "; it must be in [0, 1)");
+void ModeRelocationOptions::check_relations(const std::string& path) const {
+  require(!damping_ratios.empty(), path, ".damping_ratios is empty; it must hold at least one");
 }
 
 namespace {

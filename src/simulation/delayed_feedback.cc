@@ -225,11 +225,6 @@ DelayedStateSpace to_delayed_state_space(const Polynomial& alpha, const Polynomi
   return r;
 }
 
-void DelayedSimulationOptions::validate() const {
-  require(substeps >= 1 && substeps <= 100000,
-          "DelayedSimulationOptions: substeps must be in [1, 100000], got ", substeps);
-}
-
 Eigen::VectorXd simulate_delayed(const DelayedStateSpace& model,
                                  const std::function<double(double)>& input, double sample_time,
                                  int samples, const DelayedSimulationOptions& options) {

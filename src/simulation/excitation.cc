@@ -42,17 +42,14 @@ Eigen::VectorXd white_noise(int length, double standard_deviation, std::uint64_t
   return e;
 }
 
-void PrbsOptions::validate() const {
-  require(register_length >= 2 && register_length <= 24,
-          "PrbsOptions.register_length must be in [2, 24], got ", register_length);
-  require(std::isfinite(amplitude) && amplitude > 0.0,
-          "PrbsOptions.amplitude must be positive and finite, got ", amplitude);
-  require(samples_per_bit >= 1, "PrbsOptions.samples_per_bit must be >= 1, got ", samples_per_bit);
+void PrbsOptions::check_relations(const std::string& path) const {
   const std::uint64_t states = std::uint64_t{1} << register_length;
-  require(initial_state >= 1 && initial_state < states, "PrbsOptions.initial_state must be in [1, ",
-          states - 1, "] (a non-zero ", register_length, "-bit state), got ", initial_state);
-  require((states - 1) * static_cast<std::uint64_t>(samples_per_bit) <= 0x7fffffffULL,
-          "PrbsOptions: period (2^register_length - 1) * samples_per_bit exceeds 2^31 - 1");
+  require(initial_state < states, path, ".initial_state is ", initial_state,
+          "; it must be < 2^register_length = ", states, " (a non-zero ", register_length,
+          "-bit state)");
+  require((states - 1) * static_cast<std::uint64_t>(samples_per_bit) <= 0x7fffffffULL, path,
+          ".samples_per_bit is ", samples_per_bit,
+          "; it must keep the period (2^register_length - 1) * samples_per_bit <= 2^31 - 1");
 }
 
 int prbs_period(const PrbsOptions& options) {
@@ -83,21 +80,9 @@ Eigen::VectorXd prbs(int length, const PrbsOptions& options) {
   return u;
 }
 
-void MultisineOptions::validate() const {
-  require(period_length >= 4, "MultisineOptions.period_length must be >= 4, got ", period_length);
-  require(std::isfinite(sample_time) && sample_time > 0.0,
-          "MultisineOptions.sample_time must be positive and finite, got ", sample_time);
-  require(std::isfinite(min_frequency) && min_frequency >= 0.0,
-          "MultisineOptions.min_frequency must be finite and >= 0 Hz, got ", min_frequency);
-  require(std::isfinite(max_frequency) && max_frequency >= 0.0,
-          "MultisineOptions.max_frequency must be finite and >= 0 Hz (0 means Nyquist), got ",
-          max_frequency);
-  require(max_frequency == 0.0 || max_frequency >= min_frequency,
-          "MultisineOptions.max_frequency (", max_frequency, " Hz) must be >= min_frequency (",
-          min_frequency, " Hz)");
-  require(periods >= 1, "MultisineOptions.periods must be >= 1, got ", periods);
-  require(std::isfinite(rms) && rms > 0.0, "MultisineOptions.rms must be positive and finite, got ",
-          rms);
+void MultisineOptions::check_relations(const std::string& path) const {
+  require(max_frequency == 0.0 || max_frequency >= min_frequency, path, ".max_frequency is ",
+          max_frequency, "; it must be 0 (Nyquist) or >= min_frequency (", min_frequency, ")");
 }
 
 Multisine multisine(const MultisineOptions& options) {

@@ -101,19 +101,7 @@ std::string to_string(StudyKind kind) {
   return kind == StudyKind::open_loop ? "open-loop" : "closed-loop";
 }
 
-std::string to_string(StudyEstimator estimator) {
-  switch (estimator) {
-    case StudyEstimator::srivc:
-      return "srivc";
-    case StudyEstimator::clsrivc:
-      return "clsrivc";
-    case StudyEstimator::additive_srivc:
-      return "additive_srivc";
-    case StudyEstimator::additive_clsrivc:
-      return "additive_clsrivc";
-  }
-  return "unknown";
-}
+std::string to_string(StudyEstimator estimator) { return std::string(enum_name(estimator)); }
 
 StudyOptions StudyOptions::paper(StudyKind kind) {
   StudyOptions options;
@@ -127,28 +115,17 @@ StudyOptions StudyOptions::paper(StudyKind kind) {
   return options;
 }
 
-void StudyOptions::validate() const {
-  require(runs >= 1, "StudyOptions.runs is ", runs, "; it must be >= 1");
-  require(sizes >= 1, "StudyOptions.sizes is ", sizes, "; it must be >= 1");
-  require(min_samples >= 50, "StudyOptions.min_samples is ", min_samples,
-          "; it must be >= 50 (enough samples for 15 parameters)");
-  require(max_samples >= min_samples, "StudyOptions.max_samples is ", max_samples,
+void StudyOptions::check_relations(const std::string& path) const {
+  require(max_samples >= min_samples, path, ".max_samples is ", max_samples,
           "; it must be >= min_samples (", min_samples, ")");
-  require(threads >= 0, "StudyOptions.threads is ", threads, "; it must be >= 0 (0: all cores)");
-  require(max_iterations >= 1, "StudyOptions.max_iterations is ", max_iterations,
-          "; it must be >= 1");
-  require(std::isfinite(tolerance) && tolerance > 0.0 && tolerance < 1.0,
-          "StudyOptions.tolerance is ", tolerance, "; it must be in (0, 1)");
-  require(std::isfinite(initial_perturbation) && initial_perturbation >= 0.0 &&
-              initial_perturbation < 1.0,
-          "StudyOptions.initial_perturbation is ", initial_perturbation, "; it must be in [0, 1)");
-  for (StudyEstimator e : estimators) {
+  for (std::size_t i = 0; i < estimators.size(); ++i) {
+    const StudyEstimator e = estimators[i];
     if (kind == StudyKind::open_loop) {
-      require(is_open_loop_estimator(e), "StudyOptions.estimators contains ", to_string(e),
-              "; the open-loop study runs only srivc and additive_srivc");
+      require(is_open_loop_estimator(e), path, ".estimators[", i, "] is ", to_string(e),
+              "; it must be srivc or additive_srivc (the open-loop study)");
     } else {
-      require(is_closed_loop_estimator(e), "StudyOptions.estimators contains ", to_string(e),
-              "; the closed-loop study runs only srivc, clsrivc and additive_clsrivc");
+      require(is_closed_loop_estimator(e), path, ".estimators[", i, "] is ", to_string(e),
+              "; it must be srivc, clsrivc or additive_clsrivc (the closed-loop study)");
     }
   }
 }

@@ -150,16 +150,22 @@ TEST(PeriodicFrf, RejectsBadInput) {
   options.period_length = 2;
   EXPECT_THAT([&] { periodic_frf(whole, options); },
               ::testing::ThrowsMessage<InvalidArgument>(
-                  HasSubstr("PeriodicFrfOptions.period_length = 2: must be at least 4")));
+                  HasSubstr("PeriodicFrfOptions.period_length is 2; it must be >= 4")));
   options.period_length = kPeriod;
   options.transient_periods = -1;
   EXPECT_THAT([&] { periodic_frf(whole, options); },
               ::testing::ThrowsMessage<InvalidArgument>(
-                  HasSubstr("PeriodicFrfOptions.transient_periods = -1")));
+                  HasSubstr("PeriodicFrfOptions.transient_periods is -1")));
   options.transient_periods = 0;
   options.lines = {0};
   EXPECT_THAT([&] { periodic_frf(whole, options); },
-              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("PeriodicFrfOptions.lines")));
+              ::testing::ThrowsMessage<InvalidArgument>(
+                  HasSubstr("PeriodicFrfOptions.lines[0] is 0; it must be >= 1")));
+  options.lines = {1, kPeriod};
+  EXPECT_THAT([&] { periodic_frf(whole, options); },
+              ::testing::ThrowsMessage<InvalidArgument>(
+                  HasSubstr("PeriodicFrfOptions.lines[1] is " + std::to_string(kPeriod) +
+                            "; it must be <= period_length/2 = " + std::to_string(kPeriod / 2))));
 }
 
 TEST(WelchFrf, NoiseFreeCoherenceIsOneAndH1FollowsTheResponse) {
@@ -217,12 +223,12 @@ TEST(WelchFrf, RejectsBadInput) {
   options.overlap = 1.0;
   EXPECT_THAT([&] { welch_frf(data, options); },
               ::testing::ThrowsMessage<InvalidArgument>(
-                  HasSubstr("WelchOptions.overlap = 1: must lie in [0, 1)")));
+                  HasSubstr("WelchOptions.overlap is 1; it must be in [0, 1)")));
   options.overlap = 0.5;
   options.segment_length = 4;
   EXPECT_THAT([&] { welch_frf(data, options); },
               ::testing::ThrowsMessage<InvalidArgument>(
-                  HasSubstr("WelchOptions.segment_length = 4: must be at least 8")));
+                  HasSubstr("WelchOptions.segment_length is 4; it must be >= 8")));
 }
 
 // Two modes B/(1 + 2 zeta s / w + s^2 / w^2) evaluated directly on a grid.
@@ -277,7 +283,8 @@ TEST(ResonancePeaks, RejectsBadInput) {
   PeakOptions options;
   options.max_peaks = -2;
   EXPECT_THAT([&] { resonance_peaks(w, Eigen::VectorXcd::Ones(5), options); },
-              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("PeakOptions.max_peaks = -2")));
+              ::testing::ThrowsMessage<InvalidArgument>(
+                  HasSubstr("PeakOptions.max_peaks is -2; it must be >= 0")));
 }
 
 }  // namespace

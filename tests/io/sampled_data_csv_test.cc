@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "ctid/io/fields_json.h"
 #include "io/test_directory.h"
 
 namespace ctid::io {
@@ -69,6 +70,20 @@ TEST(SampledDataCsv, ColumnsValidateNamesTheField) {
   columns.relative_tolerance = 0.0;
   EXPECT_THAT(error_of([&] { columns.validate(); }),
               HasSubstr("CsvColumns.relative_tolerance is 0"));
+}
+
+TEST(SampledDataCsv, ColumnsRoundTripThroughTheirFields) {
+  CsvColumns columns;
+  columns.reference = "r";
+  columns.relative_tolerance = 1e-3;
+  const CsvColumns back = options_from_json<CsvColumns>(fields_to_json(columns), "c.json");
+  EXPECT_EQ(back.reference, "r");
+  EXPECT_EQ(back.relative_tolerance, 1e-3);
+  EXPECT_EQ(fields_to_json(back), fields_to_json(columns));
+  EXPECT_THAT(error_of([] {
+                options_from_json<CsvColumns>(nlohmann::json{{"input", "t"}}, "c.json");
+              }),
+              HasSubstr("c.json: CsvColumns names 't', 't', 'y', '' must differ"));
 }
 
 TEST(SampledDataCsv, WriteThenReadRoundTripsExactly) {

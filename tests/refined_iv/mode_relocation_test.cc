@@ -247,7 +247,7 @@ TEST(ModeRelocation, OptionsNameTheBadField) {
   EXPECT_THAT(message([](ModeRelocationOptions& o) { o.zero_padding = 0; }),
               HasSubstr("zero_padding is 0"));
   EXPECT_THAT(message([](ModeRelocationOptions& o) { o.search_half_width = NAN; }),
-              HasSubstr("search_half_width is nan"));
+              HasSubstr("search_half_width is NaN; it must be a number"));
   EXPECT_THAT(message([](ModeRelocationOptions& o) { o.search_points = 2; }),
               HasSubstr("search_points is 2; it must be >= 3"));
   EXPECT_THAT(message([](ModeRelocationOptions& o) { o.damping_ratios.clear(); }),

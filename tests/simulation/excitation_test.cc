@@ -87,7 +87,8 @@ TEST(Prbs, ValidatesOptions) {
     prbs(10, options);
     FAIL() << "no exception";
   } catch (const InvalidArgument& error) {
-    EXPECT_THAT(error.what(), HasSubstr("PrbsOptions.register_length must be in [2, 24], got 25"));
+    EXPECT_THAT(error.what(),
+                HasSubstr("PrbsOptions.register_length is 25; it must be in [2, 24]"));
   }
   options = PrbsOptions{};
   options.initial_state = 0;
@@ -95,6 +96,12 @@ TEST(Prbs, ValidatesOptions) {
   options = PrbsOptions{};
   options.samples_per_bit = 0;
   EXPECT_THROW(prbs(10, options), InvalidArgument);
+  options = PrbsOptions{};
+  options.register_length = 3;
+  options.initial_state = 8;
+  EXPECT_THAT([&] { prbs(10, options); },
+              ::testing::ThrowsMessage<InvalidArgument>(
+                  HasSubstr("PrbsOptions.initial_state is 8; it must be < 2^register_length = 8")));
 }
 
 std::vector<std::complex<double>> dft(const Eigen::VectorXd& x) {
@@ -182,12 +189,18 @@ TEST(Multisine, RejectsEmptyBandAndBadOptions) {
     multisine(options);
     FAIL() << "no exception";
   } catch (const InvalidArgument& error) {
-    EXPECT_THAT(error.what(), HasSubstr("MultisineOptions.rms must be positive"));
+    EXPECT_THAT(error.what(), HasSubstr("MultisineOptions.rms is -1; it must be finite and > 0"));
   }
   options = MultisineOptions{};
   options.min_frequency = 0.3;
   options.max_frequency = 0.2;
   EXPECT_THROW(multisine(options), InvalidArgument);
+  options.min_frequency = 0.5;
+  options.max_frequency = 0.25;
+  EXPECT_THAT([&] { multisine(options); },
+              ::testing::ThrowsMessage<InvalidArgument>(
+                  HasSubstr("MultisineOptions.max_frequency is 0.25; it must be 0 (Nyquist) or >= "
+                            "min_frequency (0.5)")));
 }
 
 TEST(WhiteNoise, SeededMomentsWithinStatisticalBounds) {

@@ -147,7 +147,13 @@ TEST(StudyOptions, ValidateNamesTheField) {
   options = StudyOptions::paper(StudyKind::open_loop);
   options.estimators = {StudyEstimator::clsrivc};
   EXPECT_THAT([&] { options.validate(); },
-              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("clsrivc")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr(
+                  "StudyOptions.estimators[0] is clsrivc; it must be srivc or additive_srivc")));
+  options.estimators.clear();
+  options.max_samples = options.min_samples - 1;
+  EXPECT_THAT([&] { options.validate(); },
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr(
+                  "StudyOptions.max_samples is 1999; it must be >= min_samples (2000)")));
   EXPECT_EQ(StudyOptions::paper(StudyKind::closed_loop).sizes, 50);
   EXPECT_EQ(StudyOptions::paper(StudyKind::closed_loop).max_samples, 123036);
   EXPECT_DOUBLE_EQ(StudyOptions::paper(StudyKind::closed_loop).tolerance, 1e-7);

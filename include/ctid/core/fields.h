@@ -138,6 +138,19 @@ struct Each {
 };
 template <class Rule>
 Each(Rule) -> Each<Rule>;
+/// A finite value (not +-inf; NaN is always rejected) that also follows `rule`, for one-sided
+/// bounds where infinity would otherwise pass: Finite{GreaterThan{0}} reads "finite and > 0".
+template <class Rule = AnyValue>
+struct Finite {
+  Rule rule{};
+  bool holds(double x) const { return std::isfinite(x) && rule.holds(x); }
+  std::string text() const {
+    const std::string inner = rule.text();
+    return inner.empty() ? std::string("finite") : "finite and " + inner;
+  }
+};
+template <class Rule>
+Finite(Rule) -> Finite<Rule>;
 
 // --- Fields --------------------------------------------------------------------------------
 

@@ -7,10 +7,14 @@
 // sits at 2 pi k / (L h). Peaks are picked with the kernels of peaks.h.
 #pragma once
 
+#include <string>
+#include <string_view>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
 
 namespace ctid {
@@ -38,8 +42,25 @@ struct PeriodicFrfOptions {
   std::vector<int> lines;
   /// Relative amplitude that makes a line count as excited, in (0, 1).
   double line_threshold = 1e-6;
+
+  static constexpr std::string_view type_name = "PeriodicFrfOptions";
+  static constexpr auto fields() {
+    using O = PeriodicFrfOptions;
+    return std::tuple{
+        field("period_length", &O::period_length, AtLeast{4},
+              "N, samples per period; the record holds whole periods."),
+        field("transient_periods", &O::transient_periods, AtLeast{0},
+              "Periods dropped at the start (transient)."),
+        field("lines", &O::lines, Each{AtLeast{1}},
+              "DFT lines (<= N/2) to estimate; empty: the excited ones."),
+        field("line_threshold", &O::line_threshold, Between{0, 1},
+              "Relative input amplitude that makes a line excited."),
+    };
+  }
+  /// Every line <= period_length / 2.
+  void check_relations(const std::string& path) const;
   /// Throws InvalidArgument naming the field, its value and the rule.
-  void validate() const;
+  void validate() const { validate_fields(*this); }
 };
 
 /// FRF from a periodic experiment (a multisine repeated P + transient_periods times). Throws
@@ -52,8 +73,19 @@ struct WelchOptions {
   int segment_length = 256;
   /// Fraction of a segment shared with the next one, in [0, 1).
   double overlap = 0.5;
+
+  static constexpr std::string_view type_name = "WelchOptions";
+  static constexpr auto fields() {
+    using O = WelchOptions;
+    return std::tuple{
+        field("segment_length", &O::segment_length, AtLeast{8},
+              "L, samples per segment (<= record length)."),
+        field("overlap", &O::overlap, Between{0, 1, true, false},
+              "Fraction of a segment shared with the next one."),
+    };
+  }
   /// Throws InvalidArgument naming the field, its value and the rule.
-  void validate() const;
+  void validate() const { validate_fields(*this); }
 };
 
 /// H1 estimate with periodic-Hann-windowed segments starting every L - round(overlap L)
@@ -78,8 +110,18 @@ struct PeakOptions {
   double min_prominence_db = 3.0;
   /// Keep at most this many peaks, the most prominent ones (0: all).
   int max_peaks = 0;
+
+  static constexpr std::string_view type_name = "PeakOptions";
+  static constexpr auto fields() {
+    using O = PeakOptions;
+    return std::tuple{
+        field("min_prominence_db", &O::min_prominence_db, Finite{AtLeast{0}},
+              "Smallest height above the surrounding minima [dB]."),
+        field("max_peaks", &O::max_peaks, AtLeast{0}, "Keep the most prominent (0: all)."),
+    };
+  }
   /// Throws InvalidArgument naming the field, its value and the rule.
-  void validate() const;
+  void validate() const { validate_fields(*this); }
 };
 
 /// Resonance peaks of |G| in increasing frequency. Frequencies must be finite and strictly

@@ -5,9 +5,12 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
+#include <tuple>
 
 #include <Eigen/Core>
 
+#include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/file.h"
@@ -24,8 +27,22 @@ struct CsvColumns {
   /// Allowed deviation of each time step from the mean step, relative to the mean step.
   double relative_tolerance = 1e-6;
 
+  static constexpr std::string_view type_name = "CsvColumns";
+  static constexpr auto fields() {
+    using O = CsvColumns;
+    return std::tuple{
+        field("time", &O::time, "Column of the time stamps."),
+        field("input", &O::input, "Column of the input u."),
+        field("output", &O::output, "Column of the output y."),
+        field("reference", &O::reference, "Column of the reference r; empty: none."),
+        field("relative_tolerance", &O::relative_tolerance, Between{0, 1},
+              "Allowed deviation of a time step from the mean step, relative to it."),
+    };
+  }
+  /// Time, input and output are named, and all names differ.
+  void check_relations(const std::string& path) const;
   /// Throws InvalidArgument naming the field, its value and the rule.
-  void validate() const;
+  void validate() const { validate_fields(*this); }
 };
 
 /// A uniformly sampled signal read from a table's time and value columns.

@@ -5,9 +5,12 @@
 // stay together, origin poles go to the integrator submodel) with numerators by least squares.
 #pragma once
 
+#include <string_view>
+#include <tuple>
 #include <vector>
 
 #include "ctid/core/additive_model.h"
+#include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/core/transfer_function.h"
 
@@ -22,7 +25,19 @@ struct InitializationOptions {
   /// Input delay in samples.
   int input_delay = 0;
 
-  void validate() const;
+  static constexpr std::string_view type_name = "InitializationOptions";
+  static constexpr auto fields() {
+    using O = InitializationOptions;
+    return std::tuple{
+        field("filter_bandwidths", &O::filter_bandwidths, Each{Finite{GreaterThan{0}}},
+              "SVF bandwidths to try [rad/s]; empty: a factor-2 grid up to pi/h."),
+        field("refinement_iterations", &O::refinement_iterations, AtLeast{0},
+              "SRIVC iterations refining each LSSVF start (0: LSSVF only)."),
+        field("input_delay", &O::input_delay, AtLeast{0}, "Input delay [samples]."),
+    };
+  }
+  /// Throws InvalidArgument naming the first bad field, its value and the rule.
+  void validate() const { validate_fields(*this); }
 };
 
 /// LSSVF estimate of B/(p^l A) (A anti-monic, deg A = order.n, deg B = order.m) with the

@@ -5,11 +5,16 @@
 // output error (of the poles, by default) falls. Ours, beyond the paper.
 #pragma once
 
+#include <array>
+#include <span>
 #include <string>
+#include <string_view>
+#include <tuple>
 #include <utility>
 #include <vector>
 
 #include "ctid/core/additive_model.h"
+#include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/refined_iv_options.h"
@@ -29,6 +34,15 @@ enum class RelocationCriterion {
   /// the final estimate's output error never exceeds the plain one.
   output_error,
 };
+
+inline constexpr std::array<Enumerator<RelocationCriterion>, 2> relocation_criterion_enumerators{{
+    {RelocationCriterion::projected_output_error, "projected_output_error",
+     "Output error of the estimate's poles (numerators re-fitted)."},
+    {RelocationCriterion::output_error, "output_error", "The estimate's own output error."},
+}};
+constexpr std::span<const Enumerator<RelocationCriterion>> enumerators(RelocationCriterion) {
+  return relocation_criterion_enumerators;
+}
 
 struct ModeRelocationOptions {
   /// Largest number of moves kept (0: the plain estimate). >= 0.
@@ -65,8 +79,38 @@ struct ModeRelocationOptions {
   /// (1 - min_relative_decrease) times the current value. In [0, 1).
   double min_relative_decrease = 1e-6;
 
+  static constexpr std::string_view type_name = "ModeRelocationOptions";
+  static constexpr auto fields() {
+    using O = ModeRelocationOptions;
+    return std::tuple{
+        field("max_relocations", &O::max_relocations, AtLeast{0},
+              "Largest number of moves kept (0: the plain estimate)."),
+        field("peaks_per_round", &O::peaks_per_round, AtLeast{1},
+              "Residual peaks examined per round."),
+        field("min_peak_to_floor", &O::min_peak_to_floor, Finite{GreaterThan{1}},
+              "A peak counts at this many times its local floor."),
+        field("min_input_level", &O::min_input_level, Between{0, 1, true, true},
+              "Excited band: input level relative to its largest."),
+        field("floor_half_width", &O::floor_half_width, AtLeast{1},
+              "Half-width of the local floor window [DFT lines]."),
+        field("zero_padding", &O::zero_padding, AtLeast{1}, "DFT length / record length."),
+        field("search_half_width", &O::search_half_width, Finite{GreaterThan{0}},
+              "Half-width of the search around a peak [DFT lines]."),
+        field("search_points", &O::search_points, AtLeast{3},
+              "Frequencies searched around a peak."),
+        field("damping_ratios", &O::damping_ratios, Each{Between{0, 1}},
+              "Damping ratios tried (at least one)."),
+        field("trials_per_round", &O::trials_per_round, AtLeast{1},
+              "Candidate starts re-run per round."),
+        field("criterion", &O::criterion, "How candidates are compared."),
+        field("min_relative_decrease", &O::min_relative_decrease, Between{0, 1, true, false},
+              "Relative decrease of the criterion that keeps a move."),
+    };
+  }
+  /// damping_ratios is not empty.
+  void check_relations(const std::string& path) const;
   /// Throws InvalidArgument naming the first bad field, its value and the rule.
-  void validate() const;
+  void validate() const { validate_fields(*this); }
 };
 
 /// One candidate start that was re-run through the iteration.

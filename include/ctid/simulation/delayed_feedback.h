@@ -8,9 +8,12 @@
 
 #include <cstdint>
 #include <functional>
+#include <string_view>
+#include <tuple>
 
 #include <Eigen/Core>
 
+#include "ctid/core/fields.h"
 #include "ctid/core/hold.h"
 #include "ctid/core/polynomial.h"
 #include "ctid/core/transfer_function.h"
@@ -56,7 +59,14 @@ DelayedStateSpace to_delayed_state_space(const Polynomial& alpha, const Polynomi
 struct DelayedSimulationOptions {
   /// RK4 steps per sample period (more are added when Δ is shorter than a step).
   int substeps = 20;
-  void validate() const;
+
+  static constexpr std::string_view type_name = "DelayedSimulationOptions";
+  static constexpr auto fields() {
+    return std::tuple{field("substeps", &DelayedSimulationOptions::substeps,
+                            Between{1, 100000, true, true}, "RK4 steps per sample period.")};
+  }
+  /// Throws InvalidArgument naming the field, its value and the rule.
+  void validate() const { validate_fields(*this); }
 };
 
 /// Output samples y(kδ), k = 0..samples-1, for an input given as a function of time.

@@ -5,10 +5,17 @@
 // seed for std::mt19937_64, so the same seed gives the same signal.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Core>
+
+#include "ctid/core/fields.h"
 
 namespace ctid {
 
@@ -20,8 +27,25 @@ struct PrbsOptions {
   double amplitude = 1.0;           ///< levels +amplitude (bit 1) and -amplitude (bit 0)
   int samples_per_bit = 1;          ///< each bit is held this many samples
   std::uint64_t initial_state = 1;  ///< register start, 1 <= state < 2^n; shifts the sequence
-  /// Throws InvalidArgument naming the field, its value and the rule.
-  void validate() const;
+
+  static constexpr std::string_view type_name = "PrbsOptions";
+  static constexpr auto fields() {
+    using O = PrbsOptions;
+    return std::tuple{
+        field("register_length", &O::register_length, Between{2, 24, true, true},
+              "n: the bit sequence has period 2^n - 1."),
+        field("amplitude", &O::amplitude, Finite{GreaterThan{0}},
+              "Levels +amplitude (bit 1) and -amplitude (bit 0)."),
+        field("samples_per_bit", &O::samples_per_bit, AtLeast{1},
+              "Each bit is held this many samples."),
+        field("initial_state", &O::initial_state, AtLeast{1},
+              "Register start, below 2^n; shifts the sequence."),
+    };
+  }
+  /// initial_state < 2^register_length; the period fits in an int.
+  void check_relations(const std::string& path) const;
+  /// Throws InvalidArgument naming the first bad field, its value and the rule.
+  void validate() const { validate_fields(*this); }
 };
 
 /// Samples per period, (2^n - 1) * samples_per_bit.
@@ -35,6 +59,14 @@ enum class FrequencyGrid {
   odd,   ///< odd lines only (k = 1, 3, 5, ...), leaving even lines to detect nonlinearity
 };
 
+inline constexpr std::array<Enumerator<FrequencyGrid>, 2> frequency_grid_enumerators{{
+    {FrequencyGrid::full, "full", "Every DFT line in the band."},
+    {FrequencyGrid::odd, "odd", "Odd lines only, leaving even lines to detect nonlinearity."},
+}};
+constexpr std::span<const Enumerator<FrequencyGrid>> enumerators(FrequencyGrid) {
+  return frequency_grid_enumerators;
+}
+
 struct MultisineOptions {
   int period_length = 1024;    ///< N, samples per period (>= 4)
   double sample_time = 1.0;    ///< h in seconds (> 0)
@@ -44,8 +76,27 @@ struct MultisineOptions {
   int periods = 1;         ///< repetitions of the period (>= 1)
   double rms = 1.0;        ///< root mean square of the signal (> 0)
   std::uint64_t seed = 0;  ///< seeds the phases, uniform on [0, 2 pi)
-  /// Throws InvalidArgument naming the field, its value and the rule.
-  void validate() const;
+
+  static constexpr std::string_view type_name = "MultisineOptions";
+  static constexpr auto fields() {
+    using O = MultisineOptions;
+    return std::tuple{
+        field("period_length", &O::period_length, AtLeast{4}, "N, samples per period."),
+        field("sample_time", &O::sample_time, Finite{GreaterThan{0}}, "h [s]."),
+        field("min_frequency", &O::min_frequency, Finite{AtLeast{0}},
+              "Band lower edge [Hz], inclusive."),
+        field("max_frequency", &O::max_frequency, Finite{AtLeast{0}},
+              "Band upper edge [Hz], inclusive; 0: up to Nyquist."),
+        field("grid", &O::grid, "Which DFT lines of the band are excited."),
+        field("periods", &O::periods, AtLeast{1}, "Repetitions of the period."),
+        field("rms", &O::rms, Finite{GreaterThan{0}}, "Root mean square of the signal."),
+        field("seed", &O::seed, "Seeds the phases, uniform on [0, 2 pi)."),
+    };
+  }
+  /// max_frequency is 0 or >= min_frequency.
+  void check_relations(const std::string& path) const;
+  /// Throws InvalidArgument naming the first bad field, its value and the rule.
+  void validate() const { validate_fields(*this); }
 };
 
 struct Multisine {

@@ -5,16 +5,21 @@
 // Run r at size j is a pure function of (seed, j, r): see monte_carlo.h for the seed hash.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
+#include <string_view>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "ctid/core/additive_model.h"
 #include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/refined_iv/estimation_result.h"
 
@@ -31,6 +36,26 @@ enum class StudyEstimator {
   additive_srivc,    ///< additive open-loop iteration (29) (open loop only)
   additive_clsrivc,  ///< additive closed-loop iteration (29) with instrument (20)
 };
+
+inline constexpr std::array<Enumerator<StudyKind>, 2> study_kind_enumerators{{
+    {StudyKind::open_loop, "open_loop", "Section 6.1."},
+    {StudyKind::closed_loop, "closed_loop", "Section 6.2."},
+}};
+constexpr std::span<const Enumerator<StudyKind>> enumerators(StudyKind) {
+  return study_kind_enumerators;
+}
+
+inline constexpr std::array<Enumerator<StudyEstimator>, 4> study_estimator_enumerators{{
+    {StudyEstimator::srivc, "srivc", "Unfactored SRIVC (closed loop: the direct approach)."},
+    {StudyEstimator::clsrivc, "clsrivc", "Unfactored closed-loop SRIVC (closed loop only)."},
+    {StudyEstimator::additive_srivc, "additive_srivc",
+     "Additive open-loop iteration (29) (open loop only)."},
+    {StudyEstimator::additive_clsrivc, "additive_clsrivc",
+     "Additive closed-loop iteration (29) with instrument (20)."},
+}};
+constexpr std::span<const Enumerator<StudyEstimator>> enumerators(StudyEstimator) {
+  return study_estimator_enumerators;
+}
 
 /// "open-loop" / "closed-loop" and "srivc", "clsrivc", "additive_srivc", "additive_clsrivc".
 std::string to_string(StudyKind kind);
@@ -62,10 +87,34 @@ struct StudyOptions {
   /// loop: srivc, clsrivc, additive_clsrivc).
   std::vector<StudyEstimator> estimators;
 
+  static constexpr std::string_view type_name = "StudyOptions";
+  static constexpr auto fields() {
+    using O = StudyOptions;
+    return std::tuple{
+        field("kind", &O::kind, "Which Section 6 study."),
+        field("runs", &O::runs, AtLeast{1}, "Monte Carlo runs per sample size."),
+        field("sizes", &O::sizes, AtLeast{1}, "Number of log-spaced sample sizes."),
+        field("min_samples", &O::min_samples, AtLeast{50},
+              "Smallest N (enough samples for 15 parameters)."),
+        field("max_samples", &O::max_samples, AtLeast{1}, "Largest N (>= min_samples)."),
+        field("seed", &O::seed, "Study seed; run r at size j uses a hash of (seed, j, r)."),
+        field("threads", &O::threads, AtLeast{0}, "Worker threads (0: all cores)."),
+        field("max_iterations", &O::max_iterations, AtLeast{1}, "Estimator iteration limit."),
+        field("tolerance", &O::tolerance, Between{0, 1}, "Estimator tolerance."),
+        field("initial_perturbation", &O::initial_perturbation, Between{0, 1, true, false},
+              "Start at beta* (1 + U(-p, p)) elementwise."),
+        field("compute_covariance", &O::compute_covariance,
+              "Ask the estimators for covariances (standard errors, predicted MSE)."),
+        field("estimators", &O::estimators, "Estimators to run; empty: those of the study's kind."),
+    };
+  }
+
   /// The paper's study of that kind at full size.
   static StudyOptions paper(StudyKind kind);
+  /// max_samples >= min_samples; the estimators belong to the study's kind.
+  void check_relations(const std::string& path) const;
   /// Throws InvalidArgument naming the first bad field, its value and the rule.
-  void validate() const;
+  void validate() const { validate_fields(*this); }
   /// `estimators`, or the study's default set when empty.
   std::vector<StudyEstimator> active_estimators() const;
 };
