@@ -2,6 +2,7 @@
 // nonparametric FRFs (periodic averaging, Welch H1 with coherence) with resonance peaks.
 #include "common.h"
 #include "ctid/frequency/frf.h"
+#include "ctid/frequency/peaks.h"
 #include "ctid/frequency/response.h"
 #include "fields.h"
 
@@ -76,6 +77,27 @@ void bind_frequency(py::module_& m) {
       },
       py::arg("frequencies"), py::arg("response"), py::arg("options") = py::none(),
       "Resonance peaks of |G| in increasing frequency (for orders and initial modes).");
+
+  py::class_<PeriodogramPeak>(m, "PeriodogramPeak", "A periodogram peak above its local floor.")
+      .def_readonly("frequency", &PeriodogramPeak::frequency,
+                    "rad/s, by parabolic interpolation of log power.")
+      .def_readonly("ratio", &PeriodogramPeak::ratio, "Periodogram over its local floor.")
+      .def("__repr__", [](const PeriodogramPeak& p) {
+        return "PeriodogramPeak(frequency=" + std::to_string(p.frequency) +
+               ", ratio=" + std::to_string(p.ratio) + ")";
+      });
+  bind_options<PeriodogramPeakOptions>(m, "Options of periodogram_peaks.");
+  m.def(
+      "periodogram_peaks",
+      [](const Eigen::VectorXd& x, double sample_time,
+         const std::optional<PeriodogramPeakOptions>& options, const py::kwargs& kwargs) {
+        return periodogram_peaks(
+            x, sample_time,
+            options_from<PeriodogramPeakOptions>("periodogram_peaks", options, kwargs));
+      },
+      py::arg("x"), py::arg("sample_time"), py::arg("options") = py::none(),
+      "Peaks of the zero-padded periodogram of x above its running-median floor, highest "
+      "ratio first (as mode relocation finds them in a residual).");
 }
 
 }  // namespace ctid::python

@@ -7,10 +7,13 @@
 
 #include <optional>
 #include <string>
+#include <string_view>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "ctid/core/fields.h"
 #include "ctid/core/polynomial.h"
 #include "ctid/core/transfer_function.h"
 
@@ -43,6 +46,17 @@ struct SubmodelOrder {
   int n = 2;
   int m = 0;
   int integrators = 0;
+
+  static constexpr std::string_view type_name = "SubmodelOrder";
+  static constexpr auto fields() {
+    return std::tuple{
+        field("n", &SubmodelOrder::n, AtLeast{0}, "Degree of A_i (poles besides the origin)."),
+        field("m", &SubmodelOrder::m, AtLeast{0}, "Degree of B_i (zeros)."),
+        field("integrators", &SubmodelOrder::integrators, AtLeast{0},
+              "l_i, poles at the origin (the factor 1/p^l_i)."),
+    };
+  }
+  void validate() const { validate_fields(*this); }
 };
 
 class AdditiveModel {
