@@ -23,4 +23,5 @@ PYBIND11_MODULE(_ctid, m) {
   ctid::python::bind_refined_iv(m);
   ctid::python::bind_delayed_feedback(m);
   ctid::python::bind_study(m);
+  ctid::python::bind_io(m);
 }
