@@ -151,3 +151,12 @@ def test_results_have_field_reprs():
                 ctid.ModeRelocationResult, ctid.InputDelayScanResult, ctid.ResonancePeak):
         assert cls.fields, cls
         assert "__repr__" in cls.__dict__, cls
+
+
+def test_every_public_class_has_a_repr(experiment):
+    import inspect
+    for name, cls in vars(ctid).items():
+        if (inspect.isclass(cls) and not issubclass(cls, BaseException)
+                and cls.__module__.startswith("ctid")):
+            assert cls.__repr__ is not object.__repr__, name
+    assert repr(experiment["data"]).startswith("SampledData(")
