@@ -26,8 +26,7 @@ namespace ctid::io {
 /// A result read from a document, by its "type".
 using ResultDocument = std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult,
                                     ValidationReport, Frf, StudySummary>;
-// TODO(merge): delayed_feedback_result — add the delayed-feedback result type here (and in
-// result_from_json, to_json, result_document_types) once io/feedback_result_json.h is joined.
+// The delayed-feedback result joins this variant with its reader (see result_from_json).
 
 /// The "type" values result_from_json reads, in the order of ResultDocument.
 std::vector<std::string> result_document_types();
