@@ -174,39 +174,6 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
   for (const std::string& warning : r.checks.warnings) out << "warning: " << warning << "\n";
 }
 
-// What relocation tried and kept (frequencies in rad/s, as everywhere in the result).
-nlohmann::json relocation_json(const ModeRelocationResult& r, RelocationCriterion criterion) {
-  auto number = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
-  nlohmann::json trials = nlohmann::json::array();
-  for (const RelocationTrial& t : r.trials) {
-    trials.push_back({{"round", t.round},
-                      {"submodel", t.submodel},
-                      {"moved_from", number(t.moved_from)},
-                      {"peak_frequency", number(t.peak_frequency)},
-                      {"peak_to_floor", number(t.peak_to_floor)},
-                      {"start_frequency", number(t.start_frequency)},
-                      {"start_damping", number(t.start_damping)},
-                      {"start_mean_squared_error", number(t.start_mean_squared_error)},
-                      {"mean_squared_error", number(t.mean_squared_error)},
-                      {"projected_mean_squared_error", number(t.projected_mean_squared_error)},
-                      {"score", number(t.score)},
-                      {"termination", to_string(t.termination)},
-                      {"accepted", t.accepted}});
-  }
-  const char* criterion_name =
-      criterion == RelocationCriterion::output_error ? "output_error" : "projected_output_error";
-  return {{"criterion", criterion_name},
-          {"relocations", r.relocations},
-          {"rounds", r.rounds},
-          {"initial_mean_squared_error", number(r.initial_mean_squared_error)},
-          {"initial_projected_mean_squared_error", number(r.initial_projected_mean_squared_error)},
-          {"projected_mean_squared_error", number(r.projected_mean_squared_error)},
-          {"initial_score", number(r.initial_score)},
-          {"score", number(r.score)},
-          {"message", r.message},
-          {"trials", trials}};
-}
-
 void refuse_existing(const std::string& path, bool force, const std::string& flag) {
   if (path.empty() || force) return;
   if (std::filesystem::exists(path)) {
@@ -268,20 +235,10 @@ void run_fit(const FitFlags& f, const CLI::App& app) {
     document["data"] = {
         {"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}};
     if (controller) document["controller"] = io::to_json(*controller);
-    if (scanned) {
-      nlohmann::json mse = nlohmann::json::array();
-      nlohmann::json terminations = nlohmann::json::array();
-      for (std::size_t i = 0; i < scanned->delays.size(); ++i) {
-        const double e = scanned->mean_squared_errors[i];
-        mse.push_back(std::isfinite(e) ? nlohmann::json(e) : nlohmann::json(nullptr));
-        terminations.push_back(to_string(scanned->terminations[i]));
-      }
-      document["delay_scan"] = {{"delays", scanned->delays},
-                                {"mean_squared_errors", mse},
-                                {"terminations", terminations}};
-    }
+    if (scanned) document["delay_scan"] = io::delay_scan_summary_to_json(*scanned);
     if (relocated) {
-      document["mode_relocation"] = relocation_json(*relocated, options.relocation.criterion);
+      document["mode_relocation"] = io::relocation_summary_to_json(*relocated);
+      document["mode_relocation"]["criterion"] = std::string(enum_name(options.relocation.criterion));
     }
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }

@@ -18,8 +18,10 @@
 #include "ctid/core/format.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/io/csv.h"
+#include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
 #include "data_flags.h"
 #include "plot_support.h"
@@ -132,7 +134,19 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
 
   const io::CsvTable table = frf_table(frf);
   if (!f.output.empty()) {
-    io::write_csv(f.output, table, f.force ? io::Overwrite::yes : io::Overwrite::no);
+    const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
+    if (std::filesystem::path(f.output).extension() == ".json") {
+      nlohmann::json document = io::to_json(frf);
+      document["method"] = periodic ? "periodic" : "welch";
+      document["data"] = {
+          {"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}};
+      nlohmann::json listed = nlohmann::json::array();
+      for (const ResonancePeak& p : peaks) listed.push_back(io::fields_to_json(p));
+      document["peaks"] = std::move(listed);
+      io::write_json(f.output, document, overwrite);
+    } else {
+      io::write_csv(f.output, table, overwrite);
+    }
   }
   if (!f.quiet) {
     std::cout << "ctid frf: " << (periodic ? "periodic" : "Welch H1") << " on " << f.data.file
@@ -163,6 +177,7 @@ Command add_frf_command(CLI::App& parent) {
   app->footer(
       "CSV columns: frequency (rad/s), frequency_hz, magnitude_db, phase_deg, real, imag, "
       "variance (of the complex estimate) and, for Welch, coherence (squared, 0-1).\n"
+      "-o X.json writes a typed \"frf\" document instead (docs/formats.md), with the peaks.\n"
       "Exit status: 0 ran, 2 bad usage or input, 1 other error.");
   f.data.add_to(*app, "data", false);
   app->add_option("--period", f.period,
@@ -185,7 +200,8 @@ Command add_frf_command(CLI::App& parent) {
   app->add_option("--max-peaks", f.max_peaks, "Peaks: keep at most this many (0: all)")
       ->capture_default_str()
       ->group("Peaks");
-  app->add_option("--output,-o", f.output, "CSV file to write")->group("Output");
+  app->add_option("--output,-o", f.output, "CSV file to write (.json: an frf document)")
+      ->group("Output");
   app->add_option("--plot", f.plot, "Directory for frf.png (and bode.png of --model over the FRF)")
       ->group("Output");
   app->add_option("--model", f.model, "Model or result JSON drawn over the FRF in bode.png")

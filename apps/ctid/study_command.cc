@@ -1,8 +1,9 @@
 // `ctid study open-loop|closed-loop`: the Monte Carlo studies of González et al., Section 6
 // (ctid/study/paper_study.h), at the paper's size by default. Writes runs.csv (per-run
-// estimates), mse.csv (MSE per N and parameter beside the covariance prediction), trends.csv
-// and mse.png (MSE against N, log-log, by `python3 -m ctid.plot mse`; plot_support.h).
-// Existing result files are not replaced without --force.
+// estimates), mse.csv (MSE per N and parameter beside the covariance prediction), trends.csv,
+// summary.json (a study_summary document, io/report_json.h) and mse.png (MSE against N, log-log, by
+// `python3 -m ctid.plot mse`; plot_support.h). Existing result files are not replaced without
+// --force.
 // --size-index/--run-index replay one run and write only its records.
 #include <chrono>
 #include <cstdint>
@@ -16,6 +17,8 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/io/json.h"
+#include "ctid/io/report_json.h"
 #include "ctid/study/monte_carlo.h"
 #include "ctid/study/paper_study.h"
 #include "ctid/study/study_output.h"
@@ -84,7 +87,7 @@ void run_study_command(const StudyFlags& f) {
   std::filesystem::path package;
   if (draw) package = require_plotting();
   std::vector<std::string> files{"runs.csv"};
-  if (!replay) files.insert(files.end(), {"mse.csv", "trends.csv"});
+  if (!replay) files.insert(files.end(), {"mse.csv", "trends.csv", "summary.json"});
   if (draw) files.emplace_back("mse.png");
   prepare_plot_directory(folder, files, f.force, "--output");
   const StudySetup setup = study_setup(options.kind);
@@ -129,6 +132,7 @@ void run_study_command(const StudyFlags& f) {
     std::ofstream out = open_output(folder / "trends.csv");
     write_trends_csv(result, out);
   }
+  io::write_json(folder / "summary.json", io::to_json(study_summary(result)), io::Overwrite::yes);
   if (!f.quiet) {
     std::cout << "ctid study " << to_string(options.kind) << ": " << total << " cases x "
               << options.active_estimators().size() << " estimators in " << seconds << " s on "
@@ -154,8 +158,9 @@ Command add_study_command(CLI::App& parent) {
       "and the additive closed-loop estimator, all six parameters). Paper size by default.");
   app->footer(
       "Writes DIR/runs.csv (per-run estimates and standard errors), DIR/mse.csv (MSE per N and "
-      "parameter with the covariance prediction), DIR/trends.csv (log-log slopes, MSE ratios) "
-      "and DIR/mse.png. Run r at size j is a pure function of (--seed, j, r): the output does "
+      "parameter with the covariance prediction), DIR/trends.csv (log-log slopes, MSE ratios), "
+      "DIR/summary.json (a study_summary document: MSE table and trends) and DIR/mse.png. Run r at "
+      "size j is a pure function of (--seed, j, r): the output does "
       "not depend on --threads, and --size-index j --run-index r replays that run alone.\n"
       "Docs: docs/study.md. Exit status: 0 ran, 2 bad usage or input, 1 other error.");
   app->add_option("kind", f.kind, "open-loop (Section 6.1) or closed-loop (Section 6.2)")

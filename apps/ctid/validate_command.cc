@@ -15,6 +15,7 @@
 #include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/io/json.h"
+#include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
 #include "data_flags.h"
 #include "plot_support.h"
@@ -61,29 +62,10 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
   const double max_cross = report.max_cross_correlation;
 
   if (!f.output.empty()) {
-    nlohmann::json lags = nlohmann::json::array();
-    nlohmann::json values = nlohmann::json::array();
-    for (int k = -report.max_lag; k <= report.max_lag; ++k) {
-      lags.push_back(k);
-      values.push_back(report.cross_correlation(k + report.max_lag));
-    }
-    const nlohmann::json document = {
-        {"type", "validation_report"},
-        {"model_file", f.model},
-        {"data",
-         {{"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}}},
-        {"fit_percent", report.fit_percent},
-        {"mean_squared_error", report.mean_squared_error},
-        {"residual_mean", report.residual_mean},
-        {"residual_std", report.residual_std},
-        {"max_residual_autocorrelation", report.max_residual_autocorrelation},
-        {"autocorrelation_lags", {1, kMaxLag}},
-        {"residual_white", white},
-        {"max_cross_correlation", max_cross},
-        {"cross_correlation_lags", lags},
-        {"cross_correlation", values},
-        {"residual_uncorrelated_with_input", uncorrelated},
-        {"bound_99", bound}};
+    nlohmann::json document = io::to_json(report);
+    document["model_file"] = f.model;
+    document["data"] = {
+        {"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}};
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
   if (!f.quiet) {

@@ -42,3 +42,29 @@ def options_classes():
     from . import _ctid
 
     return list(_ctid._options_classes())
+def _repr_from_properties(self):
+    """Name(attribute=value, ...) over the class's read-only or read/write attributes: the
+    repr of the bound classes that do not derive theirs from a field list."""
+    names = []
+    for klass in reversed(type(self).__mro__):
+        for name, value in vars(klass).items():
+            if isinstance(value, property) and not name.startswith("_") and name not in names:
+                names.append(name)
+    shown = []
+    for name in names:
+        try:
+            shown.append(f"{name}={getattr(self, name)!r}")
+        except Exception:  # a property that cannot be read in this state is left out
+            continue
+    return f"{type(self).__name__}({', '.join(shown)})"
+
+
+def _give_every_class_a_repr():
+    from . import _ctid
+    for value in vars(_ctid).values():
+        if (isinstance(value, type) and not issubclass(value, BaseException)
+                and "__repr__" not in value.__dict__ and not hasattr(value, "__members__")):
+            value.__repr__ = _repr_from_properties
+
+
+_give_every_class_a_repr()

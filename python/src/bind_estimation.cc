@@ -13,21 +13,7 @@ void bind_estimation(py::module_& m) {
         "Exact ZOH response of the model (from rest).");
   m.def("fit_percent", &fit_percent, py::arg("measured"), py::arg("modelled"),
         "100 (1 - ||y - y_model|| / ||y - mean y||).");
-  py::class_<ValidationReport>(m, "ValidationReport", "Residual statistics of a model.")
-      .def_readonly("fit_percent", &ValidationReport::fit_percent, "Fit %.")
-      .def_readonly("mean_squared_error", &ValidationReport::mean_squared_error, "MSE.")
-      .def_readonly("residual_mean", &ValidationReport::residual_mean, "Mean residual.")
-      .def_readonly("residual_std", &ValidationReport::residual_std, "Residual std.")
-      .def_readonly("max_lag", &ValidationReport::max_lag, "Lags used.")
-      .def_readonly("residual_autocorrelation", &ValidationReport::residual_autocorrelation,
-                    "Normalised residual autocorrelation at lags 1..max_lag.")
-      .def_readonly("cross_correlation", &ValidationReport::cross_correlation,
-                    "Normalised residual-input cross-correlation at lags -max_lag..max_lag.")
-      .def_readonly("max_residual_autocorrelation", &ValidationReport::max_residual_autocorrelation,
-                    "Largest |autocorrelation| at lags 1..max_lag.")
-      .def_readonly("max_cross_correlation", &ValidationReport::max_cross_correlation,
-                    "Largest |cross-correlation| at lags -max_lag..max_lag.")
-      .def_readonly("whiteness_bound", &ValidationReport::whiteness_bound, "2.58/sqrt(N).")
+  bind_result<ValidationReport>(m, "Residual statistics of a model.")
       .def_property_readonly("residual_white", &ValidationReport::residual_white,
                              "Autocorrelation within the 99 % band.")
       .def_property_readonly("residual_uncorrelated_with_input",

@@ -24,16 +24,9 @@ void bind_frequency(py::module_& m) {
   m.def("submodel_frequency_responses", &submodel_frequency_responses, py::arg("g"),
         py::arg("omegas"), "Column i: submodel i's response (no delay factor).");
 
-  py::class_<Frf>(m, "Frf",
-                  "A nonparametric FRF on DFT lines: frequencies [rad/s], response, variance "
-                  "E|G_hat - G|^2 per line, coherence (Welch only).")
-      .def_readonly("lines", &Frf::lines, "DFT line k of each frequency.")
-      .def_readonly("frequencies", &Frf::frequencies, "2 pi k / (L h) [rad/s].")
-      .def_readonly("response", &Frf::response, "G_hat (complex).")
-      .def_readonly("variance", &Frf::variance, "Estimated variance of G_hat per line.")
-      .def_readonly("coherence", &Frf::coherence, "Squared coherence (Welch); empty otherwise.")
-      .def_readonly("averages", &Frf::averages, "Periods or segments averaged.")
-      .def_readonly("block_length", &Frf::block_length, "Samples per period or segment.");
+  bind_result<Frf>(m,
+                   "A nonparametric FRF on DFT lines: frequencies [rad/s], response, variance "
+                   "E|G_hat - G|^2 per line, coherence (Welch only).");
   bind_options<PeriodicFrfOptions>(m, "Options of periodic_frf.");
   bind_options<WelchOptions>(m, "Options of welch_frf.");
   m.def(
@@ -54,19 +47,7 @@ void bind_frequency(py::module_& m) {
       py::arg("data"), py::arg("options") = py::none(),
       "H1 FRF with Hann-windowed Welch averaging, and the coherence.");
 
-  py::class_<ResonancePeak>(m, "ResonancePeak", "A resonance peak of |G|.")
-      .def_readonly("index", &ResonancePeak::index, "Position in the FRF.")
-      .def_readonly("frequency", &ResonancePeak::frequency, "Interpolated peak [rad/s].")
-      .def_readonly("magnitude", &ResonancePeak::magnitude, "|G| at the grid maximum.")
-      .def_readonly("prominence_db", &ResonancePeak::prominence_db,
-                    "Height above the surrounding minima [dB].")
-      .def_readonly("damping_ratio", &ResonancePeak::damping_ratio,
-                    "Half-power bandwidth estimate (NaN if not measurable).")
-      .def("__repr__", [](const ResonancePeak& p) {
-        return "ResonancePeak(frequency=" + std::to_string(p.frequency) +
-               ", damping_ratio=" + std::to_string(p.damping_ratio) +
-               ", prominence_db=" + std::to_string(p.prominence_db) + ")";
-      });
+  bind_result<ResonancePeak>(m, "A resonance peak of |G|.");
   bind_options<PeakOptions>(m, "Options of resonance_peaks.");
   m.def(
       "resonance_peaks",

@@ -4,6 +4,7 @@
 #include "common.h"
 #include "ctid/study/monte_carlo.h"
 #include "ctid/study/paper_study.h"
+#include "ctid/study/study_output.h"
 #include "fields.h"
 
 namespace ctid::python {
@@ -16,13 +17,7 @@ void bind_study(py::module_& m) {
         "Independent stream of a run.");
   m.def("log_spaced_sizes", &log_spaced_sizes, py::arg("first"), py::arg("last"), py::arg("count"),
         "Rounded geometric sequence of sample sizes.");
-  py::class_<ErrorSummary>(m, "ErrorSummary", "MSE, bias and predicted MSE of one parameter.")
-      .def_readonly("runs", &ErrorSummary::runs, "Finite estimates used.")
-      .def_readonly("mean_squared_error", &ErrorSummary::mean_squared_error, "Mean e^2.")
-      .def_readonly("bias", &ErrorSummary::bias, "Mean e.")
-      .def_readonly("predicted_mean_squared_error", &ErrorSummary::predicted_mean_squared_error,
-                    "Mean predicted variance.")
-      .def_readonly("predicted_runs", &ErrorSummary::predicted_runs, "Finite predictions.");
+  bind_result<ErrorSummary>(m, "MSE, bias and predicted MSE of one parameter.");
   m.def("summarize_errors", &summarize_errors, py::arg("estimates"), py::arg("truth"),
         py::arg("predicted_variances") = Eigen::VectorXd(), "MSE summary of estimates.");
   m.def("log_log_slope", &log_log_slope, py::arg("samples"), py::arg("mse"),
@@ -47,42 +42,20 @@ void bind_study(py::module_& m) {
       .def_readonly("initial_model", &StudyRunInput::initial_model, "Start.");
   m.def("simulate_study_run", &simulate_study_run, py::arg("options"), py::arg("samples"),
         py::arg("seed"), "Simulate one run from its seed.");
-  py::class_<StudyRecord>(m, "StudyRecord", "One estimator's outcome in one run.")
-      .def_readonly("size_index", &StudyRecord::size_index, "Size index.")
-      .def_readonly("run_index", &StudyRecord::run_index, "Run index.")
-      .def_readonly("samples", &StudyRecord::samples, "N.")
-      .def_readonly("seed", &StudyRecord::seed, "Run seed.")
-      .def_readonly("estimator", &StudyRecord::estimator, "StudyEstimator.")
-      .def_readonly("termination", &StudyRecord::termination, "Termination.")
-      .def_readonly("iterations", &StudyRecord::iterations, "Iterations.")
-      .def_readonly("valid", &StudyRecord::valid, "Compared parameters formed.")
-      .def_readonly("estimate", &StudyRecord::estimate, "Compared parameters.")
-      .def_readonly("standard_error", &StudyRecord::standard_error, "Their standard errors.")
-      .def_readonly("error", &StudyRecord::error, "Message if the estimator threw.");
+  bind_result<StudyRecord>(m, "One estimator's outcome in one run.");
   m.def("compared_parameters", &compared_parameters, py::arg("kind"), py::arg("model"),
         "Compared parameters of a model in the study's structure.");
   m.def("run_study_case", &run_study_case, py::arg("options"), py::arg("size_index"),
         py::arg("run_index"), py::call_guard<py::gil_scoped_release>(),
         "Every active estimator on one run (replayable).");
-  py::class_<MseRow>(m, "MseRow", "MSE of one estimator and parameter at one N.")
-      .def_readonly("estimator", &MseRow::estimator, "StudyEstimator.")
-      .def_readonly("size_index", &MseRow::size_index, "Size index.")
-      .def_readonly("samples", &MseRow::samples, "N.")
-      .def_readonly("parameter", &MseRow::parameter, "Parameter index.")
-      .def_readonly("true_value", &MseRow::true_value, "True value.")
-      .def_readonly("mean_squared_error", &MseRow::mean_squared_error, "MSE.")
-      .def_readonly("bias", &MseRow::bias, "Bias.")
-      .def_readonly("predicted_mean_squared_error", &MseRow::predicted_mean_squared_error,
-                    "Asymptotic prediction.")
-      .def_readonly("valid_runs", &MseRow::valid_runs, "Valid runs.")
-      .def_readonly("converged_runs", &MseRow::converged_runs, "Converged runs.");
-  py::class_<StudyResult>(m, "StudyResult", "Records and MSE table of a study.")
-      .def_readonly("options", &StudyResult::options, "StudyOptions.")
-      .def_readonly("sample_sizes", &StudyResult::sample_sizes, "N per size index.")
-      .def_readonly("parameter_names", &StudyResult::parameter_names, "Names.")
-      .def_readonly("true_parameters", &StudyResult::true_parameters, "True values.")
-      .def_readonly("records", &StudyResult::records, "Per-run records.")
-      .def_readonly("mse", &StudyResult::mse, "MSE rows.");
+  bind_result<MseRow>(m, "MSE of one estimator and parameter at one N.");
+  bind_result<StudyResult>(m, "Records and MSE table of a study.");
+  bind_result<ParameterTrend>(m, "Trend of one estimator and parameter over the sample sizes.");
+  bind_result<StudySummary>(m, "What a study found: MSE table and trends (no per-run records).");
+  m.def("parameter_trends", &parameter_trends, py::arg("result"),
+        "Log-log slope, MSE over prediction and over srivc per estimator and parameter.");
+  m.def("study_summary", &study_summary, py::arg("result"),
+        "The StudySummary of a finished study (what `ctid study` writes to summary.json).");
   m.def("summarize_study", &summarize_study, py::arg("records"), py::arg("sample_sizes"),
         py::arg("estimators"), py::arg("true_parameters"), "MSE rows from records.");
   m.def(

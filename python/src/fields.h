@@ -42,6 +42,16 @@ std::string fields_repr(const py::object& self) {
   return out + ")";
 }
 
+/// Field values compared for ==: NumPy arrays by shape and elements (NaN equal to NaN, so a
+/// result read back from a document equals the one written), anything else by its own ==.
+inline bool values_equal(const py::object& a, const py::object& b) {
+  if (py::hasattr(a, "shape") || py::hasattr(b, "shape")) {
+    const py::module_ np = py::module_::import("numpy");
+    return np.attr("array_equal")(a, b, py::arg("equal_nan") = true).cast<bool>();
+  }
+  return a.equal(b);
+}
+
 template <HasFields S, class Class>
 void add_common(Class& cls) {
   const auto names = field_names<S>();
@@ -59,7 +69,7 @@ void add_common(Class& cls) {
     if (!py::isinstance(b, py::type::of(a))) return false;
     bool equal = true;
     for_each_field<S>([&](const auto& f) {
-      equal = equal && a.attr(f.name.data()).equal(b.attr(f.name.data()));
+      equal = equal && values_equal(a.attr(f.name.data()), b.attr(f.name.data()));
     });
     return equal;
   });

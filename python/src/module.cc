@@ -24,4 +24,5 @@ PYBIND11_MODULE(_ctid, m) {
   ctid::python::bind_identification(m);
   ctid::python::bind_delayed_feedback(m);
   ctid::python::bind_study(m);
+  ctid::python::bind_io(m);
 }

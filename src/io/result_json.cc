@@ -1,11 +1,13 @@
 #include "ctid/io/result_json.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <utility>
 #include <variant>
 
 #include "ctid/core/error.h"
+#include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
 
@@ -16,20 +18,6 @@ namespace {
 nlohmann::json number(double x) {
   if (!std::isfinite(x)) return nullptr;
   return x;
-}
-
-nlohmann::json vector(const Eigen::VectorXd& v) {
-  nlohmann::json array = nlohmann::json::array();
-  for (Eigen::Index i = 0; i < v.size(); ++i) array.push_back(number(v(i)));
-  return array;
-}
-
-nlohmann::json matrix(const Eigen::MatrixXd& m) {
-  nlohmann::json rows = nlohmann::json::array();
-  for (Eigen::Index i = 0; i < m.rows(); ++i) {
-    rows.push_back(vector(m.row(i).transpose()));
-  }
-  return rows;
 }
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
@@ -48,14 +36,49 @@ nlohmann::json modal_json(const ModalEstimate& mode) {
           {"gain_standard_error", number(se.gain)}};
 }
 
-nlohmann::json checks_json(const DataChecks& c) {
-  return {{"excitation_order", c.excitation_order},
-          {"excitation_order_required", c.excitation_order_required},
-          {"persistently_exciting", c.persistently_exciting},
-          {"largest_pole_frequency", number(c.largest_pole_frequency)},
-          {"nyquist_frequency", number(c.nyquist_frequency)},
-          {"sampling_rate_ok", c.sampling_rate_ok},
-          {"warnings", c.warnings}};
+// The flat layout of a mode in the document back into a ModalEstimate's fields.
+nlohmann::json modal_fields(const nlohmann::json& mode, const std::string& where) {
+  require(mode.is_object(), where, ": expected an object");
+  check_keys(mode, {"submodel"},
+             {"natural_frequency", "natural_frequency_standard_error", "natural_frequency_hz",
+              "natural_frequency_hz_standard_error", "damping_ratio",
+              "damping_ratio_standard_error", "gain", "gain_standard_error"},
+             where);
+  nlohmann::json value = nlohmann::json::object();
+  nlohmann::json error = nlohmann::json::object();
+  for (const char* name : {"natural_frequency", "damping_ratio", "gain"}) {
+    if (mode.contains(name)) value[name] = mode.at(name);
+    const std::string se = std::string(name) + "_standard_error";
+    if (mode.contains(se)) error[name] = mode.at(se);
+  }
+  nlohmann::json out = {{"value", value}, {"standard_error", error}};
+  if (mode.contains("submodel")) out["submodel"] = mode.at("submodel");
+  return out;
+}
+
+// Keys an estimation_result document holds besides the fields it writes under their own
+// name: the header, values that restate the result, renamed fields and the context that
+// `ctid fit` adds.
+const std::vector<std::string>& estimation_extra_keys() {
+  static const std::vector<std::string> keys{"type",
+                                             "version",
+                                             "converged",
+                                             "parameter_names",
+                                             "input_delay_samples",
+                                             "data_checks",
+                                             "estimator",
+                                             "loop",
+                                             "data",
+                                             "controller",
+                                             "delay_scan",
+                                             "mode_relocation"};
+  return keys;
+}
+
+const std::vector<std::string>& relocation_extra_keys() {
+  // "criterion" is written by ctid fit beside the result, which does not hold it.
+  static const std::vector<std::string> keys{"type", "version", "criterion"};
+  return keys;
 }
 
 Eigen::MatrixXd covariance_field(const nlohmann::json& value, const std::string& source,
@@ -100,42 +123,146 @@ Termination termination_from_string(const std::string& name) {
                         enum_names<Termination>() + ")");
 }
 
+void check_document(const nlohmann::json& value, std::string_view type, const std::string& source) {
+  require(value.is_object(), source, ": expected a JSON object");
+  const auto t = value.find("type");
+  require(t != value.end() && t->is_string(), source, ": \"type\" is missing; expected \"", type,
+          "\"");
+  require(t->get<std::string>() == type, source, ": \"type\" is \"", t->get<std::string>(),
+          "\"; expected \"", type, "\"");
+  const auto v = value.find("version");
+  if (v == value.end()) return;
+  require(v->is_number_integer() && v->get<long long>() == kResultDocumentVersion, source, ": ",
+          type, " version ", v->dump(), " is not one this ctid reads (", kResultDocumentVersion,
+          ")");
+}
+
+void check_keys(const nlohmann::json& value, const std::vector<std::string>& fields,
+                const std::vector<std::string>& extra, const std::string& source) {
+  for (const auto& [key, element] : value.items()) {
+    const auto known = [&](const std::vector<std::string>& names) {
+      return std::find(names.begin(), names.end(), key) != names.end();
+    };
+    if (known(fields) || known(extra)) continue;
+    std::string all;
+    for (const auto& name : fields) all += (all.empty() ? "" : ", ") + name;
+    for (const auto& name : extra) all += (all.empty() ? "" : ", ") + name;
+    throw InvalidArgument(source + ": unknown field '" + key + "'; the fields are " + all);
+  }
+}
+
+// Written from the field list (so a new field reaches the document), under the documented
+// names: "input_delay_samples" for the delay in samples ("input_delay" is the model's, in
+// seconds), "data_checks" for the checks, and modes flat with frequencies in Hz beside.
 nlohmann::json to_json(const EstimationResult& result) {
+  nlohmann::json value = fields_to_json(result);
+  value["input_delay_samples"] = value.at("input_delay");
+  value["input_delay"] = number(result.model.input_delay());
+  value["data_checks"] = value.at("checks");
+  value.erase("checks");
   nlohmann::json modes = nlohmann::json::array();
   for (const ModalEstimate& mode : result.modes) modes.push_back(modal_json(mode));
-  nlohmann::json history = nlohmann::json::array();
-  for (const IterationRecord& record : result.history) {
-    history.push_back({{"iteration", record.iteration},
-                       {"parameters", vector(record.parameters)},
-                       {"relative_change", number(record.relative_change)},
-                       {"off_diagonal_norm", number(record.off_diagonal_norm)}});
-  }
-  nlohmann::json value = {{"type", kEstimationResultType},
-                          {"model", to_json(result.model)},
-                          {"transfer_function", to_json(result.transfer_function)},
-                          {"additive_view", result.additive_view ? to_json(*result.additive_view)
-                                                                 : nlohmann::json(nullptr)},
-                          {"parameter_names", parameter_names(result.model)},
-                          {"parameters", vector(result.parameters)},
-                          {"standard_errors", vector(result.standard_errors)},
-                          {"covariance", matrix(result.covariance)},
-                          {"modes", std::move(modes)},
-                          {"termination", to_string(result.termination)},
-                          {"converged", result.converged()},
-                          {"message", result.message},
-                          {"iterations", result.iterations},
-                          {"relative_change", number(result.relative_change)},
-                          {"off_diagonal_norm", number(result.off_diagonal_norm)},
-                          {"unstable_reflections", result.unstable_reflections},
-                          {"sensitivity_fallbacks", result.sensitivity_fallbacks},
-                          {"input_delay_samples", result.input_delay},
-                          {"input_delay", number(result.model.input_delay())},
-                          {"noise_variance", number(result.noise_variance)},
-                          {"mean_squared_error", number(result.mean_squared_error)},
-                          {"fit_percent", number(result.fit_percent)},
-                          {"data_checks", checks_json(result.checks)},
-                          {"history", std::move(history)}};
+  value["modes"] = std::move(modes);
+  value["type"] = kEstimationResultType;
+  value["version"] = kResultDocumentVersion;
+  value["converged"] = result.converged();
+  value["parameter_names"] = parameter_names(result.model);
   return value;
+}
+
+EstimationResult estimation_result_from_json(const nlohmann::json& value,
+                                             const std::string& source) {
+  check_document(value, kEstimationResultType, source);
+  std::vector<std::string> fields = field_names<EstimationResult>();
+  fields.erase(std::find(fields.begin(), fields.end(), "checks"));
+  check_keys(value, fields, estimation_extra_keys(), source);
+  for (const char* key : {"model", "transfer_function"}) {
+    require(value.contains(key), source, ": ", key, ": required field is missing");
+  }
+  EstimationResult result(
+      additive_model_from_json(value.at("model"), source + ": model"),
+      transfer_function_from_json(value.at("transfer_function"), source + ": transfer_function"));
+  nlohmann::json rest = nlohmann::json::object();
+  for (const auto& [key, element] : value.items()) {
+    if (std::find(fields.begin(), fields.end(), key) != fields.end() && key != "model" &&
+        key != "transfer_function" && key != "input_delay" && key != "modes") {
+      rest[key] = element;
+    }
+  }
+  if (value.contains("input_delay_samples")) rest["input_delay"] = value.at("input_delay_samples");
+  if (value.contains("data_checks")) rest["checks"] = value.at("data_checks");
+  if (value.contains("modes")) {
+    const nlohmann::json& modes = value.at("modes");
+    require(modes.is_array(), source, ": modes: expected an array");
+    nlohmann::json converted = nlohmann::json::array();
+    for (std::size_t i = 0; i < modes.size(); ++i) {
+      converted.push_back(modal_fields(modes[i], source + ": modes[" + std::to_string(i) + "]"));
+    }
+    rest["modes"] = std::move(converted);
+  }
+  fields_from_json(rest, result, source + ": " + std::string(EstimationResult::type_name));
+  return result;
+}
+
+nlohmann::json relocation_summary_to_json(const ModeRelocationResult& result) {
+  nlohmann::json value = fields_to_json(result);
+  value.erase("estimate");
+  value["type"] = kModeRelocationResultType;
+  value["version"] = kResultDocumentVersion;
+  return value;
+}
+
+nlohmann::json to_json(const ModeRelocationResult& result) {
+  nlohmann::json value = relocation_summary_to_json(result);
+  value["estimate"] = to_json(result.estimate);
+  return value;
+}
+
+ModeRelocationResult mode_relocation_result_from_json(const nlohmann::json& value,
+                                                      EstimationResult estimate,
+                                                      const std::string& source) {
+  check_document(value, kModeRelocationResultType, source);
+  check_keys(value, field_names<ModeRelocationResult>(), relocation_extra_keys(), source);
+  ModeRelocationResult result(std::move(estimate));
+  nlohmann::json rest = value;
+  for (const char* key : {"type", "version", "criterion", "estimate"}) rest.erase(key);
+  fields_from_json(rest, result, source + ": " + std::string(ModeRelocationResult::type_name));
+  return result;
+}
+
+ModeRelocationResult mode_relocation_result_from_json(const nlohmann::json& value,
+                                                      const std::string& source) {
+  check_document(value, kModeRelocationResultType, source);
+  require(value.contains("estimate"), source, ": estimate: required field is missing");
+  return mode_relocation_result_from_json(
+      value, estimation_result_from_json(value.at("estimate"), source + ": estimate"), source);
+}
+
+nlohmann::json delay_scan_summary_to_json(const InputDelayScanResult& result) {
+  nlohmann::json value = fields_to_json(result);
+  value.erase("best");
+  return value;
+}
+
+nlohmann::json to_json(const InputDelayScanResult& result) {
+  nlohmann::json value = delay_scan_summary_to_json(result);
+  value["type"] = kInputDelayScanResultType;
+  value["version"] = kResultDocumentVersion;
+  value["best"] = to_json(result.best);
+  return value;
+}
+
+InputDelayScanResult input_delay_scan_result_from_json(const nlohmann::json& value,
+                                                       const std::string& source) {
+  check_document(value, kInputDelayScanResultType, source);
+  check_keys(value, field_names<InputDelayScanResult>(), {"type", "version"}, source);
+  require(value.contains("best"), source, ": best: required field is missing");
+  InputDelayScanResult result{
+      estimation_result_from_json(value.at("best"), source + ": best"), {}, {}, {}};
+  nlohmann::json rest = value;
+  for (const char* key : {"type", "version", "best"}) rest.erase(key);
+  fields_from_json(rest, result, source + ": " + std::string(InputDelayScanResult::type_name));
+  return result;
 }
 
 AdditiveModel as_additive_model(const TransferFunction& model) {
@@ -154,8 +281,18 @@ AdditiveModel as_additive_model(const TransferFunction& model) {
 FittedModel fitted_model_from_json(const nlohmann::json& value, const std::string& source) {
   require(value.is_object(), source, ": expected a JSON object");
   const auto type = value.find("type");
+  // The estimate inside a relocation or delay-scan document is judged as a fit result is.
+  if (type != value.end() && type->is_string() &&
+      (type->get<std::string>() == kModeRelocationResultType ||
+       type->get<std::string>() == kInputDelayScanResultType)) {
+    check_document(value, type->get<std::string>(), source);
+    const char* inner = type->get<std::string>() == kModeRelocationResultType ? "estimate" : "best";
+    require(value.contains(inner), source, ": ", inner, ": required field is missing");
+    return fitted_model_from_json(value.at(inner), source + ": " + inner);
+  }
   if (type != value.end() && type->is_string() &&
       type->get<std::string>() == kEstimationResultType) {
+    check_document(value, kEstimationResultType, source);
     const auto model = value.find("model");
     require(model != value.end(), source, ": model: required field is missing");
     FittedModel fitted{additive_model_from_json(*model, source + ": model"), {}};

@@ -132,4 +132,18 @@ void write_trends_csv(const StudyResult& result, std::ostream& out) {
   out.precision(precision);
 }
 
+StudySummary study_summary(const StudyResult& result) {
+  StudySummary summary;
+  summary.kind = result.options.kind;
+  summary.estimators = result.options.active_estimators();
+  summary.runs = result.options.runs;
+  summary.seed = result.options.seed;
+  summary.sample_sizes = result.sample_sizes;
+  summary.parameter_names = result.parameter_names;
+  summary.true_parameters = result.true_parameters;
+  summary.mse = result.mse;
+  summary.trends = parameter_trends(result);
+  return summary;
+}
+
 }  // namespace ctid

@@ -16,6 +16,7 @@
 #include "ctid/io/file.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/result_json.h"
 
 namespace ctid::cli {
 namespace {
@@ -233,6 +234,13 @@ TEST_F(FitCommand, RelocateModesFindsAWeakModeTheStartMissed) {
   int accepted = 0;
   for (const auto& t : report.at("trials")) accepted += t.at("accepted").get<bool>() ? 1 : 0;
   EXPECT_EQ(accepted, report.at("relocations").get<int>());
+  // A typed sub-document, read back with the enclosing estimate.
+  EXPECT_EQ(report.at("type"), "mode_relocation_result");
+  const ModeRelocationResult back = io::mode_relocation_result_from_json(
+      report, io::estimation_result_from_json(j, "r.json"), "r.json");
+  EXPECT_EQ(back.relocations, report.at("relocations").get<int>());
+  EXPECT_EQ(back.trials.size(), report.at("trials").size());
+  EXPECT_EQ(back.estimate.termination, Termination::converged);
   EXPECT_THAT(r.out, HasSubstr("mode relocation: "));
   // Only additive, open-loop fits can relocate (identify() checks it, naming the option).
   expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--zeros", "0", "--relocate-modes"}),

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <numbers>
+#include <variant>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -15,6 +16,8 @@
 
 #include "cli/run_ctid.h"
 #include "ctid/io/csv.h"
+#include "ctid/io/documents.h"
+#include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
 #include "ctid/simulation/discretization.h"
 
@@ -100,6 +103,25 @@ TEST_F(FrfCommand, WelchWritesCoherence) {
   std::sort(band.begin(), band.end());
   EXPECT_GT(band[band.size() / 2], 0.99);
   EXPECT_GT(band.front(), 0.8);
+}
+
+TEST_F(FrfCommand, JsonOutputIsAnFrfDocumentWithTheCsvValues) {
+  ASSERT_EQ(ctid({"frf", "d.csv", "--segment-length", "2048", "-o", "w.csv", "-q"}).status, 0);
+  const auto r = ctid({"frf", "d.csv", "--segment-length", "2048", "-o", "w.json", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const io::ResultDocument read = io::read_result(path("w.json"));
+  ASSERT_TRUE(std::holds_alternative<Frf>(read));
+  const Frf& frf = std::get<Frf>(read);
+  const io::CsvTable t = io::read_csv(path("w.csv"));
+  ASSERT_EQ(frf.frequencies.size(), t.rows());
+  EXPECT_EQ(frf.frequencies, t.column("frequency"));
+  EXPECT_EQ(frf.response.real(), t.column("real"));
+  EXPECT_EQ(frf.response.imag(), t.column("imag"));
+  EXPECT_EQ(frf.coherence, t.column("coherence"));
+  EXPECT_EQ(frf.block_length, 2048);
+  const nlohmann::json j = io::read_json(path("w.json"));
+  EXPECT_EQ(j.at("method"), "welch");
+  EXPECT_TRUE(j.at("peaks").is_array());
 }
 
 TEST_F(FrfCommand, BadInputExitsTwoWithOneLine) {

@@ -2,12 +2,14 @@
 // replayed run equal to its row in runs.csv, thread count not changing the result, results
 // never replaced without --force, bad flags exiting 2 with one line.
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "cli/run_ctid.h"
+#include "ctid/io/documents.h"
 
 namespace ctid::cli {
 namespace {
@@ -55,6 +57,12 @@ TEST_F(StudyCommand, WritesItsFilesAndReplaysOneRunExactly) {
   EXPECT_EQ(rows("runs.csv"), 2 * 3 * 2);  // sizes x runs x estimators
   EXPECT_EQ(rows("mse.csv"), 2 * 6 * 2);   // sizes x parameters x estimators
   EXPECT_EQ(rows("trends.csv"), 6 * 2);
+  // The summary document holds the MSE table and the trends.
+  const io::ResultDocument summary = io::read_result(path("s") / "summary.json");
+  ASSERT_TRUE(std::holds_alternative<StudySummary>(summary));
+  EXPECT_EQ(std::get<StudySummary>(summary).mse.size(), 2u * 6u * 2u);
+  EXPECT_EQ(std::get<StudySummary>(summary).trends.size(), 6u * 2u);
+  EXPECT_EQ(std::get<StudySummary>(summary).kind, StudyKind::closed_loop);
   // One thread gives the same bytes.
   ASSERT_EQ(tiny("serial", {"--threads", "1"}).status, 0);
   EXPECT_EQ(testing::slurp(path("serial") / "runs.csv"), testing::slurp(path("s") / "runs.csv"));

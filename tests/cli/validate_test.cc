@@ -12,6 +12,7 @@
 #include "ctid/io/csv.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/report_json.h"
 
 namespace ctid::cli {
 namespace {
@@ -53,6 +54,12 @@ TEST_F(ValidateCommand, FittedModelFitsNoiseFreeDataToAHundredPercent) {
   const auto r = ctid({"validate", "r.json", "v.csv", "-o", "report.json"});
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json j = report("report.json");
+  EXPECT_EQ(j.at("type"), "validation_report");
+  EXPECT_EQ(j.at("version"), 1);
+  const ValidationReport read = io::validation_report_from_json(j, "report.json");
+  EXPECT_EQ(read.max_lag, 20);
+  EXPECT_EQ(read.residual_autocorrelation.size(), 20);
+  EXPECT_EQ(read.fit_percent, j.at("fit_percent").get<double>());
   EXPECT_GT(j.at("fit_percent").get<double>(), 99.9999);
   EXPECT_LT(j.at("residual_std").get<double>(), 1e-6);
   EXPECT_EQ(j.at("data").at("samples"), 3000);

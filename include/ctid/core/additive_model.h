@@ -39,6 +39,16 @@ struct ModalParameters {
   double natural_frequency = 0.0;
   double damping_ratio = 0.0;
   double gain = 0.0;
+
+  static constexpr std::string_view type_name = "ModalParameters";
+  static constexpr auto fields() {
+    using S = ModalParameters;
+    return std::tuple{
+        field("natural_frequency", &S::natural_frequency, "Natural frequency w_n [rad/s]."),
+        field("damping_ratio", &S::damping_ratio, "Damping ratio zeta."),
+        field("gain", &S::gain, "Static (modal) gain B(0)."),
+    };
+  }
 };
 
 /// How a submodel structure is asked for: orders (n_i, m_i) and poles at the origin.

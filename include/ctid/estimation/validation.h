@@ -3,9 +3,13 @@
 // model's exact ZOH response, fit %, persistency of excitation and the sampling-rate rule.
 #pragma once
 
+#include <string_view>
+#include <tuple>
+
 #include <Eigen/Core>
 
 #include "ctid/core/additive_model.h"
+#include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
 
 namespace ctid {
@@ -36,6 +40,27 @@ struct ValidationReport {
   double whiteness_bound = 0.0;  ///< 2.58/sqrt(N)
   bool residual_white() const { return max_residual_autocorrelation <= whiteness_bound; }
   bool residual_uncorrelated_with_input() const { return max_cross_correlation <= whiteness_bound; }
+
+  static constexpr std::string_view type_name = "ValidationReport";
+  static constexpr auto fields() {
+    using S = ValidationReport;
+    return std::tuple{
+        field("fit_percent", &S::fit_percent, "100 (1 - ||y - y_model|| / ||y - mean(y)||)."),
+        field("mean_squared_error", &S::mean_squared_error, "Mean squared residual."),
+        field("residual_mean", &S::residual_mean, "Mean of the residual."),
+        field("residual_std", &S::residual_std, "Standard deviation of the residual."),
+        field("max_lag", &S::max_lag, "Lags used: min(max_lag asked, N - 1)."),
+        field("residual_autocorrelation", &S::residual_autocorrelation,
+              "Normalised residual autocorrelation r_ee at lags 1..max_lag."),
+        field("cross_correlation", &S::cross_correlation,
+              "Normalised residual-input cross-correlation r_eu at lags -max_lag..max_lag."),
+        field("max_residual_autocorrelation", &S::max_residual_autocorrelation,
+              "Largest |r_ee| at lags 1..max_lag."),
+        field("max_cross_correlation", &S::max_cross_correlation,
+              "Largest |r_eu| at lags -max_lag..max_lag."),
+        field("whiteness_bound", &S::whiteness_bound, "The 99 % band 2.58/sqrt(N)."),
+    };
+  }
 };
 /// max_lag >= 1; 20 by default.
 ValidationReport validate_model(const AdditiveModel& model, const SampledData& data,

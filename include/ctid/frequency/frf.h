@@ -28,6 +28,19 @@ struct Frf {
   Eigen::VectorXd coherence;    ///< Welch only: squared coherence in [0, 1]; empty otherwise
   int averages = 0;             ///< periods (periodic) or segments (Welch) averaged
   int block_length = 0;         ///< L: samples per period or per segment
+
+  static constexpr std::string_view type_name = "Frf";
+  static constexpr auto fields() {
+    return std::tuple{
+        field("lines", &Frf::lines, "DFT line k of each frequency (of one period / segment)."),
+        field("frequencies", &Frf::frequencies, "2 pi k / (L h) [rad/s], increasing."),
+        field("response", &Frf::response, "G_hat at each frequency (complex)."),
+        field("variance", &Frf::variance, "Estimated variance E|G_hat - G|^2 per line."),
+        field("coherence", &Frf::coherence, "Welch only: squared coherence; empty otherwise."),
+        field("averages", &Frf::averages, "Periods (periodic) or segments (Welch) averaged."),
+        field("block_length", &Frf::block_length, "L: samples per period or per segment."),
+    };
+  }
 };
 
 struct PeriodicFrfOptions {
@@ -103,6 +116,20 @@ struct ResonancePeak {
   /// Half-power bandwidth estimate (w2 - w1) / (2 w_peak); NaN when |G| does not fall to
   /// |G_peak| / sqrt(2) on both sides within the grid.
   double damping_ratio = 0.0;
+
+  static constexpr std::string_view type_name = "ResonancePeak";
+  static constexpr auto fields() {
+    using S = ResonancePeak;
+    return std::tuple{
+        field("index", &S::index, "Position in the FRF's vectors."),
+        field("frequency", &S::frequency, "Interpolated peak frequency [rad/s]."),
+        field("magnitude", &S::magnitude, "|G| at the grid maximum."),
+        field("prominence_db", &S::prominence_db,
+              "Height above the higher of the two surrounding minima [dB]."),
+        field("damping_ratio", &S::damping_ratio,
+              "Half-power bandwidth estimate (NaN if not measurable)."),
+    };
+  }
 };
 
 struct PeakOptions {

@@ -3,7 +3,8 @@
 // defaults (a missing key keeps its default), rejecting unknown keys and values of the wrong
 // type with the source and the field's full path, then validates. Numbers are written with
 // full precision (they read back bit-identical); a non-finite double is written as null and
-// read back as NaN; enumerations by name; vectors, optionals and nested structs recursively.
+// read back as NaN; a complex number as [real, imag]; enumerations by name; vectors, optionals
+// and nested structs recursively.
 // Other types (models, transfer functions) are written by an overload
 // `nlohmann::json to_json_value(const T&)` and read by `T from_json_value(const
 // nlohmann::json&, std::type_identity<T>, const std::string& where)`, both found by
@@ -11,6 +12,7 @@
 #pragma once
 
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <optional>
 #include <string>
@@ -31,6 +33,11 @@ template <HasFields S>
 void fields_from_json(const nlohmann::json& value, S& object, const std::string& where);
 
 namespace internal {
+
+template <class T>
+struct is_complex : std::false_type {};
+template <class T>
+struct is_complex<std::complex<T>> : std::true_type {};
 
 inline std::string join_names(const std::vector<std::string>& names) {
   std::string out;
@@ -56,15 +63,18 @@ nlohmann::json value_json(const T& value) {
     return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
   } else if constexpr (std::is_same_v<T, std::string>) {
     return value;
+  } else if constexpr (is_complex<T>::value) {
+    return nlohmann::json::array({value_json(value.real()), value_json(value.imag())});
   } else if constexpr (std::is_base_of_v<Eigen::MatrixBase<T>, T>) {
+    using Scalar = typename T::Scalar;
     nlohmann::json out = nlohmann::json::array();
     if (value.cols() == 1 && T::ColsAtCompileTime == 1) {
-      for (Eigen::Index i = 0; i < value.size(); ++i) out.push_back(value_json(double(value(i))));
+      for (Eigen::Index i = 0; i < value.size(); ++i) out.push_back(value_json(Scalar(value(i))));
     } else {
       for (Eigen::Index r = 0; r < value.rows(); ++r) {
         nlohmann::json row = nlohmann::json::array();
         for (Eigen::Index c = 0; c < value.cols(); ++c)
-          row.push_back(value_json(double(value(r, c))));
+          row.push_back(value_json(Scalar(value(r, c))));
         out.push_back(std::move(row));
       }
     }
@@ -84,6 +94,19 @@ inline double number_json(const nlohmann::json& value, const std::string& where)
   if (value.is_null()) return std::numeric_limits<double>::quiet_NaN();
   if (!value.is_number()) wrong_type(where, "a number", value);
   return value.get<double>();
+}
+
+/// A double, or a complex number written as [real, imag].
+template <class Scalar>
+Scalar scalar_json(const nlohmann::json& value, const std::string& where) {
+  if constexpr (is_complex<Scalar>::value) {
+    if (!value.is_array() || value.size() != 2) {
+      throw InvalidArgument(where + ": expected [real, imag]");
+    }
+    return Scalar(number_json(value[0], where + "[0]"), number_json(value[1], where + "[1]"));
+  } else {
+    return static_cast<Scalar>(number_json(value, where));
+  }
 }
 
 template <class T>
@@ -134,6 +157,16 @@ void value_from_json(const nlohmann::json& value, T& out, const std::string& whe
   } else if constexpr (std::is_same_v<T, bool>) {
     if (!value.is_boolean()) wrong_type(where, "true or false", value);
     out = value.get<bool>();
+  } else if constexpr (std::is_integral_v<T> && std::is_unsigned_v<T>) {
+    if (!value.is_number_integer()) wrong_type(where, "an integer", value);
+    if (!value.is_number_unsigned()) {
+      throw InvalidArgument(where + ": " + value.dump() + " is out of range");
+    }
+    const auto wide = value.get<unsigned long long>();
+    if (wide > static_cast<unsigned long long>(std::numeric_limits<T>::max())) {
+      throw InvalidArgument(where + ": " + std::to_string(wide) + " is out of range");
+    }
+    out = static_cast<T>(wide);
   } else if constexpr (std::is_integral_v<T>) {
     if (!value.is_number_integer()) wrong_type(where, "an integer", value);
     const auto wide = value.get<long long>();
@@ -148,13 +181,16 @@ void value_from_json(const nlohmann::json& value, T& out, const std::string& whe
   } else if constexpr (std::is_same_v<T, std::string>) {
     if (!value.is_string()) wrong_type(where, "a string", value);
     out = value.get<std::string>();
+  } else if constexpr (is_complex<T>::value) {
+    out = scalar_json<T>(value, where);
   } else if constexpr (std::is_base_of_v<Eigen::MatrixBase<T>, T>) {
+    using Scalar = typename T::Scalar;
     if (!value.is_array()) wrong_type(where, "an array", value);
     if (T::ColsAtCompileTime == 1) {
       out.resize(static_cast<Eigen::Index>(value.size()), 1);
       for (std::size_t i = 0; i < value.size(); ++i) {
         out(static_cast<Eigen::Index>(i)) =
-            number_json(value[i], where + "[" + std::to_string(i) + "]");
+            scalar_json<Scalar>(value[i], where + "[" + std::to_string(i) + "]");
       }
     } else {
       const auto rows = static_cast<Eigen::Index>(value.size());
@@ -168,8 +204,8 @@ void value_from_json(const nlohmann::json& value, T& out, const std::string& whe
                                 " numbers");
         }
         for (Eigen::Index c = 0; c < cols; ++c) {
-          out(r, c) = number_json(row[static_cast<std::size_t>(c)],
-                                  row_where + "[" + std::to_string(c) + "]");
+          out(r, c) = scalar_json<Scalar>(row[static_cast<std::size_t>(c)],
+                                          row_where + "[" + std::to_string(c) + "]");
         }
       }
     }

@@ -6,12 +6,15 @@
 
 #include <optional>
 #include <string>
+#include <string_view>
+#include <tuple>
 #include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "ctid/core/additive_model.h"
+#include "ctid/core/fields.h"
 #include "ctid/core/transfer_function.h"
 #include "ctid/estimation/termination.h"
 
@@ -23,6 +26,17 @@ struct ModalEstimate {
   int submodel = 0;  ///< index in the model's additive view
   ModalParameters value;
   ModalParameters standard_error;
+
+  static constexpr std::string_view type_name = "ModalEstimate";
+  static constexpr auto fields() {
+    using S = ModalEstimate;
+    return std::tuple{
+        field("submodel", &S::submodel, "Index in the model's additive view."),
+        field("value", &S::value, "ModalParameters of the mode."),
+        field("standard_error", &S::standard_error,
+              "Delta-method standard errors (NaN where no covariance is available)."),
+    };
+  }
 };
 
 /// One iteration of (29), recorded when RefinedIvOptions::record_history is set.
@@ -31,6 +45,18 @@ struct IterationRecord {
   Eigen::VectorXd parameters;      ///< beta after this iteration
   double relative_change = 0.0;    ///< ||beta_{j+1} - beta_j|| / ||beta_j||
   double off_diagonal_norm = 0.0;  ///< Lemma 4.4: ||off-block-diagonal part|| / ||beta||
+
+  static constexpr std::string_view type_name = "IterationRecord";
+  static constexpr auto fields() {
+    using S = IterationRecord;
+    return std::tuple{
+        field("iteration", &S::iteration, "Index of the iteration."),
+        field("parameters", &S::parameters, "beta after this iteration."),
+        field("relative_change", &S::relative_change, "||beta_{j+1} - beta_j|| / ||beta_j||."),
+        field("off_diagonal_norm", &S::off_diagonal_norm,
+              "Lemma 4.4: ||off-block-diagonal part|| / ||beta||."),
+    };
+  }
 };
 
 /// Checks of the paper's assumptions on the data (Assumptions 1 and 4).
@@ -48,6 +74,23 @@ struct DataChecks {
   bool sampling_rate_ok = true;
   /// One sentence per failed check.
   std::vector<std::string> warnings;
+
+  static constexpr std::string_view type_name = "DataChecks";
+  static constexpr auto fields() {
+    using S = DataChecks;
+    return std::tuple{
+        field("excitation_order", &S::excitation_order,
+              "Largest order of persistent excitation seen (up to the required one)."),
+        field("excitation_order_required", &S::excitation_order_required,
+              "2 n open loop, 2 n + n_c closed loop."),
+        field("persistently_exciting", &S::persistently_exciting, "Assumption 1 met."),
+        field("largest_pole_frequency", &S::largest_pole_frequency,
+              "Largest |imaginary part| of the estimated poles [rad/s]."),
+        field("nyquist_frequency", &S::nyquist_frequency, "pi/h [rad/s]."),
+        field("sampling_rate_ok", &S::sampling_rate_ok, "Assumption 4 met."),
+        field("warnings", &S::warnings, "One sentence per failed check."),
+    };
+  }
 };
 
 /// Derives termination, message and iterations (the iteration count of (29)) from Outcome.
@@ -83,6 +126,42 @@ struct EstimationResult : Outcome {
 
   DataChecks checks;
   std::vector<IterationRecord> history;
+
+  static constexpr std::string_view type_name = "EstimationResult";
+  static constexpr auto fields() {
+    using S = EstimationResult;
+    return join_fields(
+        Outcome::fields(),
+        std::tuple{
+            field("model", &S::model, "The estimated AdditiveModel (input delay in seconds)."),
+            field("transfer_function", &S::transfer_function, "The same model unfactored."),
+            field("additive_view", &S::additive_view,
+                  "Partial-fraction view of an unfactored estimate, or none."),
+            field("parameters", &S::parameters, "beta, stacked theta_i (eq. 3)."),
+            field("covariance", &S::covariance,
+                  "Covariance of beta (already divided by N); empty if unknown."),
+            field("standard_errors", &S::standard_errors, "sqrt of its diagonal."),
+            field("modes", &S::modes, "ModalEstimate of every second-order mode."),
+            field("relative_change", &S::relative_change, "At the last iteration."),
+            field("off_diagonal_norm", &S::off_diagonal_norm,
+                  "Lemma 4.4 at the last iteration (0 for K = 1)."),
+            field("unstable_reflections", &S::unstable_reflections,
+                  "Denominators reflected into the left half-plane."),
+            field("sensitivity_fallbacks", &S::sensitivity_fallbacks,
+                  "Closed loop: S_uo r reused because the loop was unstable."),
+            field("step_halvings", &S::step_halvings,
+                  "Steps of (29) halved by RefinedIvOptions.step_control."),
+            field("input_delay", &S::input_delay, "Input delay [samples]."),
+            field("noise_variance", &S::noise_variance,
+                  "Sum of squared residuals / (N - parameters)."),
+            field("mean_squared_error", &S::mean_squared_error,
+                  "Sum of squared residuals / N (output error)."),
+            field("fit_percent", &S::fit_percent, "100 (1 - ||y - y_model|| / ||y - mean(y)||)."),
+            field("checks", &S::checks, "DataChecks of Assumptions 1 and 4."),
+            field("history", &S::history,
+                  "IterationRecord per iteration (RefinedIvOptions.record_history)."),
+        });
+  }
 };
 
 }  // namespace ctid

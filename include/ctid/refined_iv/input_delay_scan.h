@@ -4,6 +4,8 @@
 #pragma once
 
 #include <functional>
+#include <string_view>
+#include <tuple>
 #include <vector>
 
 #include "ctid/core/additive_model.h"
@@ -18,6 +20,19 @@ struct InputDelayScanResult {
   std::vector<int> delays;
   std::vector<double> mean_squared_errors;  ///< per delay; +inf where the estimator threw
   std::vector<Termination> terminations;    ///< per delay (not_run where the estimator refused it)
+
+  static constexpr std::string_view type_name = "InputDelayScanResult";
+  static constexpr auto fields() {
+    using S = InputDelayScanResult;
+    return std::tuple{
+        field("best", &S::best, "The estimate at the delay with the smallest output error."),
+        field("delays", &S::delays, "Delays tried [samples]."),
+        field("mean_squared_errors", &S::mean_squared_errors,
+              "Output-error MSE per delay (inf where the estimator refused it)."),
+        field("terminations", &S::terminations,
+              "Termination per delay (not_run where the estimator refused it)."),
+    };
+  }
 };
 
 /// Calls `estimate(delay)` for delay = min_delay..max_delay. Estimates that did not converge

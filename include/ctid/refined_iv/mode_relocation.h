@@ -128,6 +128,29 @@ struct RelocationTrial {
   double score = 0.0;  ///< the criterion's value for this trial (see RelocationCriterion)
   Termination termination = Termination::iteration_limit;
   bool accepted = false;
+
+  static constexpr std::string_view type_name = "RelocationTrial";
+  static constexpr auto fields() {
+    using S = RelocationTrial;
+    return std::tuple{
+        field("round", &S::round, "Round (0 for the first)."),
+        field("submodel", &S::submodel, "Index of the submodel that was moved."),
+        field("moved_from", &S::moved_from, "Its natural frequency before the move [rad/s]."),
+        field("peak_frequency", &S::peak_frequency, "The residual peak [rad/s]."),
+        field("peak_to_floor", &S::peak_to_floor, "Its periodogram over the local floor."),
+        field("start_frequency", &S::start_frequency,
+              "Natural frequency of the start after the search [rad/s]."),
+        field("start_damping", &S::start_damping, "Damping ratio of the start."),
+        field("start_mean_squared_error", &S::start_mean_squared_error,
+              "Least-squares output error of the start."),
+        field("mean_squared_error", &S::mean_squared_error, "Output error after the iteration."),
+        field("projected_mean_squared_error", &S::projected_mean_squared_error,
+              "The same with the numerators re-fitted."),
+        field("score", &S::score, "The criterion's value for this trial."),
+        field("termination", &S::termination, "How the iteration from this start stopped."),
+        field("accepted", &S::accepted, "The move was kept."),
+    };
+  }
 };
 
 struct ModeRelocationResult {
@@ -144,6 +167,26 @@ struct ModeRelocationResult {
   int relocations = 0;                  ///< moves kept
   std::vector<RelocationTrial> trials;  ///< every re-run, in order
   std::string message;                  ///< one sentence: what was tried and kept
+
+  static constexpr std::string_view type_name = "ModeRelocationResult";
+  static constexpr auto fields() {
+    using S = ModeRelocationResult;
+    return std::tuple{
+        field("estimate", &S::estimate, "The final EstimationResult."),
+        field("initial_mean_squared_error", &S::initial_mean_squared_error,
+              "Output error of the plain estimate, before any move."),
+        field("initial_projected_mean_squared_error", &S::initial_projected_mean_squared_error,
+              "The same with the numerators re-fitted."),
+        field("projected_mean_squared_error", &S::projected_mean_squared_error,
+              "Of the final estimate, numerators re-fitted."),
+        field("initial_score", &S::initial_score, "The criterion's value for the plain estimate."),
+        field("score", &S::score, "The criterion's value for the kept one (never larger)."),
+        field("rounds", &S::rounds, "Rounds that looked for peaks."),
+        field("relocations", &S::relocations, "Moves kept."),
+        field("trials", &S::trials, "Every re-run, in order."),
+        field("message", &S::message, "One sentence: what was tried and kept."),
+    };
+  }
 };
 
 /// additive_srivc (open loop, options.input_delay fixed), then up to max_relocations rounds

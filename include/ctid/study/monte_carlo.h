@@ -8,9 +8,13 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <string_view>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Core>
+
+#include "ctid/core/fields.h"
 
 namespace ctid {
 
@@ -50,6 +54,19 @@ struct ErrorSummary {
   /// covariance prediction of the MSE, whose bias part vanishes asymptotically.
   double predicted_mean_squared_error = std::numeric_limits<double>::quiet_NaN();
   int predicted_runs = 0;  ///< finite predicted variances used
+
+  static constexpr std::string_view type_name = "ErrorSummary";
+  static constexpr auto fields() {
+    using S = ErrorSummary;
+    return std::tuple{
+        field("runs", &S::runs, "Finite estimates used."),
+        field("mean_squared_error", &S::mean_squared_error, "Mean e_r^2."),
+        field("bias", &S::bias, "Mean e_r."),
+        field("predicted_mean_squared_error", &S::predicted_mean_squared_error,
+              "Mean of the finite predicted variances (NaN if none)."),
+        field("predicted_runs", &S::predicted_runs, "Finite predicted variances used."),
+    };
+  }
 };
 
 /// Summary of `estimates` against `truth`; non-finite estimates are skipped, as are

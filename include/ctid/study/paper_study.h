@@ -165,6 +165,25 @@ struct StudyRecord {
   /// Non-empty if the estimator threw (InvalidArgument on data it should accept): the
   /// message, so the run can be replayed and reported; the study goes on.
   std::string error;
+
+  static constexpr std::string_view type_name = "StudyRecord";
+  static constexpr auto fields() {
+    using S = StudyRecord;
+    return std::tuple{
+        field("size_index", &S::size_index, "Index of the sample size."),
+        field("run_index", &S::run_index, "Index of the run."),
+        field("samples", &S::samples, "N."),
+        field("seed", &S::seed, "The run's seed."),
+        field("estimator", &S::estimator, "StudyEstimator."),
+        field("termination", &S::termination, "How the estimator stopped."),
+        field("iterations", &S::iterations, "Iterations run."),
+        field("valid", &S::valid, "The compared parameters could be formed."),
+        field("estimate", &S::estimate, "The compared parameters (NaN unless valid)."),
+        field("standard_error", &S::standard_error,
+              "Their delta-method standard errors (NaN without covariance)."),
+        field("error", &S::error, "The message if the estimator threw, else empty."),
+    };
+  }
 };
 
 /// Compared parameters of a model in the study's structure (K second-order modes sorted as
@@ -189,6 +208,24 @@ struct MseRow {
   double predicted_mean_squared_error = 0.0;
   int valid_runs = 0;
   int converged_runs = 0;
+
+  static constexpr std::string_view type_name = "MseRow";
+  static constexpr auto fields() {
+    using S = MseRow;
+    return std::tuple{
+        field("estimator", &S::estimator, "StudyEstimator."),
+        field("size_index", &S::size_index, "Index of the sample size."),
+        field("samples", &S::samples, "N."),
+        field("parameter", &S::parameter, "Index of the compared parameter."),
+        field("true_value", &S::true_value, "Its true value."),
+        field("mean_squared_error", &S::mean_squared_error, "MSE over the valid runs."),
+        field("bias", &S::bias, "Mean error over the valid runs."),
+        field("predicted_mean_squared_error", &S::predicted_mean_squared_error,
+              "Mean squared reported standard error (NaN without covariance)."),
+        field("valid_runs", &S::valid_runs, "Runs with a valid estimate."),
+        field("converged_runs", &S::converged_runs, "Runs that converged."),
+    };
+  }
 };
 
 struct StudyResult {
@@ -200,6 +237,19 @@ struct StudyResult {
   std::vector<StudyRecord> records;
   /// Ordered by estimator, then size index, then parameter.
   std::vector<MseRow> mse;
+
+  static constexpr std::string_view type_name = "StudyResult";
+  static constexpr auto fields() {
+    using S = StudyResult;
+    return std::tuple{
+        field("options", &S::options, "The StudyOptions that were run."),
+        field("sample_sizes", &S::sample_sizes, "N per size index."),
+        field("parameter_names", &S::parameter_names, "Names of the compared parameters."),
+        field("true_parameters", &S::true_parameters, "Their true values."),
+        field("records", &S::records, "StudyRecord per size, run and estimator (in that order)."),
+        field("mse", &S::mse, "MseRow per estimator, size and parameter (in that order)."),
+    };
+  }
 };
 
 /// MSE rows from records (any order) for the given sizes and estimators.

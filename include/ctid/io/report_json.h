@@ -1,0 +1,43 @@
+// Documents of the analyses around an estimate (docs/formats.md): the residual tests of a
+// model on data (`ctid validate -o`), a nonparametric FRF (`ctid frf -o X.json`) and the
+// summary of a Section 6 study of González et al. (`ctid study`). Each is a typed, versioned
+// JSON object written from its struct's field list and read back bit for bit (NaN as null).
+#pragma once
+
+#include <string>
+#include <type_traits>
+
+#include <nlohmann/json.hpp>
+
+#include "ctid/estimation/validation.h"
+#include "ctid/frequency/frf.h"
+#include "ctid/study/paper_study.h"
+#include "ctid/study/study_output.h"
+
+namespace ctid::io {
+
+/// The "type" values of these documents.
+inline constexpr const char* kValidationReportType = "validation_report";
+inline constexpr const char* kFrfType = "frf";
+inline constexpr const char* kStudySummaryType = "study_summary";
+
+/// {"type": "validation_report", "version": 1, <fields>} with, restating them for readers,
+/// "autocorrelation_lags" [1, max_lag], "cross_correlation_lags" (-max_lag..max_lag),
+/// "residual_white", "residual_uncorrelated_with_input" and "bound_99" (= whiteness_bound).
+nlohmann::json to_json(const ValidationReport& report);
+/// Reads it back; the restated keys and the context `ctid validate` writes ("model_file",
+/// "data") are accepted and not read.
+ValidationReport validation_report_from_json(const nlohmann::json& value,
+                                             const std::string& source);
+
+/// {"type": "frf", "version": 1, <fields>}, the complex response as [real, imag] pairs.
+nlohmann::json to_json(const Frf& frf);
+/// Reads it back; the context `ctid frf` writes ("method", "data", "peaks") is accepted and
+/// not read.
+Frf frf_from_json(const nlohmann::json& value, const std::string& source);
+
+/// {"type": "study_summary", "version": 1, <fields>}.
+nlohmann::json to_json(const StudySummary& summary);
+StudySummary study_summary_from_json(const nlohmann::json& value, const std::string& source);
+
+}  // namespace ctid::io

@@ -1,0 +1,54 @@
+// Python bindings of the result documents (io/documents.h): ctid.read_result(path) returns the
+// result a document holds as the Python class of its C++ type; ctid.result_to_json(result)
+// and ctid.write_result(path, result) write one.
+#include <filesystem>
+#include <variant>
+
+#include <pybind11/stl/filesystem.h>
+
+#include "common.h"
+#include "ctid/io/documents.h"
+#include "ctid/io/file.h"
+
+namespace ctid::python {
+namespace {
+
+// One overload per result type (a variant argument would need a default-constructible first
+// alternative, which EstimationResult is not).
+template <class... T>
+void bind_writers(py::module_& m, std::variant<T...>*) {
+  (m.def(
+       "result_to_json",
+       [](const T& result, int indent) {
+         return io::to_json(io::ResultDocument(result)).dump(indent);
+       },
+       py::arg("result"), py::arg("indent") = 2,
+       "The document of a result as JSON text (read back by read_result bit for bit)."),
+   ...);
+  (m.def(
+       "write_result",
+       [](const std::filesystem::path& path, const T& result, bool overwrite) {
+         io::write_result(path, io::ResultDocument(result),
+                          overwrite ? io::Overwrite::yes : io::Overwrite::no);
+       },
+       py::arg("path"), py::arg("result"), py::arg("overwrite") = false,
+       "Writes the document of a result (refuses an existing file unless overwrite)."),
+   ...);
+}
+
+}  // namespace
+
+void bind_io(py::module_& m) {
+  m.def(
+      "read_result", [](const std::filesystem::path& path) { return io::read_result(path); },
+      py::arg("path"),
+      "The result in a document written by ctid (fit -o, validate -o, frf -o X.json, study's "
+      "summary.json) or by write_result: EstimationResult, ModeRelocationResult, "
+      "InputDelayScanResult, ValidationReport, Frf or StudySummary, chosen by its \"type\". "
+      "Raises InvalidArgument for an unknown type or version or a bad field.");
+  m.def("result_document_types", &io::result_document_types,
+        "The \"type\" values read_result reads.");
+  bind_writers(m, static_cast<io::ResultDocument*>(nullptr));
+}
+
+}  // namespace ctid::python
