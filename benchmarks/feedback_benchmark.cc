@@ -12,7 +12,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include "ctid/delayed_feedback/refinement.h"
+#include "ctid/delayed_feedback/identification.h"
 #include "ctid/study/monte_carlo.h"
 #include "delayed_feedback/records.h"
 

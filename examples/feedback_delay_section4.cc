@@ -8,7 +8,7 @@
 #include <functional>
 
 #include "ctid/delayed_feedback/least_squares.h"
-#include "ctid/delayed_feedback/refinement.h"
+#include "ctid/delayed_feedback/identification.h"
 #include "ctid/delayed_feedback/regressors.h"
 #include "ctid/delayed_feedback/separation.h"
 #include "ctid/delayed_feedback/validation.h"

@@ -12,7 +12,7 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
-#include "ctid/delayed_feedback/refinement.h"
+#include "ctid/delayed_feedback/identification.h"
 #include "ctid/io/json.h"
 #include "ctid/io/sampled_data_csv.h"
 

@@ -3,7 +3,7 @@
 // delay scan, the identification pipeline and the Section 4 validation protocol.
 #include "common.h"
 #include "ctid/delayed_feedback/least_squares.h"
-#include "ctid/delayed_feedback/refinement.h"
+#include "ctid/delayed_feedback/identification.h"
 #include "ctid/delayed_feedback/regressors.h"
 #include "ctid/delayed_feedback/separation.h"
 #include "ctid/delayed_feedback/validation.h"

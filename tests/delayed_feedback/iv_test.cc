@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
-#include "ctid/delayed_feedback/refinement.h"
+#include "ctid/delayed_feedback/identification.h"
 #include "delayed_feedback/records.h"
 
 namespace ctid {

@@ -11,7 +11,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ctid/delayed_feedback/refinement.h"
+#include "ctid/delayed_feedback/identification.h"
 #include "delayed_feedback/records.h"
 
 namespace ctid {

@@ -1,5 +1,5 @@
 // Output-error refinement, Cramér-Rao separability report and delay scan.
-#include "ctid/delayed_feedback/refinement.h"
+#include "ctid/delayed_feedback/identification.h"
 
 #include <cmath>
 #include <random>

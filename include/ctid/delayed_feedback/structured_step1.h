@@ -1,0 +1,35 @@
+// Structured step 1 of the delayed-feedback identification (beyond De Iuliis, Germani, Manes
+// 2017): the step-1 equation error minimised over the 2(n+m) true unknowns ρ of F and H.
+#pragma once
+
+#include <vector>
+
+#include "ctid/delayed_feedback/regressors.h"
+#include "ctid/simulation/delayed_feedback.h"
+
+namespace ctid {
+
+/// Structured step 1: the equation error |target - C θ(ρ)|² (nuisance columns projected out)
+/// minimised over the 2(n+m) true unknowns, where θ(ρ) stacks β = D_F D_H, γ = N_F N_H,
+/// α = N_F D_H. Starts: alternating least squares (the residual is affine in F's parameters
+/// for fixed H and vice versa) from D_H = (s + w)^m for each w in start_frequencies, then
+/// Levenberg-Marquardt; the smallest cost is kept. The trade between β and γ that makes the
+/// unstructured θ ill-determined is not available inside this manifold.
+struct StructuredStep1Options {
+  std::vector<double> start_frequencies{0.3, 1.0, 3.0};
+  int alternating_iterations = 100;
+  int max_iterations = 100;
+  void validate() const;
+};
+
+struct StructuredStep1Result {
+  DelayedFeedbackLoop loop{TransferFunction(Polynomial{0.0}, Polynomial{1.0}),
+                           TransferFunction(Polynomial{0.0}, Polynomial{1.0}), 0.0};
+  double cost = 0.0;  ///< residual sum of squares
+  int starts = 0;
+};
+
+StructuredStep1Result estimate_structured_step1(const FeedbackRegression& regression,
+                                                const StructuredStep1Options& options = {});
+
+}  // namespace ctid
