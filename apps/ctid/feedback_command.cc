@@ -114,8 +114,7 @@ void run_feedback(const FeedbackFlags& f) {
   } else {
     r = identify_delayed_feedback(data, f.forward_order, f.feedback_order, f.delay, options);
   }
-  if (r.best_candidate < 0)
-    throw std::runtime_error("no usable separation candidate: " + r.message);
+  if (!r.best_candidate) throw std::runtime_error("no usable separation candidate: " + r.message);
 
   nlohmann::json candidates = nlohmann::json::array();
   for (const SeparationCandidateReport& c : r.candidates)
@@ -144,7 +143,7 @@ void run_feedback(const FeedbackFlags& f) {
           {"condition_number", r.step1.condition_number},
           {"output_rms", finite_or_null(r.step1_output_rms)}}},
         {"candidates", candidates},
-        {"best_candidate", r.best_candidate},
+        {"best_candidate", *r.best_candidate},
         {"cramer_rao",
          {{"parameters", vector(r.cramer_rao.parameters)},
           {"standard_deviations", vector(r.cramer_rao.standard_deviations)},

@@ -132,7 +132,7 @@ void bind_feedback(py::module_& m) {
       .def_readonly("candidates", &FeedbackIdentificationResult::candidates,
                     "SeparationCandidateReport list.")
       .def_readonly("best_candidate", &FeedbackIdentificationResult::best_candidate,
-                    "Index of the chosen candidate (-1: none).")
+                    "Index of the chosen candidate (None: none).")
       .def_readonly("output_rms", &FeedbackIdentificationResult::output_rms,
                     "Output-error rms of the returned loop.")
       .def_readonly("message", &FeedbackIdentificationResult::message, "Summary.")
@@ -177,7 +177,8 @@ void bind_feedback(py::module_& m) {
       .def_readonly("output_rms_history", &StructuredIvResult::output_rms_history,
                     "Start, then each iterate (inf: unstable).")
       .def_readonly("iterations", &StructuredIvResult::iterations, "Iterations run.")
-      .def_readonly("converged", &StructuredIvResult::converged, "Tolerance reached.")
+      .def_readonly("termination", &StructuredIvResult::termination, "Why it stopped.")
+      .def("converged", &StructuredIvResult::converged, "termination == converged.")
       .def_readonly("message", &StructuredIvResult::message, "Summary.");
   m.def(
       "estimate_structured_step1_iv",
@@ -209,8 +210,8 @@ void bind_feedback_separation(py::module_& m) {
       .def_readonly("cost", &KroneckerSeparationResult::cost, "J at the returned F, H.")
       .def_readonly("starts", &KroneckerSeparationResult::starts, "Starts refined.")
       .def_readonly("best_start", &KroneckerSeparationResult::best_start, "Winning start.")
-      .def_readonly("converged", &KroneckerSeparationResult::converged,
-                    "Ceres converged for the best start.")
+      .def_readonly("termination", &KroneckerSeparationResult::termination, "Why it stopped.")
+      .def("converged", &KroneckerSeparationResult::converged, "termination == converged.")
       .def_readonly("message", &KroneckerSeparationResult::message, "Summary.")
       .def_readonly("candidates", &KroneckerSeparationResult::candidates,
                     "Every refined start (KroneckerCandidate list).");
@@ -272,7 +273,8 @@ void bind_feedback_separation(py::module_& m) {
       .def_readonly("loop", &OutputErrorResult::loop, "DelayedFeedbackLoop (F, H, delay).")
       .def_readonly("residual_rms", &OutputErrorResult::residual_rms, "rms of y - y_hat.")
       .def_readonly("iterations", &OutputErrorResult::iterations, "Iterations.")
-      .def_readonly("converged", &OutputErrorResult::converged, "Converged.")
+      .def_readonly("termination", &OutputErrorResult::termination, "Why it stopped.")
+      .def("converged", &OutputErrorResult::converged, "termination == converged.")
       .def_readonly("message", &OutputErrorResult::message, "Summary.")
       .def_readonly("quality", &OutputErrorResult::quality, "SeparabilityReport at the estimate.");
   m.def(

@@ -39,8 +39,13 @@ FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int n, int 
                                             const FeedbackDelayScanOptions& options) {
   options.validate();
   require(n >= 1 && m >= 1, "scan_feedback_delay: orders must be >= 1, got n = ", n, ", m = ", m);
+  const double inf = std::numeric_limits<double>::infinity();
+  int evaluations = 0;
   auto criterion = [&](double delay) {
-    try {
+    ++evaluations;
+    // A delay at which the regression cannot be built (beyond the record) scores +inf.
+    if (feedback_regression_problem(data, n, m, delay, options.regressors)) return inf;
+    {
       const FeedbackRegression reg =
           build_feedback_regression(data, n, m, delay, options.regressors);
       if (options.criterion == DelayCriterion::kStructuredOutputError ||
@@ -58,14 +63,10 @@ FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int n, int 
           iv.hold = options.hold;
           iv.substeps = options.substeps;
           for (double pole : options.iv_filter_poles) {
-            try {
-              const StructuredIvResult r =
-                  iv_start(data, n, m, delay, options.regressors, pole, iv);
-              if (std::isfinite(r.output_rms)) starts.push_back(r.loop);
-              rms = std::min(rms, r.output_rms);
-            } catch (const InvalidArgument&) {
-              // No start at this pole.
-            }
+            // No stable start at this pole: output_rms is +inf.
+            const StructuredIvResult r = iv_start(data, n, m, delay, options.regressors, pole, iv);
+            if (std::isfinite(r.output_rms)) starts.push_back(r.loop);
+            rms = std::min(rms, r.output_rms);
           }
           for (const DelayedFeedbackLoop& start : starts) {
             const OutputErrorResult fit = refine_output_error(data, start, oe);
@@ -75,16 +76,15 @@ FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int n, int 
         return rms * rms;
       }
       const ClosedLoopEstimate est = estimate_closed_loop_batch(reg, options.least_squares);
+      if (!est.converged()) return inf;  // a singular or non-finite step 1
       if (options.criterion == DelayCriterion::kEquationError)
         return est.residual_rms * est.residual_rms;
       const Eigen::VectorXd y = simulate_delayed(
           to_delayed_state_space(est.alpha, est.beta, est.gamma, delay), data.input(),
           data.sample_time(), options.hold, DelayedSimulationOptions{options.substeps});
-      if (!y.allFinite()) return std::numeric_limits<double>::infinity();
+      if (!y.allFinite()) return inf;
       const double mse = (data.output() - y).squaredNorm() / static_cast<double>(y.size());
-      return std::isfinite(mse) ? mse : std::numeric_limits<double>::infinity();
-    } catch (const InvalidArgument&) {
-      return std::numeric_limits<double>::infinity();
+      return std::isfinite(mse) ? mse : inf;
     }
   };
   FeedbackDelayScanResult r;
@@ -105,6 +105,14 @@ FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int n, int 
       r.delay = x;
       r.best_criterion = f;
     }
+  }
+  r.iterations = evaluations;
+  if (std::isfinite(r.best_criterion)) {
+    r.termination = Termination::converged;
+    r.message = "the criterion is smallest at delay " + internal::concat(r.delay) + " s";
+  } else {
+    r.termination = Termination::no_solution;
+    r.message = "every delay of the scan is unstable, degenerate or beyond the record";
   }
   return r;
 }

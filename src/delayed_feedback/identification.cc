@@ -63,31 +63,23 @@ FeedbackIdentificationResult identify_delayed_feedback(
   const double inf = std::numeric_limits<double>::infinity();
   const FeedbackRegression reg = build_feedback_regression(data, n, m, delay, options.regressors);
   FeedbackIdentificationResult r;
-  bool have_step1 = true;
-  try {
-    r.step1 = options.step1 == Step1Method::kBatch
-                  ? estimate_closed_loop_batch(reg, options.batch)
-                  : estimate_closed_loop_recursive(reg, options.recursive);
-  } catch (const InvalidArgument& e) {
-    // A singular unstructured regression: only the structured candidate remains.
-    have_step1 = false;
-    r.message = std::string("step 1: ") + e.what() + "; ";
-  }
+  r.step1 = options.step1 == Step1Method::kBatch
+                ? estimate_closed_loop_batch(reg, options.batch)
+                : estimate_closed_loop_recursive(reg, options.recursive);
+  // A singular unstructured regression: only the structured candidates remain.
+  const bool have_step1 = r.step1.converged();
+  if (!have_step1) r.message = "step 1: " + r.step1.message + "; ";
   const Hold hold = options.output_error.hold;
   const int substeps = options.output_error.substeps;
   r.step1_output_rms = inf;
   if (have_step1) {
-    try {
-      const Eigen::VectorXd y = simulate_delayed(
-          to_delayed_state_space(r.step1.alpha, r.step1.beta, r.step1.gamma, delay), data.input(),
-          data.sample_time(), hold, DelayedSimulationOptions{substeps});
-      r.step1_output_rms =
-          y.allFinite() && y.cwiseAbs().maxCoeff() < 1e12
-              ? std::sqrt((data.output() - y).squaredNorm() / static_cast<double>(y.size()))
-              : inf;
-    } catch (const InvalidArgument&) {
-      r.step1_output_rms = inf;
-    }
+    const Eigen::VectorXd y = simulate_delayed(
+        to_delayed_state_space(r.step1.alpha, r.step1.beta, r.step1.gamma, delay), data.input(),
+        data.sample_time(), hold, DelayedSimulationOptions{substeps});
+    r.step1_output_rms =
+        y.allFinite() && y.cwiseAbs().maxCoeff() < 1e12
+            ? std::sqrt((data.output() - y).squaredNorm() / static_cast<double>(y.size()))
+            : inf;
   }
   const Polynomial& a = r.step1.alpha;
   const Polynomial& b = r.step1.beta;
@@ -97,59 +89,45 @@ FeedbackIdentificationResult identify_delayed_feedback(
     SeparationCandidateReport c;
     c.source = std::move(source);
     c.start = DelayedFeedbackLoop{f.normalized(), h.normalized(), delay};
-    try {
-      c.start.validate();
-    } catch (const InvalidArgument&) {
-      return;
-    }
+    if (!loop_is_simulable(c.start)) return;
     c.kronecker_cost =
         have_step1 ? kronecker_cost(a, b, g, c.start.forward, c.start.feedback) : inf;
     c.start_rms = loop_output_rms(data, c.start, hold, substeps);
     c.refined_rms = c.start_rms;
     r.candidates.push_back(std::move(c));
   };
-  if (have_step1 && options.separation != SeparationMethod::kKronecker) {
-    try {
-      const GcdSeparationResult gcd = separate_approximate_gcd(a, b, g, n, m);
-      add("gcd", gcd.forward, gcd.feedback);
-    } catch (const InvalidArgument&) {
-      // α̂ of low degree: no GCD candidate.
-    }
+  // α̂ of low degree: no GCD candidate.
+  if (have_step1 && options.separation != SeparationMethod::kKronecker && a.degree() == n + m - 1) {
+    const GcdSeparationResult gcd = separate_approximate_gcd(a, b, g, n, m);
+    add("gcd", gcd.forward, gcd.feedback);
   }
   if (have_step1 && options.separation != SeparationMethod::kGcd) {
-    try {
-      const KroneckerSeparationResult kr = separate_kronecker(a, b, g, n, m, options.kronecker);
-      for (const KroneckerCandidate& c : kr.candidates)
-        add("kronecker: " + c.start, c.forward, c.feedback);
-    } catch (const InvalidArgument&) {
-      // No usable start.
-    }
+    // No usable start (no_solution): no candidates.
+    const KroneckerSeparationResult kr = separate_kronecker(a, b, g, n, m, options.kronecker);
+    for (const KroneckerCandidate& c : kr.candidates)
+      add("kronecker: " + c.start, c.forward, c.feedback);
   }
   if (options.structured_candidate) {
-    try {
-      const StructuredStep1Result st = estimate_structured_step1(reg, options.structured);
+    // A degenerate structured fit (no_solution) gives no simulable candidate.
+    const StructuredStep1Result st = estimate_structured_step1(reg, options.structured);
+    if (st.termination != Termination::no_solution)
       add("structured step 1", st.loop.forward, st.loop.feedback);
-    } catch (const InvalidArgument&) {
-      // Degenerate structured fit: no candidate.
-    }
   }
   {
     StructuredIvOptions iv = options.iv;
     iv.hold = hold;
     iv.substeps = substeps;
     for (double pole : options.iv_filter_poles) {
-      try {
-        const StructuredIvResult st = iv_start(data, n, m, delay, options.regressors, pole, iv);
-        if (std::isfinite(st.output_rms))
-          add("structured iv a = " + short_number(pole), st.loop.forward, st.loop.feedback);
-      } catch (const InvalidArgument&) {
-        // No stable start at this pole.
-      }
+      // No stable start at this pole: output_rms is +inf.
+      const StructuredIvResult st = iv_start(data, n, m, delay, options.regressors, pole, iv);
+      if (std::isfinite(st.output_rms))
+        add("structured iv a = " + short_number(pole), st.loop.forward, st.loop.feedback);
     }
   }
   if (r.candidates.empty()) {
     r.message += "no separation candidate with the requested orders";
     r.output_rms = inf;
+    r.termination = Termination::no_solution;
     return r;
   }
   // Every candidate gets a short output-error refinement; the best then runs to convergence.
@@ -175,15 +153,15 @@ FeedbackIdentificationResult identify_delayed_feedback(
       c.refinement = refine_output_error(data, current, screen);
       c.refined_rms = std::isfinite(c.refinement.residual_rms) ? c.refinement.residual_rms : inf;
     }
-    if (c.refined_rms < best || r.best_candidate < 0) {
+    if (c.refined_rms < best || !r.best_candidate) {
       best = c.refined_rms;
-      r.best_candidate = static_cast<int>(i);
+      r.best_candidate = i;
     }
   }
   if (options.refine && std::isfinite(best)) {
     // The finalists: the best screened candidate and up to extra_finalists runner-ups within
     // finalist_ratio of it, each continued to convergence; the smallest final cost wins.
-    std::vector<std::size_t> finalists{static_cast<std::size_t>(r.best_candidate)};
+    std::vector<std::size_t> finalists{*r.best_candidate};
     {
       std::vector<std::size_t> others;
       for (std::size_t i = 0; i < r.candidates.size(); ++i)
@@ -198,7 +176,7 @@ FeedbackIdentificationResult identify_delayed_feedback(
     }
     for (std::size_t i : finalists) {
       SeparationCandidateReport& c = r.candidates[i];
-      if (!c.refinement.converged &&
+      if (!c.refinement.converged() &&
           options.output_error.max_iterations > options.screening_iterations) {
         OutputErrorOptions rest = options.output_error;
         rest.max_iterations = options.output_error.max_iterations - options.screening_iterations;
@@ -211,19 +189,25 @@ FeedbackIdentificationResult identify_delayed_feedback(
       }
     }
     for (std::size_t i : finalists)
-      if (r.candidates[i].refined_rms <
-          r.candidates[static_cast<std::size_t>(r.best_candidate)].refined_rms)
-        r.best_candidate = static_cast<int>(i);
-    best = r.candidates[static_cast<std::size_t>(r.best_candidate)].refined_rms;
+      if (r.candidates[i].refined_rms < r.candidates[*r.best_candidate].refined_rms)
+        r.best_candidate = i;
+    best = r.candidates[*r.best_candidate].refined_rms;
   }
-  const SeparationCandidateReport& chosen =
-      r.candidates[static_cast<std::size_t>(r.best_candidate)];
+  const SeparationCandidateReport& chosen = r.candidates[*r.best_candidate];
   const bool refined = options.refine && std::isfinite(chosen.start_rms);
   r.loop = refined ? chosen.refinement.loop : chosen.start;
   r.output_rms = chosen.refined_rms;
   if (refined) r.cramer_rao = chosen.refinement.quality;
   r.message += std::isfinite(best) ? "best candidate: " + chosen.source
                                    : "every candidate is unstable or overflowed";
+  if (!std::isfinite(best)) {
+    r.termination = Termination::no_solution;
+  } else if (refined) {
+    r.termination = chosen.refinement.termination;
+    r.iterations = chosen.refinement.iterations;
+  } else {
+    r.termination = Termination::converged;  // the selection by step-1 output error is done
+  }
   return r;
 }
 
@@ -241,9 +225,15 @@ DelayIdentificationResult identify_delayed_feedback_with_delay_scan(
   FeedbackDelayScanOptions scan = options.scan;
   scan.refine = false;
   r.scan = scan_feedback_delay(data, n, m, scan);
-  r.identification = identify_delayed_feedback(data, n, m, r.scan.delay, options.identification);
   r.delay = r.scan.delay;
-  if (r.identification.best_candidate < 0 || !std::isfinite(r.identification.output_rms)) return r;
+  // The outcome is the identification's at the returned Δ.
+  const auto finish = [&r]() -> DelayIdentificationResult& {
+    static_cast<Outcome&>(r) = static_cast<const Outcome&>(r.identification);
+    return r;
+  };
+  r.identification = identify_delayed_feedback(data, n, m, r.scan.delay, options.identification);
+  if (!r.identification.best_candidate || !std::isfinite(r.identification.output_rms))
+    return finish();
   if (options.joint_delay) {
     OutputErrorOptions joint = options.identification.output_error;
     joint.estimate_delay = true;
@@ -255,10 +245,11 @@ DelayIdentificationResult identify_delayed_feedback_with_delay_scan(
       r.identification.output_rms = fit.residual_rms;
       r.identification.cramer_rao = fit.quality;
       r.identification.message += "; delay refined jointly with F and H";
+      r.identification.termination = fit.termination;
     }
-    return r;
+    return finish();
   }
-  if (options.golden_iterations == 0) return r;
+  if (options.golden_iterations == 0) return finish();
   const double step = (scan.max_delay - scan.min_delay) / (scan.points - 1);
   DelayedFeedbackLoop warm = r.identification.loop;
   OutputErrorResult best_fit;
@@ -289,8 +280,9 @@ DelayIdentificationResult identify_delayed_feedback_with_delay_scan(
     r.identification.output_rms = best_cost;
     r.identification.cramer_rao = best_fit.quality;
     r.identification.message += "; delay refined by golden section";
+    r.identification.termination = best_fit.termination;
   }
-  return r;
+  return finish();
 }
 
 }  // namespace ctid

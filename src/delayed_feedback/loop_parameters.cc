@@ -57,16 +57,23 @@ DelayedFeedbackLoop loop_from_parameters(const Eigen::VectorXd& rho, int n, int 
 double loop_output_rms(const SampledData& data, const DelayedFeedbackLoop& loop, Hold hold,
                        int substeps) {
   const double inf = std::numeric_limits<double>::infinity();
-  try {
-    const Eigen::VectorXd y =
-        simulate_delayed(to_delayed_state_space(loop), data.input(), data.sample_time(), hold,
-                         DelayedSimulationOptions{substeps});
-    if (!y.allFinite() || y.cwiseAbs().maxCoeff() > 1e12) return inf;
-    const double rms = std::sqrt((data.output() - y).squaredNorm() / static_cast<double>(y.size()));
-    return std::isfinite(rms) ? rms : inf;
-  } catch (const InvalidArgument&) {
-    return inf;
-  }
+  if (!loop_is_simulable(loop)) return inf;
+  const Eigen::VectorXd y =
+      simulate_delayed(to_delayed_state_space(loop), data.input(), data.sample_time(), hold,
+                       DelayedSimulationOptions{substeps});
+  if (!y.allFinite() || y.cwiseAbs().maxCoeff() > 1e12) return inf;
+  const double rms = std::sqrt((data.output() - y).squaredNorm() / static_cast<double>(y.size()));
+  return std::isfinite(rms) ? rms : inf;
+}
+
+bool loop_is_simulable(const DelayedFeedbackLoop& loop) {
+  const auto finite = [](const TransferFunction& tf) {
+    return tf.numerator().coefficients().allFinite() &&
+           tf.denominator().coefficients().allFinite() && tf.denominator().degree() >= 1 &&
+           tf.is_strictly_proper() && tf.input_delay() == 0.0;
+  };
+  return std::isfinite(loop.delay) && loop.delay >= 0.0 && finite(loop.forward) &&
+         finite(loop.feedback);
 }
 
 }  // namespace ctid

@@ -82,7 +82,7 @@ OutputErrorResult refine_output_error(const SampledData& data, const DelayedFeed
   settings.parameter_tolerance = 1e-12;
   const internal::LeastSquaresOutcome outcome = internal::solve_least_squares(problem, settings);
   result.iterations = outcome.iterations;
-  result.converged = outcome.converged;
+  result.termination = outcome.termination;
   result.message = outcome.message;
   rho = params.head(np);
   const double delay = options.estimate_delay ? params(np) : start.delay;
@@ -91,6 +91,10 @@ OutputErrorResult refine_output_error(const SampledData& data, const DelayedFeed
                                          options.hold, options.substeps);
   const Eigen::VectorXd e = data.output() - y;
   result.residual_rms = std::sqrt(e.squaredNorm() / static_cast<double>(e.size()));
+  if (!std::isfinite(result.residual_rms) && result.termination != Termination::non_finite) {
+    result.termination = Termination::non_finite;
+    result.message = "the refined loop cannot be simulated (unstable or overflowing)";
+  }
   const double variance =
       e.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(1, e.size() - rho.size()));
   if (y.allFinite()) {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/QR>
 
@@ -25,7 +26,13 @@ StructuredIvResult iv_start(const SampledData& data, int n, int m, double delay,
   regressors.filter_pole = pole;
   const FeedbackRegression reg = build_feedback_regression(data, n, m, delay, regressors);
   const StructuredStep1Result st = estimate_structured_step1(reg);
-  require(std::isfinite(st.cost), "structured step 1 found no start");
+  if (!std::isfinite(st.cost)) {
+    StructuredIvResult none;
+    none.termination = Termination::no_solution;
+    none.message = "structured step 1 found no start";
+    none.output_rms = std::numeric_limits<double>::infinity();
+    return none;
+  }
   return estimate_structured_step1_iv(data, st.loop, regressors, iv);
 }
 
@@ -54,6 +61,7 @@ StructuredIvResult estimate_structured_step1_iv(const SampledData& data,
   r.output_rms = loop_output_rms(data, r.loop, options.hold, options.substeps);
   r.output_rms_history.push_back(r.output_rms);
   if (!std::isfinite(r.output_rms)) {
+    r.termination = Termination::non_finite;
     r.message = "the start is unstable or overflows";
     return r;
   }
@@ -64,7 +72,10 @@ StructuredIvResult estimate_structured_step1_iv(const SampledData& data,
     const Eigen::VectorXd y_model =
         simulate_delayed(to_delayed_state_space(current), data.input(), data.sample_time(),
                          options.hold, DelayedSimulationOptions{options.substeps});
-    if (!y_model.allFinite() || y_model.cwiseAbs().maxCoeff() > 1e12) break;
+    if (!y_model.allFinite() || y_model.cwiseAbs().maxCoeff() > 1e12) {
+      r.termination = Termination::non_finite;
+      break;
+    }
     const FeedbackRegression zreg = build_feedback_regression(
         SampledData(data.sample_time(), data.input(), y_model), n, m, delay, regressors);
     Eigen::MatrixXd z = zreg.regressor.leftCols(zreg.theta_size);
@@ -89,11 +100,17 @@ StructuredIvResult estimate_structured_step1_iv(const SampledData& data,
       next += rho - self;
     }
     ++r.iterations;
-    if (!next.allFinite()) break;
+    if (!next.allFinite()) {
+      r.termination = Termination::non_finite;
+      break;
+    }
     const DelayedFeedbackLoop candidate = loop_from_parameters(next, n, m, delay);
     const double rms = loop_output_rms(data, candidate, options.hold, options.substeps);
     r.output_rms_history.push_back(rms);
-    if (!std::isfinite(rms)) break;
+    if (!std::isfinite(rms)) {
+      r.termination = Termination::non_finite;
+      break;
+    }
     const double change = (next - rho).norm() / std::max(1.0, rho.norm());
     rho = next;
     current = candidate;
@@ -102,12 +119,16 @@ StructuredIvResult estimate_structured_step1_iv(const SampledData& data,
       r.loop = candidate;
     }
     if (change < options.tolerance) {
-      r.converged = true;
+      r.termination = Termination::converged;
       break;
     }
   }
-  r.message = r.converged ? "instrumental-variable iterations converged"
-                          : "instrumental-variable iterations stopped at the limit";
+  if (r.termination == Termination::not_run) r.termination = Termination::iteration_limit;
+  r.message = r.termination == Termination::converged ? "instrumental-variable iterations converged"
+              : r.termination == Termination::iteration_limit
+                  ? "instrumental-variable iterations stopped at the limit"
+                  : "an instrumental-variable iterate is unstable or overflows; the best "
+                    "iterate so far is kept";
   return r;
 }
 

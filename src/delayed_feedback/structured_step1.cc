@@ -105,8 +105,9 @@ ProjectedSystem project_nuisance(const FeedbackRegression& reg) {
 }
 
 // Levenberg-Marquardt on |y - c θ(ρ)|² from rho (updated in place); returns the cost.
-double structured_least_squares(const Eigen::MatrixXd& c, const Eigen::VectorXd& y, int n, int m,
-                                int max_iterations, Eigen::VectorXd& rho) {
+LeastSquaresOutcome structured_least_squares(const Eigen::MatrixXd& c, const Eigen::VectorXd& y,
+                                             int n, int m, int max_iterations,
+                                             Eigen::VectorXd& rho) {
   ceres::Problem problem;
   auto* cost = new ceres::DynamicAutoDiffCostFunction<StructuredResidual, 8>(
       new StructuredResidual{&c, &y, n, m});
@@ -117,7 +118,7 @@ double structured_least_squares(const Eigen::MatrixXd& c, const Eigen::VectorXd&
   settings.max_iterations = max_iterations;
   settings.function_tolerance = 1e-14;
   settings.parameter_tolerance = 1e-14;
-  return internal::solve_least_squares(problem, settings).sum_of_squares;
+  return internal::solve_least_squares(problem, settings);
 }
 
 }  // namespace internal
@@ -151,12 +152,21 @@ StructuredStep1Result estimate_structured_step1(const FeedbackRegression& reg,
       internal::solve_block(rho, 0, 2 * n, n, m, sys.c, sys.y);
       internal::solve_block(rho, 2 * n, 2 * m, n, m, sys.c, sys.y);
     }
-    const double j = structured_least_squares(sys.c, sys.y, n, m, options.max_iterations, rho);
+    const internal::LeastSquaresOutcome outcome =
+        structured_least_squares(sys.c, sys.y, n, m, options.max_iterations, rho);
+    const double j = outcome.sum_of_squares;
     ++best.starts;
     if (rho.allFinite() && j < best.cost) {
       best.cost = j;
+      best.termination = outcome.termination;
+      best.iterations = outcome.iterations;
+      best.message = outcome.message;
       best.loop = loop_from_parameters(rho, n, m, reg.delay);
     }
+  }
+  if (!std::isfinite(best.cost)) {
+    best.termination = Termination::no_solution;
+    best.message = "no start of the structured step 1 ends finite";
   }
   return best;
 }

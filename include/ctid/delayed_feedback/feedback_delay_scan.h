@@ -11,6 +11,7 @@
 #include "ctid/delayed_feedback/least_squares.h"
 #include "ctid/delayed_feedback/regressors.h"
 #include "ctid/delayed_feedback/structured_iv.h"
+#include "ctid/estimation/termination.h"
 
 namespace ctid {
 
@@ -41,7 +42,9 @@ struct FeedbackDelayScanOptions {
   void validate() const;
 };
 
-struct FeedbackDelayScanResult {
+/// converged when some delay has a finite criterion (iterations: criterion evaluations), else
+/// no_solution (every delay unstable, degenerate or beyond the record).
+struct FeedbackDelayScanResult : Outcome {
   Eigen::VectorXd delays;
   Eigen::VectorXd criterion;  ///< per DelayCriterion (inf: unstable or degenerate)
   double delay = 0.0;         ///< the minimiser

@@ -3,6 +3,8 @@
 // the delay unknown.
 #pragma once
 
+#include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +18,7 @@
 #include "ctid/delayed_feedback/separation.h"
 #include "ctid/delayed_feedback/structured_iv.h"
 #include "ctid/delayed_feedback/structured_step1.h"
+#include "ctid/estimation/termination.h"
 #include "ctid/simulation/delayed_feedback.h"
 
 namespace ctid {
@@ -75,16 +78,17 @@ struct SeparationCandidateReport {
   OutputErrorResult refinement;  ///< valid when refined
 };
 
-struct FeedbackIdentificationResult {
+/// The outcome is the chosen candidate's refinement (its termination and iterations; converged
+/// when refine is off), or no_solution when no candidate exists or every one is unstable.
+struct FeedbackIdentificationResult : Outcome {
   DelayedFeedbackLoop loop{TransferFunction(Polynomial{0.0}, Polynomial{1.0}),
                            TransferFunction(Polynomial{0.0}, Polynomial{1.0}), 0.0};
   ClosedLoopEstimate step1;       ///< α̂, β̂, γ̂ (Ŵ)
   double step1_output_rms = 0.0;  ///< output-error rms of Ŵ (inf: unstable)
   std::vector<SeparationCandidateReport> candidates;
-  int best_candidate = -1;        ///< index into candidates
-  double output_rms = 0.0;        ///< output-error rms of the returned loop
-  SeparabilityReport cramer_rao;  ///< at the returned loop, σ² from the residuals
-  std::string message;
+  std::optional<std::size_t> best_candidate;  ///< index into candidates (none: no candidate)
+  double output_rms = 0.0;                    ///< output-error rms of the returned loop
+  SeparabilityReport cramer_rao;              ///< at the returned loop, σ² from the residuals
 };
 
 /// Throws InvalidArgument for orders < 1, Δ < 0, too few samples or a record not longer than Δ.
@@ -110,7 +114,9 @@ struct DelayIdentificationOptions {
   void validate() const;
 };
 
-struct DelayIdentificationResult {
+/// The outcome of the identification at the returned Δ (no_solution when the scan found no
+/// delay at which the regression can be built).
+struct DelayIdentificationResult : Outcome {
   FeedbackDelayScanResult scan;
   FeedbackIdentificationResult identification;  ///< at the returned Δ (loop.delay)
   double delay = 0.0;

@@ -12,11 +12,14 @@
 
 #include "ctid/core/polynomial.h"
 #include "ctid/delayed_feedback/regressors.h"
+#include "ctid/estimation/termination.h"
 
 namespace ctid {
 
-/// α̂, β̂ (monic), γ̂ of W = α/(β + γ e^{-Δs}) with the diagnostics of the fit.
-struct ClosedLoopEstimate {
+/// α̂, β̂ (monic), γ̂ of W = α/(β + γ e^{-Δs}) with the diagnostics of the fit. The outcome:
+/// converged (one solve, or every RLS update), singular_equations (a rank-deficient regressor
+/// without regularisation; α̂, β̂, γ̂ are then empty) or non_finite (NaN/Inf in the regression).
+struct ClosedLoopEstimate : Outcome {
   Polynomial alpha;
   Polynomial beta;
   Polynomial gamma;
@@ -38,7 +41,7 @@ Eigen::VectorXd closed_loop_theta(const Polynomial& alpha, const Polynomial& bet
 
 enum class LeastSquaresSolver { kQr, kSvd };
 enum class Regularisation {
-  kNone,   ///< plain least squares; a rank-deficient regressor throws InvalidArgument
+  kNone,   ///< plain least squares; a rank-deficient regressor ends in singular_equations
   kFixed,  ///< ridge with weight `ridge` (relative to σ_max² of the scaled θ block)
   kGcv,    ///< ridge with the weight minimising generalised cross-validation
 };

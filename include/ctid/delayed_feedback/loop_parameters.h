@@ -16,7 +16,12 @@ Eigen::VectorXd loop_parameters(const DelayedFeedbackLoop& loop);
 DelayedFeedbackLoop loop_from_parameters(const Eigen::VectorXd& rho, int forward_order,
                                          int feedback_order, double delay);
 
-/// Output-error rms of a loop on the data (+inf when the simulation overflows).
+/// True when the loop passes DelayedFeedbackLoop::validate with finite coefficients, so it can
+/// be simulated; lets a search skip a degenerate candidate without an exception.
+bool loop_is_simulable(const DelayedFeedbackLoop& loop);
+
+/// Output-error rms of a loop on the data (+inf when the loop is not simulable or the
+/// simulation overflows).
 double loop_output_rms(const SampledData& data, const DelayedFeedbackLoop& loop, Hold hold,
                        int substeps);
 

@@ -23,13 +23,11 @@ struct OutputErrorOptions {
   void validate() const;
 };
 
-struct OutputErrorResult {
+/// converged, iteration_limit, or non_finite when the start itself cannot be simulated.
+struct OutputErrorResult : Outcome {
   DelayedFeedbackLoop loop{TransferFunction(Polynomial{0.0}, Polynomial{1.0}),
                            TransferFunction(Polynomial{0.0}, Polynomial{1.0}), 0.0};
   double residual_rms = 0.0;
-  int iterations = 0;
-  bool converged = false;
-  std::string message;
   SeparabilityReport quality;  ///< covariance at the estimate, σ² from the residuals
 };
 

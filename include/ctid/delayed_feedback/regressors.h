@@ -6,6 +6,9 @@
 // and the filter integrated exactly (eqs. 8-9). Δ need not be a multiple of δ.
 #pragma once
 
+#include <optional>
+#include <string>
+
 #include <Eigen/Core>
 
 #include "ctid/core/sampled_data.h"
@@ -62,6 +65,12 @@ struct FeedbackRegression {
   double delay = 0.0;
   double sample_time = 0.0;
 };
+
+/// Why the regression cannot be built from this record (orders < 1, Δ < 0, a record not longer
+/// than Δ, fewer equations than unknowns), or nullopt: lets a scan skip such delays.
+std::optional<std::string> feedback_regression_problem(const SampledData& data, int forward_order,
+                                                       int feedback_order, double delay,
+                                                       const FeedbackRegressorOptions& options);
 
 /// Throws InvalidArgument for orders < 1, Δ < 0, a record not longer than Δ, or fewer
 /// equations than unknowns.

@@ -13,6 +13,7 @@
 
 #include "ctid/core/polynomial.h"
 #include "ctid/core/transfer_function.h"
+#include "ctid/estimation/termination.h"
 
 namespace ctid {
 
@@ -37,14 +38,14 @@ struct KroneckerCandidate {
   double cost = 0.0;  ///< J after Levenberg-Marquardt from this start
 };
 
-struct KroneckerSeparationResult {
+/// The outcome is the best start's Levenberg-Marquardt ending (its iterations), or no_solution
+/// when no start is finite (F and H are then the default zero models).
+struct KroneckerSeparationResult : Outcome {
   TransferFunction forward{Polynomial{0.0}, Polynomial{1.0}};
   TransferFunction feedback{Polynomial{0.0}, Polynomial{1.0}};
-  double cost = 0.0;       ///< J at the returned F, H
-  int starts = 0;          ///< starts refined
-  std::string best_start;  ///< "gcd" or "roots split k"
-  bool converged = false;  ///< Ceres reported convergence for the best start
-  std::string message;
+  double cost = 0.0;                           ///< J at the returned F, H
+  int starts = 0;                              ///< starts refined
+  std::string best_start;                      ///< "gcd" or "roots split k"
   std::vector<KroneckerCandidate> candidates;  ///< every refined start, in start order
 };
 

@@ -8,6 +8,7 @@
 #include "ctid/core/hold.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/delayed_feedback/regressors.h"
+#include "ctid/estimation/termination.h"
 #include "ctid/simulation/delayed_feedback.h"
 
 namespace ctid {
@@ -30,14 +31,13 @@ struct StructuredIvOptions {
   void validate() const;
 };
 
-struct StructuredIvResult {
+/// converged (the tolerance was met), iteration_limit, non_finite (the start or an iterate is
+/// unstable or overflows; the best iterate so far is kept) or no_solution (no stable start).
+struct StructuredIvResult : Outcome {
   DelayedFeedbackLoop loop{TransferFunction(Polynomial{0.0}, Polynomial{1.0}),
                            TransferFunction(Polynomial{0.0}, Polynomial{1.0}), 0.0};
   double output_rms = 0.0;                 ///< of the returned loop on the data
   std::vector<double> output_rms_history;  ///< start, then each iterate (inf: unstable)
-  int iterations = 0;
-  bool converged = false;
-  std::string message;
 };
 
 /// Throws InvalidArgument for an invalid start or data too short for the regression.

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "ctid/delayed_feedback/regressors.h"
+#include "ctid/estimation/termination.h"
 #include "ctid/simulation/delayed_feedback.h"
 
 namespace ctid {
@@ -22,7 +23,9 @@ struct StructuredStep1Options {
   void validate() const;
 };
 
-struct StructuredStep1Result {
+/// The outcome of the best start's Levenberg-Marquardt (its iterations), or no_solution when no
+/// start ends finite (cost +inf, the loop the default zero models).
+struct StructuredStep1Result : Outcome {
   DelayedFeedbackLoop loop{TransferFunction(Polynomial{0.0}, Polynomial{1.0}),
                            TransferFunction(Polynomial{0.0}, Polynomial{1.0}), 0.0};
   double cost = 0.0;  ///< residual sum of squares

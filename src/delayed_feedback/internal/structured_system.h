@@ -7,6 +7,7 @@
 #include "ctid/core/sampled_data.h"
 #include "ctid/delayed_feedback/regressors.h"
 #include "ctid/delayed_feedback/structured_iv.h"
+#include "delayed_feedback/internal/ceres_solve.h"
 
 namespace ctid::internal {
 
@@ -23,9 +24,10 @@ struct ProjectedSystem {
 
 ProjectedSystem project_nuisance(const FeedbackRegression& reg);
 
-/// Levenberg-Marquardt on |y - c θ(ρ)|² from rho (updated in place); returns the cost.
-double structured_least_squares(const Eigen::MatrixXd& c, const Eigen::VectorXd& y, int n, int m,
-                                int max_iterations, Eigen::VectorXd& rho);
+/// Levenberg-Marquardt on |y - c θ(ρ)|² from rho (updated in place); its outcome and cost.
+LeastSquaresOutcome structured_least_squares(const Eigen::MatrixXd& c, const Eigen::VectorXd& y,
+                                             int n, int m, int max_iterations,
+                                             Eigen::VectorXd& rho);
 
 /// Structured step 1 with the 1/(s + a)^q filter at `pole`, then the bias-corrected IV
 /// iterations from it; InvalidArgument when no stable start exists.
