@@ -18,21 +18,10 @@ namespace ctid {
 using internal::golden_section_minimum;
 using internal::iv_start;
 
-void FeedbackDelayScanOptions::validate() const {
-  require(std::isfinite(min_delay) && min_delay >= 0.0,
-          "FeedbackDelayScanOptions: min_delay must be >= 0, got ", min_delay);
-  require(std::isfinite(max_delay) && max_delay > min_delay,
-          "FeedbackDelayScanOptions: max_delay must exceed min_delay, got ", max_delay);
-  require(points >= 2, "FeedbackDelayScanOptions: points must be >= 2, got ", points);
-  require(substeps >= 1, "FeedbackDelayScanOptions: substeps must be >= 1, got ", substeps);
-  require(refined_iterations >= 1,
-          "FeedbackDelayScanOptions: refined_iterations must be >= 1, got ", refined_iterations);
-  regressors.validate();
-  least_squares.validate();
-  iv.validate();
-  for (double pole : iv_filter_poles)
-    require(std::isfinite(pole) && pole > 0.0,
-            "FeedbackDelayScanOptions: iv_filter_poles must be positive, got ", pole);
+void FeedbackDelayScanOptions::check_relations(const std::string& path) const {
+  require(max_delay > min_delay, path, ".max_delay is ", max_delay, "; it must be > min_delay (",
+          min_delay, ")");
+  iv.check_agrees(path + ".iv", hold, substeps);
 }
 
 FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int n, int m,
@@ -48,11 +37,11 @@ FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int n, int 
     {
       const FeedbackRegression reg =
           build_feedback_regression(data, n, m, delay, options.regressors);
-      if (options.criterion == DelayCriterion::kStructuredOutputError ||
-          options.criterion == DelayCriterion::kRefinedOutputError) {
+      if (options.criterion == DelayCriterion::structured_output_error ||
+          options.criterion == DelayCriterion::refined_output_error) {
         const StructuredStep1Result st = estimate_structured_step1(reg);
         double rms = loop_output_rms(data, st.loop, options.hold, options.substeps);
-        if (options.criterion == DelayCriterion::kRefinedOutputError) {
+        if (options.criterion == DelayCriterion::refined_output_error) {
           OutputErrorOptions oe;
           oe.hold = options.hold;
           oe.substeps = options.substeps;
@@ -77,7 +66,7 @@ FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int n, int 
       }
       const ClosedLoopEstimate est = estimate_closed_loop_batch(reg, options.least_squares);
       if (!est.converged()) return inf;  // a singular or non-finite step 1
-      if (options.criterion == DelayCriterion::kEquationError)
+      if (options.criterion == DelayCriterion::equation_error)
         return est.residual_rms * est.residual_rms;
       const Eigen::VectorXd y = simulate_delayed(
           to_delayed_state_space(est.alpha, est.beta, est.gamma, delay), data.input(),

@@ -28,28 +28,8 @@ std::string short_number(double x) {
 
 }  // namespace
 
-void FeedbackIdentificationOptions::validate() const {
-  regressors.validate();
-  batch.validate();
-  recursive.validate();
-  kronecker.validate();
-  output_error.validate();
-  structured.validate();
-  iv.validate();
-  for (double pole : iv_filter_poles)
-    require(std::isfinite(pole) && pole > 0.0,
-            "FeedbackIdentificationOptions: iv_filter_poles must be positive, got ", pole);
-  for (double fraction : continuation_fractions)
-    require(std::isfinite(fraction) && fraction > 0.0 && fraction < 1.0,
-            "FeedbackIdentificationOptions: continuation_fractions must lie in (0, 1), got ",
-            fraction);
-  require(screening_iterations >= 1,
-          "FeedbackIdentificationOptions: screening_iterations must be >= 1, got ",
-          screening_iterations);
-  require(extra_finalists >= 0, "FeedbackIdentificationOptions: extra_finalists must be >= 0, got ",
-          extra_finalists);
-  require(std::isfinite(finalist_ratio) && finalist_ratio >= 1.0,
-          "FeedbackIdentificationOptions: finalist_ratio must be >= 1, got ", finalist_ratio);
+void FeedbackIdentificationOptions::check_relations(const std::string& path) const {
+  iv.check_agrees(path + ".iv", output_error.hold, output_error.substeps);
 }
 
 FeedbackIdentificationResult identify_delayed_feedback(
@@ -63,7 +43,7 @@ FeedbackIdentificationResult identify_delayed_feedback(
   const double inf = std::numeric_limits<double>::infinity();
   const FeedbackRegression reg = build_feedback_regression(data, n, m, delay, options.regressors);
   FeedbackIdentificationResult r;
-  r.step1 = options.step1 == Step1Method::kBatch
+  r.step1 = options.step1 == Step1Method::batch
                 ? estimate_closed_loop_batch(reg, options.batch)
                 : estimate_closed_loop_recursive(reg, options.recursive);
   // A singular unstructured regression: only the structured candidates remain.
@@ -97,11 +77,11 @@ FeedbackIdentificationResult identify_delayed_feedback(
     r.candidates.push_back(std::move(c));
   };
   // α̂ of low degree: no GCD candidate.
-  if (have_step1 && options.separation != SeparationMethod::kKronecker && a.degree() == n + m - 1) {
+  if (have_step1 && options.separation != SeparationMethod::kronecker && a.degree() == n + m - 1) {
     const GcdSeparationResult gcd = separate_approximate_gcd(a, b, g, n, m);
     add("gcd", gcd.forward, gcd.feedback);
   }
-  if (have_step1 && options.separation != SeparationMethod::kGcd) {
+  if (have_step1 && options.separation != SeparationMethod::gcd) {
     // No usable start (no_solution): no candidates.
     const KroneckerSeparationResult kr = separate_kronecker(a, b, g, n, m, options.kronecker);
     for (const KroneckerCandidate& c : kr.candidates)
@@ -211,11 +191,14 @@ FeedbackIdentificationResult identify_delayed_feedback(
   return r;
 }
 
-void DelayIdentificationOptions::validate() const {
-  scan.validate();
-  identification.validate();
-  require(golden_iterations >= 0,
-          "DelayIdentificationOptions: golden_iterations must be >= 0, got ", golden_iterations);
+void DelayIdentificationOptions::check_relations(const std::string& path) const {
+  const OutputErrorOptions& oe = identification.output_error;
+  if (scan.hold != oe.hold)
+    throw InvalidArgument(internal::concat(path, ".scan.hold is ", enum_name(scan.hold),
+                                           "; it must equal identification.output_error.hold (",
+                                           enum_name(oe.hold), ")"));
+  require(scan.substeps == oe.substeps, path, ".scan.substeps is ", scan.substeps,
+          "; it must equal identification.output_error.substeps (", oe.substeps, ")");
 }
 
 DelayIdentificationResult identify_delayed_feedback_with_delay_scan(

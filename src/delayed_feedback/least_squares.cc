@@ -73,14 +73,9 @@ Eigen::VectorXd closed_loop_theta(const Polynomial& alpha, const Polynomial& bet
   return theta;
 }
 
-void BatchLeastSquaresOptions::validate() const {
-  require(std::isfinite(ridge) && ridge >= 0.0,
-          "BatchLeastSquaresOptions: ridge must be finite and >= 0, got ", ridge);
-  require(gcv_min > 0.0 && gcv_max > gcv_min,
-          "BatchLeastSquaresOptions: need 0 < gcv_min < gcv_max, got ", gcv_min, ", ", gcv_max);
-  require(gcv_points >= 2, "BatchLeastSquaresOptions: gcv_points must be >= 2, got ", gcv_points);
-  require(rank_tolerance > 0.0 && rank_tolerance < 1.0,
-          "BatchLeastSquaresOptions: rank_tolerance must be in (0, 1), got ", rank_tolerance);
+void BatchLeastSquaresOptions::check_relations(const std::string& path) const {
+  require(gcv_max > gcv_min, path, ".gcv_max is ", gcv_max, "; it must be > gcv_min (", gcv_min,
+          ")");
 }
 
 ClosedLoopEstimate estimate_closed_loop_batch(const FeedbackRegression& reg,
@@ -126,7 +121,7 @@ ClosedLoopEstimate estimate_closed_loop_batch(const FeedbackRegression& reg,
   }
   Eigen::VectorXd scale = c.colwise().norm().transpose();
   for (int j = 0; j < p; ++j) {
-    if (!(scale(j) > 0.0 || options.regularisation != Regularisation::kNone))
+    if (!(scale(j) > 0.0 || options.regularisation != Regularisation::none))
       return fail(Termination::singular_equations,
                   internal::concat("estimate_closed_loop_batch: singular regressor: column ", j,
                                    " (", column_name(j, q),
@@ -139,7 +134,7 @@ ClosedLoopEstimate estimate_closed_loop_batch(const FeedbackRegression& reg,
   result.condition_number =
       s(s.size() - 1) > 0.0 ? s(0) / s(s.size() - 1) : std::numeric_limits<double>::infinity();
   Eigen::VectorXd theta_scaled;
-  if (options.regularisation == Regularisation::kNone) {
+  if (options.regularisation == Regularisation::none) {
     if (!(s(s.size() - 1) > options.rank_tolerance * s(0)))
       return fail(
           Termination::singular_equations,
@@ -147,7 +142,7 @@ ClosedLoopEstimate estimate_closed_loop_batch(const FeedbackRegression& reg,
                            "number ", result.condition_number, " beyond 1/rank_tolerance); the ",
                            "input is not rich enough or the orders are too high; use ",
                            "regularisation"));
-    if (options.solver == LeastSquaresSolver::kQr) {
+    if (options.solver == LeastSquaresSolver::qr) {
       theta_scaled = cs.colPivHouseholderQr().solve(y);
     } else {
       theta_scaled = svd.solve(y);
@@ -167,7 +162,7 @@ ClosedLoopEstimate estimate_closed_loop_batch(const FeedbackRegression& reg,
       return dof * rss / (trace * trace);
     };
     double rho = options.ridge;
-    if (options.regularisation == Regularisation::kGcv) {
+    if (options.regularisation == Regularisation::gcv) {
       double best = std::numeric_limits<double>::infinity();
       for (int i = 0; i < options.gcv_points; ++i) {
         const double r =
@@ -195,14 +190,6 @@ ClosedLoopEstimate estimate_closed_loop_batch(const FeedbackRegression& reg,
   finish(result, reg, all);
   result.iterations = 1;
   return result;
-}
-
-void RecursiveLeastSquaresOptions::validate() const {
-  require(std::isfinite(forgetting) && forgetting > 0.0 && forgetting <= 1.0,
-          "RecursiveLeastSquaresOptions: forgetting must be in (0, 1], got ", forgetting);
-  require(std::isfinite(initial_covariance) && initial_covariance > 0.0,
-          "RecursiveLeastSquaresOptions: initial_covariance must be positive, got ",
-          initial_covariance);
 }
 
 RecursiveLeastSquares::RecursiveLeastSquares(Eigen::VectorXd theta0, Eigen::MatrixXd p0,

@@ -39,14 +39,6 @@ struct OutputErrorFunctor {
 
 }  // namespace
 
-void OutputErrorOptions::validate() const {
-  require(substeps >= 1, "OutputErrorOptions: substeps must be >= 1, got ", substeps);
-  require(max_iterations >= 1, "OutputErrorOptions: max_iterations must be >= 1, got ",
-          max_iterations);
-  require(relative_threshold > 0.0, "OutputErrorOptions: relative_threshold must be > 0, got ",
-          relative_threshold);
-}
-
 OutputErrorResult refine_output_error(const SampledData& data, const DelayedFeedbackLoop& start,
                                       const OutputErrorOptions& options) {
   options.validate();

@@ -90,14 +90,11 @@ FilterStep integral_filter_step(int q, double pole, double tau) {
   return r;
 }
 
-void FeedbackRegressorOptions::validate() const {
-  require(filter == RegressorFilter::kIntegratorChain ||
+void FeedbackRegressorOptions::check_relations(const std::string& path) const {
+  require(filter == RegressorFilter::integrator_chain ||
               (std::isfinite(filter_pole) && filter_pole > 0.0),
-          "FeedbackRegressorOptions: filter_pole must be positive and finite for the linear "
-          "integral filter, got ",
-          filter_pole);
-  require(first_equation >= -1, "FeedbackRegressorOptions: first_equation must be >= 0 or -1 ",
-          "(paper's k = p), got ", first_equation);
+          path, ".filter_pole is ", filter_pole,
+          "; it must be > 0 and finite for the linear_integral_filter");
 }
 
 namespace {
@@ -161,7 +158,7 @@ FeedbackRegression build_feedback_regression(const SampledData& data, int forwar
   const int samples = data.size();
   const int q = forward_order + feedback_order;
   const double pole =
-      options.filter == RegressorFilter::kIntegratorChain ? 0.0 : options.filter_pole;
+      options.filter == RegressorFilter::integrator_chain ? 0.0 : options.filter_pole;
 
   int whole = static_cast<int>(std::floor(delay / delta + 1e-9));
   double frac = delay - whole * delta;

@@ -197,11 +197,6 @@ double kronecker_cost(const Polynomial& alpha, const Polynomial& beta, const Pol
   return res.squaredNorm();
 }
 
-void KroneckerSeparationOptions::validate() const {
-  require(max_iterations >= 1, "KroneckerSeparationOptions: max_iterations must be >= 1, got ",
-          max_iterations);
-}
-
 GcdSeparationResult separate_approximate_gcd(const Polynomial& alpha, const Polynomial& beta,
                                              const Polynomial& gamma, int n, int m) {
   check(alpha, beta, n, m, "separate_approximate_gcd");

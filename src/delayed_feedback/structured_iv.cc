@@ -22,7 +22,7 @@ namespace internal {
 StructuredIvResult iv_start(const SampledData& data, int n, int m, double delay,
                             FeedbackRegressorOptions regressors, double pole,
                             const StructuredIvOptions& iv) {
-  regressors.filter = RegressorFilter::kLinearIntegralFilter;
+  regressors.filter = RegressorFilter::linear_integral_filter;
   regressors.filter_pole = pole;
   const FeedbackRegression reg = build_feedback_regression(data, n, m, delay, regressors);
   const StructuredStep1Result st = estimate_structured_step1(reg);
@@ -38,11 +38,16 @@ StructuredIvResult iv_start(const SampledData& data, int n, int m, double delay,
 
 }  // namespace internal
 
-void StructuredIvOptions::validate() const {
-  require(iterations >= 1, "StructuredIvOptions: iterations must be >= 1, got ", iterations);
-  require(max_iterations >= 1, "StructuredIvOptions: max_iterations must be >= 1, got ",
-          max_iterations);
-  require(substeps >= 1, "StructuredIvOptions: substeps must be >= 1, got ", substeps);
+void StructuredIvOptions::check_agrees(const std::string& path, Hold caller_hold,
+                                       int caller_substeps) const {
+  if (hold && *hold != caller_hold)
+    throw InvalidArgument(internal::concat(path, ".hold is ", enum_name(*hold),
+                                           "; it must be empty or ", enum_name(caller_hold),
+                                           " (every stage continues the input the same way)"));
+  if (substeps && *substeps != caller_substeps)
+    throw InvalidArgument(internal::concat(path, ".substeps is ", *substeps,
+                                           "; it must be empty or ", caller_substeps,
+                                           " (every stage simulates the same way)"));
 }
 
 StructuredIvResult estimate_structured_step1_iv(const SampledData& data,
@@ -51,6 +56,8 @@ StructuredIvResult estimate_structured_step1_iv(const SampledData& data,
                                                 const StructuredIvOptions& options) {
   options.validate();
   start.validate();
+  const Hold hold = options.hold.value_or(Hold::first_order_hold);
+  const int substeps = options.substeps.value_or(4);
   const int n = start.forward.denominator().degree();
   const int m = start.feedback.denominator().degree();
   const double delay = start.delay;
@@ -58,7 +65,7 @@ StructuredIvResult estimate_structured_step1_iv(const SampledData& data,
   const ProjectedSystem sys = project_nuisance(reg);
   StructuredIvResult r;
   r.loop = DelayedFeedbackLoop{start.forward.normalized(), start.feedback.normalized(), delay};
-  r.output_rms = loop_output_rms(data, r.loop, options.hold, options.substeps);
+  r.output_rms = loop_output_rms(data, r.loop, hold, substeps);
   r.output_rms_history.push_back(r.output_rms);
   if (!std::isfinite(r.output_rms)) {
     r.termination = Termination::non_finite;
@@ -70,8 +77,8 @@ StructuredIvResult estimate_structured_step1_iv(const SampledData& data,
   for (int it = 0; it < options.iterations; ++it) {
     // Instruments: the regressors rebuilt from the current model's noise-free output.
     const Eigen::VectorXd y_model =
-        simulate_delayed(to_delayed_state_space(current), data.input(), data.sample_time(),
-                         options.hold, DelayedSimulationOptions{options.substeps});
+        simulate_delayed(to_delayed_state_space(current), data.input(), data.sample_time(), hold,
+                         DelayedSimulationOptions{substeps});
     if (!y_model.allFinite() || y_model.cwiseAbs().maxCoeff() > 1e12) {
       r.termination = Termination::non_finite;
       break;
@@ -105,7 +112,7 @@ StructuredIvResult estimate_structured_step1_iv(const SampledData& data,
       break;
     }
     const DelayedFeedbackLoop candidate = loop_from_parameters(next, n, m, delay);
-    const double rms = loop_output_rms(data, candidate, options.hold, options.substeps);
+    const double rms = loop_output_rms(data, candidate, hold, substeps);
     r.output_rms_history.push_back(rms);
     if (!std::isfinite(rms)) {
       r.termination = Termination::non_finite;

@@ -123,13 +123,10 @@ LeastSquaresOutcome structured_least_squares(const Eigen::MatrixXd& c, const Eig
 
 }  // namespace internal
 
-void StructuredStep1Options::validate() const {
-  require(!start_frequencies.empty(), "StructuredStep1Options: start_frequencies is empty");
-  for (double w : start_frequencies)
-    require(std::isfinite(w) && w > 0.0,
-            "StructuredStep1Options: start_frequencies must be positive, got ", w);
-  require(alternating_iterations >= 0 && max_iterations >= 1,
-          "StructuredStep1Options: iteration counts must be >= 0 (alternating) and >= 1");
+void StructuredStep1Options::check_relations(const std::string& path) const {
+  require(!start_frequencies.empty(), path,
+          ".start_frequencies is empty; it must hold at least "
+          "one frequency");
 }
 
 StructuredStep1Result estimate_structured_step1(const FeedbackRegression& reg,

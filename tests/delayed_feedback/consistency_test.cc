@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/delayed_feedback/identification.h"
-#include "delayed_feedback/records.h"
+#include "support/de_iuliis_systems.h"
 
 namespace ctid {
 namespace {

@@ -4,9 +4,12 @@
 #pragma once
 
 #include <string>
+#include <string_view>
+#include <tuple>
 
 #include <Eigen/Core>
 
+#include "ctid/core/fields.h"
 #include "ctid/core/hold.h"
 #include "ctid/simulation/delayed_feedback.h"
 
@@ -22,6 +25,22 @@ struct SeparabilityReport {
   double condition_number = 0.0;  ///< of the column-scaled sensitivity matrix
   bool separable = false;         ///< every relative sd below the threshold
   std::string message;
+
+  static constexpr std::string_view type_name = "SeparabilityReport";
+  static constexpr auto fields() {
+    using R = SeparabilityReport;
+    return std::tuple{
+        field("parameters", &R::parameters, "rho = [a_F | b_F | a_H | b_H]."),
+        field("covariance", &R::covariance, "sigma^2 (J'J)^-1."),
+        field("standard_deviations", &R::standard_deviations, "Square roots of its diagonal."),
+        field("relative_standard_deviations", &R::relative_standard_deviations,
+              "sd / max(|rho_i|, 1e-3)."),
+        field("noise_variance", &R::noise_variance, "sigma^2."),
+        field("condition_number", &R::condition_number, "Of the column-scaled sensitivity matrix."),
+        field("separable", &R::separable, "Every relative sd below the threshold."),
+        field("message", &R::message, "The verdict in one sentence."),
+    };
+  }
 };
 
 /// Cramér-Rao bound of ρ for the loop driven by `input` (held by `hold`) with white output
