@@ -12,16 +12,16 @@
 
 #include <benchmark/benchmark.h>
 
-#include "ctid/delayed_feedback/refinement.h"
+#include "ctid/delayed_feedback/identification.h"
 #include "ctid/study/monte_carlo.h"
-#include "delayed_feedback/records.h"
+#include "support/de_iuliis_systems.h"
 
 namespace {
 
 ctid::DelayedFeedbackLoop paper_loop() { return ctid::test_support::paper_feedback_loop(); }
 
 // Noise-free record of `duration` s: the tests' smooth multisine of `harmonics` lines of a
-// `period` s fundamental through the paper's loop (delayed_feedback/records.h).
+// `period` s fundamental through the paper's loop (support/de_iuliis_systems.h).
 ctid::SampledData multisine_record(double duration, double period, int harmonics) {
   return ctid::test_support::feedback_record(paper_loop(), duration, period, harmonics);
 }
@@ -64,7 +64,7 @@ const ctid::SampledData& monte_carlo_record(std::int64_t which) {
 const ctid::FeedbackRegression& regression() {
   static const ctid::FeedbackRegression reg = [] {
     ctid::FeedbackRegressorOptions o;
-    o.filter = ctid::RegressorFilter::kLinearIntegralFilter;
+    o.filter = ctid::RegressorFilter::linear_integral_filter;
     o.initial_condition_terms = true;
     return ctid::build_feedback_regression(record(), 3, 3, 0.5, o);
   }();

@@ -7,12 +7,13 @@
 #include <cstdio>
 #include <functional>
 
+#include "ctid/delayed_feedback/identification.h"
 #include "ctid/delayed_feedback/least_squares.h"
-#include "ctid/delayed_feedback/refinement.h"
 #include "ctid/delayed_feedback/regressors.h"
 #include "ctid/delayed_feedback/separation.h"
 #include "ctid/delayed_feedback/validation.h"
 #include "ctid/simulation/delayed_feedback.h"
+#include "support/de_iuliis_systems.h"
 
 using namespace ctid;
 
@@ -31,9 +32,8 @@ void report(const char* label, const TransferFunction& f, const TransferFunction
 }  // namespace
 
 int main() {
-  const DelayedFeedbackLoop truth{
-      TransferFunction(Polynomial{2.0, 1.0, 2.0}, Polynomial{3.0, 2.0, 3.0, 1.0}),
-      TransferFunction(Polynomial{1.0, 5.0, 1.0}, Polynomial{2.0, 2.0, 3.0, 1.0}), 0.5};
+  // F = (2s² + s + 2)/(s³ + 3s² + 2s + 3), H = (s² + 5s + 1)/(s³ + 3s² + 2s + 2), Δ = 0.5 s.
+  const DelayedFeedbackLoop truth = test_support::paper_feedback_loop(0.5);
   const double delta = 0.05;
   const int samples = 101;  // T = 5 s
   const FourierBasisInput input{12, 5.0};

@@ -1,8 +1,9 @@
 // `ctid feedback`: forward F and feedback H of a loop with a delay in the feedback path,
 // W = F/(1 + F H e^{-Δs}), from a record t,u,y (u the loop input, y its output), by
 // ctid::identify_delayed_feedback (step 1, separation candidates, output-error refinement
-// from each) or, with --delay-scan, identify_delayed_feedback_with_delay_scan. Writes JSON
-// with ascending coefficients; algorithm and conventions in docs/algorithms/feedback-delay.md.
+// from each) or, with --delay-scan, identify_delayed_feedback_with_delay_scan. Writes the
+// delayed_feedback_result document of io (feedback_result_json.h), which `ctid simulate
+// --model` reads back; algorithm and conventions in docs/algorithms/feedback-delay.md.
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -12,8 +13,8 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
-#include "ctid/delayed_feedback/refinement.h"
-#include "ctid/io/json.h"
+#include "ctid/delayed_feedback/identification.h"
+#include "ctid/io/feedback_result_json.h"
 #include "ctid/io/sampled_data_csv.h"
 
 namespace ctid::cli {
@@ -38,25 +39,6 @@ struct FeedbackFlags {
   double filter_pole = 1.0;
 };
 
-nlohmann::json coefficients(const Polynomial& p) {
-  nlohmann::json a = nlohmann::json::array();
-  for (int i = 0; i <= p.degree(); ++i) a.push_back(p.coefficient(i));
-  return a;
-}
-
-nlohmann::json model(const TransferFunction& tf) {
-  return {{"numerator", coefficients(tf.numerator())},
-          {"denominator", coefficients(tf.denominator())}};
-}
-
-nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nullptr; }
-
-nlohmann::json vector(const Eigen::VectorXd& v) {
-  nlohmann::json a = nlohmann::json::array();
-  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(finite_or_null(v(i)));
-  return a;
-}
-
 void run_feedback(const FeedbackFlags& f) {
   if (f.forward_order < 1 || f.feedback_order < 1)
     usage_error("--forward-order and --feedback-order must be >= 1, got " +
@@ -77,14 +59,14 @@ void run_feedback(const FeedbackFlags& f) {
 
   FeedbackIdentificationOptions options;
   options.regressors.filter_pole = f.filter_pole;
-  options.step1 = f.step1 == "rls" ? Step1Method::kRecursive : Step1Method::kBatch;
-  options.separation = f.separation == "gcd"         ? SeparationMethod::kGcd
-                       : f.separation == "kronecker" ? SeparationMethod::kKronecker
-                                                     : SeparationMethod::kBoth;
+  options.step1 = f.step1 == "rls" ? Step1Method::recursive : Step1Method::batch;
+  options.separation = f.separation == "gcd"         ? SeparationMethod::gcd
+                       : f.separation == "kronecker" ? SeparationMethod::kronecker
+                                                     : SeparationMethod::both;
   options.output_error.hold = f.hold == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
 
-  FeedbackIdentificationResult r;
-  nlohmann::json scan_json = nullptr;
+  io::DelayedFeedbackResult document;
+  FeedbackIdentificationResult& r = document.identification;
   if (scan) {
     const auto colon = f.delay_scan.find(':');
     if (colon == std::string::npos)
@@ -108,51 +90,15 @@ void run_feedback(const FeedbackFlags& f) {
     const DelayIdentificationResult s =
         identify_delayed_feedback_with_delay_scan(data, f.forward_order, f.feedback_order, d);
     r = s.identification;
-    scan_json = {{"delays", vector(s.scan.delays)},
-                 {"criterion", vector(s.scan.criterion)},
-                 {"grid_delay", s.scan.delay}};
+    document.delay_scan = s.scan;
   } else {
     r = identify_delayed_feedback(data, f.forward_order, f.feedback_order, f.delay, options);
   }
-  if (r.best_candidate < 0)
-    throw std::runtime_error("no usable separation candidate: " + r.message);
+  if (!r.best_candidate) throw std::runtime_error("no usable separation candidate: " + r.message);
 
-  nlohmann::json candidates = nlohmann::json::array();
-  for (const SeparationCandidateReport& c : r.candidates)
-    candidates.push_back({{"source", c.source},
-                          {"kronecker_cost", finite_or_null(c.kronecker_cost)},
-                          {"start_rms", finite_or_null(c.start_rms)},
-                          {"refined_rms", finite_or_null(c.refined_rms)}});
-  const nlohmann::json result = {
-      {"kind", "delayed_feedback"},
-      {"coefficients", "ascending powers of s"},
-      {"forward", model(r.loop.forward)},
-      {"feedback", model(r.loop.feedback)},
-      {"delay", r.loop.delay},
-      {"closed_loop",
-       {{"alpha", coefficients(r.loop.alpha())},
-        {"beta", coefficients(r.loop.beta())},
-        {"gamma", coefficients(r.loop.gamma())}}},
-      {"diagnostics",
-       {{"output_rms", finite_or_null(r.output_rms)},
-        {"message", r.message},
-        {"step1",
-         {{"alpha", coefficients(r.step1.alpha)},
-          {"beta", coefficients(r.step1.beta)},
-          {"gamma", coefficients(r.step1.gamma)},
-          {"residual_rms", r.step1.residual_rms},
-          {"condition_number", r.step1.condition_number},
-          {"output_rms", finite_or_null(r.step1_output_rms)}}},
-        {"candidates", candidates},
-        {"best_candidate", r.best_candidate},
-        {"cramer_rao",
-         {{"parameters", vector(r.cramer_rao.parameters)},
-          {"standard_deviations", vector(r.cramer_rao.standard_deviations)},
-          {"separable", r.cramer_rao.separable},
-          {"message", r.cramer_rao.message}}},
-        {"delay_scan", scan_json}}}};
   if (!f.output.empty())
-    io::write_json(output, result, f.force ? io::Overwrite::yes : io::Overwrite::no);
+    io::write_delayed_feedback_result(output, document,
+                                      f.force ? io::Overwrite::yes : io::Overwrite::no);
   if (!f.quiet) {
     std::cout << "F(s) = (" << r.loop.forward.numerator().to_string() << ") / ("
               << r.loop.forward.denominator().to_string() << ")\n"
@@ -172,10 +118,11 @@ Command add_feedback_command(CLI::App& parent) {
       "Identify forward F and feedback H of a loop with a delay in the feedback path, "
       "W = F/(1 + F H e^{-Ds}), from a CSV record t,u,y.");
   app->footer(
-      "Output JSON: forward/feedback numerator and denominator (ascending powers of s, monic "
-      "denominators), delay, closed_loop alpha/beta/gamma, diagnostics (step 1, candidates, "
-      "Cramer-Rao). See docs/algorithms/feedback-delay.md. Exit status: 0 ran, 2 bad usage or "
-      "input, 1 other error.");
+      "Output JSON: a delayed_feedback_result document (type, version, identification: loop "
+      "with F and H as transfer_function documents, step 1, candidates, Cramer-Rao, "
+      "termination; delay_scan when scanned); ctid simulate --model accepts it. See "
+      "docs/algorithms/feedback-delay.md. Exit status: 0 ran, 2 bad usage or input, 1 other "
+      "error.");
   app->add_option("data", f.data, "CSV record with time, input and output columns")
       ->required()
       ->check(CLI::ExistingFile);

@@ -18,6 +18,7 @@
 #include "ctid/core/format.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/excitation_spec.h"
+#include "ctid/io/feedback_result_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/result_json.h"
@@ -245,7 +246,12 @@ void run_simulate_loop(const SimulateFlags& f, CLI::App& app, const nlohmann::js
                                  ": a delayed_feedback_loop gets white output noise only "
                                  "(--noise-std, --snr or --nsr)"));
   }
-  const DelayedFeedbackLoop loop = io::delayed_feedback_loop_from_json(document, f.model);
+  // A delayed_feedback_result (ctid feedback) is simulated through its identified loop.
+  const DelayedFeedbackLoop loop =
+      io::is_delayed_feedback_result(document)
+          ? io::delayed_feedback_result_from_json(document, f.model).identification.loop
+          : io::delayed_feedback_loop_from_json(document, f.model);
+  loop.validate();
   const DelayedSimulationOptions options{f.substeps};
   options.validate();
   const Hold hold = f.hold == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
@@ -280,7 +286,7 @@ void run_simulate(const SimulateFlags& f, CLI::App& app) {
     usage_error(output.string() + ": file exists; pass --force to replace it");
   }
   const nlohmann::json document = io::read_json(f.model);
-  if (io::is_delayed_feedback_loop(document)) {
+  if (io::is_delayed_feedback_loop(document) || io::is_delayed_feedback_result(document)) {
     run_simulate_loop(f, app, document);
     return;
   }

@@ -49,59 +49,6 @@ inline void check_keywords(const std::string& where, const py::kwargs& kwargs,
   }
 }
 
-/// An options struct bound as a Python class: Name(field=value, ...) with keyword-only
-/// arguments (unknown ones raise TypeError listing the valid fields), read/write attributes,
-/// validate(), a repr and the class attribute `fields`.
-template <class T>
-class OptionsClass {
- public:
-  OptionsClass(py::module_& m, const char* name, const char* doc)
-      : cls_(m, name, doc), name_(name), fields_(std::make_shared<std::vector<std::string>>()) {}
-
-  template <class D>
-  OptionsClass& field(const char* name, D T::*member, const char* doc) {
-    cls_.def_readwrite(name, member, doc);
-    fields_->push_back(name);
-    return *this;
-  }
-
-  py::class_<T>& finish() {
-    auto fields = fields_;
-    const std::string name = name_;
-    cls_.def(py::init([fields, name](const py::kwargs& kwargs) {
-               check_keywords(name, kwargs, *fields);
-               py::object object = py::cast(T{});
-               for (const auto& item : kwargs) {
-                 py::setattr(object, item.first, item.second);
-               }
-               return object.cast<T>();
-             }),
-             ("Keyword-only constructor; fields: " + join(*fields) +
-              ". Unknown keywords raise TypeError.")
-                 .c_str());
-    cls_.def(
-        "validate", [](const T& self) { self.validate(); },
-        "Raise ValueError naming the first bad field, its value and the rule.");
-    cls_.def("__repr__", [fields, name](const py::object& self) {
-      std::string out = name + "(";
-      for (size_t i = 0; i < fields->size(); ++i) {
-        out += (i ? ", " : "") + (*fields)[i] + "=" +
-               py::cast<std::string>(py::repr(self.attr((*fields)[i].c_str())));
-      }
-      return out + ")";
-    });
-    py::tuple names(fields->size());
-    for (size_t i = 0; i < fields->size(); ++i) names[i] = py::str((*fields)[i]);
-    cls_.attr("fields") = names;
-    return cls_;
-  }
-
- private:
-  py::class_<T> cls_;
-  std::string name_;
-  std::shared_ptr<std::vector<std::string>> fields_;
-};
-
 /// The options of a call: `options` itself, or T(**kwargs); both at once is a TypeError, and
 /// an unknown keyword names the function and the valid keywords.
 template <class T>

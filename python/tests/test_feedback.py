@@ -120,3 +120,56 @@ def test_structured_iv_improves_a_perturbed_start():
     assert result.output_rms < 1e-2 * history[0], result.message
     with pytest.raises(TypeError):
         ctid.estimate_structured_step1_iv(data, start, regressors, iteration=4)
+
+
+def test_a_failed_fit_is_a_result_not_a_value_error():
+    # An all-zero record: step 1 is singular. That is an outcome of the fit, not bad input.
+    zero = ctid.SampledData(0.05, np.zeros(200), np.zeros(200))
+    regression = ctid.build_feedback_regression(zero, 3, 3, 0.5)
+    step1 = ctid.estimate_closed_loop_batch(regression)
+    assert step1.termination == ctid.Termination.singular_equations
+    assert not step1.converged()
+    assert "singular regressor" in step1.message
+    result = ctid.identify_delayed_feedback(zero, 2, 1, 0.5, iv_filter_poles=[])
+    assert result.step1.termination == ctid.Termination.singular_equations
+    assert result.termination != ctid.Termination.not_run
+    assert result.brief_report()
+
+
+def test_identification_options_are_reachable_from_python():
+    options = ctid.FeedbackIdentificationOptions()
+    assert options.fields[0] == "regressors"
+    assert options.output_error.hold == ctid.Hold.first_order_hold
+    assert options.step1 == ctid.Step1Method.batch
+    assert options.separation == ctid.SeparationMethod.both
+    assert options.regressors.filter == ctid.RegressorFilter.linear_integral_filter
+    assert options.iv.hold is None
+    assert list(options.iv_filter_poles) == [0.3, 0.5, 1.0, 2.0]
+    options.output_error.substeps = 0
+    with pytest.raises(ValueError,
+                       match=r"FeedbackIdentificationOptions\.output_error\.substeps is 0; "
+                             r"it must be >= 1"):
+        options.validate()
+    options.output_error.substeps = 4
+    options.iv.hold = ctid.Hold.zero_order_hold
+    with pytest.raises(ValueError, match=r"iv\.hold is zero_order_hold"):
+        options.validate()
+    scan = ctid.DelayIdentificationOptions()
+    assert scan.scan.criterion == ctid.DelayCriterion.refined_output_error
+    for enum in (ctid.RegressorFilter, ctid.LeastSquaresSolver, ctid.Regularisation,
+                 ctid.DelayCriterion, ctid.Step1Method, ctid.SeparationMethod):
+        assert all(name == name.lower() for name in enum.__members__)
+
+
+def test_identification_takes_options_or_keywords_alike():
+    data = informative_record(0.5)
+    options = ctid.FeedbackIdentificationOptions(iv_filter_poles=[0.5])
+    by_object = ctid.identify_delayed_feedback(data, 3, 3, 0.5, options=options)
+    by_keywords = ctid.identify_delayed_feedback(data, 3, 3, 0.5, iv_filter_poles=[0.5])
+    assert by_object.output_rms == by_keywords.output_rms
+    assert by_object.termination == ctid.Termination.converged
+    assert by_object.best_candidate is not None
+    with pytest.raises(TypeError):
+        ctid.identify_delayed_feedback(data, 3, 3, 0.5, options=options, refine=False)
+    with pytest.raises(TypeError):
+        ctid.identify_delayed_feedback(data, 3, 3, 0.5, holdd=ctid.Hold.zero_order_hold)

@@ -22,25 +22,6 @@ import ctid
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 HEADERS = sorted((ROOT / "include" / "ctid").rglob("*.h"))
 
-# ---- Not yet converted on this branch ---------------------------------------------------
-# The delayed_feedback options get their field lists on the delayed_feedback branch; until
-# that branch is merged they are expected to fail here. Empty this set after the merge.
-NOT_YET_CONVERTED = {
-    "FeedbackRegressorOptions",
-    "KroneckerSeparationOptions",
-    "BatchLeastSquaresOptions",
-    "RecursiveLeastSquaresOptions",
-    "StructuredStep1Options",
-    "StructuredIvOptions",
-    "OutputErrorOptions",
-    "FeedbackDelayScanOptions",
-    "FeedbackIdentificationOptions",
-    "DelayIdentificationOptions",
-    "WhiteNoiseValidationOptions",
-}
-NOT_YET_CONVERTED_REASON = "converted on the delayed_feedback branch"
-# -------------------------------------------------------------------------------------------
-
 # ---- Reading the C++ headers --------------------------------------------------------------
 
 _TOKENS = re.compile(r'"(?:\\.|[^"\\])*"|\'(?:\\.|[^\'\\])*\'|//[^\n]*|/\*.*?\*/', re.S)
@@ -125,15 +106,7 @@ OPTIONS = sorted(name for name in STRUCTS if re.fullmatch(r"\w+Options", name))
 assert len(OPTIONS) >= 10, f"too few options structs found in the headers: {OPTIONS}"
 
 
-def _cases():
-    for name in OPTIONS:
-        marks = []
-        if name in NOT_YET_CONVERTED:
-            marks.append(pytest.mark.xfail(reason=NOT_YET_CONVERTED_REASON, strict=False))
-        yield pytest.param(name, marks=marks, id=name)
-
-
-CASES = list(_cases())
+CASES = [pytest.param(name, id=name) for name in OPTIONS]
 
 # ---- Values -------------------------------------------------------------------------------
 

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
+#include <utility>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -30,6 +32,12 @@ void finish(ClosedLoopEstimate& r, const FeedbackRegression& reg, const Eigen::V
   r.equations = static_cast<int>(reg.target.size());
   const Eigen::VectorXd residual = reg.target - reg.regressor * all;
   r.residual_rms = std::sqrt(residual.squaredNorm() / static_cast<double>(residual.size()));
+  if (all.allFinite()) {
+    r.termination = Termination::converged;
+  } else {
+    r.termination = Termination::non_finite;
+    r.message = "the least-squares solution is not finite";
+  }
 }
 
 }  // namespace
@@ -65,14 +73,9 @@ Eigen::VectorXd closed_loop_theta(const Polynomial& alpha, const Polynomial& bet
   return theta;
 }
 
-void BatchLeastSquaresOptions::validate() const {
-  require(std::isfinite(ridge) && ridge >= 0.0,
-          "BatchLeastSquaresOptions: ridge must be finite and >= 0, got ", ridge);
-  require(gcv_min > 0.0 && gcv_max > gcv_min,
-          "BatchLeastSquaresOptions: need 0 < gcv_min < gcv_max, got ", gcv_min, ", ", gcv_max);
-  require(gcv_points >= 2, "BatchLeastSquaresOptions: gcv_points must be >= 2, got ", gcv_points);
-  require(rank_tolerance > 0.0 && rank_tolerance < 1.0,
-          "BatchLeastSquaresOptions: rank_tolerance must be in (0, 1), got ", rank_tolerance);
+void BatchLeastSquaresOptions::check_relations(const std::string& path) const {
+  require(gcv_max > gcv_min, path, ".gcv_max is ", gcv_max, "; it must be > gcv_min (", gcv_min,
+          ")");
 }
 
 ClosedLoopEstimate estimate_closed_loop_batch(const FeedbackRegression& reg,
@@ -84,8 +87,16 @@ ClosedLoopEstimate estimate_closed_loop_batch(const FeedbackRegression& reg,
   const Eigen::Index rows = reg.regressor.rows();
   require(rows > p + nn, "estimate_closed_loop_batch: too few equations (", rows, ") for ", p + nn,
           " unknowns");
-  require(reg.regressor.allFinite() && reg.target.allFinite(),
-          "estimate_closed_loop_batch: the regression has non-finite entries");
+  ClosedLoopEstimate result;
+  result.equations = static_cast<int>(reg.target.size());
+  auto fail = [&](Termination why, std::string message) {
+    result.termination = why;
+    result.message = std::move(message);
+    return result;
+  };
+  if (!reg.regressor.allFinite() || !reg.target.allFinite())
+    return fail(Termination::non_finite,
+                "estimate_closed_loop_batch: the regression has non-finite entries");
 
   // Project the nuisance columns out so that they are estimated but never penalised.
   Eigen::MatrixXd c = reg.regressor.leftCols(p);
@@ -99,32 +110,39 @@ ClosedLoopEstimate estimate_closed_loop_batch(const FeedbackRegression& reg,
     }
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(nuis);
     qr.setThreshold(1e-13);
-    require(qr.rank() == nn, "estimate_closed_loop_batch: the initial-condition columns are ",
-            "singular (rank ", qr.rank(), " < ", nn, "); the record is too short for them");
+    if (qr.rank() != nn)
+      return fail(Termination::singular_equations,
+                  internal::concat("estimate_closed_loop_batch: the initial-condition columns are ",
+                                   "singular (rank ", qr.rank(), " < ", nn,
+                                   "); the record is too short for them"));
     q_nuisance = qr.householderQ() * Eigen::MatrixXd::Identity(rows, nn);
     c -= q_nuisance * (q_nuisance.transpose() * c);
     y -= q_nuisance * (q_nuisance.transpose() * y);
   }
   Eigen::VectorXd scale = c.colwise().norm().transpose();
   for (int j = 0; j < p; ++j) {
-    require(scale(j) > 0.0 || options.regularisation != Regularisation::kNone,
-            "estimate_closed_loop_batch: singular regressor: column ", j, " (", column_name(j, q),
-            ") is identically zero; is the input or output zero?");
+    if (!(scale(j) > 0.0 || options.regularisation != Regularisation::none))
+      return fail(Termination::singular_equations,
+                  internal::concat("estimate_closed_loop_batch: singular regressor: column ", j,
+                                   " (", column_name(j, q),
+                                   ") is identically zero; is the input or output zero?"));
     if (scale(j) == 0.0) scale(j) = 1.0;
   }
   const Eigen::MatrixXd cs = c * scale.cwiseInverse().asDiagonal();
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(cs, Eigen::ComputeThinU | Eigen::ComputeThinV);
   const Eigen::VectorXd s = svd.singularValues();
-  ClosedLoopEstimate result;
   result.condition_number =
       s(s.size() - 1) > 0.0 ? s(0) / s(s.size() - 1) : std::numeric_limits<double>::infinity();
   Eigen::VectorXd theta_scaled;
-  if (options.regularisation == Regularisation::kNone) {
-    require(s(s.size() - 1) > options.rank_tolerance * s(0),
-            "estimate_closed_loop_batch: singular regressor (scaled condition number ",
-            result.condition_number, " beyond 1/rank_tolerance); the input is not rich enough ",
-            "or the orders are too high; use regularisation");
-    if (options.solver == LeastSquaresSolver::kQr) {
+  if (options.regularisation == Regularisation::none) {
+    if (!(s(s.size() - 1) > options.rank_tolerance * s(0)))
+      return fail(
+          Termination::singular_equations,
+          internal::concat("estimate_closed_loop_batch: singular regressor (scaled condition ",
+                           "number ", result.condition_number, " beyond 1/rank_tolerance); the ",
+                           "input is not rich enough or the orders are too high; use ",
+                           "regularisation"));
+    if (options.solver == LeastSquaresSolver::qr) {
       theta_scaled = cs.colPivHouseholderQr().solve(y);
     } else {
       theta_scaled = svd.solve(y);
@@ -144,7 +162,7 @@ ClosedLoopEstimate estimate_closed_loop_batch(const FeedbackRegression& reg,
       return dof * rss / (trace * trace);
     };
     double rho = options.ridge;
-    if (options.regularisation == Regularisation::kGcv) {
+    if (options.regularisation == Regularisation::gcv) {
       double best = std::numeric_limits<double>::infinity();
       for (int i = 0; i < options.gcv_points; ++i) {
         const double r =
@@ -170,15 +188,8 @@ ClosedLoopEstimate estimate_closed_loop_batch(const FeedbackRegression& reg,
     all.tail(nn) = reg.regressor.rightCols(nn).colPivHouseholderQr().solve(rest);
   }
   finish(result, reg, all);
+  result.iterations = 1;
   return result;
-}
-
-void RecursiveLeastSquaresOptions::validate() const {
-  require(std::isfinite(forgetting) && forgetting > 0.0 && forgetting <= 1.0,
-          "RecursiveLeastSquaresOptions: forgetting must be in (0, 1], got ", forgetting);
-  require(std::isfinite(initial_covariance) && initial_covariance > 0.0,
-          "RecursiveLeastSquaresOptions: initial_covariance must be positive, got ",
-          initial_covariance);
 }
 
 RecursiveLeastSquares::RecursiveLeastSquares(Eigen::VectorXd theta0, Eigen::MatrixXd p0,
@@ -226,6 +237,7 @@ ClosedLoopEstimate estimate_closed_loop_recursive(const FeedbackRegression& reg,
   result.condition_number =
       s(s.size() - 1) > 0.0 ? s(0) / s(s.size() - 1) : std::numeric_limits<double>::infinity();
   finish(result, reg, rls.theta());
+  result.iterations = static_cast<int>(reg.regressor.rows());
   return result;
 }
 

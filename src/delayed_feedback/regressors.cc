@@ -90,34 +90,75 @@ FilterStep integral_filter_step(int q, double pole, double tau) {
   return r;
 }
 
-void FeedbackRegressorOptions::validate() const {
-  require(filter == RegressorFilter::kIntegratorChain ||
+void FeedbackRegressorOptions::check_relations(const std::string& path) const {
+  require(filter == RegressorFilter::integrator_chain ||
               (std::isfinite(filter_pole) && filter_pole > 0.0),
-          "FeedbackRegressorOptions: filter_pole must be positive and finite for the linear "
-          "integral filter, got ",
-          filter_pole);
-  require(first_equation >= -1, "FeedbackRegressorOptions: first_equation must be >= 0 or -1 ",
-          "(paper's k = p), got ", first_equation);
+          path, ".filter_pole is ", filter_pole,
+          "; it must be > 0 and finite for the linear_integral_filter");
+}
+
+namespace {
+
+// The first equation and the number of nuisance columns of the regression.
+struct RegressionShape {
+  int first = 0;
+  int nuisance = 0;
+  bool delayed_terms = false;
+};
+
+RegressionShape regression_shape(int q, double delay, double delta,
+                                 const FeedbackRegressorOptions& options) {
+  RegressionShape s;
+  s.first = options.first_equation >= 0 ? options.first_equation
+                                        : static_cast<int>(std::ceil(delay / delta - 1e-9));
+  // For t >= Δ the delayed terms (t - Δ)^j e^{-a(t-Δ)} lie in the span of t^j e^{-at}: they
+  // add information only when some equations precede Δ.
+  s.delayed_terms = options.initial_condition_terms && s.first * delta < delay - 1e-9 * delta;
+  s.nuisance = options.initial_condition_terms ? (s.delayed_terms ? 2 * q : q) : 0;
+  return s;
+}
+
+}  // namespace
+
+std::optional<std::string> feedback_regression_problem(const SampledData& data, int forward_order,
+                                                       int feedback_order, double delay,
+                                                       const FeedbackRegressorOptions& options) {
+  if (forward_order < 1)
+    return internal::concat("feedback identification: forward order n must be >= 1, got ",
+                            forward_order);
+  if (feedback_order < 1)
+    return internal::concat("feedback identification: feedback order m must be >= 1, got ",
+                            feedback_order);
+  if (!(std::isfinite(delay) && delay >= 0.0))
+    return internal::concat("feedback identification: delay must be finite and >= 0, got ", delay);
+  const double delta = data.sample_time();
+  const double duration = (data.size() - 1) * delta;
+  if (!(duration > delay))
+    return internal::concat("feedback identification: the record (", duration,
+                            " s) must be longer than the delay (", delay, " s)");
+  const int q = forward_order + feedback_order;
+  const RegressionShape shape = regression_shape(q, delay, delta, options);
+  const int rows = data.size() - shape.first;
+  const int theta_size = 3 * q - 1;
+  if (rows < theta_size + shape.nuisance + 1)
+    return internal::concat("feedback identification: too few samples: ", rows, " equations for ",
+                            theta_size + shape.nuisance,
+                            " unknowns (need more equations than unknowns; record more samples)");
+  return std::nullopt;
 }
 
 FeedbackRegression build_feedback_regression(const SampledData& data, int forward_order,
                                              int feedback_order, double delay,
                                              const FeedbackRegressorOptions& options) {
   options.validate();
-  require(forward_order >= 1, "feedback identification: forward order n must be >= 1, got ",
-          forward_order);
-  require(feedback_order >= 1, "feedback identification: feedback order m must be >= 1, got ",
-          feedback_order);
-  require(std::isfinite(delay) && delay >= 0.0,
-          "feedback identification: delay must be finite and >= 0, got ", delay);
+  if (const auto problem =
+          feedback_regression_problem(data, forward_order, feedback_order, delay, options))
+    throw InvalidArgument(*problem);
   const double delta = data.sample_time();
   const int samples = data.size();
-  const double duration = (samples - 1) * delta;
-  require(duration > delay, "feedback identification: the record (", duration,
-          " s) must be longer than the delay (", delay, " s)");
   const int q = forward_order + feedback_order;
   const double pole =
-      options.filter == RegressorFilter::kIntegratorChain ? 0.0 : options.filter_pole;
+      options.filter == RegressorFilter::integrator_chain ? 0.0 : options.filter_pole;
 
   int whole = static_cast<int>(std::floor(delay / delta + 1e-9));
   double frac = delay - whole * delta;
@@ -128,18 +169,12 @@ FeedbackRegression build_feedback_regression(const SampledData& data, int forwar
   const FilteredSignal y(data.output(), full, part, delta, whole, fractional);
   const FilteredSignal u(data.input(), full, part, delta, whole, fractional);
 
-  const int first = options.first_equation >= 0 ? options.first_equation
-                                                : static_cast<int>(std::ceil(delay / delta - 1e-9));
+  const RegressionShape shape = regression_shape(q, delay, delta, options);
+  const int first = shape.first;
   const int rows = samples - first;
   const int theta_size = 3 * q - 1;
-  // For t >= Δ the delayed terms (t - Δ)^j e^{-a(t-Δ)} lie in the span of t^j e^{-at}: they
-  // add information only when some equations precede Δ.
-  const bool delayed_terms =
-      options.initial_condition_terms && first * delta < delay - 1e-9 * delta;
-  const int nuisance = options.initial_condition_terms ? (delayed_terms ? 2 * q : q) : 0;
-  require(rows >= theta_size + nuisance + 1, "feedback identification: too few samples: ", rows,
-          " equations for ", theta_size + nuisance,
-          " unknowns (need more equations than unknowns; record more samples)");
+  const bool delayed_terms = shape.delayed_terms;
+  const int nuisance = shape.nuisance;
 
   // Coefficients of (s + a)^q below s^q: the target is s^q/(s+a)^q y = y - sum c_i x_{i+1}.
   Eigen::VectorXd c = Eigen::VectorXd::Zero(q);

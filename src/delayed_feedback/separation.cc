@@ -197,11 +197,6 @@ double kronecker_cost(const Polynomial& alpha, const Polynomial& beta, const Pol
   return res.squaredNorm();
 }
 
-void KroneckerSeparationOptions::validate() const {
-  require(max_iterations >= 1, "KroneckerSeparationOptions: max_iterations must be >= 1, got ",
-          max_iterations);
-}
-
 GcdSeparationResult separate_approximate_gcd(const Polynomial& alpha, const Polynomial& beta,
                                              const Polynomial& gamma, int n, int m) {
   check(alpha, beta, n, m, "separate_approximate_gcd");
@@ -236,12 +231,11 @@ KroneckerSeparationResult separate_kronecker(const Polynomial& alpha, const Poly
                         gv = padded(gamma, q - 1);
 
   std::vector<std::pair<std::string, Eigen::VectorXd>> starts;
-  try {
+  // With α̂ of low degree the GCD start is unavailable; the root splits remain.
+  if (alpha.degree() == q - 1) {
     const GcdSeparationResult g = separate_approximate_gcd(alpha, beta, gamma, n, m);
     if (g.forward.denominator().degree() == n && g.feedback.denominator().degree() == m)
       starts.emplace_back("gcd", pack(g.forward, g.feedback, n, m));
-  } catch (const InvalidArgument&) {
-    // alpha of low degree: the GCD start is unavailable, root splits remain.
   }
   if (options.multi_start || starts.empty()) {
     int index = 0;
@@ -279,12 +273,17 @@ KroneckerSeparationResult separate_kronecker(const Polynomial& alpha, const Poly
     if (j < best.cost) {
       best.cost = j;
       best.best_start = name;
-      best.converged = outcome.converged;
+      best.termination = outcome.termination;
+      best.iterations = outcome.iterations;
       best.message = outcome.message;
       best_p = p;
     }
   }
-  require(best_p.size() > 0, "separate_kronecker: no usable start (non-finite estimates?)");
+  if (best_p.size() == 0) {
+    best.termination = Termination::no_solution;
+    best.message = "separate_kronecker: no usable start (non-finite estimates?)";
+    return best;
+  }
   best.forward = unpack(best_p, 0, n);
   best.feedback = unpack(best_p, 2 * n, m);
   return best;

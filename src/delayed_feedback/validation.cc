@@ -40,11 +40,9 @@ void check_models(const TransferFunction& truth, const TransferFunction& estimat
 
 }  // namespace
 
-void WhiteNoiseValidationOptions::validate() const {
-  require(std::isfinite(sample_time) && sample_time > 0.0,
-          "WhiteNoiseValidationOptions: sample_time must be positive, got ", sample_time);
-  require(std::isfinite(duration) && duration >= sample_time,
-          "WhiteNoiseValidationOptions: duration must be >= sample_time, got ", duration);
+void WhiteNoiseValidationOptions::check_relations(const std::string& path) const {
+  require(duration >= sample_time, path, ".duration is ", duration, "; it must be >= sample_time (",
+          sample_time, ")");
 }
 
 double expected_white_noise_mse(const TransferFunction& truth, const TransferFunction& estimate,

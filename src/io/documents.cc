@@ -15,7 +15,8 @@ std::vector<std::string> result_document_types() {
           kInputDelayScanResultType,
           kValidationReportType,
           kFrfType,
-          kStudySummaryType};
+          kStudySummaryType,
+          std::string(kDelayedFeedbackResultType)};
 }
 
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source) {
@@ -32,9 +33,7 @@ ResultDocument result_from_json(const nlohmann::json& value, const std::string& 
   if (name == kValidationReportType) return validation_report_from_json(value, source);
   if (name == kFrfType) return frf_from_json(value, source);
   if (name == kStudySummaryType) return study_summary_from_json(value, source);
-  // TODO(merge): delayed_feedback_result — add DelayedFeedbackResult to ResultDocument,
-  // result_document_types and to_json, and return delayed_feedback_result_from_json(value,
-  // source) (io/feedback_result_json.h) here.
+  if (name == kDelayedFeedbackResultType) return delayed_feedback_result_from_json(value, source);
   throw InvalidArgument(source + ": \"type\" is \"" + name +
                         "\", which is not a result document (" + types + ")");
 }

@@ -201,7 +201,6 @@ namespace ctid {
 nlohmann::json to_json_value(const TransferFunction& model) { return io::to_json(model); }
 nlohmann::json to_json_value(const AdditiveModel& model) { return io::to_json(model); }
 nlohmann::json to_json_value(const DiscreteTransferFunction& model) { return io::to_json(model); }
-nlohmann::json to_json_value(const DelayedFeedbackLoop& model) { return io::to_json(model); }
 TransferFunction from_json_value(const nlohmann::json& value, std::type_identity<TransferFunction>,
                                  const std::string& where) {
   return io::transfer_function_from_json(value, where);
@@ -214,11 +213,6 @@ DiscreteTransferFunction from_json_value(const nlohmann::json& value,
                                          std::type_identity<DiscreteTransferFunction>,
                                          const std::string& where) {
   return io::discrete_transfer_function_from_json(value, where);
-}
-DelayedFeedbackLoop from_json_value(const nlohmann::json& value,
-                                    std::type_identity<DelayedFeedbackLoop>,
-                                    const std::string& where) {
-  return io::delayed_feedback_loop_from_json(value, where);
 }
 
 }  // namespace ctid

@@ -5,10 +5,11 @@
 #include <gtest/gtest.h>
 
 #include "cli/run_ctid.h"
+#include "ctid/io/feedback_result_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/sampled_data_csv.h"
 #include "ctid/simulation/delayed_feedback.h"
-#include "delayed_feedback/records.h"
+#include "support/de_iuliis_systems.h"
 
 namespace ctid::cli {
 namespace {
@@ -71,17 +72,40 @@ TEST_F(CliTest, FeedbackRecoversTheLoopAndWritesJson) {
     for (int i = 0; i <= p.degree(); ++i)
       EXPECT_NEAR(a[static_cast<std::size_t>(i)].get<double>(), p.coefficient(i), 1e-6) << i;
   };
-  expect_poly(j["forward"]["numerator"], truth.forward.numerator());
-  expect_poly(j["forward"]["denominator"], truth.forward.denominator());
-  expect_poly(j["feedback"]["numerator"], truth.feedback.numerator());
-  expect_poly(j["feedback"]["denominator"], truth.feedback.denominator());
-  EXPECT_DOUBLE_EQ(j["delay"].get<double>(), 0.5);
-  EXPECT_FALSE(j["diagnostics"]["candidates"].empty());
+  EXPECT_EQ(j["type"], "delayed_feedback_result");
+  EXPECT_EQ(j["version"], 1);
+  const nlohmann::json& loop = j["identification"]["loop"];
+  expect_poly(loop["forward"]["numerator_ascending"], truth.forward.numerator());
+  expect_poly(loop["forward"]["denominator_ascending"], truth.forward.denominator());
+  expect_poly(loop["feedback"]["numerator_ascending"], truth.feedback.numerator());
+  expect_poly(loop["feedback"]["denominator_ascending"], truth.feedback.denominator());
+  EXPECT_DOUBLE_EQ(loop["delay"].get<double>(), 0.5);
+  EXPECT_FALSE(j["identification"]["candidates"].empty());
+  EXPECT_EQ(j["identification"]["termination"], "converged");
+  // The library reads the document back, every number bit for bit.
+  const io::DelayedFeedbackResult back = io::read_delayed_feedback_result(path("result.json"));
+  EXPECT_EQ(io::to_json(back), j);
   // No clobbering without --force.
   const auto again = ctid({"feedback", path("loop.csv").string(), "--forward-order", "3",
                            "--feedback-order", "3", "--delay", "0.5", "--output", "result.json"});
   EXPECT_EQ(again.status, 2);
   EXPECT_THAT(again.err, HasSubstr("--force"));
+}
+
+TEST_F(CliTest, FeedbackResultIsAModelForSimulate) {
+  io::write_sampled_data(path("loop.csv"), informative_record());
+  ASSERT_EQ(ctid({"feedback", path("loop.csv").string(), "--forward-order", "3", "--feedback-order",
+                  "3", "--delay", "0.5", "--output", "result.json", "-q"})
+                .status,
+            0);
+  // ctid simulate accepts the result and simulates its loop: the same record comes back.
+  const auto r = ctid({"simulate", "--model", "result.json", "--input", path("loop.csv").string(),
+                       "--output", "again.csv", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const SampledData original = informative_record();
+  const SampledData again = io::read_sampled_data(path("again.csv"));
+  ASSERT_EQ(again.size(), original.size());
+  EXPECT_LT((again.output() - original.output()).cwiseAbs().maxCoeff(), 1e-6);
 }
 
 }  // namespace

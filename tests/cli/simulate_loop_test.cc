@@ -96,10 +96,14 @@ TEST_F(CliTest, SimulateLoopEqualsSimulateDelayedAndFeedbackRecoversIt) {
       EXPECT_NEAR(got[k].get<double>(), w, 1e-5 * std::abs(w)) << what << "[" << k << "]";
     }
   };
-  expect_close(result["forward"]["numerator"], truth.forward.numerator(), "F numerator");
-  expect_close(result["forward"]["denominator"], truth.forward.denominator(), "F denominator");
-  expect_close(result["feedback"]["numerator"], truth.feedback.numerator(), "H numerator");
-  expect_close(result["feedback"]["denominator"], truth.feedback.denominator(), "H denominator");
+  // The delayed_feedback_result document (io/feedback_result_json.h).
+  const nlohmann::json& loop = result["identification"]["loop"];
+  expect_close(loop["forward"]["numerator_ascending"], truth.forward.numerator(), "F numerator");
+  expect_close(loop["forward"]["denominator_ascending"], truth.forward.denominator(),
+               "F denominator");
+  expect_close(loop["feedback"]["numerator_ascending"], truth.feedback.numerator(), "H numerator");
+  expect_close(loop["feedback"]["denominator_ascending"], truth.feedback.denominator(),
+               "H denominator");
 }
 
 TEST_F(CliTest, SimulateLoopHoldAndNoiseToSignalRatio) {

@@ -12,8 +12,8 @@
 
 #include <gtest/gtest.h>
 
-#include "ctid/delayed_feedback/refinement.h"
-#include "delayed_feedback/records.h"
+#include "ctid/delayed_feedback/identification.h"
+#include "support/de_iuliis_systems.h"
 
 namespace ctid {
 namespace {
@@ -56,9 +56,8 @@ TEST(FeedbackConsistency, SeededMonteCarloIsUnbiasedWithCramerRaoSpread) {
   options.output_error.hold = Hold::first_order_hold;
   const FeedbackIdentificationResult pipeline =
       identify_delayed_feedback(noisy_copy(clean, seed + 1, 0), 3, 3, 0.5, options);
-  ASSERT_GE(pipeline.best_candidate, 0) << pipeline.message;
-  const DelayedFeedbackLoop start =
-      pipeline.candidates[static_cast<std::size_t>(pipeline.best_candidate)].start;
+  ASSERT_TRUE(pipeline.best_candidate.has_value()) << pipeline.message;
+  const DelayedFeedbackLoop start = pipeline.candidates[*pipeline.best_candidate].start;
   Eigen::MatrixXd errors(truth.size(), runs);
   for (int r = 0; r < runs; ++r)
     errors.col(r) = estimate(noisy_copy(clean, seed, r), start) - truth;

@@ -11,8 +11,8 @@
 #include <gtest/gtest.h>
 #include <Eigen/LU>
 
-#include "ctid/delayed_feedback/refinement.h"
-#include "delayed_feedback/records.h"
+#include "ctid/delayed_feedback/identification.h"
+#include "support/de_iuliis_systems.h"
 
 namespace ctid {
 namespace {
@@ -67,7 +67,7 @@ TEST(FeedbackFractionalDelay, PipelineAtTheTrueDelayIsExactNoiseFree) {
   FeedbackIdentificationOptions o;
   o.output_error.hold = Hold::first_order_hold;
   const FeedbackIdentificationResult r = identify_delayed_feedback(record(0.0, 0), 3, 3, kDelay, o);
-  ASSERT_GE(r.best_candidate, 0) << r.message;
+  ASSERT_TRUE(r.best_candidate.has_value()) << r.message;
   const Eigen::VectorXd truth = loop_parameters(paper_loop());
   EXPECT_LT((loop_parameters(r.loop) - truth).cwiseAbs().maxCoeff(), 1e-6) << r.message;
   EXPECT_LT(r.output_rms, 1e-9) << r.message;

@@ -10,8 +10,8 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
-#include "ctid/delayed_feedback/refinement.h"
-#include "delayed_feedback/records.h"
+#include "ctid/delayed_feedback/identification.h"
+#include "support/de_iuliis_systems.h"
 
 namespace ctid {
 namespace {
@@ -21,7 +21,7 @@ DelayedFeedbackLoop paper_loop() { return test_support::paper_feedback_loop(); }
 SampledData clean_record() { return test_support::feedback_record(paper_loop()); }
 
 FeedbackRegressorOptions regressors() {
-  return {RegressorFilter::kLinearIntegralFilter, 1.0, true, -1};
+  return {RegressorFilter::linear_integral_filter, 1.0, true, -1};
 }
 
 TEST(FeedbackIv, BiasCorrectionConvergesToTheTruthNoiseFree) {

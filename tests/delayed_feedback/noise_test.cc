@@ -11,8 +11,8 @@
 
 #include <gtest/gtest.h>
 
-#include "ctid/delayed_feedback/refinement.h"
-#include "delayed_feedback/records.h"
+#include "ctid/delayed_feedback/identification.h"
+#include "support/de_iuliis_systems.h"
 
 namespace ctid {
 namespace {

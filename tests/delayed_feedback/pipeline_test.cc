@@ -10,8 +10,8 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
-#include "ctid/delayed_feedback/refinement.h"
-#include "delayed_feedback/records.h"
+#include "ctid/delayed_feedback/identification.h"
+#include "support/de_iuliis_systems.h"
 
 namespace ctid {
 namespace {
@@ -33,7 +33,7 @@ TEST(FeedbackPipeline, NoiseFreeInformativeRecordRecoversFAndH) {
   const DelayedFeedbackLoop loop = paper_loop();
   const FeedbackIdentificationResult r =
       identify_delayed_feedback(informative_data(loop), 3, 3, 0.5, foh_options());
-  ASSERT_GE(r.best_candidate, 0) << r.message;
+  ASSERT_TRUE(r.best_candidate.has_value()) << r.message;
   const Eigen::VectorXd truth = loop_parameters(loop);
   const Eigen::VectorXd error = loop_parameters(r.loop) - truth;
   EXPECT_LT(error.cwiseAbs().maxCoeff(), 1e-6 * truth.cwiseAbs().maxCoeff()) << r.message;
@@ -132,6 +132,39 @@ TEST(FeedbackPipeline, BadInputIsNamed) {
   o.screening_iterations = 0;
   EXPECT_THAT([&] { o.validate(); },
               testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("screening_iterations")));
+  // A nested field is named by its full path, value and rule.
+  o.screening_iterations = 15;
+  o.output_error.substeps = 0;
+  EXPECT_THAT([&] { o.validate(); },
+              testing::ThrowsMessage<InvalidArgument>(testing::StrEq(
+                  "FeedbackIdentificationOptions.output_error.substeps is 0; it must be >= 1")));
+  // The IV stage follows output_error's hold: a contradicting one is rejected, not overwritten.
+  o.output_error.substeps = 4;
+  o.output_error.hold = Hold::first_order_hold;
+  o.iv.hold = Hold::zero_order_hold;
+  EXPECT_THAT([&] { o.validate(); },
+              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr(
+                  "FeedbackIdentificationOptions.iv.hold is zero_order_hold; it must be empty or "
+                  "first_order_hold")));
+  o.iv.hold = Hold::first_order_hold;
+  EXPECT_NO_THROW(o.validate());
+  DelayIdentificationOptions d;
+  d.scan.hold = Hold::zero_order_hold;
+  EXPECT_THAT([&] { d.validate(); },
+              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr(
+                  "DelayIdentificationOptions.scan.hold is zero_order_hold; it must equal "
+                  "identification.output_error.hold")));
+}
+
+TEST(FeedbackPipeline, AFailedFitIsAResultNotAnException) {
+  // An all-zero record: step 1 is singular and no candidate can be refined.
+  const SampledData zero(0.05, Eigen::VectorXd::Zero(200), Eigen::VectorXd::Zero(200));
+  FeedbackIdentificationOptions o;
+  o.iv_filter_poles = {};
+  const FeedbackIdentificationResult r = identify_delayed_feedback(zero, 2, 1, 0.5, o);
+  EXPECT_EQ(r.step1.termination, Termination::singular_equations);
+  EXPECT_NE(r.termination, Termination::not_run);
+  EXPECT_FALSE(r.message.empty());
 }
 
 }  // namespace

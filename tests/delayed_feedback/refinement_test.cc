@@ -1,5 +1,5 @@
 // Output-error refinement, Cramér-Rao separability report and delay scan.
-#include "ctid/delayed_feedback/refinement.h"
+#include "ctid/delayed_feedback/identification.h"
 
 #include <cmath>
 #include <random>
@@ -8,14 +8,19 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "support/de_iuliis_systems.h"
 
 namespace ctid {
 namespace {
 
-DelayedFeedbackLoop paper_loop() {
-  return {TransferFunction(Polynomial{2.0, 1.0, 2.0}, Polynomial{3.0, 2.0, 3.0, 1.0}),
-          TransferFunction(Polynomial{1.0, 5.0, 1.0}, Polynomial{2.0, 2.0, 3.0, 1.0}), 0.5};
+// These records are simulated with a zero-order hold; the refinement must assume the same.
+OutputErrorOptions zoh_options() {
+  OutputErrorOptions o;
+  o.hold = Hold::zero_order_hold;
+  return o;
 }
+
+DelayedFeedbackLoop paper_loop() { return test_support::paper_feedback_loop(); }
 
 Eigen::VectorXd fourier_samples(double delta, int samples, double period) {
   const FourierBasisInput input{12, period};
@@ -43,7 +48,7 @@ TEST(FeedbackRefinement, OutputErrorRecoversLoopNoiseFree) {
   Eigen::VectorXd start = loop_parameters(loop);
   for (Eigen::Index i = 0; i < start.size(); ++i) start(i) *= (i % 2 == 0) ? 0.98 : 1.02;
   const OutputErrorResult r =
-      refine_output_error(data, loop_from_parameters(start, 3, 3, 0.5), OutputErrorOptions{});
+      refine_output_error(data, loop_from_parameters(start, 3, 3, 0.5), zoh_options());
   EXPECT_LT((loop_parameters(r.loop) - loop_parameters(loop)).cwiseAbs().maxCoeff(), 1e-5);
   EXPECT_LT(r.residual_rms, 1e-8);
 }
@@ -94,7 +99,8 @@ TEST(FeedbackRefinement, OutputErrorIsConsistentInASeededMonteCarlo) {
     std::normal_distribution<double> normal(0.0, sigma);
     Eigen::VectorXd noisy = y;
     for (Eigen::Index k = 0; k < noisy.size(); ++k) noisy(k) += normal(rng);
-    const OutputErrorResult fit = refine_output_error(SampledData(delta, u, noisy), loop);
+    const OutputErrorResult fit =
+        refine_output_error(SampledData(delta, u, noisy), loop, zoh_options());
     errors.col(r) = loop_parameters(fit.loop) - truth;
   }
   const Eigen::VectorXd mean = errors.rowwise().mean();

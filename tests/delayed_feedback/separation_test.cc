@@ -6,14 +6,12 @@
 
 #include "ctid/core/error.h"
 #include "ctid/simulation/delayed_feedback.h"
+#include "support/de_iuliis_systems.h"
 
 namespace ctid {
 namespace {
 
-DelayedFeedbackLoop paper_loop() {
-  return {TransferFunction(Polynomial{2.0, 1.0, 2.0}, Polynomial{3.0, 2.0, 3.0, 1.0}),
-          TransferFunction(Polynomial{1.0, 5.0, 1.0}, Polynomial{2.0, 2.0, 3.0, 1.0}), 0.5};
-}
+DelayedFeedbackLoop paper_loop() { return test_support::paper_feedback_loop(); }
 
 double coefficient_error(const TransferFunction& a, const TransferFunction& b) {
   const TransferFunction x = a.normalized();

@@ -10,6 +10,7 @@
 #include "ctid/delayed_feedback/least_squares.h"
 #include "ctid/delayed_feedback/regressors.h"
 #include "ctid/simulation/delayed_feedback.h"
+#include "support/de_iuliis_systems.h"
 
 namespace ctid {
 namespace {
@@ -30,10 +31,7 @@ double closed_loop_error(const ClosedLoopEstimate& est, const DelayedFeedbackLoo
   return worst;
 }
 
-DelayedFeedbackLoop paper_loop() {
-  return {TransferFunction(Polynomial{2.0, 1.0, 2.0}, Polynomial{3.0, 2.0, 3.0, 1.0}),
-          TransferFunction(Polynomial{1.0, 5.0, 1.0}, Polynomial{2.0, 2.0, 3.0, 1.0}), 0.5};
-}
+DelayedFeedbackLoop paper_loop() { return test_support::paper_feedback_loop(); }
 
 SampledData fourier_data(const DelayedFeedbackLoop& loop, double delta, double duration,
                          double period) {
@@ -114,7 +112,7 @@ TEST(FeedbackRegressors, FineSamplingMakesTheEquationHoldAtTrueTheta) {
   const SampledData data = fourier_data(loop, 0.005, 5.0, 5.0);
   const Eigen::VectorXd theta = closed_loop_theta(loop.alpha(), loop.beta(), loop.gamma());
   FeedbackRegressorOptions options;
-  options.filter = RegressorFilter::kLinearIntegralFilter;
+  options.filter = RegressorFilter::linear_integral_filter;
   options.filter_pole = 2.0;
   options.initial_condition_terms = true;
   const FeedbackRegression reg = build_feedback_regression(data, 3, 3, 0.5, options);
@@ -131,7 +129,7 @@ TEST(FeedbackLeastSquares, RecoversClosedLoopOnAnInformativeExperiment) {
   loop.delay = 0.503;
   const SampledData data = fourier_data(loop, 0.01, 30.0, 10.0);
   FeedbackRegressorOptions options;
-  options.filter = RegressorFilter::kLinearIntegralFilter;
+  options.filter = RegressorFilter::linear_integral_filter;
   options.filter_pole = 2.0;
   options.initial_condition_terms = true;
   const FeedbackRegression reg = build_feedback_regression(data, 3, 3, 0.503, options);
@@ -139,7 +137,7 @@ TEST(FeedbackLeastSquares, RecoversClosedLoopOnAnInformativeExperiment) {
   EXPECT_LT(closed_loop_error(est, loop, 7.5), 2e-3);  // harmonics up to 7.5 rad/s
   EXPECT_LT(est.residual_rms, 1e-3 * reg.target.norm() / std::sqrt(reg.target.size()));
   BatchLeastSquaresOptions svd;
-  svd.solver = LeastSquaresSolver::kSvd;
+  svd.solver = LeastSquaresSolver::svd;
   EXPECT_LT(closed_loop_error(estimate_closed_loop_batch(reg, svd), loop, 7.5), 2e-3);
 }
 
@@ -148,7 +146,7 @@ TEST(FeedbackLeastSquares, RlsWithUnitForgettingEqualsRegularisedBatch) {
   const DelayedFeedbackLoop loop = paper_loop();
   const SampledData data = fourier_data(loop, 0.05, 10.0, 5.0);
   FeedbackRegressorOptions ro;
-  ro.filter = RegressorFilter::kLinearIntegralFilter;
+  ro.filter = RegressorFilter::linear_integral_filter;
   ro.filter_pole = 1.0;
   const FeedbackRegression reg = build_feedback_regression(data, 3, 3, 0.5, ro);
   const int p = reg.theta_size;
@@ -174,17 +172,17 @@ TEST(FeedbackLeastSquares, GcvRidgeStaysCloseOnCleanData) {
   DelayedFeedbackLoop loop = paper_loop();
   const SampledData data = fourier_data(loop, 0.01, 30.0, 10.0);
   FeedbackRegressorOptions ro;
-  ro.filter = RegressorFilter::kLinearIntegralFilter;
+  ro.filter = RegressorFilter::linear_integral_filter;
   ro.filter_pole = 2.0;
   ro.initial_condition_terms = true;
   const FeedbackRegression reg = build_feedback_regression(data, 3, 3, 0.5, ro);
   BatchLeastSquaresOptions options;
-  options.regularisation = Regularisation::kGcv;
+  options.regularisation = Regularisation::gcv;
   const ClosedLoopEstimate est = estimate_closed_loop_batch(reg, options);
   EXPECT_LT(closed_loop_error(est, loop, 7.5), 5e-3);
   EXPECT_GT(est.ridge, 0.0);
   // A heavy fixed ridge shrinks θ: the fit gets visibly worse, so the weight is used.
-  options.regularisation = Regularisation::kFixed;
+  options.regularisation = Regularisation::fixed;
   options.ridge = 1e-2;
   EXPECT_GT(closed_loop_error(estimate_closed_loop_batch(reg, options), loop, 7.5), 1e-2);
 }
@@ -204,13 +202,17 @@ TEST(FeedbackLeastSquares, BadInputIsNamed) {
               ThrowsMessage<InvalidArgument>(HasSubstr("longer than the delay")));
   EXPECT_THAT([&] { build_feedback_regression(data.segment(0, 20), 3, 3, 0.5); },
               ThrowsMessage<InvalidArgument>(HasSubstr("too few samples")));
+  // A singular regressor is a numerical outcome, not bad input: a result, never an exception.
   const SampledData zero(0.05, Eigen::VectorXd::Zero(101), Eigen::VectorXd::Zero(101));
-  EXPECT_THAT([&] { estimate_closed_loop_batch(build_feedback_regression(zero, 3, 3, 0.5)); },
-              ThrowsMessage<InvalidArgument>(HasSubstr("singular regressor")));
+  const ClosedLoopEstimate singular =
+      estimate_closed_loop_batch(build_feedback_regression(zero, 3, 3, 0.5));
+  EXPECT_EQ(singular.termination, Termination::singular_equations);
+  EXPECT_THAT(singular.message, HasSubstr("singular regressor"));
   RecursiveLeastSquaresOptions rls;
   rls.forgetting = 1.5;
   EXPECT_THAT([&] { rls.validate(); },
-              ThrowsMessage<InvalidArgument>(HasSubstr("forgetting must be in (0, 1]")));
+              ThrowsMessage<InvalidArgument>(HasSubstr(
+                  "RecursiveLeastSquaresOptions.forgetting is 1.5; it must be in (0, 1]")));
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // White-noise validation of separated models (Section 4 protocol) and its exact expectation.
 #include "ctid/delayed_feedback/validation.h"
+#include "support/de_iuliis_systems.h"
 
 #include <cmath>
 #include <limits>
@@ -9,7 +10,7 @@
 namespace ctid {
 namespace {
 
-const TransferFunction kF(Polynomial{2.0, 1.0, 2.0}, Polynomial{3.0, 2.0, 3.0, 1.0});
+const TransferFunction kF = test_support::paper_feedback_loop().forward;
 
 TEST(FeedbackValidation, IdenticalModelsHaveZeroError) {
   const ResponseComparison r = compare_white_noise_response(kF, kF);

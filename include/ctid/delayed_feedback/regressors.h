@@ -6,8 +6,17 @@
 // and the filter integrated exactly (eqs. 8-9). Δ need not be a multiple of δ.
 #pragma once
 
+#include <array>
+#include <limits>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <tuple>
+
 #include <Eigen/Core>
 
+#include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
 
 namespace ctid {
@@ -29,13 +38,22 @@ FilterStep integrator_chain_step(int q, double tau);
 FilterStep integral_filter_step(int q, double pole, double tau);
 
 enum class RegressorFilter {
-  kIntegratorChain,       ///< 1/s^q, the paper's choice (eqs. 6-9)
-  kLinearIntegralFilter,  ///< 1/(s + a)^q, regressors stay bounded on long records
+  integrator_chain,        ///< 1/s^q, the paper's choice (eqs. 6-9)
+  linear_integral_filter,  ///< 1/(s + a)^q, regressors stay bounded on long records
 };
+inline constexpr std::array<Enumerator<RegressorFilter>, 2> regressor_filter_enumerators{{
+    {RegressorFilter::integrator_chain, "integrator_chain",
+     "1/s^q, the paper's choice (eqs. 6-9)."},
+    {RegressorFilter::linear_integral_filter, "linear_integral_filter",
+     "1/(s + a)^q: regressors stay bounded on long records."},
+}};
+constexpr std::span<const Enumerator<RegressorFilter>> enumerators(RegressorFilter) {
+  return regressor_filter_enumerators;
+}
 
 struct FeedbackRegressorOptions {
-  RegressorFilter filter = RegressorFilter::kIntegratorChain;
-  /// a > 0 of 1/(s + a)^q [rad/s]; used by kLinearIntegralFilter only.
+  RegressorFilter filter = RegressorFilter::integrator_chain;
+  /// a > 0 of 1/(s + a)^q [rad/s]; used by linear_integral_filter only.
   double filter_pole = 1.0;
   /// Append nuisance columns t^j e^{-at}/j! and their Δ-delayed copies (j = 0..q-1): they
   /// absorb non-zero initial conditions (the paper's Remark 1) and the boundary terms of
@@ -46,7 +64,23 @@ struct FeedbackRegressorOptions {
   /// First equation k; -1 uses the paper's k = p = ceil(Δ/δ).
   int first_equation = -1;
 
-  void validate() const;
+  static constexpr std::string_view type_name = "FeedbackRegressorOptions";
+  static constexpr auto fields() {
+    using O = FeedbackRegressorOptions;
+    return std::tuple{
+        field("filter", &O::filter, "Filter of the step-1 regressors."),
+        field("filter_pole", &O::filter_pole,
+              "Pole a > 0 of 1/(s + a)^q [rad/s]; checked and used by linear_integral_filter "
+              "only."),
+        field("initial_condition_terms", &O::initial_condition_terms,
+              "Append nuisance columns for initial conditions and interpolation boundaries."),
+        field("first_equation", &O::first_equation, AtLeast{-1},
+              "First equation k; -1: the paper's ceil(delay / sample time)."),
+    };
+  }
+  void validate() const { validate_fields(*this); }
+  /// filter_pole > 0 and finite when the linear integral filter is used.
+  void check_relations(const std::string& path) const;
 };
 
 /// Rows are the equations k = first..N-1: target(k) = regressor.row(k) [θ; nuisance].
@@ -61,7 +95,29 @@ struct FeedbackRegression {
   int nuisance_size = 0;
   double delay = 0.0;
   double sample_time = 0.0;
+
+  static constexpr std::string_view type_name = "FeedbackRegression";
+  static constexpr auto fields() {
+    using R = FeedbackRegression;
+    return std::tuple{
+        field("regressor", &R::regressor, "C: one row per equation, [theta | nuisance] columns."),
+        field("target", &R::target, "y (chain) or s^q/(s+a)^q y (linear integral filter)."),
+        field("sample_index", &R::sample_index, "Sample k of each equation."),
+        field("forward_order", &R::forward_order, "n."),
+        field("feedback_order", &R::feedback_order, "m."),
+        field("theta_size", &R::theta_size, "3(n + m) - 1."),
+        field("nuisance_size", &R::nuisance_size, "Nuisance columns."),
+        field("delay", &R::delay, "Delay [s]."),
+        field("sample_time", &R::sample_time, "Sample time [s]."),
+    };
+  }
 };
+
+/// Why the regression cannot be built from this record (orders < 1, Δ < 0, a record not longer
+/// than Δ, fewer equations than unknowns), or nullopt: lets a scan skip such delays.
+std::optional<std::string> feedback_regression_problem(const SampledData& data, int forward_order,
+                                                       int feedback_order, double delay,
+                                                       const FeedbackRegressorOptions& options);
 
 /// Throws InvalidArgument for orders < 1, Δ < 0, a record not longer than Δ, or fewer
 /// equations than unknowns.

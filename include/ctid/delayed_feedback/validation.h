@@ -6,9 +6,14 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <tuple>
 
 #include <Eigen/Core>
 
+#include "ctid/core/fields.h"
 #include "ctid/core/transfer_function.h"
 
 namespace ctid {
@@ -17,7 +22,21 @@ struct WhiteNoiseValidationOptions {
   double sample_time = 0.005;  ///< t_c [s]
   double duration = 5.0;       ///< T [s]; N = round(T / t_c)
   std::uint64_t seed = 1;
-  void validate() const;
+
+  static constexpr std::string_view type_name = "WhiteNoiseValidationOptions";
+  static constexpr auto fields() {
+    using O = WhiteNoiseValidationOptions;
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    return std::tuple{
+        field("sample_time", &O::sample_time, Between{0.0, inf},
+              "t_c [s]: the white noise is held by a ZOH for this long."),
+        field("duration", &O::duration, Between{0.0, inf}, "T [s] (>= sample_time)."),
+        field("seed", &O::seed, "Seed of the white noise."),
+    };
+  }
+  void validate() const { validate_fields(*this); }
+  /// duration >= sample_time.
+  void check_relations(const std::string& path) const;
 };
 
 struct ResponseComparison {
@@ -26,6 +45,18 @@ struct ResponseComparison {
   bool estimate_stable = true;
   Eigen::VectorXd truth;     ///< y(k t_c), k = 1..N
   Eigen::VectorXd estimate;  ///< ŷ(k t_c)
+
+  static constexpr std::string_view type_name = "ResponseComparison";
+  static constexpr auto fields() {
+    using R = ResponseComparison;
+    return std::tuple{
+        field("mse", &R::mse, "MSE of this realisation (inf: overflow)."),
+        field("expected_mse", &R::expected_mse, "Expected MSE over realisations."),
+        field("estimate_stable", &R::estimate_stable, "The estimate is stable."),
+        field("truth", &R::truth, "True response y(k t_c), k = 1..N."),
+        field("estimate", &R::estimate, "Estimated response."),
+    };
+  }
 };
 
 /// Both models must be strictly proper or proper, without delay.

@@ -15,6 +15,7 @@
 
 #include "ctid/estimation/validation.h"
 #include "ctid/frequency/frf.h"
+#include "ctid/io/feedback_result_json.h"
 #include "ctid/io/file.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/input_delay_scan.h"
@@ -25,15 +26,15 @@ namespace ctid::io {
 
 /// A result read from a document, by its "type".
 using ResultDocument = std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult,
-                                    ValidationReport, Frf, StudySummary>;
-// The delayed-feedback result joins this variant with its reader (see result_from_json).
+                                    ValidationReport, Frf, StudySummary, DelayedFeedbackResult>;
 
 /// The "type" values result_from_json reads, in the order of ResultDocument.
 std::vector<std::string> result_document_types();
 
 /// The result in `value`, by its "type" (estimation_result, mode_relocation_result,
-/// input_delay_scan_result, validation_report, frf, study_summary). Throws InvalidArgument
-/// naming `source` for a missing or unknown type, an unknown version or a bad field.
+/// input_delay_scan_result, validation_report, frf, study_summary, delayed_feedback_result). Throws
+/// InvalidArgument naming `source` for a missing or unknown type, an unknown version or a bad
+/// field.
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source);
 ResultDocument read_result(const std::filesystem::path& path);
 

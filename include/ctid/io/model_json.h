@@ -73,7 +73,6 @@ namespace ctid {
 nlohmann::json to_json_value(const TransferFunction& model);
 nlohmann::json to_json_value(const AdditiveModel& model);
 nlohmann::json to_json_value(const DiscreteTransferFunction& model);
-nlohmann::json to_json_value(const DelayedFeedbackLoop& model);
 TransferFunction from_json_value(const nlohmann::json& value, std::type_identity<TransferFunction>,
                                  const std::string& where);
 AdditiveModel from_json_value(const nlohmann::json& value, std::type_identity<AdditiveModel>,
@@ -81,8 +80,5 @@ AdditiveModel from_json_value(const nlohmann::json& value, std::type_identity<Ad
 DiscreteTransferFunction from_json_value(const nlohmann::json& value,
                                          std::type_identity<DiscreteTransferFunction>,
                                          const std::string& where);
-DelayedFeedbackLoop from_json_value(const nlohmann::json& value,
-                                    std::type_identity<DelayedFeedbackLoop>,
-                                    const std::string& where);
 
 }  // namespace ctid

@@ -6,6 +6,8 @@
 
 #include <string>
 
+#include "ctid/estimation/termination.h"
+
 namespace ctid::internal {
 
 /// Stopping rules of one solve; the defaults are Ceres' own except the iteration cap.
@@ -22,6 +24,8 @@ struct LeastSquaresOutcome {
   double sum_of_squares = 0.0;  ///< |r|² at the end (twice Ceres' cost)
   int iterations = 0;
   bool converged = false;  ///< Ceres reported CONVERGENCE (not a cap or a failure)
+  /// converged, iteration_limit (Ceres' NO_CONVERGENCE) or non_finite (a failed evaluation).
+  Termination termination = Termination::not_run;
   std::string message;
 };
 
@@ -43,6 +47,10 @@ inline LeastSquaresOutcome solve_least_squares(ceres::Problem& problem,
   outcome.sum_of_squares = 2.0 * summary.final_cost;
   outcome.iterations = static_cast<int>(summary.iterations.size());
   outcome.converged = summary.termination_type == ceres::CONVERGENCE;
+  outcome.termination = outcome.converged ? Termination::converged
+                        : summary.termination_type == ceres::NO_CONVERGENCE
+                            ? Termination::iteration_limit
+                            : Termination::non_finite;
   outcome.message = summary.message;
   return outcome;
 }

@@ -1,7 +1,8 @@
-// Shared test input of the delayed-feedback tests: the paper's F and H (De Iuliis et al.,
-// Section 4) and the informative record used throughout docs/algorithms/feedback-delay.md, a
-// smooth multisine of `harmonics` lines of a `period`-second fundamental (random phases from
-// seed 3, rms 1) sampled every 50 ms and continued linearly between samples.
+// The systems of De Iuliis, Germani, Manes 2017, defined once for the tests, benchmarks and
+// examples: the paper's Section 4 loop (F and H) and the informative record used throughout
+// docs/algorithms/feedback-delay.md, a smooth multisine of `harmonics` lines of a
+// `period`-second fundamental (random phases from seed 3, rms 1) sampled every 50 ms and
+// continued linearly between samples.
 #pragma once
 
 #include <cmath>
