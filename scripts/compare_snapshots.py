@@ -11,8 +11,26 @@ import pathlib
 import re
 import sys
 
-# Document keys that a refactoring renamed on purpose: {old path suffix: new path suffix}.
-RENAMED = {}
+# Document keys that a refactoring renamed on purpose: {file: [(old path prefix, new path
+# prefix)]}, applied in order; a prefix mapped to None is a field that is no longer written.
+RENAMED = {
+    # Issue 10: `ctid feedback` writes the typed delayed_feedback_result document; it used to
+    # write its own schema ("kind", "numerator", "diagnostics"). Its closed_loop α, β, γ were
+    # those of the returned loop, which the document keeps (step 1's are in identification.step1).
+    "feedback.json": [
+        ("kind", None),
+        ("coefficients", None),
+        ("closed_loop.", None),
+        ("diagnostics.delay_scan", "delay_scan"),
+        ("diagnostics.step1.output_rms", "identification.step1_output_rms"),
+        ("diagnostics.", "identification."),
+        ("delay", "identification.loop.delay"),
+        ("forward.numerator", "identification.loop.forward.numerator_ascending"),
+        ("forward.denominator", "identification.loop.forward.denominator_ascending"),
+        ("feedback.numerator", "identification.loop.feedback.numerator_ascending"),
+        ("feedback.denominator", "identification.loop.feedback.denominator_ascending"),
+    ],
+}
 # Lines of the text outputs that may differ in wording (not in numbers), as prefixes.
 REWORDED_PREFIXES = ("termination:",)
 # Wall-clock times in progress and summary lines are not results.
@@ -33,10 +51,15 @@ def flatten(value, path=""):
 def compare_json(before, after, name):
     old = dict(flatten(json.loads(before.read_text())))
     new = dict(flatten(json.loads(after.read_text())))
-    for old_suffix, new_suffix in RENAMED.items():
-        for path in list(old):
-            if path.endswith(old_suffix):
-                old[path[: -len(old_suffix)] + new_suffix] = old.pop(path)
+    renamed = {}
+    for path, value in old.items():
+        for old_prefix, new_prefix in RENAMED.get(name, []):
+            if path.startswith(old_prefix):
+                path = None if new_prefix is None else new_prefix + path[len(old_prefix):]
+                break
+        if path is not None:
+            renamed[path] = value
+    old = renamed
     problems = []
     for path, value in old.items():
         if path not in new:

@@ -152,6 +152,9 @@ void bind_feedback_functions(py::module_& m) {
         py::arg("feedback_order"), py::arg("delay"), "The loop of rho.");
   m.def("loop_output_rms", &loop_output_rms, py::arg("data"), py::arg("loop"), py::arg("hold"),
         py::arg("substeps") = 4, "Output-error rms of a loop on the data (inf: not simulable).");
+  m.def("validate_loop", &validate_loop, py::arg("loop"), py::arg("data"), py::arg("hold"),
+        py::arg("substeps") = 4, py::arg("max_lag") = 20,
+        "ValidationReport of a loop simulated from rest with the measured input.");
   m.def("cramer_rao_bound", &cramer_rao_bound, py::arg("loop"), py::arg("input"),
         py::arg("sample_time"), py::arg("hold"), py::arg("noise_sd"),
         py::arg("relative_threshold") = 0.1, py::arg("substeps") = 4,

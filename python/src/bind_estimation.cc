@@ -21,6 +21,9 @@ void bind_estimation(py::module_& m) {
                              "Cross-correlation within the 99 % band.");
   m.def("validate_model", &validate_model, py::arg("model"), py::arg("data"),
         py::arg("max_lag") = 20, "Fit and residual statistics of a model on data.");
+  m.def("residual_report", &residual_report, py::arg("data"), py::arg("modelled"),
+        py::arg("max_lag") = 20,
+        "The statistics of validate_model for any simulated output `modelled` of the record.");
   m.def("persistent_excitation_order", &persistent_excitation_order, py::arg("x"),
         py::arg("max_order"), py::arg("tolerance") = 1e-9, "Order of PE seen in the record.");
   m.def("largest_pole_frequency", &largest_pole_frequency, py::arg("model"),

@@ -1,7 +1,6 @@
-// Shared helpers of the ctid Python bindings: options structs bound with keyword-only
-// constructors that reject unknown keywords (the field list is written once per struct and
-// reused for the constructor, repr and the `fields` tuple), and functions that take their
-// options either as one options object or as keyword arguments. No numerics live here.
+// Shared helpers of the ctid Python bindings: the keyword check of the options classes that
+// fields.h derives from each struct's field list, and functions that take their options either
+// as one options object or as keyword arguments. No numerics live here.
 #pragma once
 
 #include <algorithm>

@@ -66,6 +66,15 @@ double loop_output_rms(const SampledData& data, const DelayedFeedbackLoop& loop,
   return std::isfinite(rms) ? rms : inf;
 }
 
+ValidationReport validate_loop(const DelayedFeedbackLoop& loop, const SampledData& data, Hold hold,
+                               int substeps, int max_lag) {
+  loop.validate();
+  const Eigen::VectorXd y =
+      simulate_delayed(to_delayed_state_space(loop), data.input(), data.sample_time(), hold,
+                       DelayedSimulationOptions{substeps});
+  return residual_report(data, y, max_lag);
+}
+
 bool loop_is_simulable(const DelayedFeedbackLoop& loop) {
   const auto finite = [](const TransferFunction& tf) {
     return tf.numerator().coefficients().allFinite() &&

@@ -48,11 +48,18 @@ double fit_percent(const Eigen::VectorXd& measured, const Eigen::VectorXd& model
 
 ValidationReport validate_model(const AdditiveModel& model, const SampledData& data, int max_lag) {
   require(max_lag >= 1, "validate_model: max_lag must be at least 1, got ", max_lag);
-  const Eigen::VectorXd yhat = model_output(model, data.input(), data.sample_time());
-  const Eigen::VectorXd e = data.output() - yhat;
+  return residual_report(data, model_output(model, data.input(), data.sample_time()), max_lag);
+}
+
+ValidationReport residual_report(const SampledData& data, const Eigen::VectorXd& modelled,
+                                 int max_lag) {
+  require(max_lag >= 1, "residual_report: max_lag must be at least 1, got ", max_lag);
+  require(modelled.size() == data.size(), "residual_report: the modelled output has ",
+          modelled.size(), " samples but the record has ", data.size());
+  const Eigen::VectorXd e = data.output() - modelled;
   const Eigen::Index n = e.size();
   ValidationReport r;
-  r.fit_percent = fit_percent(data.output(), yhat);
+  r.fit_percent = fit_percent(data.output(), modelled);
   r.mean_squared_error = e.squaredNorm() / static_cast<double>(n);
   r.residual_mean = e.mean();
   const Eigen::VectorXd c = e.array() - r.residual_mean;

@@ -104,6 +104,24 @@ TEST_F(CliTest, SimulateLoopEqualsSimulateDelayedAndFeedbackRecoversIt) {
   expect_close(loop["feedback"]["numerator_ascending"], truth.feedback.numerator(), "H numerator");
   expect_close(loop["feedback"]["denominator_ascending"], truth.feedback.denominator(),
                "H denominator");
+
+  // ctid validate judges the loop of the result and the true loop on the same record: both
+  // fit the noise-free data, the true loop exactly (the same simulation as ctid simulate).
+  const auto truth_report = ctid({"validate", model, data, "-o", path("v1.json").string(), "-q"});
+  ASSERT_EQ(truth_report.status, 0) << truth_report.err;
+  EXPECT_DOUBLE_EQ(io::read_json(path("v1.json"))["fit_percent"].get<double>(), 100.0);
+  const auto fitted_report =
+      ctid({"validate", path("r.json").string(), data, "-o", path("v3.json").string()});
+  ASSERT_EQ(fitted_report.status, 0) << fitted_report.err;
+  EXPECT_THAT(fitted_report.out, ::testing::HasSubstr("whiteness"));
+  EXPECT_GT(io::read_json(path("v3.json"))["fit_percent"].get<double>(), 99.99);
+  const auto zoh =
+      ctid({"validate", model, data, "--hold", "zoh", "-o", path("v2.json").string(), "-q"});
+  ASSERT_EQ(zoh.status, 0) << zoh.err;
+  EXPECT_LT(io::read_json(path("v2.json"))["fit_percent"].get<double>(), 99.9);
+  const auto plot = ctid({"validate", model, data, "--plot", path("figures").string()});
+  EXPECT_EQ(plot.status, 2);
+  EXPECT_THAT(plot.err, ::testing::HasSubstr("holds a closed loop with delayed feedback"));
 }
 
 TEST_F(CliTest, SimulateLoopHoldAndNoiseToSignalRatio) {

@@ -66,6 +66,11 @@ struct ValidationReport {
 ValidationReport validate_model(const AdditiveModel& model, const SampledData& data,
                                 int max_lag = 20);
 
+/// The same statistics for any model whose simulated output on `data` is `modelled` (e.g. a
+/// closed loop with delayed feedback). max_lag >= 1; sizes must agree.
+ValidationReport residual_report(const SampledData& data, const Eigen::VectorXd& modelled,
+                                 int max_lag = 20);
+
 /// Largest n <= max_order for which the sample matrix sum_k phi_k phi_k' of the windows
 /// phi_k = [x_k, x_{k-d}, ..., x_{k-(n-1)d}] is numerically non-singular (smallest over
 /// largest eigenvalue above `tolerance`) for some lag spacing d in {1, 2, 3, 4, 6, 8, 12, 16}:
