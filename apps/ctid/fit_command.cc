@@ -238,7 +238,8 @@ void run_fit(const FitFlags& f, const CLI::App& app) {
     if (scanned) document["delay_scan"] = io::delay_scan_summary_to_json(*scanned);
     if (relocated) {
       document["mode_relocation"] = io::relocation_summary_to_json(*relocated);
-      document["mode_relocation"]["criterion"] = std::string(enum_name(options.relocation.criterion));
+      document["mode_relocation"]["criterion"] =
+          std::string(enum_name(options.relocation.criterion));
     }
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
