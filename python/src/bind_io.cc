@@ -7,6 +7,7 @@
 #include <pybind11/stl/filesystem.h>
 
 #include "common.h"
+#include "fields.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/file.h"
 
@@ -39,12 +40,16 @@ void bind_writers(py::module_& m, std::variant<T...>*) {
 }  // namespace
 
 void bind_io(py::module_& m) {
+  bind_result<io::DelayedFeedbackResult>(
+      m, "What ctid feedback computes: the identification at the known or scanned delay, and "
+         "the scan when the delay was unknown (a delayed_feedback_result document).");
   m.def(
       "read_result", [](const std::filesystem::path& path) { return io::read_result(path); },
       py::arg("path"),
       "The result in a document written by ctid (fit -o, validate -o, frf -o X.json, study's "
-      "summary.json) or by write_result: EstimationResult, ModeRelocationResult, "
-      "InputDelayScanResult, ValidationReport, Frf or StudySummary, chosen by its \"type\". "
+      "summary.json, feedback -o) or by write_result: EstimationResult, ModeRelocationResult, "
+      "InputDelayScanResult, ValidationReport, Frf, StudySummary or DelayedFeedbackResult, "
+      "chosen by its \"type\". "
       "Raises InvalidArgument for an unknown type or version or a bad field.");
   m.def("result_document_types", &io::result_document_types,
         "The \"type\" values read_result reads.");

@@ -124,6 +124,28 @@ def test_study_summary_reads_back(run):
     assert len(summary.trends) == 2 * len(summary.parameter_names)
 
 
+def test_feedback_result_reads_back_as_a_delayed_feedback_result(run):
+    folder = run("simulate", "-m", MODELS / "de_iuliis_section4_loop.json", "-e", "multisine",
+                 "-n", "600", "-T", "0.05", "--periods", "2", "--max-frequency-hz", "0.6",
+                 "-o", "loop.csv", "-q")
+    run("feedback", "loop.csv", "--forward-order", "3", "--feedback-order", "3", "--delay",
+        "0.5", "--hold", "foh", "-o", "fb.json", "-q")
+    result = ctid.read_result(folder / "fb.json")
+    assert isinstance(result, ctid.DelayedFeedbackResult)
+    assert result.delay_scan is None
+    identification = result.identification
+    assert identification.termination == ctid.Termination.converged
+    document = json.loads((folder / "fb.json").read_text())
+    loop = document["identification"]["loop"]
+    assert list(identification.loop.forward.numerator.coefficients) == (
+        loop["forward"]["numerator_ascending"])
+    assert identification.loop.delay == 0.5
+    # The true loop: F = (2 s^2 + s + 2) / (s^3 + 3 s^2 + 2 s + 3), to the last digits.
+    np.testing.assert_allclose(identification.loop.forward.denominator.coefficients,
+                               [3.0, 2.0, 3.0, 1.0], rtol=1e-9)
+    assert json.loads(ctid.result_to_json(result)) == document
+
+
 def test_written_results_read_back_equal(tmp_path, fitted):
     path = tmp_path / "r.json"
     ctid.write_result(str(path), fitted)

@@ -288,3 +288,24 @@ def test_nested_values_keep_their_json_form():
         ctid.options_from_json(ctid.ModeRelocationOptions, {"criterion": "best"})
     with pytest.raises(ValueError, match="is not an options class"):
         ctid.options_from_json("Nothing", {})
+
+
+# ---- Results and reports -------------------------------------------------------------------
+# The same discovery for what the library returns: every `*Result` and `*Report` struct of
+# the headers is a Python class whose `fields` are the C++ data members (its base's first),
+# so no member of a result is out of Python's reach.
+RESULTS = sorted(name for name in STRUCTS if re.fullmatch(r"\w+(Result|Report)", name))
+
+
+def test_the_scan_sees_the_results_of_both_modules():
+    assert {"EstimationResult", "FeedbackIdentificationResult", "ValidationReport"} <= set(RESULTS)
+
+
+@pytest.mark.parametrize("name", RESULTS)
+def test_result_fields_are_the_struct_members(name):
+    assert hasattr(ctid, name), f"ctid.{name} is not bound"
+    cls = getattr(ctid, name)
+    assert hasattr(cls, "fields"), f"ctid.{name} is not bound from a field list"
+    assert list(cls.fields) == _members(name), name
+    for field in cls.fields:
+        assert hasattr(cls, field), f"ctid.{name}.{field}"

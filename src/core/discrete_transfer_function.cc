@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "ctid/core/controllable_form.h"
 #include "ctid/core/error.h"
 
 namespace ctid {
@@ -38,19 +39,7 @@ bool DiscreteTransferFunction::is_stable() const {
 }
 
 StateSpace DiscreteTransferFunction::to_state_space() const {
-  const int n = denominator_.degree();
-  const double lead = denominator_.leading();
-  StateSpace ss;
-  ss.d = numerator_.coefficient(n) / lead;
-  ss.a = Eigen::MatrixXd::Zero(n, n);
-  ss.b = Eigen::VectorXd::Zero(n);
-  ss.c = Eigen::RowVectorXd::Zero(n);
-  if (n == 0) return ss;
-  ss.a.diagonal(1).setOnes();
-  for (int k = 0; k < n; ++k) ss.a(n - 1, k) = -denominator_[k] / lead;
-  ss.b(n - 1) = 1.0;
-  for (int k = 0; k < n; ++k) ss.c(k) = (numerator_[k] - ss.d * denominator_[k]) / lead;
-  return ss;
+  return controllable_form(numerator_.coefficients(), denominator_.coefficients());
 }
 
 Eigen::VectorXd DiscreteTransferFunction::filter(const Eigen::VectorXd& x) const {

@@ -12,6 +12,7 @@
 #include <Eigen/QR>
 #include <Eigen/SVD>
 
+#include "ctid/core/controllable_form.h"
 #include "ctid/core/error.h"
 #include "ctid/core/state_space.h"
 #include "delayed_feedback/internal/ceres_solve.h"
@@ -127,19 +128,6 @@ std::vector<std::pair<Polynomial, Polynomial>> root_splits(const Polynomial& bet
   return splits;
 }
 
-StateSpace companion_form(const Eigen::VectorXd& num, const Eigen::VectorXd& den_monic) {
-  const Eigen::Index q = den_monic.size() - 1;
-  StateSpace s;
-  s.a = Eigen::MatrixXd::Zero(q, q);
-  for (Eigen::Index i = 0; i + 1 < q; ++i) s.a(i, i + 1) = 1.0;
-  s.a.row(q - 1) = -den_monic.head(q).transpose();
-  s.b = Eigen::VectorXd::Zero(q);
-  s.b(q - 1) = 1.0;
-  s.c = Eigen::RowVectorXd::Zero(q);
-  for (Eigen::Index i = 0; i < num.size() && i < q; ++i) s.c(i) = num(i);
-  return s;
-}
-
 struct Truncation {
   TransferFunction model{Polynomial{0.0}, Polynomial{1.0}};
   Eigen::VectorXd singular_values;
@@ -150,7 +138,7 @@ struct Truncation {
 // Keeps the `keep` most observable directions of the companion realisation (eq. 24).
 Truncation truncate_observable(const Eigen::VectorXd& num, const Eigen::VectorXd& den_monic,
                                int keep) {
-  const StateSpace s = companion_form(num, den_monic);
+  const StateSpace s = controllable_form(num, den_monic);
   const Eigen::Index q = s.a.rows();
   Eigen::MatrixXd obs(q, q);
   Eigen::RowVectorXd row = s.c;

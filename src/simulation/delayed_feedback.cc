@@ -9,34 +9,19 @@
 #include <random>
 #include <vector>
 
+#include "ctid/core/controllable_form.h"
 #include "ctid/core/error.h"
 
 namespace ctid {
 namespace {
 
-// Controllable canonical form of N/D (the form of the paper's eq. 22): A companion with last
-// row -d_0..-d_{n-1} of the monic D, B = e_n, C = [n_0 .. n_{n-1}]. Requires deg N < deg D.
-struct Companion {
-  Eigen::MatrixXd a;
-  Eigen::VectorXd b;
-  Eigen::RowVectorXd c;
-};
-
-Companion companion(const Polynomial& numerator, const Polynomial& denominator, const char* what) {
+// Controllable canonical form of a strictly proper N/D (the form of the paper's eq. 22).
+StateSpace companion(const Polynomial& numerator, const Polynomial& denominator, const char* what) {
   const int n = denominator.degree();
   require(n >= 1, what, ": the denominator must have degree >= 1, got ", n);
   require(numerator.degree() < n, what, ": must be strictly proper, numerator degree ",
           numerator.degree(), " >= denominator degree ", n);
-  const double lead = denominator.leading();
-  Companion r;
-  r.a = Eigen::MatrixXd::Zero(n, n);
-  for (int i = 0; i + 1 < n; ++i) r.a(i, i + 1) = 1.0;
-  for (int j = 0; j < n; ++j) r.a(n - 1, j) = -denominator.coefficient(j) / lead;
-  r.b = Eigen::VectorXd::Zero(n);
-  r.b(n - 1) = 1.0;
-  r.c = Eigen::RowVectorXd::Zero(n);
-  for (int j = 0; j <= numerator.degree(); ++j) r.c(j) = numerator.coefficient(j) / lead;
-  return r;
+  return controllable_form(numerator.coefficients(), denominator.coefficients());
 }
 
 Polynomial monic_numerator(const TransferFunction& g) {
@@ -182,8 +167,8 @@ void DelayedStateSpace::validate() const {
 
 DelayedStateSpace to_delayed_state_space(const DelayedFeedbackLoop& loop) {
   loop.validate();
-  const Companion f = companion(loop.forward.numerator(), loop.forward.denominator(), "F");
-  const Companion h = companion(loop.feedback.numerator(), loop.feedback.denominator(), "H");
+  const StateSpace f = companion(loop.forward.numerator(), loop.forward.denominator(), "F");
+  const StateSpace h = companion(loop.feedback.numerator(), loop.feedback.denominator(), "H");
   const Eigen::Index n = f.a.rows();
   const Eigen::Index m = h.a.rows();
   DelayedStateSpace r;
@@ -207,8 +192,8 @@ DelayedStateSpace to_delayed_state_space(const Polynomial& alpha, const Polynomi
                                          const Polynomial& gamma, double delay) {
   require(std::isfinite(delay) && delay >= 0.0,
           "to_delayed_state_space: delay must be finite and >= 0, got ", delay);
-  const Companion u = companion(alpha, beta, "alpha/beta");
-  const Companion d = companion(gamma, beta, "gamma/beta");
+  const StateSpace u = companion(alpha, beta, "alpha/beta");
+  const StateSpace d = companion(gamma, beta, "gamma/beta");
   const Eigen::Index q = u.a.rows();
   DelayedStateSpace r;
   r.a = Eigen::MatrixXd::Zero(2 * q, 2 * q);
