@@ -7,9 +7,9 @@
 #include <pybind11/stl/filesystem.h>
 
 #include "common.h"
-#include "fields.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/file.h"
+#include "fields.h"
 
 namespace ctid::python {
 namespace {
@@ -41,8 +41,9 @@ void bind_writers(py::module_& m, std::variant<T...>*) {
 
 void bind_io(py::module_& m) {
   bind_result<io::DelayedFeedbackResult>(
-      m, "What ctid feedback computes: the identification at the known or scanned delay, and "
-         "the scan when the delay was unknown (a delayed_feedback_result document).");
+      m,
+      "What ctid feedback computes: the identification at the known or scanned delay, and "
+      "the scan when the delay was unknown (a delayed_feedback_result document).");
   m.def(
       "read_result", [](const std::filesystem::path& path) { return io::read_result(path); },
       py::arg("path"),
