@@ -3,9 +3,9 @@
 
 #include <cmath>
 
-#include <unsupported/Eigen/MatrixFunctions>
-
+#include "ctid/core/controllable_form.h"
 #include "ctid/core/error.h"
+#include "ctid/simulation/discretization.h"
 
 namespace ctid {
 namespace {
@@ -75,18 +75,26 @@ FilterStep integral_filter_step(int q, double pole, double tau) {
           "integral_filter_step: pole a must be finite and >= 0, got ", pole);
   require(std::isfinite(tau) && tau >= 0.0, "integral_filter_step: tau must be >= 0, got ", tau);
   if (pole == 0.0) return integrator_chain_step(q, tau);
-  // (s + a)^q = sum_i C(q, i) a^{q-i} s^i.
-  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(q + 2, q + 2);
-  for (int i = 0; i + 1 < q; ++i) m(i, i + 1) = 1.0;
-  for (int i = 0; i < q; ++i)
-    m(q - 1, i) = -factorial(q) / (factorial(i) * factorial(q - i)) * std::pow(pole, q - i);
-  m(q - 1, q) = 1.0;
-  m(q, q + 1) = 1.0;
-  const Eigen::MatrixXd e = (m * tau).exp();
   FilterStep r;
-  r.a = e.topLeftCorner(q, q);
-  r.b = e.block(0, q, q, 1);
-  r.g = e.block(0, q + 1, q, 1);
+  if (tau == 0.0) {
+    r.a = Eigen::MatrixXd::Identity(q, q);
+    r.b = Eigen::VectorXd::Zero(q);
+    r.g = Eigen::VectorXd::Zero(q);
+    return r;
+  }
+  // 1/(s + a)^q in controllable form, (s + a)^q = sum_i C(q, i) a^{q-i} s^i, propagated over τ
+  // by the simulator's exact FOH discretisation: y linear on the step is y(t) + ẏ θ, so
+  // b = Γ0 + Γ1 (the weights of y_k and y_{k+1}) and g = τ Γ1.
+  Eigen::VectorXd denominator(q + 1);
+  for (int i = 0; i < q; ++i) {
+    denominator(i) = factorial(q) / (factorial(i) * factorial(q - i)) * std::pow(pole, q - i);
+  }
+  denominator(q) = 1.0;
+  const StateSpace filter = controllable_form(Eigen::VectorXd::Ones(1), denominator);
+  const FohDiscretization step = discretize_foh(filter.a, filter.b, tau);
+  r.a = step.phi;
+  r.b = step.gamma0 + step.gamma1;
+  r.g = tau * step.gamma1;
   return r;
 }
 

@@ -33,8 +33,9 @@ struct FilterStep {
 /// Brunovsky chain of order q (v_1 the q-fold integral, v_q the single integral): the closed
 /// forms a_ij = τ^{j-i}/(j-i)!, b_i = τ^{r+1}/(r+1)!, g_i = τ^{r+2}/(r+2)!, r = q - i.
 FilterStep integrator_chain_step(int q, double tau);
-/// Controllable form of 1/(s + a)^q (state i = s^{i-1}/(s+a)^q y, i = 1..q), via one
-/// matrix exponential of an augmented matrix; pole a = 0 gives integrator_chain_step.
+/// Controllable form of 1/(s + a)^q (state i = s^{i-1}/(s+a)^q y, i = 1..q) propagated by the
+/// simulator's exact FOH discretisation (simulation/discretization.h); pole a = 0 gives
+/// integrator_chain_step, τ = 0 the identity.
 FilterStep integral_filter_step(int q, double pole, double tau);
 
 enum class RegressorFilter {
