@@ -94,18 +94,22 @@ void run_feedback(const FeedbackFlags& f) {
   } else {
     r = identify_delayed_feedback(data, f.forward_order, f.feedback_order, f.delay, options);
   }
-  if (!r.best_candidate) throw std::runtime_error("no usable separation candidate: " + r.message);
 
   if (!f.output.empty())
     io::write_delayed_feedback_result(output, document,
                                       f.force ? io::Overwrite::yes : io::Overwrite::no);
   if (!f.quiet) {
-    std::cout << "F(s) = (" << r.loop.forward.numerator().to_string() << ") / ("
-              << r.loop.forward.denominator().to_string() << ")\n"
-              << "H(s) = (" << r.loop.feedback.numerator().to_string() << ") / ("
-              << r.loop.feedback.denominator().to_string() << ")\n"
-              << "delay = " << r.loop.delay << " s, output rms = " << r.output_rms << ", "
-              << r.message << "\n";
+    // How the refinement ended is printed as `ctid fit` prints it; a run in which every
+    // separation candidate failed is an outcome (no_solution), not an error.
+    std::cout << "termination: " << r.brief_report() << "\n";
+    if (r.best_candidate) {
+      std::cout << "F(s) = (" << r.loop.forward.numerator().to_string() << ") / ("
+                << r.loop.forward.denominator().to_string() << ")\n"
+                << "H(s) = (" << r.loop.feedback.numerator().to_string() << ") / ("
+                << r.loop.feedback.denominator().to_string() << ")\n"
+                << "delay = " << r.loop.delay << " s, output rms = " << r.output_rms << ", "
+                << r.message << "\n";
+    }
     if (!f.output.empty()) std::cout << "wrote " << output.string() << "\n";
   }
 }

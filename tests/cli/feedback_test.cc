@@ -64,6 +64,7 @@ TEST_F(CliTest, FeedbackRecoversTheLoopAndWritesJson) {
   const auto r = ctid({"feedback", path("loop.csv").string(), "--forward-order", "3",
                        "--feedback-order", "3", "--delay", "0.5", "--output", "result.json"});
   ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("termination: converged after "));
   EXPECT_THAT(r.out, HasSubstr("F(s) ="));
   const nlohmann::json j = io::read_json(path("result.json"));
   const DelayedFeedbackLoop truth = paper_loop();
