@@ -41,8 +41,6 @@ void IdentificationOptions::check_relations(const std::string& path) const {
   require(!delay_scan || refined_iv.input_delay == 0, path, ".refined_iv.input_delay is ",
           refined_iv.input_delay, " and ", path,
           ".delay_scan is set; give a known delay or a scan, not both");
-  // Until ModeRelocationOptions lists its fields, validate_fields does not reach into it.
-  if constexpr (!HasFields<ModeRelocationOptions>) relocation.validate();
 }
 
 RefinedIvEstimator choose_estimator(const ModelStructure& structure, bool closed_loop) {
