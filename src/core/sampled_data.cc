@@ -74,8 +74,16 @@ SampledData SampledData::segment(int begin, int count) const {
           begin + count, ") does not fit a record of ", size(), " samples (and needs >= 2)");
   std::optional<Eigen::VectorXd> r;
   if (reference_) r = reference_->segment(begin, count);
-  return SampledData(sample_time_, input_.segment(begin, count), output_.segment(begin, count),
-                     std::move(r), start_time_ + begin * sample_time_);
+  SampledData out(sample_time_, input_.segment(begin, count), output_.segment(begin, count),
+                  std::move(r), start_time_ + begin * sample_time_);
+  out.input_hold_ = input_hold_;
+  return out;
+}
+
+SampledData SampledData::with_input_hold(Hold hold) const {
+  SampledData out = *this;
+  out.input_hold_ = hold;
+  return out;
 }
 
 }  // namespace ctid

@@ -59,3 +59,14 @@ TEST(SampledData, TimeStampsMustBeUniform) {
 
 }  // namespace
 }  // namespace ctid
+
+TEST(SampledData, InputHoldIsZeroOrderByDefaultAndKeptBySegments) {
+  const ctid::SampledData data(0.1, Eigen::VectorXd::LinSpaced(10, 0.0, 1.0),
+                               Eigen::VectorXd::LinSpaced(10, 1.0, 2.0));
+  EXPECT_EQ(data.input_hold(), ctid::Hold::zero_order_hold);
+  const ctid::SampledData foh = data.with_input_hold(ctid::Hold::first_order_hold);
+  EXPECT_EQ(foh.input_hold(), ctid::Hold::first_order_hold);
+  EXPECT_EQ(data.input_hold(), ctid::Hold::zero_order_hold);
+  EXPECT_EQ(foh.segment(2, 5).input_hold(), ctid::Hold::first_order_hold);
+  EXPECT_EQ(foh.segment(2, 5).input()(0), data.input()(2));
+}

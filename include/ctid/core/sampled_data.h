@@ -6,6 +6,8 @@
 
 #include <Eigen/Core>
 
+#include "ctid/core/hold.h"
+
 namespace ctid {
 
 class SampledData {
@@ -32,7 +34,14 @@ class SampledData {
   /// Throws InvalidArgument if there is no reference.
   const Eigen::VectorXd& reference() const;
 
-  /// Samples [begin, begin + count).
+  /// How the input is continued between samples (zero-order hold by default: a DAC output;
+  /// first-order hold for multisine and band-limited experiments whose input is not held).
+  /// Every estimator, simulator and validation that reads this record's input uses it.
+  Hold input_hold() const { return input_hold_; }
+  /// The same record with its input continued by `hold`.
+  SampledData with_input_hold(Hold hold) const;
+
+  /// Samples [begin, begin + count) (the input hold is kept).
   SampledData segment(int begin, int count) const;
 
  private:
@@ -41,6 +50,7 @@ class SampledData {
   Eigen::VectorXd input_;
   Eigen::VectorXd output_;
   std::optional<Eigen::VectorXd> reference_;
+  Hold input_hold_ = Hold::zero_order_hold;
 };
 
 }  // namespace ctid
