@@ -37,6 +37,8 @@ struct FrfFlags {
   double overlap = WelchOptions{}.overlap;
   double min_prominence_db = PeakOptions{}.min_prominence_db;
   int max_peaks = 10;  // a noisy FRF has many small local maxima; list the main ones
+  double line_threshold = PeakOptions{}.line_threshold;
+  double min_coherence = PeakOptions{}.min_coherence;
   std::string output;
   std::string plot;
   std::string model;
@@ -64,6 +66,7 @@ io::CsvTable frf_table(const Frf& frf) {
   table.add_column("imag", im);
   table.add_column("variance", frf.variance);
   if (frf.coherence.size() == n) table.add_column("coherence", frf.coherence);
+  if (frf.input_level.size() == n) table.add_column("input_level", frf.input_level);
   return table;
 }
 
@@ -114,6 +117,7 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
     PeriodicFrfOptions options;
     options.period_length = f.period;
     options.transient_periods = f.transient_periods;
+    options.line_threshold = f.line_threshold;
     options.validate();
     frf = periodic_frf(data, options);
   } else {
@@ -127,10 +131,14 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
   PeakOptions peak_options;
   peak_options.min_prominence_db = f.min_prominence_db;
   peak_options.max_peaks = f.max_peaks;
+  peak_options.line_threshold = f.line_threshold;
+  peak_options.min_coherence = f.min_coherence;
   peak_options.validate();
-  const std::vector<ResonancePeak> peaks =
-      frf.frequencies.size() >= 3 ? resonance_peaks(frf.frequencies, frf.response, peak_options)
-                                  : std::vector<ResonancePeak>{};
+  const std::size_t all_lines = frf.lines.size();
+  frf = excited_lines(frf, f.line_threshold);
+  require(frf.frequencies.size() > 0, "ctid frf: no line of the input reaches --line-threshold ",
+          f.line_threshold, " of its largest line; lower it or check the input column");
+  const std::vector<ResonancePeak> peaks = resonance_peaks(frf, peak_options);
 
   const io::CsvTable table = frf_table(frf);
   if (!f.output.empty()) {
@@ -153,14 +161,21 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
               << ": " << frf.frequencies.size() << " lines, " << frf.averages
               << (periodic ? " periods" : " segments") << " of " << frf.block_length
               << " samples\n";
+    const Eigen::Index last = frf.frequencies.size() - 1;
+    std::cout << "excited band: " << format_brief(frf.frequencies(0) / (2.0 * std::numbers::pi))
+              << " to " << format_brief(frf.frequencies(last) / (2.0 * std::numbers::pi)) << " Hz, "
+              << frf.lines.size() << " of " << all_lines << " lines above --line-threshold "
+              << format_number(f.line_threshold) << " of the largest input line\n";
     std::cout << peaks.size() << " resonance peak" << (peaks.size() == 1 ? "" : "s")
-              << " (prominence >= " << format_number(f.min_prominence_db) << " dB):\n";
+              << " (prominence >= " << format_number(f.min_prominence_db)
+              << " dB, coherence >= " << format_number(f.min_coherence) << "):\n";
     for (const ResonancePeak& p : peaks) {
       std::cout << "  w = " << format_brief(p.frequency) << " rad/s ("
                 << format_brief(p.frequency / (2.0 * std::numbers::pi))
                 << " Hz), |G| = " << format_significant(20.0 * std::log10(p.magnitude), 4)
                 << " dB, prominence " << format_significant(p.prominence_db, 3) << " dB, damping ~ "
-                << format_significant(p.damping_ratio, 3) << "\n";
+                << format_significant(p.damping_ratio, 3) << ", coherence "
+                << format_significant(p.coherence, 3) << "\n";
     }
     if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
   }
@@ -176,7 +191,8 @@ Command add_frf_command(CLI::App& parent) {
       "over periods) as CSV, with its resonance peaks.");
   app->footer(
       "CSV columns: frequency (rad/s), frequency_hz, magnitude_db, phase_deg, real, imag, "
-      "variance (of the complex estimate) and, for Welch, coherence (squared, 0-1).\n"
+      "variance (of the complex estimate), coherence (squared, 0-1) and input_level (the input's "
+      "amplitude at the line over its largest line's); only lines above --line-threshold.\n"
       "-o X.json writes a typed \"frf\" document instead (docs/formats.md), with the peaks.\n"
       "Exit status: 0 ran, 2 bad usage or input, 1 other error.");
   f.data.add_to(*app, "data", false);
@@ -198,6 +214,15 @@ Command add_frf_command(CLI::App& parent) {
       ->capture_default_str()
       ->group("Peaks");
   app->add_option("--max-peaks", f.max_peaks, "Peaks: keep at most this many (0: all)")
+      ->capture_default_str()
+      ->group("Peaks");
+  app->add_option("--line-threshold", f.line_threshold,
+                  "Keep lines where the input's amplitude exceeds this fraction of its largest "
+                  "line (gaps and out-of-band leakage are not peaks)")
+      ->capture_default_str()
+      ->group("Peaks");
+  app->add_option("--min-coherence", f.min_coherence,
+                  "Peaks: smallest squared coherence at the peak (0-1)")
       ->capture_default_str()
       ->group("Peaks");
   app->add_option("--output,-o", f.output, "CSV file to write (.json: an frf document)")

@@ -175,12 +175,6 @@ std::vector<std::string> model_figure_names(bool modes) {
   return names;
 }
 
-int default_segment_length(int n) {
-  int length = 8;
-  while (length * 2 <= n / 8 && length < 4096) length *= 2;
-  return std::min(length, n);
-}
-
 nlohmann::json frf_json(const Frf& frf) {
   nlohmann::json frequencies = nlohmann::json::array();
   nlohmann::json real = nlohmann::json::array();

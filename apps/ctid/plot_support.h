@@ -63,10 +63,6 @@ void prepare_plot_directory(const std::filesystem::path& dir,
 /// with `modes`, modes.png.
 std::vector<std::string> model_figure_names(bool modes);
 
-/// Samples per Welch segment for a record of n samples: the largest power of two <= n/8,
-/// within [8, 4096] and at most n.
-int default_segment_length(int n);
-
 /// The FRF as the "frf" object of the ctid.plot JSON input.
 nlohmann::json frf_json(const Frf& frf);
 

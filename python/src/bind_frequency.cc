@@ -26,7 +26,7 @@ void bind_frequency(py::module_& m) {
 
   bind_result<Frf>(m,
                    "A nonparametric FRF on DFT lines: frequencies [rad/s], response, variance "
-                   "E|G_hat - G|^2 per line, coherence (Welch only).");
+                   "E|G_hat - G|^2 per line, squared coherence and relative input level.");
   bind_options<PeriodicFrfOptions>(m, "Options of periodic_frf.");
   bind_options<WelchOptions>(m, "Options of welch_frf.");
   m.def(
@@ -58,6 +58,15 @@ void bind_frequency(py::module_& m) {
       },
       py::arg("frequencies"), py::arg("response"), py::arg("options") = py::none(),
       "Resonance peaks of |G| in increasing frequency (for orders and initial modes).");
+  m.def(
+      "resonance_peaks",
+      [](const Frf& frf, const std::optional<PeakOptions>& options, const py::kwargs& kwargs) {
+        return resonance_peaks(frf, options_from<PeakOptions>("resonance_peaks", options, kwargs));
+      },
+      py::arg("frf"), py::arg("options") = py::none(),
+      "Resonance peaks of a measured Frf on its excited lines, with their coherence.");
+  m.def("excited_lines", &excited_lines, py::arg("frf"), py::arg("line_threshold"),
+        "The lines of an Frf whose input_level exceeds line_threshold.");
 
   py::class_<PeriodogramPeak>(m, "PeriodogramPeak", "A periodogram peak above its local floor.")
       .def_readonly("frequency", &PeriodogramPeak::frequency,

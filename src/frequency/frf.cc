@@ -28,6 +28,16 @@ double line_frequency(int k, int block_length, double sample_time) {
   return 2.0 * std::numbers::pi * k / (block_length * sample_time);
 }
 
+// At most `max_peaks` (0: all) of the most prominent peaks, in the order of their index.
+void keep_most_prominent(std::vector<ResonancePeak>& peaks, int max_peaks) {
+  if (max_peaks <= 0 || static_cast<int>(peaks.size()) <= max_peaks) return;
+  std::stable_sort(peaks.begin(), peaks.end(),
+                   [](const auto& a, const auto& b) { return a.prominence_db > b.prominence_db; });
+  peaks.resize(static_cast<size_t>(max_peaks));
+  std::sort(peaks.begin(), peaks.end(),
+            [](const auto& a, const auto& b) { return a.index < b.index; });
+}
+
 }  // namespace
 
 void PeriodicFrfOptions::check_relations(const std::string& path) const {
@@ -95,20 +105,40 @@ Frf periodic_frf(const SampledData& data, const PeriodicFrfOptions& options) {
   result.frequencies.resize(count);
   result.response.resize(count);
   result.variance.resize(count);
+  result.coherence.resize(count);
+  result.input_level.resize(count);
   Eigen::VectorXcd per_period(periods);
   for (Eigen::Index i = 0; i < count; ++i) {
     const int k = result.lines[static_cast<size_t>(i)];
+    double suu = 0.0;
+    double syy = 0.0;
+    Complex syu = 0.0;
     for (int p = 0; p < periods; ++p) {
       const auto q = static_cast<size_t>(p);
-      per_period(p) = y_spectra[q](k) / u_spectra[q](k);
+      const Complex u = u_spectra[q](k);
+      const Complex y = y_spectra[q](k);
+      per_period(p) = y / u;
+      suu += std::norm(u);
+      syy += std::norm(y);
+      syu += y * std::conj(u);
     }
     const Complex mean = per_period.mean();
     result.frequencies(i) = line_frequency(k, n, data.sample_time());
     result.response(i) = mean;
     // Sample variance over periods, divided by P for the variance of the mean.
     result.variance(i) = (per_period.array() - mean).abs2().sum() / (periods - 1) / periods;
+    // Over the periods of a periodic input this is |mean Y|^2 / mean |Y|^2: the share of the
+    // output's power at the line that repeats with the input.
+    result.coherence(i) = syy == 0.0 ? 0.0 : std::min(std::norm(syu) / (suu * syy), 1.0);
+    result.input_level(i) = std::abs(u_mean(k)) / largest;
   }
   return result;
+}
+
+int default_segment_length(int samples) {
+  int length = 8;
+  while (length * 2 <= samples / 8 && length < 4096) length *= 2;
+  return std::min(length, samples);
 }
 
 Frf welch_frf(const SampledData& data, const WelchOptions& options) {
@@ -152,11 +182,14 @@ Frf welch_frf(const SampledData& data, const WelchOptions& options) {
   result.response.resize(half);
   result.variance.resize(half);
   result.coherence.resize(half);
+  result.input_level.resize(half);
+  const double largest = suu.tail(half).maxCoeff();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (int k = 1; k <= half; ++k) {
     const int i = k - 1;
     result.lines.push_back(k);
     result.frequencies(i) = line_frequency(k, length, data.sample_time());
+    result.input_level(i) = largest > 0.0 ? std::sqrt(suu(k) / largest) : 0.0;
     if (suu(k) == 0.0) {
       result.response(i) = Complex(nan, nan);
       result.coherence(i) = 0.0;
@@ -229,14 +262,86 @@ std::vector<ResonancePeak> resonance_peaks(const Eigen::VectorXd& frequencies,
     peaks.push_back(peak);
   }
 
-  if (options.max_peaks > 0 && static_cast<int>(peaks.size()) > options.max_peaks) {
-    std::stable_sort(peaks.begin(), peaks.end(), [](const auto& a, const auto& b) {
-      return a.prominence_db > b.prominence_db;
-    });
-    peaks.resize(static_cast<size_t>(options.max_peaks));
-    std::sort(peaks.begin(), peaks.end(),
-              [](const auto& a, const auto& b) { return a.index < b.index; });
+  keep_most_prominent(peaks, options.max_peaks);
+  return peaks;
+}
+
+Frf excited_lines(const Frf& frf, double line_threshold) {
+  require(line_threshold >= 0.0 && line_threshold < 1.0, "excited_lines: line_threshold is ",
+          line_threshold, "; it must be in [0, 1)");
+  const Eigen::Index size = frf.frequencies.size();
+  const auto check_size = [&](Eigen::Index other, const char* name, bool optional) {
+    require(other == size || (optional && other == 0), "excited_lines: the FRF has ", size,
+            " frequencies but ", other, " ", name);
+  };
+  check_size(static_cast<Eigen::Index>(frf.lines.size()), "lines", false);
+  check_size(frf.response.size(), "response values", false);
+  check_size(frf.variance.size(), "variances", false);
+  check_size(frf.coherence.size(), "coherences", true);
+  check_size(frf.input_level.size(), "input levels", true);
+  if (frf.input_level.size() == 0) return frf;
+
+  std::vector<Eigen::Index> kept;
+  for (Eigen::Index i = 0; i < size; ++i) {
+    if (frf.input_level(i) > line_threshold) kept.push_back(i);
   }
+  const auto count = static_cast<Eigen::Index>(kept.size());
+  Frf result;
+  result.averages = frf.averages;
+  result.block_length = frf.block_length;
+  result.frequencies.resize(count);
+  result.response.resize(count);
+  result.variance.resize(count);
+  result.input_level.resize(count);
+  if (frf.coherence.size() == size) result.coherence.resize(count);
+  for (Eigen::Index j = 0; j < count; ++j) {
+    const Eigen::Index i = kept[static_cast<size_t>(j)];
+    result.lines.push_back(frf.lines[static_cast<size_t>(i)]);
+    result.frequencies(j) = frf.frequencies(i);
+    result.response(j) = frf.response(i);
+    result.variance(j) = frf.variance(i);
+    result.input_level(j) = frf.input_level(i);
+    if (result.coherence.size() == count) result.coherence(j) = frf.coherence(i);
+  }
+  return result;
+}
+
+std::vector<ResonancePeak> resonance_peaks(const Frf& frf, const PeakOptions& options) {
+  options.validate();
+  const Frf excited = excited_lines(frf, options.line_threshold);
+  // Lines where Y/U could not be formed (no input power at all) are not searched either.
+  std::vector<Eigen::Index> searched;
+  for (Eigen::Index i = 0; i < excited.response.size(); ++i) {
+    if (std::isfinite(excited.response(i).real()) && std::isfinite(excited.response(i).imag())) {
+      searched.push_back(i);
+    }
+  }
+  const auto count = static_cast<Eigen::Index>(searched.size());
+  if (count < 3) return {};
+  Eigen::VectorXd frequencies(count);
+  Eigen::VectorXcd response(count);
+  for (Eigen::Index j = 0; j < count; ++j) {
+    frequencies(j) = excited.frequencies(searched[static_cast<size_t>(j)]);
+    response(j) = excited.response(searched[static_cast<size_t>(j)]);
+  }
+  PeakOptions all = options;
+  all.max_peaks = 0;
+  std::vector<ResonancePeak> peaks;
+  for (ResonancePeak peak : resonance_peaks(frequencies, response, all)) {
+    const Eigen::Index i = searched[static_cast<size_t>(peak.index)];
+    if (excited.coherence.size() > 0) {
+      peak.coherence = excited.coherence(i);
+      if (peak.coherence < options.min_coherence) continue;
+    }
+    peak.input_level = excited.input_level.size() > 0 ? excited.input_level(i)
+                                                      : std::numeric_limits<double>::quiet_NaN();
+    // Back to the position in the caller's FRF: the excited line's place among all lines.
+    const int line = excited.lines[static_cast<size_t>(i)];
+    const auto found = std::find(frf.lines.begin(), frf.lines.end(), line);
+    peak.index = static_cast<int>(found - frf.lines.begin());
+    peaks.push_back(peak);
+  }
+  keep_most_prominent(peaks, options.max_peaks);
   return peaks;
 }
 

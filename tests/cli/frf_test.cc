@@ -66,7 +66,11 @@ TEST_F(FrfCommand, PeriodicFrfEqualsTheSampledResponseAndFindsTheModes) {
   const StateSpace d = discretize_zoh(model.to_transfer_function().to_state_space(), 0.05);
   // Lines k/(2048 x 0.05 s) in 0.01-3 Hz: k = 2..307.
   EXPECT_EQ(t.rows(), 306);
-  EXPECT_FALSE(t.has_column("coherence"));
+  // Noise-free, the output repeats with the input: coherence 1 at every excited line.
+  ASSERT_TRUE(t.has_column("coherence"));
+  EXPECT_GT(t.column("coherence").minCoeff(), 1.0 - 1e-9);
+  ASSERT_TRUE(t.has_column("input_level"));
+  EXPECT_DOUBLE_EQ(t.column("input_level").maxCoeff(), 1.0);
   for (int k = 0; k < t.rows(); ++k) {
     const double w = t.column("frequency")(k);
     const std::complex<double> g(t.column("real")(k), t.column("imag")(k));
@@ -79,7 +83,9 @@ TEST_F(FrfCommand, PeriodicFrfEqualsTheSampledResponseAndFindsTheModes) {
     EXPECT_NEAR(t.column("frequency_hz")(k), w / (2.0 * std::numbers::pi), 1e-12);
   }
   // Four peaks listed; the lightly damped modes 2 and 3 within 1 % of w_n.
+  EXPECT_THAT(r.out, HasSubstr("excited band: 0.0195312 to 2.99805 Hz, 306 of 306 lines"));
   EXPECT_THAT(r.out, HasSubstr("4 resonance peaks"));
+  EXPECT_THAT(r.out, HasSubstr("coherence 1\n"));
   EXPECT_THAT(r.out, HasSubstr("w = 3.1"));
   EXPECT_THAT(r.out, HasSubstr("w = 5.7"));
 }
@@ -88,7 +94,15 @@ TEST_F(FrfCommand, WelchWritesCoherence) {
   const auto r = ctid({"frf", "d.csv", "--segment-length", "2048", "-o", "w.csv", "-q"});
   ASSERT_EQ(r.status, 0) << r.err;
   const io::CsvTable t = io::read_csv(path("w.csv"));
-  EXPECT_EQ(t.rows(), 1024);  // lines 1..L/2
+  // Of lines 1..L/2, those where the input reaches 1 % of its largest line: the multisine's
+  // band, 0.01-3 Hz, and the window's leakage just outside it.
+  ASSERT_TRUE(t.has_column("input_level"));
+  EXPECT_GT(t.column("input_level").minCoeff(), 0.01);
+  EXPECT_LT(t.column("frequency_hz").minCoeff(), 0.05);
+  EXPECT_GT(t.column("frequency_hz").maxCoeff(), 2.95);
+  EXPECT_LT(t.column("frequency_hz").maxCoeff(), 3.2);
+  EXPECT_GT(t.rows(), 290);
+  EXPECT_LT(t.rows(), 340);
   ASSERT_TRUE(t.has_column("coherence"));
   EXPECT_GE(t.column("coherence").minCoeff(), 0.0);
   EXPECT_LE(t.column("coherence").maxCoeff(), 1.0 + 1e-12);
@@ -124,7 +138,18 @@ TEST_F(FrfCommand, JsonOutputIsAnFrfDocumentWithTheCsvValues) {
   EXPECT_TRUE(j.at("peaks").is_array());
 }
 
+TEST_F(FrfCommand, LineThresholdZeroKeepsEveryWelchLine) {
+  const auto r = ctid({"frf", "d.csv", "--segment-length", "2048", "--line-threshold", "0",
+                       "--min-coherence", "0", "-o", "w.csv"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(io::read_csv(path("w.csv")).rows(), 1024);  // lines 1..L/2
+  EXPECT_THAT(r.out, HasSubstr("1024 of 1024 lines above --line-threshold 0"));
+}
+
 TEST_F(FrfCommand, BadInputExitsTwoWithOneLine) {
+  expect_bad_input(ctid({"frf", "d.csv", "--line-threshold", "1.5"}), "line_threshold is 1.5");
+  expect_bad_input(ctid({"frf", "d.csv", "--period", "2048", "--min-coherence", "-1"}),
+                   "min_coherence is -1");
   expect_bad_input(ctid({"frf", "d.csv", "--period", "3000"}), "");
   expect_bad_input(ctid({"frf", "d.csv", "--period", "2048", "--segment-length", "256"}),
                    "no effect with --period");

@@ -58,7 +58,13 @@ TEST(PeriodicFrf, NoiseFreeEqualsZohResponseAtExcitedLines) {
 
   EXPECT_EQ(frf.lines, u.lines);
   EXPECT_EQ(frf.averages, 3);
-  EXPECT_TRUE(frf.coherence.size() == 0);
+  // Noise-free, the output repeats exactly with the input: coherence 1 on every line; the
+  // multisine's lines all have one amplitude.
+  ASSERT_EQ(frf.coherence.size(), frf.response.size());
+  EXPECT_GT(frf.coherence.minCoeff(), 1.0 - 1e-12);
+  ASSERT_EQ(frf.input_level.size(), frf.response.size());
+  EXPECT_DOUBLE_EQ(frf.input_level.maxCoeff(), 1.0);
+  EXPECT_GT(frf.input_level.minCoeff(), 1.0 - 1e-9);
   double worst = 0.0;
   for (Eigen::Index i = 0; i < frf.response.size(); ++i) {
     const int k = frf.lines[static_cast<size_t>(i)];
@@ -268,6 +274,101 @@ TEST(ResonancePeaks, FindsModesAndHalfPowerDamping) {
   options = PeakOptions{};
   options.min_prominence_db = 200.0;
   EXPECT_TRUE(resonance_peaks(w, g, options).empty());
+}
+
+// A measured FRF as the estimators return it: two modes on an excited band, a gap in the
+// test signal where Y/U divides noise by almost nothing (a 40 dB spike), and an incoherent
+// spike in the band (a disturbance at one line).
+Frf measured_two_modes() {
+  const int n = 2000;
+  Frf frf;
+  frf.frequencies.resize(n);
+  frf.response.resize(n);
+  frf.variance = Eigen::VectorXd::Zero(n);
+  frf.coherence = Eigen::VectorXd::Constant(n, 0.99);
+  frf.input_level = Eigen::VectorXd::Ones(n);
+  for (int i = 0; i < n; ++i) {
+    frf.lines.push_back(i + 1);
+    frf.frequencies(i) = 0.01 * (i + 1);  // 0.01 .. 20 rad/s
+    frf.response(i) = two_modes(frf.frequencies(i));
+  }
+  for (int i = 600; i < 620; ++i) {  // the gap, 6 .. 6.2 rad/s
+    frf.input_level(i) = 1e-4;
+    frf.response(i) *= (i == 610 ? 100.0 : 1.0);
+  }
+  frf.response(1400) *= 30.0;  // 14 rad/s, incoherent
+  frf.coherence(1400) = 0.1;
+  return frf;
+}
+
+TEST(ResonancePeaks, OfAMeasuredFrfAreTheModesNotTheGapsOrIncoherentLines) {
+  const Frf frf = measured_two_modes();
+  // Peaks of |G| alone include the gap's spike and the incoherent line.
+  EXPECT_EQ(resonance_peaks(frf.frequencies, frf.response).size(), 4U);
+
+  // The gap is not searched; the incoherent spike stays unless coherence is asked for.
+  EXPECT_EQ(resonance_peaks(frf).size(), 3U);
+  PeakOptions coherent;
+  coherent.min_coherence = 0.5;
+  const std::vector<ResonancePeak> peaks = resonance_peaks(frf, coherent);
+  ASSERT_EQ(peaks.size(), 2U);
+  EXPECT_NEAR(peaks[0].frequency, 2.0, 0.01);
+  EXPECT_NEAR(peaks[1].frequency, 10.0, 0.05);
+  for (const ResonancePeak& p : peaks) {
+    EXPECT_DOUBLE_EQ(p.coherence, 0.99);
+    EXPECT_DOUBLE_EQ(p.input_level, 1.0);
+    // The index refers to the FRF passed in, not to its excited subset.
+    EXPECT_DOUBLE_EQ(p.magnitude, std::abs(frf.response(p.index)));
+  }
+
+  // Searching every line (threshold 0) and accepting any coherence brings both back.
+  PeakOptions options;
+  options.line_threshold = 0.0;
+  options.min_coherence = 0.0;
+  EXPECT_EQ(resonance_peaks(frf, options).size(), 4U);
+  options.max_peaks = 1;
+  const auto strongest = resonance_peaks(frf, options);
+  ASSERT_EQ(strongest.size(), 1U);
+  EXPECT_EQ(strongest[0].index, 610);  // the gap's 40 dB spike is the most prominent
+}
+
+TEST(ExcitedLines, KeepsTheLinesAboveTheThresholdWithAllTheirValues) {
+  const Frf frf = measured_two_modes();
+  const Frf excited = excited_lines(frf, 0.01);
+  ASSERT_EQ(excited.lines.size(), frf.lines.size() - 20);
+  EXPECT_EQ(excited.lines[600], 621);
+  EXPECT_EQ(excited.frequencies(600), frf.frequencies(620));
+  EXPECT_EQ(excited.response(600), frf.response(620));
+  EXPECT_EQ(excited.coherence(1380), 0.1);
+  EXPECT_EQ(excited_lines(frf, 0.0).lines, frf.lines);
+  EXPECT_THAT([&] { excited_lines(frf, 1.0); },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("it must be in [0, 1)")));
+}
+
+TEST(PeriodicFrf, DefaultThresholdKeepsTheMultisineLinesWhenTheInputIsMeasuredWithNoise) {
+  // The measured input carries sensor noise at every line: with a threshold of 1e-6 every
+  // line up to Nyquist counts as excited and Y/U there is noise over noise, full of peaks.
+  const Multisine u = test_multisine(6, 5);
+  const TransferFunction g = resonant();
+  const Eigen::VectorXd y = simulate(g, u.signal, kH) + white_noise(u.signal.size(), 1e-4, 7);
+  const Eigen::VectorXd measured = u.signal + white_noise(u.signal.size(), 1e-4, 8);
+  const SampledData data(kH, measured, y);
+  PeriodicFrfOptions options;
+  options.period_length = kPeriod;
+  options.transient_periods = 3;
+  const Frf frf = periodic_frf(data, options);
+  EXPECT_EQ(frf.lines, u.lines);
+  PeakOptions coherent;
+  coherent.min_coherence = 0.5;
+  const std::vector<ResonancePeak> peaks = resonance_peaks(frf, coherent);
+  ASSERT_EQ(peaks.size(), 1U);
+  EXPECT_NEAR(peaks[0].frequency, 2.0, 0.1);
+  EXPECT_GT(peaks[0].coherence, 0.99);
+
+  options.line_threshold = 1e-6;
+  const Frf every = periodic_frf(data, options);
+  EXPECT_EQ(every.lines.size(), static_cast<size_t>(kPeriod / 2));
+  EXPECT_GT(resonance_peaks(every.frequencies, every.response).size(), 10U);
 }
 
 TEST(ResonancePeaks, RejectsBadInput) {
