@@ -43,6 +43,7 @@ struct FitFlags {
 
   std::string controller;
   std::string initial;
+  std::string start = "auto";
   int max_iterations = RefinedIvOptions{}.max_iterations;
   double tolerance = RefinedIvOptions{}.tolerance;
   std::string interpolation = "foh";
@@ -195,6 +196,20 @@ IdentificationOptions identification_options(const FitFlags& f) {
   refined.noise = f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
   refined.record_history = f.history;
   refined.input_delay = f.delay;
+  if (!f.initial.empty() && f.start != "auto") {
+    usage_error("give --start or --initial, not both");
+  }
+  if (f.start == "lssvf") {
+    refined.start = StartMethod::lssvf;
+  } else if (f.start == "frf") {
+    refined.start = StartMethod::frf;
+  } else if (f.start != "auto") {
+    if (!std::filesystem::is_regular_file(f.start)) {
+      usage_error("--start is '" + f.start +
+                  "': neither auto, lssvf nor frf, and not a model or result file");
+    }
+    refined.initial_model = io::read_fitted_model(f.start).model;
+  }
   if (!f.initial.empty()) refined.initial_model = io::read_fitted_model(f.initial).model;
   return options;
 }
@@ -319,9 +334,12 @@ Command add_fit_command(CLI::App& parent) {
       ->check(CLI::ExistingFile)
       ->group("Closed loop");
 
-  app->add_option("--initial", f.initial,
-                  "Starting model (model JSON or a result JSON); default: automatic start from "
-                  "the data")
+  app->add_option("--start", f.start,
+                  "Start: auto (LSSVF grid and FRF peaks, best output error), lssvf, frf, or a "
+                  "model/result JSON")
+      ->capture_default_str()
+      ->group("Iteration");
+  app->add_option("--initial", f.initial, "Starting model or result JSON (same as --start FILE)")
       ->check(CLI::ExistingFile)
       ->group("Iteration");
   app->add_option("--max-iterations", f.max_iterations, "Iteration limit")

@@ -36,6 +36,8 @@ void bind_results(py::module_& m) {
 
 void bind_refined_iv_estimators(py::module_& m) {
   bind_enum<NoiseAssumption>(m, "NoiseAssumption", "Noise model of the covariance.");
+  bind_enum<StartMethod>(m, "StartMethod",
+                         "How a start is found from the data (initialization.h).");
   bind_options<RefinedIvOptions>(m, "Options of srivc, clsrivc, additive_srivc, additive_clsrivc.");
 
   m.def(
@@ -124,7 +126,7 @@ void bind_refined_iv_estimators(py::module_& m) {
 }
 
 void bind_initialization(py::module_& m) {
-  bind_options<InitializationOptions>(m, "Options of the data-driven start (LSSVF + SRIVC).");
+  bind_options<InitializationOptions>(m, "Options of the data-driven start (LSSVF, FRF peaks).");
   m.def("lssvf", &lssvf, py::arg("data"), py::arg("order"), py::arg("bandwidth"),
         py::arg("input_delay") = 0, "Least-squares state-variable-filter estimate.");
   m.def("unfactored_order", &unfactored_order, py::arg("orders"),
@@ -138,7 +140,10 @@ void bind_initialization(py::module_& m) {
             options_from<InitializationOptions>("initial_transfer_function", options, kwargs));
       },
       py::arg("data"), py::arg("order"), py::arg("options") = py::none(),
-      "Best unfactored start over the bandwidth grid.");
+      "Best unfactored start among the candidates (LSSVF grid, FRF peaks).");
+  m.def("frf_peak_start", &frf_peak_start, py::arg("data"), py::arg("order"),
+        py::arg("input_delay") = 0,
+        "Start from the resonance peaks of the record's FRF, or None if it has too few.");
   m.def("group_into_submodels", &group_into_submodels, py::arg("g"), py::arg("orders"),
         py::arg("data"), py::arg("input_delay") = 0,
         "Poles of g grouped into submodels; numerators fitted by least squares.");

@@ -12,6 +12,7 @@
 #include "ctid/core/error.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/filtering/filter_bank.h"
+#include "ctid/frequency/frf.h"
 #include "ctid/refined_iv/srivc.h"
 #include "refined_iv/internal/refined_iv_engine.h"
 #include "refined_iv/internal/scaled_least_squares.h"
@@ -59,53 +60,103 @@ TransferFunction lssvf(const SampledData& data, const SubmodelOrder& order, doub
                           Polynomial::monomial(l) * Polynomial::trimmed(a));
 }
 
+std::optional<TransferFunction> frf_peak_start(const SampledData& data, const SubmodelOrder& order,
+                                               int input_delay) {
+  const int pairs = order.n / 2;
+  if (data.size() < 16) return std::nullopt;
+  WelchOptions welch;
+  welch.segment_length = default_segment_length(data.size());
+  const Frf frf = welch_frf(data, welch);
+  std::vector<ResonancePeak> peaks;
+  if (pairs > 0) {
+    PeakOptions options;
+    options.max_peaks = pairs;
+    peaks = resonance_peaks(frf, options);
+    if (static_cast<int>(peaks.size()) < pairs) return std::nullopt;
+  }
+  Polynomial a{1.0};
+  for (const ResonancePeak& peak : peaks) {
+    const double zeta =
+        std::isfinite(peak.damping_ratio) ? std::clamp(peak.damping_ratio, 1e-3, 0.5) : 0.05;
+    const double w = peak.frequency / std::sqrt(1.0 - 2.0 * zeta * zeta);  // resonance -> w_n
+    a = a * Polynomial{1.0, 2.0 * zeta / w, 1.0 / (w * w)};
+  }
+  if (order.n % 2 == 1) a = a * Polynomial{1.0, 1.0 / frf.frequencies(0)};
+  const TransferFunction poles_only(Polynomial{1.0}, Polynomial::monomial(order.integrators) * a);
+  return group_into_submodels(poles_only, {order}, data, input_delay)
+      .to_transfer_function()
+      .with_input_delay(0.0);
+}
+
 TransferFunction initial_transfer_function(const SampledData& data, const SubmodelOrder& order,
                                            const InitializationOptions& options) {
   options.validate();
-  std::vector<double> grid = options.filter_bandwidths;
-  const double nyquist = M_PI / data.sample_time();
-  if (grid.empty()) {
-    for (double w = nyquist / 128.0; w <= nyquist * 1.0001; w *= 2.0) grid.push_back(w);
-  }
   double best_cost = std::numeric_limits<double>::infinity();
   std::optional<TransferFunction> best;
-  for (double lambda : grid) {
-    try {
-      const TransferFunction start = lssvf(data, order, lambda, options.input_delay);
-      const Eigen::VectorXd theta = internal::unfactored_parameters(start, order);
-      if (!theta.allFinite()) continue;
-      AdditiveModel model = AdditiveModel::from_parameters({order}, theta);
-      if (options.refinement_iterations > 0) {
-        RefinedIvOptions o;
-        o.initial_model = model;
-        o.max_iterations = options.refinement_iterations;
-        o.tolerance = 1e-8;
-        o.input_delay = options.input_delay;
-        o.compute_covariance = false;
-        const EstimationResult r = srivc(data, order, o);
-        if (!std::isfinite(r.mean_squared_error)) continue;
-        if (r.mean_squared_error < best_cost) {
-          best_cost = r.mean_squared_error;
-          best = r.transfer_function.with_input_delay(0.0);
-        }
-      } else {
-        // Judge the (stabilised) LSSVF model by its output error.
-        bool reflected = false;
-        const Polynomial a = internal::reflect_unstable_roots(model[0].a, reflected);
-        model = AdditiveModel({Submodel{a, model[0].b, order.integrators}},
-                              options.input_delay * data.sample_time());
-        const double cost =
-            (data.output() - model_output(model, data.input(), data.sample_time())).squaredNorm();
-        if (std::isfinite(cost) && cost < best_cost) {
-          best_cost = cost;
-          best = model.to_transfer_function().with_input_delay(0.0);
-        }
+  // Refines one candidate by SRIVC (or judges it as it is) and keeps it if its output error
+  // is the lowest so far.
+  const auto consider = [&](const TransferFunction& start) {
+    const Eigen::VectorXd theta = internal::unfactored_parameters(start, order);
+    if (!theta.allFinite()) return;
+    AdditiveModel model = AdditiveModel::from_parameters({order}, theta);
+    if (options.refinement_iterations > 0) {
+      RefinedIvOptions o;
+      o.initial_model = model;
+      o.max_iterations = options.refinement_iterations;
+      o.tolerance = 1e-8;
+      o.input_delay = options.input_delay;
+      o.compute_covariance = false;
+      const EstimationResult r = srivc(data, order, o);
+      if (!std::isfinite(r.mean_squared_error)) return;
+      if (r.mean_squared_error < best_cost) {
+        best_cost = r.mean_squared_error;
+        best = r.transfer_function.with_input_delay(0.0);
       }
-    } catch (const InvalidArgument&) {
-      continue;  // a bandwidth that gives a degenerate start is skipped
+    } else {
+      // Judge the (stabilised) model by its output error.
+      bool reflected = false;
+      const Polynomial a = internal::reflect_unstable_roots(model[0].a, reflected);
+      model = AdditiveModel({Submodel{a, model[0].b, order.integrators}},
+                            options.input_delay * data.sample_time());
+      const double cost =
+          (data.output() - model_output(model, data.input(), data.sample_time())).squaredNorm() /
+          data.size();
+      if (std::isfinite(cost) && cost < best_cost) {
+        best_cost = cost;
+        best = model.to_transfer_function().with_input_delay(0.0);
+      }
+    }
+  };
+
+  if (options.method != StartMethod::frf) {
+    std::vector<double> grid = options.filter_bandwidths;
+    const double nyquist = M_PI / data.sample_time();
+    if (grid.empty()) {
+      for (double w = nyquist / 128.0; w <= nyquist * 1.0001; w *= 2.0) grid.push_back(w);
+    }
+    for (double lambda : grid) {
+      try {
+        consider(lssvf(data, order, lambda, options.input_delay));
+      } catch (const InvalidArgument&) {
+        continue;  // a bandwidth that gives a degenerate start is skipped
+      }
     }
   }
-  require(best.has_value(), "initial_transfer_function: no filter bandwidth gave a usable start;",
+  if (options.method != StartMethod::lssvf) {
+    bool found = false;
+    try {
+      const std::optional<TransferFunction> start =
+          frf_peak_start(data, order, options.input_delay);
+      found = start.has_value();
+      if (found) consider(*start);
+    } catch (const InvalidArgument&) {
+      found = false;  // an FRF that gives a degenerate start is not a candidate
+    }
+    require(found || options.method != StartMethod::frf,
+            "initial_transfer_function: the record's FRF has fewer resonance peaks than the ",
+            order.n / 2, " pole pairs of the structure; use another start (lssvf or a model)");
+  }
+  require(best.has_value(), "initial_transfer_function: no candidate start gave a finite model;",
           " give an initial model");
   return *best;
 }

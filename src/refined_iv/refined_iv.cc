@@ -504,6 +504,7 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   } else {
     InitializationOptions init;
     init.input_delay = delay;
+    init.method = options.start;
     if (layout.size() == 1) {
       beta = unfactored_parameters(initial_transfer_function(data, layout.orders[0], init),
                                    layout.orders[0]);

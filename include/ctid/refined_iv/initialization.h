@@ -1,10 +1,13 @@
-// Starting models for the refined IV iterations without knowing the true system: a
-// least-squares state-variable-filter (LSSVF, Young 1965) estimate of the unfactored model
-// for a grid of filter bandwidths, each refined by a few SRIVC iterations (eq. 30), the best
-// output-error fit kept; then its poles grouped into the requested submodels (complex pairs
-// stay together, origin poles go to the integrator submodel) with numerators by least squares.
+// Starting models for the refined IV iterations without knowing the true system. Candidates:
+// a least-squares state-variable-filter (LSSVF, Young 1965) estimate of the unfactored model
+// for a grid of filter bandwidths, and a model built from the resonance peaks of the record's
+// FRF (lightly damped data, where LSSVF starts tend to miss modes); each is refined by a few
+// SRIVC iterations (eq. 30) and the best output-error fit kept. Its poles are then grouped
+// into the requested submodels (complex pairs stay together, origin poles go to the
+// integrator submodel) with numerators by least squares.
 #pragma once
 
+#include <optional>
 #include <string_view>
 #include <tuple>
 #include <vector>
@@ -13,6 +16,7 @@
 #include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/core/transfer_function.h"
+#include "ctid/refined_iv/refined_iv_options.h"
 
 namespace ctid {
 
@@ -24,6 +28,8 @@ struct InitializationOptions {
   int refinement_iterations = 20;
   /// Input delay in samples.
   int input_delay = 0;
+  /// Which candidates are tried: auto (all), lssvf or frf.
+  StartMethod method = StartMethod::automatic;
 
   static constexpr std::string_view type_name = "InitializationOptions";
   static constexpr auto fields() {
@@ -34,6 +40,7 @@ struct InitializationOptions {
         field("refinement_iterations", &O::refinement_iterations, AtLeast{0},
               "SRIVC iterations refining each LSSVF start (0: LSSVF only)."),
         field("input_delay", &O::input_delay, AtLeast{0}, "Input delay [samples]."),
+        field("method", &O::method, "Candidates tried: auto (all), lssvf or frf."),
     };
   }
   /// Throws InvalidArgument naming the first bad field, its value and the rule.
@@ -45,11 +52,22 @@ struct InitializationOptions {
 TransferFunction lssvf(const SampledData& data, const SubmodelOrder& order, double bandwidth,
                        int input_delay = 0);
 
+/// A start from the resonance peaks of the record's Welch FRF (default_segment_length,
+/// resonance_peaks on its excited, coherent lines): the n/2 most prominent peaks give pole
+/// pairs -zeta w +- j w sqrt(1 - zeta^2) with their half-power damping (clamped to [1e-3,
+/// 0.5]; 0.05 where it cannot be measured), an odd n adds a real pole at the FRF's lowest
+/// line, integrators sit at the origin, and B is fitted by output-error least squares.
+/// None when the FRF has fewer peaks than the pairs needed.
+std::optional<TransferFunction> frf_peak_start(const SampledData& data, const SubmodelOrder& order,
+                                               int input_delay = 0);
+
 /// Orders of the unfactored model equivalent to an additive structure: n = sum n_i,
 /// m = max_i (m_i + sum_{j != i} n_j + l - l_i), l = integrators.
 SubmodelOrder unfactored_order(const std::vector<SubmodelOrder>& orders);
 
-/// The best unfactored start for `order` over the bandwidth grid (see file comment).
+/// The best unfactored start for `order` among the candidates options.method names (see file
+/// comment). Throws InvalidArgument when no candidate gives a finite model (with frf: when
+/// the FRF has too few peaks for the order).
 TransferFunction initial_transfer_function(const SampledData& data, const SubmodelOrder& order,
                                            const InitializationOptions& options = {});
 

@@ -30,6 +30,23 @@ constexpr std::span<const Enumerator<NoiseAssumption>> enumerators(NoiseAssumpti
   return noise_assumption_enumerators;
 }
 
+/// How a start is found from the data when no initial model is given (initialization.h).
+enum class StartMethod {
+  automatic,  ///< every candidate below, the lowest output error after refinement kept
+  lssvf,      ///< LSSVF over a grid of filter bandwidths, each refined by SRIVC
+  frf,        ///< resonance peaks of the record's FRF with half-power damping, refined by SRIVC
+};
+
+inline constexpr std::array<Enumerator<StartMethod>, 3> start_method_enumerators{{
+    {StartMethod::automatic, "auto",
+     "Every candidate start (LSSVF grid, FRF peaks); the lowest output error kept."},
+    {StartMethod::lssvf, "lssvf", "LSSVF over a grid of filter bandwidths, refined by SRIVC."},
+    {StartMethod::frf, "frf", "Resonance peaks of the record's FRF, refined by SRIVC."},
+}};
+constexpr std::span<const Enumerator<StartMethod>> enumerators(StartMethod) {
+  return start_method_enumerators;
+}
+
 struct RefinedIvOptions {
   /// Upper bound on the iterations of (29)/(30). >= 1.
   int max_iterations = 100;
@@ -40,6 +57,8 @@ struct RefinedIvOptions {
   /// ones it is converted to one transfer function and regrouped. Without it the start is
   /// found from the data (initialization.h).
   std::optional<AdditiveModel> initial_model;
+  /// How the start is found from the data when initial_model is none.
+  StartMethod start = StartMethod::automatic;
   /// Interpolation of the measured output between samples before filtering.
   Hold output_interpolation = Hold::first_order_hold;
   /// Known input delay in whole samples (>= 0); the model's input_delay is set to delay * h.
@@ -71,6 +90,7 @@ struct RefinedIvOptions {
               "Stop when the relative parameter change falls below this."),
         field("initial_model", &O::initial_model,
               "Starting AdditiveModel, or none: found from the data."),
+        field("start", &O::start, "How the start is found from the data without initial_model."),
         field("output_interpolation", &O::output_interpolation,
               "How the measured output is continued between samples before filtering."),
         field("input_delay", &O::input_delay, AtLeast{0}, "Known input delay [samples]."),

@@ -1,0 +1,109 @@
+// Starts from the data alone (initialization.h) on lightly damped modes, where a start from
+// the resonance peaks of the record's FRF is what reaches the truth: the FRF start places
+// every mode near its natural frequency, and the refined IV iteration started from the
+// automatic choice converges to the exact model on noise-free data.
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "ctid/core/error.h"
+#include "ctid/refined_iv/identification.h"
+#include "ctid/refined_iv/initialization.h"
+#include "ctid/simulation/excitation.h"
+#include "ctid/simulation/simulate.h"
+
+namespace ctid {
+namespace {
+
+using ::testing::HasSubstr;
+
+constexpr double kH = 0.01;
+constexpr int kN = 8192;
+
+// theta = [a1, a2, b0] of a mode with natural frequency hz, damping zeta and static gain.
+Eigen::VectorXd mode(double hz, double zeta, double gain) {
+  const double w = 2.0 * M_PI * hz;
+  Eigen::VectorXd theta(3);
+  theta << 2.0 * zeta / w, 1.0 / (w * w), gain;
+  return theta;
+}
+
+// Three lightly damped modes (zeta 2e-3 .. 5e-3) inside the band of the input.
+AdditiveModel lightly_damped() {
+  Eigen::VectorXd beta(9);
+  beta << mode(1.5, 5e-3, 1.0), mode(4.0, 3e-3, 0.3), mode(11.0, 2e-3, 0.1);
+  return AdditiveModel::from_parameters(std::vector<SubmodelOrder>(3, SubmodelOrder{2, 0, 0}),
+                                        beta);
+}
+
+SampledData noise_free(const AdditiveModel& g, std::uint64_t seed) {
+  const Eigen::VectorXd u = white_noise(kN, 1.0, seed);
+  return SampledData(kH, u, simulate(g, u, kH));
+}
+
+std::vector<double> natural_frequencies_hz(const TransferFunction& g) {
+  std::vector<double> hz;
+  const Eigen::VectorXcd poles = g.poles();
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    if (poles(i).imag() > 0.0) hz.push_back(std::abs(poles(i)) / (2.0 * M_PI));
+  }
+  std::sort(hz.begin(), hz.end());
+  return hz;
+}
+
+TEST(FrfPeakStart, PlacesEveryLightlyDampedModeNearItsNaturalFrequency) {
+  for (std::uint64_t seed : {1U, 2U, 3U}) {
+    const std::optional<TransferFunction> start =
+        frf_peak_start(noise_free(lightly_damped(), seed), SubmodelOrder{6, 4, 0});
+    ASSERT_TRUE(start.has_value()) << "seed " << seed;
+    const std::vector<double> hz = natural_frequencies_hz(*start);
+    ASSERT_EQ(hz.size(), 3U) << "seed " << seed;
+    // Within the Welch FRF's resolution, 1 / (1024 h) ~ 0.1 Hz.
+    EXPECT_NEAR(hz[0], 1.5, 0.1) << "seed " << seed;
+    EXPECT_NEAR(hz[1], 4.0, 0.1) << "seed " << seed;
+    EXPECT_NEAR(hz[2], 11.0, 0.1) << "seed " << seed;
+  }
+}
+
+TEST(FrfPeakStart, IsNoneWhenTheFrfHasTooFewPeaks) {
+  const AdditiveModel first_order({Submodel{Polynomial{1.0, 0.2}, Polynomial{1.0}, 0}});
+  const SampledData data = noise_free(first_order, 4);
+  EXPECT_FALSE(frf_peak_start(data, SubmodelOrder{2, 0, 0}).has_value());
+  InitializationOptions options;
+  options.method = StartMethod::frf;
+  EXPECT_THAT(
+      [&] {
+        initial_transfer_function(data, SubmodelOrder{2, 0, 0}, options);
+      },
+      ::testing::ThrowsMessage<InvalidArgument>(
+          HasSubstr("fewer resonance peaks than the 1 pole pairs")));
+  // The other candidates still give a start.
+  options.method = StartMethod::automatic;
+  EXPECT_NO_THROW(initial_transfer_function(data, SubmodelOrder{2, 0, 0}, options));
+}
+
+TEST(AutomaticStart, ReachesTheExactLightlyDampedModelFromTheDataAlone) {
+  const AdditiveModel truth = lightly_damped();
+  for (StartMethod method : {StartMethod::automatic, StartMethod::frf}) {
+    for (std::uint64_t seed : {5U, 6U}) {
+      IdentificationOptions options;
+      options.refined_iv.start = method;
+      options.refined_iv.compute_covariance = false;
+      const IdentificationResult r =
+          identify(noise_free(truth, seed), ModelStructure::modes(3), options);
+      const std::string where = std::string(enum_name(method)) + ", seed " + std::to_string(seed);
+      ASSERT_TRUE(r.estimate.converged()) << where << ": " << r.estimate.brief_report();
+      const std::vector<double> hz = natural_frequencies_hz(r.estimate.transfer_function);
+      ASSERT_EQ(hz.size(), 3U) << where;
+      EXPECT_NEAR(hz[0], 1.5, 1.5e-7) << where;
+      EXPECT_NEAR(hz[1], 4.0, 4e-7) << where;
+      EXPECT_NEAR(hz[2], 11.0, 1.1e-6) << where;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace ctid
