@@ -2,7 +2,8 @@
 
     /usr/bin/python3 -m ctid.plot KIND INPUT OUTPUT [--title TEXT]
 
-KIND is one of bode, modes, frf, validation, residuals, mse; INPUT a JSON (bode, modes) or
+KIND is one of bode, modes, frf, validation, residuals, mse, stabilisation; INPUT a JSON
+(bode, modes, stabilisation: the scan `ctid structure -o` writes) or
 CSV (frf, validation, residuals, mse) file in the formats of docs/python.md; OUTPUT ends in .png or
 .svg. Exit status 0 on success, 2 for bad usage or input (one line on stderr), 1 otherwise.
 """
@@ -16,7 +17,7 @@ import sys
 
 import numpy as np
 
-KINDS = ("bode", "modes", "frf", "validation", "residuals", "mse")
+KINDS = ("bode", "modes", "frf", "validation", "residuals", "mse", "stabilisation")
 
 
 class InputError(Exception):
@@ -125,6 +126,12 @@ def run(kind, path, output, title=None):
         raise InputError(f"output '{output}' must end in .png or .svg")
     if kind in ("bode", "modes"):
         return _frequency_figure(kind, path, output, title)
+    if kind == "stabilisation":
+        with open(path, encoding="utf-8") as handle:
+            document = json.load(handle)
+        if not isinstance(document, dict) or "stabilisation" not in document:
+            raise InputError(f"{path}: not a structure scan (no 'stabilisation' field)")
+        return plotting.stabilisation(document, title=title, filename=output)
     rows = _read_csv(path)
     if kind == "frf":
         return plotting.frf(_Frf.from_rows(rows, path), title=title, filename=output)
@@ -155,7 +162,8 @@ def main(argv=None):
         description="Draw a ctid figure (PNG or SVG) from a JSON or CSV file.")
     parser.add_argument("kind", help="one of: " + ", ".join(KINDS))
     parser.add_argument("input",
-                        help="JSON (bode, modes) or CSV (frf, validation, residuals, mse)")
+                        help="JSON (bode, modes, stabilisation) or CSV (frf, validation, "
+                        "residuals, mse)")
     parser.add_argument("output", help="figure file, .png or .svg")
     parser.add_argument("--title", default=None, help="figure title")
     try:

@@ -215,6 +215,53 @@ def frf(estimate, title=None, filename=None):
     return _finish(figure, filename)
 
 
+def stabilisation(scan, title=None, filename=None):
+    """Stabilisation diagram of a structure scan: every pole pair of every fit at its natural
+    frequency [Hz] (x) and its fit's order (y). Markers: "stable" (frequency and damping within
+    the scan's tolerances of the previous order's), "stable frequency", "new", "unstable pole";
+    the recommended fit's row is marked.
+
+    ``scan``: a ctid.StructureScanResult or the JSON document `ctid structure -o` writes.
+    Returns the Figure.
+    """
+    def get(obj, name):
+        return obj[name] if isinstance(obj, dict) else getattr(obj, name)
+
+    points = get(scan, "stabilisation")
+    styles = [("stable", "o", "tab:green"), ("stable frequency", "d", "tab:blue"),
+              ("new", ".", "tab:gray"), ("unstable pole", "x", "tab:red")]
+    groups = {name: ([], []) for name, _, _ in styles}
+    for p in points:
+        if not get(p, "stable_pole"):
+            name = "unstable pole"
+        elif get(p, "stable_damping"):
+            name = "stable"
+        elif get(p, "stable_frequency"):
+            name = "stable frequency"
+        else:
+            name = "new"
+        groups[name][0].append(get(p, "frequency") / (2.0 * np.pi))
+        groups[name][1].append(get(p, "order"))
+    figure, ax = plt.subplots(figsize=(7.0, 4.5))
+    for name, marker, colour in styles:
+        x, y = groups[name]
+        if x:
+            ax.semilogx(x, y, marker, color=colour, ms=6, ls="none", label=name)
+    recommended = get(scan, "recommended")
+    fits = get(scan, "fits")
+    if recommended is not None and 0 <= recommended < len(fits):
+        orders = [get(p, "order") for p in points if get(p, "fit") == recommended]
+        if orders:
+            ax.axhline(orders[0], color="k", lw=0.8, ls="--", label="recommended")
+    ax.set_xlabel("natural frequency [Hz]")
+    ax.set_ylabel("model order (poles)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="best", fontsize="small")
+    if title:
+        ax.set_title(title)
+    return _finish(figure, filename)
+
+
 def modes(model, omegas=None, frf=None, title=None, filename=None):
     """Magnitude of each submodel of an additive model, their sum, and optionally the FRF.
 

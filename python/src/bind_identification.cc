@@ -3,6 +3,7 @@
 // from its C++ field list (fields.h); no field is named in this file.
 #include "common.h"
 #include "ctid/refined_iv/identification.h"
+#include "ctid/refined_iv/structure_scan.h"
 #include "fields.h"
 
 namespace ctid::python {
@@ -40,6 +41,24 @@ void bind_identification(py::module_& m) {
       "additive iteration (29), closed loop when options.controller is set, over "
       "options.delay_scan, then mode relocation if options.relocate_modes. Options are one "
       "IdentificationOptions or its fields as keywords.");
+
+  bind_options<StructureScanOptions>(
+      m, "Options of scan_structures: held-out share, parsimony tolerance, diagram tolerances.");
+  bind_result<StructureFit>(m, "One candidate structure of a scan: how it ended and scores.");
+  bind_result<StabilisationPoint>(m, "One pole pair of the stabilisation diagram.");
+  bind_result<StructureScanResult>(
+      m, "Every candidate's fit, the recommended one and the stabilisation diagram.");
+  m.def(
+      "scan_structures",
+      [](const SampledData& data, const std::vector<ModelStructure>& candidates,
+         const std::optional<StructureScanOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<StructureScanOptions>("scan_structures", options, kwargs);
+        py::gil_scoped_release release;
+        return scan_structures(data, candidates, o);
+      },
+      py::arg("data"), py::arg("candidates"), py::arg("options") = py::none(),
+      "Fit every candidate structure on the first part of the record, score it on the held-out "
+      "end (fit, YIC, RT2, AIC, BIC) and recommend one, as `ctid structure` does.");
 }
 
 }  // namespace ctid::python

@@ -1,0 +1,222 @@
+// `ctid structure`: fits a range of structures (K modes, or unfactored n poles) with the
+// library's scan_structures (refined_iv/structure_scan.h), prints a table of how each fit ended
+// and scores (estimation and held-out validation fit, YIC, RT2, AIC, BIC, usable), recommends
+// one by the stated rule, and writes the scan with its stabilisation diagram as JSON.
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "command.h"
+#include "ctid/core/error.h"
+#include "ctid/core/format.h"
+#include "ctid/io/fields_json.h"
+#include "ctid/io/json.h"
+#include "ctid/io/model_json.h"
+#include "ctid/refined_iv/structure_scan.h"
+#include "data_flags.h"
+#include "plot_support.h"
+
+namespace ctid::cli {
+namespace {
+
+struct StructureFlags {
+  DataFlags data;
+  std::string modes;  // A:B
+  std::string poles;  // A:B
+  int zeros = -1;     // -1: poles - 1
+  int integrators = 0;
+  std::string controller;
+  int delay = 0;
+  double validation_fraction = StructureScanOptions{}.validation_fraction;
+  double fit_tolerance = StructureScanOptions{}.fit_tolerance;
+  std::string output;
+  std::string plot;
+  bool force = false;
+  bool quiet = false;
+};
+
+// "A:B" (or "A") as an inclusive range of positive counts.
+std::pair<int, int> parse_range(const std::string& text, const std::string& flag) {
+  const auto colon = text.find(':');
+  const std::string low = text.substr(0, colon);
+  const std::string high = colon == std::string::npos ? low : text.substr(colon + 1);
+  const auto parse = [&](const std::string& part) {
+    std::size_t used = 0;
+    int value = 0;
+    try {
+      value = std::stoi(part, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (part.empty() || used != part.size() || value < 1) {
+      usage_error(flag + " '" + text + "': expected MIN:MAX, positive integers, e.g. 1:6");
+    }
+    return value;
+  };
+  const int a = parse(low);
+  const int b = parse(high);
+  if (b < a) usage_error(flag + " '" + text + "': MAX is below MIN");
+  if (b - a > 31) usage_error(flag + " '" + text + "': at most 32 structures per scan");
+  return {a, b};
+}
+
+std::string describe(const ModelStructure& s) {
+  std::ostringstream out;
+  if (!s.is_additive()) {
+    const SubmodelOrder& o = s.orders[0];
+    out << "n=" << o.n << " m=" << o.m;
+    if (o.integrators > 0) out << " l=" << o.integrators;
+    return out.str();
+  }
+  out << s.orders.size() << (s.orders.size() == 1 ? " mode" : " modes");
+  return out.str();
+}
+
+std::string fixed(double x, int decimals) {
+  if (!std::isfinite(x)) return "-";
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(decimals) << x;
+  return out.str();
+}
+
+void print_table(std::ostream& out, const StructureScanResult& r, const std::string& file) {
+  out << "ctid structure: " << r.fits.size() << " structures on " << file << " ("
+      << r.estimation_samples << " samples fitted, " << r.validation_samples << " held out)\n";
+  out << "   structure    params  est.fit %  val.fit %      YIC     RT2          AIC          BIC"
+         "  usable  termination\n";
+  for (std::size_t i = 0; i < r.fits.size(); ++i) {
+    const StructureFit& f = r.fits[i];
+    out << (static_cast<int>(i) == r.recommended ? " * " : "   ") << std::left << std::setw(12)
+        << describe(f.structure) << std::right << std::setw(7) << f.parameters << std::setw(11)
+        << fixed(f.estimation_fit, 2) << std::setw(11) << fixed(f.validation_fit, 2) << std::setw(9)
+        << fixed(f.yic, 2) << std::setw(8) << fixed(f.rt2, 4) << std::setw(13) << fixed(f.aic, 1)
+        << std::setw(13) << fixed(f.bic, 1) << std::setw(8) << (f.usable ? "yes" : "no") << "  "
+        << f.message << "\n";
+  }
+  if (r.recommended >= 0) {
+    out << "recommended: " << describe(r.fits[static_cast<std::size_t>(r.recommended)].structure)
+        << " (" << r.rule << ")\n";
+  } else {
+    out << "WARNING: " << r.rule << "; try other orders, a longer record or --start\n";
+  }
+}
+
+void run_structure(const StructureFlags& f, const CLI::App& app) {
+  const bool modes = !f.modes.empty();
+  const bool poles = !f.poles.empty();
+  if (modes == poles) usage_error("give one range: --modes MIN:MAX or --poles MIN:MAX");
+  if (modes && (app.count("--zeros") > 0 || app.count("--integrators") > 0)) {
+    usage_error("--zeros and --integrators go with --poles");
+  }
+  if (!f.output.empty() && !f.force && std::filesystem::exists(f.output)) {
+    usage_error(f.output + ": file exists; pass --force to replace it (--output)");
+  }
+  std::vector<ModelStructure> candidates;
+  const auto [low, high] = parse_range(modes ? f.modes : f.poles, modes ? "--modes" : "--poles");
+  for (int k = low; k <= high; ++k) {
+    if (modes) {
+      candidates.push_back(ModelStructure::modes(k));
+    } else {
+      const int zeros = f.zeros < 0 ? k - 1 : f.zeros;
+      if (zeros > k + f.integrators) {
+        usage_error("--zeros " + std::to_string(zeros) + " exceeds the " + std::to_string(k) +
+                    " poles of a structure in --poles " + f.poles + " (an improper model)");
+      }
+      candidates.push_back(ModelStructure::unfactored(k, zeros, f.integrators));
+    }
+  }
+  std::filesystem::path package;
+  if (!f.plot.empty()) {
+    package = require_plotting();
+    prepare_plot_directory(f.plot, {"stabilisation.png"}, f.force);
+  }
+  StructureScanOptions options;
+  options.validation_fraction = f.validation_fraction;
+  options.fit_tolerance = f.fit_tolerance;
+  if (!f.controller.empty()) {
+    options.identification.controller = io::read_discrete_transfer_function(f.controller);
+  }
+  options.identification.refined_iv.input_delay = f.delay;
+  options.validate();
+  const SampledData data = f.data.load(app, !f.controller.empty());
+  const StructureScanResult result = scan_structures(data, candidates, options);
+  nlohmann::json document = io::fields_to_json(result);
+  document["type"] = "structure_scan_result";
+  document["data"] = {
+      {"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}};
+  if (!f.output.empty()) {
+    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  }
+  if (!f.quiet) {
+    print_table(std::cout, result, f.data.file);
+    if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
+  }
+  if (!f.plot.empty()) {
+    const TemporaryDirectory work;
+    io::write_json(work.path() / "scan.json", document);
+    plot(package, {{"stabilisation", work.path() / "scan.json",
+                    std::filesystem::path(f.plot) / "stabilisation.png",
+                    "ctid structure: " + std::filesystem::path(f.data.file).filename().string()}});
+  }
+}
+
+Command add_structure_command(CLI::App& parent) {
+  auto flags = std::make_shared<StructureFlags>();
+  StructureFlags& f = *flags;
+  CLI::App* app = parent.add_subcommand(
+      "structure",
+      "Fit a range of structures and recommend one: estimation and held-out validation fit, "
+      "YIC, RT2, AIC, BIC, and a stabilisation diagram of the poles.");
+  app->footer(
+      "The last --validation-fraction of the record is held out: every estimate is simulated "
+      "over the whole record from rest and scored there. Recommended: the fewest parameters "
+      "among usable fits within --fit-tolerance points of the best validation fit.\n"
+      "-o SCAN.json writes every fit, the recommendation and the stabilisation diagram.\n"
+      "Exit status: 0 ran, 2 bad usage or input, 1 other error.");
+  f.data.add_to(*app, "data", true);
+  app->add_option("--modes", f.modes, "Additive: numbers of second-order modes, MIN:MAX")
+      ->group("Structures");
+  app->add_option("--poles", f.poles, "Unfactored: numbers of poles n, MIN:MAX")
+      ->group("Structures");
+  app->add_option("--zeros", f.zeros, "Unfactored: zeros m of every structure (default n - 1)")
+      ->group("Structures");
+  app->add_option("--integrators", f.integrators, "Unfactored: poles at the origin")
+      ->capture_default_str()
+      ->group("Structures");
+  app->add_option("--controller,-c", f.controller,
+                  "Discrete controller JSON: closed loop (the data need the reference)")
+      ->check(CLI::ExistingFile)
+      ->group("Structures");
+  app->add_option("--delay", f.delay, "Known input delay in samples")
+      ->capture_default_str()
+      ->group("Structures");
+  app->add_option("--validation-fraction", f.validation_fraction,
+                  "Share of the record at its end held out for validation (0: none)")
+      ->capture_default_str()
+      ->group("Choice");
+  app->add_option("--fit-tolerance", f.fit_tolerance,
+                  "Percentage points of validation fit traded for fewer parameters")
+      ->capture_default_str()
+      ->group("Choice");
+  app->add_option("--output,-o", f.output, "Scan JSON to write")->group("Output");
+  app->add_option("--plot", f.plot, "Directory for stabilisation.png (the stabilisation diagram)")
+      ->group("Output");
+  app->add_flag("--force", f.force, "Replace an output file that exists")->group("Output");
+  app->add_flag("--quiet,-q", f.quiet, "Print nothing")->group("Output");
+
+  Command command;
+  command.app = app;
+  command.run = [flags, app] { run_structure(*flags, *app); };
+  return command;
+}
+
+}  // namespace
+
+CTID_REGISTER_COMMAND(25, add_structure_command);
+
+}  // namespace ctid::cli

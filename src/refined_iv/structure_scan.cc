@@ -1,0 +1,170 @@
+// Candidate structures fitted with identify() and scored on held-out data (structure_scan.h).
+#include "ctid/refined_iv/structure_scan.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <limits>
+
+#include "ctid/core/error.h"
+#include "ctid/core/format.h"
+#include "ctid/estimation/validation.h"
+
+namespace ctid {
+namespace {
+
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+
+// Poles of g besides the origin's (integrators), one of each complex pair.
+std::vector<std::complex<double>> upper_poles(const TransferFunction& g) {
+  std::vector<std::complex<double>> out;
+  const Eigen::VectorXcd poles = g.poles();
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    const std::complex<double> s = poles(i);
+    if (std::abs(s) == 0.0) continue;
+    if (s.imag() > 1e-9 * std::abs(s)) out.push_back(s);
+  }
+  return out;
+}
+
+bool stable(const TransferFunction& g) {
+  const Eigen::VectorXcd poles = g.poles();
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    if (std::abs(poles(i)) == 0.0) continue;  // an integrator the structure asked for
+    if (!(poles(i).real() < 0.0)) return false;
+  }
+  return true;
+}
+
+double variance_about_mean(const Eigen::VectorXd& x) {
+  return (x.array() - x.mean()).square().mean();
+}
+
+}  // namespace
+
+StructureScanResult scan_structures(const SampledData& data,
+                                    const std::vector<ModelStructure>& candidates,
+                                    const StructureScanOptions& options) {
+  options.validate();
+  require(!candidates.empty(), "scan_structures: no candidate structure given");
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    candidates[i].validate();
+  }
+  const int total = data.size();
+  const int held_out = static_cast<int>(std::floor(options.validation_fraction * total));
+  const int fitted = total - held_out;
+  require(fitted >= 8, "scan_structures: too few samples: ", fitted,
+          " samples remain for estimation after holding out validation_fraction = ",
+          options.validation_fraction, " of ", total);
+  require(options.validation_fraction == 0.0 || held_out >= 8,
+          "scan_structures: too few samples: validation_fraction = ", options.validation_fraction,
+          " of ", total, " samples holds out ", held_out, "; at least 8 are needed");
+  const SampledData estimation = data.segment(0, fitted);
+  const double h = data.sample_time();
+
+  StructureScanResult result;
+  result.estimation_samples = fitted;
+  result.validation_samples = held_out;
+  for (const ModelStructure& structure : candidates) {
+    StructureFit fit;
+    fit.structure = structure;
+    fit.yic = fit.rt2 = fit.aic = fit.bic = kNan;
+    fit.estimation_fit = fit.validation_fit = kNan;
+    try {
+      const IdentificationResult r = identify(estimation, structure, options.identification);
+      const EstimationResult& e = r.estimate;
+      fit.parameters = static_cast<int>(e.parameters.size());
+      fit.termination = e.termination;
+      fit.message = e.brief_report();
+      fit.iterations = e.iterations;
+      fit.transfer_function = e.transfer_function;
+      const Eigen::VectorXd simulated = model_output(e.model, data.input(), h);
+      const Eigen::VectorXd y_est = data.output().head(fitted);
+      const Eigen::VectorXd e_est = y_est - simulated.head(fitted);
+      fit.estimation_fit = fit_percent(y_est, simulated.head(fitted));
+      fit.validation_fit = held_out > 0
+                               ? fit_percent(data.output().tail(held_out), simulated.tail(held_out))
+                               : fit.estimation_fit;
+      const double error_variance = e_est.squaredNorm() / fitted;
+      const double output_variance = variance_about_mean(y_est);
+      fit.rt2 = 1.0 - error_variance / output_variance;
+      fit.aic = fitted * std::log(error_variance) + 2.0 * fit.parameters;
+      fit.bic = fitted * std::log(error_variance) + fit.parameters * std::log(double(fitted));
+      if (e.covariance.rows() == fit.parameters && fit.parameters > 0) {
+        double relative = 0.0;
+        for (int i = 0; i < fit.parameters; ++i) {
+          relative += e.covariance(i, i) / (e.parameters(i) * e.parameters(i));
+        }
+        fit.yic = std::log(error_variance / output_variance) + std::log(relative / fit.parameters);
+      }
+      fit.usable = e.termination != Termination::non_finite &&
+                   e.termination != Termination::no_solution && e.parameters.allFinite() &&
+                   std::isfinite(fit.validation_fit) && std::isfinite(fit.estimation_fit) &&
+                   stable(e.transfer_function);
+    } catch (const InvalidArgument& error) {
+      fit.message = error.what();
+      fit.usable = false;
+    }
+    result.fits.push_back(std::move(fit));
+  }
+
+  // Recommendation: parsimony within fit_tolerance of the best usable validation fit.
+  double best = -std::numeric_limits<double>::infinity();
+  for (const StructureFit& fit : result.fits) {
+    if (fit.usable) best = std::max(best, fit.validation_fit);
+  }
+  for (std::size_t i = 0; i < result.fits.size(); ++i) {
+    const StructureFit& fit = result.fits[i];
+    if (!fit.usable || fit.validation_fit < best - options.fit_tolerance) continue;
+    if (result.recommended < 0) {
+      result.recommended = static_cast<int>(i);
+      continue;
+    }
+    const StructureFit& kept = result.fits[static_cast<std::size_t>(result.recommended)];
+    const bool fewer = fit.parameters < kept.parameters;
+    const bool tie_better_yic = fit.parameters == kept.parameters && fit.yic < kept.yic;
+    if (fewer || tie_better_yic) result.recommended = static_cast<int>(i);
+  }
+  const std::string where = held_out > 0 ? "held-out validation fit" : "fit";
+  if (result.recommended < 0) {
+    result.rule = "no candidate gave a usable fit";
+  } else {
+    result.rule = "fewest parameters among the usable fits whose " + where + " is within " +
+                  format_number(options.fit_tolerance) + " points of the best (" +
+                  format_significant(best, 4) + " %)";
+  }
+
+  // Stabilisation diagram: each fit against the fit before it in the list.
+  for (std::size_t i = 0; i < result.fits.size(); ++i) {
+    const std::vector<std::complex<double>> poles = upper_poles(result.fits[i].transfer_function);
+    const std::vector<std::complex<double>> previous =
+        i == 0 ? std::vector<std::complex<double>>{}
+               : upper_poles(result.fits[i - 1].transfer_function);
+    const Polynomial& den = result.fits[i].transfer_function.denominator();
+    int origin = 0;
+    while (origin < den.degree() && den[origin] == 0.0) ++origin;
+    const int order = den.degree() - origin;
+    for (const std::complex<double>& s : poles) {
+      StabilisationPoint point;
+      point.fit = static_cast<int>(i);
+      point.order = order;
+      point.frequency = std::abs(s);
+      point.damping_ratio = -s.real() / std::abs(s);
+      point.stable_pole = s.real() < 0.0;
+      for (const std::complex<double>& q : previous) {
+        const double w = std::abs(q);
+        const double zeta = -q.real() / w;
+        if (std::abs(point.frequency - w) <= options.frequency_tolerance * w) {
+          point.stable_frequency = true;
+          if (std::abs(point.damping_ratio - zeta) <= options.damping_tolerance * std::abs(zeta)) {
+            point.stable_damping = true;
+          }
+        }
+      }
+      result.stabilisation.push_back(point);
+    }
+  }
+  return result;
+}
+
+}  // namespace ctid
