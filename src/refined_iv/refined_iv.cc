@@ -481,6 +481,22 @@ Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares) {
   return s;
 }
 
+// The solution of (29) from its sums with unit-norm columns, or nothing if they are not
+// finite or the equations are singular.
+std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums) {
+  if (!sums.all_finite()) return std::nullopt;
+  const Eigen::VectorXd sz = norms_from_squares(sums.zz);
+  const Eigen::VectorXd sp = norms_from_squares(sums.pp);
+  const Eigen::MatrixXd m =
+      sz.cwiseInverse().asDiagonal() * sums.zp * sp.cwiseInverse().asDiagonal();
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(m);
+  if (!(lu.rcond() > 1e-14)) return std::nullopt;
+  const Eigen::MatrixXd rhs = sz.cwiseInverse().asDiagonal() * sums.zy;
+  Eigen::MatrixXd solution = sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(lu.solve(rhs));
+  if (!solution.allFinite()) return std::nullopt;
+  return solution;
+}
+
 }  // namespace
 
 Polynomial reflect_unstable_roots(const Polynomial& a, bool& reflected) {
@@ -783,6 +799,17 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   }
   if (closed_loop && result.termination != Termination::closed_loop_unstable) {
     if (!update_source(beta)) ++result.sensitivity_fallbacks;
+  }
+  if (layout.free_responses() && result.iterations > 0) {
+    // The loop's free-response coefficients come from the solve at the previous iterate;
+    // one more solve of (29) at the returned beta gives them in its own realisations.
+    Moments sums;
+    evaluate(layout, beta, initial_states, u, y, source ? &*source : nullptr, h,
+             options.output_interpolation, workspace, &sums, nullptr, nullptr);
+    if (std::optional<Eigen::MatrixXd> solution = solve_scaled(sums)) {
+      initial_states = free_response_coefficients(layout, *solution);
+      states_at = beta;
+    }
   }
   Eigen::VectorXd residual;
   Eigen::MatrixXd psi;

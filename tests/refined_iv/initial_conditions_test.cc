@@ -122,9 +122,6 @@ TEST_F(RecordCutAfterAStep, AdditiveRecoversParametersAndInitialState) {
 TEST_F(RecordCutAfterAStep, UnfactoredRecoversParametersAndInitialState) {
   RefinedIvOptions options;
   options.initial_model = truth.with_parameters(perturbed(truth.parameters(), 2));
-  // The initial state comes from the last solve of (29), one iterate behind the parameters;
-  // its third derivative amplifies that step, so iterate a little closer than the default.
-  options.tolerance = 1e-12;
   options.initial_conditions = InitialConditions::estimate;
   const EstimationResult r = srivc(*data, {4, 2, 0}, options);
   ASSERT_TRUE(r.converged()) << r.message;
@@ -159,6 +156,40 @@ TEST(InitialConditions, SteadyStatePeriodOfAPeriodicResponse) {
   options.initial_conditions = InitialConditions::zero;
   const EstimationResult z = additive_srivc(data, truth.orders(), options);
   EXPECT_GT(relative_error(z.parameters, truth.parameters()), 1e-4);
+}
+
+TEST(InitialConditions, IntegratorSubmodelAndEightPoleUnfactoredModel) {
+  // Remark 5: an integrating submodel's free response includes a constant (l = 1).
+  const AdditiveModel integrating(
+      {{Polynomial({1.0, 0.5}), Polynomial({0.5}), 1}, testing::mode_from_pole(-0.2, 2.0, 1.0)});
+  const int cut = 500;
+  {
+    const Eigen::VectorXd u = white_noise(2500, 1.0, 31);
+    const Eigen::VectorXd y = simulate(integrating, u, kH);
+    const SampledData data(kH, tail(u, cut), tail(y, cut));
+    RefinedIvOptions options;
+    options.initial_model = integrating.with_parameters(perturbed(integrating.parameters(), 6));
+    options.initial_conditions = InitialConditions::estimate;
+    const EstimationResult r = additive_srivc(data, integrating.orders(), options);
+    ASSERT_TRUE(r.converged()) << r.message;
+    EXPECT_LT(relative_error(r.parameters, integrating.parameters()), 1e-9);
+    EXPECT_LT(relative_error(r.initial_conditions, free_responses_at(integrating, u, cut)), 1e-9);
+  }
+  // Section 6.1's four modes as one 8-pole, 6-zero model, cut mid-motion.
+  const AdditiveModel four = testing::open_loop_four_modes();
+  const Eigen::VectorXd u = white_noise(3500, 1.0, 32);
+  const Eigen::VectorXd y = simulate(four, u, kH);
+  const SampledData data(kH, tail(u, cut), tail(y, cut));
+  RefinedIvOptions options;
+  options.initial_model = four.with_parameters(perturbed(four.parameters(), 7));
+  options.initial_conditions = InitialConditions::estimate;
+  const EstimationResult r = srivc(data, {8, 6, 0}, options);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_LT(relative_error(r.parameters, unfactored_beta(four.to_transfer_function(), 8, 6)), 1e-9);
+  const EstimationResult a = additive_srivc(data, four.orders(), options);
+  ASSERT_TRUE(a.converged()) << a.message;
+  EXPECT_LT(relative_error(a.parameters, four.parameters()), 1e-9);
+  EXPECT_LT(relative_error(a.initial_conditions, free_responses_at(four, u, cut)), 1e-9);
 }
 
 TEST(InitialConditions, RecordsStartingAtRestKeepTheirExactFit) {
