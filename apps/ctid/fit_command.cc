@@ -48,6 +48,7 @@ struct FitFlags {
   double tolerance = RefinedIvOptions{}.tolerance;
   std::string interpolation = "foh";
   std::string noise = "coloured";
+  std::string initial_conditions = "zero";
   bool history = false;
   bool relocate_modes = false;
 
@@ -194,6 +195,8 @@ IdentificationOptions identification_options(const FitFlags& f) {
   refined.output_interpolation =
       f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
   refined.noise = f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
+  refined.initial_conditions =
+      f.initial_conditions == "estimate" ? InitialConditions::estimate : InitialConditions::zero;
   refined.record_history = f.history;
   refined.input_delay = f.delay;
   if (!f.initial.empty() && f.start != "auto") {
@@ -358,6 +361,13 @@ Command add_fit_command(CLI::App& parent) {
                   "Noise assumed by the covariance: white or coloured (sandwich, AR model of the "
                   "residuals)")
       ->check(CLI::IsMember({"white", "coloured"}))
+      ->capture_default_str()
+      ->group("Iteration");
+  app->add_option("--initial-conditions", f.initial_conditions,
+                  "State at the first sample: zero (at rest, as in the paper) or estimate (each "
+                  "submodel's free response is estimated with the parameters; for records that "
+                  "start mid-motion)")
+      ->check(CLI::IsMember({"zero", "estimate"}))
       ->capture_default_str()
       ->group("Iteration");
   app->add_flag("--history", f.history, "Record every iteration's parameters in the result")

@@ -38,6 +38,8 @@ void bind_refined_iv_estimators(py::module_& m) {
   bind_enum<NoiseAssumption>(m, "NoiseAssumption", "Noise model of the covariance.");
   bind_enum<StartMethod>(m, "StartMethod",
                          "How a start is found from the data (initialization.h).");
+  bind_enum<InitialConditions>(m, "InitialConditions",
+                               "State assumed at the first sample: zero or estimate.");
   bind_options<RefinedIvOptions>(m, "Options of srivc, clsrivc, additive_srivc, additive_clsrivc.");
 
   m.def(

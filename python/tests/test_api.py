@@ -114,3 +114,21 @@ def test_numpy_in_and_out(experiment):
     # Polynomials take plain lists, ascending.
     p = ctid.Polynomial([1.0, 2.0, 3.0])
     assert p(2.0) == 1.0 + 4.0 + 12.0
+
+
+def test_initial_conditions_are_estimated_for_a_record_that_starts_mid_motion():
+    # 4 / (4 + 0.8 p + p^2) = 1 / (1 + 0.2 p + 0.25 p^2); the record is cut after 200 samples.
+    h = 0.05
+    g = ctid.TransferFunction([4.0], [4.0, 0.8, 1.0])
+    u = ctid.white_noise(1200, 1.0, 3)
+    y = ctid.simulate(g, u, h)
+    data = ctid.SampledData(h, u[200:], y[200:])
+    truth = np.array([0.2, 0.25, 1.0])
+    order = ctid.SubmodelOrder(2, 0)
+    r = ctid.srivc(data, order, initial_conditions=ctid.InitialConditions.estimate)
+    assert r.converged()
+    np.testing.assert_allclose(r.parameters, truth, rtol=1e-9)
+    assert r.initial_conditions.shape == (2,)  # free response and its derivative at t = 0
+    zero = ctid.srivc(data, order)  # default: at rest
+    assert np.max(np.abs(zero.parameters - truth) / truth) > 1e-4
+    assert zero.initial_conditions.size == 0

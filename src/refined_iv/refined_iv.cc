@@ -27,18 +27,35 @@ namespace ctid {
 namespace internal {
 namespace {
 
+// The augmented vector of (29): beta first, then (InitialConditions::estimate) the n_i + l_i
+// free-response coefficients of every submodel, so the parameter block of any joint matrix is
+// its top-left p x p corner.
 struct Layout {
   std::vector<SubmodelOrder> orders;
   std::vector<int> offset;
+  std::vector<int> free_offset;  // of submodel i's free-response coefficients
   int parameters = 0;
-  int poles = 0;  // sum n_i + l_i
+  int poles = 0;      // sum n_i + l_i
+  int augmented = 0;  // parameters, plus poles when initial conditions are estimated
 
-  explicit Layout(std::vector<SubmodelOrder> o) : orders(std::move(o)) {
+  Layout(std::vector<SubmodelOrder> o, bool initial_conditions) : orders(std::move(o)) {
     for (const SubmodelOrder& s : orders) {
       offset.push_back(parameters);
       parameters += s.n + s.m + 1;
       poles += s.n + s.integrators;
     }
+    augmented = parameters;
+    if (initial_conditions) {
+      for (const SubmodelOrder& s : orders) {
+        free_offset.push_back(augmented);
+        augmented += s.n + s.integrators;
+      }
+    }
+  }
+  explicit Layout(std::vector<SubmodelOrder> o) : Layout(std::move(o), false) {}
+  bool free_responses() const { return augmented > parameters; }
+  int states(int i) const {
+    return orders[static_cast<size_t>(i)].n + orders[static_cast<size_t>(i)].integrators;
   }
   int size() const { return static_cast<int>(orders.size()); }
   int count(int i) const {
@@ -180,7 +197,25 @@ struct Moments {
 // is the model output B/(p^l A) u. `input` (closed loop, or when no instrument is needed)
 // gives p^j/(p^l A) u in rows 0..m and B/(p^l A) u in row m+1. `output` is the bank of
 // 1/A on the residual output y~_i (23).
+// Free responses of one submodel at one iterate (InitialConditions::estimate), exact at the
+// samples: the homogeneous chain 1/(p^l A) -> p^k/A with transition matrix phi, propagated
+// from the s = n + l initial states [e_j; 0] (columns j < s: the basis 1/(p^l A) of the
+// submodel's free responses, regressor and instrument columns alike) and from [c_i; 0]
+// (column s: the current free response f_i, added to the model output, and p^k/A f_i,
+// added to the a-part of the open-loop instrument).
+struct FreeResponse {
+  Eigen::MatrixXd phi;
+  Eigen::MatrixXd state;  // chain states x (s + 1)
+  Eigen::MatrixXd next;
+  Eigen::RowVectorXd c0;     // 1/(p^l A)
+  Eigen::MatrixXd ck;        // p^k/A of it, k = 1..n
+  Eigen::MatrixXd basis;     // kBlock x s
+  Eigen::VectorXd value;     // kBlock: f_i
+  Eigen::MatrixXd filtered;  // kBlock x n: p^k/A f_i
+};
+
 struct SubmodelFilters {
+  std::optional<FreeResponse> free;
   std::optional<SampledFilter> source;
   std::optional<SampledFilter> input;
   std::optional<SampledFilter> output;
@@ -202,8 +237,8 @@ struct Workspace {
   std::vector<Eigen::MatrixXd> output_out;
 
   explicit Workspace(const Layout& layout)
-      : instrument(kBlock, layout.parameters),
-        regressor(kBlock, layout.parameters),
+      : instrument(kBlock, layout.augmented),
+        regressor(kBlock, layout.augmented),
         filtered(kBlock, layout.size()),
         outputs(kBlock, layout.size()),
         total(kBlock),
@@ -223,7 +258,8 @@ FilterRealization with_rows(const FilterRealization& f, const Eigen::MatrixXd& c
   return out;
 }
 
-SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& beta, int i, double h,
+SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& beta,
+                                 const Eigen::VectorXd& initial_states, int i, double h,
                                  Hold output_interpolation, bool closed_loop, bool need_instrument,
                                  bool need_regressor) {
   const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
@@ -271,27 +307,52 @@ SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& be
     f.output.emplace(derivative_filters(a), h, output_interpolation);
     f.output_stream = f.output->start();
   }
+  if (layout.free_responses()) {
+    const int s = layout.states(i);
+    FilterRealization chain = bank;
+    if (o.n > 0) {
+      Eigen::VectorXd first = Eigen::VectorXd::Zero(bank.outputs());
+      first(0) = 1.0;
+      chain = cascade(bank, first, derivative_filters(a));
+    }
+    const int states = chain.order();
+    const int given = std::min(s, s1);  // s1 < s only if the iterate lost its leading a_in
+    FreeResponse& r = f.free.emplace();
+    r.phi = discretize_zoh(chain.a, chain.b, h).phi;
+    r.state = Eigen::MatrixXd::Zero(states, s + 1);
+    r.state.topLeftCorner(given, given).setIdentity();
+    r.state.block(0, s, given, 1) = initial_states.segment(
+        layout.free_offset[static_cast<size_t>(i)] - layout.parameters, given);
+    r.next.resize(states, s + 1);
+    r.c0 = Eigen::RowVectorXd::Zero(states);
+    r.c0.head(s1) = bank.c.row(0);
+    r.ck = o.n > 0 ? Eigen::MatrixXd(chain.c.middleRows(1, o.n)) : Eigen::MatrixXd(0, states);
+    r.basis.resize(kBlock, s);
+    r.value.resize(kBlock);
+    r.filtered.resize(kBlock, o.n);
+  }
   return f;
 }
 
 // One pass over the record at beta (instrument source: u in open loop, S_uo r otherwise).
 // With `moments`: the sums of eq. (29); with `residual`: y - sum_i G_i u; with `psi`: the
 // N x p instrument (for the covariance).
-void evaluate(const Layout& layout, const Eigen::VectorXd& beta, const Eigen::VectorXd& u,
+void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
+              const Eigen::VectorXd& initial_states, const Eigen::VectorXd& u,
               const Eigen::VectorXd& y, const Eigen::VectorXd* source, double h,
               Hold output_interpolation, Workspace& w, Moments* moments, Eigen::VectorXd* residual,
               Eigen::MatrixXd* psi) {
   const Eigen::Index n = u.size();
   const int k_count = layout.size();
-  const int p = layout.parameters;
+  const int p = layout.augmented;
   const bool closed_loop = source != nullptr;
   const bool need_instrument = moments != nullptr || psi != nullptr;
   const bool need_regressor = moments != nullptr;
   std::vector<SubmodelFilters> filters;
   filters.reserve(static_cast<size_t>(k_count));
   for (int i = 0; i < k_count; ++i) {
-    filters.push_back(submodel_filters(layout, beta, i, h, output_interpolation, closed_loop,
-                                       need_instrument, need_regressor));
+    filters.push_back(submodel_filters(layout, beta, initial_states, i, h, output_interpolation,
+                                       closed_loop, need_instrument, need_regressor));
   }
   if (moments != nullptr) {
     moments->zp = Eigen::MatrixXd::Zero(p, p);
@@ -325,6 +386,26 @@ void evaluate(const Layout& layout, const Eigen::VectorXd& beta, const Eigen::Ve
         f.input->run(u.segment(k0, len), f.input_stream, out);
         w.outputs.col(i).head(len) = out.col(o.m + 1);
         if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+      }
+      if (f.free) {
+        FreeResponse& r = *f.free;
+        const int s = layout.states(i);
+        for (Eigen::Index k = 0; k < len; ++k) {
+          r.basis.row(k).noalias() = r.c0 * r.state.leftCols(s);
+          r.value(k) = r.c0.dot(r.state.col(s));
+          if (o.n > 0) r.filtered.row(k).noalias() = (r.ck * r.state.col(s)).transpose();
+          r.next.noalias() = r.phi * r.state;
+          r.state.swap(r.next);
+        }
+        const int free_off = layout.free_offset[at];
+        w.outputs.col(i).head(len) += r.value.head(len);
+        if (need_instrument) {
+          w.instrument.block(0, free_off, len, s) = r.basis.topRows(len);
+          if (!closed_loop && o.n > 0) {
+            w.instrument.block(0, off, len, o.n) -= r.filtered.topRows(len);
+          }
+        }
+        if (need_regressor) w.regressor.block(0, free_off, len, s) = r.basis.topRows(len);
       }
     }
     w.total.head(len) = w.outputs.topRows(len).rowwise().sum();
@@ -360,12 +441,60 @@ void evaluate(const Layout& layout, const Eigen::VectorXd& beta, const Eigen::Ve
   }
 }
 
+// The free-response coefficients of every submodel from its own column of the solution of (29).
+Eigen::VectorXd free_response_coefficients(const Layout& layout, const Eigen::MatrixXd& solution) {
+  Eigen::VectorXd c(layout.augmented - layout.parameters);
+  for (int i = 0; i < layout.size() && layout.free_responses(); ++i) {
+    const int at = layout.free_offset[static_cast<size_t>(i)];
+    c.segment(at - layout.parameters, layout.states(i)) =
+        solution.block(at, i, layout.states(i), 1);
+  }
+  return c;
+}
+
+// Realisation-independent form of the coefficients: per submodel, the free response f_i and
+// its first n_i + l_i - 1 derivatives at the first sample, c0 A^k x0 of 1/(p^l A_i).
+Eigen::VectorXd free_response_derivatives(const Layout& layout, const Eigen::VectorXd& beta,
+                                          const Eigen::VectorXd& initial_states) {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(initial_states.size());
+  for (int i = 0; i < layout.size(); ++i) {
+    const FilterRealization bank =
+        derivative_filters(Polynomial::monomial(layout.orders[static_cast<size_t>(i)].integrators) *
+                           denominator_of(layout, beta, i));
+    const int s = layout.states(i);
+    const int at = layout.free_offset[static_cast<size_t>(i)] - layout.parameters;
+    if (bank.order() != s) continue;
+    Eigen::VectorXd x = initial_states.segment(at, s);
+    for (int k = 0; k < s; ++k) {
+      out(at + k) = bank.c.row(0).dot(x);
+      x = bank.a * x;
+    }
+  }
+  return out;
+}
+
 Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares) {
   Eigen::VectorXd s = squares.cwiseSqrt();
   for (Eigen::Index j = 0; j < s.size(); ++j) {
     if (!(s(j) > 0.0) || !std::isfinite(s(j))) s(j) = 1.0;
   }
   return s;
+}
+
+// The solution of (29) from its sums with unit-norm columns, or nothing if they are not
+// finite or the equations are singular.
+std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums) {
+  if (!sums.all_finite()) return std::nullopt;
+  const Eigen::VectorXd sz = norms_from_squares(sums.zz);
+  const Eigen::VectorXd sp = norms_from_squares(sums.pp);
+  const Eigen::MatrixXd m =
+      sz.cwiseInverse().asDiagonal() * sums.zp * sp.cwiseInverse().asDiagonal();
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(m);
+  if (!(lu.rcond() > 1e-14)) return std::nullopt;
+  const Eigen::MatrixXd rhs = sz.cwiseInverse().asDiagonal() * sums.zy;
+  Eigen::MatrixXd solution = sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(lu.solve(rhs));
+  if (!solution.allFinite()) return std::nullopt;
+  return solution;
 }
 
 }  // namespace
@@ -424,7 +553,7 @@ Eigen::VectorXd unfactored_parameters(const TransferFunction& g, const SubmodelO
 EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIvOptions& options) {
   options.validate();
   const SampledData& data = *problem.data;
-  const Layout layout(problem.orders);
+  const Layout layout(problem.orders, options.initial_conditions == InitialConditions::estimate);
   const std::string name = problem.name;
   require(layout.size() >= 1, name, ": the model structure has no submodels");
   {
@@ -450,9 +579,11 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   const int delay = options.input_delay;
   const int n_samples = data.size();
   const int p = layout.parameters;
-  require(n_samples - delay >= std::max(3 * p, p + 20), name, ": ", n_samples,
-          " samples (input delay ", delay, ") are too few for ", p, " parameters; at least ",
-          std::max(3 * p, p + 20) + delay, " are needed");
+  const int unknowns = layout.augmented;  // with the free-response coefficients
+  require(n_samples - delay >= std::max(3 * unknowns, unknowns + 20), name, ": ", n_samples,
+          " samples (input delay ", delay, ") are too few for ", unknowns,
+          " parameters and initial conditions; at least ",
+          std::max(3 * unknowns, unknowns + 20) + delay, " are needed");
   const bool closed_loop = problem.controller != nullptr;
   const double h = data.sample_time();
   if (closed_loop) {
@@ -543,6 +674,10 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   };
 
   Workspace workspace(layout);
+  // Free-response coefficients (initial states of each submodel's 1/(p^l A_i) realisation at
+  // the current iterate), taken from the last solution of (29); empty with `zero`.
+  Eigen::VectorXd initial_states = Eigen::VectorXd::Zero(layout.augmented - p);
+  Eigen::VectorXd states_at = beta;  // the iterate whose realisations they refer to
   result.termination = Termination::iteration_limit;
   bool stopped = false;
   if (closed_loop && !update_source(beta)) {
@@ -564,8 +699,8 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     bool source_ok = true;
     if (closed_loop && iteration > 1) source_ok = update_source(beta);
     Moments sums;
-    evaluate(layout, beta, u, y, source ? &*source : nullptr, h, options.output_interpolation,
-             workspace, &sums, nullptr, nullptr);
+    evaluate(layout, beta, initial_states, u, y, source ? &*source : nullptr, h,
+             options.output_interpolation, workspace, &sums, nullptr, nullptr);
     const bool finite = sums.all_finite();
     Eigen::VectorXd sz;
     Eigen::VectorXd sp;
@@ -610,7 +745,7 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     const Eigen::MatrixXd solution =
         sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(m.fullPivLu().solve(rhs));
     Eigen::VectorXd next(p);
-    Eigen::MatrixXd off = solution;
+    Eigen::MatrixXd off = solution.topRows(p);
     for (int i = 0; i < layout.size(); ++i) {
       const int o = layout.offset[static_cast<size_t>(i)];
       next.segment(o, layout.count(i)) = solution.block(o, i, layout.count(i), 1);
@@ -627,6 +762,8 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     result.off_diagonal_norm = off.norm() / std::max(next.norm(), 1e-300);
     result.relative_change = change;
     result.iterations = iteration;
+    initial_states = free_response_coefficients(layout, solution);
+    states_at = beta;
     beta = next;
     if (options.record_history) {
       result.history.push_back({iteration, beta, change, result.off_diagonal_norm});
@@ -664,18 +801,35 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   if (closed_loop && result.termination != Termination::closed_loop_unstable) {
     if (!update_source(beta)) ++result.sensitivity_fallbacks;
   }
+  if (layout.free_responses() && result.iterations > 0) {
+    // The loop's free-response coefficients come from the solve at the previous iterate;
+    // one more solve of (29) at the returned beta gives them in its own realisations.
+    Moments sums;
+    evaluate(layout, beta, initial_states, u, y, source ? &*source : nullptr, h,
+             options.output_interpolation, workspace, &sums, nullptr, nullptr);
+    if (std::optional<Eigen::MatrixXd> solution = solve_scaled(sums)) {
+      initial_states = free_response_coefficients(layout, *solution);
+      states_at = beta;
+    }
+  }
   Eigen::VectorXd residual;
   Eigen::MatrixXd psi;
-  evaluate(layout, beta, u, y, source ? &*source : nullptr, h, options.output_interpolation,
-           workspace, nullptr, &residual, options.compute_covariance ? &psi : nullptr);
+  evaluate(layout, beta, initial_states, u, y, source ? &*source : nullptr, h,
+           options.output_interpolation, workspace, nullptr, &residual,
+           options.compute_covariance ? &psi : nullptr);
   const double sse = residual.squaredNorm();
   result.mean_squared_error = sse / n_samples;
-  result.noise_variance = sse / std::max(n_samples - p, 1);
+  result.noise_variance = sse / std::max(n_samples - unknowns, 1);
   result.fit_percent = fit_percent(y, y - residual);
+  if (layout.free_responses())
+    result.initial_conditions = free_response_derivatives(layout, states_at, initial_states);
 
   if (options.compute_covariance && psi.allFinite() && residual.allFinite()) {
-    result.covariance = instrumental_variable_covariance(psi, residual, p, options.noise,
-                                                         options.noise_model_max_order);
+    // With free responses the joint covariance of beta and their coefficients; its beta
+    // block is the covariance of beta with the nuisance coefficients estimated alongside.
+    const Eigen::MatrixXd joint = instrumental_variable_covariance(
+        psi, residual, unknowns, options.noise, options.noise_model_max_order);
+    result.covariance = joint.topLeftCorner(p, p);
     result.standard_errors = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
     result.modes = modal_estimates(result.model, result.covariance, problem.unfactored);
   }

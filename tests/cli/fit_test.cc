@@ -2,6 +2,7 @@
 // examples, fitted, and the JSON's parameters compared with the true ones; bad input exits
 // 2 with one line; files are never replaced without --force; --plot writes real PNGs.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -102,6 +103,38 @@ TEST_F(FitCommand, UnfactoredOpenLoopRecoversTheTransferFunction) {
   }
   // Its partial-fraction view holds the two modes.
   EXPECT_EQ(j.at("modes").size(), 2u);
+}
+
+TEST_F(FitCommand, InitialConditionsEstimateFitsARecordThatStartsMidMotion) {
+  // The Section 6.2 plant under a PRBS; the record is cut after 300 samples, mid-motion.
+  const auto s = ctid({"simulate", "-m", example("gonzalez_6_2_plant.json"), "--excitation", "prbs",
+                       "--register-length", "10", "--samples-per-bit", "4", "--samples", "3000",
+                       "-T", "0.05", "-o", "full.csv", "-q"});
+  ASSERT_EQ(s.status, 0) << s.err;
+  std::istringstream in(read_text("full.csv"));
+  std::ostringstream cut;
+  std::string line;
+  int data_lines = 0;
+  while (std::getline(in, line)) {
+    const bool header = line.empty() || !(std::isdigit(static_cast<unsigned char>(line[0])) ||
+                                          line[0] == '-' || line[0] == '.');
+    if (header || data_lines++ >= 300) cut << line << "\n";
+  }
+  write("d.csv", cut.str());
+  const Eigen::VectorXd truth = example_additive("gonzalez_6_2_plant.json").parameters();
+  const auto e = ctid(
+      {"fit", "d.csv", "--modes", "2", "--initial-conditions", "estimate", "-o", "e.json", "-q"});
+  ASSERT_EQ(e.status, 0) << e.err;
+  const nlohmann::json je = read("e.json");
+  EXPECT_EQ(je.at("termination"), "converged");
+  EXPECT_LT(relative_error(numbers(je.at("parameters")), truth), 1e-6);
+  EXPECT_EQ(je.at("initial_conditions").size(), 4u);  // 2 modes x (value, derivative)
+  // The default assumes rest at the first sample: the known bias.
+  const auto z = ctid({"fit", "d.csv", "--modes", "2", "-o", "z.json", "-q"});
+  ASSERT_EQ(z.status, 0) << z.err;
+  EXPECT_GT(relative_error(numbers(read("z.json").at("parameters")), truth), 1e-4);
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--initial-conditions", "guess"}),
+                   "--initial-conditions");
 }
 
 TEST_F(FitCommand, ClosedLoopAdditiveAndClsrivcRecoverSection62) {

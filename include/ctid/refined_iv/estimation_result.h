@@ -112,6 +112,10 @@ struct EstimationResult : Outcome {
   Eigen::MatrixXd covariance;        ///< of `parameters` (already divided by N); empty if unknown
   Eigen::VectorXd standard_errors;   ///< sqrt of its diagonal
   std::vector<ModalEstimate> modes;  ///< every second-order mode of `additive_view`
+  /// RefinedIvOptions::initial_conditions = estimate: per submodel (in `model`), the value
+  /// and first n_i + l_i - 1 derivatives at the first sample of its estimated free response
+  /// (the part of its output not driven by the recorded input). Empty with `zero`.
+  Eigen::VectorXd initial_conditions;
 
   double relative_change = 0.0;    ///< at the last iteration
   double off_diagonal_norm = 0.0;  ///< Lemma 4.4 at the last iteration (0 for K = 1)
@@ -142,6 +146,9 @@ struct EstimationResult : Outcome {
                   "Covariance of beta (already divided by N); empty if unknown."),
             field("standard_errors", &S::standard_errors, "sqrt of its diagonal."),
             field("modes", &S::modes, "ModalEstimate of every second-order mode."),
+            field("initial_conditions", &S::initial_conditions,
+                  "Per submodel, the estimated free response and its first n_i + l_i - 1 "
+                  "derivatives at the first sample; empty unless estimated."),
             field("relative_change", &S::relative_change, "At the last iteration."),
             field("off_diagonal_norm", &S::off_diagonal_norm,
                   "Lemma 4.4 at the last iteration (0 for K = 1)."),

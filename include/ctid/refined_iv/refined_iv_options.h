@@ -47,6 +47,22 @@ constexpr std::span<const Enumerator<StartMethod>> enumerators(StartMethod) {
   return start_method_enumerators;
 }
 
+/// What the refined IV estimators assume about the state of the system at the first sample.
+enum class InitialConditions {
+  zero,      ///< at rest (the paper's estimators; exact for records that start at rest)
+  estimate,  ///< unknown: each submodel's free response is a nuisance parameter
+};
+
+inline constexpr std::array<Enumerator<InitialConditions>, 2> initial_conditions_enumerators{{
+    {InitialConditions::zero, "zero", "The system is at rest at the first sample (the paper)."},
+    {InitialConditions::estimate, "estimate",
+     "Each submodel's free response from an unknown initial state is estimated with the "
+     "parameters; the covariance accounts for it."},
+}};
+constexpr std::span<const Enumerator<InitialConditions>> enumerators(InitialConditions) {
+  return initial_conditions_enumerators;
+}
+
 struct RefinedIvOptions {
   /// Upper bound on the iterations of (29)/(30). >= 1.
   int max_iterations = 100;
@@ -79,6 +95,10 @@ struct RefinedIvOptions {
   int noise_model_max_order = 20;
   /// Compute covariance, standard errors and modal standard errors (skip to save time).
   bool compute_covariance = true;
+  /// State at the first sample. `estimate` adds the free response of every submodel
+  /// (n_i + l_i coefficients each) to the regressor and the instrument; the reported
+  /// covariance is the parameter block of the joint one. Default `zero`: decision 0010.
+  InitialConditions initial_conditions = InitialConditions::zero;
 
   static constexpr std::string_view type_name = "RefinedIvOptions";
   static constexpr auto fields() {
@@ -104,6 +124,8 @@ struct RefinedIvOptions {
               "Largest AR order of the coloured-noise covariance (chosen by AIC)."),
         field("compute_covariance", &O::compute_covariance,
               "Compute covariance, standard errors and modal standard errors."),
+        field("initial_conditions", &O::initial_conditions,
+              "State at the first sample: zero (at rest) or estimate (nuisance parameters)."),
     };
   }
   /// Throws InvalidArgument naming the first bad field, its value and the rule.
