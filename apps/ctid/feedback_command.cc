@@ -159,7 +159,10 @@ Command add_feedback_command(CLI::App& parent) {
   app->add_flag("--quiet,-q", f.quiet, "Print nothing on success");
   Command command;
   command.app = app;
-  command.run = [flags] { run_feedback(*flags); };
+  command.run = [flags] {
+    run_feedback(*flags);
+    return kExitOk;
+  };
   return command;
 }
 
