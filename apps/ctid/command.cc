@@ -37,10 +37,9 @@ std::vector<CommandRegistration> registered_commands() {
   return sorted;
 }
 
-int run_command(const std::string& command_path, const std::function<void()>& action) {
+int run_command(const std::string& command_path, const std::function<ExitStatus()>& action) {
   try {
-    action();
-    return kExitOk;
+    return action();
   } catch (const InvalidArgument& e) {
     std::cerr << command_path << ": error: " << one_line(e.what()) << "\n";
     return kExitUsage;

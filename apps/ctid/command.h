@@ -1,6 +1,7 @@
 // The frame every `ctid` subcommand plugs into, and the exit-status policy of the tool:
-// 0 the command ran; 2 bad usage or bad input (one line on stderr,
-// "ctid <command>: error: <what>"); 1 any other failure. A subcommand is one file,
+// 0 the command ran; 3 it ran but produced no usable model (ctid fit: the quality verdict,
+// estimation/verdict.h, failed; outputs are still written); 2 bad usage or bad input (one
+// line on stderr, "ctid <command>: error: <what>"); 1 any other failure. A subcommand is one file,
 // <name>_command.cc, that registers itself with CTID_REGISTER_COMMAND; main.cc never
 // changes when a command is added. No numerics here: commands call the library.
 #pragma once
@@ -14,13 +15,14 @@
 namespace ctid::cli {
 
 /// Exit statuses of the ctid tool.
-enum ExitStatus : int { kExitOk = 0, kExitFailure = 1, kExitUsage = 2 };
+enum ExitStatus : int { kExitOk = 0, kExitFailure = 1, kExitUsage = 2, kExitNoUsableModel = 3 };
 
 /// What a command's registration gives back: the CLI11 subcommand it added (its flags bound
-/// to storage the command owns) and the action main() runs when that subcommand was chosen.
+/// to storage the command owns) and the action main() runs when that subcommand was chosen,
+/// which returns the exit status of a run that finished (kExitOk or kExitNoUsableModel).
 struct Command {
   CLI::App* app = nullptr;
-  std::function<void()> run;
+  std::function<ExitStatus()> run;
 };
 
 /// Adds one subcommand to the top-level app.
@@ -37,9 +39,10 @@ bool register_command(int order, CommandFactory factory);
 /// Every registered command, sorted by order.
 std::vector<CommandRegistration> registered_commands();
 
-/// Runs a command's action and maps its outcome to an exit status: ctid::InvalidArgument
-/// (bad input) gives 2, anything else 1, each with one line on stderr naming the command.
-int run_command(const std::string& command_path, const std::function<void()>& action);
+/// Runs a command's action and returns its status, or maps an exception to one:
+/// ctid::InvalidArgument (bad input) gives 2, anything else 1, each with one line on stderr
+/// naming the command.
+int run_command(const std::string& command_path, const std::function<ExitStatus()>& action);
 
 /// Prints a CLI11 parse error as one line naming the command and the help flag, and
 /// returns 2; --help and --version print to stdout and return 0.

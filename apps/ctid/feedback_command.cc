@@ -101,6 +101,7 @@ void run_feedback(const FeedbackFlags& f) {
   if (!f.quiet) {
     // How the refinement ended is printed as `ctid fit` prints it; a run in which every
     // separation candidate failed is an outcome (no_solution), not an error.
+    if (!r.verdict.usable) std::cout << "WARNING: " << r.verdict.summary() << "\n";
     std::cout << "termination: " << r.brief_report() << "\n";
     if (r.best_candidate) {
       std::cout << "F(s) = (" << r.loop.forward.numerator().to_string() << ") / ("
@@ -159,7 +160,10 @@ Command add_feedback_command(CLI::App& parent) {
   app->add_flag("--quiet,-q", f.quiet, "Print nothing on success");
   Command command;
   command.app = app;
-  command.run = [flags] { run_feedback(*flags); };
+  command.run = [flags] {
+    run_feedback(*flags);
+    return kExitOk;
+  };
   return command;
 }
 

@@ -141,6 +141,8 @@ std::string plus_minus(double value, double error) {
 
 void print_summary(std::ostream& out, const EstimationResult& r, const std::string& estimator,
                    const SampledData& data, const std::string& file) {
+  // A model that failed the quality verdict is announced before anything else.
+  if (!r.verdict.usable) out << "WARNING: " << r.verdict.summary() << "\n";
   out << "ctid fit: " << estimator << " on " << file << " (N = " << data.size()
       << ", h = " << format_number(data.sample_time()) << " s)\n";
   // The estimator's message restates the reason; print it only when it explains a failure.
@@ -174,6 +176,17 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
         << ", S_uo fallbacks: " << r.sensitivity_fallbacks << "\n";
   }
   for (const std::string& warning : r.checks.warnings) out << "warning: " << warning << "\n";
+}
+
+// The delay scan's table, the chosen delay marked, and a note when the choice is not clear.
+void print_delay_scan(std::ostream& out, const InputDelayScanResult& scan) {
+  out << "delay scan (samples, output-error MSE, termination, verdict):\n";
+  for (std::size_t k = 0; k < scan.delays.size(); ++k) {
+    out << (scan.delays[k] == scan.best.input_delay ? "* " : "  ") << scan.delays[k] << "  "
+        << format_brief(scan.mean_squared_errors[k]) << "  " << to_string(scan.terminations[k])
+        << "  " << (scan.usable[k] ? "usable" : "not usable") << "\n";
+  }
+  if (!scan.note.empty()) out << "warning: " << scan.note << "\n";
 }
 
 void refuse_existing(const std::string& path, bool force, const std::string& flag) {
@@ -217,7 +230,7 @@ IdentificationOptions identification_options(const FitFlags& f) {
   return options;
 }
 
-void run_fit(const FitFlags& f, const CLI::App& app) {
+ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   const ModelStructure structure = model_structure(f, app);
   if (app.count("--delay") > 0 && !f.delay_scan.empty()) {
     usage_error("give --delay or --delay-scan, not both");
@@ -267,6 +280,7 @@ void run_fit(const FitFlags& f, const CLI::App& app) {
   }
   if (!f.quiet) {
     print_summary(std::cout, result, estimator, data, f.data.file);
+    if (scanned) print_delay_scan(std::cout, *scanned);
     if (relocated) std::cout << "mode relocation: " << relocated->message << "\n";
   }
 
@@ -279,6 +293,10 @@ void run_fit(const FitFlags& f, const CLI::App& app) {
       for (const auto& file : written) std::cout << "wrote " << file.string() << "\n";
     }
   }
+  if (f.quiet && !result.verdict.usable) {
+    std::cerr << "ctid fit: WARNING: " << result.verdict.summary() << "\n";
+  }
+  return result.verdict.usable ? kExitOk : kExitNoUsableModel;
 }
 
 Command add_fit_command(CLI::App& parent) {
@@ -290,14 +308,16 @@ Command add_fit_command(CLI::App& parent) {
       "(SRIVC, CLSRIVC, additive open/closed loop) and write the result as JSON.");
   app->footer(
       "Structure: --poles N --zeros M [--integrators L] (one unfactored B/(p^L A)), or "
-      "--submodel N,M[,L] repeated, slowest first (additive), or --modes K (K second-order "
+      "--submodel N,M[,L] repeated, in any order (additive), or --modes K (K second-order "
       "modes, M = 0).\n"
       "Closed loop: --controller C.json (discrete controller) uses CLSRIVC / additive CL and "
       "needs the reference column.\n"
       "Output: --output RESULT.json holds everything; its \"model\" field (or --model-output) "
       "is a model file for 'ctid validate' and 'ctid simulate --model'.\n"
-      "Formats: docs/formats.md, docs/cli-estimation.md. Exit status: 0 ran (whatever the "
-      "termination), 2 bad usage or input, 1 other error.");
+      "Formats: docs/formats.md, docs/cli-estimation.md. Exit status: 0 ran and the model passed "
+      "the quality verdict (whatever the termination), 3 ran but no usable model (a WARNING "
+      "line says why and what to try; outputs are still written), 2 bad usage or input, 1 "
+      "other error.");
 
   f.data.add_to(*app, "data", true);
 
@@ -316,8 +336,8 @@ Command add_fit_command(CLI::App& parent) {
       ->check(CLI::NonNegativeNumber)
       ->group("Structure");
   app->add_option("--submodel", f.submodels,
-                  "Additive: one submodel N,M[,L] (poles, zeros, integrators); repeat, slowest "
-                  "first")
+                  "Additive: one submodel N,M[,L] (poles, zeros, integrators); repeat (any "
+                  "order: the start gives slower poles to earlier submodels that fit them)")
       ->take_all()
       ->allow_extra_args(false)
       ->group("Structure");
@@ -393,7 +413,7 @@ Command add_fit_command(CLI::App& parent) {
 
   Command command;
   command.app = app;
-  command.run = [flags, app] { run_fit(*flags, *app); };
+  command.run = [flags, app] { return run_fit(*flags, *app); };
   return command;
 }
 

@@ -237,7 +237,10 @@ Command add_frf_command(CLI::App& parent) {
 
   Command command;
   command.app = app;
-  command.run = [flags, app] { run_frf(*flags, *app); };
+  command.run = [flags, app] {
+    run_frf(*flags, *app);
+    return kExitOk;
+  };
   return command;
 }
 

@@ -1,7 +1,7 @@
 // ctid: continuous-time system identification from sampled data, on the command line.
 // The subcommands register themselves (command.h); this file parses the command line,
-// runs the chosen command and returns its exit status (0 ran, 2 bad usage or input,
-// 1 other error).
+// runs the chosen command and returns its exit status (0 ran, 3 ran but no usable model,
+// 2 bad usage or input, 1 other error).
 #include <iostream>
 #include <string>
 #include <vector>
@@ -20,7 +20,8 @@ int main(int argc, char** argv) {
       "ctid: continuous-time system identification from sampled data.\n"
       "Models are JSON files with coefficients in ascending powers (docs/formats.md);\n"
       "data are CSV files with a header row of column names. Run 'ctid <command> --help'\n"
-      "for a command's flags. Exit status: 0 ran, 2 bad usage or input, 1 other error.",
+      "for a command's flags. Exit status: 0 ran, 2 bad usage or input, 1 other error,\n"
+      "3 ran but no usable model (fit).",
       "ctid"};
   app.set_version_flag("--version", std::string("ctid ") + CTID_VERSION,
                        "Print the version and exit");

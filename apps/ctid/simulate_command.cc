@@ -484,6 +484,7 @@ Command add_simulate_command(CLI::App& parent) {
     if (sources != 1)
       usage_error("give one input: --input FILE, --excitation KIND or --excitation-spec FILE");
     run_simulate(g, *app);
+    return kExitOk;
   };
   return command;
 }

@@ -202,7 +202,10 @@ Command add_study_command(CLI::App& parent) {
 
   Command command;
   command.app = app;
-  command.run = [flags] { run_study_command(*flags); };
+  command.run = [flags] {
+    run_study_command(*flags);
+    return kExitOk;
+  };
   return command;
 }
 

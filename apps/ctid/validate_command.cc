@@ -159,7 +159,10 @@ Command add_validate_command(CLI::App& parent) {
 
   Command command;
   command.app = app;
-  command.run = [flags, app] { run_validate(*flags, *app); };
+  command.run = [flags, app] {
+    run_validate(*flags, *app);
+    return kExitOk;
+  };
   return command;
 }
 

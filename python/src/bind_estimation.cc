@@ -1,14 +1,18 @@
 // Python bindings of the shared estimation base: the Termination of every iterative method, model
-// output, fit and the residual tests of a model on data (validation.h).
+// output, fit, the quality verdict and the residual tests of a model on data (validation.h).
 #include "common.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/validation.h"
+#include "ctid/estimation/verdict.h"
 #include "fields.h"
 
 namespace ctid::python {
 
 void bind_estimation(py::module_& m) {
   bind_enum<Termination>(m, "Termination", "Why an iterative method stopped (termination.h).");
+  bind_result<Verdict>(m, "Is an estimate worth using: usable, reasons, advice (verdict.h).")
+      .def("summary", &Verdict::summary,
+           "'no usable model: <reasons>. Try: <advice>.' (empty when usable).");
   m.def("model_output", &model_output, py::arg("model"), py::arg("input"), py::arg("sample_time"),
         "Exact ZOH response of the model (from rest).");
   m.def("fit_percent", &fit_percent, py::arg("measured"), py::arg("modelled"),

@@ -18,7 +18,7 @@ void bind_identification(py::module_& m) {
                   py::arg("integrators") = 0,
                   "One transfer function B/(p^integrators A), deg A = poles, deg B = zeros.")
       .def_static("additive", &ModelStructure::additive, py::arg("orders"),
-                  "Submodels with these SubmodelOrders, slowest first.")
+                  "Submodels with these SubmodelOrders, in any order.")
       .def_static("modes", &ModelStructure::modes, py::arg("count"),
                   "count second-order modes b0 / (1 + a1 p + a2 p^2).")
       .def("is_additive", &ModelStructure::is_additive, "kind == ModelKind.additive.");

@@ -72,7 +72,7 @@ void bind_refined_iv_estimators(py::module_& m) {
         return additive_srivc(data, orders, o);
       },
       py::arg("data"), py::arg("orders"), py::arg("options") = py::none(),
-      "Additive open-loop refined IV (eq. 29), submodels listed slowest first.");
+      "Additive open-loop refined IV (eq. 29), submodels in any order.");
   m.def(
       "additive_clsrivc",
       [](const SampledData& data, const DiscreteTransferFunction& controller,

@@ -20,10 +20,38 @@ using internal::golden_section_minimum;
 using internal::iv_start;
 namespace {
 
+constexpr double kNoStart = std::numeric_limits<double>::quiet_NaN();
+
 std::string short_number(double x) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%g", x);
   return buffer;
+}
+
+// The checks of estimation/verdict.h that apply to a delayed-feedback loop (decision 0007):
+// a loop was found, its output error is finite (a stable, simulable loop) and its
+// output-error fit 100 (1 - rms(e) / rms(y - mean y)) is not negative.
+Verdict feedback_verdict(const FeedbackIdentificationResult& r, const SampledData& data) {
+  Verdict verdict;
+  if (r.termination == Termination::no_solution) {
+    verdict.fail("no candidate gave a stable loop (" + r.message + ")",
+                 {verdict_advice::lower_order, verdict_advice::more_data});
+    return verdict;
+  }
+  if (!std::isfinite(r.output_rms)) {
+    verdict.fail("the loop's output error is not finite (unstable or overflowed)",
+                 {verdict_advice::lower_order, verdict_advice::better_start});
+    return verdict;
+  }
+  const Eigen::VectorXd& y = data.output();
+  const double spread = std::sqrt((y.array() - y.mean()).square().mean());
+  if (!(spread > 0.0)) {
+    verdict.fail("the output is constant, so the record says nothing about the loop",
+                 {verdict_advice::more_data});
+    return verdict;
+  }
+  check_fit(verdict, 100.0 * (1.0 - r.output_rms / spread), kNoStart);
+  return verdict;
 }
 
 }  // namespace
@@ -108,6 +136,7 @@ FeedbackIdentificationResult identify_delayed_feedback(
     r.message += "no separation candidate with the requested orders";
     r.output_rms = inf;
     r.termination = Termination::no_solution;
+    r.verdict = feedback_verdict(r, data);
     return r;
   }
   // Every candidate gets a short output-error refinement; the best then runs to convergence.
@@ -188,6 +217,7 @@ FeedbackIdentificationResult identify_delayed_feedback(
   } else {
     r.termination = Termination::converged;  // the selection by step-1 output error is done
   }
+  r.verdict = feedback_verdict(r, data);
   return r;
 }
 
@@ -210,7 +240,8 @@ DelayIdentificationResult identify_delayed_feedback_with_delay_scan(
   r.scan = scan_feedback_delay(data, n, m, scan);
   r.delay = r.scan.delay;
   // The outcome is the identification's at the returned Δ.
-  const auto finish = [&r]() -> DelayIdentificationResult& {
+  const auto finish = [&r, &data]() -> DelayIdentificationResult& {
+    r.identification.verdict = feedback_verdict(r.identification, data);
     static_cast<Outcome&>(r) = static_cast<const Outcome&>(r.identification);
     return r;
   };

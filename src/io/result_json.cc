@@ -258,7 +258,7 @@ InputDelayScanResult input_delay_scan_result_from_json(const nlohmann::json& val
   check_keys(value, field_names<InputDelayScanResult>(), {"type", "version"}, source);
   require(value.contains("best"), source, ": best: required field is missing");
   InputDelayScanResult result{
-      estimation_result_from_json(value.at("best"), source + ": best"), {}, {}, {}};
+      estimation_result_from_json(value.at("best"), source + ": best"), {}, {}, {}, {}, true, {}};
   nlohmann::json rest = value;
   for (const char* key : {"type", "version", "best"}) rest.erase(key);
   fields_from_json(rest, result, source + ": " + std::string(InputDelayScanResult::type_name));

@@ -6,6 +6,7 @@
 #include <complex>
 #include <deque>
 #include <limits>
+#include <optional>
 
 #include <Eigen/Dense>
 
@@ -203,23 +204,42 @@ AdditiveModel group_into_submodels(const TransferFunction& g,
   }
   const Eigen::VectorXd u = delay_samples(data.input(), input_delay);
   const double h = data.sample_time();
+  // Units go to submodels from the slowest up, each to the first listed submodel with room
+  // for it whole, a real pole preferring a submodel with an odd number of poles left: the
+  // grouping does not depend on the order the submodels are listed in (a first-order and a
+  // second-order submodel get the real pole and the pair either way). A pair that fits
+  // nowhere whole is split into two real poles of its magnitude.
+  std::vector<std::vector<std::complex<double>>> assigned(orders.size());
+  auto room = [&](size_t i) { return orders[i].n - static_cast<int>(assigned[i].size()); };
+  while (!units.empty()) {
+    std::vector<std::complex<double>> unit = units.front();
+    units.pop_front();
+    const int size = static_cast<int>(unit.size());
+    std::optional<size_t> chosen;
+    for (size_t i = 0; i < orders.size(); ++i) {
+      if (room(i) < size) continue;
+      const bool preferred = size == 2 || room(i) % 2 == 1;
+      if (preferred) {
+        chosen = i;
+        break;
+      }
+      if (!chosen) chosen = i;
+    }
+    if (!chosen) {
+      require(size == 2, "group_into_submodels: ran out of room for a real pole");
+      const double m = -std::abs(unit[0]);
+      units.push_front({std::complex<double>(m, 0.0)});
+      units.push_front({std::complex<double>(m, 0.0)});
+      continue;
+    }
+    assigned[*chosen].insert(assigned[*chosen].end(), unit.begin(), unit.end());
+  }
   std::vector<Polynomial> denominators;
   int columns = 0;
-  for (const SubmodelOrder& o : orders) {
-    std::vector<std::complex<double>> mine;
-    while (static_cast<int>(mine.size()) < o.n) {
-      require(!units.empty(), "group_into_submodels: ran out of poles");
-      std::vector<std::complex<double>> unit = units.front();
-      units.pop_front();
-      if (static_cast<int>(mine.size() + unit.size()) > o.n) {
-        // A pair does not fit: split it into two real poles of the same magnitude.
-        const double m = -std::abs(unit[0]);
-        mine.emplace_back(m, 0.0);
-        units.push_front({std::complex<double>(m, 0.0)});
-      } else {
-        mine.insert(mine.end(), unit.begin(), unit.end());
-      }
-    }
+  for (size_t i = 0; i < orders.size(); ++i) {
+    const SubmodelOrder& o = orders[i];
+    const std::vector<std::complex<double>>& mine = assigned[i];
+    require(static_cast<int>(mine.size()) == o.n, "group_into_submodels: ran out of poles");
     Polynomial a{1.0};
     if (!mine.empty()) {
       Eigen::VectorXcd roots(static_cast<Eigen::Index>(mine.size()));

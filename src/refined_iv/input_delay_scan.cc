@@ -1,11 +1,13 @@
 // Delay estimation by scanning whole-sample delays and keeping the best output-error fit.
 #include "ctid/refined_iv/input_delay_scan.h"
 
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <string>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/srivc.h"
 
@@ -16,13 +18,15 @@ InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>
   require(min_delay >= 0 && max_delay >= min_delay, "scan_input_delay: the delay range [",
           min_delay, ", ", max_delay, "] must satisfy 0 <= min_delay <= max_delay");
   std::optional<EstimationResult> best;
-  bool best_converged = false;
   std::string first_error;
   InputDelayScanResult table{
       EstimationResult(AdditiveModel({{Polynomial{1.0, 1.0}, Polynomial{1.0}, 0}}),
                        TransferFunction(Polynomial{1.0}, Polynomial{1.0, 1.0})),
       {},
       {},
+      {},
+      {},
+      true,
       {}};
   for (int d = min_delay; d <= max_delay; ++d) {
     table.delays.push_back(d);
@@ -30,21 +34,37 @@ InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>
       EstimationResult r = estimate(d);
       table.mean_squared_errors.push_back(r.mean_squared_error);
       table.terminations.push_back(r.termination);
-      const bool better =
-          !best || (r.converged() && !best_converged) ||
-          (r.converged() == best_converged && r.mean_squared_error < best->mean_squared_error);
-      if (better) {
-        best_converged = r.converged();
-        best = std::move(r);
-      }
+      table.usable.push_back(r.verdict.usable);
+      // Usable before unusable, then the smaller output error (NaN never wins).
+      const bool better = !best || (r.verdict.usable && !best->verdict.usable) ||
+                          (r.verdict.usable == best->verdict.usable &&
+                           (r.mean_squared_error < best->mean_squared_error ||
+                            std::isnan(best->mean_squared_error)));
+      if (better) best = std::move(r);
     } catch (const InvalidArgument& e) {
       if (first_error.empty()) first_error = e.what();
       table.mean_squared_errors.push_back(std::numeric_limits<double>::infinity());
       table.terminations.push_back(Termination::not_run);  // the estimator refused this delay
+      table.usable.push_back(false);
     }
   }
   require(best.has_value(),
           "scan_input_delay: every delay failed; the first error was: ", first_error);
+  const double chosen = best->mean_squared_error;
+  for (size_t k = 0; k < table.delays.size(); ++k) {
+    if (table.delays[k] == best->input_delay || table.usable[k] != best->verdict.usable) continue;
+    if (table.mean_squared_errors[k] <= chosen * (1.0 + kDelayScanTieRatio)) {
+      table.choice_clear = false;
+      table.note = "the delay is not clear: " + std::to_string(table.delays[k]) +
+                   " samples fit within " + format_brief(100.0 * kDelayScanTieRatio) +
+                   " % of the output error of the chosen " + std::to_string(best->input_delay);
+      break;
+    }
+  }
+  if (!best->verdict.usable) {
+    table.note += std::string(table.note.empty() ? "" : "; ") +
+                  "no delay gave a usable model (the one with the smallest output error is kept)";
+  }
   table.best = std::move(*best);
   return table;
 }

@@ -16,6 +16,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
+#include "ctid/estimation/verdict.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/initialization.h"
@@ -336,12 +337,13 @@ SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& be
 
 // One pass over the record at beta (instrument source: u in open loop, S_uo r otherwise).
 // With `moments`: the sums of eq. (29); with `residual`: y - sum_i G_i u; with `psi`: the
-// N x p instrument (for the covariance).
+// N x p instrument (for the covariance); with `sse`: the sum of squared output errors
+// ||y - sum_i G_i u||^2 (the model output is formed on every pass anyway).
 void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
               const Eigen::VectorXd& initial_states, const Eigen::VectorXd& u,
               const Eigen::VectorXd& y, const Eigen::VectorXd* source, double h,
               Hold output_interpolation, Workspace& w, Moments* moments, Eigen::VectorXd* residual,
-              Eigen::MatrixXd* psi) {
+              Eigen::MatrixXd* psi, double* sse = nullptr) {
   const Eigen::Index n = u.size();
   const int k_count = layout.size();
   const int p = layout.augmented;
@@ -362,6 +364,7 @@ void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
   }
   if (residual != nullptr) residual->resize(n);
   if (psi != nullptr) psi->resize(n, p);
+  if (sse != nullptr) *sse = 0.0;
   for (Eigen::Index k0 = 0; k0 < n; k0 += kBlock) {
     const Eigen::Index len = std::min(kBlock, n - k0);
     for (int i = 0; i < k_count; ++i) {
@@ -437,6 +440,7 @@ void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
       moments->pp += phi.colwise().squaredNorm().transpose();
     }
     if (residual != nullptr) residual->segment(k0, len) = y.segment(k0, len) - w.total.head(len);
+    if (sse != nullptr) *sse += (y.segment(k0, len) - w.total.head(len)).squaredNorm();
     if (psi != nullptr) psi->middleRows(k0, len) = w.instrument.topRows(len);
   }
 }
@@ -495,6 +499,49 @@ std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums) {
   Eigen::MatrixXd solution = sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(lu.solve(rhs));
   if (!solution.allFinite()) return std::nullopt;
   return solution;
+}
+
+// The checks of estimation/verdict.h on a finished estimate (decision 0007).
+// `returned_start`: no iterate fitted better than the start, so the start was returned.
+Verdict refined_iv_verdict(const EstimationResult& r, bool returned_start) {
+  Verdict verdict;
+  if (r.iterations == 0 && !r.converged()) {
+    verdict.fail("no step of the iteration was completed (" + to_string(r.termination) +
+                     "), so the model is the start",
+                 {verdict_advice::better_start, verdict_advice::lower_order});
+  } else if (returned_start) {
+    verdict.fail("the iteration did not converge (" + to_string(r.termination) +
+                     ") and no iterate fitted better than the start, so the model is the start",
+                 {verdict_advice::lower_order, verdict_advice::better_start});
+  }
+  check_finite(verdict, r.parameters.allFinite(), "a parameter");
+  check_fit(verdict, r.fit_percent, r.start_fit_percent);
+  Eigen::VectorXcd poles(0);
+  for (int i = 0; i < r.model.size(); ++i) {
+    if (r.model[i].a.degree() < 1) continue;
+    const Eigen::VectorXcd roots = r.model[i].a.roots();
+    poles.conservativeResize(poles.size() + roots.size());
+    poles.tail(roots.size()) = roots;
+  }
+  if (poles.allFinite()) {
+    check_stable(verdict, poles);
+    const Eigen::VectorXcd zeros = r.transfer_function.numerator().degree() >= 1
+                                       ? r.transfer_function.zeros()
+                                       : Eigen::VectorXcd(0);
+    if (zeros.allFinite()) check_cancellation(verdict, poles, zeros);
+  }
+  std::vector<std::string> names;
+  Eigen::VectorXd values(static_cast<Eigen::Index>(r.modes.size()));
+  Eigen::VectorXd errors(values.size());
+  for (size_t k = 0; k < r.modes.size(); ++k) {
+    const ModalEstimate& m = r.modes[k];
+    names.push_back("the natural frequency of submodel " + std::to_string(m.submodel + 1));
+    values(static_cast<Eigen::Index>(k)) = m.value.natural_frequency;
+    errors(static_cast<Eigen::Index>(k)) = m.standard_error.natural_frequency;
+  }
+  check_standard_errors(verdict, names, values, errors);
+  check_conditioning(verdict, r.reciprocal_condition);
+  return verdict;
 }
 
 }  // namespace
@@ -694,13 +741,26 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   const bool control = options.step_control;
   Eigen::VectorXd accepted;
   int halvings = 0;  // of the current step
+  // The iterate with the lowest output error seen (the start included): returned instead of
+  // the last one when the iteration did not converge and the last one fits worse.
+  double start_sse = std::numeric_limits<double>::quiet_NaN();
+  double best_sse = std::numeric_limits<double>::infinity();
+  Eigen::VectorXd best_beta;
+  int best_iteration = 0;
   int iteration = 1;
   while (!stopped && iteration <= options.max_iterations) {
     bool source_ok = true;
     if (closed_loop && iteration > 1) source_ok = update_source(beta);
     Moments sums;
+    double sse = 0.0;
     evaluate(layout, beta, initial_states, u, y, source ? &*source : nullptr, h,
-             options.output_interpolation, workspace, &sums, nullptr, nullptr);
+             options.output_interpolation, workspace, &sums, nullptr, nullptr, &sse);
+    if (std::isnan(start_sse)) start_sse = sse;
+    if (std::isfinite(sse) && !(sse >= best_sse)) {
+      best_sse = sse;
+      best_beta = beta;
+      best_iteration = iteration - 1;
+    }
     const bool finite = sums.all_finite();
     Eigen::VectorXd sz;
     Eigen::VectorXd sp;
@@ -714,6 +774,7 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
       svd.emplace(m);
       const Eigen::VectorXd& sv = svd->singularValues();
       rcond = sv(sv.size() - 1) / sv(0);
+      result.reciprocal_condition = rcond;
     }
     if (control && accepted.size() > 0 && halvings < options.max_step_halvings &&
         (!finite || !(rcond > 1e-14))) {
@@ -784,6 +845,25 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
                      format_significant(options.tolerance, 3);
   }
 
+  Eigen::VectorXd residual;
+  Eigen::MatrixXd psi;
+  double sse = 0.0;
+  bool returned_start = false;
+  if (!result.converged() && best_beta.size() > 0) {
+    evaluate(layout, beta, initial_states, u, y, nullptr, h, options.output_interpolation,
+             workspace, nullptr, nullptr, nullptr, &sse);
+    if (!(sse <= best_sse)) {
+      beta = best_beta;
+      returned_start = best_iteration == 0;
+      result.message +=
+          "; the iterate with the lowest output error (" +
+          (best_iteration == 0 ? std::string("the start")
+                               : "after " + std::to_string(best_iteration) +
+                                     (best_iteration == 1 ? " iteration" : " iterations")) +
+          ") is returned";
+    }
+  }
+
   // The estimate and its statistics.
   result.parameters = beta;
   result.input_delay = delay;
@@ -812,17 +892,22 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
       states_at = beta;
     }
   }
-  Eigen::VectorXd residual;
-  Eigen::MatrixXd psi;
   evaluate(layout, beta, initial_states, u, y, source ? &*source : nullptr, h,
            options.output_interpolation, workspace, nullptr, &residual,
            options.compute_covariance ? &psi : nullptr);
-  const double sse = residual.squaredNorm();
+  sse = residual.squaredNorm();
   result.mean_squared_error = sse / n_samples;
   result.noise_variance = sse / std::max(n_samples - unknowns, 1);
   result.fit_percent = fit_percent(y, y - residual);
   if (layout.free_responses())
     result.initial_conditions = free_response_derivatives(layout, states_at, initial_states);
+  {
+    // The start's fit, from the same definition: 100 (1 - ||e|| / ||y - mean(y)||).
+    const double spread = (y.array() - y.mean()).matrix().norm();
+    result.start_fit_percent = std::isnan(start_sse) ? result.fit_percent
+                               : spread > 0.0        ? 100.0 * (1.0 - std::sqrt(start_sse) / spread)
+                                                     : std::numeric_limits<double>::quiet_NaN();
+  }
 
   if (options.compute_covariance && psi.allFinite() && residual.allFinite()) {
     // With free responses the joint covariance of beta and their coefficients; its beta
@@ -846,6 +931,7 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
                               " rad/s (Assumption 4): sample faster or lower the model order");
   }
   result.checks = std::move(checks);
+  result.verdict = refined_iv_verdict(result, returned_start);
   return result;
 }
 

@@ -24,6 +24,7 @@ namespace {
 
 using ::testing::HasSubstr;
 using testing::line_count;
+using ::testing::Not;
 using ::testing::StartsWith;
 
 class FitCommand : public testing::CliTest {
@@ -184,6 +185,35 @@ TEST_F(FitCommand, DelayScanFindsTheDelayAndIntegratorsAreFitted) {
   // B/(p A) with A = 1 + p/2.14, B = 0.3696/2.14.
   const Eigen::VectorXd truth = (Eigen::VectorXd(2) << 1.0 / 2.14, 0.3696 / 2.14).finished();
   EXPECT_LT(relative_error(numbers(j.at("parameters")), truth), 1e-6);
+}
+
+// Too many poles for a noisy two-mode record: the fit runs (7/6 converges at a negative
+// fit), so the outputs are written, but the summary starts with a WARNING saying what to try,
+// the JSON says usable: false with its reasons, and the exit status is 3; the true order on
+// the same record exits 0 without a warning.
+TEST_F(FitCommand, UnusableModelWarnsAndExitsThree) {
+  const auto s = ctid({"simulate", "-m", example("gonzalez_6_2_plant.json"), "--excitation", "prbs",
+                       "--register-length", "10", "--samples-per-bit", "4", "--samples", "2000",
+                       "-T", "0.05", "--snr", "10", "-o", "d.csv", "-q"});
+  ASSERT_EQ(s.status, 0) << s.err;
+  const auto bad = ctid({"fit", "d.csv", "--poles", "7", "--zeros", "6", "-o", "bad.json"});
+  EXPECT_EQ(bad.status, 3) << bad.err;
+  EXPECT_THAT(bad.out, StartsWith("WARNING: no usable model: "));
+  EXPECT_THAT(bad.out.substr(0, bad.out.find('\n')), HasSubstr("Try: "));
+  const nlohmann::json j = read("bad.json");
+  EXPECT_EQ(j.at("verdict").at("usable"), false);
+  EXPECT_GE(j.at("verdict").at("reasons").size(), 1u);
+  EXPECT_FALSE(j.at("verdict").at("advice").get<std::string>().empty());
+  EXPECT_LT(j.at("fit_percent").get<double>(), 0.0);
+  // --quiet still says it, on stderr.
+  const auto quiet = ctid({"fit", "d.csv", "--poles", "7", "--zeros", "6", "-q"});
+  EXPECT_EQ(quiet.status, 3);
+  EXPECT_THAT(quiet.err, StartsWith("ctid fit: WARNING: no usable model: "));
+
+  const auto good = ctid({"fit", "d.csv", "--modes", "2", "-o", "good.json"});
+  EXPECT_EQ(good.status, 0) << good.out;
+  EXPECT_THAT(good.out, Not(HasSubstr("WARNING")));
+  EXPECT_EQ(read("good.json").at("verdict").at("usable"), true);
 }
 
 TEST_F(FitCommand, FittedModelIsReadBySimulateAndAnInitialModelIsAccepted) {

@@ -41,6 +41,7 @@ TEST_F(CliTest, VersionAndHelpExitZero) {
   EXPECT_EQ(help.status, 0);
   EXPECT_THAT(help.out, HasSubstr("simulate"));
   EXPECT_THAT(help.out, HasSubstr("Exit status: 0 ran, 2 bad usage or input, 1 other error"));
+  EXPECT_THAT(help.out, HasSubstr("3 ran but no usable model (fit)"));
 }
 
 TEST_F(CliTest, SimulateHelpExplainsEveryFlag) {

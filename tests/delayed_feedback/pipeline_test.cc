@@ -38,6 +38,7 @@ TEST(FeedbackPipeline, NoiseFreeInformativeRecordRecoversFAndH) {
   const Eigen::VectorXd error = loop_parameters(r.loop) - truth;
   EXPECT_LT(error.cwiseAbs().maxCoeff(), 1e-6 * truth.cwiseAbs().maxCoeff()) << r.message;
   EXPECT_LT(r.output_rms, 1e-9);
+  EXPECT_TRUE(r.verdict.usable) << r.verdict.summary();
   EXPECT_DOUBLE_EQ(r.loop.delay, 0.5);
   // Candidates of every kind were tried, and the chosen one has the smallest refined cost.
   bool gcd = false, kronecker = false;
@@ -165,6 +166,10 @@ TEST(FeedbackPipeline, AFailedFitIsAResultNotAnException) {
   EXPECT_EQ(r.step1.termination, Termination::singular_equations);
   EXPECT_NE(r.termination, Termination::not_run);
   EXPECT_FALSE(r.message.empty());
+  // Nothing usable came out, and the verdict says so.
+  EXPECT_FALSE(r.verdict.usable);
+  EXPECT_FALSE(r.verdict.reasons.empty());
+  EXPECT_FALSE(r.verdict.advice.empty());
 }
 
 }  // namespace

@@ -103,7 +103,7 @@ ModeRelocationResult example_relocation() {
 }
 
 InputDelayScanResult example_scan() {
-  InputDelayScanResult scan{example_estimate(), {0, 1, 2}, {0.5, kNaN, 0.25}, {}};
+  InputDelayScanResult scan{example_estimate(), {0, 1, 2}, {0.5, kNaN, 0.25}, {}, {}, true, {}};
   scan.terminations = {Termination::converged, Termination::not_run, Termination::converged};
   return scan;
 }

@@ -277,6 +277,10 @@ TEST(RefinedIvBadInput, ControllerThatDoesNotStabiliseTheModelIsATermination) {
   EXPECT_EQ(e.termination, Termination::closed_loop_unstable);
   EXPECT_THAT(e.message, HasSubstr("does not stabilise"));
   EXPECT_EQ(to_string(e.termination), "closed_loop_unstable");
+  // Nothing was estimated: even though the start is the truth, the verdict says so.
+  EXPECT_FALSE(e.verdict.usable);
+  EXPECT_THAT(e.verdict.reasons.at(0), HasSubstr("no step of the iteration was completed"));
+  EXPECT_EQ(e.start_fit_percent, e.fit_percent);
 }
 
 TEST(RefinedIvCovariance, AutoregressiveFitRecoversAnArProcess) {

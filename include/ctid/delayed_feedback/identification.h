@@ -24,6 +24,7 @@
 #include "ctid/delayed_feedback/structured_iv.h"
 #include "ctid/delayed_feedback/structured_step1.h"
 #include "ctid/estimation/termination.h"
+#include "ctid/estimation/verdict.h"
 #include "ctid/simulation/delayed_feedback.h"
 
 namespace ctid {
@@ -160,6 +161,9 @@ struct FeedbackIdentificationResult : Outcome {
   std::optional<std::size_t> best_candidate;  ///< index into candidates (none: no candidate)
   double output_rms = 0.0;                    ///< output-error rms of the returned loop
   SeparabilityReport cramer_rao;              ///< at the returned loop, σ² from the residuals
+  /// Is the loop worth using (estimation/verdict.h): a candidate was found, the output error
+  /// is finite and the output-error fit is not negative.
+  Verdict verdict;
 
   static constexpr std::string_view type_name = "FeedbackIdentificationResult";
   static constexpr auto fields() {
@@ -177,6 +181,8 @@ struct FeedbackIdentificationResult : Outcome {
             field("output_rms", &R::output_rms, "Output-error rms of the returned loop."),
             field("cramer_rao", &R::cramer_rao,
                   "SeparabilityReport at the returned loop (sigma^2 from the residuals)."),
+            field("verdict", &R::verdict,
+                  "Verdict: usable, reasons, advice (docs/decisions/0007-quality-verdict.md)."),
         });
   }
 };

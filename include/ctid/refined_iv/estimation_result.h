@@ -4,6 +4,7 @@
 // with standard errors of modal parameters, and the checks of Assumptions 1 and 4.
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -17,6 +18,7 @@
 #include "ctid/core/fields.h"
 #include "ctid/core/transfer_function.h"
 #include "ctid/estimation/termination.h"
+#include "ctid/estimation/verdict.h"
 
 namespace ctid {
 
@@ -127,6 +129,13 @@ struct EstimationResult : Outcome {
   double noise_variance = 0.0;      ///< sum of squared residuals / (N - parameters)
   double mean_squared_error = 0.0;  ///< sum of squared residuals / N (output error)
   double fit_percent = 0.0;         ///< 100 (1 - ||y - y_model|| / ||y - mean(y)||)
+  /// The same fit of the start the iteration began from (NaN if it could not be formed).
+  double start_fit_percent = std::numeric_limits<double>::quiet_NaN();
+  /// Reciprocal condition of the scaled instrument-regressor matrix of (29) at the last
+  /// iteration (NaN if none was formed).
+  double reciprocal_condition = std::numeric_limits<double>::quiet_NaN();
+  /// Is the model worth using (estimation/verdict.h): checked after every estimate.
+  Verdict verdict;
 
   DataChecks checks;
   std::vector<IterationRecord> history;
@@ -164,6 +173,12 @@ struct EstimationResult : Outcome {
             field("mean_squared_error", &S::mean_squared_error,
                   "Sum of squared residuals / N (output error)."),
             field("fit_percent", &S::fit_percent, "100 (1 - ||y - y_model|| / ||y - mean(y)||)."),
+            field("start_fit_percent", &S::start_fit_percent,
+                  "The same fit of the start (NaN if it could not be formed)."),
+            field("reciprocal_condition", &S::reciprocal_condition,
+                  "Reciprocal condition of the scaled IV matrix of (29) at the last iteration."),
+            field("verdict", &S::verdict,
+                  "Verdict: usable, reasons, advice (docs/decisions/0007-quality-verdict.md)."),
             field("checks", &S::checks, "DataChecks of Assumptions 1 and 4."),
             field("history", &S::history,
                   "IterationRecord per iteration (RefinedIvOptions.record_history)."),

@@ -40,7 +40,7 @@ constexpr std::span<const Enumerator<ModelKind>> enumerators(ModelKind) {
 }
 
 /// The model to estimate: its kind and the orders {n, m, l} of its one (unfactored) or K
-/// (additive, slowest first) submodels.
+/// (additive, in any order) submodels.
 struct ModelStructure {
   ModelKind kind = ModelKind::unfactored;
   std::vector<SubmodelOrder> orders{SubmodelOrder{}};

@@ -71,8 +71,10 @@ SubmodelOrder unfactored_order(const std::vector<SubmodelOrder>& orders);
 TransferFunction initial_transfer_function(const SampledData& data, const SubmodelOrder& order,
                                            const InitializationOptions& options = {});
 
-/// Groups the poles of g into submodels of the requested orders, filled in the given order
-/// with poles of increasing magnitude; the numerators B_i are then fitted to the data by
+/// Groups the poles of g into submodels of the requested orders: from the slowest up, each
+/// pole (or pair) goes to the first listed submodel with room for it whole, a real pole
+/// preferring one with an odd number of poles left, so the listed order of the submodels
+/// does not change the grouping (decision 0007); the numerators B_i are then fitted to the data by
 /// linear least squares (output error with the denominators fixed). Unstable poles are
 /// reflected. Throws InvalidArgument if the pole counts do not match.
 AdditiveModel group_into_submodels(const TransferFunction& g,

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <string>
 #include <string_view>
 #include <tuple>
 #include <vector>
@@ -20,6 +21,11 @@ struct InputDelayScanResult {
   std::vector<int> delays;
   std::vector<double> mean_squared_errors;  ///< per delay; +inf where the estimator threw
   std::vector<Termination> terminations;    ///< per delay (not_run where the estimator refused it)
+  std::vector<bool> usable;  ///< per delay: the estimate's verdict (false if refused)
+  /// False when another delay's estimate of the same usability has a mean squared error
+  /// within kDelayScanTieRatio of the chosen one's: the data do not pick the delay clearly.
+  bool choice_clear = true;
+  std::string note;  ///< one sentence when the choice is not clear (or no estimate was usable)
 
   static constexpr std::string_view type_name = "InputDelayScanResult";
   static constexpr auto fields() {
@@ -31,13 +37,21 @@ struct InputDelayScanResult {
               "Output-error MSE per delay (inf where the estimator refused it)."),
         field("terminations", &S::terminations,
               "Termination per delay (not_run where the estimator refused it)."),
+        field("usable", &S::usable, "Verdict per delay (false where the estimator refused it)."),
+        field("choice_clear", &S::choice_clear,
+              "False when a runner-up's output error is within 1 % of the chosen one's."),
+        field("note", &S::note, "Why the choice is not clear, or empty."),
     };
   }
 };
 
-/// Calls `estimate(delay)` for delay = min_delay..max_delay. Estimates that did not converge
-/// are kept in the table but chosen only if none converged. Throws InvalidArgument for a bad
-/// range or if every delay throws (the first message is passed on).
+/// Relative margin of mean squared error under which two delays are not told apart.
+inline constexpr double kDelayScanTieRatio = 0.01;
+
+/// Calls `estimate(delay)` for delay = min_delay..max_delay and keeps the estimate with the
+/// smallest output error among those whose verdict is usable (among all if none is), whether
+/// or not its iteration converged: convergence of (29) says nothing about the fit. Throws
+/// InvalidArgument for a bad range or if every delay throws (the first message is passed on).
 InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>& estimate,
                                       int min_delay, int max_delay);
 
