@@ -24,7 +24,8 @@ struct CsvColumns {
   std::string output = "y";
   /// Empty: the record has no reference.
   std::string reference;
-  /// Allowed deviation of each time step from the mean step, relative to the mean step.
+  /// Smallest allowed distance of a time stamp from the uniform grid, relative to the step;
+  /// stamps printed to few digits are allowed more (SampledData::from_time_stamps).
   double relative_tolerance = 1e-6;
 
   static constexpr std::string_view type_name = "CsvColumns";
@@ -36,7 +37,7 @@ struct CsvColumns {
         field("output", &O::output, "Column of the output y."),
         field("reference", &O::reference, "Column of the reference r; empty: none."),
         field("relative_tolerance", &O::relative_tolerance, Between{0, 1},
-              "Allowed deviation of a time step from the mean step, relative to it."),
+              "Smallest allowed distance of a stamp from the uniform grid, relative to the step."),
     };
   }
   /// Time, input and output are named, and all names differ.
