@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <tuple>
@@ -58,10 +59,16 @@ TimedSignal timed_signal_from_table(const CsvTable& table, const std::string& ti
                                     const std::string& value_column,
                                     double relative_tolerance = 1e-6);
 
+/// The hold declared by a "# input_hold: zoh|foh" line, if any; throws InvalidArgument
+/// naming the line for another value.
+std::optional<Hold> declared_input_hold(const CsvTable& table);
+
+/// The record, with the input hold the table declares (zero-order hold if none).
 SampledData sampled_data_from_table(const CsvTable& table, const CsvColumns& columns = {});
 SampledData read_sampled_data(const std::filesystem::path& path, const CsvColumns& columns = {});
 
-/// Columns time, input, output and (if the record has one and columns.reference is not
+/// A "# input_hold: foh" declaration for a first-order-hold input, then columns time, input,
+/// output and (if the record has one and columns.reference is not
 /// empty) reference, named as in `columns`.
 CsvTable to_csv_table(const SampledData& data, const CsvColumns& columns = {});
 void write_sampled_data(const std::filesystem::path& path, const SampledData& data,
