@@ -126,8 +126,9 @@ PreprocessedData preprocess(const SampledData& data, const PreprocessingOptions&
 
 /// The zero-phase anti-alias lowpass used by decimation by `factor`: a Hamming-windowed sinc
 /// of 40 factor + 1 taps, cut off (-6 dB) at 0.9 of the new Nyquist frequency, unit DC gain;
-/// flat to 0.8 of the new Nyquist frequency, and at least 50 dB down from 0.97 of it. Ends are
-/// continued by odd reflection about the end samples. Returns x filtered, same length.
+/// its gain is within 0.3 % of 1 up to 0.8 of the new Nyquist frequency and at least 53 dB
+/// down from the new Nyquist frequency up. Ends are continued by odd reflection about the end
+/// samples. Returns x filtered, same length.
 Eigen::VectorXd anti_alias_filter(const Eigen::VectorXd& x, int factor);
 
 }  // namespace ctid
