@@ -1,7 +1,10 @@
 #include "data_flags.h"
 
 #include <cmath>
+#include <iostream>
 #include <optional>
+#include <type_traits>
+#include <utility>
 
 #include "command.h"
 #include "ctid/core/error.h"
@@ -17,6 +20,46 @@ std::string column_list(const io::CsvTable& table) {
   for (const std::string& name : table.names) list += (list.empty() ? "" : ", ") + name;
   return list;
 }
+
+// "A:B", "A:" or ":B" into its two ends; empty ends stay empty.
+std::pair<std::string, std::string> split_range(const std::string& flag, const std::string& text) {
+  const std::size_t colon = text.find(':');
+  if (colon == std::string::npos || text.find(':', colon + 1) != std::string::npos || text == ":") {
+    usage_error(flag + " '" + text + "': expected A:B (either end may be left out)");
+  }
+  return {text.substr(0, colon), text.substr(colon + 1)};
+}
+
+template <class T>
+std::optional<T> parse_end(const std::string& flag, const std::string& range,
+                           const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  std::size_t used = 0;
+  T value{};
+  try {
+    if constexpr (std::is_integral_v<T>) {
+      value = std::stoi(text, &used);
+    } else {
+      value = std::stod(text, &used);
+    }
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || (std::is_integral_v<T> && value < 0)) {
+    usage_error(flag + " '" + range + "': '" + text + "' is not a " +
+                (std::is_integral_v<T> ? "row number (>= 0)" : "time in seconds"));
+  }
+  return value;
+}
+
+std::optional<Hold> parse_hold(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  if (text == "zoh") return Hold::zero_order_hold;
+  if (text == "foh") return Hold::first_order_hold;
+  usage_error("--input-hold '" + text + "': expected zoh or foh");
+}
+
+const char* hold_flag_name(Hold hold) { return hold == Hold::zero_order_hold ? "zoh" : "foh"; }
 
 }  // namespace
 
@@ -41,9 +84,40 @@ void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_referen
       ->capture_default_str()
       ->group("Data");
   app.add_option("--sample-time,-T", sample_time,
-                 "Sample time h in seconds, for data without a time column")
+                 "Sample time h in seconds; overrides a time column (its first stamp stays the "
+                 "start time)")
       ->check(CLI::PositiveNumber)
       ->group("Data");
+  app.add_option("--input-hold", input_hold,
+                 "How u is continued between samples: zoh or foh (default: the file's "
+                 "'# input_hold:' declaration, else zoh)")
+      ->group("Data");
+  app.add_option("--rows", rows, "Keep data rows A to B-1 (0-based, A:B, either end optional)")
+      ->group("Preprocessing");
+  app.add_option("--time", time, "Keep samples with A <= t < B seconds (A:B)")
+      ->group("Preprocessing");
+  app.add_option("--detrend", detrend, "Remove nothing, the means, or straight lines")
+      ->check(CLI::IsMember({"none", "mean", "linear"}))
+      ->capture_default_str()
+      ->group("Preprocessing");
+  app.add_option("--decimate", decimate,
+                 "Keep every N-th sample after a zero-phase anti-alias lowpass filter")
+      ->capture_default_str()
+      ->group("Preprocessing");
+  app.add_option("--scale-input", scale_input, "Multiply u by this factor")
+      ->capture_default_str()
+      ->group("Preprocessing");
+  app.add_option("--scale-output", scale_output, "Multiply y (and r) by this factor")
+      ->capture_default_str()
+      ->group("Preprocessing");
+}
+
+bool DataFlags::preprocessing_asked(const CLI::App& app) const {
+  for (const char* flag :
+       {"--rows", "--time", "--detrend", "--decimate", "--scale-input", "--scale-output"}) {
+    if (app.count(flag) > 0) return true;
+  }
+  return false;
 }
 
 SampledData DataFlags::load(const CLI::App& app, bool need_reference) const {
@@ -67,30 +141,100 @@ SampledData DataFlags::load(const CLI::App& app, bool need_reference) const {
   const Eigen::VectorXd& y = table.column(output_column);
   const bool time_flag = app.count("--time-column") > 0;
   const bool h_flag = app.count("--sample-time") > 0;
+  const std::optional<Hold> declared = io::declared_input_hold(table);
+  const std::optional<Hold> flagged = parse_hold(input_hold);
+  if (declared && flagged && *declared != *flagged) {
+    usage_error(internal::concat("--input-hold ", input_hold, " contradicts ", file, ":",
+                                 table.declaration("input_hold")->line,
+                                 ", which declares input_hold: ", hold_flag_name(*declared)));
+  }
+  const Hold hold = flagged.value_or(declared.value_or(Hold::zero_order_hold));
+
+  std::optional<SampledData> read;
   if (table.has_column(time_column)) {
-    io::CsvColumns columns;
-    columns.time = time_column;
-    columns.input = input_column;
-    columns.output = output_column;
-    columns.reference = reference_name;
-    SampledData data = io::sampled_data_from_table(table, columns);
-    if (h_flag && !same_sample_time(sample_time, data.sample_time())) {
-      usage_error(internal::concat("--sample-time ", format_number(sample_time),
-                                   " disagrees with the time column '", time_column, "' of ", file,
-                                   " (step ", format_number(data.sample_time()), " s)"));
+    const Eigen::VectorXd& stamps = table.column(time_column);
+    if (h_flag) {
+      // -T wins; the stamps give the start time, and a disagreement is noted, not refused.
+      try {
+        const TimeStampCheck check = check_time_stamps(stamps);
+        const double drift = std::abs(sample_time - check.step) * (stamps.size() - 1);
+        if (check.worst_sample) {
+          std::cerr << "note: the time column '" << time_column << "' of " << file
+                    << " is not uniform (sample " << *check.worst_sample << " is "
+                    << format_brief(check.deviation) << " s off its grid); --sample-time "
+                    << format_number(sample_time) << " s is used\n";
+        } else if (drift > check.tolerance) {
+          std::cerr << "note: --sample-time " << format_number(sample_time)
+                    << " s overrides the time column '" << time_column << "' of " << file
+                    << " (step " << format_number(check.step) << " s)\n";
+        }
+      } catch (const InvalidArgument& e) {
+        std::cerr << "note: the time column '" << time_column << "' of " << file << ": " << e.what()
+                  << "; --sample-time " << format_number(sample_time) << " s is used\n";
+      }
+      try {
+        read.emplace(sample_time, u, y, reference, stamps(0));
+      } catch (const InvalidArgument& e) {
+        throw InvalidArgument(file + ": " + e.what());
+      }
+    } else {
+      io::CsvColumns columns;
+      columns.time = time_column;
+      columns.input = input_column;
+      columns.output = output_column;
+      columns.reference = reference_name;
+      try {
+        read.emplace(io::sampled_data_from_table(table, columns));
+      } catch (const InvalidArgument& e) {
+        throw InvalidArgument(std::string(e.what()) +
+                              "; --sample-time (-T) overrides the time column");
+      }
     }
-    return data;
+  } else {
+    if (time_flag) table.column(time_column);  // throws, naming the columns present
+    if (!h_flag) {
+      usage_error(internal::concat(file, " has no time column '", time_column,
+                                   "'; give --sample-time (or --time-column)"));
+    }
+    try {
+      read.emplace(sample_time, u, y, reference);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(file + ": " + e.what());
+    }
   }
-  if (time_flag) table.column(time_column);  // throws, naming the columns present
-  if (!h_flag) {
-    usage_error(internal::concat(file, " has no time column '", time_column,
-                                 "'; give --sample-time (or --time-column)"));
+
+  PreprocessingOptions options;
+  if (!rows.empty() && !time.empty()) usage_error("give --rows or --time, not both");
+  if (!rows.empty()) {
+    const auto [a, b] = split_range("--rows", rows);
+    options.first_row = parse_end<int>("--rows", rows, a);
+    options.end_row = parse_end<int>("--rows", rows, b);
   }
-  try {
-    return SampledData(sample_time, u, y, reference);
-  } catch (const InvalidArgument& e) {
-    throw InvalidArgument(file + ": " + e.what());
+  if (!time.empty()) {
+    const auto [a, b] = split_range("--time", time);
+    options.start_time = parse_end<double>("--time", time, a);
+    options.end_time = parse_end<double>("--time", time, b);
   }
+  if (decimate < 1) usage_error(internal::concat("--decimate is ", decimate, "; it must be >= 1"));
+  if (!(scale_input > 0.0) || !(scale_output > 0.0)) {
+    usage_error("--scale-input and --scale-output must be > 0");
+  }
+  options.detrend = *enum_from_name<Detrend>(detrend);
+  options.decimate = decimate;
+  options.input_scale = scale_input;
+  options.output_scale = scale_output;
+  PreprocessedData result = [&] {
+    try {
+      return preprocess(read->with_input_hold(hold), options);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(file + ": " + e.what());
+    }
+  }();
+  for (const std::string& warning : result.record.warnings) {
+    std::cerr << "warning: " << file << ": " << warning << "\n";
+  }
+  preprocessing = std::move(result.record);
+  return std::move(result.data);
 }
 
 }  // namespace ctid::cli

@@ -1,12 +1,15 @@
 // The data flags shared by the estimation commands (fit, validate, frf): which CSV columns
-// hold u, y and r, and where the sample time comes from (a uniform time column, or
-// --sample-time). Errors are one line naming the file, the column and the flag to use.
+// hold u, y and r, where the sample time comes from (a uniform time column, or --sample-time,
+// which overrides it), how the input is held (--input-hold or the file's declaration), and
+// the preprocessing (core/preprocessing.h: --rows/--time, --detrend, --decimate, --scale-*).
+// Errors are one line naming the file, the column and the flag to use.
 #pragma once
 
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "ctid/core/preprocessing.h"
 #include "ctid/core/sampled_data.h"
 
 namespace ctid::cli {
@@ -18,6 +21,16 @@ struct DataFlags {
   std::string reference_column;  ///< empty: "r" when a reference is needed
   std::string time_column = "t";
   double sample_time = 0.0;
+  std::string input_hold;  ///< "zoh" or "foh"; empty: the file's declaration, else zoh
+  std::string rows;        ///< "A:B"; empty: all
+  std::string time;        ///< "A:B" in seconds; empty: all
+  std::string detrend = "none";
+  int decimate = 1;
+  double scale_input = 1.0;
+  double scale_output = 1.0;
+
+  /// What load() did to the record (set by load(), which the commands call on const flags).
+  mutable PreprocessingRecord preprocessing;
 
   /// Adds DATA (positional, `name` in the help) and the column flags to `app`; with
   /// `with_reference` also --reference-column.
@@ -25,8 +38,12 @@ struct DataFlags {
 
   /// Reads the record. With `need_reference` the reference column must be present (its
   /// absence is a usage error naming --reference-column); without it, --reference-column is
-  /// a usage error. `app` tells which flags were given.
+  /// a usage error. `app` tells which flags were given. Preprocesses the record as the flags
+  /// ask, keeps the record of it in `preprocessing` and prints its warnings on stderr.
   SampledData load(const CLI::App& app, bool need_reference) const;
+
+  /// Whether any preprocessing flag was given (then commands print preprocessing.summary()).
+  bool preprocessing_asked(const CLI::App& app) const;
 };
 
 /// Agreement of two sample times given in different places (flag, file, controller).

@@ -18,6 +18,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
+#include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/result_json.h"
@@ -140,11 +141,13 @@ std::string plus_minus(double value, double error) {
 }
 
 void print_summary(std::ostream& out, const EstimationResult& r, const std::string& estimator,
-                   const SampledData& data, const std::string& file) {
+                   const SampledData& data, const std::string& file,
+                   const std::string& preprocessing) {
   // A model that failed the quality verdict is announced before anything else.
   if (!r.verdict.usable) out << "WARNING: " << r.verdict.summary() << "\n";
   out << "ctid fit: " << estimator << " on " << file << " (N = " << data.size()
       << ", h = " << format_number(data.sample_time()) << " s)\n";
+  if (!preprocessing.empty()) out << "preprocessing: " << preprocessing << "\n";
   // The estimator's message restates the reason; print it only when it explains a failure.
   out << "termination: " << r.brief_report() << "\n";
   out << "input delay: " << r.input_delay << " samples (" << format_number(r.model.input_delay())
@@ -263,8 +266,11 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
     nlohmann::json document = io::to_json(result);
     document["estimator"] = estimator;
     document["loop"] = identified.closed_loop ? "closed" : "open";
-    document["data"] = {
-        {"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}};
+    document["data"] = {{"file", f.data.file},
+                        {"samples", data.size()},
+                        {"sample_time", data.sample_time()},
+                        {"input_hold", enum_name(data.input_hold())},
+                        {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
     if (controller) document["controller"] = io::to_json(*controller);
     if (scanned) document["delay_scan"] = io::delay_scan_summary_to_json(*scanned);
     if (relocated) {
@@ -279,7 +285,8 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
                     f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
   if (!f.quiet) {
-    print_summary(std::cout, result, estimator, data, f.data.file);
+    print_summary(std::cout, result, estimator, data, f.data.file,
+                  f.data.preprocessing_asked(app) ? f.data.preprocessing.summary() : "");
     if (scanned) print_delay_scan(std::cout, *scanned);
     if (relocated) std::cout << "mode relocation: " << relocated->message << "\n";
   }

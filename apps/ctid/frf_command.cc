@@ -146,8 +146,11 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
     if (std::filesystem::path(f.output).extension() == ".json") {
       nlohmann::json document = io::to_json(frf);
       document["method"] = periodic ? "periodic" : "welch";
-      document["data"] = {
-          {"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}};
+      document["data"] = {{"file", f.data.file},
+                          {"samples", data.size()},
+                          {"sample_time", data.sample_time()},
+                          {"input_hold", enum_name(data.input_hold())},
+                          {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
       nlohmann::json listed = nlohmann::json::array();
       for (const ResonancePeak& p : peaks) listed.push_back(io::fields_to_json(p));
       document["peaks"] = std::move(listed);
@@ -161,6 +164,9 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
               << ": " << frf.frequencies.size() << " lines, " << frf.averages
               << (periodic ? " periods" : " segments") << " of " << frf.block_length
               << " samples\n";
+    if (f.data.preprocessing_asked(app)) {
+      std::cout << "preprocessing: " << f.data.preprocessing.summary() << "\n";
+    }
     const Eigen::Index last = frf.frequencies.size() - 1;
     std::cout << "excited band: " << format_brief(frf.frequencies(0) / (2.0 * std::numbers::pi))
               << " to " << format_brief(frf.frequencies(last) / (2.0 * std::numbers::pi)) << " Hz, "

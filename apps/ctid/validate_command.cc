@@ -21,6 +21,7 @@
 #include "ctid/delayed_feedback/output_error.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/io/feedback_result_json.h"
+#include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
@@ -96,14 +97,20 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
   if (!f.output.empty()) {
     nlohmann::json document = io::to_json(report);
     document["model_file"] = f.model;
-    document["data"] = {
-        {"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}};
+    document["data"] = {{"file", f.data.file},
+                        {"samples", data.size()},
+                        {"sample_time", data.sample_time()},
+                        {"input_hold", enum_name(data.input_hold())},
+                        {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
   if (!f.quiet) {
     std::cout << "ctid validate: " << f.model << " on " << f.data.file << " (N = " << data.size()
-              << ", h = " << format_number(data.sample_time()) << " s)\n"
-              << "fit: " << format_number(report.fit_percent) << " %, mean squared error "
+              << ", h = " << format_number(data.sample_time()) << " s)\n";
+    if (f.data.preprocessing_asked(app)) {
+      std::cout << "preprocessing: " << f.data.preprocessing.summary() << "\n";
+    }
+    std::cout << "fit: " << format_number(report.fit_percent) << " %, mean squared error "
               << format_number(report.mean_squared_error) << "\n"
               << "residual: mean " << format_number(report.residual_mean) << ", std "
               << format_number(report.residual_std) << "\n"

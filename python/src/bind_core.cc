@@ -1,12 +1,15 @@
 // Python bindings of the core layer: Polynomial (ascending coefficients), TransferFunction,
-// DiscreteTransferFunction, StateSpace, AdditiveModel with its submodels, SampledData.
+// DiscreteTransferFunction, StateSpace, AdditiveModel with its submodels, SampledData and its
+// preprocessing.
 #include <complex>
 
 #include "common.h"
 #include "ctid/core/additive_model.h"
 #include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/error.h"
 #include "ctid/core/hold.h"
 #include "ctid/core/polynomial.h"
+#include "ctid/core/preprocessing.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/core/state_space.h"
 #include "ctid/core/transfer_function.h"
@@ -240,7 +243,53 @@ void bind_core(py::module_& m) {
       .def("with_input_hold", &SampledData::with_input_hold, py::arg("hold"),
            "The same record with its input continued by `hold`.")
       .def("segment", &SampledData::segment, py::arg("begin"), py::arg("count"),
-           "Samples [begin, begin + count) (the input hold is kept).");
+           "Samples [begin, begin + count) (the input hold is kept).")
+      .def(
+          "preprocess",
+          [](const SampledData& data, const std::optional<PreprocessingOptions>& options,
+             const py::kwargs& kwargs) {
+            return preprocess(data, options_from<PreprocessingOptions>("SampledData.preprocess",
+                                                                       options, kwargs));
+          },
+          py::arg("options") = py::none(),
+          "PreprocessedData: this record after range, detrend, decimation and scaling "
+          "(PreprocessingOptions or its fields as keywords).");
+
+  bind_enum<Detrend>(m, "Detrend", "What preprocess removes from each signal.");
+  bind_options<PreprocessingOptions>(m, "Options of preprocess (core/preprocessing.h).");
+  bind_result<PreprocessingRecord>(m, "What preprocess did, in the original units.")
+      .def("summary", &PreprocessingRecord::summary, "One line, as ctid fit prints it.");
+  py::class_<PreprocessedData>(m, "PreprocessedData",
+                               "The preprocessed record and the record of what was done.")
+      .def_readonly("data", &PreprocessedData::data, "The preprocessed SampledData.")
+      .def_readonly("record", &PreprocessedData::record, "The PreprocessingRecord.")
+      .def("__repr__", [](const PreprocessedData& p) {
+        return "PreprocessedData(" + p.record.summary() + ")";
+      });
+  m.def(
+      "preprocess",
+      [](const SampledData& data, const std::optional<PreprocessingOptions>& options,
+         const py::kwargs& kwargs) {
+        return preprocess(data, options_from<PreprocessingOptions>("preprocess", options, kwargs));
+      },
+      py::arg("data"), py::arg("options") = py::none(),
+      "PreprocessedData: the record after range, detrend, decimation and scaling.");
+  m.def("check_time_stamps", &check_time_stamps, py::arg("time"),
+        py::arg("relative_tolerance") = 1e-6,
+        "The uniformity check of time stamps (docs/decisions/0008): step, digits, tolerance "
+        "and the stamp farthest off the grid, if beyond tolerance.");
+  py::class_<TimeStampCheck>(m, "TimeStampCheck", "Result of check_time_stamps.")
+      .def_readonly("step", &TimeStampCheck::step, "h from the first and last stamps [s].")
+      .def_readonly("digits", &TimeStampCheck::digits, "Significant digits of the stamps.")
+      .def_readonly("tolerance", &TimeStampCheck::tolerance, "Allowed distance from the grid.")
+      .def_readonly("worst_sample", &TimeStampCheck::worst_sample,
+                    "Stamp farthest off the grid beyond tolerance, or None.")
+      .def_readonly("deviation", &TimeStampCheck::deviation, "Its distance from the grid [s].")
+      .def("__repr__", [](const TimeStampCheck& c) {
+        return ::ctid::internal::concat(
+            "TimeStampCheck(step=", c.step, ", digits=", c.digits, ", tolerance=", c.tolerance,
+            ", worst_sample=", c.worst_sample ? std::to_string(*c.worst_sample) : "None", ")");
+      });
 }
 
 }  // namespace ctid::python

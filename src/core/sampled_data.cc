@@ -1,8 +1,12 @@
 #include "ctid/core/sampled_data.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 
 namespace ctid {
 
@@ -13,6 +17,18 @@ void require_finite_signal(const Eigen::VectorXd& v, const char* name) {
     require(std::isfinite(v(k)), name, " sample ", k, " is ", v(k),
             "; every sample must be finite");
   }
+}
+
+// The fewest significant digits (1..17) whose decimal text reads back as x: how many digits
+// x was printed with, trailing zeros aside.
+int significant_digits(double x) {
+  if (x == 0.0) return 1;
+  char buffer[40];
+  for (int digits = 1; digits < 17; ++digits) {
+    std::snprintf(buffer, sizeof buffer, "%.*e", digits - 1, x);
+    if (std::strtod(buffer, nullptr) == x) return digits;
+  }
+  return 17;
 }
 
 }  // namespace
@@ -47,16 +63,45 @@ SampledData SampledData::from_time_stamps(const Eigen::VectorXd& time, Eigen::Ve
           input.size(), "; they must have equal lengths");
   require(time.size() >= 2, "a record needs at least 2 samples; got ", time.size());
   require_finite_signal(time, "time");
-  const Eigen::Index n = time.size();
-  const double h = (time(n - 1) - time(0)) / static_cast<double>(n - 1);
-  require(h > 0.0, "time stamps must increase; first ", time(0), " s, last ", time(n - 1), " s");
-  for (Eigen::Index k = 1; k < n; ++k) {
-    const double step = time(k) - time(k - 1);
-    require(std::abs(step - h) <= relative_tolerance * h, "time stamps are not uniform: step ", k,
-            " (from t = ", time(k - 1), " to ", time(k), ") is ", step, " s but the mean step is ",
-            h, " s");
+  const TimeStampCheck check = check_time_stamps(time, relative_tolerance);
+  if (check.worst_sample) {
+    const Eigen::Index k = *check.worst_sample;
+    require(false, "time stamps are not uniform: sample ", k, " (t = ", format_number(time(k)),
+            " s) is ", format_brief(check.deviation),
+            " s off the grid t_0 + k h, with h = ", format_number(check.step),
+            " s from the first and last stamps; stamps printed to ", check.digits,
+            " significant digits allow ", format_brief(check.tolerance), " s");
   }
-  return SampledData(h, std::move(input), std::move(output), std::move(reference), time(0));
+  return SampledData(check.step, std::move(input), std::move(output), std::move(reference),
+                     time(0));
+}
+
+TimeStampCheck check_time_stamps(const Eigen::VectorXd& time, double relative_tolerance) {
+  require(time.size() >= 2, "a record needs at least 2 samples; got ", time.size());
+  const Eigen::Index n = time.size();
+  TimeStampCheck check;
+  check.step = (time(n - 1) - time(0)) / static_cast<double>(n - 1);
+  require(check.step > 0.0, "time stamps must increase; first ", time(0), " s, last ", time(n - 1),
+          " s");
+  double largest = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    check.digits = std::max(check.digits, significant_digits(time(k)));
+    largest = std::max(largest, std::abs(time(k)));
+  }
+  // One unit in the last printed digit of the largest stamp: half a unit of rounding on the
+  // stamp itself plus at most half a unit carried into the grid by the two end stamps.
+  const double unit =
+      largest > 0.0 ? std::pow(10.0, std::floor(std::log10(largest)) - check.digits + 1) : 0.0;
+  check.tolerance =
+      std::max(relative_tolerance * check.step, std::min(unit, kMaxGridDeviation * check.step));
+  for (Eigen::Index k = 1; k < n; ++k) {
+    const double deviation = std::abs(time(k) - time(0) - static_cast<double>(k) * check.step);
+    if (deviation > check.tolerance && deviation > check.deviation) {
+      check.deviation = deviation;
+      check.worst_sample = static_cast<int>(k);
+    }
+  }
+  return check;
 }
 
 Eigen::VectorXd SampledData::time() const {

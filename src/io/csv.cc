@@ -1,5 +1,6 @@
 #include "ctid/io/csv.h"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -98,6 +99,30 @@ void CsvTable::add_column(std::string name, Eigen::VectorXd values) {
   columns.push_back(std::move(values));
 }
 
+namespace {
+
+// "key: value" with key made of letters, digits and '_'; anything else is a plain comment.
+std::optional<CsvDeclaration> parse_declaration(std::string_view comment) {
+  comment = trim(comment);
+  const size_t colon = comment.find(':');
+  if (colon == std::string_view::npos || colon == 0) return std::nullopt;
+  const std::string_view key = comment.substr(0, colon);
+  for (const char c : key) {
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return std::nullopt;
+  }
+  return CsvDeclaration{std::string(key), std::string(trim(comment.substr(colon + 1))), 0};
+}
+
+}  // namespace
+
+const CsvDeclaration* CsvTable::declaration(std::string_view key) const {
+  const CsvDeclaration* found = nullptr;
+  for (const CsvDeclaration& d : declarations) {
+    if (d.key == key) found = &d;
+  }
+  return found;
+}
+
 CsvTable parse_csv(std::string_view text, const std::string& source) {
   CsvTable table;
   table.source = source;
@@ -111,7 +136,14 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
     const std::string_view line = trim(text.substr(position, end - position));
     position = end + 1;
     ++line_number;
-    if (line.empty() || line.front() == '#') continue;
+    if (line.empty()) continue;
+    if (line.front() == '#') {
+      if (auto declaration = parse_declaration(line.substr(1))) {
+        declaration->line = line_number;
+        table.declarations.push_back(std::move(*declaration));
+      }
+      continue;
+    }
 
     const auto fields = split_fields(line);
     if (header_line == 0) {
@@ -177,6 +209,7 @@ std::string format_csv(const CsvTable& table) {
   }
   std::string text;
   text.reserve(static_cast<size_t>(rows + 1) * table.names.size() * 25);
+  for (const CsvDeclaration& d : table.declarations) text += "# " + d.key + ": " + d.value + "\n";
   for (size_t i = 0; i < table.names.size(); ++i) {
     if (i > 0) text += ',';
     text += table.names[i];

@@ -32,6 +32,15 @@ TimedSignal timed_signal_from_table(const CsvTable& table, const std::string& ti
   }
 }
 
+std::optional<Hold> declared_input_hold(const CsvTable& table) {
+  const CsvDeclaration* d = table.declaration("input_hold");
+  if (d == nullptr) return std::nullopt;
+  if (d->value == "zoh" || d->value == "zero_order_hold") return Hold::zero_order_hold;
+  if (d->value == "foh" || d->value == "first_order_hold") return Hold::first_order_hold;
+  throw InvalidArgument(internal::concat(table.source, ":", d->line, ": input_hold is '", d->value,
+                                         "'; it must be zoh or foh"));
+}
+
 SampledData sampled_data_from_table(const CsvTable& table, const CsvColumns& columns) {
   columns.validate();
   const Eigen::VectorXd& time = table.column(columns.time);
@@ -39,9 +48,11 @@ SampledData sampled_data_from_table(const CsvTable& table, const CsvColumns& col
   const Eigen::VectorXd& output = table.column(columns.output);
   std::optional<Eigen::VectorXd> reference;
   if (!columns.reference.empty()) reference = table.column(columns.reference);
+  const Hold hold = declared_input_hold(table).value_or(Hold::zero_order_hold);
   try {
-    return SampledData::from_time_stamps(time, input, output, std::move(reference),
-                                         columns.relative_tolerance);
+    const SampledData data = SampledData::from_time_stamps(
+        time, input, output, std::move(reference), columns.relative_tolerance);
+    return data.with_input_hold(hold);
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(
         internal::concat(table.source, ": column '", columns.time, "': ", e.what()));
@@ -56,6 +67,9 @@ SampledData read_sampled_data(const std::filesystem::path& path, const CsvColumn
 CsvTable to_csv_table(const SampledData& data, const CsvColumns& columns) {
   columns.validate();
   CsvTable table;
+  if (data.input_hold() != Hold::zero_order_hold) {
+    table.declarations.push_back({"input_hold", "foh", 0});
+  }
   table.add_column(columns.time, data.time());
   table.add_column(columns.input, data.input());
   table.add_column(columns.output, data.output());

@@ -1,6 +1,8 @@
 #include "ctid/core/sampled_data.h"
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -47,14 +49,68 @@ TEST(SampledData, TimeStampsMustBeUniform) {
   const SampledData d =
       SampledData::from_time_stamps(t, Eigen::VectorXd::Zero(5), Eigen::VectorXd::Zero(5));
   EXPECT_NEAR(d.sample_time(), 0.1, 1e-15);
-  t(3) = 0.31;
+  t(3) = 0.33;
   EXPECT_THAT(
       [&] { SampledData::from_time_stamps(t, Eigen::VectorXd::Zero(5), Eigen::VectorXd::Zero(5)); },
-      ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("step 3")));
+      ::testing::ThrowsMessage<InvalidArgument>(
+          HasSubstr("sample 3 (t = 0.33 s) is 0.03 s off the grid t_0 + k h, with h = 0.1 s")));
   t << 0.4, 0.3, 0.2, 0.1, 0.0;
   EXPECT_THAT(
       [&] { SampledData::from_time_stamps(t, Eigen::VectorXd::Zero(5), Eigen::VectorXd::Zero(5)); },
       ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("increase")));
+}
+
+// Stamps k h printed with `digits` significant digits, as a CSV writer would.
+Eigen::VectorXd printed_stamps(int n, double h, int digits) {
+  Eigen::VectorXd t(n);
+  char buffer[40];
+  for (int k = 0; k < n; ++k) {
+    std::snprintf(buffer, sizeof buffer, "%.*g", digits, k * h);
+    t(k) = std::strtod(buffer, nullptr);
+  }
+  return t;
+}
+
+TEST(SampledData, StampsPrintedToFewDigitsAreUniform) {
+  const double h = 1.0 / 1024.0;
+  for (const int digits : {5, 6, 8}) {
+    const Eigen::VectorXd t = printed_stamps(9000, h, digits);
+    const TimeStampCheck check = check_time_stamps(t);
+    EXPECT_FALSE(check.worst_sample)
+        << digits << " digits: sample " << check.worst_sample.value_or(-1);
+    EXPECT_EQ(check.digits, digits);
+    EXPECT_NEAR(check.step, h, 1e-3 * h);
+  }
+  // The shipped flexible-structure stamps: 0.9755859375 printed as 0.97558594.
+  const Eigen::VectorXd t = printed_stamps(8192, h, 8);
+  EXPECT_EQ(t(999), 0.97558594);
+  const SampledData d =
+      SampledData::from_time_stamps(t, Eigen::VectorXd::Zero(8192), Eigen::VectorXd::Zero(8192));
+  EXPECT_NEAR(d.sample_time(), h, 1e-8 * h);
+}
+
+TEST(SampledData, GapsAndJitterBeyondThePrintedDigitsAreRefused) {
+  const double h = 0.08;
+  Eigen::VectorXd t = printed_stamps(1000, h, 5);
+  // A missing sample: every stamp after row 400 moves one step later.
+  Eigen::VectorXd gap = t;
+  gap.tail(600).array() += h;
+  const TimeStampCheck missing = check_time_stamps(gap);
+  ASSERT_TRUE(missing.worst_sample);
+  EXPECT_EQ(*missing.worst_sample, 400);
+  EXPECT_GT(missing.deviation, 0.4 * h);
+  // Jitter of 1 % of h on stamps printed with all 17 digits.
+  Eigen::VectorXd jitter = Eigen::VectorXd::LinSpaced(1000, 0.0, 999.0) * h;
+  jitter(500) += 0.01 * h;
+  EXPECT_THAT(
+      [&] {
+        SampledData::from_time_stamps(jitter, Eigen::VectorXd::Zero(1000),
+                                      Eigen::VectorXd::Zero(1000));
+      },
+      ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("not uniform: sample 500")));
+  // Stamps too coarse to resolve a quarter step: 2 digits for h = 0.08 up to 80 s.
+  const TimeStampCheck coarse = check_time_stamps(printed_stamps(1000, h, 2));
+  EXPECT_TRUE(coarse.worst_sample);
 }
 
 }  // namespace

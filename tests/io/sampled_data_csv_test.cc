@@ -106,3 +106,25 @@ TEST(SampledDataCsv, WriteThenReadRoundTripsExactly) {
 
 }  // namespace
 }  // namespace ctid::io
+
+namespace ctid::io {
+namespace {
+
+TEST(SampledDataCsv, TheFileMayDeclareTheInputHold) {
+  const std::string body = "t,u,y\n0,1,2\n0.5,3,4\n1,5,6\n";
+  EXPECT_EQ(sampled_data_from_table(parse_csv(body, "d.csv")).input_hold(), Hold::zero_order_hold);
+  const CsvTable declared = parse_csv("# measured on rig 2\n# input_hold: foh\n" + body, "d.csv");
+  const SampledData data = sampled_data_from_table(declared);
+  EXPECT_EQ(data.input_hold(), Hold::first_order_hold);
+  EXPECT_EQ(data.size(), 3);
+  // Written back with its declaration, and read again the same.
+  const CsvTable written = parse_csv(format_csv(to_csv_table(data)), "w.csv");
+  EXPECT_EQ(sampled_data_from_table(written).input_hold(), Hold::first_order_hold);
+  EXPECT_THAT(format_csv(to_csv_table(data)), ::testing::StartsWith("# input_hold: foh\nt,u,y\n"));
+  const CsvTable bad = parse_csv("#input_hold: spline\n" + body, "d.csv");
+  EXPECT_THAT(error_of([&] { sampled_data_from_table(bad); }),
+              HasSubstr("d.csv:1: input_hold is 'spline'; it must be zoh or foh"));
+}
+
+}  // namespace
+}  // namespace ctid::io

@@ -17,8 +17,8 @@ class SampledData {
   SampledData(double sample_time, Eigen::VectorXd input, Eigen::VectorXd output,
               std::optional<Eigen::VectorXd> reference = std::nullopt, double start_time = 0.0);
 
-  /// From time stamps: they must increase uniformly, each step within
-  /// relative_tolerance * h of the mean step h (the first offending index is named).
+  /// From time stamps, checked by check_time_stamps (the stamp farthest off the grid is named,
+  /// with the step found and the tolerance).
   static SampledData from_time_stamps(const Eigen::VectorXd& time, Eigen::VectorXd input,
                                       Eigen::VectorXd output,
                                       std::optional<Eigen::VectorXd> reference = std::nullopt,
@@ -52,5 +52,27 @@ class SampledData {
   std::optional<Eigen::VectorXd> reference_;
   Hold input_hold_ = Hold::zero_order_hold;
 };
+
+/// The uniformity rule for time stamps t_0..t_{N-1} (docs/decisions/0008): the step is
+/// h = (t_{N-1} - t_0)/(N - 1), and every stamp must lie within a tolerance of the grid
+/// t_0 + k h. Stamps are text printed to some number of significant digits P (the most any
+/// stamp needs to read back exactly), so the tolerance is one unit in the P-th digit of the
+/// largest |t_k| (half a unit of rounding on the stamp, half carried into the grid by the end
+/// stamps), at most kMaxGridDeviation * h and at least relative_tolerance * h. Stamps that
+/// cannot resolve a quarter step are thus refused, and so are gaps (a missing sample moves
+/// some stamp by about h/2 or more) and jitter beyond the printed precision.
+inline constexpr double kMaxGridDeviation = 0.25;
+
+struct TimeStampCheck {
+  double step = 0.0;                ///< h found from the first and last stamps [s]
+  int digits = 1;                   ///< significant digits the stamps are printed with
+  double tolerance = 0.0;           ///< allowed distance of a stamp from the grid [s]
+  std::optional<int> worst_sample;  ///< the stamp farthest off the grid, if beyond tolerance
+  double deviation = 0.0;           ///< its distance from the grid [s]
+};
+
+/// Applies the rule above; throws InvalidArgument for fewer than 2 stamps or a last stamp not
+/// after the first. A stamp off the grid is reported, not thrown.
+TimeStampCheck check_time_stamps(const Eigen::VectorXd& time, double relative_tolerance = 1e-6);
 
 }  // namespace ctid

@@ -1,5 +1,6 @@
 // Numeric CSV tables with a header row of column names (docs/formats.md). Fields are
-// separated by commas; blank lines and lines starting with '#' are skipped; every value
+// separated by commas; blank lines and lines starting with '#' are skipped (a line
+// "# key: value" is kept as a declaration); every value
 // must be a finite number. Parse errors name the source, the line and the column:
 // "data.csv:7: column 'y' (field 3): malformed number 'abc'". Written values use %.17g,
 // so a table read back is bit-identical.
@@ -16,12 +17,22 @@
 
 namespace ctid::io {
 
+/// A comment line of the form "# key: value" (key: letters, digits and '_'), e.g.
+/// "# input_hold: foh". Other comment lines are ignored.
+struct CsvDeclaration {
+  std::string key;
+  std::string value;
+  int line = 0;  ///< where it was read (0: not read from text)
+};
+
 struct CsvTable {
   /// Where the table came from (a file name), used in error messages.
   std::string source;
   std::vector<std::string> names;
   /// One vector per name, all of the same length.
   std::vector<Eigen::VectorXd> columns;
+  /// Declarations from "# key: value" comment lines, in file order; written back first.
+  std::vector<CsvDeclaration> declarations;
 
   int rows() const { return columns.empty() ? 0 : static_cast<int>(columns.front().size()); }
   bool has_column(std::string_view name) const;
@@ -30,6 +41,8 @@ struct CsvTable {
   /// Appends a column; throws InvalidArgument for an invalid or repeated name or a length
   /// that differs from the other columns.
   void add_column(std::string name, Eigen::VectorXd values);
+  /// The last declaration of `key`, if any.
+  const CsvDeclaration* declaration(std::string_view key) const;
 };
 
 /// Parses CSV text; `source` names it in error messages.

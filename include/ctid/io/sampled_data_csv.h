@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <tuple>
@@ -24,7 +25,8 @@ struct CsvColumns {
   std::string output = "y";
   /// Empty: the record has no reference.
   std::string reference;
-  /// Allowed deviation of each time step from the mean step, relative to the mean step.
+  /// Smallest allowed distance of a time stamp from the uniform grid, relative to the step;
+  /// stamps printed to few digits are allowed more (SampledData::from_time_stamps).
   double relative_tolerance = 1e-6;
 
   static constexpr std::string_view type_name = "CsvColumns";
@@ -36,7 +38,7 @@ struct CsvColumns {
         field("output", &O::output, "Column of the output y."),
         field("reference", &O::reference, "Column of the reference r; empty: none."),
         field("relative_tolerance", &O::relative_tolerance, Between{0, 1},
-              "Allowed deviation of a time step from the mean step, relative to it."),
+              "Smallest allowed distance of a stamp from the uniform grid, relative to the step."),
     };
   }
   /// Time, input and output are named, and all names differ.
@@ -57,10 +59,16 @@ TimedSignal timed_signal_from_table(const CsvTable& table, const std::string& ti
                                     const std::string& value_column,
                                     double relative_tolerance = 1e-6);
 
+/// The hold declared by a "# input_hold: zoh|foh" line, if any; throws InvalidArgument
+/// naming the line for another value.
+std::optional<Hold> declared_input_hold(const CsvTable& table);
+
+/// The record, with the input hold the table declares (zero-order hold if none).
 SampledData sampled_data_from_table(const CsvTable& table, const CsvColumns& columns = {});
 SampledData read_sampled_data(const std::filesystem::path& path, const CsvColumns& columns = {});
 
-/// Columns time, input, output and (if the record has one and columns.reference is not
+/// A "# input_hold: foh" declaration for a first-order-hold input, then columns time, input,
+/// output and (if the record has one and columns.reference is not
 /// empty) reference, named as in `columns`.
 CsvTable to_csv_table(const SampledData& data, const CsvColumns& columns = {});
 void write_sampled_data(const std::filesystem::path& path, const SampledData& data,
