@@ -8,6 +8,7 @@
 #include <Eigen/SVD>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/core/transfer_function.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/simulation/discretization.h"
@@ -100,10 +101,12 @@ Window scored_window(const SampledData& data, const ValidationOptions& options) 
   const double start = options.window_start.value_or(t0);
   const double end = options.window_end.value_or(t_last);
   const double tolerance = 1e-6 * h;
-  const auto describe = [&] { return internal::concat("the window [", start, ", ", end, "] s"); };
+  const auto describe = [&] {
+    return internal::concat("the window [", format_number(start), ", ", format_number(end), "] s");
+  };
   const auto record = [&] {
-    return internal::concat("the record (", n, " samples of ", h, " s, t = ", t0, " to ", t_last,
-                            " s)");
+    return internal::concat("the record (", n, " samples of ", format_number(h),
+                            " s, t = ", format_number(t0), " to ", format_number(t_last), " s)");
   };
   require(start >= t0 - tolerance && end <= t_last + tolerance, describe(), " is not inside ",
           record());
