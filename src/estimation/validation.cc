@@ -144,7 +144,11 @@ Eigen::VectorXd estimated_free_response(const AdditiveModel& model, const Sample
   const Eigen::MatrixXd scaled = fw * scale.asDiagonal();
   const Eigen::BDCSVD<Eigen::MatrixXd> svd(scaled, Eigen::ComputeThinU | Eigen::ComputeThinV);
   const Eigen::VectorXd& sigma = svd.singularValues();
-  const double threshold = 1e-10 * sigma(0);
+  // Columns have unit norm over the record, so a singular value is the fraction of a state
+  // direction's free response that the window sees. Below 1e-6 the direction would be
+  // extrapolated backwards from the window's noise (a fast mode that has died out before it
+  // comes back as a huge transient at the record's start); it is dropped instead.
+  const double threshold = 1e-6 * sigma(0);
   Eigen::VectorXd x = Eigen::VectorXd::Zero(f.cols());
   for (Eigen::Index j = 0; j < sigma.size(); ++j) {
     if (!(sigma(j) > threshold)) break;

@@ -116,6 +116,22 @@ TEST(ValidationInitialState, WindowScoresTheSliceOfTheSimulationFromTheRecordSta
   EXPECT_DOUBLE_EQ(validate_model(two_modes(), shifted, options).fit_percent, r.fit_percent);
 }
 
+TEST(ValidationInitialState, AModeThatDiedBeforeTheWindowIsNotFittedToNoise) {
+  // From t = 8 s the first-order mode (time constant 0.5 s) keeps e^-16 ~ 1e-7 of its start:
+  // fitted to the window's noise it would come back ~1e7 times larger at the record's start.
+  const Record rec = record_from_state(two_modes(), start_state());
+  const Eigen::VectorXd noisy = rec.data.output() + white_noise(kN, 0.01, 3);
+  const SampledData data(kH, rec.data.input(), noisy);
+  ValidationOptions options;
+  options.initial_state = InitialState::estimate;
+  options.window_start = 8.0;
+  const ValidationReport r = validate_model(two_modes(), data, options);
+  EXPECT_EQ(r.initial_state_rank, 2);
+  EXPECT_GT(r.fit_estimated_state, 95.0);
+  const Eigen::VectorXd out = validation_output(two_modes(), data, options);
+  EXPECT_LT(out.cwiseAbs().maxCoeff(), 2.0 * noisy.cwiseAbs().maxCoeff());
+}
+
 std::string message_of(const AdditiveModel& model, const SampledData& data,
                        const ValidationOptions& options) {
   try {

@@ -145,9 +145,10 @@ ValidationReport validate_model(const AdditiveModel& model, const SampledData& d
 /// The model simulated from the record's first sample with the measured input (exact ZOH),
 /// scored on options' window. The initial state is estimated by linear least squares of
 /// y - y_rest on the free responses over the window: columns scaled to unit norm over the
-/// whole record, solved by SVD with singular values below 1e-10 of the largest dropped (a mode
-/// that has died out before the window, or nearly cancelled modes, leave the state, not the
-/// fit, ill-determined; initial_state_rank counts what was kept). A window outside the record
+/// whole record, solved by SVD with singular values below 1e-6 of the largest dropped: a
+/// state direction whose free response the window barely sees (a mode that has died out
+/// before the window, or nearly cancelled modes) is not fitted to the window's noise and
+/// extrapolated backwards; initial_state_rank counts what was kept. A window outside the record
 /// or holding fewer than 2 samples is an InvalidArgument naming the window and the record.
 ValidationReport validate_model(const AdditiveModel& model, const SampledData& data,
                                 const ValidationOptions& options);
