@@ -241,5 +241,24 @@ TEST_F(CraneValidation, AWindowOutsideTheRecordExitsTwoNamingItAndTheRecord) {
                    "the end must be later than the start");
 }
 
+TEST_F(CraneValidation, PlotOfSeveralModelsDrawsOneComparisonFigure) {
+  if (testing::python_package().empty()) {
+    GTEST_SKIP() << "the ctid Python package is not built (CTID_BUILD_PYTHON=OFF); set "
+                    "CTID_PYTHONPATH to test --plot";
+  }
+  ASSERT_EQ(ctid({"fit", "estimation.csv", "--poles", "2", "--zeros", "1", "--model-output",
+                  "second.json", "-q"})
+                .status,
+            0);
+  const auto r = ctid({"validate", "crane.json", "validation.csv", "second.json", "--initial-state",
+                       "estimate", "--window", "42:", "--plot", "fig"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("validation.png"));
+  const std::string bytes = testing::slurp(path("fig") / "validation.png");
+  EXPECT_GT(bytes.size(), 10000u);
+  EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  EXPECT_FALSE(std::filesystem::exists(path("fig") / "bode.png"));
+}
+
 }  // namespace
 }  // namespace ctid::cli
