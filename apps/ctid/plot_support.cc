@@ -238,4 +238,31 @@ std::vector<std::filesystem::path> draw_model_figures(
   return written;
 }
 
+std::filesystem::path draw_comparison_figure(
+    const std::filesystem::path& package_dir, const std::filesystem::path& dir,
+    const SampledData& data, const std::vector<std::string>& labels,
+    const std::vector<AdditiveModel>& models, const ValidationOptions& options,
+    const std::vector<ValidationReport>& reports, const std::string& title) {
+  const TemporaryDirectory work;
+  const Eigen::VectorXd t = data.time();
+  nlohmann::json input;
+  input["t"] = std::vector<double>(t.data(), t.data() + t.size());
+  input["y"] = std::vector<double>(data.output().data(), data.output().data() + data.size());
+  input["window"] = {reports.front().window_start, reports.front().window_end};
+  input["initial_state"] = std::string(enum_name(options.initial_state));
+  nlohmann::json lines = nlohmann::json::array();
+  for (std::size_t i = 0; i < models.size(); ++i) {
+    const Eigen::VectorXd y = validation_output(models[i], data, options);
+    lines.push_back({{"label", std::filesystem::path(labels[i]).filename().string()},
+                     {"fit", reports[i].fit_percent},
+                     {"output", std::vector<double>(y.data(), y.data() + y.size())}});
+  }
+  input["models"] = std::move(lines);
+  const std::filesystem::path file = work.path() / "compare.json";
+  io::write_json(file, input);
+  const std::filesystem::path output = dir / "validation.png";
+  plot(package_dir, {{"compare", file, output, title}});
+  return output;
+}
+
 }  // namespace ctid::cli

@@ -15,6 +15,7 @@
 
 #include "ctid/core/additive_model.h"
 #include "ctid/core/sampled_data.h"
+#include "ctid/estimation/validation.h"
 #include "ctid/frequency/frf.h"
 
 namespace ctid::cli {
@@ -74,5 +75,14 @@ std::vector<std::filesystem::path> draw_model_figures(
     const std::filesystem::path& package_dir, const std::filesystem::path& dir,
     const AdditiveModel& model, const Eigen::MatrixXd& covariance, const SampledData& data,
     const Eigen::VectorXd& simulated, bool modes, const std::string& title);
+
+/// Draws `dir`/validation.png: the measured output of `data` with each model's output
+/// (validation_output with `options`) over it, labelled by its file name and fit on the window
+/// (reports[i].fit_percent), like MATLAB's `compare`. Returns the file written.
+std::filesystem::path draw_comparison_figure(
+    const std::filesystem::path& package_dir, const std::filesystem::path& dir,
+    const SampledData& data, const std::vector<std::string>& labels,
+    const std::vector<AdditiveModel>& models, const ValidationOptions& options,
+    const std::vector<ValidationReport>& reports, const std::string& title);
 
 }  // namespace ctid::cli

@@ -6,13 +6,20 @@
 // closed loop with delayed feedback (a `ctid feedback` result or a delayed_feedback_loop
 // model) is simulated with the measured input continued by --hold (validate_loop,
 // delayed_feedback/loop_parameters.h) and judged by the same statistics.
+// --initial-state estimate starts the simulation from the least-squares initial state and
+// --window A:B scores part of the record (simulated from its start); both fits, from rest and
+// from the estimated state, are printed beside each other, one row per model when several
+// models are compared on the same record (MATLAB's `compare`).
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "command.h"
 #include "ctid/core/error.h"
@@ -36,7 +43,10 @@ constexpr int kMaxLag = 20;
 
 struct ValidateFlags {
   std::string model;
+  std::vector<std::string> more_models;
   DataFlags data;
+  std::string initial_state = "zero";
+  std::string window;
   std::string output;
   std::string plot;
   std::string hold = "foh";
@@ -58,44 +68,153 @@ std::optional<DelayedFeedbackLoop> loop_in(const std::string& file) {
   return std::nullopt;
 }
 
+// "A:B", "A:" or ":B" (seconds on the record's time axis) into the options' window.
+void parse_window(const std::string& text, ValidationOptions& options) {
+  const auto colon = text.find(':');
+  const auto bad = [&] {
+    usage_error("--window '" + text + "': expected START:END in seconds (either may be empty)");
+  };
+  if (colon == std::string::npos || text.find(':', colon + 1) != std::string::npos) bad();
+  const auto number = [&](const std::string& part) -> std::optional<double> {
+    if (part.empty()) return std::nullopt;
+    std::size_t used = 0;
+    double value = 0.0;
+    try {
+      value = std::stod(part, &used);
+    } catch (const std::exception&) {
+      bad();
+    }
+    if (used != part.size() || !std::isfinite(value)) bad();
+    return value;
+  };
+  options.window_start = number(text.substr(0, colon));
+  options.window_end = number(text.substr(colon + 1));
+  if (options.window_start && options.window_end &&
+      !(*options.window_end > *options.window_start)) {
+    usage_error("--window '" + text + "': the end must be later than the start");
+  }
+}
+
+void check_delay(const io::FittedModel& fitted, const std::string& file, const ValidateFlags& f,
+                 const SampledData& data) {
+  const double delay_samples = fitted.model.input_delay() / data.sample_time();
+  if (std::abs(delay_samples - std::round(delay_samples)) > 1e-9 * std::max(1.0, delay_samples)) {
+    usage_error(internal::concat(file, ": the model's input delay ",
+                                 format_number(fitted.model.input_delay()),
+                                 " s is not a whole number of samples of ", f.data.file,
+                                 " (h = ", format_number(data.sample_time()), " s)"));
+  }
+}
+
+void print_statistics(const ValidationReport& report) {
+  const double bound = report.whiteness_bound;
+  std::cout << "fit: " << format_number(report.fit_percent) << " %, mean squared error "
+            << format_number(report.mean_squared_error) << "\n"
+            << "residual: mean " << format_number(report.residual_mean) << ", std "
+            << format_number(report.residual_std) << "\n"
+            << "whiteness (autocorrelation, lags 1-" << report.max_lag
+            << "): max |r| = " << format_number(report.max_residual_autocorrelation) << " against "
+            << format_number(bound)
+            << " (99 %): " << (report.residual_white() ? "white" : "not white") << "\n"
+            << "cross-correlation with the input (lags -" << report.max_lag << ".."
+            << report.max_lag << "): max |r| = " << format_number(report.max_cross_correlation)
+            << " against " << format_number(bound) << " (99 %): "
+            << (report.residual_uncorrelated_with_input() ? "uncorrelated" : "correlated") << "\n";
+}
+
+std::string percent(double fit) {
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(2) << fit << " %";
+  return text.str();
+}
+
+std::string padded(const std::string& text, std::size_t width) {
+  return text.size() >= width ? text + " " : text + std::string(width - text.size(), ' ');
+}
+
+// One row per model: the fit from rest and from the estimated state, beside each other.
+void print_table(const std::vector<std::string>& names,
+                 const std::vector<ValidationReport>& reports) {
+  std::size_t width = 5;
+  for (const auto& name : names) width = std::max(width, name.size() + 2);
+  std::cout << padded("model", width) << padded("fit zero state", 17)
+            << padded("fit estimated state", 22) << "window\n";
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const ValidationReport& r = reports[i];
+    std::cout << padded(names[i], width) << padded(percent(r.fit_zero_state), 17)
+              << padded(percent(r.fit_estimated_state), 22) << format_number(r.window_start)
+              << " to " << format_number(r.window_end) << " s (" << r.window_samples
+              << " samples)\n";
+  }
+}
+
 void run_validate(const ValidateFlags& f, const CLI::App& app) {
   if (!f.output.empty() && !f.force && std::filesystem::exists(f.output)) {
     usage_error(f.output + ": file exists; pass --force to replace it (--output)");
   }
-  const std::optional<DelayedFeedbackLoop> loop = loop_in(f.model);
-  if (loop && !f.plot.empty()) {
-    usage_error("--plot draws continuous-time models; " + f.model +
-                " holds a closed loop with delayed feedback");
+  std::vector<std::string> files{f.model};
+  files.insert(files.end(), f.more_models.begin(), f.more_models.end());
+  const bool several = files.size() > 1;
+  if (several && !f.output.empty()) {
+    usage_error("--output writes the report of one model; " + std::to_string(files.size()) +
+                " models were given");
   }
-  std::optional<io::FittedModel> fitted;
-  if (!loop) fitted = io::read_fitted_model(f.model);
-  const bool modes = fitted && fitted->model.size() > 1;
+  ValidationOptions options;
+  options.max_lag = kMaxLag;
+  options.initial_state =
+      f.initial_state == "estimate" ? InitialState::estimate : InitialState::zero;
+  if (!f.window.empty()) parse_window(f.window, options);
+
+  const std::optional<DelayedFeedbackLoop> loop = loop_in(f.model);
+  if (loop) {
+    if (several) {
+      usage_error(f.model + " holds a closed loop with delayed feedback; it is validated alone");
+    }
+    if (!f.plot.empty()) {
+      usage_error("--plot draws continuous-time models; " + f.model +
+                  " holds a closed loop with delayed feedback");
+    }
+    if (options.initial_state == InitialState::estimate || !f.window.empty()) {
+      usage_error("--initial-state estimate and --window apply to continuous-time models; " +
+                  f.model + " holds a closed loop with delayed feedback");
+    }
+  }
+  std::vector<io::FittedModel> fitted;
+  if (!loop) {
+    for (const auto& file : files) {
+      if (several && loop_in(file)) {
+        usage_error(file + " holds a closed loop with delayed feedback; it is validated alone");
+      }
+      fitted.push_back(io::read_fitted_model(file));
+    }
+  }
+  const bool modes = !several && !fitted.empty() && fitted.front().model.size() > 1;
   std::filesystem::path package;
   if (!f.plot.empty()) {
     package = require_plotting();
-    prepare_plot_directory(f.plot, model_figure_names(modes), f.force);
+    prepare_plot_directory(
+        f.plot, several ? std::vector<std::string>{"validation.png"} : model_figure_names(modes),
+        f.force);
   }
   const SampledData data = f.data.load(app, false);
-  if (fitted) {
-    const double delay_samples = fitted->model.input_delay() / data.sample_time();
-    if (std::abs(delay_samples - std::round(delay_samples)) > 1e-9 * std::max(1.0, delay_samples)) {
-      usage_error(internal::concat("the model's input delay ",
-                                   format_number(fitted->model.input_delay()),
-                                   " s is not a whole number of samples of ", f.data.file,
-                                   " (h = ", format_number(data.sample_time()), " s)"));
+  for (std::size_t i = 0; i < fitted.size(); ++i) check_delay(fitted[i], files[i], f, data);
+
+  std::vector<ValidationReport> reports;
+  try {
+    if (loop) {
+      const Hold hold = f.hold == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
+      reports.push_back(validate_loop(*loop, data, hold, f.substeps, kMaxLag));
+    } else {
+      for (const auto& each : fitted) reports.push_back(validate_model(each.model, data, options));
     }
+  } catch (const InvalidArgument& error) {
+    // A window outside the record is the user's input: name the file and the flag.
+    if (f.window.empty()) throw;
+    usage_error(f.data.file + ": " + error.what() + " (--window " + f.window + ")");
   }
 
-  const Hold hold = f.hold == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
-  const ValidationReport report = loop ? validate_loop(*loop, data, hold, f.substeps, kMaxLag)
-                                       : validate_model(fitted->model, data, kMaxLag);
-  const double bound = report.whiteness_bound;
-  const bool white = report.residual_white();
-  const bool uncorrelated = report.residual_uncorrelated_with_input();
-  const double max_cross = report.max_cross_correlation;
-
   if (!f.output.empty()) {
-    nlohmann::json document = io::to_json(report);
+    nlohmann::json document = io::to_json(reports.front());
     document["model_file"] = f.model;
     document["data"] = {{"file", f.data.file},
                         {"samples", data.size()},
@@ -105,28 +224,35 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
   if (!f.quiet) {
-    std::cout << "ctid validate: " << f.model << " on " << f.data.file << " (N = " << data.size()
+    std::cout << "ctid validate: " << (several ? std::to_string(files.size()) + " models" : f.model)
+              << " on " << f.data.file << " (N = " << data.size()
               << ", h = " << format_number(data.sample_time()) << " s)\n";
     if (f.data.preprocessing_asked(app)) {
       std::cout << "preprocessing: " << f.data.preprocessing.summary() << "\n";
     }
-    std::cout << "fit: " << format_number(report.fit_percent) << " %, mean squared error "
-              << format_number(report.mean_squared_error) << "\n"
-              << "residual: mean " << format_number(report.residual_mean) << ", std "
-              << format_number(report.residual_std) << "\n"
-              << "whiteness (autocorrelation, lags 1-" << kMaxLag
-              << "): max |r| = " << format_number(report.max_residual_autocorrelation)
-              << " against " << format_number(bound)
-              << " (99 %): " << (white ? "white" : "not white") << "\n"
-              << "cross-correlation with the input (lags -" << kMaxLag << ".." << kMaxLag
-              << "): max |r| = " << format_number(max_cross) << " against " << format_number(bound)
-              << " (99 %): " << (uncorrelated ? "uncorrelated" : "correlated") << "\n";
+    if (!loop) {
+      std::cout << "initial state: " << f.initial_state << " (residual statistics below)\n";
+      print_table(files, reports);
+    }
+    for (std::size_t i = 0; i < reports.size(); ++i) {
+      if (several) std::cout << files[i] << ":\n";
+      print_statistics(reports[i]);
+    }
   }
   if (!f.plot.empty()) {
-    const Eigen::VectorXd simulated = model_output(fitted->model, data.input(), data.sample_time());
-    const auto written = draw_model_figures(
-        package, f.plot, fitted->model, fitted->covariance, data, simulated, modes,
-        "ctid validate on " + std::filesystem::path(f.data.file).filename().string());
+    const std::string title =
+        "ctid validate on " + std::filesystem::path(f.data.file).filename().string();
+    std::vector<std::filesystem::path> written;
+    if (several) {
+      std::vector<AdditiveModel> models;
+      for (const auto& each : fitted) models.push_back(each.model);
+      written.push_back(
+          draw_comparison_figure(package, f.plot, data, files, models, options, reports, title));
+    } else {
+      const Eigen::VectorXd simulated = validation_output(fitted.front().model, data, options);
+      written = draw_model_figures(package, f.plot, fitted.front().model, fitted.front().covariance,
+                                   data, simulated, modes, title);
+    }
     if (!f.quiet) {
       for (const auto& file : written) std::cout << "wrote " << file.string() << "\n";
     }
@@ -144,11 +270,26 @@ Command add_validate_command(CLI::App& parent) {
       "MODEL: the result JSON of 'ctid fit' or a transfer_function / additive_model JSON, or\n"
       "a closed loop with delayed feedback: the result JSON of 'ctid feedback' or a\n"
       "delayed_feedback_loop JSON (simulated with the input continued by --hold).\n"
-      "The model is simulated from rest with the measured input (exact ZOH). Tests use lags "
-      "1-20 (autocorrelation) and -20..20 (cross-correlation) against 2.58/sqrt(N).\n"
+      "MODEL2...: more models compared on the same record (one table row each; --plot draws\n"
+      "them all over the measured output in validation.png).\n"
+      "The model is simulated from the record's first sample with the measured input (exact\n"
+      "ZOH), from rest or from the least-squares initial state (--initial-state), and scored\n"
+      "on --window; the fits from rest and from the estimated state are printed side by side.\n"
+      "Tests use lags 1-20 (autocorrelation) and -20..20 (cross-correlation) against\n"
+      "2.58/sqrt(N), N the samples scored.\n"
       "Exit status: 0 ran (whatever the verdict), 2 bad usage or input, 1 other error.");
   app->add_option("model", f.model, "Model or result JSON")->required()->check(CLI::ExistingFile);
   f.data.add_to(*app, "data", false);
+  app->add_option("models", f.more_models, "More model JSON files to compare on the same data")
+      ->check(CLI::ExistingFile);
+  app->add_option("--initial-state", f.initial_state,
+                  "Simulate from rest (zero) or from the least-squares initial state over the "
+                  "window (estimate)")
+      ->check(CLI::IsMember({"zero", "estimate"}))
+      ->capture_default_str();
+  app->add_option("--window", f.window,
+                  "Score only START:END (seconds on the record's time axis, inclusive; either "
+                  "may be empty); the simulation still starts at the record's first sample");
   app->add_option("--output,-o", f.output, "Report JSON to write")->group("Output");
   app->add_option("--plot", f.plot,
                   "Directory for bode.png, validation.png, residuals.png (and modes.png)")

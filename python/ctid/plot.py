@@ -2,8 +2,9 @@
 
     /usr/bin/python3 -m ctid.plot KIND INPUT OUTPUT [--title TEXT]
 
-KIND is one of bode, modes, frf, validation, residuals, mse, stabilisation; INPUT a JSON
-(bode, modes, stabilisation: the scan `ctid structure -o` writes) or
+KIND is one of bode, modes, frf, validation, compare, residuals, mse, stabilisation; INPUT a
+JSON (bode, modes, stabilisation: the scan `ctid structure -o` writes, compare: {"t", "y",
+"window": [start, end], "initial_state", "models": [{"label", "output"}]}) or
 CSV (frf, validation, residuals, mse) file in the formats of docs/python.md; OUTPUT ends in .png or
 .svg. Exit status 0 on success, 2 for bad usage or input (one line on stderr), 1 otherwise.
 """
@@ -17,7 +18,7 @@ import sys
 
 import numpy as np
 
-KINDS = ("bode", "modes", "frf", "validation", "residuals", "mse", "stabilisation")
+KINDS = ("bode", "modes", "frf", "validation", "compare", "residuals", "mse", "stabilisation")
 
 
 class InputError(Exception):
@@ -115,6 +116,36 @@ def _frequency_figure(kind, path, output, title):
     return plotting.modes(model, omegas=omegas, frf=frf, title=title, filename=output)
 
 
+def _compare_figure(path, output, title):
+    import ctid
+    from . import plotting
+
+    with open(path) as stream:
+        document = json.load(stream)
+    for name in ("t", "y", "models"):
+        if name not in document:
+            raise InputError(f"{path}: missing field '{name}'")
+    t = np.asarray(document["t"], dtype=float)
+    y = np.asarray(document["y"], dtype=float)
+    if len(t) < 2 or len(y) != len(t):
+        raise InputError(f"{path}: 't' and 'y' need the same length, at least 2")
+    h = (t[-1] - t[0]) / (len(t) - 1)
+    data = ctid.SampledData(h, np.zeros_like(y), y, start_time=float(t[0]))
+    options = ctid.ValidationOptions()
+    if "window" in document:
+        options.window_start, options.window_end = (float(x) for x in document["window"])
+    if document.get("initial_state") == "estimate":
+        options.initial_state = ctid.InitialState.estimate
+    outputs, labels = [], []
+    for i, line in enumerate(document["models"]):
+        if "output" not in line or len(line["output"]) != len(t):
+            raise InputError(f"{path}: models[{i}] needs an 'output' as long as 't'")
+        outputs.append(np.asarray(line["output"], dtype=float))
+        labels.append(str(line.get("label", f"model {i + 1}")))
+    return plotting.compare(data, outputs, labels=labels, options=options, title=title,
+                            filename=output)
+
+
 def run(kind, path, output, title=None):
     """Draw one figure; returns the Figure. Raises InputError or ValueError on bad input."""
     import ctid
@@ -132,6 +163,8 @@ def run(kind, path, output, title=None):
         if not isinstance(document, dict) or "stabilisation" not in document:
             raise InputError(f"{path}: not a structure scan (no 'stabilisation' field)")
         return plotting.stabilisation(document, title=title, filename=output)
+    if kind == "compare":
+        return _compare_figure(path, output, title)
     rows = _read_csv(path)
     if kind == "frf":
         return plotting.frf(_Frf.from_rows(rows, path), title=title, filename=output)
@@ -162,7 +195,7 @@ def main(argv=None):
         description="Draw a ctid figure (PNG or SVG) from a JSON or CSV file.")
     parser.add_argument("kind", help="one of: " + ", ".join(KINDS))
     parser.add_argument("input",
-                        help="JSON (bode, modes, stabilisation) or CSV (frf, validation, "
+                        help="JSON (bode, modes, compare, stabilisation) or CSV (frf, validation, "
                         "residuals, mse)")
     parser.add_argument("output", help="figure file, .png or .svg")
     parser.add_argument("--title", default=None, help="figure title")

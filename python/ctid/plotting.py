@@ -31,6 +31,7 @@ __all__ = [
     "frf",
     "modes",
     "validation",
+    "compare",
     "residual_correlation",
     "mse_against_n",
     "frequency_response_band",
@@ -322,6 +323,50 @@ def validation(data, simulated, title=None, filename=None):
     ax.legend(fontsize=8)
     heading = f"fit = {fit:.2f} %"
     ax.set_title(f"{title}: {heading}" if title else heading)
+    return _finish(figure, filename)
+
+
+def compare(data, models, labels=None, options=None, title=None, filename=None):
+    """Several models over one measured output, like MATLAB's ``compare``.
+
+    ``data``: ctid.SampledData. ``models``: a list of AdditiveModel / EstimationResult (each
+    simulated by ctid.validation_output with ``options``, a ctid.ValidationOptions: initial
+    state and scored window) or of simulated output arrays. ``labels``: one per model
+    (default "model 1", ...). The legend gives each model's fit % on the window; the window is
+    shaded when it is not the whole record. Returns the Figure.
+    """
+    options = options if options is not None else _ctid.ValidationOptions()
+    labels = list(labels) if labels is not None else [f"model {i + 1}" for i in range(len(models))]
+    if len(labels) != len(models):
+        raise ValueError(f"compare: {len(labels)} labels for {len(models)} models")
+    measured = np.asarray(data.output)
+    t = np.asarray(data.time)
+    start = options.window_start if options.window_start is not None else t[0]
+    end = options.window_end if options.window_end is not None else t[-1]
+    inside = (t >= start - 1e-9) & (t <= end + 1e-9)
+    if inside.sum() < 2:
+        raise ValueError(f"compare: the window [{start}, {end}] s holds fewer than 2 samples")
+    figure, ax = plt.subplots(figsize=(8.0, 4.0))
+    ax.plot(t, measured, color="0.5", lw=1, label="measured")
+    for i, (model, label) in enumerate(zip(models, labels)):
+        if isinstance(model, (np.ndarray, list, tuple)):
+            output = np.asarray(model, dtype=float)
+            fit = _ctid.fit_percent(measured[inside], output[inside])
+        else:
+            base, _, _ = _as_model(model)
+            output = np.asarray(_ctid.validation_output(base, data, options))
+            fit = _ctid.validate_model(base, data, options).fit_percent
+        ax.plot(t, output, color=f"C{i}", lw=1, label=f"{label}: fit {fit:.2f} %")
+    first, last = t[inside][0], t[inside][-1]
+    if first > t[0] or last < t[-1]:
+        ax.axvspan(first, last, color="C0", alpha=0.06, lw=0, label="scored window")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("output")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    state = "estimated initial state" if options.initial_state == _ctid.InitialState.estimate \
+        else "from rest"
+    ax.set_title(f"{title}: {state}" if title else state)
     return _finish(figure, filename)
 
 

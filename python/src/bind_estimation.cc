@@ -17,14 +17,29 @@ void bind_estimation(py::module_& m) {
         "Exact ZOH response of the model (from rest).");
   m.def("fit_percent", &fit_percent, py::arg("measured"), py::arg("modelled"),
         "100 (1 - ||y - y_model|| / ||y - mean y||).");
+  bind_enum<InitialState>(m, "InitialState", "Where validate_model's simulation starts.");
+  bind_options<ValidationOptions>(m, "Options of validate_model: initial state and window.");
   bind_result<ValidationReport>(m, "Residual statistics of a model.")
       .def_property_readonly("residual_white", &ValidationReport::residual_white,
                              "Autocorrelation within the 99 % band.")
       .def_property_readonly("residual_uncorrelated_with_input",
                              &ValidationReport::residual_uncorrelated_with_input,
                              "Cross-correlation within the 99 % band.");
-  m.def("validate_model", &validate_model, py::arg("model"), py::arg("data"),
-        py::arg("max_lag") = 20, "Fit and residual statistics of a model on data.");
+  m.def("validate_model",
+        py::overload_cast<const AdditiveModel&, const SampledData&, int>(&validate_model),
+        py::arg("model"), py::arg("data"), py::arg("max_lag") = 20,
+        "Fit and residual statistics of a model on data, simulated from rest.");
+  m.def("validate_model",
+        py::overload_cast<const AdditiveModel&, const SampledData&, const ValidationOptions&>(
+            &validate_model),
+        py::arg("model"), py::arg("data"), py::arg("options"),
+        "Fit and residual statistics on options' window, from rest or from the least-squares "
+        "initial state; both fits are reported.");
+  m.def("validation_output", &validation_output, py::arg("model"), py::arg("data"),
+        py::arg("options") = ValidationOptions{},
+        "The output validate_model scores, over the whole record.");
+  m.def("free_responses", &free_responses, py::arg("model"), py::arg("samples"),
+        py::arg("sample_time"), "Sampled free responses of the model's realisation (columns).");
   m.def("residual_report", &residual_report, py::arg("data"), py::arg("modelled"),
         py::arg("max_lag") = 20,
         "The statistics of validate_model for any simulated output `modelled` of the record.");

@@ -5,9 +5,13 @@
 #include <cmath>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
+#include "ctid/core/transfer_function.h"
 #include "ctid/filtering/filter_bank.h"
+#include "ctid/simulation/discretization.h"
 
 namespace ctid {
 
@@ -36,6 +40,33 @@ Eigen::VectorXd model_output(const AdditiveModel& model, const Eigen::VectorXd& 
   return y;
 }
 
+Eigen::MatrixXd free_responses(const AdditiveModel& model, int samples, double sample_time) {
+  require(std::isfinite(sample_time) && sample_time > 0.0,
+          "free_responses: sample_time must be positive, got ", sample_time);
+  require(samples >= 0, "free_responses: samples is ", samples, "; it must be >= 0");
+  int states = 0;
+  for (int i = 0; i < model.size(); ++i) {
+    states += model[i].integrators + model[i].a.degree();
+  }
+  Eigen::MatrixXd f = Eigen::MatrixXd::Zero(samples, states);
+  int column = 0;
+  for (int i = 0; i < model.size(); ++i) {
+    const Submodel& s = model[i];
+    const Polynomial den = Polynomial::monomial(s.integrators) * s.a;
+    const int n = den.degree();
+    if (n == 0) continue;
+    const StateSpace continuous = TransferFunction(s.b, den).to_state_space();
+    const StateSpace discrete = discretize_zoh(continuous, sample_time);
+    Eigen::RowVectorXd row = discrete.c;
+    for (int k = 0; k < samples; ++k) {
+      f.block(k, column, 1, n) = row;
+      row = row * discrete.a;
+    }
+    column += n;
+  }
+  return f;
+}
+
 double fit_percent(const Eigen::VectorXd& measured, const Eigen::VectorXd& modelled) {
   require(measured.size() == modelled.size(), "fit_percent: ", measured.size(),
           " measured samples against ", modelled.size(), " modelled");
@@ -46,9 +77,133 @@ double fit_percent(const Eigen::VectorXd& measured, const Eigen::VectorXd& model
   return 100.0 * (1.0 - error / spread);
 }
 
+void ValidationOptions::check_relations(const std::string& path) const {
+  if (window_start && window_end) {
+    require(*window_end > *window_start, path, ".window_end is ", *window_end,
+            "; it must be > window_start (", *window_start, ")");
+  }
+}
+
+namespace {
+
+struct Window {
+  int first = 0;
+  int count = 0;
+};
+
+// The samples k with window_start <= start_time + k h <= window_end (a tolerance of 1e-6 h
+// absorbs times typed with fewer digits than the record's).
+Window scored_window(const SampledData& data, const ValidationOptions& options) {
+  const int n = data.size();
+  const double h = data.sample_time();
+  const double t0 = data.start_time();
+  const double t_last = t0 + (n - 1) * h;
+  const double start = options.window_start.value_or(t0);
+  const double end = options.window_end.value_or(t_last);
+  const double tolerance = 1e-6 * h;
+  const auto describe = [&] {
+    return internal::concat("the window [", format_number(start), ", ", format_number(end), "] s");
+  };
+  const auto record = [&] {
+    return internal::concat("the record (", n, " samples of ", format_number(h),
+                            " s, t = ", format_number(t0), " to ", format_number(t_last), " s)");
+  };
+  require(start >= t0 - tolerance && end <= t_last + tolerance, describe(), " is not inside ",
+          record());
+  Window w;
+  w.first = static_cast<int>(std::ceil((start - t0) / h - 1e-6));
+  const int last = static_cast<int>(std::floor((end - t0) / h + 1e-6));
+  w.first = std::clamp(w.first, 0, n - 1);
+  w.count = std::clamp(last, 0, n - 1) - w.first + 1;
+  require(w.count >= 2, describe(), " holds ", std::max(w.count, 0), " samples of ", record(),
+          "; at least 2 are needed");
+  return w;
+}
+
+// y_rest + F x0 with x0 the least-squares fit of y - y_rest on the free responses F over the
+// window. Returns the free response over the whole record and the rank used.
+Eigen::VectorXd estimated_free_response(const AdditiveModel& model, const SampledData& data,
+                                        const Eigen::VectorXd& rest, const Window& w, int* states,
+                                        int* rank) {
+  const Eigen::MatrixXd f = free_responses(model, data.size(), data.sample_time());
+  *states = static_cast<int>(f.cols());
+  *rank = 0;
+  Eigen::VectorXd free = Eigen::VectorXd::Zero(data.size());
+  if (f.cols() == 0 || !f.allFinite()) return free;
+  const Eigen::MatrixXd fw = f.middleRows(w.first, w.count);
+  const Eigen::VectorXd target = (data.output() - rest).segment(w.first, w.count);
+  // Columns scaled by their norm over the whole record (states in comparable units), not on
+  // the window: a state whose free response has died out before the window keeps a tiny
+  // column there and falls below the rank threshold instead of being fitted to rounding.
+  Eigen::VectorXd scale = f.colwise().norm().transpose();
+  const double largest_scale = scale.maxCoeff();
+  if (!(largest_scale > 0.0)) return free;
+  for (Eigen::Index j = 0; j < scale.size(); ++j) {
+    scale(j) = scale(j) > 1e-300 * largest_scale ? 1.0 / scale(j) : 0.0;
+  }
+  const Eigen::MatrixXd scaled = fw * scale.asDiagonal();
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(scaled, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd& sigma = svd.singularValues();
+  // Columns have unit norm over the record, so a singular value is the fraction of a state
+  // direction's free response that the window sees. Below 1e-6 the direction would be
+  // extrapolated backwards from the window's noise (a fast mode that has died out before it
+  // comes back as a huge transient at the record's start); it is dropped instead.
+  const double threshold = 1e-6 * sigma(0);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(f.cols());
+  for (Eigen::Index j = 0; j < sigma.size(); ++j) {
+    if (!(sigma(j) > threshold)) break;
+    x += svd.matrixV().col(j) * (svd.matrixU().col(j).dot(target) / sigma(j));
+    ++*rank;
+  }
+  const Eigen::VectorXd x0 = scale.asDiagonal() * x;
+  free = f * x0;
+  return free;
+}
+
+}  // namespace
+
 ValidationReport validate_model(const AdditiveModel& model, const SampledData& data, int max_lag) {
   require(max_lag >= 1, "validate_model: max_lag must be at least 1, got ", max_lag);
-  return residual_report(data, model_output(model, data.input(), data.sample_time()), max_lag);
+  ValidationOptions options;
+  options.max_lag = max_lag;
+  return validate_model(model, data, options);
+}
+
+ValidationReport validate_model(const AdditiveModel& model, const SampledData& data,
+                                const ValidationOptions& options) {
+  options.validate();
+  const Window w = scored_window(data, options);
+  const Eigen::VectorXd rest = model_output(model, data.input(), data.sample_time());
+  int states = 0;
+  int rank = 0;
+  const Eigen::VectorXd free = estimated_free_response(model, data, rest, w, &states, &rank);
+  const Eigen::VectorXd estimated = rest + free;
+  const SampledData scored = data.segment(w.first, w.count);
+  const bool estimate = options.initial_state == InitialState::estimate;
+  ValidationReport r = residual_report(
+      scored, (estimate ? estimated : rest).segment(w.first, w.count), options.max_lag);
+  r.initial_state = options.initial_state;
+  r.fit_zero_state = fit_percent(scored.output(), rest.segment(w.first, w.count));
+  r.fit_estimated_state = fit_percent(scored.output(), estimated.segment(w.first, w.count));
+  r.window_start = data.start_time() + w.first * data.sample_time();
+  r.window_end = data.start_time() + (w.first + w.count - 1) * data.sample_time();
+  r.window_samples = w.count;
+  r.states = states;
+  r.initial_state_rank = rank;
+  r.free_response_rms = free.segment(w.first, w.count).norm() / std::sqrt(double(w.count));
+  return r;
+}
+
+Eigen::VectorXd validation_output(const AdditiveModel& model, const SampledData& data,
+                                  const ValidationOptions& options) {
+  options.validate();
+  const Window w = scored_window(data, options);
+  Eigen::VectorXd rest = model_output(model, data.input(), data.sample_time());
+  if (options.initial_state == InitialState::zero) return rest;
+  int states = 0;
+  int rank = 0;
+  rest += estimated_free_response(model, data, rest, w, &states, &rank);
+  return rest;
 }
 
 ValidationReport residual_report(const SampledData& data, const Eigen::VectorXd& modelled,

@@ -3,6 +3,9 @@
 // model's exact ZOH response, fit %, persistency of excitation and the sampling-rate rule.
 #pragma once
 
+#include <array>
+#include <optional>
+#include <span>
 #include <string_view>
 #include <tuple>
 
@@ -20,15 +23,76 @@ namespace ctid {
 Eigen::VectorXd model_output(const AdditiveModel& model, const Eigen::VectorXd& input,
                              double sample_time);
 
+/// Sampled free responses of the model's realisation (TransferFunction::to_state_space of each
+/// submodel b / (s^integrators a), discretised exactly with period h): column j, row k is
+/// C Phi^k e_j, the output k samples after starting from state e_j with zero input. An
+/// additive model stacks its submodels' states (a static submodel has none). The response
+/// from an initial state x0 is model_output(...) + free_responses(...) x0. An input delay adds
+/// no states: the delayed input before the first sample is zero, as in model_output.
+Eigen::MatrixXd free_responses(const AdditiveModel& model, int samples, double sample_time);
+
 /// 100 (1 - ||y - y_model|| / ||y - mean(y)||); 100 is a perfect fit. Sizes must agree.
 double fit_percent(const Eigen::VectorXd& measured, const Eigen::VectorXd& modelled);
+
+/// Where the simulation of `ctid validate` starts: from rest, or from the initial state that
+/// fits the scored window best (least squares, like MATLAB's `compare` with estimated initial
+/// conditions). A record cut out of a steady-state experiment starts mid-motion; from rest
+/// its first samples carry the model's transient, which a lightly damped model keeps long.
+enum class InitialState { zero, estimate };
+
+inline constexpr std::array<Enumerator<InitialState>, 2> initial_state_enumerators{{
+    {InitialState::zero, "zero", "Simulate from rest."},
+    {InitialState::estimate, "estimate",
+     "Start from the least-squares initial state over the scored window."},
+}};
+constexpr std::span<const Enumerator<InitialState>> enumerators(InitialState) {
+  return initial_state_enumerators;
+}
+
+/// How validate_model simulates and scores. The model is always simulated from the record's
+/// first sample; the window only chooses the samples that are scored (and, with
+/// InitialState::estimate, fitted by the initial state). Window bounds are times on the
+/// record's own axis (start_time + k h) in seconds, inclusive; empty: the record's ends.
+struct ValidationOptions {
+  InitialState initial_state = InitialState::zero;
+  std::optional<double> window_start;  ///< [s]; empty: the first sample
+  std::optional<double> window_end;    ///< [s]; empty: the last sample
+  int max_lag = 20;
+
+  static constexpr std::string_view type_name = "ValidationOptions";
+  static constexpr auto fields() {
+    using O = ValidationOptions;
+    return std::tuple{
+        field("initial_state", &O::initial_state,
+              "Simulate from rest (zero) or from the least-squares initial state (estimate)."),
+        field("window_start", &O::window_start, Finite{},
+              "First scored time [s] on the record's axis; None: the first sample."),
+        field("window_end", &O::window_end, Finite{},
+              "Last scored time [s] on the record's axis; None: the last sample."),
+        field("max_lag", &O::max_lag, AtLeast{1}, "Largest correlation lag tested."),
+    };
+  }
+  void validate() const { validate_fields(*this); }
+  void check_relations(const std::string& path) const;
+};
 
 /// Residual statistics of a model on data (for `ctid validate`). Correlations are normalised
 /// (means removed): r_ee(k) = sum e(t+k) e(t) / sum e(t)^2 at lags 1..max_lag, and
 /// r_eu(k) = sum e(t+k) u(t) / sqrt(sum e^2 sum u^2) at lags -max_lag..max_lag; both are judged
-/// against the 99 % band 2.58/sqrt(N) of a white residual independent of the input.
+/// against the 99 % band 2.58/sqrt(N) of a white residual independent of the input. All
+/// statistics are over the scored window (N its samples); fit_percent and the residual use
+/// the simulation `initial_state` names, and both fits are given beside each other.
 struct ValidationReport {
   double fit_percent = 0.0;
+  InitialState initial_state = InitialState::zero;  ///< the simulation the statistics use
+  double fit_zero_state = 0.0;                      ///< fit % on the window, simulated from rest
+  double fit_estimated_state = 0.0;  ///< fit % on the window, from the estimated state
+  double window_start = 0.0;         ///< time of the first scored sample [s]
+  double window_end = 0.0;           ///< time of the last scored sample [s]
+  int window_samples = 0;
+  int states = 0;                  ///< dimension of the initial state (free_responses columns)
+  int initial_state_rank = 0;      ///< free responses numerically independent on the window
+  double free_response_rms = 0.0;  ///< rms on the window of the estimated state's free response
   double mean_squared_error = 0.0;
   double residual_mean = 0.0;
   double residual_std = 0.0;
@@ -45,7 +109,20 @@ struct ValidationReport {
   static constexpr auto fields() {
     using S = ValidationReport;
     return std::tuple{
-        field("fit_percent", &S::fit_percent, "100 (1 - ||y - y_model|| / ||y - mean(y)||)."),
+        field("fit_percent", &S::fit_percent,
+              "100 (1 - ||y - y_model|| / ||y - mean(y)||) on the window, with initial_state."),
+        field("initial_state", &S::initial_state, "The simulation the statistics use."),
+        field("fit_zero_state", &S::fit_zero_state, "Fit % on the window from rest."),
+        field("fit_estimated_state", &S::fit_estimated_state,
+              "Fit % on the window from the least-squares initial state."),
+        field("window_start", &S::window_start, "Time of the first scored sample [s]."),
+        field("window_end", &S::window_end, "Time of the last scored sample [s]."),
+        field("window_samples", &S::window_samples, "Samples scored."),
+        field("states", &S::states, "Dimension of the model's initial state."),
+        field("initial_state_rank", &S::initial_state_rank,
+              "Free responses numerically independent on the window (the rank solved)."),
+        field("free_response_rms", &S::free_response_rms,
+              "Rms on the window of the estimated initial state's free response."),
         field("mean_squared_error", &S::mean_squared_error, "Mean squared residual."),
         field("residual_mean", &S::residual_mean, "Mean of the residual."),
         field("residual_std", &S::residual_std, "Standard deviation of the residual."),
@@ -62,9 +139,24 @@ struct ValidationReport {
     };
   }
 };
-/// max_lag >= 1; 20 by default.
+/// max_lag >= 1; 20 by default. From rest, the whole record (estimated-state fit also given).
 ValidationReport validate_model(const AdditiveModel& model, const SampledData& data,
                                 int max_lag = 20);
+/// The model simulated from the record's first sample with the measured input (exact ZOH),
+/// scored on options' window. The initial state is estimated by linear least squares of
+/// y - y_rest on the free responses over the window: columns scaled to unit norm over the
+/// whole record, solved by SVD with singular values below 1e-6 of the largest dropped: a
+/// state direction whose free response the window barely sees (a mode that has died out
+/// before the window, or nearly cancelled modes) is not fitted to the window's noise and
+/// extrapolated backwards; initial_state_rank counts what was kept. A window outside the record
+/// or holding fewer than 2 samples is an InvalidArgument naming the window and the record.
+ValidationReport validate_model(const AdditiveModel& model, const SampledData& data,
+                                const ValidationOptions& options);
+
+/// The output validate_model scores, over the whole record: from rest, plus with
+/// InitialState::estimate the free response of the state fitted on the window.
+Eigen::VectorXd validation_output(const AdditiveModel& model, const SampledData& data,
+                                  const ValidationOptions& options);
 
 /// The same statistics for any model whose simulated output on `data` is `modelled` (e.g. a
 /// closed loop with delayed feedback). max_lag >= 1; sizes must agree.
