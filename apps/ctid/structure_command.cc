@@ -106,7 +106,7 @@ void print_table(std::ostream& out, const StructureScanResult& r, const std::str
   }
 }
 
-void run_structure(const StructureFlags& f, const CLI::App& app) {
+ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
   const bool modes = !f.modes.empty();
   const bool poles = !f.poles.empty();
   if (modes == poles) usage_error("give one range: --modes MIN:MAX or --poles MIN:MAX");
@@ -163,6 +163,7 @@ void run_structure(const StructureFlags& f, const CLI::App& app) {
                     std::filesystem::path(f.plot) / "stabilisation.png",
                     "ctid structure: " + std::filesystem::path(f.data.file).filename().string()}});
   }
+  return result.recommended < 0 ? kExitNoUsableModel : kExitOk;
 }
 
 Command add_structure_command(CLI::App& parent) {
@@ -177,7 +178,8 @@ Command add_structure_command(CLI::App& parent) {
       "over the whole record from rest and scored there. Recommended: the fewest parameters "
       "among usable fits within --fit-tolerance points of the best validation fit.\n"
       "-o SCAN.json writes every fit, the recommendation and the stabilisation diagram.\n"
-      "Exit status: 0 ran, 2 bad usage or input, 1 other error.");
+      "Exit status: 0 ran, 3 ran but no structure gave a usable model, 2 bad usage or input, 1 "
+      "other error.");
   f.data.add_to(*app, "data", true);
   app->add_option("--modes", f.modes, "Additive: numbers of second-order modes, MIN:MAX")
       ->group("Structures");
@@ -211,7 +213,7 @@ Command add_structure_command(CLI::App& parent) {
 
   Command command;
   command.app = app;
-  command.run = [flags, app] { run_structure(*flags, *app); };
+  command.run = [flags, app] { return run_structure(*flags, *app); };
   return command;
 }
 

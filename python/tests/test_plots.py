@@ -202,15 +202,24 @@ def test_frf_figure_draws_magnitude_phase_and_coherence(experiment):
     np.testing.assert_allclose(magnitude.get_ydata(), 20 * np.log10(np.abs(welch.response)))
     (coherence,) = [l for l in axes[2].get_lines() if l.get_label() == "coherence"]
     np.testing.assert_allclose(coherence.get_ydata(), welch.coherence)
-    periodic = plotting.frf(ctid.periodic_frf(data, period_length=256))
-    assert len(periodic.axes) == 2
+    # A periodic FRF has a coherence over its periods too; an estimate without one has two
+    # panels.
+    periodic = ctid.periodic_frf(data, period_length=256)
+    assert len(plotting.frf(periodic).axes) == 3
+
+    class Bare:
+        frequencies = periodic.frequencies
+        response = periodic.response
+
+    assert len(plotting.frf(Bare()).axes) == 2
 
 
 def test_command_line_bad_input_exits_2(tmp_path):
     result = run_plot("nyquist", tmp_path / "x.json", tmp_path / "x.png")
     assert result.returncode == 2
     assert result.stderr.strip() == ("ctid.plot: unknown kind 'nyquist'; expected one of "
-                                     "bode, modes, frf, validation, compare, residuals, mse")
+                                     "bode, modes, frf, validation, compare, residuals, mse, "
+                                     "stabilisation")
     (tmp_path / "bad.json").write_text('{"type": "state_space"}')
     result = run_plot("bode", tmp_path / "bad.json", tmp_path / "x.png")
     assert result.returncode == 2 and "'type' is 'state_space'" in result.stderr

@@ -97,10 +97,10 @@ StructureScanResult scan_structures(const SampledData& data,
         }
         fit.yic = std::log(error_variance / output_variance) + std::log(relative / fit.parameters);
       }
-      fit.usable = e.termination != Termination::non_finite &&
-                   e.termination != Termination::no_solution && e.parameters.allFinite() &&
+      fit.usable = e.verdict.usable && e.parameters.allFinite() &&
                    std::isfinite(fit.validation_fit) && std::isfinite(fit.estimation_fit) &&
                    stable(e.transfer_function);
+      fit.reasons = e.verdict.reasons;
     } catch (const InvalidArgument& error) {
       fit.message = error.what();
       fit.usable = false;

@@ -61,8 +61,9 @@ struct StructureFit {
   int iterations = 0;
   /// False when the fit failed, did not give a finite, stable model, or its verdict says so.
   bool usable = false;
-  double estimation_fit = 0.0;  ///< fit_percent on the estimation part
-  double validation_fit = 0.0;  ///< fit_percent on the held-out part (simulated from rest)
+  std::vector<std::string> reasons;  ///< the estimate's verdict reasons (empty when usable)
+  double estimation_fit = 0.0;       ///< fit_percent on the estimation part
+  double validation_fit = 0.0;       ///< fit_percent on the held-out part (simulated from rest)
   /// Young's information criterion: ln(s_e^2 / s_y^2) + ln((1/p) sum_i P_ii / beta_i^2), with
   /// P the parameter covariance (NaN without one). More negative is better.
   double yic = 0.0;
@@ -81,6 +82,7 @@ struct StructureFit {
         field("message", &S::message, "The fit's report, or the error that stopped it."),
         field("iterations", &S::iterations, "Iterations of the fit."),
         field("usable", &S::usable, "Finite, stable, and the fit's verdict says usable."),
+        field("reasons", &S::reasons, "The estimate's verdict reasons (empty when usable)."),
         field("estimation_fit", &S::estimation_fit, "fit_percent on the estimation part."),
         field("validation_fit", &S::validation_fit, "fit_percent on the held-out part."),
         field("yic", &S::yic, "Young's information criterion (more negative is better)."),
