@@ -292,7 +292,8 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   }
 
   if (!f.plot.empty()) {
-    const Eigen::VectorXd simulated = model_output(result.model, data.input(), data.sample_time());
+    const Eigen::VectorXd simulated =
+        model_output(result.model, data.input(), data.sample_time(), data.input_hold());
     const auto written = draw_model_figures(
         package, f.plot, result.model, result.covariance, data, simulated, structure.is_additive(),
         "ctid fit: " + estimator + " on " + std::filesystem::path(f.data.file).filename().string());

@@ -14,7 +14,8 @@ void bind_estimation(py::module_& m) {
       .def("summary", &Verdict::summary,
            "'no usable model: <reasons>. Try: <advice>.' (empty when usable).");
   m.def("model_output", &model_output, py::arg("model"), py::arg("input"), py::arg("sample_time"),
-        "Exact ZOH response of the model (from rest).");
+        py::arg("input_hold") = Hold::zero_order_hold,
+        "Exact response of the model (from rest) to the input held as input_hold says.");
   m.def("fit_percent", &fit_percent, py::arg("measured"), py::arg("modelled"),
         "100 (1 - ||y - y_model|| / ||y - mean y||).");
   bind_enum<InitialState>(m, "InitialState", "Where validate_model's simulation starts.");

@@ -16,7 +16,7 @@
 namespace ctid {
 
 Eigen::VectorXd model_output(const AdditiveModel& model, const Eigen::VectorXd& input,
-                             double sample_time) {
+                             double sample_time, Hold input_hold) {
   require(std::isfinite(sample_time) && sample_time > 0.0,
           "model_output: sample_time must be positive, got ", sample_time);
   require(input.allFinite(), "model_output: the input has a non-finite value");
@@ -34,7 +34,7 @@ Eigen::VectorXd model_output(const AdditiveModel& model, const Eigen::VectorXd& 
       y += (s.b[0] / den[0]) * u;
       continue;
     }
-    const Eigen::MatrixXd f = filter_derivatives(den, u, sample_time, Hold::zero_order_hold);
+    const Eigen::MatrixXd f = filter_derivatives(den, u, sample_time, input_hold);
     for (int k = 0; k <= s.m(); ++k) y += s.b[k] * f.col(k);
   }
   return y;
@@ -173,7 +173,8 @@ ValidationReport validate_model(const AdditiveModel& model, const SampledData& d
                                 const ValidationOptions& options) {
   options.validate();
   const Window w = scored_window(data, options);
-  const Eigen::VectorXd rest = model_output(model, data.input(), data.sample_time());
+  const Eigen::VectorXd rest =
+      model_output(model, data.input(), data.sample_time(), data.input_hold());
   int states = 0;
   int rank = 0;
   const Eigen::VectorXd free = estimated_free_response(model, data, rest, w, &states, &rank);
@@ -198,7 +199,7 @@ Eigen::VectorXd validation_output(const AdditiveModel& model, const SampledData&
                                   const ValidationOptions& options) {
   options.validate();
   const Window w = scored_window(data, options);
-  Eigen::VectorXd rest = model_output(model, data.input(), data.sample_time());
+  Eigen::VectorXd rest = model_output(model, data.input(), data.sample_time(), data.input_hold());
   if (options.initial_state == InitialState::zero) return rest;
   int states = 0;
   int rank = 0;

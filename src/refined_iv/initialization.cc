@@ -48,7 +48,7 @@ TransferFunction lssvf(const SampledData& data, const SubmodelOrder& order, doub
   const double h = data.sample_time();
   const Eigen::MatrixXd fy = filter_derivatives(f, data.output(), h, Hold::first_order_hold);
   const Eigen::MatrixXd fu =
-      filter_derivatives(f, delay_samples(data.input(), input_delay), h, Hold::zero_order_hold);
+      filter_derivatives(f, delay_samples(data.input(), input_delay), h, data.input_hold());
   const int l = order.integrators;
   Eigen::MatrixXd x(data.size(), order.n + order.m + 1);
   for (int k = 1; k <= order.n; ++k) x.col(k - 1) = -fy.col(k + l);
@@ -120,7 +120,8 @@ TransferFunction initial_transfer_function(const SampledData& data, const Submod
       model = AdditiveModel({Submodel{a, model[0].b, order.integrators}},
                             options.input_delay * data.sample_time());
       const double cost =
-          (data.output() - model_output(model, data.input(), data.sample_time())).squaredNorm() /
+          (data.output() - model_output(model, data.input(), data.sample_time(), data.input_hold()))
+              .squaredNorm() /
           data.size();
       if (std::isfinite(cost) && cost < best_cost) {
         best_cost = cost;
@@ -254,7 +255,7 @@ AdditiveModel group_into_submodels(const TransferFunction& g,
   int at = 0;
   for (size_t i = 0; i < orders.size(); ++i) {
     const Polynomial d = Polynomial::monomial(orders[i].integrators) * denominators[i];
-    const Eigen::MatrixXd f = filter_derivatives(d, u, h, Hold::zero_order_hold);
+    const Eigen::MatrixXd f = filter_derivatives(d, u, h, data.input_hold());
     x.middleCols(at, orders[i].m + 1) = f.leftCols(orders[i].m + 1);
     at += orders[i].m + 1;
   }

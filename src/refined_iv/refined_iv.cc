@@ -38,6 +38,7 @@ struct Layout {
   int parameters = 0;
   int poles = 0;      // sum n_i + l_i
   int augmented = 0;  // parameters, plus poles when initial conditions are estimated
+  Hold input_hold = Hold::zero_order_hold;  // how the measured input behaves between samples
 
   Layout(std::vector<SubmodelOrder> o, bool initial_conditions) : orders(std::move(o)) {
     for (const SubmodelOrder& s : orders) {
@@ -291,7 +292,10 @@ SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& be
       c.block(rows - 1, 0, 1, s1) = model_c;
       d(rows - 1) = model_d;
     }
-    f.source.emplace(with_rows(chain, c, d), h, Hold::zero_order_hold);
+    // Open loop the source is the measured input; closed loop it is the controller's output
+    // S_uo r, held by the DAC.
+    f.source.emplace(with_rows(chain, c, d), h,
+                     closed_loop ? Hold::zero_order_hold : layout.input_hold);
     f.source_stream = f.source->start();
   }
   if (closed_loop || !need_instrument) {
@@ -301,7 +305,7 @@ SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& be
     d.head(o.m + 1) = bank.d.head(o.m + 1);
     c.row(o.m + 1) = model_c;
     d(o.m + 1) = model_d;
-    f.input.emplace(with_rows(bank, c, d), h, Hold::zero_order_hold);
+    f.input.emplace(with_rows(bank, c, d), h, layout.input_hold);
     f.input_stream = f.input->start();
   }
   if (need_regressor && o.n > 0) {
@@ -600,7 +604,8 @@ Eigen::VectorXd unfactored_parameters(const TransferFunction& g, const SubmodelO
 EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIvOptions& options) {
   options.validate();
   const SampledData& data = *problem.data;
-  const Layout layout(problem.orders, options.initial_conditions == InitialConditions::estimate);
+  Layout layout(problem.orders, options.initial_conditions == InitialConditions::estimate);
+  layout.input_hold = data.input_hold();
   const std::string name = problem.name;
   require(layout.size() >= 1, name, ": the model structure has no submodels");
   {

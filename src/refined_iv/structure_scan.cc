@@ -78,7 +78,7 @@ StructureScanResult scan_structures(const SampledData& data,
       fit.message = e.brief_report();
       fit.iterations = e.iterations;
       fit.transfer_function = e.transfer_function;
-      const Eigen::VectorXd simulated = model_output(e.model, data.input(), h);
+      const Eigen::VectorXd simulated = model_output(e.model, data.input(), h, data.input_hold());
       const Eigen::VectorXd y_est = data.output().head(fitted);
       const Eigen::VectorXd e_est = y_est - simulated.head(fitted);
       fit.estimation_fit = fit_percent(y_est, simulated.head(fitted));

@@ -13,15 +13,17 @@
 
 #include "ctid/core/additive_model.h"
 #include "ctid/core/fields.h"
+#include "ctid/core/hold.h"
 #include "ctid/core/sampled_data.h"
 
 namespace ctid {
 
-/// Exact sampled response (from rest) of the model to the ZOH input u with period h. The
+/// Exact sampled response (from rest) of the model to the input u with period h, held
+/// between samples as `input_hold` says (a record's SampledData::input_hold()). The
 /// model's input delay must be a whole number of samples (within 1e-9). Integrators and a
 /// biproper submodel are allowed.
 Eigen::VectorXd model_output(const AdditiveModel& model, const Eigen::VectorXd& input,
-                             double sample_time);
+                             double sample_time, Hold input_hold = Hold::zero_order_hold);
 
 /// Sampled free responses of the model's realisation (TransferFunction::to_state_space of each
 /// submodel b / (s^integrators a), discretised exactly with period h): column j, row k is
