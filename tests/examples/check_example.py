@@ -77,6 +77,11 @@ def pt326(s, out):
           f"(got {s['fit_validation_percent']:.1f})")
     check(s["fit_validation_percent"] > s["fit_estimation_percent"] - 5,
           "validation fit within 5 points of the estimation fit (no over-fitting)")
+    check(s["scan_recommended_poles"] == 1,
+          f"the structure scan recommends first order, as published (got "
+          f"{s['scan_recommended_poles']})")
+    usable = [y for y, ok in zip(s["scan_yic"], s["scan_usable"]) if ok]
+    check(min(usable) == s["scan_yic"][0], "first order also has the most negative YIC")
     for name in ("delay_scan.png", "validation.png", "residuals.png"):
         check_png(os.path.join(out, name))
 
