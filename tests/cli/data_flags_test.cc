@@ -16,18 +16,10 @@ namespace ctid::cli {
 namespace {
 
 using ::testing::HasSubstr;
-using testing::line_count;
-using ::testing::StartsWith;
 
 const std::string kData = std::string(CTID_SOURCE_DIR) + "/data/";
 
-void expect_bad_input(const testing::RunResult& r, const std::string& command,
-                      const std::string& fragment) {
-  EXPECT_EQ(r.status, 2) << r.err;
-  EXPECT_EQ(line_count(r.err), 1) << r.err;
-  EXPECT_THAT(r.err, StartsWith("ctid " + command + ": error: "));
-  EXPECT_THAT(r.err, HasSubstr(fragment));
-}
+using testing::expect_bad_input;
 
 // y follows a first-order lag of u plus offsets 5 and 3, stamps printed with `digits`
 // significant digits.

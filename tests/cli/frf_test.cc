@@ -25,26 +25,12 @@ namespace ctid::cli {
 namespace {
 
 using ::testing::HasSubstr;
-using testing::line_count;
-using ::testing::StartsWith;
 
-class FrfCommand : public testing::CliTest {
- protected:
-  void SetUp() override {
-    testing::CliTest::SetUp();
-    // Section 6.1 under 4 periods of a 2048-sample multisine, 0.01-3 Hz, h = 0.05 s.
-    const auto r =
-        ctid({"simulate", "-m", example("gonzalez_6_1_open_loop.json"), "--excitation-spec",
-              example("multisine_0.01_3hz.json"), "-o", "d.csv", "-q"});
-    ASSERT_EQ(r.status, 0) << r.err;
-  }
-};
+// Section 6.1 under 4 periods of a 2048-sample multisine, 0.01-3 Hz, h = 0.05 s.
+class FrfCommand : public testing::Section61Test {};
 
 void expect_bad_input(const testing::RunResult& r, const std::string& fragment) {
-  EXPECT_EQ(r.status, 2) << r.err;
-  EXPECT_EQ(line_count(r.err), 1) << r.err;
-  EXPECT_THAT(r.err, StartsWith("ctid frf: error: "));
-  EXPECT_THAT(r.err, HasSubstr(fragment));
+  testing::expect_bad_input(r, "frf", fragment);
 }
 
 // G_d(e^{j w h}) of the ZOH equivalent: what a periodic steady state measures exactly.

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 namespace ctid::cli::testing {
@@ -93,6 +94,29 @@ inline int line_count(const std::string& text) {
   for (char c : text) lines += c == '\n' ? 1 : 0;
   return lines + (!text.empty() && text.back() != '\n' ? 1 : 0);
 }
+
+/// Bad input: exit status 2 and one line on stderr, "ctid <command>: error: ..." holding
+/// `fragment`.
+inline void expect_bad_input(const RunResult& r, const std::string& command,
+                             const std::string& fragment) {
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_THAT(r.err, ::testing::StartsWith("ctid " + command + ": error: "));
+  EXPECT_THAT(r.err, ::testing::HasSubstr(fragment));
+}
+
+/// A CliTest whose folder holds d.csv: the Section 6.1 open-loop system (four modes) under
+/// four periods of the 0.01-3 Hz multisine of examples/models, noise-free, h = 0.05 s.
+class Section61Test : public CliTest {
+ protected:
+  void SetUp() override {
+    CliTest::SetUp();
+    const auto r =
+        ctid({"simulate", "-m", example("gonzalez_6_1_open_loop.json"), "--excitation-spec",
+              example("multisine_0.01_3hz.json"), "-o", "d.csv", "-q"});
+    ASSERT_EQ(r.status, 0) << r.err;
+  }
+};
 
 /// The folder of the built ctid Python package, found as plot_support.cc finds it
 /// ($CTID_PYTHONPATH, else <build>/python next to the binary); empty when there is none, so

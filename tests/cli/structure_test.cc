@@ -11,25 +11,11 @@ namespace ctid::cli {
 namespace {
 
 using ::testing::HasSubstr;
-using testing::line_count;
-using ::testing::StartsWith;
 
-class StructureCommand : public testing::CliTest {
- protected:
-  void SetUp() override {
-    testing::CliTest::SetUp();
-    const auto r =
-        ctid({"simulate", "-m", example("gonzalez_6_1_open_loop.json"), "--excitation-spec",
-              example("multisine_0.01_3hz.json"), "-o", "d.csv", "-q"});
-    ASSERT_EQ(r.status, 0) << r.err;
-  }
-};
+class StructureCommand : public testing::Section61Test {};
 
 void expect_bad_input(const testing::RunResult& r, const std::string& fragment) {
-  EXPECT_EQ(r.status, 2) << r.err;
-  EXPECT_EQ(line_count(r.err), 1) << r.err;
-  EXPECT_THAT(r.err, StartsWith("ctid structure: error: "));
-  EXPECT_THAT(r.err, HasSubstr(fragment));
+  testing::expect_bad_input(r, "structure", fragment);
 }
 
 TEST_F(StructureCommand, RecommendsTheTrueNumberOfModesAndWritesTheScan) {
