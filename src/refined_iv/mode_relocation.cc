@@ -35,9 +35,9 @@ Polynomial mode_denominator(double w, double z) {
 
 // Columns p^k / (p^l A) u, k = 0..m: the numerator regressors of one submodel.
 Eigen::MatrixXd numerator_columns(const Polynomial& a, int integrators, int m,
-                                  const Eigen::VectorXd& u, double h) {
+                                  const Eigen::VectorXd& u, double h, Hold hold) {
   const Polynomial d = Polynomial::monomial(integrators) * a;
-  return filter_derivatives(d, u, h, Hold::zero_order_hold).leftCols(m + 1);
+  return filter_derivatives(d, u, h, hold).leftCols(m + 1);
 }
 
 // The residual's periodogram peaks as ModeRelocationOptions asks for them.
@@ -62,8 +62,8 @@ struct ModeStart {
 };
 
 ModeStart search_mode(const PeriodogramPeak& peak, const Eigen::MatrixXd& q,
-                      const Eigen::VectorXd& r, const Eigen::VectorXd& u, double h, int m,
-                      const ModeRelocationOptions& o) {
+                      const Eigen::VectorXd& r, const Eigen::VectorXd& u, double h, Hold hold,
+                      int m, const ModeRelocationOptions& o) {
   const double line = 2.0 * M_PI / (static_cast<double>(u.size()) * h);
   const double lo = std::max(peak.frequency - o.search_half_width * line, 0.25 * line);
   const double hi = std::min(peak.frequency + o.search_half_width * line, M_PI / h * 0.999);
@@ -72,7 +72,7 @@ ModeStart search_mode(const PeriodogramPeak& peak, const Eigen::MatrixXd& q,
   for (double z : o.damping_ratios) {
     for (int s = 0; s < o.search_points; ++s) {
       const double w = lo + (hi - lo) * s / (o.search_points - 1);
-      Eigen::MatrixXd c = numerator_columns(mode_denominator(w, z), 0, m, u, h);
+      Eigen::MatrixXd c = numerator_columns(mode_denominator(w, z), 0, m, u, h, hold);
       c -= q * (q.transpose() * c);
       for (Eigen::Index j = 0; j < c.cols(); ++j) {
         const double norm = c.col(j).norm();
@@ -102,7 +102,7 @@ struct ProjectedFit {
 
 ProjectedFit projected_fit(const std::vector<Polynomial>& denominators,
                            const std::vector<SubmodelOrder>& orders, const Eigen::VectorXd& u,
-                           const Eigen::VectorXd& y, double h) {
+                           const Eigen::VectorXd& y, double h, Hold hold) {
   ProjectedFit out;
   Eigen::Index total = 0;
   for (const SubmodelOrder& o : orders) {
@@ -112,7 +112,7 @@ ProjectedFit projected_fit(const std::vector<Polynomial>& denominators,
   out.x.resize(y.size(), total);
   for (size_t i = 0; i < orders.size(); ++i) {
     out.x.middleCols(out.first_column[i], orders[i].m + 1) =
-        numerator_columns(denominators[i], orders[i].integrators, orders[i].m, u, h);
+        numerator_columns(denominators[i], orders[i].integrators, orders[i].m, u, h, hold);
   }
   out.fit = internal::scaled_least_squares(out.x, y);
   out.mean_squared_error = out.fit.residual.squaredNorm() / static_cast<double>(y.size());
@@ -129,9 +129,9 @@ double projected_mse(const EstimationResult& r, const std::vector<SubmodelOrder>
                      const SampledData& data) {
   if (!r.parameters.allFinite()) return std::numeric_limits<double>::infinity();
   const Eigen::VectorXd u = delay_samples(data.input(), r.input_delay);
-  const double mse =
-      projected_fit(denominators_of(r.model), orders, u, data.output(), data.sample_time())
-          .mean_squared_error;
+  const double mse = projected_fit(denominators_of(r.model), orders, u, data.output(),
+                                   data.sample_time(), data.input_hold())
+                         .mean_squared_error;
   return std::isfinite(mse) ? mse : std::numeric_limits<double>::infinity();
 }
 
@@ -187,7 +187,7 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
     const Eigen::VectorXd u = delay_samples(data.input(), current.input_delay);
     const AdditiveModel& model = current.model;
     const std::vector<Polynomial> denominators = denominators_of(model);
-    const ProjectedFit base = projected_fit(denominators, orders, u, y, h);
+    const ProjectedFit base = projected_fit(denominators, orders, u, y, h, data.input_hold());
     // Orthonormal basis of the current regressors (columns scaled first for the rank).
     const Eigen::VectorXd norms = internal::column_scales(base.x);
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(base.x *
@@ -211,13 +211,15 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
         return std::abs(w - peak.frequency) < relocation.search_half_width * line;
       });
       if (taken) continue;
-      const ModeStart start = search_mode(peak, q, base.fit.residual, u, h, search_m, relocation);
+      const ModeStart start =
+          search_mode(peak, q, base.fit.residual, u, h, data.input_hold(), search_m, relocation);
       if (start.reduction <= 0.0) continue;
       for (int moved : movable_submodels) {
         const auto mi = static_cast<size_t>(moved);
         std::vector<Polynomial> moved_denominators = denominators;
         moved_denominators[mi] = mode_denominator(start.frequency, start.damping);
-        const ProjectedFit fit = projected_fit(moved_denominators, orders, u, y, h);
+        const ProjectedFit fit =
+            projected_fit(moved_denominators, orders, u, y, h, data.input_hold());
         Candidate c;
         c.submodel = moved;
         c.peak = peak;
