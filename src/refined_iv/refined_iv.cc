@@ -354,6 +354,24 @@ void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
   const bool closed_loop = source != nullptr;
   const bool need_instrument = moments != nullptr || psi != nullptr;
   const bool need_regressor = moments != nullptr;
+  for (int i = 0; i < k_count; ++i) {
+    if (denominator_of(layout, beta, i).degree() < layout.orders[static_cast<size_t>(i)].n) {
+      // A_i lost its leading coefficient: the iterate has fewer poles than the structure and
+      // its filters cannot be formed. The pass reads as non-finite, so the iteration treats
+      // it as a failed step (and a final model as not usable).
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      if (moments != nullptr) {
+        moments->zp = Eigen::MatrixXd::Constant(p, p, nan);
+        moments->zy = Eigen::MatrixXd::Constant(p, k_count, nan);
+        moments->zz = Eigen::VectorXd::Constant(p, nan);
+        moments->pp = Eigen::VectorXd::Constant(p, nan);
+      }
+      if (residual != nullptr) *residual = Eigen::VectorXd::Constant(n, nan);
+      if (psi != nullptr) *psi = Eigen::MatrixXd::Constant(n, p, nan);
+      if (sse != nullptr) *sse = nan;
+      return;
+    }
+  }
   std::vector<SubmodelFilters> filters;
   filters.reserve(static_cast<size_t>(k_count));
   for (int i = 0; i < k_count; ++i) {
