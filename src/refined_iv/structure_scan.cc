@@ -27,15 +27,6 @@ std::vector<std::complex<double>> upper_poles(const TransferFunction& g) {
   return out;
 }
 
-bool stable(const TransferFunction& g) {
-  const Eigen::VectorXcd poles = g.poles();
-  for (Eigen::Index i = 0; i < poles.size(); ++i) {
-    if (std::abs(poles(i)) == 0.0) continue;  // an integrator the structure asked for
-    if (!(poles(i).real() < 0.0)) return false;
-  }
-  return true;
-}
-
 double variance_about_mean(const Eigen::VectorXd& x) {
   return (x.array() - x.mean()).square().mean();
 }
@@ -97,9 +88,9 @@ StructureScanResult scan_structures(const SampledData& data,
         }
         fit.yic = std::log(error_variance / output_variance) + std::log(relative / fit.parameters);
       }
-      fit.usable = e.verdict.usable && e.parameters.allFinite() &&
-                   std::isfinite(fit.validation_fit) && std::isfinite(fit.estimation_fit) &&
-                   stable(e.transfer_function);
+      // The verdict already asks for finite parameters and stable poles (integrators aside).
+      fit.usable = e.verdict.usable && std::isfinite(fit.validation_fit) &&
+                   std::isfinite(fit.estimation_fit);
       fit.reasons = e.verdict.reasons;
     } catch (const InvalidArgument& error) {
       fit.message = error.what();
@@ -135,16 +126,14 @@ StructureScanResult scan_structures(const SampledData& data,
   }
 
   // Stabilisation diagram: each fit against the fit before it in the list.
+  std::vector<std::vector<std::complex<double>>> poles;
+  for (const StructureFit& fit : result.fits) poles.push_back(upper_poles(fit.transfer_function));
   for (std::size_t i = 0; i < result.fits.size(); ++i) {
-    const std::vector<std::complex<double>> poles = upper_poles(result.fits[i].transfer_function);
-    const std::vector<std::complex<double>> previous =
-        i == 0 ? std::vector<std::complex<double>>{}
-               : upper_poles(result.fits[i - 1].transfer_function);
-    const Polynomial& den = result.fits[i].transfer_function.denominator();
-    int origin = 0;
-    while (origin < den.degree() && den[origin] == 0.0) ++origin;
-    const int order = den.degree() - origin;
-    for (const std::complex<double>& s : poles) {
+    const std::vector<std::complex<double>> none;
+    const std::vector<std::complex<double>>& previous = i == 0 ? none : poles[i - 1];
+    int order = 0;  // poles besides integrators
+    for (const SubmodelOrder& o : result.fits[i].structure.orders) order += o.n;
+    for (const std::complex<double>& s : poles[i]) {
       StabilisationPoint point;
       point.fit = static_cast<int>(i);
       point.order = order;
