@@ -266,12 +266,17 @@ std::vector<ResonancePeak> resonance_peaks(const Eigen::VectorXd& frequencies,
   return peaks;
 }
 
-Frf excited_lines(const Frf& frf, double line_threshold) {
-  require(line_threshold >= 0.0 && line_threshold < 1.0, "excited_lines: line_threshold is ",
+namespace {
+
+// Positions of the lines of `frf` whose input_level exceeds `line_threshold` (every line when
+// it has none), after checking that its vectors agree in size; `caller` names the function.
+std::vector<Eigen::Index> excited_positions(const Frf& frf, double line_threshold,
+                                            const char* caller) {
+  require(line_threshold >= 0.0 && line_threshold < 1.0, caller, ": line_threshold is ",
           line_threshold, "; it must be in [0, 1)");
   const Eigen::Index size = frf.frequencies.size();
   const auto check_size = [&](Eigen::Index other, const char* name, bool optional) {
-    require(other == size || (optional && other == 0), "excited_lines: the FRF has ", size,
+    require(other == size || (optional && other == 0), caller, ": the FRF has ", size,
             " frequencies but ", other, " ", name);
   };
   check_size(static_cast<Eigen::Index>(frf.lines.size()), "lines", false);
@@ -279,12 +284,18 @@ Frf excited_lines(const Frf& frf, double line_threshold) {
   check_size(frf.variance.size(), "variances", false);
   check_size(frf.coherence.size(), "coherences", true);
   check_size(frf.input_level.size(), "input levels", true);
-  if (frf.input_level.size() == 0) return frf;
-
   std::vector<Eigen::Index> kept;
   for (Eigen::Index i = 0; i < size; ++i) {
-    if (frf.input_level(i) > line_threshold) kept.push_back(i);
+    if (frf.input_level.size() == 0 || frf.input_level(i) > line_threshold) kept.push_back(i);
   }
+  return kept;
+}
+
+}  // namespace
+
+Frf excited_lines(const Frf& frf, double line_threshold) {
+  const std::vector<Eigen::Index> kept = excited_positions(frf, line_threshold, "excited_lines");
+  if (frf.input_level.size() == 0) return frf;
   const auto count = static_cast<Eigen::Index>(kept.size());
   Frf result;
   result.averages = frf.averages;
@@ -293,7 +304,7 @@ Frf excited_lines(const Frf& frf, double line_threshold) {
   result.response.resize(count);
   result.variance.resize(count);
   result.input_level.resize(count);
-  if (frf.coherence.size() == size) result.coherence.resize(count);
+  if (frf.coherence.size() > 0) result.coherence.resize(count);
   for (Eigen::Index j = 0; j < count; ++j) {
     const Eigen::Index i = kept[static_cast<size_t>(j)];
     result.lines.push_back(frf.lines[static_cast<size_t>(i)]);
@@ -301,18 +312,17 @@ Frf excited_lines(const Frf& frf, double line_threshold) {
     result.response(j) = frf.response(i);
     result.variance(j) = frf.variance(i);
     result.input_level(j) = frf.input_level(i);
-    if (result.coherence.size() == count) result.coherence(j) = frf.coherence(i);
+    if (frf.coherence.size() > 0) result.coherence(j) = frf.coherence(i);
   }
   return result;
 }
 
 std::vector<ResonancePeak> resonance_peaks(const Frf& frf, const PeakOptions& options) {
   options.validate();
-  const Frf excited = excited_lines(frf, options.line_threshold);
-  // Lines where Y/U could not be formed (no input power at all) are not searched either.
+  // The excited lines, less those where Y/U could not be formed (no input power at all).
   std::vector<Eigen::Index> searched;
-  for (Eigen::Index i = 0; i < excited.response.size(); ++i) {
-    if (std::isfinite(excited.response(i).real()) && std::isfinite(excited.response(i).imag())) {
+  for (Eigen::Index i : excited_positions(frf, options.line_threshold, "resonance_peaks")) {
+    if (std::isfinite(frf.response(i).real()) && std::isfinite(frf.response(i).imag())) {
       searched.push_back(i);
     }
   }
@@ -321,24 +331,20 @@ std::vector<ResonancePeak> resonance_peaks(const Frf& frf, const PeakOptions& op
   Eigen::VectorXd frequencies(count);
   Eigen::VectorXcd response(count);
   for (Eigen::Index j = 0; j < count; ++j) {
-    frequencies(j) = excited.frequencies(searched[static_cast<size_t>(j)]);
-    response(j) = excited.response(searched[static_cast<size_t>(j)]);
+    frequencies(j) = frf.frequencies(searched[static_cast<size_t>(j)]);
+    response(j) = frf.response(searched[static_cast<size_t>(j)]);
   }
   PeakOptions all = options;
   all.max_peaks = 0;
   std::vector<ResonancePeak> peaks;
   for (ResonancePeak peak : resonance_peaks(frequencies, response, all)) {
     const Eigen::Index i = searched[static_cast<size_t>(peak.index)];
-    if (excited.coherence.size() > 0) {
-      peak.coherence = excited.coherence(i);
+    if (frf.coherence.size() > 0) {
+      peak.coherence = frf.coherence(i);
       if (peak.coherence < options.min_coherence) continue;
     }
-    peak.input_level = excited.input_level.size() > 0 ? excited.input_level(i)
-                                                      : std::numeric_limits<double>::quiet_NaN();
-    // Back to the position in the caller's FRF: the excited line's place among all lines.
-    const int line = excited.lines[static_cast<size_t>(i)];
-    const auto found = std::find(frf.lines.begin(), frf.lines.end(), line);
-    peak.index = static_cast<int>(found - frf.lines.begin());
+    if (frf.input_level.size() > 0) peak.input_level = frf.input_level(i);
+    peak.index = static_cast<int>(i);  // the position in the caller's FRF
     peaks.push_back(peak);
   }
   keep_most_prominent(peaks, options.max_peaks);
