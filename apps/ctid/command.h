@@ -7,7 +7,9 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -52,6 +54,26 @@ int report_parse_error(const CLI::App& app, const CLI::ParseError& error,
 /// Throws ctid::InvalidArgument with `message` (usage errors found after parsing, such as
 /// two inputs given at once).
 [[noreturn]] void usage_error(const std::string& message);
+
+/// The whole of a flag's `text` as an int or a double; none when it is empty, not a number
+/// or has characters after the number. Each command words its own usage error around it.
+template <class T>
+std::optional<T> parse_number(const std::string& text) {
+  static_assert(std::is_same_v<T, int> || std::is_same_v<T, double>);
+  std::size_t used = 0;
+  T value{};
+  try {
+    if constexpr (std::is_same_v<T, int>) {
+      value = std::stoi(text, &used);
+    } else {
+      value = std::stod(text, &used);
+    }
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (used != text.size()) return std::nullopt;
+  return value;
+}
 
 }  // namespace ctid::cli
 

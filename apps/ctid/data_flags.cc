@@ -34,18 +34,8 @@ template <class T>
 std::optional<T> parse_end(const std::string& flag, const std::string& range,
                            const std::string& text) {
   if (text.empty()) return std::nullopt;
-  std::size_t used = 0;
-  T value{};
-  try {
-    if constexpr (std::is_integral_v<T>) {
-      value = std::stoi(text, &used);
-    } else {
-      value = std::stod(text, &used);
-    }
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || (std::is_integral_v<T> && value < 0)) {
+  const std::optional<T> value = parse_number<T>(text);
+  if (!value || (std::is_integral_v<T> && *value < 0)) {
     usage_error(flag + " '" + range + "': '" + text + "' is not a " +
                 (std::is_integral_v<T> ? "row number (>= 0)" : "time in seconds"));
   }

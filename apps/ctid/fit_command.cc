@@ -61,17 +61,9 @@ struct FitFlags {
 };
 
 int parse_count(const std::string& text, const std::string& what) {
-  std::size_t used = 0;
-  int value = -1;
-  try {
-    value = std::stoi(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || text.empty() || value < 0) {
-    usage_error(what + ": '" + text + "' is not a non-negative integer");
-  }
-  return value;
+  const std::optional<int> value = parse_number<int>(text);
+  if (!value || *value < 0) usage_error(what + ": '" + text + "' is not a non-negative integer");
+  return *value;
 }
 
 SubmodelOrder parse_submodel(const std::string& text) {

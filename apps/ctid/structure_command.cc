@@ -46,17 +46,11 @@ std::pair<int, int> parse_range(const std::string& text, const std::string& flag
   const std::string low = text.substr(0, colon);
   const std::string high = colon == std::string::npos ? low : text.substr(colon + 1);
   const auto parse = [&](const std::string& part) {
-    std::size_t used = 0;
-    int value = 0;
-    try {
-      value = std::stoi(part, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (part.empty() || used != part.size() || value < 1) {
+    const std::optional<int> value = parse_number<int>(part);
+    if (!value || *value < 1) {
       usage_error(flag + " '" + text + "': expected MIN:MAX, positive integers, e.g. 1:6");
     }
-    return value;
+    return *value;
   };
   const int a = parse(low);
   const int b = parse(high);

@@ -77,14 +77,8 @@ void parse_window(const std::string& text, ValidationOptions& options) {
   if (colon == std::string::npos || text.find(':', colon + 1) != std::string::npos) bad();
   const auto number = [&](const std::string& part) -> std::optional<double> {
     if (part.empty()) return std::nullopt;
-    std::size_t used = 0;
-    double value = 0.0;
-    try {
-      value = std::stod(part, &used);
-    } catch (const std::exception&) {
-      bad();
-    }
-    if (used != part.size() || !std::isfinite(value)) bad();
+    const std::optional<double> value = parse_number<double>(part);
+    if (!value || !std::isfinite(*value)) bad();
     return value;
   };
   options.window_start = number(text.substr(0, colon));
