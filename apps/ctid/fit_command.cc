@@ -41,6 +41,7 @@ struct FitFlags {
 
   int delay = 0;
   std::string delay_scan;
+  std::string delay_range;
 
   std::string controller;
   std::string initial;
@@ -126,6 +127,20 @@ DelayRange parse_delay_range(const std::string& text) {
   return range;
 }
 
+// --delay-range MIN:MAX in seconds; the library checks the values (non-negative, ordered,
+// inside the record) and names the field.
+DelayInterval parse_delay_interval(const std::string& text) {
+  const auto colon = text.find(':');
+  const std::optional<double> min =
+      colon == std::string::npos ? std::nullopt : parse_number<double>(text.substr(0, colon));
+  const std::optional<double> max =
+      colon == std::string::npos ? std::nullopt : parse_number<double>(text.substr(colon + 1));
+  if (!min || !max) {
+    usage_error("--delay-range '" + text + "': expected MIN:MAX in seconds, e.g. 0:0.5");
+  }
+  return DelayInterval{*min, *max};
+}
+
 std::string plus_minus(double value, double error) {
   std::string text = format_brief(value);
   if (std::isfinite(error)) text += " ± " + format_brief(error);
@@ -142,8 +157,15 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
   if (!preprocessing.empty()) out << "preprocessing: " << preprocessing << "\n";
   // The estimator's message restates the reason; print it only when it explains a failure.
   out << "termination: " << r.brief_report() << "\n";
-  out << "input delay: " << r.input_delay << " samples (" << format_number(r.model.input_delay())
-      << " s)\n";
+  if (r.delay_standard_error > 0.0) {
+    // Estimated as a continuous parameter: tau with its standard error, and in samples.
+    const double h = data.sample_time();
+    out << "input delay: " << plus_minus(r.model.input_delay(), r.delay_standard_error) << " s ("
+        << format_brief(r.model.input_delay() / h) << " samples)\n";
+  } else {
+    out << "input delay: " << format_brief(r.input_delay + r.input_delay_fraction) << " samples ("
+        << format_number(r.model.input_delay()) << " s)\n";
+  }
   for (int i = 0; i < r.model.size(); ++i) {
     const Submodel& s = r.model[i];
     out << "submodel " << i + 1 << ": (" << s.b.to_string("p") << ") / (";
@@ -196,6 +218,7 @@ IdentificationOptions identification_options(const FitFlags& f) {
   IdentificationOptions options;
   if (!f.controller.empty()) options.controller = io::read_discrete_transfer_function(f.controller);
   if (!f.delay_scan.empty()) options.delay_scan = parse_delay_range(f.delay_scan);
+  if (!f.delay_range.empty()) options.delay_range = parse_delay_interval(f.delay_range);
   options.relocate_modes = f.relocate_modes;
   RefinedIvOptions& refined = options.refined_iv;
   refined.max_iterations = f.max_iterations;
@@ -227,8 +250,10 @@ IdentificationOptions identification_options(const FitFlags& f) {
 
 ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   const ModelStructure structure = model_structure(f, app);
-  if (app.count("--delay") > 0 && !f.delay_scan.empty()) {
-    usage_error("give --delay or --delay-scan, not both");
+  if (static_cast<int>(app.count("--delay") > 0) + static_cast<int>(!f.delay_scan.empty()) +
+          static_cast<int>(!f.delay_range.empty()) >
+      1) {
+    usage_error("give one of --delay, --delay-scan and --delay-range");
   }
   refuse_existing(f.output, f.force, "--output");
   refuse_existing(f.model_output, f.force, "--model-output");
@@ -350,6 +375,10 @@ Command add_fit_command(CLI::App& parent) {
   app->add_option("--delay-scan", f.delay_scan,
                   "Estimate the delay: fit every delay MIN:MAX (samples), keep the smallest "
                   "output error")
+      ->group("Structure");
+  app->add_option("--delay-range", f.delay_range,
+                  "Estimate the delay as a continuous parameter in MIN:MAX (seconds): the "
+                  "whole samples are scanned, then the delay is refined with its standard error")
       ->group("Structure");
 
   app->add_option("--controller,-c", f.controller,

@@ -89,17 +89,6 @@ void parse_window(const std::string& text, ValidationOptions& options) {
   }
 }
 
-void check_delay(const io::FittedModel& fitted, const std::string& file, const ValidateFlags& f,
-                 const SampledData& data) {
-  const double delay_samples = fitted.model.input_delay() / data.sample_time();
-  if (std::abs(delay_samples - std::round(delay_samples)) > 1e-9 * std::max(1.0, delay_samples)) {
-    usage_error(internal::concat(file, ": the model's input delay ",
-                                 format_number(fitted.model.input_delay()),
-                                 " s is not a whole number of samples of ", f.data.file,
-                                 " (h = ", format_number(data.sample_time()), " s)"));
-  }
-}
-
 void print_statistics(const ValidationReport& report) {
   const double bound = report.whiteness_bound;
   std::cout << "fit: " << format_number(report.fit_percent) << " %, mean squared error "
@@ -191,7 +180,6 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
         f.force);
   }
   const SampledData data = f.data.load(app, false);
-  for (std::size_t i = 0; i < fitted.size(); ++i) check_delay(fitted[i], files[i], f, data);
 
   std::vector<ValidationReport> reports;
   try {

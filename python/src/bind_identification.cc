@@ -23,6 +23,9 @@ void bind_identification(py::module_& m) {
                   "count second-order modes b0 / (1 + a1 p + a2 p^2).")
       .def("is_additive", &ModelStructure::is_additive, "kind == ModelKind.additive.");
   bind_options<DelayRange>(m, "Whole-sample input delays min..max (inclusive) to scan.");
+  bind_options<DelayInterval>(
+      m,
+      "Input delays min..max [s] within which the delay is estimated as a continuous parameter.");
   bind_options<IdentificationOptions>(
       m, "Options of identify: controller (closed loop), delay scan, mode relocation, estimator.");
   bind_result<IdentificationResult>(
@@ -39,7 +42,8 @@ void bind_identification(py::module_& m) {
       py::arg("data"), py::arg("structure"), py::arg("options") = py::none(),
       "Estimate `structure` from `data` as `ctid fit` does: SRIVC / CLSRIVC (unfactored) or the "
       "additive iteration (29), closed loop when options.controller is set, over "
-      "options.delay_scan, then mode relocation if options.relocate_modes. Options are one "
+      "options.delay_scan or with the delay estimated in options.delay_range, then mode relocation "
+      "if options.relocate_modes. Options are one "
       "IdentificationOptions or its fields as keywords.");
 
   bind_options<StructureScanOptions>(

@@ -117,6 +117,28 @@ def test_delay_scan_equals_ctid_fit(cli, open_loop):
     assert result.mode_relocation is None
 
 
+def test_delay_range_estimates_a_fractional_delay_as_ctid_fit_does(cli, tmp_path):
+    # One mode delayed by 2.6 samples, noise-free: the delay comes back to 1e-9 with a
+    # standard error, and the CLI's --delay-range gives the very same numbers.
+    u = ctid.white_noise(N, 1.0, 45)
+    mode = ctid.AdditiveModel.from_parameters([ctid.SubmodelOrder(2, 0)], [0.25, 0.25, 3.0])
+    y = ctid.simulate(mode.with_input_delay(2.6 * H), u, H)
+    csv = tmp_path / "fractional.csv"
+    write_csv(csv, {"u": u, "y": y})
+    data = ctid.SampledData(H, u, y)
+    result = ctid.identify(data, ctid.ModelStructure.modes(1),
+                           delay_range=ctid.DelayInterval(min=0.0, max=5 * H))
+    e = result.estimate
+    assert abs(e.model.input_delay - 2.6 * H) < 1e-9 * 2.6 * H
+    assert (e.input_delay, round(e.input_delay_fraction, 6)) == (2, 0.6)
+    assert e.delay_standard_error > 0
+    np.testing.assert_allclose(e.parameters, [0.25, 0.25, 3.0], rtol=1e-9)
+    document = fit(cli, csv, "--modes", "1", "--delay-range", f"0:{5 * H!r}")
+    expect_same_as_cli(result, document)
+    assert bits([document["delay_standard_error"]]) == bits([e.delay_standard_error])
+    assert list(result.delay_scan.delays) == [0, 1, 2, 3, 4, 5]
+
+
 def test_unfactored_with_options_equals_ctid_fit(cli, open_loop):
     data, csv = open_loop
     options = ctid.IdentificationOptions(refined_iv=ctid.RefinedIvOptions(
@@ -182,7 +204,7 @@ def test_options_and_structure_are_checked_with_the_field_path(open_loop):
 
 def test_classes_follow_the_cpp_field_lists():
     assert ctid.IdentificationOptions.fields == (
-        "controller", "delay_scan", "relocate_modes", "relocation", "refined_iv")
+        "controller", "delay_scan", "delay_range", "relocate_modes", "relocation", "refined_iv")
     assert ctid.IdentificationResult.fields == (
         "estimator", "closed_loop", "estimate", "delay_scan", "mode_relocation")
     assert ctid.ModelStructure.fields == ("kind", "orders")

@@ -12,6 +12,7 @@
 #include "ctid/core/transfer_function.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/simulation/discretization.h"
+#include "ctid/simulation/simulate.h"
 
 namespace ctid {
 
@@ -20,21 +21,23 @@ Eigen::VectorXd model_output(const AdditiveModel& model, const Eigen::VectorXd& 
   require(std::isfinite(sample_time) && sample_time > 0.0,
           "model_output: sample_time must be positive, got ", sample_time);
   require(input.allFinite(), "model_output: the input has a non-finite value");
-  const double samples = model.input_delay() / sample_time;
-  const double rounded = std::round(samples);
-  require(std::abs(samples - rounded) <= 1e-9 * std::max(1.0, samples),
-          "model_output: the input delay ", model.input_delay(), " s is not a whole number of ",
-          "samples of ", sample_time, " s (", samples, " samples)");
-  const Eigen::VectorXd u = delay_samples(input, static_cast<int>(rounded));
+  const DelaySplit delay = split_delay(model.input_delay(), sample_time);
+  const Eigen::VectorXd u = delay_samples(input, delay.samples);
   Eigen::VectorXd y = Eigen::VectorXd::Zero(input.size());
   for (int i = 0; i < model.size(); ++i) {
     const Submodel& s = model[i];
     const Polynomial den = Polynomial::monomial(s.integrators) * s.a;
     if (den.degree() == 0) {
-      y += (s.b[0] / den[0]) * u;
+      // A static gain sees the delayed input at the samples.
+      const SampledFilter pass(
+          FilterRealization{Eigen::MatrixXd::Zero(1, 1), Eigen::VectorXd::Zero(1),
+                            Eigen::MatrixXd::Zero(1, 1), Eigen::VectorXd::Ones(1)},
+          sample_time, input_hold, delay.fraction);
+      y += (s.b[0] / den[0]) * pass.apply(u).col(0);
       continue;
     }
-    const Eigen::MatrixXd f = filter_derivatives(den, u, sample_time, input_hold);
+    const Eigen::MatrixXd f =
+        SampledFilter(derivative_filters(den), sample_time, input_hold, delay.fraction).apply(u);
     for (int k = 0; k <= s.m(); ++k) y += s.b[k] * f.col(k);
   }
   return y;

@@ -149,23 +149,21 @@ FilterRealization combine_outputs(const FilterRealization& filter, const Eigen::
 }
 
 SampledFilter::SampledFilter(const FilterRealization& filter, double sample_time,
-                             Hold interpolation) {
+                             Hold interpolation, double delay_fraction) {
   filter.validate();
   require(std::isfinite(sample_time) && sample_time > 0.0,
           "SampledFilter: sample_time must be positive and finite, got ", sample_time);
-  if (interpolation == Hold::zero_order_hold) {
-    const ZohDiscretization zoh = discretize_zoh(filter.a, filter.b, sample_time);
-    phi_ = zoh.phi;
-    gamma0_ = zoh.gamma.col(0);
-    gamma1_ = Eigen::VectorXd::Zero(filter.order());
-    hold_ = true;
-  } else {
-    const FohDiscretization foh = discretize_foh(filter.a, filter.b, sample_time);
-    phi_ = foh.phi;
-    gamma0_ = foh.gamma0.col(0);
-    gamma1_ = foh.gamma1.col(0);
-    hold_ = false;
-  }
+  require(std::isfinite(delay_fraction) && delay_fraction >= 0.0 && delay_fraction < 1.0,
+          "SampledFilter: the delay fraction is ", delay_fraction, "; it must be in [0, 1)");
+  DelayedHoldDiscretization w =
+      discretize_delayed(filter.a, filter.b, sample_time, delay_fraction, interpolation);
+  phi_ = std::move(w.phi);
+  gamma_previous_ = w.previous.col(0);
+  gamma0_ = w.current.col(0);
+  gamma1_ = w.next.col(0);
+  fractional_ = delay_fraction > 0.0;
+  output_previous_ = w.output_previous;
+  output_current_ = w.output_current;
   c_ = filter.c;
   d_ = filter.d;
   // Exact zeros only: skipping them changes no result.
@@ -227,14 +225,25 @@ void SampledFilter::run_fixed(const Eigen::Ref<const Eigen::VectorXd>& x, Stream
   const int* clo = c_lo_.data() + first_output;
   const int* chi = c_hi_.data() + first_output;
   const double* c_first = c + static_cast<ptrdiff_t>(first_output) * s;
+  const double* gp = gamma_previous_.data();
+  const bool fractional = fractional_;
+  const double out_previous = output_previous_;
+  const double out_current = output_current_;
   double previous = stream.previous;
+  double before_previous = stream.before_previous;
   bool started = stream.started;
   double* o = out.data();
   const Eigen::Index stride = out.outerStride();
   for (Eigen::Index k = 0; k < n; ++k) {
     const double xk = x(k);
     if (started) {
-      for (int i = 0; i < s; ++i) next[i] = g0[i] * previous + g1[i] * xk;
+      if (fractional) {
+        for (int i = 0; i < s; ++i) {
+          next[i] = gp[i] * before_previous + g0[i] * previous + g1[i] * xk;
+        }
+      } else {
+        for (int i = 0; i < s; ++i) next[i] = g0[i] * previous + g1[i] * xk;
+      }
       if constexpr (S > 0) {
         using Vector = Eigen::Matrix<double, kLocal, 1>;
         Eigen::Map<Vector> zv(z);
@@ -251,9 +260,11 @@ void SampledFilter::run_fixed(const Eigen::Ref<const Eigen::VectorXd>& x, Stream
       }
     }
     started = true;
+    // The (delayed) signal at t_k; x_k itself without a delay fraction.
+    const double now = fractional ? out_previous * previous + out_current * xk : xk;
     for (int j = 0; j < r; ++j) {
       const double* row = c_first + static_cast<ptrdiff_t>(j) * s;
-      double acc = d[j] * xk;
+      double acc = d[j] * now;
       if constexpr (S > 0 && S <= 8) {
         // Short rows: the unrolled dense dot costs less than tracking the non-zeros.
         for (int i = 0; i < S; ++i) acc += row[i] * z[i];
@@ -262,6 +273,7 @@ void SampledFilter::run_fixed(const Eigen::Ref<const Eigen::VectorXd>& x, Stream
       }
       o[k + j * stride] = acc;
     }
+    before_previous = previous;
     previous = xk;
   }
   if (S > 0) {
@@ -270,6 +282,7 @@ void SampledFilter::run_fixed(const Eigen::Ref<const Eigen::VectorXd>& x, Stream
     stream.state.swap(stream.scratch);  // the pointers were swapped an odd number of times
   }
   stream.previous = previous;
+  stream.before_previous = before_previous;
   stream.started = started;
 }
 

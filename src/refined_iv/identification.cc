@@ -1,12 +1,20 @@
 // The refined IV front door: chooses the estimator, runs the delay scan and the relocation.
 #include "ctid/refined_iv/identification.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
 #include <utility>
 
+#include <boost/math/tools/minima.hpp>
+
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/clsrivc.h"
 #include "ctid/refined_iv/srivc.h"
+#include "ctid/simulation/simulate.h"
 
 namespace ctid {
 
@@ -37,10 +45,18 @@ void DelayRange::check_relations(const std::string& path) const {
   require(max >= min, path, ".max is ", max, "; it must be >= min (", min, ")");
 }
 
+void DelayInterval::check_relations(const std::string& path) const {
+  require(max >= min, path, ".max is ", max, " s; it must be >= min (", min, " s)");
+}
+
 void IdentificationOptions::check_relations(const std::string& path) const {
-  require(!delay_scan || refined_iv.input_delay == 0, path, ".refined_iv.input_delay is ",
-          refined_iv.input_delay, " and ", path,
-          ".delay_scan is set; give a known delay or a scan, not both");
+  const bool known = refined_iv.input_delay != 0 || refined_iv.input_delay_fraction != 0.0;
+  require(!delay_scan || !known, path, ".refined_iv.input_delay is ", refined_iv.input_delay,
+          " and ", path, ".delay_scan is set; give a known delay or a scan, not both");
+  require(!delay_range || !known, path, ".refined_iv.input_delay is ", refined_iv.input_delay,
+          " and ", path, ".delay_range is set; give a known delay or a range, not both");
+  require(!delay_range || !delay_scan, path, ".delay_scan and ", path,
+          ".delay_range are both set; a range already scans its whole samples");
 }
 
 RefinedIvEstimator choose_estimator(const ModelStructure& structure, bool closed_loop) {
@@ -64,6 +80,80 @@ void validate_identification(const ModelStructure& structure,
   }
 }
 
+namespace {
+
+// The delay as a continuous parameter (IdentificationOptions::delay_range): the whole samples
+// in the range are scanned, then the output error of converged fits is minimised over tau
+// within a sample of the best, in two Brent passes (the second on a 1e-4 h scale, since a
+// minimum is located only to about sqrt(eps) of the search variable), and the final fit at
+// tau carries the delay's sensitivity in its covariance.
+template <class Run>
+EstimationResult estimate_delay(const SampledData& data, const DelayInterval& range,
+                                const RefinedIvOptions& base, const Run& run,
+                                std::optional<InputDelayScanResult>& scanned) {
+  const double h = data.sample_time();
+  const double duration = data.size() * h;
+  require(range.max < duration, "IdentificationOptions.delay_range.max is ", range.max,
+          " s; the record lasts only ", duration, " s (", data.size(), " samples of ", h, " s)");
+  auto at = [&](double tau, const std::optional<AdditiveModel>& start, bool final_fit) {
+    const DelaySplit split = split_delay(tau, h);
+    RefinedIvOptions o = base;
+    o.input_delay = split.samples;
+    o.input_delay_fraction = split.fraction;
+    if (start) o.initial_model = start;
+    o.compute_covariance = final_fit && base.compute_covariance;
+    o.delay_estimated = final_fit;
+    o.record_history = final_fit && base.record_history;
+    return run(o);
+  };
+  const int first = static_cast<int>(std::ceil(range.min / h - 1e-9));
+  const int last = static_cast<int>(std::floor(range.max / h + 1e-9));
+  std::optional<EstimationResult> best;
+  if (first <= last) {
+    scanned = scan_input_delay([&](int delay) { return at(delay * h, std::nullopt, false); }, first,
+                               last);
+    best = scanned->best;
+  } else {
+    best = at(0.5 * (range.min + range.max), std::nullopt, false);
+  }
+  const double centre = best->model.input_delay();
+  AdditiveModel warm = best->model;
+  double warm_error =
+      best->verdict.usable ? best->mean_squared_error : std::numeric_limits<double>::infinity();
+  auto profile = [&](double tau) {
+    const EstimationResult r = at(tau, warm, false);
+    if (!r.verdict.usable || !std::isfinite(r.mean_squared_error)) {
+      return std::numeric_limits<double>::infinity();
+    }
+    if (r.mean_squared_error < warm_error) {
+      warm_error = r.mean_squared_error;
+      warm = r.model;
+    }
+    return r.mean_squared_error;
+  };
+  double tau = centre;
+  double scale = h;
+  for (int pass = 0; pass < 2; ++pass) {
+    const double lo = std::max(range.min, tau - scale);
+    const double hi = std::min(range.max, tau + scale);
+    if (!(hi > lo)) break;
+    std::uintmax_t evaluations = 60;
+    const double origin = tau;
+    const std::pair<double, double> found = boost::math::tools::brent_find_minima(
+        [&](double x) { return profile(origin + x * scale); }, (lo - origin) / scale,
+        (hi - origin) / scale, std::numeric_limits<double>::digits / 2, evaluations);
+    if (!std::isfinite(found.second)) break;
+    tau = std::clamp(origin + found.first * scale, range.min, range.max);
+    scale *= 1e-4;
+  }
+  EstimationResult result = at(tau, warm, true);
+  result.message += "; delay estimated in [" + format_significant(range.min, 6) + ", " +
+                    format_significant(range.max, 6) + "] s: " + format_significant(tau, 10) + " s";
+  return result;
+}
+
+}  // namespace
+
 IdentificationResult identify(const SampledData& data, const ModelStructure& structure,
                               const IdentificationOptions& options) {
   validate_identification(structure, options);
@@ -71,9 +161,7 @@ IdentificationResult identify(const SampledData& data, const ModelStructure& str
   const RefinedIvEstimator estimator = choose_estimator(structure, closed_loop);
   const std::vector<SubmodelOrder>& orders = structure.orders;
 
-  auto estimate = [&](int delay) {
-    RefinedIvOptions o = options.refined_iv;
-    o.input_delay = delay;
+  auto run = [&](const RefinedIvOptions& o) {
     switch (estimator) {
       case RefinedIvEstimator::srivc:
         return srivc(data, orders.front(), o);
@@ -86,12 +174,19 @@ IdentificationResult identify(const SampledData& data, const ModelStructure& str
     }
     return additive_clsrivc(data, *options.controller, orders, o);
   };
+  auto estimate = [&](int delay) {
+    RefinedIvOptions o = options.refined_iv;
+    o.input_delay = delay;
+    return run(o);
+  };
 
   std::optional<InputDelayScanResult> scanned;
   std::optional<EstimationResult> fitted;
   if (options.delay_scan) {
     scanned = scan_input_delay(estimate, options.delay_scan->min, options.delay_scan->max);
     fitted = scanned->best;
+  } else if (options.delay_range) {
+    fitted = estimate_delay(data, *options.delay_range, options.refined_iv, run, scanned);
   } else {
     fitted = estimate(options.refined_iv.input_delay);
   }
@@ -99,6 +194,7 @@ IdentificationResult identify(const SampledData& data, const ModelStructure& str
   if (options.relocate_modes) {
     RefinedIvOptions o = options.refined_iv;
     o.input_delay = fitted->input_delay;
+    o.input_delay_fraction = fitted->input_delay_fraction;
     o.initial_model = fitted->model;
     relocated = additive_srivc_relocated(data, orders, o, options.relocation);
     fitted = relocated->estimate;

@@ -39,6 +39,7 @@ struct Layout {
   int poles = 0;      // sum n_i + l_i
   int augmented = 0;  // parameters, plus poles when initial conditions are estimated
   Hold input_hold = Hold::zero_order_hold;  // how the measured input behaves between samples
+  double delay_fraction = 0.0;              // of a sample, on top of the whole-sample delay
 
   Layout(std::vector<SubmodelOrder> o, bool initial_conditions) : orders(std::move(o)) {
     for (const SubmodelOrder& s : orders) {
@@ -91,19 +92,18 @@ FilterRealization submodel_realization(const Polynomial& a, const Eigen::VectorX
 std::optional<Eigen::VectorXd> sensitivity_filtered_reference(
     const Layout& layout, const Eigen::VectorXd& beta, const DiscreteTransferFunction& controller,
     const Eigen::VectorXd& r, double h, int delay) {
-  // Plant: submodels side by side.
-  std::vector<ZohDiscretization> parts;
-  std::vector<Eigen::RowVectorXd> outs;
+  // Plant: submodels side by side, each with the fraction of the delay (one more state).
+  std::vector<StateSpace> parts;
   double dg = 0.0;
   int ng = 0;
   for (int i = 0; i < layout.size(); ++i) {
     const FilterRealization f =
         submodel_realization(denominator_of(layout, beta, i), numerator_of(layout, beta, i),
                              layout.orders[static_cast<size_t>(i)].integrators);
-    parts.push_back(discretize_zoh(f.a, f.b, h));
-    outs.push_back(f.c.row(0));
-    dg += f.d(0);
-    ng += f.order();
+    parts.push_back(
+        discretize_zoh(StateSpace{f.a, f.b, f.c.row(0), f.d(0)}, h, layout.delay_fraction));
+    dg += parts.back().d;
+    ng += parts.back().order();
   }
   const StateSpace c = controller.to_state_space();
   const int nc = c.order();
@@ -113,12 +113,12 @@ std::optional<Eigen::VectorXd> sensitivity_filtered_reference(
   Eigen::MatrixXd phig = Eigen::MatrixXd::Zero(ng, ng);
   Eigen::VectorXd gammag(ng);
   int at = 0;
-  for (size_t i = 0; i < parts.size(); ++i) {
-    const Eigen::Index s = parts[i].phi.rows();
-    phig.block(at, at, s, s) = parts[i].phi;
-    gammag.segment(at, s) = parts[i].gamma.col(0);
-    cg.segment(at, s) = outs[i];
-    at += static_cast<int>(s);
+  for (const StateSpace& part : parts) {
+    const int s = part.order();
+    phig.block(at, at, s, s) = part.a;
+    gammag.segment(at, s) = part.b;
+    cg.segment(at, s) = part.c;
+    at += s;
   }
   Eigen::RowVectorXd cc = Eigen::RowVectorXd::Zero(n);
   cc.tail(nc) = c.c;
@@ -295,7 +295,8 @@ SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& be
     // Open loop the source is the measured input; closed loop it is the controller's output
     // S_uo r, held by the DAC.
     f.source.emplace(with_rows(chain, c, d), h,
-                     closed_loop ? Hold::zero_order_hold : layout.input_hold);
+                     closed_loop ? Hold::zero_order_hold : layout.input_hold,
+                     layout.delay_fraction);
     f.source_stream = f.source->start();
   }
   if (closed_loop || !need_instrument) {
@@ -305,7 +306,7 @@ SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& be
     d.head(o.m + 1) = bank.d.head(o.m + 1);
     c.row(o.m + 1) = model_c;
     d(o.m + 1) = model_d;
-    f.input.emplace(with_rows(bank, c, d), h, layout.input_hold);
+    f.input.emplace(with_rows(bank, c, d), h, layout.input_hold, layout.delay_fraction);
     f.input_stream = f.input->start();
   }
   if (need_regressor && o.n > 0) {
@@ -624,6 +625,7 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   const SampledData& data = *problem.data;
   Layout layout(problem.orders, options.initial_conditions == InitialConditions::estimate);
   layout.input_hold = data.input_hold();
+  layout.delay_fraction = options.input_delay_fraction;
   const std::string name = problem.name;
   require(layout.size() >= 1, name, ": the model structure has no submodels");
   {
@@ -716,7 +718,8 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   }
   require(beta.allFinite(), name, ": the initial model has a non-finite parameter");
 
-  EstimationResult result{AdditiveModel::from_parameters(layout.orders, beta, delay * h),
+  const double tau = (delay + layout.delay_fraction) * h;
+  EstimationResult result{AdditiveModel::from_parameters(layout.orders, beta, tau),
                           TransferFunction(Polynomial{1.0}, Polynomial{1.0})};
   auto reflect_all = [&](Eigen::VectorXd& b) {
     for (int i = 0; i < layout.size(); ++i) {
@@ -735,11 +738,13 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   const Eigen::VectorXd u = delay_samples(data.input(), delay);
   const Eigen::VectorXd& y = data.output();
   std::optional<Eigen::VectorXd> source;  // S_uo r, delayed (closed loop)
+  Eigen::VectorXd undelayed_source;       // S_uo r itself
   auto update_source = [&](const Eigen::VectorXd& b) -> bool {
     std::optional<Eigen::VectorXd> s =
         sensitivity_filtered_reference(layout, b, *problem.controller, data.reference(), h, delay);
     if (!s) return false;
     source = delay_samples(*s, delay);
+    undelayed_source = std::move(*s);
     return true;
   };
 
@@ -890,7 +895,8 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   // The estimate and its statistics.
   result.parameters = beta;
   result.input_delay = delay;
-  result.model = AdditiveModel::from_parameters(layout.orders, beta, delay * h);
+  result.input_delay_fraction = layout.delay_fraction;
+  result.model = AdditiveModel::from_parameters(layout.orders, beta, tau);
   result.transfer_function = result.model.to_transfer_function();
   if (problem.unfactored) {
     try {
@@ -935,9 +941,30 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   if (options.compute_covariance && psi.allFinite() && residual.allFinite()) {
     // With free responses the joint covariance of beta and their coefficients; its beta
     // block is the covariance of beta with the nuisance coefficients estimated alongside.
+    int joint_unknowns = unknowns;
+    if (options.delay_estimated) {
+      // The delay's column: the sensitivity of the noise-free model output to tau, as the
+      // other columns of psi are theirs to the parameters (a central difference within the
+      // sample interval, where the held input makes the output smooth in tau).
+      const Eigen::VectorXd& driven = closed_loop ? undelayed_source : data.input();
+      const Hold hold = closed_loop ? Hold::zero_order_hold : layout.input_hold;
+      const double step = 1e-4;
+      const double f = layout.delay_fraction;
+      const double up = f + step < 1.0 ? step : 0.0;
+      const double down = f - step >= 0.0 ? step : 0.0;
+      auto output_at = [&](double shift) {
+        return model_output(result.model.with_input_delay(tau + shift * h), driven, h, hold);
+      };
+      psi.conservativeResize(Eigen::NoChange, unknowns + 1);
+      psi.col(unknowns) = (output_at(up) - output_at(-down)) / ((up + down) * h);
+      joint_unknowns = unknowns + 1;
+    }
     const Eigen::MatrixXd joint = instrumental_variable_covariance(
-        psi, residual, unknowns, options.noise, options.noise_model_max_order);
+        psi, residual, joint_unknowns, options.noise, options.noise_model_max_order);
     result.covariance = joint.topLeftCorner(p, p);
+    if (options.delay_estimated) {
+      result.delay_standard_error = std::sqrt(std::max(joint(unknowns, unknowns), 0.0));
+    }
     result.standard_errors = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
     result.modes = modal_estimates(result.model, result.covariance, problem.unfactored);
   }

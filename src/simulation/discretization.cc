@@ -63,6 +63,76 @@ FohDiscretization discretize_foh(const Eigen::MatrixXd& a, const Eigen::MatrixXd
   return result;
 }
 
+DelayedHoldDiscretization discretize_delayed(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b,
+                                             double h, double fraction, Hold hold) {
+  check_arguments(a, b, h, "discretize_delayed");
+  require(std::isfinite(fraction) && fraction >= 0.0 && fraction < 1.0,
+          "discretize_delayed: the delay fraction is ", fraction, "; it must be in [0, 1)");
+  const Eigen::Index n = a.rows();
+  const Eigen::Index m = b.cols();
+  const double f = fraction;
+  DelayedHoldDiscretization r;
+  r.next = Eigen::MatrixXd::Zero(n, m);
+  r.previous = Eigen::MatrixXd::Zero(n, m);
+  if (hold == Hold::zero_order_hold) {
+    if (f == 0.0) {
+      ZohDiscretization whole = discretize_zoh(a, b, h);
+      r.phi = std::move(whole.phi);
+      r.current = std::move(whole.gamma);
+      return r;
+    }
+    // u_{k-1} on [t_k, t_k + f h), u_k on the rest.
+    const ZohDiscretization first = discretize_zoh(a, b, f * h);
+    const ZohDiscretization second = discretize_zoh(a, b, (1.0 - f) * h);
+    r.phi = second.phi * first.phi;
+    r.previous = second.phi * first.gamma;
+    r.current = second.gamma;
+    r.output_previous = 1.0;
+    r.output_current = 0.0;
+    return r;
+  }
+  if (f == 0.0) {
+    FohDiscretization whole = discretize_foh(a, b, h);
+    r.phi = std::move(whole.phi);
+    r.current = std::move(whole.gamma0);
+    r.next = std::move(whole.gamma1);
+    return r;
+  }
+  // On [t_k, t_k + f h) the line from f u_{k-1} + (1 - f) u_k to u_k; on the rest the line
+  // from u_k to f u_k + (1 - f) u_{k+1}.
+  const FohDiscretization first = discretize_foh(a, b, f * h);
+  const FohDiscretization second = discretize_foh(a, b, (1.0 - f) * h);
+  r.phi = second.phi * first.phi;
+  r.previous = f * second.phi * first.gamma0;
+  r.current =
+      second.phi * ((1.0 - f) * first.gamma0 + first.gamma1) + second.gamma0 + f * second.gamma1;
+  r.next = (1.0 - f) * second.gamma1;
+  r.output_previous = f;
+  r.output_current = 1.0 - f;
+  return r;
+}
+
+StateSpace discretize_zoh(const StateSpace& model, double h, double fraction) {
+  model.validate();
+  const DelayedHoldDiscretization w =
+      discretize_delayed(model.a, model.b, h, fraction, Hold::zero_order_hold);
+  if (fraction == 0.0) return discretize_zoh(model, h);
+  const int n = model.order();
+  // States [x; u_{k-1}].
+  StateSpace result;
+  result.a = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  result.a.topLeftCorner(n, n) = w.phi;
+  result.a.block(0, n, n, 1) = w.previous;
+  result.b = Eigen::VectorXd::Zero(n + 1);
+  result.b.head(n) = w.current.col(0);
+  result.b(n) = 1.0;
+  result.c = Eigen::RowVectorXd::Zero(n + 1);
+  result.c.head(n) = model.c;
+  result.c(n) = model.d;
+  result.d = 0.0;
+  return result;
+}
+
 StateSpace discretize_zoh(const StateSpace& model, double h) {
   model.validate();
   ZohDiscretization zoh = discretize_zoh(model.a, model.b, h);

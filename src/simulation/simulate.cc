@@ -53,25 +53,35 @@ StateSpace with_input_shift(const StateSpace& plant, int delay) {
   return result;
 }
 
-StateSpace undelayed_zoh(const TransferFunction& g, double h) {
+// ZOH equivalent of e^{-f h s} G(s), the fraction f of the delay that is not whole samples.
+StateSpace undelayed_zoh(const TransferFunction& g, double h, double fraction) {
   require(g.is_proper(), "cannot simulate an improper transfer function (numerator degree ",
           g.numerator().degree(), " > denominator degree ", g.denominator().degree(), ")");
-  return discretize_zoh(g.to_state_space(), h);
+  return discretize_zoh(g.with_input_delay(0.0).to_state_space(), h, fraction);
 }
 
 }  // namespace
 
-int delay_in_samples(double tau, double h) {
-  check_sample_time(h, "delay_in_samples");
+DelaySplit split_delay(double tau, double h) {
+  check_sample_time(h, "split_delay");
   require(std::isfinite(tau) && tau >= 0.0, "input delay tau must be non-negative and finite, got ",
           tau);
   const double ratio = tau / h;
+  require(ratio <= 1e9, "input delay tau = ", tau, " s is too long: tau/h = ", ratio);
   const double rounded = std::round(ratio);
-  require(std::abs(ratio - rounded) <= 1e-9 * std::max(1.0, rounded), "input delay tau = ", tau,
-          " s is not a whole number of samples of h = ", h, " s (tau/h = ", ratio,
-          "); only integer-sample delays can be simulated");
-  require(rounded <= 1e9, "input delay tau = ", tau, " s is too long: tau/h = ", ratio);
-  return static_cast<int>(rounded);
+  if (std::abs(ratio - rounded) <= 1e-9 * std::max(1.0, rounded)) {
+    return {static_cast<int>(rounded), 0.0};
+  }
+  const double whole = std::floor(ratio);
+  return {static_cast<int>(whole), ratio - whole};
+}
+
+int delay_in_samples(double tau, double h) {
+  check_sample_time(h, "delay_in_samples");
+  const DelaySplit split = split_delay(tau, h);
+  require(split.fraction == 0.0, "input delay tau = ", tau,
+          " s is not a whole number of samples of h = ", h, " s (tau/h = ", tau / h, ")");
+  return split.samples;
 }
 
 Eigen::VectorXd simulate_discrete(const StateSpace& discrete, const Eigen::VectorXd& u) {
@@ -85,17 +95,17 @@ Eigen::VectorXd simulate_discrete(const StateSpace& discrete, const Eigen::Vecto
 
 StateSpace zoh_equivalent(const TransferFunction& g, double h) {
   check_sample_time(h, "zoh_equivalent");
-  const int delay = delay_in_samples(g.input_delay(), h);
-  return with_input_shift(undelayed_zoh(g, h), delay);
+  const DelaySplit delay = split_delay(g.input_delay(), h);
+  return with_input_shift(undelayed_zoh(g, h, delay.fraction), delay.samples);
 }
 
 StateSpace zoh_equivalent(const AdditiveModel& g, double h) {
   check_sample_time(h, "zoh_equivalent");
-  const int delay = delay_in_samples(g.input_delay(), h);
+  const DelaySplit delay = split_delay(g.input_delay(), h);
   std::vector<StateSpace> parts;
   int total = 0;
   for (const Submodel& submodel : g.submodels()) {
-    parts.push_back(undelayed_zoh(submodel.to_transfer_function(), h));
+    parts.push_back(undelayed_zoh(submodel.to_transfer_function(), h, delay.fraction));
     total += parts.back().order();
   }
   StateSpace result;
@@ -111,15 +121,15 @@ StateSpace zoh_equivalent(const AdditiveModel& g, double h) {
     result.d += part.d;
     offset += n;
   }
-  return with_input_shift(result, delay);
+  return with_input_shift(result, delay.samples);
 }
 
 Eigen::VectorXd simulate(const TransferFunction& g, const Eigen::VectorXd& u, double h) {
   check_sample_time(h, "simulate");
   check_input(u, "simulate");
-  const int delay = delay_in_samples(g.input_delay(), h);
-  const Eigen::VectorXd input = delayed(u, delay);
-  internal::StateRecursion recursion(undelayed_zoh(g, h));
+  const DelaySplit delay = split_delay(g.input_delay(), h);
+  const Eigen::VectorXd input = delayed(u, delay.samples);
+  internal::StateRecursion recursion(undelayed_zoh(g, h, delay.fraction));
   Eigen::VectorXd y(u.size());
   recursion.run(input.data(), y.data(), input.size(), false);
   return y;
@@ -128,11 +138,12 @@ Eigen::VectorXd simulate(const TransferFunction& g, const Eigen::VectorXd& u, do
 Eigen::MatrixXd simulate_submodels(const AdditiveModel& g, const Eigen::VectorXd& u, double h) {
   check_sample_time(h, "simulate_submodels");
   check_input(u, "simulate_submodels");
-  const int delay = delay_in_samples(g.input_delay(), h);
-  const Eigen::VectorXd input = delayed(u, delay);
+  const DelaySplit delay = split_delay(g.input_delay(), h);
+  const Eigen::VectorXd input = delayed(u, delay.samples);
   Eigen::MatrixXd y(u.size(), g.size());
   for (int i = 0; i < g.size(); ++i) {
-    internal::StateRecursion recursion(undelayed_zoh(g[i].to_transfer_function(), h));
+    internal::StateRecursion recursion(
+        undelayed_zoh(g[i].to_transfer_function(), h, delay.fraction));
     recursion.run(input.data(), y.col(i).data(), input.size(), false);
   }
   return y;
@@ -141,11 +152,12 @@ Eigen::MatrixXd simulate_submodels(const AdditiveModel& g, const Eigen::VectorXd
 Eigen::VectorXd simulate(const AdditiveModel& g, const Eigen::VectorXd& u, double h) {
   check_sample_time(h, "simulate");
   check_input(u, "simulate");
-  const int delay = delay_in_samples(g.input_delay(), h);
-  const Eigen::VectorXd input = delayed(u, delay);
+  const DelaySplit delay = split_delay(g.input_delay(), h);
+  const Eigen::VectorXd input = delayed(u, delay.samples);
   Eigen::VectorXd y = Eigen::VectorXd::Zero(u.size());
   for (const Submodel& submodel : g.submodels()) {
-    internal::StateRecursion recursion(undelayed_zoh(submodel.to_transfer_function(), h));
+    internal::StateRecursion recursion(
+        undelayed_zoh(submodel.to_transfer_function(), h, delay.fraction));
     recursion.run(input.data(), y.data(), input.size(), true);
   }
   return y;

@@ -187,6 +187,45 @@ TEST_F(FitCommand, DelayScanFindsTheDelayAndIntegratorsAreFitted) {
   EXPECT_LT(relative_error(numbers(j.at("parameters")), truth), 1e-6);
 }
 
+TEST_F(FitCommand, DelayRangeEstimatesAFractionalDelayWithItsStandardError) {
+  // The same plant with a delay of 3.37 samples: simulated exactly, estimated as a continuous
+  // parameter in 0..6 samples.
+  write("g.json", R"({"type": "transfer_function", "numerator_ascending": [0.3696],
+    "denominator_ascending": [0, 2.14, 1], "input_delay": 0.0337})");
+  const auto s = ctid({"simulate", "-m", "g.json", "--excitation", "prbs", "--samples", "2000",
+                       "--samples-per-bit", "5", "-T", "0.01", "-o", "d.csv", "-q"});
+  ASSERT_EQ(s.status, 0) << s.err;
+  const auto r = ctid({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--integrators", "1",
+                       "--delay-range", "0:0.06", "-o", "r.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("input delay: 0.0337"));
+  EXPECT_THAT(r.out, HasSubstr("3.37 samples"));
+  const nlohmann::json j = read("r.json");
+  EXPECT_NEAR(j.at("model").at("input_delay").get<double>(), 0.0337, 1e-9 * 0.0337);
+  EXPECT_EQ(j.at("input_delay_samples"), 3);
+  EXPECT_GT(j.at("delay_standard_error").get<double>(), 0.0);
+  EXPECT_EQ(j.at("delay_scan").at("delays").size(), 7u);
+  const Eigen::VectorXd truth = (Eigen::VectorXd(2) << 1.0 / 2.14, 0.3696 / 2.14).finished();
+  EXPECT_LT(relative_error(numbers(j.at("parameters")), truth), 1e-9);
+  // The fitted model validates with its fractional delay.
+  const auto v = ctid({"validate", "r.json", "d.csv", "-q", "-o", "v.json"});
+  ASSERT_EQ(v.status, 0) << v.err;
+  EXPECT_GT(read("v.json").at("fit_percent").get<double>(), 99.9999);
+
+  expect_bad_input(ctid({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--integrators", "1",
+                         "--delay-range", "-0.5:0.25"}),
+                   "delay_range.min is -0.5");
+  expect_bad_input(ctid({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--integrators", "1",
+                         "--delay-range", "0:30", "--detrend", "mean"}),
+                   "the record lasts only 20 s");
+  expect_bad_input(ctid({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--integrators", "1",
+                         "--delay-range", "0.25"}),
+                   "--delay-range '0.25': expected MIN:MAX in seconds");
+  expect_bad_input(ctid({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--integrators", "1",
+                         "--delay", "1", "--delay-range", "0:0.5"}),
+                   "give one of --delay, --delay-scan and --delay-range");
+}
+
 // Too many poles for a noisy two-mode record: the fit runs (7/6 converges at a negative
 // fit), so the outputs are written, but the summary starts with a WARNING saying what to try,
 // the JSON says usable: false with its reasons, and the exit status is 3; the true order on
@@ -322,7 +361,7 @@ TEST_F(FitCommand, BadInputExitsTwoWithOneLine) {
   expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--zeros", "5"}), "");
   expect_bad_input(ctid({"fit", "d.csv", "--submodel", "2,x"}), "--submodel '2,x'");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--delay", "1", "--delay-scan", "0:3"}),
-                   "not both");
+                   "give one of --delay");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--delay-scan", "5:2"}),
                    "delay_scan.max is 2; it must be >= min (5)");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--max-iterations", "0"}),

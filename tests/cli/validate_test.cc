@@ -127,9 +127,6 @@ TEST_F(ValidateCommand, BadInputExitsTwoWithOneLine) {
   expect_bad_input(
       ctid({"validate", example("gonzalez_6_1_open_loop.json"), "d.csv", "--input-column", "x"}),
       "'x'");
-  write("late.json", R"({"type": "transfer_function", "numerator_ascending": [1],
-    "denominator_ascending": [1, 1], "input_delay": 0.013})");
-  expect_bad_input(ctid({"validate", "late.json", "d.csv"}), "not a whole number of samples");
   expect_bad_input(ctid({"validate", example("gonzalez_6_2_pid.json"), "d.csv"}), "type");
   write("out.json", "keep");
   expect_bad_input(

@@ -143,10 +143,42 @@ TEST(Simulate, IntegerInputDelayShiftsTheResponse) {
   EXPECT_LT(max_abs(ya2.tail(298) - ya.head(298)), 1e-15);
 }
 
-TEST(Simulate, RejectsFractionalDelayNamingIt) {
-  const TransferFunction g(Polynomial{1.0}, Polynomial{1.0, 1.0}, 0.12);
+TEST(Simulate, FractionalDelayStepResponseMatchesClosedForm) {
+  // 1/(1 + T p) of a unit step delayed by tau = 2.3 h: y(t) = 1 - e^{-(t - tau)/T}, t > tau.
+  const double h = 0.1;
+  const double tau = 0.23;
+  const double time_constant = 0.4;
+  const TransferFunction g(Polynomial{1.0}, Polynomial{1.0, time_constant}, tau);
+  const Eigen::VectorXd y = simulate(g, Eigen::VectorXd::Ones(40), h);
+  for (int k = 0; k < 40; ++k) {
+    const double t = k * h;
+    const double expected = t > tau ? 1.0 - std::exp(-(t - tau) / time_constant) : 0.0;
+    EXPECT_NEAR(y(k), expected, 1e-14) << "k = " << k;
+  }
+  const DelaySplit split = split_delay(tau, h);
+  EXPECT_EQ(split.samples, 2);
+  EXPECT_NEAR(split.fraction, 0.3, 1e-12);
+  EXPECT_EQ(split_delay(0.15, 0.05).fraction, 0.0);
+}
+
+TEST(Simulate, FractionalDelayOfABiproperModeEqualsItsEquivalent) {
+  // A biproper mode with a delay of 3.37 samples: simulate, zoh_equivalent and the
+  // submodel split agree, and the ZOH equivalent has 3 + 1 extra states.
+  const double h = 0.05;
+  const TransferFunction g(Polynomial{0.3, 0.1, 0.02}, Polynomial{1.0, 0.05, 0.04}, 3.37 * h);
+  const Eigen::VectorXd u = gaussian(300, 5);
+  const Eigen::VectorXd y = simulate(g, u, h);
+  const StateSpace discrete = zoh_equivalent(g, h);
+  EXPECT_EQ(discrete.order(), 2 + 3 + 1);
+  EXPECT_LT(max_abs(simulate_discrete(discrete, u) - y), 1e-12);
+  const AdditiveModel additive = AdditiveModel::from_transfer_function(g);
+  EXPECT_LT(max_abs(simulate(additive, u, h) - y), 1e-11);
+  EXPECT_LT(max_abs(simulate_submodels(additive, u, h).rowwise().sum() - y), 1e-11);
+}
+
+TEST(Simulate, DelayInSamplesNamesAFractionalDelay) {
   try {
-    simulate(g, Eigen::VectorXd::Ones(10), 0.05);
+    delay_in_samples(0.12, 0.05);
     FAIL() << "no exception";
   } catch (const InvalidArgument& error) {
     EXPECT_THAT(error.what(), HasSubstr("input delay tau = 0.12"));

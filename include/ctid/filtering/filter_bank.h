@@ -52,10 +52,14 @@ class SampledFilter {
     Eigen::VectorXd state;
     Eigen::VectorXd scratch;
     double previous = 0.0;
+    double before_previous = 0.0;  // the sample before it (fractional delays)
     bool started = false;
   };
 
-  SampledFilter(const FilterRealization& filter, double sample_time, Hold interpolation);
+  /// `delay_fraction` f in [0, 1): the filter sees the interpolated signal delayed by f
+  /// sample times, x(t - f h), zero before the first sample (discretize_delayed).
+  SampledFilter(const FilterRealization& filter, double sample_time, Hold interpolation,
+                double delay_fraction = 0.0);
 
   int order() const { return static_cast<int>(phi_.rows()); }
   int outputs() const { return static_cast<int>(c_.rows()); }
@@ -80,9 +84,12 @@ class SampledFilter {
   Eigen::MatrixXd phi_;     // column-major: the recursion adds phi(:, j) z_j
   Eigen::VectorXi phi_lo_;  // rows [lo, hi) of column j hold its non-zeros
   Eigen::VectorXi phi_hi_;
-  Eigen::VectorXd gamma0_;  // weight of x_k
-  Eigen::VectorXd gamma1_;  // weight of x_{k+1} (zero for the zero-order hold)
-  bool hold_ = true;        // zero-order hold: gamma1_ is zero
+  Eigen::VectorXd gamma_previous_;  // weight of x_{k-1} (non-zero only for a delay fraction)
+  Eigen::VectorXd gamma0_;          // weight of x_k
+  Eigen::VectorXd gamma1_;          // weight of x_{k+1} (zero for the zero-order hold)
+  bool fractional_ = false;         // gamma_previous_ is used
+  double output_previous_ = 0.0;    // the delayed signal at t_k: these weights of x_{k-1}, x_k
+  double output_current_ = 1.0;
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> c_;
   Eigen::VectorXi c_lo_;  // columns [lo, hi) of row j hold its non-zeros
   Eigen::VectorXi c_hi_;

@@ -86,6 +86,23 @@ struct DelayRange {
   void validate() const { validate_fields(*this); }
 };
 
+/// An interval of input delays [s] within which the delay is estimated as a continuous
+/// parameter together with the model.
+struct DelayInterval {
+  double min = 0.0;
+  double max = 0.0;
+
+  static constexpr std::string_view type_name = "DelayInterval";
+  static constexpr auto fields() {
+    return std::tuple{
+        field("min", &DelayInterval::min, Finite{AtLeast{0.0}}, "Smallest delay [s]."),
+        field("max", &DelayInterval::max, Finite{AtLeast{0.0}}, "Largest delay [s], >= min."),
+    };
+  }
+  void check_relations(const std::string& path) const;
+  void validate() const { validate_fields(*this); }
+};
+
 /// Which refined IV estimator identify() ran.
 enum class RefinedIvEstimator {
   srivc,             ///< unfactored, open loop
@@ -117,6 +134,12 @@ struct IdentificationOptions {
   /// Scan these whole-sample input delays and keep the best output-error fit (converged fits
   /// first); none: the known delay refined_iv.input_delay (which must then be 0 if set).
   std::optional<DelayRange> delay_scan;
+  /// Estimate the input delay as a continuous parameter in this interval [s]: the whole
+  /// samples in it are scanned as with delay_scan, then the output error is minimised over
+  /// the delay within a sample of the best (Brent's method, each point a converged fit), and
+  /// the final fit reports the delay's standard error (EstimationResult::delay_standard_error,
+  /// its sensitivity in the covariance). None: a known delay or delay_scan.
+  std::optional<DelayInterval> delay_range;
   /// After the fit (at the delay the scan chose), move second-order submodels to peaks of
   /// the residual spectrum and keep moves that fit better (mode_relocation.h). Additive
   /// structure, open loop only.
@@ -134,6 +157,8 @@ struct IdentificationOptions {
               "Known discrete controller of closed-loop data, or none (open loop)."),
         field("delay_scan", &O::delay_scan,
               "DelayRange of input delays to scan, or none (the known refined_iv.input_delay)."),
+        field("delay_range", &O::delay_range,
+              "DelayInterval [s] in which the delay is estimated as a continuous parameter."),
         field("relocate_modes", &O::relocate_modes,
               "Move second-order submodels to residual peaks after the fit (additive, open loop)."),
         field("relocation", &O::relocation, "ModeRelocationOptions of relocate_modes."),
@@ -177,7 +202,8 @@ struct IdentificationResult {
 void validate_identification(const ModelStructure& structure, const IdentificationOptions& options);
 
 /// Estimates `structure` from `data` with the estimator choose_estimator() names: over the
-/// delay scan if one is asked for (scan_input_delay), then with mode relocation if asked for
+/// delay scan if one is asked for (scan_input_delay), or with the delay estimated in
+/// delay_range (which must end before the record does), then with mode relocation if asked for
 /// (additive_srivc_relocated, started from that estimate at its delay, so the plain iteration
 /// stops at once and the scan is not repeated). Throws InvalidArgument for bad input (as the
 /// estimators do); how the iteration ended is result.estimate.termination.

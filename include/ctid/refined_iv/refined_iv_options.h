@@ -77,8 +77,16 @@ struct RefinedIvOptions {
   StartMethod start = StartMethod::automatic;
   /// Interpolation of the measured output between samples before filtering.
   Hold output_interpolation = Hold::first_order_hold;
-  /// Known input delay in whole samples (>= 0); the model's input_delay is set to delay * h.
+  /// Known input delay in whole samples (>= 0); the model's input_delay is set to
+  /// (input_delay + input_delay_fraction) * h.
   int input_delay = 0;
+  /// Known fraction of a sample added to input_delay, in [0, 1): the filters see the input
+  /// delayed exactly (held as the record's input_hold says, SampledFilter).
+  double input_delay_fraction = 0.0;
+  /// The delay was estimated from these data (IdentificationOptions::delay_range): the output
+  /// sensitivity to it joins the covariance, whose parameter block then accounts for it, and
+  /// EstimationResult::delay_standard_error reports its standard error.
+  bool delay_estimated = false;
   /// Keep one IterationRecord per iteration in the result.
   bool record_history = false;
   /// Step control: a step of (29) whose equations are singular or non-finite, whose model
@@ -114,6 +122,10 @@ struct RefinedIvOptions {
         field("output_interpolation", &O::output_interpolation,
               "How the measured output is continued between samples before filtering."),
         field("input_delay", &O::input_delay, AtLeast{0}, "Known input delay [samples]."),
+        field("input_delay_fraction", &O::input_delay_fraction, Between{0.0, 1.0, true, false},
+              "Known fraction of a sample added to input_delay, in [0, 1)."),
+        field("delay_estimated", &O::delay_estimated,
+              "The delay was estimated: its sensitivity joins the covariance."),
         field("record_history", &O::record_history, "Keep one IterationRecord per iteration."),
         field("step_control", &O::step_control,
               "Halve steps that fail or increase the scaled IV residual."),

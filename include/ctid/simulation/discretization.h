@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include "ctid/core/hold.h"
 #include "ctid/core/state_space.h"
 
 namespace ctid {
@@ -22,11 +23,32 @@ struct FohDiscretization {
   Eigen::MatrixXd gamma1;  ///< weight of u_{k+1}
 };
 
+/// A held input delayed by a fraction f of a sample, u(t - f h) with 0 <= f < 1: over
+/// [t_k, t_k+1] it is u_{k-1} then u_k (ZOH), or the lines through u_{k-1}, u_k, u_{k+1}
+/// (FOH), so  x_{k+1} = Phi x_k + previous u_{k-1} + current u_k + next u_{k+1},  and the
+/// delayed input at t_k is  output_previous u_{k-1} + output_current u_k.  Exact: the
+/// period is split at t_k + f h and each part discretised as above. f = 0 gives the plain
+/// ZOH / FOH weights (previous = 0).
+struct DelayedHoldDiscretization {
+  Eigen::MatrixXd phi;       ///< e^{A h}
+  Eigen::MatrixXd previous;  ///< weight of u_{k-1}
+  Eigen::MatrixXd current;   ///< weight of u_k
+  Eigen::MatrixXd next;      ///< weight of u_{k+1} (zero for the ZOH)
+  double output_previous = 0.0;
+  double output_current = 1.0;
+};
+
 /// A is n x n, B is n x m (any m >= 1); h > 0. Throws InvalidArgument otherwise.
 ZohDiscretization discretize_zoh(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double h);
 FohDiscretization discretize_foh(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double h);
+/// As above, for the input delayed by fraction * h; throws unless 0 <= fraction < 1.
+DelayedHoldDiscretization discretize_delayed(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b,
+                                             double h, double fraction, Hold hold);
 
 /// ZOH equivalent of a SISO realisation: discrete (Phi, Gamma, C, D).
 StateSpace discretize_zoh(const StateSpace& model, double h);
+/// ZOH equivalent of e^{-f h s} G(s), 0 <= f < 1: for f > 0 one more state holds u_{k-1}
+/// (x_{k+1} = Phi x_k + previous u_{k-1} + current u_k, y_k = C x_k + D u_{k-1}).
+StateSpace discretize_zoh(const StateSpace& model, double h, double fraction);
 
 }  // namespace ctid
