@@ -24,6 +24,15 @@ def check(condition, what):
         failures.append(what)
 
 
+def _load(relative_path):
+    import numpy as np
+
+    path = os.path.join(ROOT, "data", relative_path)
+    with open(path) as f:
+        names = f.readline().strip().split(",")
+    return names, np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+
+
 def check_png(path, min_width=300, min_height=200):
     ok = os.path.isfile(path)
     if ok:
@@ -34,6 +43,43 @@ def check_png(path, min_width=300, min_height=200):
             width, height = struct.unpack(">II", head[16:24])
             ok = width >= min_width and height >= min_height and os.path.getsize(path) > 5000
     check(ok, f"{os.path.basename(path)} is a PNG of sensible size")
+
+
+def check_docs(name, out):
+    """Every number docs/examples/NAME.md quotes for the example is in a generated block:
+    the blocks the run just wrote (OUT/tables.json) must equal the document's, and the
+    example's row of the index in docs/examples/README.md must equal the regenerated row."""
+    import difflib
+
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    import _common
+
+    with open(os.path.join(out, "tables.json")) as f:
+        generated = json.load(f)
+    path = os.path.join(_common.DOCS, name + ".md")
+    with open(path) as f:
+        in_doc = _common.generated_blocks(f.read(), name)
+    update = f"update with: python3 examples/{name}.py --write-docs (then review the diff)"
+    for table, text in generated["tables"].items():
+        same = in_doc.get(table) == text
+        check(same, f"docs/examples/{name}.md block '{table}' matches the regenerated one")
+        if not same:
+            if table not in in_doc:
+                print(f"      missing: add '{_common.begin_mark(name, table)}' and "
+                      f"'{_common.END_MARK}' to {path}")
+            sys.stdout.writelines(difflib.unified_diff(
+                (in_doc.get(table, "") + "\n").splitlines(True), (text + "\n").splitlines(True),
+                f"docs/examples/{name}.md: {table}", f"regenerated: {table}"))
+            print(f"      {update}")
+    stale = sorted(set(in_doc) - set(generated["tables"]))
+    check(not stale, f"docs/examples/{name}.md has no block the example no longer writes "
+          f"({stale})")
+    with open(os.path.join(_common.DOCS, "README.md")) as f:
+        row = _common.index_rows(f.read()).get(name)
+    check(row == generated["index_row"],
+          f"docs/examples/README.md index row of {name} matches the regenerated one")
+    if row != generated["index_row"]:
+        print(f"      in README: {row}\n      generated: {generated['index_row']}\n      {update}")
 
 
 def flexible_structure(s, out):
@@ -117,8 +163,51 @@ def emps(s, out):
         check_png(os.path.join(out, name))
 
 
+def arx_static_gain(u, y, delay, na=2, nb=2):
+    """Static gain of a least-squares ARX(na, nb) model with `delay` samples of dead time
+    (NumPy only): an estimate of the DC gain independent of ctid."""
+    import numpy as np
+
+    start = max(na, nb + delay)
+    rows = [np.concatenate([-y[k - na:k][::-1], u[k - delay - nb:k - delay][::-1]])
+            for k in range(start, len(y))]
+    theta = np.linalg.lstsq(np.array(rows), y[start:], rcond=None)[0]
+    return float(theta[na:].sum() / (1.0 + theta[:na].sum()))
+
+
+def dryer(s, out):
+    # Physics: a heater raises the temperature (positive static gain) through a stable,
+    # overdamped thermal path with a transport delay (PROVENANCE: same process as pt326).
+    # A linear model simulated from rest cannot explain an output mean of 4.89 V, so removing
+    # the means must help by far more than any structure choice does.
+    import numpy as np
+
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    names, table = _load("daisy_dryer_ljung/dryer.csv")
+    raw, done = s["raw"], s["detrended"]
+    check(done["termination"] == "converged", f"converged ({done['termination']})")
+    check(done["fit_validation_percent"] > raw["fit_validation_percent"] + 20,
+          f"detrended validation fit {done['fit_validation_percent']:.1f} % beats raw "
+          f"{raw['fit_validation_percent']:.1f} % by > 20 points")
+    check(done["fit_validation_percent"] > 80, "detrended validation fit > 80 %")
+    check(all(p < 0 for p in done["poles"]) and max(done["poles_imag"]) == 0,
+          f"stable real poles (overdamped thermal lag): {done['poles']}")
+    check(1 <= done["delay_samples"] <= 5,
+          f"a transport delay of 1-5 samples (got {done['delay_samples']})")
+    n = s["estimation_samples"]
+    u = table[:n, 1] - table[:n, 1].mean()
+    y = table[:n, 2] - table[:n, 2].mean()
+    reference = arx_static_gain(u, y, done["delay_samples"])
+    check(done["static_gain"] > 0 and abs(done["static_gain"] / reference - 1) < 0.1,
+          f"static gain {done['static_gain']:.3f} positive and within 10 % of a NumPy ARX(2, 2) "
+          f"least-squares estimate ({reference:.3f})")
+    check(s["scan_usable"][s["scan_poles"].index(s["scan_recommended_poles"])],
+          "the recommended structure is usable")
+    check_png(os.path.join(out, "validation.png"))
+
+
 CHECKS = {"flexible_structure": flexible_structure, "pt326": pt326,
-          "canning_river": canning_river, "emps": emps}
+          "canning_river": canning_river, "emps": emps, "dryer": dryer}
 
 
 def main():
@@ -132,6 +221,7 @@ def main():
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
     CHECKS[name](summary, out)
+    check_docs(name, out)
     print(f"{len(failures)} check(s) failed" if failures else "all checks passed")
     return 1 if failures else 0
 
