@@ -100,6 +100,7 @@ def main():
                 label=f"{label} model from rest: fit {rows[label]['fit_validation_percent']:.1f} %")
         ax.set_ylabel("outlet temperature [V]")
         ax.grid(True, alpha=0.3)
+        ax.margins(y=0.3)
         ax.legend(fontsize=8, loc="lower right")
     ax_raw.set_title("dryer validation record (samples 501-1000): raw, then means removed")
     ax_done.set_xlabel("time [s]")
