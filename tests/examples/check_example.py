@@ -148,6 +148,8 @@ def canning_river(s, out):
     # The additive and the unfactored parameterisations describe one system.
     for pa, pu in zip(s["poles_additive"], s["poles_srivc"]):
         check(abs(pa - pu) < 1e-6 * abs(pu), f"additive pole {pa:.6f} equals SRIVC pole {pu:.6f}")
+    check(s["scan_recommended"] == [2, 2], "the structure scan recommends the published 2 poles, "
+          f"2 zeros (nn = [3 2 0]; got {s['scan_recommended']})")
     for name in ("flow.png", "stores.png"):
         check_png(os.path.join(out, name))
 
