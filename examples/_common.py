@@ -83,16 +83,16 @@ def percent(x):
 
 
 def significant(x, digits=4):
-    """x to `digits` significant digits, without exponent for ordinary magnitudes."""
+    """x to `digits` significant digits (trailing zeros kept: 0.020), without exponent for
+    ordinary magnitudes."""
     if x == 0 or not (x == x):
         return f"{x}"
-    text = f"{x:.{digits}g}"
+    text = f"{x:#.{digits}g}"
     if "e" in text:
         exponent = int(text.split("e")[1])
         if -5 <= exponent < digits + 3:
-            decimals = max(digits - 1 - exponent, 0)
-            text = f"{x:.{decimals}f}"
-    return text
+            text = f"{x:.{max(digits - 1 - exponent, 0)}f}"
+    return text.rstrip(".")
 
 
 def markdown_table(header, rows):

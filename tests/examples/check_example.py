@@ -111,7 +111,16 @@ def flexible_structure(s, out):
         check(0 < zeta < 0.05, f"mode {fn:.2f} Hz lightly damped (zeta = {zeta:.5f})")
         check(0 < m["natural_frequency_se_hz"] < resolution,
               f"standard error of f_n below the FRF resolution ({m['natural_frequency_se_hz']:.4f})")
-    for name in ("bode.png", "modes.png"):
+    stable = [p for p in s["stabilisation"] if p["stable_pole"] and p["stable_frequency"]
+              and p["frequency_hz"] < example.MAX_MODE_HZ]
+    check(len({round(p["frequency_hz"]) for p in stable}) >= 2,
+          "the stabilisation diagram has at least two stable-frequency modes")
+    for p in stable:
+        nearest = float(f[peaks][np.argmin(np.abs(f[peaks] - p["frequency_hz"]))])
+        check(abs(p["frequency_hz"] - nearest) <= resolution,
+              f"stable pole {p['frequency_hz']:.2f} Hz ({p['order']} poles) within one Welch line "
+              f"of a SciPy peak ({nearest:.2f} Hz)")
+    for name in ("bode.png", "modes.png", "stabilisation.png"):
         check_png(os.path.join(out, name))
 
 
