@@ -2,7 +2,11 @@
 """Smoke test of one real-data example: run examples/<name>.py into a scratch folder, then
 check its figures (valid PNG files of sensible size) and its summary.json against bounds
 that come from the physics or the publications named in data/*/PROVENANCE.md, or from an
-independent computation done here with SciPy, never from ctid's own earlier output.
+independent computation done here with SciPy, never from ctid's own earlier output. Then
+compare the tables the run wrote (OUT/tables.json) with the generated blocks of
+docs/examples/NAME.md and the example's row of docs/examples/README.md (decision 0012): a
+page that quotes a number the code no longer computes fails, with a diff and the command
+that regenerates it (python3 examples/NAME.py --write-docs).
 
 Usage: check_example.py NAME OUT_DIR   (exit status 0 = pass, 1 = a check failed)
 """
