@@ -163,10 +163,9 @@ def index_row_prefix(name):
 def index_rows(text):
     """The rows of the generated index block of docs/examples/README.md, keyed by example."""
     rows = {}
-    for block_name in ("index",):
-        for line in generated_blocks(text, "*").get(block_name, "").split("\n"):
-            if line.startswith("| ["):
-                rows[line.split("]")[0][3:]] = line
+    for line in generated_blocks(text, "*").get(INDEX, "").split("\n"):
+        if line.startswith("| ["):
+            rows[line.split("]")[0][3:]] = line
     return rows
 
 

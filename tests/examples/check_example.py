@@ -198,9 +198,6 @@ def dryer(s, out):
     # overdamped thermal path with a transport delay (PROVENANCE: same process as pt326).
     # A linear model simulated from rest cannot explain an output mean of 4.89 V, so removing
     # the means must help by far more than any structure choice does.
-    import numpy as np
-
-    sys.path.insert(0, os.path.join(ROOT, "examples"))
     names, table = _load("daisy_dryer_ljung/dryer.csv")
     raw, done = s["raw"], s["detrended"]
     check(done["termination"] == "converged", f"converged ({done['termination']})")
