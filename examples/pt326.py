@@ -75,6 +75,35 @@ def main():
         print(f"    n = {fit.structure.orders[0].n}: validation fit {fit.validation_fit:.1f} %, "
               f"YIC {fit.yic:.2f}, usable {fit.usable}")
 
+    def describe(structure):
+        o = structure.orders[0]
+        return f"{o.n} pole{'s' if o.n > 1 else ''}, {o.m} zero{'s' if o.m != 1 else ''}"
+
+    d = r.input_delay
+    results = _common.markdown_table(["", "ours", "published"], [
+        ["structure", "first order, m = 0", "first order, nb = 1 (nn = [1 1 5])"],
+        ["delay", f"**{d} samples ({d * h:.1f} s)**", "5 samples"],
+        ["gain K", f"{b0:.3f} ± {se_b0:.3f}", "—"],
+        ["time constant T", f"{a1:.3f} ± {se_a1:.3f} s", "—"],
+        ["fit, estimation record", _common.percent(r.fit_percent), "—"],
+        ["fit, validation record", _common.percent(report.fit_percent), '"pretty good"'],
+    ])
+    mse = dict(zip(scan.delays, scan.mean_squared_errors))
+    neighbours = [k for k in (d - 1, d, d + 1) if k in mse]
+    notes = (
+        "The delay scan's output-error MSE at "
+        + ", ".join(f"{k}" for k in neighbours) + " samples: "
+        + ", ".join((f"**{_common.significant(mse[k], 2)}**" if k == d
+                     else _common.significant(mse[k], 2)) for k in neighbours)
+        + f". Largest residual autocorrelation on the validation record: "
+        f"{report.max_residual_autocorrelation:.2f}.")
+    tables = {"results": results, "notes": notes,
+              "scan": _common.scan_table(structures, describe)}
+    index_row = (f"| [pt326](pt326.md) | CONTSID aero-thermal channel | first order + delay, "
+                 f"SRIVC delay scan; scan: {describe(structures.fits[structures.recommended].structure)}"
+                 f" | delay {d} samples (published 5), validation fit "
+                 f"{_common.percent(report.fit_percent)} |")
+    _common.publish(args, "pt326", tables, index_row)
     summary = {
         "example": "pt326", "sample_time": h,
         "delays": list(scan.delays), "mean_squared_errors": list(scan.mean_squared_errors),

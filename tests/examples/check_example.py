@@ -2,7 +2,11 @@
 """Smoke test of one real-data example: run examples/<name>.py into a scratch folder, then
 check its figures (valid PNG files of sensible size) and its summary.json against bounds
 that come from the physics or the publications named in data/*/PROVENANCE.md, or from an
-independent computation done here with SciPy, never from ctid's own earlier output.
+independent computation done here with SciPy, never from ctid's own earlier output. Then
+compare the tables the run wrote (OUT/tables.json) with the generated blocks of
+docs/examples/NAME.md and the example's row of docs/examples/README.md (decision 0012): a
+page that quotes a number the code no longer computes fails, with a diff and the command
+that regenerates it (python3 examples/NAME.py --write-docs).
 
 Usage: check_example.py NAME OUT_DIR   (exit status 0 = pass, 1 = a check failed)
 """
@@ -24,6 +28,15 @@ def check(condition, what):
         failures.append(what)
 
 
+def _load(relative_path):
+    import numpy as np
+
+    path = os.path.join(ROOT, "data", relative_path)
+    with open(path) as f:
+        names = f.readline().strip().split(",")
+    return names, np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+
+
 def check_png(path, min_width=300, min_height=200):
     ok = os.path.isfile(path)
     if ok:
@@ -34,6 +47,46 @@ def check_png(path, min_width=300, min_height=200):
             width, height = struct.unpack(">II", head[16:24])
             ok = width >= min_width and height >= min_height and os.path.getsize(path) > 5000
     check(ok, f"{os.path.basename(path)} is a PNG of sensible size")
+
+
+def check_docs(name, out):
+    """Every number docs/examples/NAME.md quotes for the example is in a generated block:
+    the blocks the run just wrote (OUT/tables.json) must equal the document's, and the
+    example's row of the index in docs/examples/README.md must equal the regenerated row."""
+    import difflib
+
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    import _common
+
+    with open(os.path.join(out, "tables.json")) as f:
+        generated = json.load(f)
+    path = os.path.join(_common.DOCS, name + ".md")
+    check(os.path.isfile(path), f"docs/examples/{name}.md exists")
+    if not os.path.isfile(path):
+        return
+    with open(path) as f:
+        in_doc = _common.generated_blocks(f.read(), name)
+    update = f"update with: python3 examples/{name}.py --write-docs (then review the diff)"
+    for table, text in generated["tables"].items():
+        same = in_doc.get(table) == text
+        check(same, f"docs/examples/{name}.md block '{table}' matches the regenerated one")
+        if not same:
+            if table not in in_doc:
+                print(f"      missing: add '{_common.begin_mark(name, table)}' and "
+                      f"'{_common.END_MARK}' to {path}")
+            sys.stdout.writelines(difflib.unified_diff(
+                (in_doc.get(table, "") + "\n").splitlines(True), (text + "\n").splitlines(True),
+                f"docs/examples/{name}.md: {table}", f"regenerated: {table}"))
+            print(f"      {update}")
+    stale = sorted(set(in_doc) - set(generated["tables"]))
+    check(not stale, f"docs/examples/{name}.md has no block the example no longer writes "
+          f"({stale})")
+    with open(os.path.join(_common.DOCS, "README.md")) as f:
+        row = _common.index_rows(f.read()).get(name)
+    check(row == generated["index_row"],
+          f"docs/examples/README.md index row of {name} matches the regenerated one")
+    if row != generated["index_row"]:
+        print(f"      in README: {row}\n      generated: {generated['index_row']}\n      {update}")
 
 
 def flexible_structure(s, out):
@@ -62,7 +115,16 @@ def flexible_structure(s, out):
         check(0 < zeta < 0.05, f"mode {fn:.2f} Hz lightly damped (zeta = {zeta:.5f})")
         check(0 < m["natural_frequency_se_hz"] < resolution,
               f"standard error of f_n below the FRF resolution ({m['natural_frequency_se_hz']:.4f})")
-    for name in ("bode.png", "modes.png"):
+    stable = [p for p in s["stabilisation"] if p["stable_pole"] and p["stable_frequency"]
+              and p["frequency_hz"] < example.MAX_MODE_HZ]
+    check(len({round(p["frequency_hz"]) for p in stable}) >= 2,
+          "the stabilisation diagram has at least two stable-frequency modes")
+    for p in stable:
+        nearest = float(f[peaks][np.argmin(np.abs(f[peaks] - p["frequency_hz"]))])
+        check(abs(p["frequency_hz"] - nearest) <= resolution,
+              f"stable pole {p['frequency_hz']:.2f} Hz ({p['order']} poles) within one Welch line "
+              f"of a SciPy peak ({nearest:.2f} Hz)")
+    for name in ("bode.png", "modes.png", "stabilisation.png"):
         check_png(os.path.join(out, name))
 
 
@@ -99,6 +161,8 @@ def canning_river(s, out):
     # The additive and the unfactored parameterisations describe one system.
     for pa, pu in zip(s["poles_additive"], s["poles_srivc"]):
         check(abs(pa - pu) < 1e-6 * abs(pu), f"additive pole {pa:.6f} equals SRIVC pole {pu:.6f}")
+    check(s["scan_recommended"] == [2, 2], "the structure scan recommends the published 2 poles, "
+          f"2 zeros (nn = [3 2 0]; got {s['scan_recommended']})")
     for name in ("flow.png", "stores.png"):
         check_png(os.path.join(out, name))
 
@@ -117,8 +181,98 @@ def emps(s, out):
         check_png(os.path.join(out, name))
 
 
+def arx_static_gain(u, y, delay, na=2, nb=2):
+    """Static gain of a least-squares ARX(na, nb) model with `delay` samples of dead time
+    (NumPy only): an estimate of the DC gain independent of ctid."""
+    import numpy as np
+
+    start = max(na, nb + delay)
+    rows = [np.concatenate([-y[k - na:k][::-1], u[k - delay - nb:k - delay][::-1]])
+            for k in range(start, len(y))]
+    theta = np.linalg.lstsq(np.array(rows), y[start:], rcond=None)[0]
+    return float(theta[na:].sum() / (1.0 + theta[:na].sum()))
+
+
+def dryer(s, out):
+    # Physics: a heater raises the temperature (positive static gain) through a stable,
+    # overdamped thermal path with a transport delay (PROVENANCE: same process as pt326).
+    # A linear model simulated from rest cannot explain an output mean of 4.89 V, so removing
+    # the means must help by far more than any structure choice does.
+    names, table = _load("daisy_dryer_ljung/dryer.csv")
+    raw, done = s["raw"], s["detrended"]
+    check(done["termination"] == "converged", f"converged ({done['termination']})")
+    check(done["fit_validation_percent"] > raw["fit_validation_percent"] + 20,
+          f"detrended validation fit {done['fit_validation_percent']:.1f} % beats raw "
+          f"{raw['fit_validation_percent']:.1f} % by > 20 points")
+    check(done["fit_validation_percent"] > 80, "detrended validation fit > 80 %")
+    check(all(p < 0 for p in done["poles"]) and max(done["poles_imag"]) == 0,
+          f"stable real poles (overdamped thermal lag): {done['poles']}")
+    check(1 <= done["delay_samples"] <= 5,
+          f"a transport delay of 1-5 samples (got {done['delay_samples']})")
+    n = s["estimation_samples"]
+    u = table[:n, 1] - table[:n, 1].mean()
+    y = table[:n, 2] - table[:n, 2].mean()
+    reference = arx_static_gain(u, y, done["delay_samples"])
+    check(done["static_gain"] > 0 and abs(done["static_gain"] / reference - 1) < 0.1,
+          f"static gain {done['static_gain']:.3f} positive and within 10 % of a NumPy ARX(2, 2) "
+          f"least-squares estimate ({reference:.3f})")
+    check(s["scan_usable"][s["scan_poles"].index(s["scan_recommended_poles"])],
+          "the recommended structure is usable")
+    check_png(os.path.join(out, "validation.png"))
+
+
+def crane(s, out):
+    # Physics (PROVENANCE.md): the load angle swings as a lightly damped pendulum. Its
+    # frequency is checked against the resonance of an independent SciPy Welch estimate of
+    # motor voltage -> load angle over PRBS periods 3-5 (one period per segment). The records
+    # are cut out of the running experiment, so estimating the initial state must help.
+    import numpy as np
+    from scipy import signal
+
+    names, table = _load("contsid_crane/crane.csv")
+    h = s["sample_time"]
+    rows = slice(s["estimation_rows"][0], s["validation_rows"][1])
+    u = table[rows, names.index("u_motor_voltage")]
+    y = table[rows, names.index("y2_load_angle")]
+    segment = s["estimation_rows"][1] - s["estimation_rows"][0]
+    f, puu = signal.welch(u, fs=1 / h, nperseg=segment // 2)
+    _, puy = signal.csd(u, y, fs=1 / h, nperseg=segment // 2)
+    band = (f > 0.2) & (f < 5.0)
+    peak = float(f[band][np.argmax(np.abs(puy / puu)[band])])
+    resolution = float(f[1] - f[0])
+    before, after = s["initial_conditions_zero"], s["initial_conditions_estimate"]
+    for label, row in (("zero", before), ("estimate", after)):
+        check(row["termination"] == "converged" and row["stable"],
+              f"initial conditions {label}: converged to a stable model")
+        check(abs(row["pendulum_hz"] - peak) <= resolution,
+              f"initial conditions {label}: pendulum {row['pendulum_hz']:.4f} Hz within one Welch "
+              f"line ({resolution:.3f} Hz) of SciPy's peak {peak:.3f} Hz")
+        check(0 < row["pendulum_damping"] < 0.1,
+              f"initial conditions {label}: lightly damped (zeta {row['pendulum_damping']:.4f})")
+    check(before["fit_validation_estimated_state_percent"]
+          > before["fit_validation_from_rest_percent"] + 15,
+          "the same model validates > 15 points better from the estimated initial state than "
+          f"from rest ({before['fit_validation_estimated_state_percent']:.1f} against "
+          f"{before['fit_validation_from_rest_percent']:.1f} %)")
+    check(after["fit_validation_estimated_state_percent"] > 75,
+          f"after: validation fit > 75 % ({after['fit_validation_estimated_state_percent']:.1f})")
+    check(after["fit_validation_estimated_state_percent"]
+          > before["fit_validation_from_rest_percent"] + 20,
+          "after (initial conditions estimated) beats before (from rest) by > 20 points")
+    chosen = s["scan_structures"].index(s["scan_recommended"])
+    check(s["scan_usable"][chosen] and s["scan_recommended"][0] >= 2,
+          f"the scan recommends a usable structure with room for the pendulum's pole pair "
+          f"({s['scan_recommended']})")
+    stable = [p for p in s["stabilisation"] if p["stable_frequency"]]
+    check(any(abs(p["frequency_hz"] - peak) <= resolution for p in stable),
+          "the pendulum is a stable-frequency pole of the stabilisation diagram")
+    for name in ("stabilisation.png", "validation.png"):
+        check_png(os.path.join(out, name))
+
+
 CHECKS = {"flexible_structure": flexible_structure, "pt326": pt326,
-          "canning_river": canning_river, "emps": emps}
+          "canning_river": canning_river, "emps": emps, "dryer": dryer,
+          "crane": crane}
 
 
 def main():
@@ -132,6 +286,7 @@ def main():
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
     CHECKS[name](summary, out)
+    check_docs(name, out)
     print(f"{len(failures)} check(s) failed" if failures else "all checks passed")
     return 1 if failures else 0
 
