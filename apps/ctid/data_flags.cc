@@ -55,10 +55,18 @@ const char* hold_flag_name(Hold hold) { return hold == Hold::zero_order_hold ? "
 
 bool same_sample_time(double a, double b) { return std::abs(a - b) <= 1e-9 * std::abs(b); }
 
-void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_reference) {
-  app.add_option(name, file, "CSV data file with a header row of column names")
-      ->required()
-      ->check(CLI::ExistingFile);
+void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_reference, bool several) {
+  if (several) {
+    app.add_option(name, files,
+                   "CSV data file(s) with a header row of column names; several files are "
+                   "records of one system fitted together")
+        ->required()
+        ->check(CLI::ExistingFile);
+  } else {
+    app.add_option(name, file, "CSV data file with a header row of column names")
+        ->required()
+        ->check(CLI::ExistingFile);
+  }
   app.add_option("--input-column", input_column, "Column holding the input u")
       ->capture_default_str()
       ->group("Data");
@@ -110,8 +118,9 @@ bool DataFlags::preprocessing_asked(const CLI::App& app) const {
   return false;
 }
 
-SampledData DataFlags::load(const CLI::App& app, bool need_reference) const {
-  const io::CsvTable table = io::read_csv(file);
+SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
+                                 bool need_reference) const {
+  const io::CsvTable table = io::read_csv(path);
   const bool reference_flag = app.get_option_no_throw("--reference-column") != nullptr &&
                               app.count("--reference-column") > 0;
   std::optional<Eigen::VectorXd> reference;
@@ -119,7 +128,7 @@ SampledData DataFlags::load(const CLI::App& app, bool need_reference) const {
   if (need_reference) {
     reference_name = reference_column.empty() ? "r" : reference_column;
     if (!table.has_column(reference_name)) {
-      usage_error(internal::concat("closed loop (--controller) needs the reference r, but ", file,
+      usage_error(internal::concat("closed loop (--controller) needs the reference r, but ", path,
                                    " has no column '", reference_name, "' (columns: ",
                                    column_list(table), "); name it with --reference-column"));
     }
@@ -134,7 +143,7 @@ SampledData DataFlags::load(const CLI::App& app, bool need_reference) const {
   const std::optional<Hold> declared = io::declared_input_hold(table);
   const std::optional<Hold> flagged = parse_hold(input_hold);
   if (declared && flagged && *declared != *flagged) {
-    usage_error(internal::concat("--input-hold ", input_hold, " contradicts ", file, ":",
+    usage_error(internal::concat("--input-hold ", input_hold, " contradicts ", path, ":",
                                  table.declaration("input_hold")->line,
                                  ", which declares input_hold: ", hold_flag_name(*declared)));
   }
@@ -149,23 +158,23 @@ SampledData DataFlags::load(const CLI::App& app, bool need_reference) const {
         const TimeStampCheck check = check_time_stamps(stamps);
         const double drift = std::abs(sample_time - check.step) * (stamps.size() - 1);
         if (check.worst_sample) {
-          std::cerr << "note: the time column '" << time_column << "' of " << file
+          std::cerr << "note: the time column '" << time_column << "' of " << path
                     << " is not uniform (sample " << *check.worst_sample << " is "
                     << format_brief(check.deviation) << " s off its grid); --sample-time "
                     << format_number(sample_time) << " s is used\n";
         } else if (drift > check.tolerance) {
           std::cerr << "note: --sample-time " << format_number(sample_time)
-                    << " s overrides the time column '" << time_column << "' of " << file
+                    << " s overrides the time column '" << time_column << "' of " << path
                     << " (step " << format_number(check.step) << " s)\n";
         }
       } catch (const InvalidArgument& e) {
-        std::cerr << "note: the time column '" << time_column << "' of " << file << ": " << e.what()
+        std::cerr << "note: the time column '" << time_column << "' of " << path << ": " << e.what()
                   << "; --sample-time " << format_number(sample_time) << " s is used\n";
       }
       try {
         read.emplace(sample_time, u, y, reference, stamps(0));
       } catch (const InvalidArgument& e) {
-        throw InvalidArgument(file + ": " + e.what());
+        throw InvalidArgument(path + ": " + e.what());
       }
     } else {
       io::CsvColumns columns;
@@ -183,13 +192,13 @@ SampledData DataFlags::load(const CLI::App& app, bool need_reference) const {
   } else {
     if (time_flag) table.column(time_column);  // throws, naming the columns present
     if (!h_flag) {
-      usage_error(internal::concat(file, " has no time column '", time_column,
+      usage_error(internal::concat(path, " has no time column '", time_column,
                                    "'; give --sample-time (or --time-column)"));
     }
     try {
       read.emplace(sample_time, u, y, reference);
     } catch (const InvalidArgument& e) {
-      throw InvalidArgument(file + ": " + e.what());
+      throw InvalidArgument(path + ": " + e.what());
     }
   }
 
@@ -217,14 +226,33 @@ SampledData DataFlags::load(const CLI::App& app, bool need_reference) const {
     try {
       return preprocess(read->with_input_hold(hold), options);
     } catch (const InvalidArgument& e) {
-      throw InvalidArgument(file + ": " + e.what());
+      throw InvalidArgument(path + ": " + e.what());
     }
   }();
   for (const std::string& warning : result.record.warnings) {
-    std::cerr << "warning: " << file << ": " << warning << "\n";
+    std::cerr << "warning: " << path << ": " << warning << "\n";
   }
   preprocessing = std::move(result.record);
   return std::move(result.data);
+}
+
+SampledData DataFlags::load(const CLI::App& app, bool need_reference) const {
+  return load_file(file, app, need_reference);
+}
+
+std::vector<SampledData> DataFlags::load_all(const CLI::App& app, bool need_reference) const {
+  std::vector<SampledData> records;
+  for (const std::string& path : files.empty() ? std::vector<std::string>{file} : files) {
+    records.push_back(load_file(path, app, need_reference));
+  }
+  return records;
+}
+
+std::string DataFlags::file_list() const {
+  if (files.empty()) return file;
+  std::string text;
+  for (const std::string& path : files) text += (text.empty() ? "" : ", ") + path;
+  return text;
 }
 
 }  // namespace ctid::cli

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -15,7 +16,8 @@
 namespace ctid::cli {
 
 struct DataFlags {
-  std::string file;
+  std::string file;                ///< the data file (commands that take one)
+  std::vector<std::string> files;  ///< the data files (commands that take several)
   std::string input_column = "u";
   std::string output_column = "y";
   std::string reference_column;  ///< empty: "r" when a reference is needed
@@ -34,16 +36,24 @@ struct DataFlags {
 
   /// Adds DATA (positional, `name` in the help) and the column flags to `app`; with
   /// `with_reference` also --reference-column.
-  void add_to(CLI::App& app, const std::string& name, bool with_reference);
+  /// With `several`, DATA takes one or more files (into `files`, else into `file`).
+  void add_to(CLI::App& app, const std::string& name, bool with_reference, bool several = false);
 
   /// Reads the record. With `need_reference` the reference column must be present (its
   /// absence is a usage error naming --reference-column); without it, --reference-column is
   /// a usage error. `app` tells which flags were given. Preprocesses the record as the flags
   /// ask, keeps the record of it in `preprocessing` and prints its warnings on stderr.
   SampledData load(const CLI::App& app, bool need_reference) const;
+  /// load() of every file, each read, checked and preprocessed alike.
+  std::vector<SampledData> load_all(const CLI::App& app, bool need_reference) const;
+  /// The files as the summary names them: "a.csv" or "a.csv, b.csv".
+  std::string file_list() const;
 
   /// Whether any preprocessing flag was given (then commands print preprocessing.summary()).
   bool preprocessing_asked(const CLI::App& app) const;
+
+ private:
+  SampledData load_file(const std::string& path, const CLI::App& app, bool need_reference) const;
 };
 
 /// Agreement of two sample times given in different places (flag, file, controller).

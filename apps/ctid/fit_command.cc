@@ -148,11 +148,11 @@ std::string plus_minus(double value, double error) {
 }
 
 void print_summary(std::ostream& out, const EstimationResult& r, const std::string& estimator,
-                   const SampledData& data, const std::string& file,
+                   const SampledData& data, int samples, const std::string& file,
                    const std::string& preprocessing) {
   // A model that failed the quality verdict is announced before anything else.
   if (!r.verdict.usable) out << "WARNING: " << r.verdict.summary() << "\n";
-  out << "ctid fit: " << estimator << " on " << file << " (N = " << data.size()
+  out << "ctid fit: " << estimator << " on " << file << " (N = " << samples
       << ", h = " << format_number(data.sample_time()) << " s)\n";
   if (!preprocessing.empty()) out << "preprocessing: " << preprocessing << "\n";
   // The estimator's message restates the reason; print it only when it explains a failure.
@@ -266,14 +266,26 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   const IdentificationOptions options = identification_options(f);
   validate_identification(structure, options);  // before the data is read
   const std::optional<DiscreteTransferFunction>& controller = options.controller;
-  const SampledData data = f.data.load(app, controller.has_value());
+  const std::vector<SampledData> records = f.data.load_all(app, controller.has_value());
+  const SampledData& data = records.front();
+  int samples = 0;
+  for (std::size_t k = 0; k < records.size(); ++k) {
+    samples += records[k].size();
+    if (!same_sample_time(records[k].sample_time(), data.sample_time())) {
+      usage_error(internal::concat(
+          f.data.files[k], " is sampled every ", format_number(records[k].sample_time()), " s but ",
+          f.data.files.front(), " every ", format_number(data.sample_time()),
+          " s; records fitted together share their sample time"));
+    }
+  }
   if (controller && !same_sample_time(controller->sample_time(), data.sample_time())) {
     usage_error(internal::concat("the controller in ", f.controller, " has sample time ",
-                                 format_number(controller->sample_time()), " s but ", f.data.file,
-                                 " is sampled every ", format_number(data.sample_time()), " s"));
+                                 format_number(controller->sample_time()), " s but ",
+                                 f.data.file_list(), " is sampled every ",
+                                 format_number(data.sample_time()), " s"));
   }
 
-  const IdentificationResult identified = identify(data, structure, options);
+  const IdentificationResult identified = identify(records, structure, options);
   const EstimationResult& result = identified.estimate;
   const std::string estimator(enum_name(identified.estimator));
   const std::optional<InputDelayScanResult>& scanned = identified.delay_scan;
@@ -283,11 +295,17 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
     nlohmann::json document = io::to_json(result);
     document["estimator"] = estimator;
     document["loop"] = identified.closed_loop ? "closed" : "open";
-    document["data"] = {{"file", f.data.file},
-                        {"samples", data.size()},
+    document["data"] = {{"file", f.data.files.front()},
+                        {"samples", samples},
                         {"sample_time", data.sample_time()},
                         {"input_hold", enum_name(data.input_hold())},
                         {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
+    if (records.size() > 1) {
+      document["data"]["files"] = f.data.files;
+      std::vector<int> sizes;
+      for (const SampledData& record : records) sizes.push_back(record.size());
+      document["data"]["record_samples"] = sizes;
+    }
     if (controller) document["controller"] = io::to_json(*controller);
     if (scanned) document["delay_scan"] = io::delay_scan_summary_to_json(*scanned);
     if (relocated) {
@@ -302,7 +320,7 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
                     f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
   if (!f.quiet) {
-    print_summary(std::cout, result, estimator, data, f.data.file,
+    print_summary(std::cout, result, estimator, data, samples, f.data.file_list(),
                   f.data.preprocessing_asked(app) ? f.data.preprocessing.summary() : "");
     if (scanned) print_delay_scan(std::cout, *scanned);
     if (relocated) std::cout << "mode relocation: " << relocated->message << "\n";
@@ -313,7 +331,8 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
         model_output(result.model, data.input(), data.sample_time(), data.input_hold());
     const auto written = draw_model_figures(
         package, f.plot, result.model, result.covariance, data, simulated, structure.is_additive(),
-        "ctid fit: " + estimator + " on " + std::filesystem::path(f.data.file).filename().string());
+        "ctid fit: " + estimator + " on " +
+            std::filesystem::path(f.data.files.front()).filename().string());
     if (!f.quiet) {
       for (const auto& file : written) std::cout << "wrote " << file.string() << "\n";
     }
@@ -344,7 +363,7 @@ Command add_fit_command(CLI::App& parent) {
       "line says why and what to try; outputs are still written), 2 bad usage or input, 1 "
       "other error.");
 
-  f.data.add_to(*app, "data", true);
+  f.data.add_to(*app, "data", true, true);
 
   app->add_option("--model", f.model,
                   "Model kind: unfactored or additive (default: from the "

@@ -45,6 +45,18 @@ void bind_identification(py::module_& m) {
       "options.delay_scan or with the delay estimated in options.delay_range, then mode relocation "
       "if options.relocate_modes. Options are one "
       "IdentificationOptions or its fields as keywords.");
+  m.def(
+      "identify",
+      [](const std::vector<SampledData>& records, const ModelStructure& structure,
+         const std::optional<IdentificationOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<IdentificationOptions>("identify", options, kwargs);
+        py::gil_scoped_release release;
+        return identify(records, structure, o);
+      },
+      py::arg("records"), py::arg("structure"), py::arg("options") = py::none(),
+      "identify on several records of one system (a list of SampledData, e.g. separate "
+      "experiments): one parameter vector fitted to all, each record with its own initial state "
+      "(with refined_iv.initial_conditions = estimate); as `ctid fit a.csv b.csv`.");
 
   bind_options<StructureScanOptions>(
       m, "Options of scan_structures: held-out share, parsimony tolerance, diagram tolerances.");

@@ -139,6 +139,32 @@ def test_delay_range_estimates_a_fractional_delay_as_ctid_fit_does(cli, tmp_path
     assert list(result.delay_scan.delays) == [0, 1, 2, 3, 4, 5]
 
 
+def test_several_records_equal_ctid_fit_on_several_files(cli, tmp_path):
+    # Two pieces of one noise-free run, neither at rest: a list of SampledData in Python and
+    # two files on the command line give the same numbers, and the exact model.
+    u = ctid.white_noise(3000, 1.0, 46)
+    y = ctid.simulate(TRUTH, u, H)
+    pieces = [(300, 1100), (1700, 1200)]
+    records, files = [], []
+    for k, (first, count) in enumerate(pieces):
+        part = slice(first, first + count)
+        records.append(ctid.SampledData(H, u[part], y[part]))
+        files.append(tmp_path / f"piece{k}.csv")
+        write_csv(files[-1], {"u": u[part], "y": y[part]})
+    options = ctid.IdentificationOptions(refined_iv=ctid.RefinedIvOptions(
+        initial_conditions=ctid.InitialConditions.estimate))
+    result = ctid.identify(records, ctid.ModelStructure.modes(2), options)
+    np.testing.assert_allclose(result.estimate.parameters, TRUTH.parameters(), rtol=1e-9)
+    assert len(result.estimate.initial_conditions) == 2 * 4
+    document = fit(cli, files[0], str(files[1]), "--modes", "2", "--initial-conditions",
+                   "estimate")
+    expect_same_as_cli(result, document)
+    assert document["data"]["record_samples"] == [1100, 1200]
+    with pytest.raises(ctid.InvalidArgument, match="record 2 is sampled every"):
+        ctid.identify([records[0], ctid.SampledData(2 * H, u[:500], y[:500])],
+                      ctid.ModelStructure.modes(2))
+
+
 def test_unfactored_with_options_equals_ctid_fit(cli, open_loop):
     data, csv = open_loop
     options = ctid.IdentificationOptions(refined_iv=ctid.RefinedIvOptions(

@@ -5,16 +5,16 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <utility>
+#include <vector>
 
 #include <boost/math/tools/minima.hpp>
 
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
-#include "ctid/refined_iv/additive_srivc.h"
-#include "ctid/refined_iv/clsrivc.h"
-#include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/simulate.h"
+#include "refined_iv/internal/refined_iv_engine.h"
 
 namespace ctid {
 
@@ -88,13 +88,18 @@ namespace {
 // minimum is located only to about sqrt(eps) of the search variable), and the final fit at
 // tau carries the delay's sensitivity in its covariance.
 template <class Run>
-EstimationResult estimate_delay(const SampledData& data, const DelayInterval& range,
+EstimationResult estimate_delay(std::span<const SampledData> records, const DelayInterval& range,
                                 const RefinedIvOptions& base, const Run& run,
                                 std::optional<InputDelayScanResult>& scanned) {
-  const double h = data.sample_time();
-  const double duration = data.size() * h;
+  const SampledData* shortest = &records.front();
+  for (const SampledData& record : records) {
+    if (record.size() < shortest->size()) shortest = &record;
+  }
+  const double h = shortest->sample_time();
+  const double duration = shortest->size() * h;
   require(range.max < duration, "IdentificationOptions.delay_range.max is ", range.max,
-          " s; the record lasts only ", duration, " s (", data.size(), " samples of ", h, " s)");
+          " s; the record lasts only ", duration, " s (", shortest->size(), " samples of ", h,
+          " s)");
   auto at = [&](double tau, const std::optional<AdditiveModel>& start, bool final_fit) {
     const DelaySplit split = split_delay(tau, h);
     RefinedIvOptions o = base;
@@ -152,27 +157,28 @@ EstimationResult estimate_delay(const SampledData& data, const DelayInterval& ra
   return result;
 }
 
-}  // namespace
-
-IdentificationResult identify(const SampledData& data, const ModelStructure& structure,
-                              const IdentificationOptions& options) {
+IdentificationResult identify_records(std::span<const SampledData> records,
+                                      const ModelStructure& structure,
+                                      const IdentificationOptions& options) {
   validate_identification(structure, options);
+  require(!records.empty(), "identify: no data record was given");
+  require(!options.relocate_modes || records.size() == 1,
+          "IdentificationOptions.relocate_modes is true but ", records.size(),
+          " records are given; mode relocation works on one record");
   const bool closed_loop = options.controller.has_value();
   const RefinedIvEstimator estimator = choose_estimator(structure, closed_loop);
   const std::vector<SubmodelOrder>& orders = structure.orders;
+  const SampledData& data = records.front();
 
+  // The estimators of srivc.h, on every record.
   auto run = [&](const RefinedIvOptions& o) {
-    switch (estimator) {
-      case RefinedIvEstimator::srivc:
-        return srivc(data, orders.front(), o);
-      case RefinedIvEstimator::clsrivc:
-        return clsrivc(data, *options.controller, orders.front(), o);
-      case RefinedIvEstimator::additive_srivc:
-        return additive_srivc(data, orders, o);
-      case RefinedIvEstimator::additive_clsrivc:
-        break;
-    }
-    return additive_clsrivc(data, *options.controller, orders, o);
+    internal::RefinedIvProblem problem;
+    for (const SampledData& record : records) problem.records.push_back(&record);
+    problem.orders = orders;
+    problem.controller = closed_loop ? &*options.controller : nullptr;
+    problem.unfactored = !structure.is_additive();
+    problem.name = enum_name(estimator).data();  // the enumerator names are literals
+    return internal::run_refined_iv(problem, o);
   };
   auto estimate = [&](int delay) {
     RefinedIvOptions o = options.refined_iv;
@@ -186,7 +192,7 @@ IdentificationResult identify(const SampledData& data, const ModelStructure& str
     scanned = scan_input_delay(estimate, options.delay_scan->min, options.delay_scan->max);
     fitted = scanned->best;
   } else if (options.delay_range) {
-    fitted = estimate_delay(data, *options.delay_range, options.refined_iv, run, scanned);
+    fitted = estimate_delay(records, *options.delay_range, options.refined_iv, run, scanned);
   } else {
     fitted = estimate(options.refined_iv.input_delay);
   }
@@ -206,6 +212,19 @@ IdentificationResult identify(const SampledData& data, const ModelStructure& str
   result.delay_scan = std::move(scanned);
   result.mode_relocation = std::move(relocated);
   return result;
+}
+
+}  // namespace
+
+IdentificationResult identify(const SampledData& data, const ModelStructure& structure,
+                              const IdentificationOptions& options) {
+  return identify_records(std::span<const SampledData>(&data, 1), structure, options);
+}
+
+IdentificationResult identify(const std::vector<SampledData>& records,
+                              const ModelStructure& structure,
+                              const IdentificationOptions& options) {
+  return identify_records(records, structure, options);
 }
 
 }  // namespace ctid

@@ -29,19 +29,21 @@ namespace internal {
 namespace {
 
 // The augmented vector of (29): beta first, then (InitialConditions::estimate) the n_i + l_i
-// free-response coefficients of every submodel, so the parameter block of any joint matrix is
-// its top-left p x p corner.
+// free-response coefficients of every submodel in every record, so the parameter block of any
+// joint matrix is its top-left p x p corner.
 struct Layout {
   std::vector<SubmodelOrder> orders;
   std::vector<int> offset;
-  std::vector<int> free_offset;  // of submodel i's free-response coefficients
+  std::vector<int> free_offset;  // of record r's submodel i: [r * K + i]
   int parameters = 0;
   int poles = 0;      // sum n_i + l_i
-  int augmented = 0;  // parameters, plus poles when initial conditions are estimated
+  int records = 1;    // each with its own initial state
+  int augmented = 0;  // parameters, plus records * poles when initial conditions are estimated
   Hold input_hold = Hold::zero_order_hold;  // how the measured input behaves between samples
   double delay_fraction = 0.0;              // of a sample, on top of the whole-sample delay
 
-  Layout(std::vector<SubmodelOrder> o, bool initial_conditions) : orders(std::move(o)) {
+  Layout(std::vector<SubmodelOrder> o, bool initial_conditions, int record_count)
+      : orders(std::move(o)), records(record_count) {
     for (const SubmodelOrder& s : orders) {
       offset.push_back(parameters);
       parameters += s.n + s.m + 1;
@@ -49,14 +51,19 @@ struct Layout {
     }
     augmented = parameters;
     if (initial_conditions) {
-      for (const SubmodelOrder& s : orders) {
-        free_offset.push_back(augmented);
-        augmented += s.n + s.integrators;
+      for (int r = 0; r < records; ++r) {
+        for (const SubmodelOrder& s : orders) {
+          free_offset.push_back(augmented);
+          augmented += s.n + s.integrators;
+        }
       }
     }
   }
-  explicit Layout(std::vector<SubmodelOrder> o) : Layout(std::move(o), false) {}
+  explicit Layout(std::vector<SubmodelOrder> o) : Layout(std::move(o), false, 1) {}
   bool free_responses() const { return augmented > parameters; }
+  int free_at(int record, int i) const {
+    return free_offset[static_cast<size_t>(record * size() + i)];
+  }
   int states(int i) const {
     return orders[static_cast<size_t>(i)].n + orders[static_cast<size_t>(i)].integrators;
   }
@@ -261,7 +268,7 @@ FilterRealization with_rows(const FilterRealization& f, const Eigen::MatrixXd& c
 }
 
 SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& beta,
-                                 const Eigen::VectorXd& initial_states, int i, double h,
+                                 const Eigen::VectorXd& initial_states, int record, int i, double h,
                                  Hold output_interpolation, bool closed_loop, bool need_instrument,
                                  bool need_regressor) {
   const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
@@ -327,8 +334,8 @@ SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& be
     r.phi = discretize_zoh(chain.a, chain.b, h).phi;
     r.state = Eigen::MatrixXd::Zero(states, s + 1);
     r.state.topLeftCorner(given, given).setIdentity();
-    r.state.block(0, s, given, 1) = initial_states.segment(
-        layout.free_offset[static_cast<size_t>(i)] - layout.parameters, given);
+    r.state.block(0, s, given, 1) =
+        initial_states.segment(layout.free_at(record, i) - layout.parameters, given);
     r.next.resize(states, s + 1);
     r.c0 = Eigen::RowVectorXd::Zero(states);
     r.c0.head(s1) = bank.c.row(0);
@@ -340,54 +347,45 @@ SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& be
   return f;
 }
 
-// One pass over the record at beta (instrument source: u in open loop, S_uo r otherwise).
-// With `moments`: the sums of eq. (29); with `residual`: y - sum_i G_i u; with `psi`: the
-// N x p instrument (for the covariance); with `sse`: the sum of squared output errors
-// ||y - sum_i G_i u||^2 (the model output is formed on every pass anyway).
-void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
-              const Eigen::VectorXd& initial_states, const Eigen::VectorXd& u,
-              const Eigen::VectorXd& y, const Eigen::VectorXd* source, double h,
-              Hold output_interpolation, Workspace& w, Moments* moments, Eigen::VectorXd* residual,
-              Eigen::MatrixXd* psi, double* sse = nullptr) {
+// One record's signals: the input delayed by the whole samples of the delay, the output, and
+// in closed loop S_uo r (delayed likewise) and S_uo r itself; `offset` is the row of its
+// first sample in the stacked residual and instrument.
+struct RecordSignals {
+  Eigen::VectorXd u;
+  const Eigen::VectorXd* y = nullptr;
+  std::optional<Eigen::VectorXd> source;
+  Eigen::VectorXd undelayed_source;
+  Eigen::Index offset = 0;
+};
+
+// evaluate() on one record: its filters from rest, its free responses, its rows of the
+// stacked residual and instrument; the sums are added to.
+void evaluate_record(const Layout& layout, const Eigen::VectorXd& beta,
+                     const Eigen::VectorXd& initial_states, int record,
+                     const RecordSignals& signals, const Eigen::VectorXd* source, double h,
+                     Hold output_interpolation, Workspace& w, Moments* moments,
+                     Eigen::VectorXd* residual, Eigen::MatrixXd* psi, double* sse) {
+  const Eigen::VectorXd& u = signals.u;
+  const Eigen::VectorXd& y = *signals.y;
   const Eigen::Index n = u.size();
+  const Eigen::Index first = signals.offset;
   const int k_count = layout.size();
-  const int p = layout.augmented;
   const bool closed_loop = source != nullptr;
   const bool need_instrument = moments != nullptr || psi != nullptr;
   const bool need_regressor = moments != nullptr;
-  for (int i = 0; i < k_count; ++i) {
-    if (denominator_of(layout, beta, i).degree() < layout.orders[static_cast<size_t>(i)].n) {
-      // A_i lost its leading coefficient: the iterate has fewer poles than the structure and
-      // its filters cannot be formed. The pass reads as non-finite, so the iteration treats
-      // it as a failed step (and a final model as not usable).
-      const double nan = std::numeric_limits<double>::quiet_NaN();
-      if (moments != nullptr) {
-        moments->zp = Eigen::MatrixXd::Constant(p, p, nan);
-        moments->zy = Eigen::MatrixXd::Constant(p, k_count, nan);
-        moments->zz = Eigen::VectorXd::Constant(p, nan);
-        moments->pp = Eigen::VectorXd::Constant(p, nan);
-      }
-      if (residual != nullptr) *residual = Eigen::VectorXd::Constant(n, nan);
-      if (psi != nullptr) *psi = Eigen::MatrixXd::Constant(n, p, nan);
-      if (sse != nullptr) *sse = nan;
-      return;
-    }
-  }
   std::vector<SubmodelFilters> filters;
   filters.reserve(static_cast<size_t>(k_count));
   for (int i = 0; i < k_count; ++i) {
-    filters.push_back(submodel_filters(layout, beta, initial_states, i, h, output_interpolation,
-                                       closed_loop, need_instrument, need_regressor));
+    filters.push_back(submodel_filters(layout, beta, initial_states, record, i, h,
+                                       output_interpolation, closed_loop, need_instrument,
+                                       need_regressor));
   }
-  if (moments != nullptr) {
-    moments->zp = Eigen::MatrixXd::Zero(p, p);
-    moments->zy = Eigen::MatrixXd::Zero(p, k_count);
-    moments->zz = Eigen::VectorXd::Zero(p);
-    moments->pp = Eigen::VectorXd::Zero(p);
+  if (layout.free_responses()) {
+    // The other records' free-response columns are zero on this record's rows.
+    const int free = layout.augmented - layout.parameters;
+    w.instrument.rightCols(free).setZero();
+    w.regressor.rightCols(free).setZero();
   }
-  if (residual != nullptr) residual->resize(n);
-  if (psi != nullptr) psi->resize(n, p);
-  if (sse != nullptr) *sse = 0.0;
   for (Eigen::Index k0 = 0; k0 < n; k0 += kBlock) {
     const Eigen::Index len = std::min(kBlock, n - k0);
     for (int i = 0; i < k_count; ++i) {
@@ -423,7 +421,7 @@ void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
           r.next.noalias() = r.phi * r.state;
           r.state.swap(r.next);
         }
-        const int free_off = layout.free_offset[at];
+        const int free_off = layout.free_at(record, i);
         w.outputs.col(i).head(len) += r.value.head(len);
         if (need_instrument) {
           w.instrument.block(0, free_off, len, s) = r.basis.topRows(len);
@@ -462,25 +460,80 @@ void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
       moments->zz += z.colwise().squaredNorm().transpose();
       moments->pp += phi.colwise().squaredNorm().transpose();
     }
-    if (residual != nullptr) residual->segment(k0, len) = y.segment(k0, len) - w.total.head(len);
+    if (residual != nullptr) {
+      residual->segment(first + k0, len) = y.segment(k0, len) - w.total.head(len);
+    }
     if (sse != nullptr) *sse += (y.segment(k0, len) - w.total.head(len)).squaredNorm();
-    if (psi != nullptr) psi->middleRows(k0, len) = w.instrument.topRows(len);
+    if (psi != nullptr) psi->middleRows(first + k0, len) = w.instrument.topRows(len);
   }
 }
 
-// The free-response coefficients of every submodel from its own column of the solution of (29).
+// One pass over the records at beta (instrument source: u in open loop, S_uo r when
+// `with_source`); each record's filters start at rest at its first sample and its free
+// responses have their own coefficients. With `moments`: the sums of eq. (29) over all
+// records; with `residual`: y - sum_i G_i u, records stacked; with `psi`: the stacked N x p
+// instrument (for the covariance); with `sse`: the sum of squared output errors
+// ||y - sum_i G_i u||^2 (the model output is formed on every pass anyway).
+void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
+              const Eigen::VectorXd& initial_states, const std::vector<RecordSignals>& records,
+              bool with_source, double h, Hold output_interpolation, Workspace& w, Moments* moments,
+              Eigen::VectorXd* residual, Eigen::MatrixXd* psi, double* sse = nullptr) {
+  Eigen::Index n = 0;
+  for (const RecordSignals& record : records) n += record.u.size();
+  const int k_count = layout.size();
+  const int p = layout.augmented;
+  for (int i = 0; i < k_count; ++i) {
+    if (denominator_of(layout, beta, i).degree() < layout.orders[static_cast<size_t>(i)].n) {
+      // A_i lost its leading coefficient: the iterate has fewer poles than the structure and
+      // its filters cannot be formed. The pass reads as non-finite, so the iteration treats
+      // it as a failed step (and a final model as not usable).
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      if (moments != nullptr) {
+        moments->zp = Eigen::MatrixXd::Constant(p, p, nan);
+        moments->zy = Eigen::MatrixXd::Constant(p, k_count, nan);
+        moments->zz = Eigen::VectorXd::Constant(p, nan);
+        moments->pp = Eigen::VectorXd::Constant(p, nan);
+      }
+      if (residual != nullptr) *residual = Eigen::VectorXd::Constant(n, nan);
+      if (psi != nullptr) *psi = Eigen::MatrixXd::Constant(n, p, nan);
+      if (sse != nullptr) *sse = nan;
+      return;
+    }
+  }
+  if (moments != nullptr) {
+    moments->zp = Eigen::MatrixXd::Zero(p, p);
+    moments->zy = Eigen::MatrixXd::Zero(p, k_count);
+    moments->zz = Eigen::VectorXd::Zero(p);
+    moments->pp = Eigen::VectorXd::Zero(p);
+  }
+  if (residual != nullptr) residual->resize(n);
+  if (psi != nullptr) psi->resize(n, p);
+  if (sse != nullptr) *sse = 0.0;
+  for (int record = 0; record < static_cast<int>(records.size()); ++record) {
+    const RecordSignals& signals = records[static_cast<size_t>(record)];
+    evaluate_record(layout, beta, initial_states, record, signals,
+                    with_source ? &*signals.source : nullptr, h, output_interpolation, w, moments,
+                    residual, psi, sse);
+  }
+}
+
+// The free-response coefficients of every submodel in every record from the submodel's own
+// column of the solution of (29).
 Eigen::VectorXd free_response_coefficients(const Layout& layout, const Eigen::MatrixXd& solution) {
   Eigen::VectorXd c(layout.augmented - layout.parameters);
-  for (int i = 0; i < layout.size() && layout.free_responses(); ++i) {
-    const int at = layout.free_offset[static_cast<size_t>(i)];
-    c.segment(at - layout.parameters, layout.states(i)) =
-        solution.block(at, i, layout.states(i), 1);
+  for (int r = 0; r < layout.records && layout.free_responses(); ++r) {
+    for (int i = 0; i < layout.size(); ++i) {
+      const int at = layout.free_at(r, i);
+      c.segment(at - layout.parameters, layout.states(i)) =
+          solution.block(at, i, layout.states(i), 1);
+    }
   }
   return c;
 }
 
-// Realisation-independent form of the coefficients: per submodel, the free response f_i and
-// its first n_i + l_i - 1 derivatives at the first sample, c0 A^k x0 of 1/(p^l A_i).
+// Realisation-independent form of the coefficients: per record and submodel, the free
+// response f_i and its first n_i + l_i - 1 derivatives at the record's first sample, c0 A^k x0
+// of 1/(p^l A_i).
 Eigen::VectorXd free_response_derivatives(const Layout& layout, const Eigen::VectorXd& beta,
                                           const Eigen::VectorXd& initial_states) {
   Eigen::VectorXd out = Eigen::VectorXd::Zero(initial_states.size());
@@ -489,12 +542,14 @@ Eigen::VectorXd free_response_derivatives(const Layout& layout, const Eigen::Vec
         derivative_filters(Polynomial::monomial(layout.orders[static_cast<size_t>(i)].integrators) *
                            denominator_of(layout, beta, i));
     const int s = layout.states(i);
-    const int at = layout.free_offset[static_cast<size_t>(i)] - layout.parameters;
     if (bank.order() != s) continue;
-    Eigen::VectorXd x = initial_states.segment(at, s);
-    for (int k = 0; k < s; ++k) {
-      out(at + k) = bank.c.row(0).dot(x);
-      x = bank.a * x;
+    for (int r = 0; r < layout.records; ++r) {
+      const int at = layout.free_at(r, i) - layout.parameters;
+      Eigen::VectorXd x = initial_states.segment(at, s);
+      for (int k = 0; k < s; ++k) {
+        out(at + k) = bank.c.row(0).dot(x);
+        x = bank.a * x;
+      }
     }
   }
   return out;
@@ -622,11 +677,34 @@ Eigen::VectorXd unfactored_parameters(const TransferFunction& g, const SubmodelO
 
 EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIvOptions& options) {
   options.validate();
-  const SampledData& data = *problem.data;
-  Layout layout(problem.orders, options.initial_conditions == InitialConditions::estimate);
+  const std::string name = problem.name;
+  const std::vector<const SampledData*>& records = problem.records;
+  require(!records.empty(), name, ": no data record was given");
+  // The start (and the data checks) use the longest record; every record shares its sample
+  // time and input hold.
+  const SampledData* longest = records.front();
+  for (const SampledData* record : records) {
+    if (record->size() > longest->size()) longest = record;
+  }
+  const SampledData& data = *longest;
+  for (size_t r = 1; r < records.size(); ++r) {
+    const double h0 = records.front()->sample_time();
+    const double hr = records[r]->sample_time();
+    require(std::abs(hr - h0) <= 1e-9 * h0, name, ": record ", r + 1, " is sampled every ", hr,
+            " s but record 1 every ", h0, " s; records of one estimate share their sample time");
+    require(records[r]->input_hold() == records.front()->input_hold(), name, ": record ", r + 1,
+            "'s input is ", enum_name(records[r]->input_hold()), " but record 1's is ",
+            enum_name(records.front()->input_hold()),
+            "; records of one estimate share their input hold");
+    require(records[r]->has_reference() == records.front()->has_reference(), name, ": record ",
+            r + 1, (records[r]->has_reference() ? " has" : " has no"), " reference but record 1",
+            (records.front()->has_reference() ? " has" : " has none"),
+            "; records of one estimate have the same signals");
+  }
+  Layout layout(problem.orders, options.initial_conditions == InitialConditions::estimate,
+                static_cast<int>(records.size()));
   layout.input_hold = data.input_hold();
   layout.delay_fraction = options.input_delay_fraction;
-  const std::string name = problem.name;
   require(layout.size() >= 1, name, ": the model structure has no submodels");
   {
     int biproper = 0;
@@ -649,13 +727,15 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
             " submodels have integrators; at most one may have poles at the origin");
   }
   const int delay = options.input_delay;
-  const int n_samples = data.size();
+  int n_samples = 0;
+  for (const SampledData* record : records) n_samples += record->size();
   const int p = layout.parameters;
   const int unknowns = layout.augmented;  // with the free-response coefficients
-  require(n_samples - delay >= std::max(3 * unknowns, unknowns + 20), name, ": ", n_samples,
+  const int lost = delay * static_cast<int>(records.size());
+  require(n_samples - lost >= std::max(3 * unknowns, unknowns + 20), name, ": ", n_samples,
           " samples (input delay ", delay, ") are too few for ", unknowns,
           " parameters and initial conditions; at least ",
-          std::max(3 * unknowns, unknowns + 20) + delay, " are needed");
+          std::max(3 * unknowns, unknowns + 20) + lost, " are needed");
   const bool closed_loop = problem.controller != nullptr;
   const double h = data.sample_time();
   if (closed_loop) {
@@ -665,13 +745,16 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
             " differs from the data's ", h);
   }
 
-  // Assumption 1: persistency of excitation.
+  // Assumption 1: persistency of excitation (of the best-excited record when there are several).
   DataChecks checks;
-  const Eigen::VectorXd& excitation = closed_loop ? data.reference() : data.input();
   const int nc = closed_loop ? problem.controller->denominator().degree() : 0;
   checks.excitation_order_required = 2 * layout.poles + nc;
-  checks.excitation_order =
-      persistent_excitation_order(excitation, std::max(checks.excitation_order_required, p));
+  for (const SampledData* record : records) {
+    const Eigen::VectorXd& excitation = closed_loop ? record->reference() : record->input();
+    checks.excitation_order = std::max(
+        checks.excitation_order,
+        persistent_excitation_order(excitation, std::max(checks.excitation_order_required, p)));
+  }
   require(checks.excitation_order >= p, name, ": the ", closed_loop ? "reference" : "input",
           " is persistently exciting of order ", checks.excitation_order, " only; the ", p,
           " parameters need at least order ", p, " (e.g. a constant or a single sine cannot)");
@@ -735,16 +818,33 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   };
   reflect_all(beta);
 
-  const Eigen::VectorXd u = delay_samples(data.input(), delay);
-  const Eigen::VectorXd& y = data.output();
-  std::optional<Eigen::VectorXd> source;  // S_uo r, delayed (closed loop)
-  Eigen::VectorXd undelayed_source;       // S_uo r itself
+  std::vector<RecordSignals> signals(records.size());
+  Eigen::VectorXd y(n_samples);  // the records' outputs stacked
+  {
+    Eigen::Index at = 0;
+    for (size_t r = 0; r < records.size(); ++r) {
+      signals[r].u = delay_samples(records[r]->input(), delay);
+      signals[r].y = &records[r]->output();
+      signals[r].offset = at;
+      y.segment(at, records[r]->size()) = records[r]->output();
+      at += records[r]->size();
+    }
+  }
+  // S_uo r of every record (closed loop); false when the loop is unstable.
+  bool source = false;
   auto update_source = [&](const Eigen::VectorXd& b) -> bool {
-    std::optional<Eigen::VectorXd> s =
-        sensitivity_filtered_reference(layout, b, *problem.controller, data.reference(), h, delay);
-    if (!s) return false;
-    source = delay_samples(*s, delay);
-    undelayed_source = std::move(*s);
+    std::vector<Eigen::VectorXd> updated;  // all records or none: a failure keeps the last
+    for (const SampledData* record : records) {
+      std::optional<Eigen::VectorXd> s = sensitivity_filtered_reference(
+          layout, b, *problem.controller, record->reference(), h, delay);
+      if (!s) return false;
+      updated.push_back(std::move(*s));
+    }
+    for (size_t r = 0; r < records.size(); ++r) {
+      signals[r].source = delay_samples(updated[r], delay);
+      signals[r].undelayed_source = std::move(updated[r]);
+    }
+    source = true;
     return true;
   };
 
@@ -781,8 +881,8 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     if (closed_loop && iteration > 1) source_ok = update_source(beta);
     Moments sums;
     double sse = 0.0;
-    evaluate(layout, beta, initial_states, u, y, source ? &*source : nullptr, h,
-             options.output_interpolation, workspace, &sums, nullptr, nullptr, &sse);
+    evaluate(layout, beta, initial_states, signals, source, h, options.output_interpolation,
+             workspace, &sums, nullptr, nullptr, &sse);
     if (std::isnan(start_sse)) start_sse = sse;
     if (std::isfinite(sse) && !(sse >= best_sse)) {
       best_sse = sse;
@@ -878,7 +978,7 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   double sse = 0.0;
   bool returned_start = false;
   if (!result.converged() && best_beta.size() > 0) {
-    evaluate(layout, beta, initial_states, u, y, nullptr, h, options.output_interpolation,
+    evaluate(layout, beta, initial_states, signals, false, h, options.output_interpolation,
              workspace, nullptr, nullptr, nullptr, &sse);
     if (!(sse <= best_sse)) {
       beta = best_beta;
@@ -914,16 +1014,15 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     // The loop's free-response coefficients come from the solve at the previous iterate;
     // one more solve of (29) at the returned beta gives them in its own realisations.
     Moments sums;
-    evaluate(layout, beta, initial_states, u, y, source ? &*source : nullptr, h,
-             options.output_interpolation, workspace, &sums, nullptr, nullptr);
+    evaluate(layout, beta, initial_states, signals, source, h, options.output_interpolation,
+             workspace, &sums, nullptr, nullptr);
     if (std::optional<Eigen::MatrixXd> solution = solve_scaled(sums)) {
       initial_states = free_response_coefficients(layout, *solution);
       states_at = beta;
     }
   }
-  evaluate(layout, beta, initial_states, u, y, source ? &*source : nullptr, h,
-           options.output_interpolation, workspace, nullptr, &residual,
-           options.compute_covariance ? &psi : nullptr);
+  evaluate(layout, beta, initial_states, signals, source, h, options.output_interpolation,
+           workspace, nullptr, &residual, options.compute_covariance ? &psi : nullptr);
   sse = residual.squaredNorm();
   result.mean_squared_error = sse / n_samples;
   result.noise_variance = sse / std::max(n_samples - unknowns, 1);
@@ -946,14 +1045,20 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
       // The delay's column: the sensitivity of the noise-free model output to tau, as the
       // other columns of psi are theirs to the parameters (a central difference within the
       // sample interval, where the held input makes the output smooth in tau).
-      const Eigen::VectorXd& driven = closed_loop ? undelayed_source : data.input();
       const Hold hold = closed_loop ? Hold::zero_order_hold : layout.input_hold;
       const double step = 1e-4;
       const double f = layout.delay_fraction;
       const double up = f + step < 1.0 ? step : 0.0;
       const double down = f - step >= 0.0 ? step : 0.0;
       auto output_at = [&](double shift) {
-        return model_output(result.model.with_input_delay(tau + shift * h), driven, h, hold);
+        Eigen::VectorXd out(n_samples);
+        for (size_t r = 0; r < records.size(); ++r) {
+          const Eigen::VectorXd& driven =
+              closed_loop ? signals[r].undelayed_source : records[r]->input();
+          out.segment(signals[r].offset, records[r]->size()) =
+              model_output(result.model.with_input_delay(tau + shift * h), driven, h, hold);
+        }
+        return out;
       };
       psi.conservativeResize(Eigen::NoChange, unknowns + 1);
       psi.col(unknowns) = (output_at(up) - output_at(-down)) / ((up + down) * h);

@@ -10,7 +10,7 @@ namespace ctid {
 EstimationResult srivc(const SampledData& data, const SubmodelOrder& order,
                        const RefinedIvOptions& options) {
   internal::RefinedIvProblem problem;
-  problem.data = &data;
+  problem.records = {&data};
   problem.orders = {order};
   problem.unfactored = true;
   problem.name = "srivc";
@@ -20,7 +20,7 @@ EstimationResult srivc(const SampledData& data, const SubmodelOrder& order,
 EstimationResult clsrivc(const SampledData& data, const DiscreteTransferFunction& controller,
                          const SubmodelOrder& order, const RefinedIvOptions& options) {
   internal::RefinedIvProblem problem;
-  problem.data = &data;
+  problem.records = {&data};
   problem.orders = {order};
   problem.controller = &controller;
   problem.unfactored = true;
@@ -31,7 +31,7 @@ EstimationResult clsrivc(const SampledData& data, const DiscreteTransferFunction
 EstimationResult additive_srivc(const SampledData& data, const std::vector<SubmodelOrder>& orders,
                                 const RefinedIvOptions& options) {
   internal::RefinedIvProblem problem;
-  problem.data = &data;
+  problem.records = {&data};
   problem.orders = orders;
   problem.name = "additive_srivc";
   return internal::run_refined_iv(problem, options);
@@ -42,7 +42,7 @@ EstimationResult additive_clsrivc(const SampledData& data,
                                   const std::vector<SubmodelOrder>& orders,
                                   const RefinedIvOptions& options) {
   internal::RefinedIvProblem problem;
-  problem.data = &data;
+  problem.records = {&data};
   problem.orders = orders;
   problem.controller = &controller;
   problem.name = "additive_clsrivc";

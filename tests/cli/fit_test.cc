@@ -226,6 +226,50 @@ TEST_F(FitCommand, DelayRangeEstimatesAFractionalDelayWithItsStandardError) {
                    "give one of --delay, --delay-scan and --delay-range");
 }
 
+// Rows [first, first + count) of a CSV file with a header line, as a new file.
+std::string csv_rows(const std::string& text, int first, int count) {
+  std::istringstream in(text);
+  std::string line;
+  std::getline(in, line);
+  std::string out = line + "\n";
+  for (int k = 0; std::getline(in, line) && k < first + count; ++k) {
+    if (k >= first) out += line + "\n";
+  }
+  return out;
+}
+
+TEST_F(FitCommand, SeveralFilesAreRecordsOfOneEstimateEachWithItsInitialState) {
+  // Two pieces of one noise-free PRBS run of Section 6.2's plant, neither starting at rest.
+  const auto s = ctid({"simulate", "-m", example("gonzalez_6_2_plant.json"), "--excitation", "prbs",
+                       "--register-length", "10", "--samples-per-bit", "4", "--samples", "4000",
+                       "-T", "0.05", "-o", "d.csv", "-q"});
+  ASSERT_EQ(s.status, 0) << s.err;
+  const std::string whole = testing::slurp(path("d.csv"));
+  write("a.csv", csv_rows(whole, 500, 1200));
+  write("b.csv", csv_rows(whole, 2300, 1500));
+  const auto r = ctid({"fit", "a.csv", "b.csv", "--modes", "2", "--initial-conditions", "estimate",
+                       "-o", "r.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("on a.csv, b.csv (N = 2700,"));
+  const nlohmann::json j = read("r.json");
+  EXPECT_EQ(j.at("data").at("files").size(), 2u);
+  EXPECT_EQ(j.at("data").at("record_samples")[1], 1500);
+  EXPECT_EQ(j.at("initial_conditions").size(), 8u);  // 4 states in each record
+  const AdditiveModel truth = example_additive("gonzalez_6_2_plant.json");
+  const TransferFunction fitted = io::transfer_function_from_json(j.at("transfer_function"), "r");
+  const TransferFunction g = truth.to_transfer_function();
+  for (double w : {0.3, 2.0, 6.3}) {
+    EXPECT_LT(std::abs(fitted.frequency_response(w) - g.frequency_response(w)),
+              1e-8 * std::abs(g.frequency_response(w)));
+  }
+  // Files that do not go together.
+  write("slow.csv", "t,u,y\n0,1,0\n0.1,0,1\n0.2,1,0\n");
+  expect_bad_input(ctid({"fit", "a.csv", "slow.csv", "--modes", "2"}),
+                   "slow.csv is sampled every 0.1 s but a.csv every 0.05 s");
+  write("other.csv", "t,u,z\n0,1,0\n0.05,0,1\n0.1,1,0\n");
+  expect_bad_input(ctid({"fit", "a.csv", "other.csv", "--modes", "2"}), "other.csv");
+}
+
 // Too many poles for a noisy two-mode record: the fit runs (7/6 converges at a negative
 // fit), so the outputs are written, but the summary starts with a WARNING saying what to try,
 // the JSON says usable: false with its reasons, and the exit status is 3; the true order on

@@ -210,4 +210,14 @@ void validate_identification(const ModelStructure& structure, const Identificati
 IdentificationResult identify(const SampledData& data, const ModelStructure& structure,
                               const IdentificationOptions& options = {});
 
+/// identify() on several records of one system (separate experiments, or pieces of one
+/// record): one parameter vector fitted to all of them, each record's filters starting at
+/// its own first sample and, with InitialConditions::estimate, its own initial state. The
+/// records share the sample time, the input hold, the signals (a reference in closed loop)
+/// and the input delay; the start comes from the longest record. Mode relocation takes one
+/// record. One record gives exactly identify(data, ...).
+IdentificationResult identify(const std::vector<SampledData>& records,
+                              const ModelStructure& structure,
+                              const IdentificationOptions& options = {});
+
 }  // namespace ctid

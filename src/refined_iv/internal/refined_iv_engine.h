@@ -15,7 +15,9 @@
 namespace ctid::internal {
 
 struct RefinedIvProblem {
-  const SampledData* data = nullptr;
+  /// One record, or several of one system, each with its own initial state (one parameter
+  /// vector; the same sample time, input hold, signals and input delay).
+  std::vector<const SampledData*> records;
   std::vector<SubmodelOrder> orders;
   /// nullptr: open loop (instrument (10)); otherwise closed loop (instrument (20)).
   const DiscreteTransferFunction* controller = nullptr;
