@@ -2,8 +2,11 @@
 // from a CSV column or generated from an excitation spec, in open loop or in closed loop
 // with a discrete controller (the input then is the reference r), with optional output
 // noise; writes CSV t,u,y[,r]. The numerics are ctid::simulate / simulate_closed_loop, and
-// simulate_delayed for a delayed_feedback_loop model (De Iuliis et al. 2017, Fig. 1), whose
-// sampled input is continued by --hold (default foh, what `ctid feedback` assumes).
+// simulate_delayed for a delayed_feedback_loop model (De Iuliis et al. 2017, Fig. 1). --hold
+// says how the sampled input is continued: a model in open loop defaults to zoh (held, exact
+// with ctid::simulate) and takes foh (piecewise linear, exact with model_output, declared in
+// the CSV so `ctid fit` reads it); closed loop is held by the controller's DAC; a
+// delayed_feedback_loop defaults to foh (what `ctid feedback` assumes).
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -16,6 +19,7 @@
 #include "command.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/estimation/validation.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/excitation_spec.h"
 #include "ctid/io/feedback_result_json.h"
@@ -65,15 +69,15 @@ struct SimulateFlags {
   double nsr = 0.0;
   bool quiet = false;
 
+  std::string hold;  ///< zoh or foh; empty: zoh for a model, foh for a delayed_feedback_loop
   // Delayed-feedback loop only.
-  std::string hold = "foh";
   // Not DelayedSimulationOptions{}.substeps (20): `ctid simulate` has documented 4
   // (docs/cli.md) since it was written, and changing it would change the data it writes.
   int substeps = 4;
 };
 
 // Flags that mean something for a delayed_feedback_loop model only.
-const char* const kLoopOnlyFlags[] = {"--hold", "--substeps", "--nsr"};
+const char* const kLoopOnlyFlags[] = {"--substeps", "--nsr"};
 
 // Agreement of two sample times given in different places (flag, file, controller).
 bool same_sample_time(double a, double b) { return std::abs(a - b) <= 1e-9 * std::abs(b); }
@@ -255,6 +259,7 @@ void run_simulate_loop(const SimulateFlags& f, CLI::App& app, const nlohmann::js
   const DelayedSimulationOptions options{f.substeps};
   options.validate();
   const Hold hold = f.hold == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
+  const std::string hold_name = f.hold.empty() ? "foh" : f.hold;
 
   const InputSignal in = f.input.empty() ? generate_input(f, app, std::nullopt)
                                          : read_input_column(f, app, std::nullopt);
@@ -275,9 +280,24 @@ void run_simulate_loop(const SimulateFlags& f, CLI::App& app, const nlohmann::js
                          f.force ? io::Overwrite::yes : io::Overwrite::no);
   if (!f.quiet) {
     std::cout << "wrote " << u.size() << " samples (t,u,y, h = " << h
-              << " s, delayed feedback loop, delay " << loop.delay << " s, " << f.hold
+              << " s, delayed feedback loop, delay " << loop.delay << " s, " << hold_name
               << " input) to " << output.string() << "\n";
   }
+}
+
+// The model as one submodel B/(p^l A) (a transfer function) or as it is (additive), for
+// model_output, which takes any proper model with integrators.
+AdditiveModel as_additive(const io::ContinuousModel& model) {
+  if (const auto* additive = std::get_if<AdditiveModel>(&model)) return *additive;
+  const TransferFunction& g = std::get<TransferFunction>(model);
+  const Polynomial& den = g.denominator();
+  int l = 0;
+  while (l < den.degree() && den[l] == 0.0) ++l;
+  const Eigen::VectorXd rest = den.coefficients().tail(den.degree() + 1 - l);
+  const double scale = rest(0);
+  Submodel one{Polynomial(Eigen::VectorXd(rest / scale)),
+               Polynomial(Eigen::VectorXd(g.numerator().coefficients() / scale)), l};
+  return AdditiveModel({one}, g.input_delay());
 }
 
 void run_simulate(const SimulateFlags& f, CLI::App& app) {
@@ -299,6 +319,10 @@ void run_simulate(const SimulateFlags& f, CLI::App& app) {
   const io::ContinuousModel model = read_model_or_result(document, f.model);
   std::optional<DiscreteTransferFunction> controller;
   if (!f.controller.empty()) controller = io::read_discrete_transfer_function(f.controller);
+  const Hold hold = f.hold == "foh" ? Hold::first_order_hold : Hold::zero_order_hold;
+  if (controller && hold == Hold::first_order_hold) {
+    usage_error("--hold foh: in closed loop the controller's output is held (zoh) by its DAC");
+  }
 
   const InputSignal in =
       f.input.empty() ? generate_input(f, app, controller) : read_input_column(f, app, controller);
@@ -332,18 +356,21 @@ void run_simulate(const SimulateFlags& f, CLI::App& app) {
   } else {
     u = in.values;
     const Eigen::VectorXd noise_free =
-        std::visit([&](const auto& g) { return simulate(g, u, h); }, model);
+        hold == Hold::zero_order_hold
+            ? std::visit([&](const auto& g) { return simulate(g, u, h); }, model)
+            : model_output(as_additive(model), u, h, Hold::first_order_hold);
     const Eigen::VectorXd v = output_noise(f.noise, noise_free, h);
     y = v.size() == 0 ? noise_free : Eigen::VectorXd(noise_free + v);
   }
 
-  const SampledData data(h, u, y, r, in.start_time);
+  const SampledData data = SampledData(h, u, y, r, in.start_time).with_input_hold(hold);
   io::CsvColumns columns;
   if (r) columns.reference = "r";
   io::write_sampled_data(output, data, columns, f.force ? io::Overwrite::yes : io::Overwrite::no);
   if (!f.quiet) {
     std::cout << "wrote " << n << " samples (" << (r ? "t,u,y,r" : "t,u,y") << ", h = " << h
-              << " s, " << (controller ? "closed loop" : "open loop") << ") to " << output.string()
+              << " s, " << (controller ? "closed loop" : "open loop")
+              << (hold == Hold::first_order_hold ? ", input foh" : "") << ") to " << output.string()
               << "\n";
   }
 }
@@ -461,11 +488,10 @@ Command add_simulate_command(CLI::App& parent) {
   nsr->excludes(f.noise.snr_option);
 
   app->add_option("--hold", f.hold,
-                  "delayed_feedback_loop: the input between samples, zoh (held) or foh "
-                  "(linear, what `ctid feedback` assumes)")
-      ->check(CLI::IsMember({"zoh", "foh"}))
-      ->capture_default_str()
-      ->group("Delayed feedback loop");
+                  "The input between samples: zoh (held; default for a model) or foh (linear; "
+                  "default for a delayed_feedback_loop, what `ctid feedback` assumes). A model "
+                  "simulated with foh writes '# input_hold: foh' into the CSV")
+      ->check(CLI::IsMember({"zoh", "foh"}));
   app->add_option("--substeps", f.substeps, "delayed_feedback_loop: RK4 steps per sample period")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str()

@@ -150,9 +150,10 @@ TEST_F(CliTest, SimulateLoopMisuseIsOneLineAndExitTwo) {
                                       {"--noise-filter", example("gonzalez_6_1_noise_filter.json"),
                                        "--noise-std", "0.1"})),
                    "--noise-filter does not apply to");
-  // Loop-only flags on an ordinary model.
-  expect_bad_input(ctid(simulate_args(example("gonzalez_6_2_plant.json"), out, {"--hold", "foh"})),
-                   "--hold applies to a delayed_feedback_loop model only");
+  // Loop-only flags on an ordinary model; foh in closed loop (the DAC holds the input).
+  expect_bad_input(ctid(simulate_args(example("gonzalez_6_2_plant.json"), out,
+                                      {"--hold", "foh", "-c", example("gonzalez_6_2_pid.json")})),
+                   "in closed loop the controller's output is held (zoh)");
   expect_bad_input(ctid(simulate_args(example("gonzalez_6_2_plant.json"), out, {"--nsr", "0.1"})),
                    "--nsr applies to a delayed_feedback_loop model only");
 

@@ -270,9 +270,33 @@ def crane(s, out):
         check_png(os.path.join(out, name))
 
 
+def intersample(s, out):
+    # The truth is the example's own definition (closed-form steady state, no ctid simulation).
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    import intersample as example
+
+    true_hz = sorted(m[0] for m in example.MODES)
+    cases = s["cases"]
+    for key, case in cases.items():
+        check(case["termination"] == "converged" and case["usable"],
+              f"{key}: converged and usable ({case['termination']})")
+    zoh, foh, fast = cases["zoh"], cases["foh"], cases["zoh_fast"]
+    check(foh["rms_relative_frf_error"] < 0.5 * zoh["rms_relative_frf_error"],
+          f"FOH FRF error {foh['rms_relative_frf_error']:.3g} < half the ZOH's "
+          f"{zoh['rms_relative_frf_error']:.3g}")
+    for got, want in zip(foh["natural_frequencies_hz"], true_hz):
+        check(abs(got / want - 1) < 1e-3, f"FOH mode {got:.5f} Hz within 0.1 % of {want} Hz")
+    check(all(got > want for got, want in zip(zoh["natural_frequencies_hz"], true_hz)),
+          "the ZOH fit's modes are stiffer than the true ones (the staircase lags the input)")
+    check(foh["rms_relative_frf_error"] < fast["rms_relative_frf_error"]
+          < zoh["rms_relative_frf_error"],
+          "halving h with the ZOH lowers its FRF error, not below the FOH's")
+    check_png(os.path.join(out, "frf_error.png"))
+
+
 CHECKS = {"flexible_structure": flexible_structure, "pt326": pt326,
           "canning_river": canning_river, "emps": emps, "dryer": dryer,
-          "crane": crane}
+          "crane": crane, "intersample": intersample}
 
 
 def main():
