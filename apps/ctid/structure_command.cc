@@ -26,12 +26,14 @@ namespace {
 
 struct StructureFlags {
   DataFlags data;
-  std::string modes;  // A:B
-  std::string poles;  // A:B
-  int zeros = -1;     // -1: poles - 1
-  int integrators = 0;
+  std::string modes;        // A:B
+  std::string poles;        // A:B
+  std::string zeros;        // M or A:B; empty: poles - 1
+  std::string integrators;  // L or A:B; empty: 0
   std::string controller;
   int delay = 0;
+  std::string delay_scan;  // A:B samples
+  std::string initial_conditions = "zero";
   double validation_fraction = StructureScanOptions{}.validation_fraction;
   double fit_tolerance = StructureScanOptions{}.fit_tolerance;
   std::string output;
@@ -40,15 +42,16 @@ struct StructureFlags {
   bool quiet = false;
 };
 
-// "A:B" (or "A") as an inclusive range of positive counts.
-std::pair<int, int> parse_range(const std::string& text, const std::string& flag) {
+// "A:B" (or "A") as an inclusive range of counts >= `least`.
+std::pair<int, int> parse_range(const std::string& text, const std::string& flag, int least = 1) {
   const auto colon = text.find(':');
   const std::string low = text.substr(0, colon);
   const std::string high = colon == std::string::npos ? low : text.substr(colon + 1);
   const auto parse = [&](const std::string& part) {
     const std::optional<int> value = parse_number<int>(part);
-    if (!value || *value < 1) {
-      usage_error(flag + " '" + text + "': expected MIN:MAX, positive integers, e.g. 1:6");
+    if (!value || *value < least) {
+      usage_error(flag + " '" + text + "': expected MIN:MAX, integers >= " + std::to_string(least) +
+                  ", e.g. " + std::to_string(least) + ":6");
     }
     return *value;
   };
@@ -104,25 +107,43 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
   const bool modes = !f.modes.empty();
   const bool poles = !f.poles.empty();
   if (modes == poles) usage_error("give one range: --modes MIN:MAX or --poles MIN:MAX");
-  if (modes && (app.count("--zeros") > 0 || app.count("--integrators") > 0)) {
+  if (modes && (!f.zeros.empty() || !f.integrators.empty())) {
     usage_error("--zeros and --integrators go with --poles");
+  }
+  if (!f.delay_scan.empty() && app.count("--delay") > 0) {
+    usage_error("give --delay or --delay-scan, not both");
   }
   if (!f.output.empty() && !f.force && std::filesystem::exists(f.output)) {
     usage_error(f.output + ": file exists; pass --force to replace it (--output)");
   }
   std::vector<ModelStructure> candidates;
-  const auto [low, high] = parse_range(modes ? f.modes : f.poles, modes ? "--modes" : "--poles");
+  const auto [l_low, l_high] =
+      f.integrators.empty() ? std::pair{0, 0} : parse_range(f.integrators, "--integrators", 0);
+  // A pure integrator (0 poles besides the origin) is a candidate when integrators are scanned.
+  const auto [low, high] =
+      parse_range(modes ? f.modes : f.poles, modes ? "--modes" : "--poles", l_high > 0 ? 0 : 1);
   for (int k = low; k <= high; ++k) {
     if (modes) {
       candidates.push_back(ModelStructure::modes(k));
-    } else {
-      const int zeros = f.zeros < 0 ? k - 1 : f.zeros;
-      if (zeros > k + f.integrators) {
-        usage_error("--zeros " + std::to_string(zeros) + " exceeds the " + std::to_string(k) +
+      continue;
+    }
+    for (int l = l_low; l <= l_high; ++l) {
+      if (k + l == 0) continue;
+      // Every zero count of --zeros that keeps the model proper (default n + l - 1).
+      const auto [m_low, m_high] =
+          f.zeros.empty() ? std::pair{k + l - 1, k + l - 1} : parse_range(f.zeros, "--zeros", 0);
+      if (m_low > k + l) {
+        usage_error("--zeros " + f.zeros + " exceeds the " + std::to_string(k + l) +
                     " poles of a structure in --poles " + f.poles + " (an improper model)");
       }
-      candidates.push_back(ModelStructure::unfactored(k, zeros, f.integrators));
+      for (int m = m_low; m <= std::min(m_high, k + l); ++m) {
+        candidates.push_back(ModelStructure::unfactored(k, m, l));
+      }
     }
+  }
+  if (candidates.size() > 64) {
+    usage_error("the flags ask for " + std::to_string(candidates.size()) +
+                " structures; at most 64 per scan");
   }
   std::filesystem::path package;
   if (!f.plot.empty()) {
@@ -136,6 +157,12 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
     options.identification.controller = io::read_discrete_transfer_function(f.controller);
   }
   options.identification.refined_iv.input_delay = f.delay;
+  if (!f.delay_scan.empty()) {
+    const auto [d_low, d_high] = parse_range(f.delay_scan, "--delay-scan", 0);
+    options.identification.delay_scan = DelayRange{d_low, d_high};
+  }
+  options.identification.refined_iv.initial_conditions =
+      f.initial_conditions == "estimate" ? InitialConditions::estimate : InitialConditions::zero;
   options.validate();
   const SampledData data = f.data.load(app, !f.controller.empty());
   const StructureScanResult result = scan_structures(data, candidates, options);
@@ -169,7 +196,8 @@ Command add_structure_command(CLI::App& parent) {
       "YIC, RT2, AIC, BIC, and a stabilisation diagram of the poles.");
   app->footer(
       "The last --validation-fraction of the record is held out: every estimate is simulated "
-      "over the whole record from rest and scored there. Recommended: the fewest parameters "
+      "over the whole record (from rest, or from its fitted initial state) and scored there. "
+      "Recommended: the fewest parameters "
       "among usable fits within --fit-tolerance points of the best validation fit.\n"
       "-o SCAN.json writes every fit, the recommendation and the stabilisation diagram.\n"
       "Exit status: 0 ran, 3 ran but no structure gave a usable model, 2 bad usage or input, 1 "
@@ -179,16 +207,28 @@ Command add_structure_command(CLI::App& parent) {
       ->group("Structures");
   app->add_option("--poles", f.poles, "Unfactored: numbers of poles n, MIN:MAX")
       ->group("Structures");
-  app->add_option("--zeros", f.zeros, "Unfactored: zeros m of every structure (default n - 1)")
+  app->add_option("--zeros", f.zeros,
+                  "Unfactored: zeros m, M or MIN:MAX (each with every --poles; default n + l - 1; "
+                  "m = n + l adds a direct term)")
       ->group("Structures");
-  app->add_option("--integrators", f.integrators, "Unfactored: poles at the origin")
-      ->capture_default_str()
+  app->add_option("--integrators", f.integrators,
+                  "Unfactored: poles at the origin l, L or MIN:MAX (default 0; with l >= 1 "
+                  "--poles may start at 0, a pure integrator)")
       ->group("Structures");
   app->add_option("--controller,-c", f.controller,
                   "Discrete controller JSON: closed loop (the data need the reference)")
       ->check(CLI::ExistingFile)
       ->group("Structures");
   app->add_option("--delay", f.delay, "Known input delay in samples")
+      ->capture_default_str()
+      ->group("Structures");
+  app->add_option("--delay-scan", f.delay_scan,
+                  "Scan the input delay MIN:MAX (samples) in every structure; each keeps its best")
+      ->group("Structures");
+  app->add_option("--initial-conditions", f.initial_conditions,
+                  "zero (at rest) or estimate: every fit estimates its initial state, and the "
+                  "held-out part is simulated from the state fitted on the estimation part")
+      ->check(CLI::IsMember({"zero", "estimate"}))
       ->capture_default_str()
       ->group("Structures");
   app->add_option("--validation-fraction", f.validation_fraction,

@@ -69,7 +69,19 @@ StructureScanResult scan_structures(const SampledData& data,
       fit.message = e.brief_report();
       fit.iterations = e.iterations;
       fit.transfer_function = e.transfer_function;
-      const Eigen::VectorXd simulated = model_output(e.model, data.input(), h, data.input_hold());
+      // Simulated over the whole record from its first sample: from rest, or, when the fits
+      // estimate initial conditions, from the state fitted on the estimation part alone, so
+      // the held-out part is still a prediction.
+      Eigen::VectorXd simulated;
+      if (options.identification.refined_iv.initial_conditions == InitialConditions::estimate) {
+        ValidationOptions from_state;
+        from_state.initial_state = InitialState::estimate;
+        from_state.window_start = data.start_time();
+        from_state.window_end = data.start_time() + (fitted - 1) * h;
+        simulated = validation_output(e.model, data, from_state);
+      } else {
+        simulated = model_output(e.model, data.input(), h, data.input_hold());
+      }
       const Eigen::VectorXd y_est = data.output().head(fitted);
       const Eigen::VectorXd e_est = y_est - simulated.head(fitted);
       fit.estimation_fit = fit_percent(y_est, simulated.head(fitted));

@@ -33,6 +33,31 @@ TEST_F(StructureCommand, RecommendsTheTrueNumberOfModesAndWritesTheScan) {
   EXPECT_FALSE(j.at("stabilisation").empty());
 }
 
+TEST_F(StructureCommand, ScansIntegratorsZerosAndTheDelay) {
+  // 0.3696 e^{-3h s} / (s (s + 2.14)), h = 0.01 s, noise-free: over 0-2 poles with or without
+  // an integrator (a pure integrator included), 0 or 1 zero and delays 0-5, the scan
+  // recommends the true K/(p (1 + a p)) and each candidate found the 3-sample delay.
+  write("g.json", R"({"type": "transfer_function", "numerator_ascending": [0.3696],
+    "denominator_ascending": [0, 2.14, 1], "input_delay": 0.03})");
+  const auto s = ctid({"simulate", "-m", "g.json", "--excitation", "prbs", "--samples", "2000",
+                       "--samples-per-bit", "5", "-T", "0.01", "-o", "i.csv", "-q"});
+  ASSERT_EQ(s.status, 0) << s.err;
+  const auto r = ctid({"structure", "i.csv", "--poles", "0:2", "--integrators", "0:1", "--zeros",
+                       "0:1", "--delay-scan", "0:5", "--detrend", "none", "-o", "s.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("n=0 m=0 l=1"));
+  EXPECT_THAT(r.out, HasSubstr("recommended: n=1 m=0 l=1"));
+  const nlohmann::json j = io::read_json(path("s.json"));
+  // (n, l) in {(0,1), (1,0), (1,1), (2,0), (2,1)}, each with m = 0 and m = 1: 10 structures.
+  EXPECT_EQ(j.at("fits").size(), 10U);
+  expect_bad_input(ctid({"structure", "i.csv", "--poles", "1:2", "--delay", "1", "--delay-scan",
+                         "0:3"}),
+                   "give --delay or --delay-scan, not both");
+  expect_bad_input(ctid({"structure", "i.csv", "--poles", "0:2"}), "integers >= 1");
+  expect_bad_input(ctid({"structure", "i.csv", "--poles", "1:2", "--initial-conditions", "x"}),
+                   "--initial-conditions");
+}
+
 TEST_F(StructureCommand, BadRangesExitTwoWithOneLine) {
   expect_bad_input(ctid({"structure", "d.csv", "--modes", "3:1"}), "MAX is below MIN");
   expect_bad_input(ctid({"structure", "d.csv", "--modes", "x"}), "expected MIN:MAX");

@@ -20,8 +20,9 @@ namespace ctid {
 
 struct StructureScanOptions {
   /// Share of the record, at its end, held out to score the validation fit: each estimate is
-  /// simulated over the whole record from rest and scored on that part only. 0: score on the
-  /// estimation data. In [0, 0.9].
+  /// simulated over the whole record from rest (or, when identification estimates initial
+  /// conditions, from the state fitted on the estimation part) and scored on that part only.
+  /// 0: score on the estimation data. In [0, 0.9].
   double validation_fraction = 0.3;
   /// Parsimony: the recommended structure is the one with the fewest parameters whose
   /// validation fit is within this many percentage points of the best usable one. >= 0.
@@ -63,7 +64,7 @@ struct StructureFit {
   bool usable = false;
   std::vector<std::string> reasons;  ///< the estimate's verdict reasons (empty when usable)
   double estimation_fit = 0.0;       ///< fit_percent on the estimation part
-  double validation_fit = 0.0;       ///< fit_percent on the held-out part (simulated from rest)
+  double validation_fit = 0.0;       ///< fit_percent on the held-out part (see validation_fraction)
   /// Young's information criterion: ln(s_e^2 / s_y^2) + ln((1/p) sum_i P_ii / beta_i^2), with
   /// P the parameter covariance (NaN without one). More negative is better.
   double yic = 0.0;
