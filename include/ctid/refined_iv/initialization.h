@@ -26,17 +26,18 @@ struct InitializationOptions {
   /// Bandwidths lambda [rad/s] of the SVF filter (1 + p/lambda)^n to try; empty: a factor-2
   /// grid from (pi/h)/128 to pi/h.
   std::vector<double> filter_bandwidths;
-  /// SRIVC iterations refining each LSSVF start (0: LSSVF only).
+  /// SRIVC iterations refining each start, and CLSRIVC iterations in closed loop (0: the
+  /// starts as they are).
   int refinement_iterations = 20;
   /// Input delay in samples.
   int input_delay = 0;
   /// Which candidates are tried: auto (all), lssvf or frf.
   StartMethod method = StartMethod::automatic;
   /// The known controller u_k = C_d(q)(r_k - y_k) of closed-loop data (the data must hold the
-  /// reference); none: open loop. With it every candidate is made one the controller
-  /// stabilises (unstable poles reflected, then the gain halved up to
-  /// kStartGainHalvings times), refined by CLSRIVC instead of SRIVC, and only starts the
-  /// controller stabilises are kept, compared by the same output error.
+  /// reference); none: open loop. With it every candidate, and its open-loop SRIVC
+  /// refinement, is made one the controller stabilises (unstable poles reflected, then the
+  /// gain halved up to kStartGainHalvings times) and refined by CLSRIVC; only starts the
+  /// controller stabilises are kept, compared by the same output error y - G u.
   std::optional<DiscreteTransferFunction> controller;
 
   /// Most halvings of a candidate's gain while the controller does not stabilise it.
@@ -98,9 +99,10 @@ AdditiveModel group_into_submodels(const TransferFunction& g,
                                    const std::vector<SubmodelOrder>& orders,
                                    const SampledData& data, int input_delay = 0);
 
-/// initial_transfer_function + group_into_submodels. With options.controller, a grouped model
-/// the controller no longer stabilises (its numerators are refitted) has its gain halved as
-/// above, and otherwise the partial-fraction split of the unfactored start is used.
+/// initial_transfer_function + group_into_submodels. With options.controller the numerators
+/// are fitted to the unfactored start's response to u instead of to y (so the grouped model
+/// stays close to the stabilised start), and a grouped model the controller still does not
+/// stabilise has its gain halved as above.
 AdditiveModel initial_additive_model(const SampledData& data,
                                      const std::vector<SubmodelOrder>& orders,
                                      const InitializationOptions& options = {});
