@@ -1,4 +1,5 @@
-// LSSVF starts refined by SRIVC, and grouping of poles into a requested additive structure.
+// LSSVF and FRF-peak starts refined by SRIVC (by CLSRIVC in closed loop, after making them
+// starts the controller stabilises), and grouping of poles into a requested additive structure.
 #include "ctid/refined_iv/initialization.h"
 
 #include <algorithm>
@@ -89,50 +90,157 @@ std::optional<TransferFunction> frf_peak_start(const SampledData& data, const Su
       .with_input_delay(0.0);
 }
 
+namespace {
+
+// Closed loop: `beta` (laid out for `orders`) made a model the controller stabilises, by
+// reflecting right-half-plane poles and then halving every numerator while the loop is
+// unstable (a direct estimate from closed-loop data leans toward -1/C_d where the noise
+// dominates, i.e. toward a loop gain that is too high); none if kStartGainHalvings halvings do
+// not do it.
+std::optional<Eigen::VectorXd> stabilised(Eigen::VectorXd beta,
+                                          const std::vector<SubmodelOrder>& orders,
+                                          const DiscreteTransferFunction& controller, double h,
+                                          int input_delay) {
+  if (!beta.allFinite()) return std::nullopt;
+  int at = 0;
+  for (const SubmodelOrder& o : orders) {
+    if (o.n >= 1) {
+      Eigen::VectorXd a(o.n + 1);
+      a(0) = 1.0;
+      a.tail(o.n) = beta.segment(at, o.n);
+      bool reflected = false;
+      const Polynomial r = internal::reflect_unstable_roots(Polynomial(a), reflected);
+      if (reflected) {
+        if (r.degree() != o.n) return std::nullopt;
+        for (int k = 1; k <= o.n; ++k) beta(at + k - 1) = r[k];
+      }
+    }
+    at += o.n + o.m + 1;
+  }
+  for (int halving = 0; halving <= InitializationOptions::kStartGainHalvings; ++halving) {
+    if (internal::controller_stabilises(orders, beta, controller, h, input_delay)) return beta;
+    at = 0;
+    for (const SubmodelOrder& o : orders) {
+      beta.segment(at + o.n, o.m + 1) *= 0.5;
+      at += o.n + o.m + 1;
+    }
+  }
+  return std::nullopt;
+}
+
+// Mean squared output error y - G u of `model` (with the input delay), as the engine computes
+// mean_squared_error.
+double output_error(const AdditiveModel& model, const SampledData& data) {
+  return (data.output() - model_output(model, data.input(), data.sample_time(), data.input_hold()))
+             .squaredNorm() /
+         data.size();
+}
+
+}  // namespace
+
 TransferFunction initial_transfer_function(const SampledData& data, const SubmodelOrder& order,
                                            const InitializationOptions& options) {
   options.validate();
+  const double h = data.sample_time();
+  const DiscreteTransferFunction* controller = options.controller ? &*options.controller : nullptr;
+  if (controller != nullptr) {
+    require(data.has_reference(),
+            "initial_transfer_function: a controller is given but the data has no reference r");
+    require(std::abs(controller->sample_time() - h) <= 1e-9 * h,
+            "initial_transfer_function: the controller's sample time ", controller->sample_time(),
+            " differs from the data's ", h);
+  }
+  const double delay = options.input_delay * h;
   double best_cost = std::numeric_limits<double>::infinity();
   std::optional<TransferFunction> best;
+  // Closed loop, when the controller stabilises no candidate: the open-loop choice, so the
+  // caller can still say which model the loop failed on.
+  double unstabilised_cost = std::numeric_limits<double>::infinity();
+  std::optional<TransferFunction> unstabilised;
+  const auto keep = [&](const AdditiveModel& model, double cost) {
+    if (std::isfinite(cost) && cost < best_cost) {
+      best_cost = cost;
+      best = model.to_transfer_function().with_input_delay(0.0);
+    }
+  };
+  RefinedIvOptions refine;
+  refine.max_iterations = std::max(options.refinement_iterations, 1);
+  refine.tolerance = 1e-8;
+  refine.input_delay = options.input_delay;
+  refine.compute_covariance = false;
   // Refines one candidate by SRIVC (or judges it as it is) and keeps it if its output error
   // is the lowest so far.
-  const auto consider = [&](const TransferFunction& start) {
-    const Eigen::VectorXd theta = internal::unfactored_parameters(start, order);
-    if (!theta.allFinite()) return;
-    AdditiveModel model = AdditiveModel::from_parameters({order}, theta);
+  const auto consider_open_loop = [&](AdditiveModel model, double& cost_so_far,
+                                      std::optional<TransferFunction>& kept) {
     if (options.refinement_iterations > 0) {
-      RefinedIvOptions o;
-      o.initial_model = model;
-      o.max_iterations = options.refinement_iterations;
-      o.tolerance = 1e-8;
-      o.input_delay = options.input_delay;
-      o.compute_covariance = false;
-      const EstimationResult r = srivc(data, order, o);
-      if (!std::isfinite(r.mean_squared_error)) return;
-      if (r.mean_squared_error < best_cost) {
-        best_cost = r.mean_squared_error;
-        best = r.transfer_function.with_input_delay(0.0);
+      refine.initial_model = model;
+      const EstimationResult r = srivc(data, order, refine);
+      if (std::isfinite(r.mean_squared_error) && r.mean_squared_error < cost_so_far) {
+        cost_so_far = r.mean_squared_error;
+        kept = r.transfer_function.with_input_delay(0.0);
       }
     } else {
       // Judge the (stabilised) model by its output error.
       bool reflected = false;
       const Polynomial a = internal::reflect_unstable_roots(model[0].a, reflected);
-      model = AdditiveModel({Submodel{a, model[0].b, order.integrators}},
-                            options.input_delay * data.sample_time());
-      const double cost =
-          (data.output() - model_output(model, data.input(), data.sample_time(), data.input_hold()))
-              .squaredNorm() /
-          data.size();
-      if (std::isfinite(cost) && cost < best_cost) {
-        best_cost = cost;
-        best = model.to_transfer_function().with_input_delay(0.0);
+      model = AdditiveModel({Submodel{a, model[0].b, order.integrators}}, delay);
+      const double cost = output_error(model, data);
+      if (std::isfinite(cost) && cost < cost_so_far) {
+        cost_so_far = cost;
+        kept = model.to_transfer_function().with_input_delay(0.0);
       }
+    }
+  };
+  // Closed loop: the candidate made one the controller stabilises, refined by CLSRIVC (whose
+  // instrument needs S_uo r, so a stabilised start is what lets it run at all); the refined
+  // model is kept only if the controller still stabilises it, else the stabilised start.
+  const auto consider_closed_loop = [&](const Eigen::VectorXd& theta) {
+    const std::optional<Eigen::VectorXd> start =
+        stabilised(theta, {order}, *controller, h, options.input_delay);
+    if (!start) return false;
+    const AdditiveModel model = AdditiveModel::from_parameters({order}, *start, delay);
+    keep(model, output_error(model, data));
+    if (options.refinement_iterations > 0) {
+      internal::RefinedIvProblem problem;
+      problem.data = &data;
+      problem.orders = {order};
+      problem.controller = controller;
+      problem.unfactored = true;
+      problem.name = "clsrivc (start)";
+      refine.initial_model = model;  // so the inner run does not look for a start itself
+      const EstimationResult r = internal::run_refined_iv(problem, refine);
+      if (internal::controller_stabilises({order}, r.parameters, *controller, h,
+                                          options.input_delay)) {
+        keep(r.model, r.mean_squared_error);
+      }
+    }
+    return true;
+  };
+  const auto consider = [&](const TransferFunction& start) {
+    const Eigen::VectorXd theta = internal::unfactored_parameters(start, order);
+    if (!theta.allFinite()) return;
+    const AdditiveModel model = AdditiveModel::from_parameters({order}, theta);
+    if (controller == nullptr) {
+      consider_open_loop(model, best_cost, best);
+      return;
+    }
+    consider_closed_loop(theta);
+    // The open-loop refinement of the candidate is a second candidate: SRIVC often moves a
+    // poor LSSVF start close to the closed-loop estimate even though its gain is biased.
+    std::optional<TransferFunction> refined;
+    double refined_cost = std::numeric_limits<double>::infinity();
+    consider_open_loop(model, refined_cost, refined);
+    if (!refined) return;
+    if (!consider_closed_loop(internal::unfactored_parameters(*refined, order)) &&
+        refined_cost < unstabilised_cost) {
+      unstabilised_cost = refined_cost;
+      unstabilised = refined;
     }
   };
 
   if (options.method != StartMethod::frf) {
     std::vector<double> grid = options.filter_bandwidths;
-    const double nyquist = M_PI / data.sample_time();
+    const double nyquist = M_PI / h;
     if (grid.empty()) {
       for (double w = nyquist / 128.0; w <= nyquist * 1.0001; w *= 2.0) grid.push_back(w);
     }
@@ -158,6 +266,7 @@ TransferFunction initial_transfer_function(const SampledData& data, const Submod
             "initial_transfer_function: the record's FRF has fewer resonance peaks than the ",
             order.n / 2, " pole pairs of the structure; use another start (lssvf or a model)");
   }
+  if (!best && unstabilised) return *unstabilised;
   require(best.has_value(), "initial_transfer_function: no candidate start gave a finite model;",
           " give an initial model");
   return *best;
@@ -275,7 +384,20 @@ AdditiveModel initial_additive_model(const SampledData& data,
                                      const InitializationOptions& options) {
   const SubmodelOrder total = unfactored_order(orders);
   const TransferFunction g = initial_transfer_function(data, total, options);
-  return group_into_submodels(g, orders, data, options.input_delay);
+  if (!options.controller) return group_into_submodels(g, orders, data, options.input_delay);
+  // Closed loop: the numerators are fitted to g's own response to u rather than to y, so the
+  // grouped model stays the stabilised start g (refitting them to y would bring back the
+  // pull toward -1/C_d the start was screened against); the gain is halved if needed.
+  const double h = data.sample_time();
+  const AdditiveModel unfactored = AdditiveModel::from_parameters(
+      {total}, internal::unfactored_parameters(g, total), options.input_delay * h);
+  const SampledData own(h, data.input(),
+                        model_output(unfactored, data.input(), h, data.input_hold()));
+  const AdditiveModel grouped =
+      group_into_submodels(g, orders, own.with_input_hold(data.input_hold()), options.input_delay);
+  const std::optional<Eigen::VectorXd> beta =
+      stabilised(grouped.parameters(), orders, *options.controller, h, options.input_delay);
+  return beta ? grouped.with_parameters(*beta) : grouped;
 }
 
 }  // namespace ctid

@@ -638,6 +638,18 @@ Polynomial reflect_unstable_roots(const Polynomial& a, bool& reflected) {
   return Polynomial::from_roots(roots).anti_monic();
 }
 
+bool controller_stabilises(const std::vector<SubmodelOrder>& orders, const Eigen::VectorXd& beta,
+                           const DiscreteTransferFunction& controller, double h, int input_delay) {
+  try {
+    // An empty reference: only the loop's poles are checked, nothing is filtered.
+    return sensitivity_filtered_reference(Layout(orders), beta, controller, Eigen::VectorXd(), h,
+                                          input_delay)
+        .has_value();
+  } catch (const InvalidArgument&) {
+    return false;  // a degenerate model (e.g. A lost its leading coefficient) has no loop
+  }
+}
+
 Eigen::VectorXd parameters_for_orders(const AdditiveModel& model,
                                       const std::vector<SubmodelOrder>& orders) {
   require(model.size() == static_cast<int>(orders.size()), "initial model has ", model.size(),
@@ -791,6 +803,9 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     InitializationOptions init;
     init.input_delay = delay;
     init.method = options.start;
+    // Closed loop: only starts the controller stabilises (decision 0011); an open-loop start
+    // it does not stabilise would stop the iteration before its first step.
+    if (closed_loop) init.controller = *problem.controller;
     if (layout.size() == 1) {
       beta = unfactored_parameters(initial_transfer_function(data, layout.orders[0], init),
                                    layout.orders[0]);
@@ -857,9 +872,22 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   bool stopped = false;
   if (closed_loop && !update_source(beta)) {
     result.termination = Termination::closed_loop_unstable;
-    result.message = name +
-                     ": the controller does not stabilise the initial model, so S_uo r "
-                     "(instrument (20)) cannot be formed; give a model the controller stabilises";
+    result.message =
+        options.initial_model
+            ? name +
+                  ": the controller does not stabilise the initial model, so S_uo r "
+                  "(instrument (20)) cannot be formed; give a model the controller stabilises"
+            : name + ": the controller does not stabilise any start found from the data (" +
+                  (options.start == StartMethod::frf ? std::string("the FRF's resonance peaks")
+                   : options.start == StartMethod::lssvf
+                       ? std::string("LSSVF over a grid of filter bandwidths")
+                       : std::string("LSSVF over a grid of filter bandwidths and the FRF's "
+                                     "resonance peaks")) +
+                  ", and open-loop SRIVC fits of them; each with its unstable poles reflected, "
+                  "its gain halved up to " +
+                  std::to_string(InitializationOptions::kStartGainHalvings) +
+                  " times and refined by CLSRIVC), so S_uo r (instrument (20)) cannot be formed; "
+                  "give a model the controller stabilises";
     stopped = true;
   }
 

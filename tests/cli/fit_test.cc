@@ -168,6 +168,60 @@ TEST_F(FitCommand, ClosedLoopAdditiveAndClsrivcRecoverSection62) {
   }
 }
 
+// A proportional controller close to the loop's stability limit and coloured noise: on this
+// record the open-loop start (SRIVC on u -> y) is a model the controller does not stabilise,
+// which used to stop CLSRIVC at iteration 0 (closed_loop_unstable, exit 3). With the
+// controller screening the starts (decision 0011) the fit converges without --start, to where
+// a start from the true plant converges.
+TEST_F(FitCommand, ClosedLoopFitNeedsNoStartUnderATightController) {
+  write("p.json", R"({"type": "discrete_transfer_function", "numerator_ascending": [0.33],
+    "denominator_ascending": [1.0], "sample_time": 0.05})");
+  const auto s = ctid({"simulate",
+                       "-m",
+                       example("gonzalez_6_2_plant.json"),
+                       "-c",
+                       "p.json",
+                       "--excitation",
+                       "white",
+                       "--seed",
+                       "5",
+                       "--samples",
+                       "4000",
+                       "--noise-filter",
+                       example("gonzalez_6_1_noise_filter.json"),
+                       "--noise-std",
+                       "0.2",
+                       "--noise-seed",
+                       "105",
+                       "-o",
+                       "d.csv",
+                       "-q"});
+  ASSERT_EQ(s.status, 0) << s.err;
+  for (const char* structure : {"unfactored", "additive"}) {
+    std::vector<std::string> args{"fit", "d.csv", "-c", "p.json"};
+    if (std::string(structure) == "unfactored") {
+      args.insert(args.end(), {"--poles", "4", "--zeros", "2"});
+    } else {
+      args.insert(args.end(), {"--submodel", "2,0", "--submodel", "2,0"});
+    }
+    std::vector<std::string> data_args = args;
+    data_args.insert(data_args.end(), {"-o", "data.json", "-q", "--force"});
+    const auto from_data = ctid(data_args);
+    ASSERT_EQ(from_data.status, 0) << structure << ": " << from_data.err << from_data.out;
+    const nlohmann::json d = read("data.json");
+    EXPECT_EQ(d.at("termination"), "converged") << structure;
+    std::vector<std::string> truth_args = args;
+    truth_args.insert(truth_args.end(), {"--initial", example("gonzalez_6_2_plant.json"), "-o",
+                                         "truth.json", "-q", "--force"});
+    const auto from_truth = ctid(truth_args);
+    ASSERT_EQ(from_truth.status, 0) << structure << ": " << from_truth.err;
+    EXPECT_LT(
+        relative_error(numbers(d.at("parameters")), numbers(read("truth.json").at("parameters"))),
+        1e-6)
+        << structure;
+  }
+}
+
 TEST_F(FitCommand, DelayScanFindsTheDelayAndIntegratorsAreFitted) {
   // 0.3696 e^{-3h s}/(s (s + 2.14)): an integrator and a 3-sample delay, h = 0.01 s.
   write("g.json", R"({"type": "transfer_function", "numerator_ascending": [0.3696],

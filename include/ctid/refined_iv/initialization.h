@@ -4,7 +4,8 @@
 // FRF (lightly damped data, where LSSVF starts tend to miss modes); each is refined by a few
 // SRIVC iterations (eq. 30) and the best output-error fit kept. Its poles are then grouped
 // into the requested submodels (complex pairs stay together, origin poles go to the
-// integrator submodel) with numerators by least squares.
+// integrator submodel) with numerators by least squares. In closed loop (a known controller)
+// only starts the controller stabilises are kept, each refined by CLSRIVC (decision 0011).
 #pragma once
 
 #include <optional>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "ctid/core/additive_model.h"
+#include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/core/transfer_function.h"
@@ -24,12 +26,22 @@ struct InitializationOptions {
   /// Bandwidths lambda [rad/s] of the SVF filter (1 + p/lambda)^n to try; empty: a factor-2
   /// grid from (pi/h)/128 to pi/h.
   std::vector<double> filter_bandwidths;
-  /// SRIVC iterations refining each LSSVF start (0: LSSVF only).
+  /// SRIVC iterations refining each start, and CLSRIVC iterations in closed loop (0: the
+  /// starts as they are).
   int refinement_iterations = 20;
   /// Input delay in samples.
   int input_delay = 0;
   /// Which candidates are tried: auto (all), lssvf or frf.
   StartMethod method = StartMethod::automatic;
+  /// The known controller u_k = C_d(q)(r_k - y_k) of closed-loop data (the data must hold the
+  /// reference); none: open loop. With it every candidate, and its open-loop SRIVC
+  /// refinement, is made one the controller stabilises (unstable poles reflected, then the
+  /// gain halved up to kStartGainHalvings times) and refined by CLSRIVC; only starts the
+  /// controller stabilises are kept, compared by the same output error y - G u.
+  std::optional<DiscreteTransferFunction> controller;
+
+  /// Most halvings of a candidate's gain while the controller does not stabilise it.
+  static constexpr int kStartGainHalvings = 20;
 
   static constexpr std::string_view type_name = "InitializationOptions";
   static constexpr auto fields() {
@@ -41,6 +53,9 @@ struct InitializationOptions {
               "SRIVC iterations refining each LSSVF start (0: LSSVF only)."),
         field("input_delay", &O::input_delay, AtLeast{0}, "Input delay [samples]."),
         field("method", &O::method, "Candidates tried: auto (all), lssvf or frf."),
+        field("controller", &O::controller,
+              "Known discrete controller of closed-loop data (starts it stabilises, refined by "
+              "CLSRIVC), or none (open loop)."),
     };
   }
   /// Throws InvalidArgument naming the first bad field, its value and the rule.
@@ -67,7 +82,10 @@ SubmodelOrder unfactored_order(const std::vector<SubmodelOrder>& orders);
 
 /// The best unfactored start for `order` among the candidates options.method names (see file
 /// comment). Throws InvalidArgument when no candidate gives a finite model (with frf: when
-/// the FRF has too few peaks for the order).
+/// the FRF has too few peaks for the order). With options.controller: the best start the
+/// controller stabilises; if it stabilises none, the best candidate as found in open loop
+/// (the caller's CLSRIVC then stops with Termination::closed_loop_unstable). Throws
+/// InvalidArgument if the data has no reference or the controller's sample time differs.
 TransferFunction initial_transfer_function(const SampledData& data, const SubmodelOrder& order,
                                            const InitializationOptions& options = {});
 
@@ -81,7 +99,10 @@ AdditiveModel group_into_submodels(const TransferFunction& g,
                                    const std::vector<SubmodelOrder>& orders,
                                    const SampledData& data, int input_delay = 0);
 
-/// initial_transfer_function + group_into_submodels.
+/// initial_transfer_function + group_into_submodels. With options.controller the numerators
+/// are fitted to the unfactored start's response to u instead of to y (so the grouped model
+/// stays close to the stabilised start), and a grouped model the controller still does not
+/// stabilise has its gain halved as above.
 AdditiveModel initial_additive_model(const SampledData& data,
                                      const std::vector<SubmodelOrder>& orders,
                                      const InitializationOptions& options = {});

@@ -40,4 +40,11 @@ Eigen::VectorXd unfactored_parameters(const TransferFunction& g, const SubmodelO
 /// whether anything changed.
 Polynomial reflect_unstable_roots(const Polynomial& a, bool& reflected);
 
+/// Whether `controller` stabilises the sampled loop with the model `beta` (laid out for
+/// `orders`, ZOH with `input_delay` samples): every closed-loop pole inside the unit circle and
+/// the loop well posed. The same test that decides whether S_uo r (instrument (20)) can be
+/// formed, so a start that passes it does not stop CLSRIVC at iteration 0.
+bool controller_stabilises(const std::vector<SubmodelOrder>& orders, const Eigen::VectorXd& beta,
+                           const DiscreteTransferFunction& controller, double h, int input_delay);
+
 }  // namespace ctid::internal

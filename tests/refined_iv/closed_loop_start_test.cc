@@ -1,0 +1,196 @@
+// Starts from closed-loop data alone (initialization.h with a controller, decision 0011). The
+// plant of Section 6.2 under a proportional controller close to its stability limit, with the
+// paper's coloured noise: the open-loop start (LSSVF / FRF peaks refined by SRIVC on u -> y)
+// is often a model the controller does not stabilise, which stops CLSRIVC before its first
+// step. With the controller known, every candidate is made one it stabilises and refined by
+// CLSRIVC, so the estimators run and end where a start from the true system ends.
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "ctid/core/error.h"
+#include "ctid/refined_iv/additive_srivc.h"
+#include "ctid/refined_iv/clsrivc.h"
+#include "ctid/refined_iv/initialization.h"
+#include "ctid/simulation/closed_loop.h"
+#include "ctid/simulation/excitation.h"
+#include "ctid/simulation/noise.h"
+#include "ctid/simulation/simulate.h"
+#include "support/paper_systems.h"
+
+namespace ctid {
+namespace {
+
+using ::testing::HasSubstr;
+
+constexpr double kH = testing::kPaperSampleTime;
+constexpr SubmodelOrder kUnfactored{4, 2, 0};
+constexpr int kSeeds = 20;
+
+// u_k = 0.33 (r_k - y_k): the loop with the Section 6.2 plant loses stability at a gain of
+// about 0.37 (its lightly damped mode at 6.3 rad/s), so a model whose resonance is a little
+// too high is not stabilised.
+DiscreteTransferFunction tight_controller() {
+  return DiscreteTransferFunction(Polynomial{0.33}, Polynomial{1.0}, kH);
+}
+
+double loop_radius(const TransferFunction& g, const DiscreteTransferFunction& c) {
+  return closed_loop_poles(zoh_equivalent(g, kH), c).cwiseAbs().maxCoeff();
+}
+
+// White reference, output noise (q + 0.5)/(q - 0.85) e with var e = 0.04 (none if 0).
+SampledData closed_loop_data(std::uint64_t seed, int samples, double noise_variance) {
+  const Eigen::VectorXd r = white_noise(samples, 1.0, seed);
+  const Eigen::VectorXd v =
+      noise_variance > 0.0
+          ? colored_noise(testing::open_loop_noise_filter(), samples, noise_variance, 1000 + seed)
+          : Eigen::VectorXd();
+  const ClosedLoopSimulation loop =
+      simulate_closed_loop(testing::closed_loop_two_modes(), tight_controller(), r, v);
+  return SampledData(kH, loop.input, loop.output, r);
+}
+
+double relative_difference(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return (a - b).norm() / b.norm();
+}
+
+RefinedIvOptions quick_options() {
+  RefinedIvOptions o;
+  o.compute_covariance = false;
+  return o;
+}
+
+TEST(ClosedLoopStart, TheScenarioNeedsIt) {
+  // The true loop is stable, with little margin.
+  const double radius =
+      loop_radius(testing::closed_loop_two_modes().to_transfer_function(), tight_controller());
+  EXPECT_LT(radius, 1.0);
+  EXPECT_GT(radius, 0.999);
+}
+
+TEST(ClosedLoopStart, NoiseFreeDataGiveTheExactModel) {
+  const AdditiveModel truth = testing::closed_loop_two_modes();
+  const SampledData data = closed_loop_data(7, 2000, 0.0);
+  const EstimationResult u = clsrivc(data, tight_controller(), kUnfactored, quick_options());
+  ASSERT_TRUE(u.converged()) << u.message;
+  const TransferFunction g = truth.to_transfer_function();
+  for (double w : {0.3, 2.0, 6.3, 20.0}) {
+    EXPECT_LT(std::abs(u.transfer_function.frequency_response(w) - g.frequency_response(w)),
+              1e-8 * std::abs(g.frequency_response(w)))
+        << "w = " << w;
+  }
+  const EstimationResult a =
+      additive_clsrivc(data, tight_controller(), truth.orders(), quick_options());
+  ASSERT_TRUE(a.converged()) << a.message;
+  EXPECT_LT(relative_difference(a.parameters, truth.parameters()), 1e-8);
+}
+
+TEST(ClosedLoopStart, EveryCandidateKeptIsStabilisedByTheController) {
+  const SampledData data = closed_loop_data(1, 4000, 0.04);
+  InitializationOptions options;
+  // Open loop this record's start is not stabilised by the controller ...
+  ASSERT_GE(loop_radius(initial_transfer_function(data, kUnfactored, options), tight_controller()),
+            1.0);
+  // ... with the controller it is.
+  options.controller = tight_controller();
+  EXPECT_LT(loop_radius(initial_transfer_function(data, kUnfactored, options), tight_controller()),
+            1.0);
+  const AdditiveModel additive =
+      initial_additive_model(data, testing::closed_loop_two_modes().orders(), options);
+  EXPECT_LT(loop_radius(additive.to_transfer_function(), tight_controller()), 1.0);
+}
+
+// One estimator over kSeeds records: from the data alone it never stops at iteration 0, and it
+// ends where a start from the true system ends on at least pass_rate of them. Returns the
+// number of records on which the open-loop start (what the estimator started from before
+// decision 0011, `open_loop_start`) is not stabilised by the controller.
+template <class Estimate, class OpenLoopStart>
+int compare_with_truth_start(const char* name, const Estimate& estimate,
+                             const OpenLoopStart& open_loop_start, double pass_rate) {
+  int destabilising = 0;
+  int same = 0;
+  for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
+    const SampledData data = closed_loop_data(seed, 4000, 0.04);
+    const AdditiveModel old_start = open_loop_start(data);
+    if (loop_radius(old_start.to_transfer_function(), tight_controller()) >= 1.0) {
+      ++destabilising;
+      // Before: the estimator from that start stopped at once.
+      RefinedIvOptions o = quick_options();
+      o.initial_model = old_start;
+      EXPECT_EQ(estimate(data, o).termination, Termination::closed_loop_unstable)
+          << name << ", seed " << seed;
+    }
+    const EstimationResult from_data = estimate(data, quick_options());
+    EXPECT_NE(from_data.termination, Termination::closed_loop_unstable)
+        << name << ", seed " << seed << ": " << from_data.message;
+    RefinedIvOptions o = quick_options();
+    o.initial_model = testing::closed_loop_two_modes();
+    const EstimationResult from_truth = estimate(data, o);
+    if (from_data.converged() && from_truth.converged() &&
+        relative_difference(from_data.parameters, from_truth.parameters) < 1e-6) {
+      ++same;
+    }
+  }
+  EXPECT_GE(same, pass_rate * kSeeds) << name;
+  std::printf(
+      "%s: %d of %d records end at the true start's stationary point; the open-loop "
+      "start is not stabilised on %d\n",
+      name, same, kSeeds, destabilising);
+  return destabilising;
+}
+
+// Measured: 72 of seeds 1..80 (unfactored) and 33 of seeds 1..40 (additive) end at the true
+// start's stationary point. The others are records on which CLSRIVC has several stationary
+// points (the open-loop start, where the controller stabilises it, mostly misses too): the
+// iteration stops at the limit or at a second fixed point.
+TEST(ClosedLoopStart, ClsrivcFromTheDataEndsWhereTheTrueStartEnds) {
+  const int destabilising = compare_with_truth_start(
+      "clsrivc",
+      [](const SampledData& data, const RefinedIvOptions& o) {
+        return clsrivc(data, tight_controller(), kUnfactored, o);
+      },
+      [](const SampledData& data) {
+        const TransferFunction g = initial_transfer_function(data, kUnfactored);
+        const double scale = g.denominator()[0];
+        return AdditiveModel(
+            {Submodel{(1.0 / scale) * g.denominator(), (1.0 / scale) * g.numerator(), 0}});
+      },
+      0.85);
+  EXPECT_GE(destabilising, 3);
+}
+
+TEST(ClosedLoopStart, AdditiveClsrivcFromTheDataEndsWhereTheTrueStartEnds) {
+  const std::vector<SubmodelOrder> orders = testing::closed_loop_two_modes().orders();
+  const int destabilising = compare_with_truth_start(
+      "additive_clsrivc",
+      [&](const SampledData& data, const RefinedIvOptions& o) {
+        return additive_clsrivc(data, tight_controller(), orders, o);
+      },
+      [&](const SampledData& data) { return initial_additive_model(data, orders); }, 0.75);
+  EXPECT_GE(destabilising, 3);
+}
+
+TEST(ClosedLoopStart, SaysWhatWasTriedWhenNoStartIsStabilised) {
+  const SampledData data = closed_loop_data(3, 1000, 0.0);
+  // An unstable controller (pole at z = 1.5) that no small-gain model is stabilised by.
+  const DiscreteTransferFunction unstable(Polynomial{0.01}, Polynomial{-1.5, 1.0}, kH);
+  const EstimationResult r = clsrivc(data, unstable, kUnfactored, quick_options());
+  EXPECT_EQ(r.termination, Termination::closed_loop_unstable);
+  EXPECT_THAT(r.message, HasSubstr("does not stabilise any start found from the data"));
+  EXPECT_THAT(r.message, HasSubstr("gain halved up to 20 times"));
+  EXPECT_THAT(
+      [&] {
+        InitializationOptions options;
+        options.controller = tight_controller();
+        initial_transfer_function(SampledData(kH, data.input(), data.output()), kUnfactored,
+                                  options);
+      },
+      ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("no reference")));
+}
+
+}  // namespace
+}  // namespace ctid
