@@ -202,7 +202,7 @@ TransferFunction initial_transfer_function(const SampledData& data, const Submod
     keep(model, output_error(model, data));
     if (options.refinement_iterations > 0) {
       internal::RefinedIvProblem problem;
-      problem.data = &data;
+      problem.records = {&data};
       problem.orders = {order};
       problem.controller = controller;
       problem.unfactored = true;
