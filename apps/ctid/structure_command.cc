@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -35,7 +36,7 @@ struct StructureFlags {
   std::string delay_scan;  // A:B samples
   std::string initial_conditions = "zero";
   double validation_fraction = StructureScanOptions{}.validation_fraction;
-  double fit_tolerance = StructureScanOptions{}.fit_tolerance;
+  std::optional<double> error_tolerance;
   std::string output;
   std::string plot;
   bool force = false;
@@ -152,7 +153,7 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
   }
   StructureScanOptions options;
   options.validation_fraction = f.validation_fraction;
-  options.fit_tolerance = f.fit_tolerance;
+  options.error_tolerance = f.error_tolerance;
   if (!f.controller.empty()) {
     options.identification.controller = io::read_discrete_transfer_function(f.controller);
   }
@@ -198,7 +199,8 @@ Command add_structure_command(CLI::App& parent) {
       "The last --validation-fraction of the record is held out: every estimate is simulated "
       "over the whole record (from rest, or from its fitted initial state) and scored there. "
       "Recommended: the fewest parameters "
-      "among usable fits within --fit-tolerance points of the best validation fit.\n"
+      "among usable fits whose held-out mean squared error is within --error-tolerance "
+      "(relative; default 2 sqrt(2 / held-out samples)) of the best.\n"
       "-o SCAN.json writes every fit, the recommendation and the stabilisation diagram.\n"
       "Exit status: 0 ran, 3 ran but no structure gave a usable model, 2 bad usage or input, 1 "
       "other error.");
@@ -235,9 +237,9 @@ Command add_structure_command(CLI::App& parent) {
                   "Share of the record at its end held out for validation (0: none)")
       ->capture_default_str()
       ->group("Choice");
-  app->add_option("--fit-tolerance", f.fit_tolerance,
-                  "Percentage points of validation fit traded for fewer parameters")
-      ->capture_default_str()
+  app->add_option("--error-tolerance", f.error_tolerance,
+                  "Relative increase of the held-out mean squared error traded for fewer "
+                  "parameters (default 2 sqrt(2 / held-out samples))")
       ->group("Choice");
   app->add_option("--output,-o", f.output, "Scan JSON to write")->group("Output");
   app->add_option("--plot", f.plot, "Directory for stabilisation.png (the stabilisation diagram)")

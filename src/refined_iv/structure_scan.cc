@@ -60,7 +60,7 @@ StructureScanResult scan_structures(const SampledData& data,
     StructureFit fit;
     fit.structure = structure;
     fit.yic = fit.rt2 = fit.aic = fit.bic = kNan;
-    fit.estimation_fit = fit.validation_fit = kNan;
+    fit.estimation_fit = fit.validation_fit = fit.validation_error = kNan;
     try {
       const IdentificationResult r = identify(estimation, structure, options.identification);
       const EstimationResult& e = r.estimate;
@@ -88,6 +88,10 @@ StructureScanResult scan_structures(const SampledData& data,
       fit.validation_fit = held_out > 0
                                ? fit_percent(data.output().tail(held_out), simulated.tail(held_out))
                                : fit.estimation_fit;
+      fit.validation_error =
+          held_out > 0 ? (data.output().tail(held_out) - simulated.tail(held_out)).squaredNorm() /
+                             held_out
+                       : e_est.squaredNorm() / fitted;
       const double error_variance = e_est.squaredNorm() / fitted;
       const double output_variance = variance_about_mean(y_est);
       fit.rt2 = 1.0 - error_variance / output_variance;
@@ -102,7 +106,7 @@ StructureScanResult scan_structures(const SampledData& data,
       }
       // The verdict already asks for finite parameters and stable poles (integrators aside).
       fit.usable = e.verdict.usable && std::isfinite(fit.validation_fit) &&
-                   std::isfinite(fit.estimation_fit);
+                   std::isfinite(fit.estimation_fit) && std::isfinite(fit.validation_error);
       fit.reasons = e.verdict.reasons;
     } catch (const InvalidArgument& error) {
       fit.message = error.what();
@@ -111,14 +115,20 @@ StructureScanResult scan_structures(const SampledData& data,
     result.fits.push_back(std::move(fit));
   }
 
-  // Recommendation: parsimony within fit_tolerance of the best usable validation fit.
-  double best = -std::numeric_limits<double>::infinity();
+  // Recommendation: parsimony within error_tolerance of the best usable held-out error.
+  const int scored = held_out > 0 ? held_out : fitted;
+  const double tolerance = options.error_tolerance.value_or(2.0 * std::sqrt(2.0 / scored));
+  double best = std::numeric_limits<double>::infinity();
+  double best_fit = kNan;
   for (const StructureFit& fit : result.fits) {
-    if (fit.usable) best = std::max(best, fit.validation_fit);
+    if (fit.usable && fit.validation_error < best) {
+      best = fit.validation_error;
+      best_fit = fit.validation_fit;
+    }
   }
   for (std::size_t i = 0; i < result.fits.size(); ++i) {
     const StructureFit& fit = result.fits[i];
-    if (!fit.usable || fit.validation_fit < best - options.fit_tolerance) continue;
+    if (!fit.usable || !(fit.validation_error <= best * (1.0 + tolerance))) continue;
     if (result.recommended < 0) {
       result.recommended = static_cast<int>(i);
       continue;
@@ -128,13 +138,13 @@ StructureScanResult scan_structures(const SampledData& data,
     const bool tie_better_yic = fit.parameters == kept.parameters && fit.yic < kept.yic;
     if (fewer || tie_better_yic) result.recommended = static_cast<int>(i);
   }
-  const std::string where = held_out > 0 ? "held-out validation fit" : "fit";
+  const std::string where = held_out > 0 ? "held-out" : "estimation";
   if (result.recommended < 0) {
     result.rule = "no candidate gave a usable fit";
   } else {
-    result.rule = "fewest parameters among the usable fits whose " + where + " is within " +
-                  format_number(options.fit_tolerance) + " points of the best (" +
-                  format_significant(best, 4) + " %)";
+    result.rule = "fewest parameters among the usable fits whose " + where +
+                  " error is within " + format_significant(100.0 * tolerance, 2) +
+                  " % of the best (fit " + format_significant(best_fit, 4) + " %)";
   }
 
   // Stabilisation diagram: each fit against the fit before it in the list.

@@ -7,6 +7,7 @@
 // previous order has a pole close to it), as modal-analysis tools draw it.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <tuple>
@@ -25,8 +26,12 @@ struct StructureScanOptions {
   /// 0: score on the estimation data. In [0, 0.9].
   double validation_fraction = 0.3;
   /// Parsimony: the recommended structure is the one with the fewest parameters whose
-  /// validation fit is within this many percentage points of the best usable one. >= 0.
-  double fit_tolerance = 1.0;
+  /// held-out mean squared error is at most (1 + error_tolerance) times the best usable one's.
+  /// None: 2 sqrt(2 / N_v), twice the relative standard deviation of the mean square of N_v
+  /// white-noise samples (N_v held out, or fitted when nothing is held out), so a smaller
+  /// model is kept only when its extra error is within what the noise alone would make
+  /// (decision 0015). >= 0.
+  std::optional<double> error_tolerance;
   /// Stabilisation diagram: a pole is stable in frequency (damping) when the previous order
   /// has a pole within this relative distance of its natural frequency (damping ratio). > 0.
   double frequency_tolerance = 0.01;
@@ -40,8 +45,9 @@ struct StructureScanOptions {
     return std::tuple{
         field("validation_fraction", &O::validation_fraction, Between{0.0, 0.9, true, true},
               "Share of the record, at its end, used to score the validation fit (0: none)."),
-        field("fit_tolerance", &O::fit_tolerance, Finite{AtLeast{0.0}},
-              "Recommend the fewest parameters within this many points of the best fit."),
+        field("error_tolerance", &O::error_tolerance, Finite{AtLeast{0.0}},
+              "Relative held-out error increase accepted for fewer parameters; none: "
+              "2 sqrt(2 / N_v)."),
         field("frequency_tolerance", &O::frequency_tolerance, Finite{GreaterThan{0.0}},
               "Relative frequency change of a pole stable in frequency."),
         field("damping_tolerance", &O::damping_tolerance, Finite{GreaterThan{0.0}},
@@ -65,6 +71,7 @@ struct StructureFit {
   std::vector<std::string> reasons;  ///< the estimate's verdict reasons (empty when usable)
   double estimation_fit = 0.0;       ///< fit_percent on the estimation part
   double validation_fit = 0.0;       ///< fit_percent on the held-out part (see validation_fraction)
+  double validation_error = 0.0;     ///< mean squared output error on the held-out part
   /// Young's information criterion: ln(s_e^2 / s_y^2) + ln((1/p) sum_i P_ii / beta_i^2), with
   /// P the parameter covariance (NaN without one). More negative is better.
   double yic = 0.0;
@@ -86,6 +93,8 @@ struct StructureFit {
         field("reasons", &S::reasons, "The estimate's verdict reasons (empty when usable)."),
         field("estimation_fit", &S::estimation_fit, "fit_percent on the estimation part."),
         field("validation_fit", &S::validation_fit, "fit_percent on the held-out part."),
+        field("validation_error", &S::validation_error,
+              "Mean squared output error on the held-out part."),
         field("yic", &S::yic, "Young's information criterion (more negative is better)."),
         field("rt2", &S::rt2, "1 - s_e^2 / s_y^2 on the estimation part."),
         field("aic", &S::aic, "N ln(s_e^2) + 2 p."),
@@ -147,8 +156,8 @@ struct StructureScanResult {
 /// (see StructureScanOptions). A candidate whose fit throws (e.g. too many parameters for the
 /// data) is reported with its message and usable = false; the scan itself throws
 /// InvalidArgument only for bad options, an empty candidate list or too short a record.
-/// Recommendation: among usable fits, the fewest parameters whose validation fit is within
-/// fit_tolerance points of the best usable validation fit (ties: lower YIC).
+/// Recommendation: among usable fits, the fewest parameters whose held-out mean squared error
+/// is within error_tolerance (relative) of the best usable one's (ties: lower YIC).
 StructureScanResult scan_structures(const SampledData& data,
                                     const std::vector<ModelStructure>& candidates,
                                     const StructureScanOptions& options = {});
