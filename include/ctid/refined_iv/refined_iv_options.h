@@ -89,11 +89,13 @@ struct RefinedIvOptions {
   bool delay_estimated = false;
   /// Keep one IterationRecord per iteration in the result.
   bool record_history = false;
-  /// Step control: a step of (29) whose equations are singular or non-finite, whose model
-  /// the controller does not stabilise, which is unstable, or after which the scaled IV
-  /// residual ||sum zeta (y - G u)|| grows is halved toward the last accepted iterate (at
-  /// most max_step_halvings times per step). Accepted steps are the plain iteration, so the
-  /// fixed points are unchanged; halvings are counted in EstimationResult::step_halvings.
+  /// Step control: a step of (29) after which the equations are singular or non-finite is
+  /// halved toward the last accepted iterate (at most max_step_halvings times per step).
+  /// Accepted steps are the plain iteration, so the fixed points are unchanged; halvings are
+  /// counted in EstimationResult::step_halvings. (Unstable denominators are reflected, and
+  /// in closed loop an iterate the controller does not stabilise keeps the last S_uo r,
+  /// counted in sensitivity_fallbacks; halving those steps was measured to reach the true
+  /// start's stationary point less often.)
   bool step_control = true;
   /// Largest number of halvings of one step. >= 0.
   int max_step_halvings = 8;
@@ -128,7 +130,7 @@ struct RefinedIvOptions {
               "The delay was estimated: its sensitivity joins the covariance."),
         field("record_history", &O::record_history, "Keep one IterationRecord per iteration."),
         field("step_control", &O::step_control,
-              "Halve steps that fail or increase the scaled IV residual."),
+              "Halve steps after which the equations are singular or non-finite."),
         field("max_step_halvings", &O::max_step_halvings, AtLeast{0},
               "Largest number of halvings of one step."),
         field("noise", &O::noise, "Noise assumption of the covariance."),
