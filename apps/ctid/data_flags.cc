@@ -86,6 +86,11 @@ void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_referen
                  "start time)")
       ->check(CLI::PositiveNumber)
       ->group("Data");
+  app.add_option("--resample", resample,
+                 "Irregular time stamps: move the record onto a uniform grid of this step "
+                 "(seconds) from the first stamp, the input as it is held, the output linearly")
+      ->check(CLI::PositiveNumber)
+      ->group("Data");
   app.add_option("--input-hold", input_hold,
                  "How u is continued between samples: zoh or foh (default: the file's "
                  "'# input_hold:' declaration, else zoh)")
@@ -148,9 +153,26 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
                                  ", which declares input_hold: ", hold_flag_name(*declared)));
   }
   const Hold hold = flagged.value_or(declared.value_or(Hold::zero_order_hold));
+  const bool resample_flag = app.count("--resample") > 0;
+  if (resample_flag && h_flag) usage_error("give --resample or --sample-time, not both");
+  if (resample_flag && !table.has_column(time_column)) {
+    usage_error(internal::concat(
+        "--resample needs the time stamps, but ", path, " has no time column '", time_column,
+        "' (columns: ", column_list(table), "); name it with --time-column"));
+  }
 
   std::optional<SampledData> read;
-  if (table.has_column(time_column)) {
+  if (resample_flag) {
+    const Eigen::VectorXd& stamps = table.column(time_column);
+    try {
+      read.emplace(ctid::resample(stamps, u, y, reference, resample, hold));
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(path + ": " + e.what());
+    }
+    std::cerr << "note: " << path << ": " << stamps.size()
+              << " time stamps resampled onto h = " << format_number(resample) << " s ("
+              << read->size() << " samples)\n";
+  } else if (table.has_column(time_column)) {
     const Eigen::VectorXd& stamps = table.column(time_column);
     if (h_flag) {
       // -T wins; the stamps give the start time, and a disagreement is noted, not refused.
@@ -186,7 +208,8 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
         read.emplace(io::sampled_data_from_table(table, columns));
       } catch (const InvalidArgument& e) {
         throw InvalidArgument(std::string(e.what()) +
-                              "; --sample-time (-T) overrides the time column");
+                              "; --sample-time (-T) overrides the time column, and --resample H "
+                              "moves irregular stamps onto a grid of step H");
       }
     }
   } else {

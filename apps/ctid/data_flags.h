@@ -23,6 +23,7 @@ struct DataFlags {
   std::string reference_column;  ///< empty: "r" when a reference is needed
   std::string time_column = "t";
   double sample_time = 0.0;
+  double resample = 0.0;   ///< --resample H: irregular stamps onto a grid of step H
   std::string input_hold;  ///< "zoh" or "foh"; empty: the file's declaration, else zoh
   std::string rows;        ///< "A:B"; empty: all
   std::string time;        ///< "A:B" in seconds; empty: all

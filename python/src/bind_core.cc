@@ -274,6 +274,15 @@ void bind_core(py::module_& m) {
       },
       py::arg("data"), py::arg("options") = py::none(),
       "PreprocessedData: the record after range, detrend, decimation and scaling.");
+  m.def(
+      "resample",
+      [](const Eigen::VectorXd& time, const Eigen::VectorXd& input, const Eigen::VectorXd& output,
+         double h, const std::optional<Eigen::VectorXd>& reference,
+         Hold input_hold) { return resample(time, input, output, reference, h, input_hold); },
+      py::arg("time"), py::arg("input"), py::arg("output"), py::arg("h"),
+      py::arg("reference") = py::none(), py::arg("input_hold") = Hold::zero_order_hold,
+      "A record with irregular time stamps on the uniform grid t_0 + k h: the input as "
+      "input_hold says it is held, the output and reference linearly (ctid fit --resample).");
   m.def("check_time_stamps", &check_time_stamps, py::arg("time"),
         py::arg("relative_tolerance") = 1e-6,
         "The uniformity check of time stamps (docs/decisions/0008): step, digits, tolerance "

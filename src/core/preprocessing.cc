@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -223,6 +224,46 @@ std::string PreprocessingRecord::summary() const {
   if (output_scale != 1.0) out << ", y scaled by " << format_brief(output_scale);
   out << ", N = " << samples << ", h = " << format_number(sample_time) << " s";
   return out.str();
+}
+
+SampledData resample(const Eigen::VectorXd& time, const Eigen::VectorXd& input,
+                     const Eigen::VectorXd& output, const std::optional<Eigen::VectorXd>& reference,
+                     double h, Hold input_hold) {
+  const Eigen::Index n = time.size();
+  require(input.size() == n && output.size() == n && (!reference || reference->size() == n),
+          "resample: the time stamps (", n, "), input (", input.size(), "), output (",
+          output.size(), ")", reference ? " and reference" : "", " differ in length");
+  require(std::isfinite(h) && h > 0.0, "resample: the sample time is ", h,
+          "; it must be positive and finite");
+  require(n >= 2, "resample: ", n, " time stamps; at least 2 are needed");
+  for (Eigen::Index k = 0; k < n; ++k) {
+    require(std::isfinite(time(k)), "resample: time stamp ", k, " is not finite");
+    require(k == 0 || time(k) > time(k - 1), "resample: time stamp ", k, " (", time(k),
+            " s) is not after the one before it (", time(k - 1), " s)");
+  }
+  const double t0 = time(0);
+  const Eigen::Index count =
+      static_cast<Eigen::Index>(std::floor((time(n - 1) - t0) / h * (1.0 + 1e-12))) + 1;
+  require(count >= 2, "resample: the stamps span ", time(n - 1) - t0, " s, less than one step of ",
+          h, " s");
+  Eigen::VectorXd u(count);
+  Eigen::VectorXd y(count);
+  std::optional<Eigen::VectorXd> r;
+  if (reference) r.emplace(count);
+  Eigen::Index j = 0;  // time(j) <= t < time(j + 1)
+  for (Eigen::Index k = 0; k < count; ++k) {
+    const double t = std::min(t0 + static_cast<double>(k) * h, time(n - 1));
+    while (j + 2 < n && time(j + 1) <= t) ++j;
+    const double span = time(j + 1) - time(j);
+    const double s = std::clamp((t - time(j)) / span, 0.0, 1.0);
+    auto linear = [&](const Eigen::VectorXd& x) { return (1.0 - s) * x(j) + s * x(j + 1); };
+    // A held input changes only at a stamp: the value at t is the last sample at or before t.
+    u(k) =
+        input_hold == Hold::first_order_hold ? linear(input) : (s >= 1.0 ? input(j + 1) : input(j));
+    y(k) = linear(output);
+    if (r) (*r)(k) = linear(*reference);
+  }
+  return SampledData(h, u, y, r, t0).with_input_hold(input_hold);
 }
 
 }  // namespace ctid

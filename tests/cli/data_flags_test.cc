@@ -107,6 +107,16 @@ TEST_F(DataFlags, StampsToFiveDigitsAreAcceptedAndSampleTimeOverridesThem) {
   expect_bad_input(ctid({"fit", gap, "--poles", "1", "--zeros", "0"}), "fit",
                    "time stamps are not uniform: sample 99 (t = 9.9 s)");
   EXPECT_EQ(ctid({"frf", gap, "-T", "0.1", "-q"}).status, 0);
+  EXPECT_THAT(ctid({"fit", gap, "--poles", "1", "--zeros", "0"}).err,
+              HasSubstr("--resample H moves irregular stamps onto a grid"));
+  // --resample moves the stamps onto a grid (the held input at its last value, the output
+  // linearly across the gap), with a note; with -T it is refused.
+  const auto resampled = ctid({"frf", gap, "--resample", "0.1", "-o", "g.json", "--force", "-q"});
+  ASSERT_EQ(resampled.status, 0) << resampled.err;
+  EXPECT_THAT(resampled.err, HasSubstr(gap + ": 199 time stamps resampled onto h = 0.1 s (200 "
+                                             "samples)"));
+  expect_bad_input(ctid({"frf", gap, "--resample", "0.1", "-T", "0.1"}), "frf",
+                   "give --resample or --sample-time, not both");
 }
 
 TEST_F(DataFlags, DeclaredInputHoldIsUsedAndAContradictingFlagRefused) {

@@ -124,6 +124,17 @@ struct PreprocessedData {
 /// than 2 samples (3 for detrend linear), or a decimation leaving fewer than 2 samples.
 PreprocessedData preprocess(const SampledData& data, const PreprocessingOptions& options = {});
 
+/// A record with irregular time stamps moved onto the uniform grid t_0 + k h (t_0 the first
+/// stamp, up to the last one): the input as `input_hold` says it behaves between its
+/// samples (zero-order hold: the last sample at or before each grid time, exact for a held
+/// input; first-order hold: linear), the output and the reference linearly. The result has
+/// `input_hold`. Throws InvalidArgument for stamps that are not finite and strictly
+/// increasing (naming the first bad one), sizes that differ, h not positive, or fewer than 2
+/// grid points.
+SampledData resample(const Eigen::VectorXd& time, const Eigen::VectorXd& input,
+                     const Eigen::VectorXd& output, const std::optional<Eigen::VectorXd>& reference,
+                     double h, Hold input_hold = Hold::zero_order_hold);
+
 /// The zero-phase anti-alias lowpass used by decimation by `factor`: a Hamming-windowed sinc
 /// of 40 factor + 1 taps, cut off (-6 dB) at 0.9 of the new Nyquist frequency, unit DC gain;
 /// its gain is within 0.3 % of 1 up to 0.8 of the new Nyquist frequency and at least 53 dB
