@@ -42,6 +42,7 @@ struct FitFlags {
   int delay = 0;
   std::string delay_scan;
   std::string delay_range;
+  std::string record_delays;  // D1,D2,...
 
   std::string controller;
   std::string initial;
@@ -230,6 +231,19 @@ IdentificationOptions identification_options(const FitFlags& f) {
       f.initial_conditions == "estimate" ? InitialConditions::estimate : InitialConditions::zero;
   refined.record_history = f.history;
   refined.input_delay = f.delay;
+  if (!f.record_delays.empty()) {
+    std::size_t at = 0;
+    while (at <= f.record_delays.size()) {
+      const std::size_t comma = std::min(f.record_delays.find(',', at), f.record_delays.size());
+      const std::optional<int> d = parse_number<int>(f.record_delays.substr(at, comma - at));
+      if (!d || *d < 0) {
+        usage_error("--record-delays '" + f.record_delays +
+                    "': expected whole samples >= 0, one per data file, e.g. 0,3");
+      }
+      refined.record_input_delays.push_back(*d);
+      at = comma + 1;
+    }
+  }
   if (!f.initial.empty() && f.start != "auto") {
     usage_error("give --start or --initial, not both");
   }
@@ -266,6 +280,12 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   const IdentificationOptions options = identification_options(f);
   validate_identification(structure, options);  // before the data is read
   const std::optional<DiscreteTransferFunction>& controller = options.controller;
+  if (!f.record_delays.empty() &&
+      options.refined_iv.record_input_delays.size() != f.data.files.size()) {
+    usage_error("--record-delays gives " +
+                std::to_string(options.refined_iv.record_input_delays.size()) + " delays for " +
+                std::to_string(f.data.files.size()) + " data files; give one per file");
+  }
   const std::vector<SampledData> records = f.data.load_all(app, controller.has_value());
   const SampledData& data = records.front();
   int samples = 0;
@@ -394,6 +414,10 @@ Command add_fit_command(CLI::App& parent) {
   app->add_option("--delay-scan", f.delay_scan,
                   "Estimate the delay: fit every delay MIN:MAX (samples), keep the smallest "
                   "output error")
+      ->group("Structure");
+  app->add_option("--record-delays", f.record_delays,
+                  "Several files: whole samples by which each file's input lags more than the "
+                  "model's delay (D1,D2,..., one per file)")
       ->group("Structure");
   app->add_option("--delay-range", f.delay_range,
                   "Estimate the delay as a continuous parameter in MIN:MAX (seconds): the "

@@ -694,11 +694,11 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   require(!records.empty(), name, ": no data record was given");
   // The start (and the data checks) use the longest record; every record shares its sample
   // time and input hold.
-  const SampledData* longest = records.front();
-  for (const SampledData* record : records) {
-    if (record->size() > longest->size()) longest = record;
+  size_t longest_index = 0;
+  for (size_t r = 1; r < records.size(); ++r) {
+    if (records[r]->size() > records[longest_index]->size()) longest_index = r;
   }
-  const SampledData& data = *longest;
+  const SampledData& data = *records[longest_index];
   for (size_t r = 1; r < records.size(); ++r) {
     const double h0 = records.front()->sample_time();
     const double hr = records[r]->sample_time();
@@ -739,11 +739,21 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
             " submodels have integrators; at most one may have poles at the origin");
   }
   const int delay = options.input_delay;
+  require(
+      options.record_input_delays.empty() || options.record_input_delays.size() == records.size(),
+      name, ": record_input_delays has ", options.record_input_delays.size(), " entries for ",
+      records.size(), " records; give one per record or none");
+  // Whole samples by which each record's input is delayed: the model's delay plus the
+  // record's own (an acquisition that lags its input).
+  auto delay_of = [&](size_t r) {
+    return delay + (options.record_input_delays.empty() ? 0 : options.record_input_delays[r]);
+  };
   int n_samples = 0;
   for (const SampledData* record : records) n_samples += record->size();
   const int p = layout.parameters;
   const int unknowns = layout.augmented;  // with the free-response coefficients
-  const int lost = delay * static_cast<int>(records.size());
+  int lost = 0;
+  for (size_t r = 0; r < records.size(); ++r) lost += delay_of(r);
   require(n_samples - lost >= std::max(3 * unknowns, unknowns + 20), name, ": ", n_samples,
           " samples (input delay ", delay, ") are too few for ", unknowns,
           " parameters and initial conditions; at least ",
@@ -796,12 +806,12 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     } else {
       beta = parameters_for_orders(
           group_into_submodels(given.to_transfer_function().with_input_delay(0.0), layout.orders,
-                               data, delay),
+                               data, delay_of(longest_index)),
           layout.orders);
     }
   } else {
     InitializationOptions init;
-    init.input_delay = delay;
+    init.input_delay = delay_of(longest_index);
     init.method = options.start;
     // Closed loop: only starts the controller stabilises (decision 0011); an open-loop start
     // it does not stabilise would stop the iteration before its first step.
@@ -838,7 +848,7 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   {
     Eigen::Index at = 0;
     for (size_t r = 0; r < records.size(); ++r) {
-      signals[r].u = delay_samples(records[r]->input(), delay);
+      signals[r].u = delay_samples(records[r]->input(), delay_of(r));
       signals[r].y = &records[r]->output();
       signals[r].offset = at;
       y.segment(at, records[r]->size()) = records[r]->output();
@@ -849,14 +859,14 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   bool source = false;
   auto update_source = [&](const Eigen::VectorXd& b) -> bool {
     std::vector<Eigen::VectorXd> updated;  // all records or none: a failure keeps the last
-    for (const SampledData* record : records) {
+    for (size_t r = 0; r < records.size(); ++r) {
       std::optional<Eigen::VectorXd> s = sensitivity_filtered_reference(
-          layout, b, *problem.controller, record->reference(), h, delay);
+          layout, b, *problem.controller, records[r]->reference(), h, delay_of(r));
       if (!s) return false;
       updated.push_back(std::move(*s));
     }
     for (size_t r = 0; r < records.size(); ++r) {
-      signals[r].source = delay_samples(updated[r], delay);
+      signals[r].source = delay_samples(updated[r], delay_of(r));
       signals[r].undelayed_source = std::move(updated[r]);
     }
     source = true;
@@ -1083,8 +1093,9 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
         for (size_t r = 0; r < records.size(); ++r) {
           const Eigen::VectorXd& driven =
               closed_loop ? signals[r].undelayed_source : records[r]->input();
+          const double own = (delay_of(r) - delay) * h;
           out.segment(signals[r].offset, records[r]->size()) =
-              model_output(result.model.with_input_delay(tau + shift * h), driven, h, hold);
+              model_output(result.model.with_input_delay(tau + own + shift * h), driven, h, hold);
         }
         return out;
       };

@@ -320,6 +320,10 @@ TEST_F(FitCommand, SeveralFilesAreRecordsOfOneEstimateEachWithItsInitialState) {
   write("slow.csv", "t,u,y\n0,1,0\n0.1,0,1\n0.2,1,0\n");
   expect_bad_input(ctid({"fit", "a.csv", "slow.csv", "--modes", "2"}),
                    "slow.csv is sampled every 0.1 s but a.csv every 0.05 s");
+  expect_bad_input(ctid({"fit", "a.csv", "b.csv", "--modes", "2", "--record-delays", "0"}),
+                   "--record-delays gives 1 delays for 2 data files");
+  expect_bad_input(ctid({"fit", "a.csv", "b.csv", "--modes", "2", "--record-delays", "0,x"}),
+                   "--record-delays '0,x'");
   write("other.csv", "t,u,z\n0,1,0\n0.05,0,1\n0.1,1,0\n");
   expect_bad_input(ctid({"fit", "a.csv", "other.csv", "--modes", "2"}), "other.csv");
 }

@@ -8,6 +8,7 @@
 #include <span>
 #include <string_view>
 #include <tuple>
+#include <vector>
 
 #include "ctid/core/additive_model.h"
 #include "ctid/core/fields.h"
@@ -83,6 +84,10 @@ struct RefinedIvOptions {
   /// Known fraction of a sample added to input_delay, in [0, 1): the filters see the input
   /// delayed exactly (held as the record's input_hold says, SampledFilter).
   double input_delay_fraction = 0.0;
+  /// Several records (identify on a list): whole samples by which each record's input lags
+  /// more than input_delay says (an acquisition started late), one entry per record, each
+  /// >= 0; empty: none. The model's delay stays input_delay.
+  std::vector<int> record_input_delays;
   /// The delay was estimated from these data (IdentificationOptions::delay_range): the output
   /// sensitivity to it joins the covariance, whose parameter block then accounts for it, and
   /// EstimationResult::delay_standard_error reports its standard error.
@@ -126,6 +131,8 @@ struct RefinedIvOptions {
         field("input_delay", &O::input_delay, AtLeast{0}, "Known input delay [samples]."),
         field("input_delay_fraction", &O::input_delay_fraction, Between{0.0, 1.0, true, false},
               "Known fraction of a sample added to input_delay, in [0, 1)."),
+        field("record_input_delays", &O::record_input_delays, Each{AtLeast{0}},
+              "Per record, whole samples added to input_delay (several records); empty: none."),
         field("delay_estimated", &O::delay_estimated,
               "The delay was estimated: its sensitivity joins the covariance."),
         field("record_history", &O::record_history, "Keep one IterationRecord per iteration."),
