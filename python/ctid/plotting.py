@@ -133,13 +133,16 @@ def _db(x):
 
 
 def bode(model, frf=None, covariance=None, omegas=None, confidence=0.95, title=None,
-         filename=None):
+         filename=None, sampled=None):
     """Bode plot of a fitted model over a nonparametric FRF, with confidence bands.
 
     ``model``: EstimationResult (its covariance gives the band), AdditiveModel or
     TransferFunction. ``frf``: a ctid.Frf (or any object with ``frequencies`` and
     ``response``) drawn as markers. ``omegas``: the model's grid [rad/s]
-    (default: the FRF's range, or a decade around the poles). Lines: "model", "FRF"; bands:
+    (default: the FRF's range, or a decade around the poles). ``sampled``: (h, ctid.Hold) of
+    the data behind the FRF, to draw also the model as the samples see it
+    (ctid.sampled_frequency_response: the hold and the sampling included), which is what an
+    FRF of sampled data estimates. Lines: "model", "FRF", "model, sampled (zoh|foh)"; bands:
     "<confidence>% band". Returns the Figure (saved to ``filename`` if given).
     """
     base, _, _ = _as_model(model)
@@ -161,6 +164,19 @@ def bode(model, frf=None, covariance=None, omegas=None, confidence=0.95, title=N
                               label=band_label, linewidth=0)
     ax_mag.semilogx(omegas, _db(response), color="C0", label="model")
     ax_phase.semilogx(omegas, phase, color="C0", label="model")
+    if sampled is not None:
+        h, hold = sampled
+        additive = (base if isinstance(base, _ctid.AdditiveModel)
+                    else _ctid.AdditiveModel.from_transfer_function(base))
+        seen_at = omegas[omegas < math.pi / h]
+        seen = np.asarray(_ctid.sampled_frequency_response(additive, seen_at, h, hold))
+        name = "zoh" if hold == _ctid.Hold.zero_order_hold else "foh"
+        seen_phase = np.degrees(np.unwrap(np.angle(seen)))
+        if seen.size:
+            seen_phase += 360.0 * np.round((phase[0] - seen_phase[0]) / 360.0)
+        ax_mag.semilogx(seen_at, _db(seen), "--", color="C2", label=f"model, sampled ({name})")
+        ax_phase.semilogx(seen_at, seen_phase, "--", color="C2",
+                          label=f"model, sampled ({name})")
     if frf is not None:
         w = np.asarray(frf.frequencies)
         g = np.asarray(frf.response)

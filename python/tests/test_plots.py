@@ -60,6 +60,25 @@ def test_bode_draws_the_model_frf_and_band(tmp_path, experiment, fitted):
     np.testing.assert_allclose(ax_mag.get_ylim(), (curves.min() - 10, curves.max() + 10))
 
 
+def test_bode_draws_the_model_as_the_samples_see_it(tmp_path, experiment, fitted):
+    # sampled=(h, hold): a dashed curve of ctid.sampled_frequency_response below Nyquist,
+    # the ZOH one lagging the continuous-time model by about half a sample.
+    h = experiment["data"].sample_time
+    figure = plotting.bode(fitted, sampled=(h, ctid.Hold.zero_order_hold),
+                           filename=tmp_path / "bode.png")
+    ax_mag, ax_phase = figure.axes
+    seen = line(ax_mag, "model, sampled (zoh)")
+    w = seen.get_xdata()
+    assert w.max() < np.pi / h
+    expected = np.asarray(ctid.sampled_frequency_response(fitted.model, w, h,
+                                                          ctid.Hold.zero_order_hold))
+    np.testing.assert_allclose(seen.get_ydata(), 20 * np.log10(np.abs(expected)), rtol=1e-12)
+    low = w < 0.1 * np.pi / h
+    lag = (line(ax_phase, "model").get_ydata()[: w.size][low]
+           - line(ax_phase, "model, sampled (zoh)").get_ydata()[low])
+    np.testing.assert_allclose(np.deg2rad(lag), w[low] * h / 2, rtol=0.05, atol=1e-3)
+
+
 def test_confidence_band_matches_sampling(fitted):
     # The delta-method sigma of |G| against the spread of |G| over parameter draws.
     w = np.array([1.0, 2.0, 4.0])

@@ -4,7 +4,11 @@
 #include <cmath>
 #include <complex>
 
+#include <Eigen/Dense>
+
 #include "ctid/core/error.h"
+#include "ctid/simulation/discretization.h"
+#include "ctid/simulation/simulate.h"
 
 namespace ctid {
 namespace {
@@ -74,6 +78,45 @@ Eigen::VectorXcd frequency_response(const AdditiveModel& g, const Eigen::VectorX
     }
   }
   return response;
+}
+
+Eigen::VectorXcd sampled_frequency_response(const AdditiveModel& g, const Eigen::VectorXd& omegas,
+                                            double h, Hold hold) {
+  require(std::isfinite(h) && h > 0.0, "sampled_frequency_response: h must be positive, got ", h);
+  const DelaySplit delay = split_delay(g.input_delay(), h);
+  Eigen::VectorXcd out = Eigen::VectorXcd::Zero(omegas.size());
+  for (const Submodel& s : g.submodels()) {
+    const TransferFunction part(s.b, Polynomial::monomial(s.integrators) * s.a);
+    require(part.is_proper(), "sampled_frequency_response: submodel numerator degree ",
+            s.b.degree(), " exceeds its denominator's");
+    const StateSpace ss = part.to_state_space();
+    for (Eigen::Index k = 0; k < omegas.size(); ++k) {
+      const std::complex<double> z = std::exp(std::complex<double>(0.0, omegas(k) * h));
+      if (ss.order() == 0) {
+        // A static gain sees the delayed input at the samples: u_k, or between u_{k-1} and
+        // u_k for a fraction (held: u_{k-1}; linear: the weighted pair).
+        const double f = delay.fraction;
+        const std::complex<double> seen = f == 0.0 ? std::complex<double>(1.0)
+                                          : hold == Hold::zero_order_hold ? 1.0 / z
+                                                                          : f / z + (1.0 - f);
+        out(k) += ss.d * seen;
+        continue;
+      }
+      const DelayedHoldDiscretization w = discretize_delayed(ss.a, ss.b, h, delay.fraction, hold);
+      const Eigen::MatrixXcd resolvent = (z * Eigen::MatrixXcd::Identity(ss.order(), ss.order()) -
+                                          w.phi.cast<std::complex<double>>())
+                                             .inverse();
+      const Eigen::VectorXcd drive = w.previous.col(0).cast<std::complex<double>>() / z +
+                                     w.current.col(0).cast<std::complex<double>>() +
+                                     w.next.col(0).cast<std::complex<double>>() * z;
+      out(k) += ss.c.cast<std::complex<double>>().dot(resolvent * drive) +
+                ss.d * (w.output_previous / z + w.output_current);
+    }
+  }
+  for (Eigen::Index k = 0; k < omegas.size(); ++k) {
+    out(k) *= std::exp(std::complex<double>(0.0, -omegas(k) * h * delay.samples));
+  }
+  return out;
 }
 
 }  // namespace ctid

@@ -8,6 +8,7 @@
 
 #include "ctid/core/additive_model.h"
 #include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/hold.h"
 #include "ctid/core/transfer_function.h"
 
 namespace ctid {
@@ -27,5 +28,14 @@ Eigen::VectorXcd frequency_response(const AdditiveModel& g, const Eigen::VectorX
 /// Column i is submodel i's response G_i(j omega) without the delay factor.
 Eigen::MatrixXcd submodel_frequency_responses(const AdditiveModel& g,
                                               const Eigen::VectorXd& omegas);
+
+/// The response from the samples u_k to the samples y_k of the model fed with u held as
+/// `hold` says between samples of period h: the exact discrete equivalent (ZOH or FOH, the
+/// input delay with its fraction of a sample included) at z = e^{j omega h}. What a
+/// nonparametric FRF of sampled data estimates, to compare a continuous-time fit with it:
+/// for a band-limited input sampled without aliasing it is close to G(j omega) only for the
+/// FOH, and the ZOH adds its half-sample lag. Requires h > 0 and a proper model.
+Eigen::VectorXcd sampled_frequency_response(const AdditiveModel& g, const Eigen::VectorXd& omegas,
+                                            double h, Hold hold);
 
 }  // namespace ctid
