@@ -36,6 +36,29 @@ def draw(ctid, modes, rng, h, zeta_min):
     return ctid.AdditiveModel(submodels)
 
 
+def same_point(ctid, modes, seed, n, zeta_min=1e-3, snr=30.0, match=1e-6, h=0.01):
+    """One seeded run: whether K modes fitted from the automatic start and from the true model
+    end at the same parameters (to `match`, relative; submodels sorted by frequency)."""
+    rng = np.random.default_rng(7000 * modes + seed)
+    truth = draw(ctid, modes, rng, h, zeta_min)
+    u = ctid.white_noise(n, 1.0, 30_000 + 100 * modes + seed)
+    y0 = ctid.simulate(truth, u, h)
+    sigma = math.sqrt(np.mean(y0 ** 2)) * 10 ** (-snr / 20)
+    data = ctid.SampledData(h, u, y0 + ctid.white_noise(n, sigma, 40_000 + seed))
+    structure = ctid.ModelStructure.modes(modes)
+    auto = ctid.identify(data, structure,
+                         refined_iv=ctid.RefinedIvOptions(compute_covariance=False))
+    true = ctid.identify(data, structure, refined_iv=ctid.RefinedIvOptions(
+        compute_covariance=False, initial_model=truth))
+
+    def key(e):
+        return np.array(sorted((s.a.coefficients[2], s.a.coefficients[1], s.b.coefficients[0])
+                               for s in e.estimate.model.submodels))
+
+    a, t = key(auto), key(true)
+    return bool(np.max(np.abs(a - t) / np.maximum(np.abs(t), 1e-12)) <= match)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--modes", default="1:6")
@@ -48,32 +71,12 @@ def main():
     import ctid
 
     low, high = (int(x) for x in args.modes.split(":"))
-    h = 0.01
     total, right = 0, 0
     for n in (int(x) for x in args.samples.split(",")):
         for modes in range(low, high + 1):
-            hits, misses = 0, []
-            for seed in range(args.seeds):
-                rng = np.random.default_rng(7000 * modes + seed)
-                truth = draw(ctid, modes, rng, h, args.zeta_min)
-                u = ctid.white_noise(n, 1.0, 30_000 + 100 * modes + seed)
-                y0 = ctid.simulate(truth, u, h)
-                sigma = math.sqrt(np.mean(y0 ** 2)) * 10 ** (-args.snr / 20)
-                data = ctid.SampledData(h, u, y0 + ctid.white_noise(n, sigma, 40_000 + seed))
-                structure = ctid.ModelStructure.modes(modes)
-                auto = ctid.identify(data, structure,
-                                     refined_iv=ctid.RefinedIvOptions(compute_covariance=False))
-                true = ctid.identify(data, structure, refined_iv=ctid.RefinedIvOptions(
-                    compute_covariance=False, initial_model=truth))
-                # Submodels may come in another order: compare sorted by natural frequency.
-                def key(e):
-                    return sorted((s.a.coefficients[2], s.a.coefficients[1], s.b.coefficients[0])
-                                  for s in e.estimate.model.submodels)
-                a, t = np.array(key(auto)), np.array(key(true))
-                same = np.max(np.abs(a - t) / np.maximum(np.abs(t), 1e-12)) <= args.match
-                hits += bool(same)
-                if not same:
-                    misses.append(seed)
+            misses = [seed for seed in range(args.seeds)
+                      if not same_point(ctid, modes, seed, n, args.zeta_min, args.snr, args.match)]
+            hits = args.seeds - len(misses)
             total += args.seeds
             right += hits
             print(f"N = {n}, K = {modes}: {hits}/{args.seeds} reach the true start's point"

@@ -39,6 +39,26 @@ def system(ctid, modes, rng, h):
     return ctid.AdditiveModel(submodels), freqs
 
 
+def scan_once(ctid, modes, seed, samples=4000, snr=20.0, h=0.01):
+    """One seeded run: (the recommended number of modes, 0 if none; how many usable
+    over-parameterised fits score a held-out fit more than 1 point below the true order's)."""
+    rng = np.random.default_rng(1000 * modes + seed)
+    model, _ = system(ctid, modes, rng, h)
+    u = ctid.white_noise(samples, 1.0, 10_000 + 100 * modes + seed)
+    y0 = ctid.simulate(model, u, h)
+    sigma = math.sqrt(np.mean(y0 ** 2)) * 10 ** (-snr / 20)
+    y = y0 + ctid.white_noise(samples, sigma, 20_000 + 100 * modes + seed)
+    counts = list(range(max(1, modes - 2), modes + 3))
+    scan = ctid.scan_structures(ctid.SampledData(h, u, y),
+                                [ctid.ModelStructure.modes(k) for k in counts])
+    chosen = counts[scan.recommended] if scan.recommended >= 0 else 0
+    true_fit = scan.fits[counts.index(modes)]
+    worse = sum(1 for k, fit in zip(counts, scan.fits)
+                if k > modes and fit.usable and true_fit.usable
+                and fit.validation_fit < true_fit.validation_fit - 1.0)
+    return chosen, worse
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--modes", default="1:6")
@@ -50,29 +70,14 @@ def main():
     import ctid
 
     low, high = (int(x) for x in args.modes.split(":"))
-    h = 0.01
     rows, total, right, bad_over = [], 0, 0, 0
     for modes in range(low, high + 1):
-        hits = 0
         picks = []
         for seed in range(args.seeds):
-            rng = np.random.default_rng(1000 * modes + seed)
-            model, _ = system(ctid, modes, rng, h)
-            u = ctid.white_noise(args.samples, 1.0, 10_000 + 100 * modes + seed)
-            y0 = ctid.simulate(model, u, h)
-            sigma = math.sqrt(np.mean(y0 ** 2)) * 10 ** (-args.snr / 20)
-            y = y0 + ctid.white_noise(args.samples, sigma, 20_000 + 100 * modes + seed)
-            data = ctid.SampledData(h, u, y)
-            counts = list(range(max(1, modes - 2), modes + 3))
-            scan = ctid.scan_structures(data, [ctid.ModelStructure.modes(k) for k in counts])
-            chosen = counts[scan.recommended] if scan.recommended >= 0 else 0
+            chosen, worse = scan_once(ctid, modes, seed, args.samples, args.snr)
             picks.append(chosen)
-            hits += chosen == modes
-            true_fit = scan.fits[counts.index(modes)]
-            for k, fit in zip(counts, scan.fits):
-                if k > modes and fit.usable and true_fit.usable and \
-                        fit.validation_fit < true_fit.validation_fit - 1.0:
-                    bad_over += 1
+            bad_over += worse
+        hits = sum(p == modes for p in picks)
         total += args.seeds
         right += hits
         rows.append({"modes": modes, "seeds": args.seeds, "true_order_recommended": hits,
