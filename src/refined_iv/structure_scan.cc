@@ -89,9 +89,9 @@ StructureScanResult scan_structures(const SampledData& data,
                                ? fit_percent(data.output().tail(held_out), simulated.tail(held_out))
                                : fit.estimation_fit;
       fit.validation_error =
-          held_out > 0 ? (data.output().tail(held_out) - simulated.tail(held_out)).squaredNorm() /
-                             held_out
-                       : e_est.squaredNorm() / fitted;
+          held_out > 0
+              ? (data.output().tail(held_out) - simulated.tail(held_out)).squaredNorm() / held_out
+              : e_est.squaredNorm() / fitted;
       const double error_variance = e_est.squaredNorm() / fitted;
       const double output_variance = variance_about_mean(y_est);
       fit.rt2 = 1.0 - error_variance / output_variance;
@@ -142,9 +142,9 @@ StructureScanResult scan_structures(const SampledData& data,
   if (result.recommended < 0) {
     result.rule = "no candidate gave a usable fit";
   } else {
-    result.rule = "fewest parameters among the usable fits whose " + where +
-                  " error is within " + format_significant(100.0 * tolerance, 2) +
-                  " % of the best (fit " + format_significant(best_fit, 4) + " %)";
+    result.rule = "fewest parameters among the usable fits whose " + where + " error is within " +
+                  format_significant(100.0 * tolerance, 2) + " % of the best (fit " +
+                  format_significant(best_fit, 4) + " %)";
   }
 
   // Stabilisation diagram: each fit against the fit before it in the list.

@@ -50,9 +50,9 @@ TEST_F(StructureCommand, ScansIntegratorsZerosAndTheDelay) {
   const nlohmann::json j = io::read_json(path("s.json"));
   // (n, l) in {(0,1), (1,0), (1,1), (2,0), (2,1)}, each with m = 0 and m = 1: 10 structures.
   EXPECT_EQ(j.at("fits").size(), 10U);
-  expect_bad_input(ctid({"structure", "i.csv", "--poles", "1:2", "--delay", "1", "--delay-scan",
-                         "0:3"}),
-                   "give --delay or --delay-scan, not both");
+  expect_bad_input(
+      ctid({"structure", "i.csv", "--poles", "1:2", "--delay", "1", "--delay-scan", "0:3"}),
+      "give --delay or --delay-scan, not both");
   expect_bad_input(ctid({"structure", "i.csv", "--poles", "0:2"}), "integers >= 1");
   expect_bad_input(ctid({"structure", "i.csv", "--poles", "1:2", "--initial-conditions", "x"}),
                    "--initial-conditions");

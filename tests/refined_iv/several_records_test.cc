@@ -127,8 +127,8 @@ TEST(SeveralRecords, EachRecordMayLagItsInputByItsOwnWholeSamples) {
       SampledData(kH, ua, simulate(truth, ua, kH)),
       SampledData(kH, ub, simulate(truth.with_input_delay(3 * kH), ub, kH))};
   IdentificationOptions options;
-  options.refined_iv.initial_model = AdditiveModel::from_parameters(
-      truth.orders(), truth.parameters() * 1.03, 0.0);
+  options.refined_iv.initial_model =
+      AdditiveModel::from_parameters(truth.orders(), truth.parameters() * 1.03, 0.0);
   options.refined_iv.record_input_delays = {0, 3};
   const EstimationResult e =
       identify(records, ModelStructure::additive(truth.orders()), options).estimate;
