@@ -29,7 +29,15 @@ using ::testing::HasSubstr;
 
 constexpr double kH = testing::kPaperSampleTime;
 constexpr SubmodelOrder kUnfactored{4, 2, 0};
+// Records per estimator: 20; under AddressSanitizer (scripts/test.sh's second ctest) the
+// first 8, which this file's thresholds were checked to hold on, keep that step quick.
+#ifdef __SANITIZE_ADDRESS__
+constexpr int kSeeds = 8;
+constexpr int kDestabilising = 2;
+#else
 constexpr int kSeeds = 20;
+constexpr int kDestabilising = 3;
+#endif
 
 // u_k = 0.33 (r_k - y_k): the loop with the Section 6.2 plant loses stability at a gain of
 // about 0.37 (its lightly damped mode at 6.3 rad/s), so a model whose resonance is a little
@@ -160,7 +168,7 @@ TEST(ClosedLoopStart, ClsrivcFromTheDataEndsWhereTheTrueStartEnds) {
             {Submodel{(1.0 / scale) * g.denominator(), (1.0 / scale) * g.numerator(), 0}});
       },
       0.85);
-  EXPECT_GE(destabilising, 3);
+  EXPECT_GE(destabilising, kDestabilising);
 }
 
 TEST(ClosedLoopStart, AdditiveClsrivcFromTheDataEndsWhereTheTrueStartEnds) {
@@ -171,7 +179,7 @@ TEST(ClosedLoopStart, AdditiveClsrivcFromTheDataEndsWhereTheTrueStartEnds) {
         return additive_clsrivc(data, tight_controller(), orders, o);
       },
       [&](const SampledData& data) { return initial_additive_model(data, orders); }, 0.75);
-  EXPECT_GE(destabilising, 3);
+  EXPECT_GE(destabilising, kDestabilising);
 }
 
 TEST(ClosedLoopStart, SaysWhatWasTriedWhenNoStartIsStabilised) {

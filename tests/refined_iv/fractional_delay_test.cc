@@ -84,7 +84,11 @@ TEST(FractionalDelay, NoiseFreeClosedLoopRecoversTauExactly) {
 // mean reported standard error (decision 0013).
 TEST(FractionalDelay, StandardErrorCoversTheTruthInSeededNoisyRuns) {
   const double tau = 3.37 * kH;
+#ifdef __SANITIZE_ADDRESS__
+  const int runs = 40;  // the memory checks need no more; Release runs the full 200
+#else
   const int runs = 200;
+#endif
   const int n = 1000;
   int covered = 0;
   double sum = 0.0;
