@@ -238,7 +238,9 @@ SampledData resample(const Eigen::VectorXd& time, const Eigen::VectorXd& input,
   require(n >= 2, "resample: ", n, " time stamps; at least 2 are needed");
   for (Eigen::Index k = 0; k < n; ++k) {
     require(std::isfinite(time(k)), "resample: time stamp ", k, " is not finite");
-    require(k == 0 || time(k) > time(k - 1), "resample: time stamp ", k, " (", time(k),
+  }
+  for (Eigen::Index k = 1; k < n; ++k) {  // (require evaluates its message parts)
+    require(time(k) > time(k - 1), "resample: time stamp ", k, " (", time(k),
             " s) is not after the one before it (", time(k - 1), " s)");
   }
   const double t0 = time(0);
