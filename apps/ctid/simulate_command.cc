@@ -32,6 +32,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
+#include "data_flags.h"
 
 namespace ctid::cli {
 namespace {
@@ -78,9 +79,6 @@ struct SimulateFlags {
 
 // Flags that mean something for a delayed_feedback_loop model only.
 const char* const kLoopOnlyFlags[] = {"--substeps", "--nsr"};
-
-// Agreement of two sample times given in different places (flag, file, controller).
-bool same_sample_time(double a, double b) { return std::abs(a - b) <= 1e-9 * std::abs(b); }
 
 // Flags of the generated input, and the one signal each applies to (none: every signal).
 struct SignalFlag {
@@ -285,21 +283,6 @@ void run_simulate_loop(const SimulateFlags& f, CLI::App& app, const nlohmann::js
   }
 }
 
-// The model as one submodel B/(p^l A) (a transfer function) or as it is (additive), for
-// model_output, which takes any proper model with integrators.
-AdditiveModel as_additive(const io::ContinuousModel& model) {
-  if (const auto* additive = std::get_if<AdditiveModel>(&model)) return *additive;
-  const TransferFunction& g = std::get<TransferFunction>(model);
-  const Polynomial& den = g.denominator();
-  int l = 0;
-  while (l < den.degree() && den[l] == 0.0) ++l;
-  const Eigen::VectorXd rest = den.coefficients().tail(den.degree() + 1 - l);
-  const double scale = rest(0);
-  Submodel one{Polynomial(Eigen::VectorXd(rest / scale)),
-               Polynomial(Eigen::VectorXd(g.numerator().coefficients() / scale)), l};
-  return AdditiveModel({one}, g.input_delay());
-}
-
 void run_simulate(const SimulateFlags& f, CLI::App& app) {
   const std::filesystem::path output = f.output;
   if (!f.force && std::filesystem::exists(output)) {
@@ -358,7 +341,10 @@ void run_simulate(const SimulateFlags& f, CLI::App& app) {
     const Eigen::VectorXd noise_free =
         hold == Hold::zero_order_hold
             ? std::visit([&](const auto& g) { return simulate(g, u, h); }, model)
-            : model_output(as_additive(model), u, h, Hold::first_order_hold);
+            : model_output(std::holds_alternative<AdditiveModel>(model)
+                               ? std::get<AdditiveModel>(model)
+                               : io::as_additive_model(std::get<TransferFunction>(model)),
+                           u, h, Hold::first_order_hold);
     const Eigen::VectorXd v = output_noise(f.noise, noise_free, h);
     y = v.size() == 0 ? noise_free : Eigen::VectorXd(noise_free + v);
   }
