@@ -29,11 +29,8 @@ Eigen::VectorXd model_output(const AdditiveModel& model, const Eigen::VectorXd& 
     const Polynomial den = Polynomial::monomial(s.integrators) * s.a;
     if (den.degree() == 0) {
       // A static gain sees the delayed input at the samples.
-      const SampledFilter pass(
-          FilterRealization{Eigen::MatrixXd::Zero(1, 1), Eigen::VectorXd::Zero(1),
-                            Eigen::MatrixXd::Zero(1, 1), Eigen::VectorXd::Ones(1)},
-          sample_time, input_hold, delay.fraction);
-      y += (s.b[0] / den[0]) * pass.apply(u).col(0);
+      const DelayedSample now = delayed_sample(delay.fraction, input_hold);
+      y += (s.b[0] / den[0]) * (now.previous * delay_samples(u, 1) + now.current * u);
       continue;
     }
     const Eigen::MatrixXd f =

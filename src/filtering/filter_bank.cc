@@ -162,8 +162,9 @@ SampledFilter::SampledFilter(const FilterRealization& filter, double sample_time
   gamma0_ = w.current.col(0);
   gamma1_ = w.next.col(0);
   fractional_ = delay_fraction > 0.0;
-  output_previous_ = w.output_previous;
-  output_current_ = w.output_current;
+  const DelayedSample now = delayed_sample(delay_fraction, interpolation);
+  output_previous_ = now.previous;
+  output_current_ = now.current;
   c_ = filter.c;
   d_ = filter.d;
   // Exact zeros only: skipping them changes no result.

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <complex>
+#include <optional>
 
 #include <Eigen/Dense>
 
@@ -90,27 +91,21 @@ Eigen::VectorXcd sampled_frequency_response(const AdditiveModel& g, const Eigen:
     require(part.is_proper(), "sampled_frequency_response: submodel numerator degree ",
             s.b.degree(), " exceeds its denominator's");
     const StateSpace ss = part.to_state_space();
+    // The direct term sees the delayed input at the samples; a static gain has nothing else.
+    const DelayedSample now = delayed_sample(delay.fraction, hold);
+    std::optional<DelayedHoldDiscretization> w;
+    if (ss.order() > 0) w = discretize_delayed(ss.a, ss.b, h, delay.fraction, hold);
     for (Eigen::Index k = 0; k < omegas.size(); ++k) {
       const std::complex<double> z = std::exp(std::complex<double>(0.0, omegas(k) * h));
-      if (ss.order() == 0) {
-        // A static gain sees the delayed input at the samples: u_k, or between u_{k-1} and
-        // u_k for a fraction (held: u_{k-1}; linear: the weighted pair).
-        const double f = delay.fraction;
-        const std::complex<double> seen = f == 0.0 ? std::complex<double>(1.0)
-                                          : hold == Hold::zero_order_hold ? 1.0 / z
-                                                                          : f / z + (1.0 - f);
-        out(k) += ss.d * seen;
-        continue;
-      }
-      const DelayedHoldDiscretization w = discretize_delayed(ss.a, ss.b, h, delay.fraction, hold);
+      out(k) += ss.d * (now.previous / z + now.current);
+      if (!w) continue;
       const Eigen::MatrixXcd resolvent = (z * Eigen::MatrixXcd::Identity(ss.order(), ss.order()) -
-                                          w.phi.cast<std::complex<double>>())
+                                          w->phi.cast<std::complex<double>>())
                                              .inverse();
-      const Eigen::VectorXcd drive = w.previous.col(0).cast<std::complex<double>>() / z +
-                                     w.current.col(0).cast<std::complex<double>>() +
-                                     w.next.col(0).cast<std::complex<double>>() * z;
-      out(k) += ss.c.cast<std::complex<double>>().dot(resolvent * drive) +
-                ss.d * (w.output_previous / z + w.output_current);
+      const Eigen::VectorXcd drive = w->previous.col(0).cast<std::complex<double>>() / z +
+                                     w->current.col(0).cast<std::complex<double>>() +
+                                     w->next.col(0).cast<std::complex<double>>() * z;
+      out(k) += ss.c.cast<std::complex<double>>().dot(resolvent * drive);
     }
   }
   for (Eigen::Index k = 0; k < omegas.size(); ++k) {

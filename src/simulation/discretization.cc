@@ -87,8 +87,6 @@ DelayedHoldDiscretization discretize_delayed(const Eigen::MatrixXd& a, const Eig
     r.phi = second.phi * first.phi;
     r.previous = second.phi * first.gamma;
     r.current = second.gamma;
-    r.output_previous = 1.0;
-    r.output_current = 0.0;
     return r;
   }
   if (f == 0.0) {
@@ -107,16 +105,20 @@ DelayedHoldDiscretization discretize_delayed(const Eigen::MatrixXd& a, const Eig
   r.current =
       second.phi * ((1.0 - f) * first.gamma0 + first.gamma1) + second.gamma0 + f * second.gamma1;
   r.next = (1.0 - f) * second.gamma1;
-  r.output_previous = f;
-  r.output_current = 1.0 - f;
   return r;
+}
+
+DelayedSample delayed_sample(double fraction, Hold hold) {
+  if (fraction == 0.0) return {0.0, 1.0};
+  if (hold == Hold::zero_order_hold) return {1.0, 0.0};
+  return {fraction, 1.0 - fraction};
 }
 
 StateSpace discretize_zoh(const StateSpace& model, double h, double fraction) {
   model.validate();
+  if (fraction == 0.0) return discretize_zoh(model, h);
   const DelayedHoldDiscretization w =
       discretize_delayed(model.a, model.b, h, fraction, Hold::zero_order_hold);
-  if (fraction == 0.0) return discretize_zoh(model, h);
   const int n = model.order();
   // States [x; u_{k-1}].
   StateSpace result;

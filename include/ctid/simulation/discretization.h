@@ -25,18 +25,24 @@ struct FohDiscretization {
 
 /// A held input delayed by a fraction f of a sample, u(t - f h) with 0 <= f < 1: over
 /// [t_k, t_k+1] it is u_{k-1} then u_k (ZOH), or the lines through u_{k-1}, u_k, u_{k+1}
-/// (FOH), so  x_{k+1} = Phi x_k + previous u_{k-1} + current u_k + next u_{k+1},  and the
-/// delayed input at t_k is  output_previous u_{k-1} + output_current u_k.  Exact: the
-/// period is split at t_k + f h and each part discretised as above. f = 0 gives the plain
-/// ZOH / FOH weights (previous = 0).
+/// (FOH), so  x_{k+1} = Phi x_k + previous u_{k-1} + current u_k + next u_{k+1}  (the
+/// delayed input at t_k itself is delayed_sample()).  Exact: the period is split at
+/// t_k + f h and each part discretised as above. f = 0 gives the plain ZOH / FOH weights
+/// (previous = 0).
 struct DelayedHoldDiscretization {
   Eigen::MatrixXd phi;       ///< e^{A h}
   Eigen::MatrixXd previous;  ///< weight of u_{k-1}
   Eigen::MatrixXd current;   ///< weight of u_k
   Eigen::MatrixXd next;      ///< weight of u_{k+1} (zero for the ZOH)
-  double output_previous = 0.0;
-  double output_current = 1.0;
 };
+
+/// The held input delayed by fraction * h at the sample time t_k: previous u_{k-1} +
+/// current u_k (u_k itself for f = 0; u_{k-1} for the ZOH; the line between them for the FOH).
+struct DelayedSample {
+  double previous = 0.0;
+  double current = 1.0;
+};
+DelayedSample delayed_sample(double fraction, Hold hold);
 
 /// A is n x n, B is n x m (any m >= 1); h > 0. Throws InvalidArgument otherwise.
 ZohDiscretization discretize_zoh(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double h);
