@@ -4,13 +4,13 @@
 // iteration (29) and runs the delay scan and mode relocation. This file turns the flags into a
 // ModelStructure and IdentificationOptions, writes the result as JSON (io/result_json.h plus
 // what was run on what), prints a summary, and draws figures on request (plot_support.h).
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <numbers>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -68,19 +68,25 @@ int parse_count(const std::string& text, const std::string& what) {
   return *value;
 }
 
+// "a,b,c" as non-negative integers (an empty part is not one); `what` names the flag.
+std::vector<int> parse_counts(const std::string& text, const std::string& what) {
+  std::vector<int> counts;
+  std::size_t at = 0;
+  while (true) {
+    const std::size_t comma = std::min(text.find(',', at), text.size());
+    counts.push_back(parse_count(text.substr(at, comma - at), what));
+    if (comma == text.size()) return counts;
+    at = comma + 1;
+  }
+}
+
 SubmodelOrder parse_submodel(const std::string& text) {
-  std::vector<std::string> parts;
-  std::stringstream in(text);
-  for (std::string part; std::getline(in, part, ',');) parts.push_back(part);
-  if (parts.size() < 2 || parts.size() > 3 || text.back() == ',') {
+  const auto commas = std::count(text.begin(), text.end(), ',');
+  if (commas < 1 || commas > 2 || text.back() == ',') {
     usage_error("--submodel '" + text + "': expected n,m or n,m,l (poles, zeros, integrators)");
   }
-  const std::string what = "--submodel '" + text + "'";
-  SubmodelOrder order;
-  order.n = parse_count(parts[0], what);
-  order.m = parse_count(parts[1], what);
-  order.integrators = parts.size() == 3 ? parse_count(parts[2], what) : 0;
-  return order;
+  const std::vector<int> counts = parse_counts(text, "--submodel '" + text + "'");
+  return SubmodelOrder{counts[0], counts[1], counts.size() == 3 ? counts[2] : 0};
 }
 
 // The structure flags as a ModelStructure; which flags go together is checked here, what the
@@ -232,17 +238,8 @@ IdentificationOptions identification_options(const FitFlags& f) {
   refined.record_history = f.history;
   refined.input_delay = f.delay;
   if (!f.record_delays.empty()) {
-    std::size_t at = 0;
-    while (at <= f.record_delays.size()) {
-      const std::size_t comma = std::min(f.record_delays.find(',', at), f.record_delays.size());
-      const std::optional<int> d = parse_number<int>(f.record_delays.substr(at, comma - at));
-      if (!d || *d < 0) {
-        usage_error("--record-delays '" + f.record_delays +
-                    "': expected whole samples >= 0, one per data file, e.g. 0,3");
-      }
-      refined.record_input_delays.push_back(*d);
-      at = comma + 1;
-    }
+    refined.record_input_delays =
+        parse_counts(f.record_delays, "--record-delays '" + f.record_delays + "'");
   }
   if (!f.initial.empty() && f.start != "auto") {
     usage_error("give --start or --initial, not both");

@@ -123,6 +123,9 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
   // A pure integrator (0 poles besides the origin) is a candidate when integrators are scanned.
   const auto [low, high] =
       parse_range(modes ? f.modes : f.poles, modes ? "--modes" : "--poles", l_high > 0 ? 0 : 1);
+  // Zeros given once for every structure (parsed here, once); none: n + l - 1 for each.
+  const std::pair<int, int> zeros =
+      f.zeros.empty() ? std::pair{-1, -1} : parse_range(f.zeros, "--zeros", 0);
   for (int k = low; k <= high; ++k) {
     if (modes) {
       candidates.push_back(ModelStructure::modes(k));
@@ -130,9 +133,9 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
     }
     for (int l = l_low; l <= l_high; ++l) {
       if (k + l == 0) continue;
-      // Every zero count of --zeros that keeps the model proper (default n + l - 1).
-      const auto [m_low, m_high] =
-          f.zeros.empty() ? std::pair{k + l - 1, k + l - 1} : parse_range(f.zeros, "--zeros", 0);
+      // Every zero count of --zeros that keeps the model proper.
+      const int m_low = f.zeros.empty() ? k + l - 1 : zeros.first;
+      const int m_high = f.zeros.empty() ? k + l - 1 : zeros.second;
       if (m_low > k + l) {
         usage_error("--zeros " + f.zeros + " exceeds the " + std::to_string(k + l) +
                     " poles of a structure in --poles " + f.poles + " (an improper model)");
