@@ -98,11 +98,16 @@ TEST(ClosedLoopStart, NoiseFreeDataGiveTheExactModel) {
 }
 
 TEST(ClosedLoopStart, EveryCandidateKeptIsStabilisedByTheController) {
-  const SampledData data = closed_loop_data(1, 4000, 0.04);
+  // The first record whose open-loop start the controller does not stabilise ...
   InitializationOptions options;
-  // Open loop this record's start is not stabilised by the controller ...
-  ASSERT_GE(loop_radius(initial_transfer_function(data, kUnfactored, options), tight_controller()),
-            1.0);
+  std::uint64_t seed = 1;
+  while (seed <= 10 && loop_radius(initial_transfer_function(closed_loop_data(seed, 4000, 0.04),
+                                                             kUnfactored, options),
+                                   tight_controller()) < 1.0) {
+    ++seed;
+  }
+  ASSERT_LE(seed, 10u) << "no record of seeds 1-10 needs the closed-loop start";
+  const SampledData data = closed_loop_data(seed, 4000, 0.04);
   // ... with the controller it is.
   options.controller = tight_controller();
   EXPECT_LT(loop_radius(initial_transfer_function(data, kUnfactored, options), tight_controller()),
