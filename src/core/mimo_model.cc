@@ -1,0 +1,42 @@
+#include "ctid/core/mimo_model.h"
+
+#include <utility>
+
+#include "ctid/core/error.h"
+
+namespace ctid {
+
+MimoAdditiveModel::MimoAdditiveModel(int inputs, int outputs, std::vector<MimoSubmodel> submodels)
+    : inputs_(inputs), outputs_(outputs), submodels_(std::move(submodels)) {
+  require(inputs_ >= 1 && outputs_ >= 1, "a MIMO model needs at least one input and one output; ",
+          "got ", inputs_, " inputs and ", outputs_, " outputs");
+  require(!submodels_.empty(), "a MIMO model needs at least one submodel");
+  for (size_t i = 0; i < submodels_.size(); ++i) {
+    const MimoSubmodel& s = submodels_[i];
+    require(s.a.degree() >= 1 && s.a[0] == 1.0, "submodel ", i + 1,
+            ": the denominator must be anti-monic (a[0] = 1) of degree >= 1");
+    require(s.a.coefficients().allFinite(), "submodel ", i + 1, ": non-finite denominator");
+    require(static_cast<int>(s.b.size()) == inputs_ * outputs_, "submodel ", i + 1, " has ",
+            s.b.size(), " numerators; ", outputs_, " outputs x ", inputs_, " inputs need ",
+            inputs_ * outputs_);
+    for (const Polynomial& b : s.b) {
+      require(b.coefficients().allFinite(), "submodel ", i + 1, ": non-finite numerator");
+    }
+  }
+}
+
+const Polynomial& MimoAdditiveModel::numerator(int i, int output, int input) const {
+  require(output >= 0 && output < outputs_ && input >= 0 && input < inputs_, "channel (output ",
+          output, ", input ", input, ") is outside a ", outputs_, " x ", inputs_, " model");
+  return (*this)[i].b[static_cast<size_t>(output * inputs_ + input)];
+}
+
+AdditiveModel MimoAdditiveModel::channel(int output, int input) const {
+  std::vector<Submodel> siso;
+  for (int i = 0; i < size(); ++i) {
+    siso.push_back(Submodel{submodels_[static_cast<size_t>(i)].a, numerator(i, output, input), 0});
+  }
+  return AdditiveModel(std::move(siso));
+}
+
+}  // namespace ctid

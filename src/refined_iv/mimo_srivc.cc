@@ -1,0 +1,462 @@
+// Shared-pole refined IV for several inputs and outputs (mimo_srivc.h).
+#include "ctid/refined_iv/mimo_srivc.h"
+
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include <Eigen/Dense>
+
+#include "ctid/core/error.h"
+#include "ctid/estimation/validation.h"
+#include "ctid/filtering/filter_bank.h"
+#include "ctid/refined_iv/initialization.h"
+#include "internal/refined_iv_engine.h"
+#include "internal/scaled_least_squares.h"
+
+namespace ctid {
+
+namespace {
+
+// Where each submodel's unknowns sit: the denominators' a_i1..a_in (shared by every output) in
+// one vector, and the numerator regressors p^r / A_i u_k (r = 0..m_i, the same for every
+// output) in the columns of one matrix.
+struct Layout {
+  std::vector<SubmodelOrder> orders;
+  int inputs = 0;
+  int outputs = 0;
+  std::vector<int> a_at;  // first a-entry of submodel i
+  std::vector<int> u_at;  // first numerator column of submodel i (input 0)
+  int a_count = 0;
+  int u_count = 0;
+
+  Layout(std::vector<SubmodelOrder> o, int n_u, int n_y)
+      : orders(std::move(o)), inputs(n_u), outputs(n_y) {
+    for (const SubmodelOrder& s : orders) {
+      a_at.push_back(a_count);
+      u_at.push_back(u_count);
+      a_count += s.n;
+      u_count += inputs * (s.m + 1);
+    }
+  }
+  int size() const { return static_cast<int>(orders.size()); }
+  // Numerator column of submodel i, input k, power r.
+  int u_column(int i, int k, int r) const { return u_at[i] + k * (orders[i].m + 1) + r; }
+};
+
+// The model's parameters in one vector: every a-block, then every numerator (submodel,
+// output, input, power), for the stopping rule.
+Eigen::VectorXd flatten(const MimoAdditiveModel& model) {
+  std::vector<double> v;
+  for (const MimoSubmodel& s : model.submodels()) {
+    for (int q = 1; q <= s.a.degree(); ++q) v.push_back(s.a[q]);
+  }
+  for (const MimoSubmodel& s : model.submodels()) {
+    for (const Polynomial& b : s.b) {
+      for (int r = 0; r <= b.degree(); ++r) v.push_back(b[r]);
+    }
+  }
+  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+
+// p^r / A_i u_k for every submodel, input and r <= m_i (N x u_count), exact for the input hold.
+Eigen::MatrixXd numerator_regressors(const Layout& layout, const MimoData& data,
+                                     const std::vector<Polynomial>& a) {
+  Eigen::MatrixXd u(data.size(), layout.u_count);
+  for (int i = 0; i < layout.size(); ++i) {
+    const SampledFilter filter(derivative_filters(a[static_cast<size_t>(i)]), data.sample_time(),
+                               data.input_hold());
+    const int m = layout.orders[static_cast<size_t>(i)].m;
+    for (int k = 0; k < layout.inputs; ++k) {
+      const Eigen::MatrixXd f = filter.apply(data.inputs().col(k));
+      u.middleCols(layout.u_column(i, k, 0), m + 1) = f.leftCols(m + 1);
+    }
+  }
+  return u;
+}
+
+// Numerators of submodel i as the rows of its numerator columns x outputs.
+Eigen::MatrixXd numerator_block(const Layout& layout, const MimoAdditiveModel& model, int i) {
+  const int m = layout.orders[static_cast<size_t>(i)].m;
+  Eigen::MatrixXd block = Eigen::MatrixXd::Zero(layout.inputs * (m + 1), layout.outputs);
+  for (int j = 0; j < layout.outputs; ++j) {
+    for (int k = 0; k < layout.inputs; ++k) {
+      const Polynomial& b = model.numerator(i, j, k);
+      for (int r = 0; r <= std::min(m, b.degree()); ++r) block(k * (m + 1) + r, j) = b[r];
+    }
+  }
+  return block;
+}
+
+std::vector<Polynomial> denominators(const MimoAdditiveModel& model) {
+  std::vector<Polynomial> a;
+  for (const MimoSubmodel& s : model.submodels()) a.push_back(s.a);
+  return a;
+}
+
+// Submodel i's sampled output at every output channel (N x outputs).
+Eigen::MatrixXd submodel_outputs(const Layout& layout, const Eigen::MatrixXd& u,
+                                 const MimoAdditiveModel& model, int i) {
+  const int m = layout.orders[static_cast<size_t>(i)].m;
+  return u.middleCols(layout.u_at[static_cast<size_t>(i)], layout.inputs * (m + 1)) *
+         numerator_block(layout, model, i);
+}
+
+// Numerators fitted by least squares to every output for the given denominators.
+MimoAdditiveModel fit_numerators(const Layout& layout, const MimoData& data,
+                                 const std::vector<Polynomial>& a) {
+  const Eigen::MatrixXd u = numerator_regressors(layout, data, a);
+  const Eigen::VectorXd s = internal::column_scales(u);
+  const Eigen::MatrixXd b =
+      s.cwiseInverse().asDiagonal() *
+      (u * s.cwiseInverse().asDiagonal()).colPivHouseholderQr().solve(data.outputs());
+  std::vector<MimoSubmodel> submodels;
+  for (int i = 0; i < layout.size(); ++i) {
+    MimoSubmodel sub{a[static_cast<size_t>(i)], {}};
+    const int m = layout.orders[static_cast<size_t>(i)].m;
+    for (int j = 0; j < layout.outputs; ++j) {
+      for (int k = 0; k < layout.inputs; ++k) {
+        sub.b.emplace_back(Eigen::VectorXd(b.block(layout.u_column(i, k, 0), j, m + 1, 1)));
+      }
+    }
+    submodels.push_back(std::move(sub));
+  }
+  return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels));
+}
+
+// Sum over the outputs of the mean squared output error relative to the output's mean square:
+// how the start's candidates are compared (every channel counts alike).
+double relative_output_error(const Layout& layout, const MimoData& data,
+                             const MimoAdditiveModel& model) {
+  const Eigen::MatrixXd u = numerator_regressors(layout, data, denominators(model));
+  Eigen::MatrixXd fitted = Eigen::MatrixXd::Zero(data.size(), layout.outputs);
+  for (int i = 0; i < layout.size(); ++i) fitted += submodel_outputs(layout, u, model, i);
+  double total = 0.0;
+  for (int j = 0; j < layout.outputs; ++j) {
+    total += (data.outputs().col(j) - fitted.col(j)).squaredNorm() /
+             std::max(data.outputs().col(j).squaredNorm(), 1e-300);
+  }
+  return total;
+}
+
+// The common-denominator state-variable-filter least squares over every channel, the MIMO form
+// of the SISO start's LSSVF: A(p) y_j = sum_k B_jk(p) u_k with one A of degree n = sum n_i,
+// every signal through 1 / (1 + p / lambda)^n. The numerator columns are the same for every
+// output, so they are projected out once and A comes from a system of n unknowns. Its poles
+// are grouped into the structure's submodels (group_into_submodels); none if they do not fit.
+std::optional<std::vector<Polynomial>> common_denominator_start(const Layout& layout,
+                                                                const MimoData& data, double lambda,
+                                                                Hold interpolation) {
+  int n = 0;
+  for (const SubmodelOrder& o : layout.orders) n += o.n;
+  int m = 0;
+  for (const SubmodelOrder& o : layout.orders) m = std::max(m, o.m + n - o.n);
+  Polynomial f{1.0};
+  for (int q = 0; q < n; ++q) f = f * Polynomial{1.0, 1.0 / lambda};
+  const FilterRealization bank = derivative_filters(f);
+  const SampledFilter on_inputs(bank, data.sample_time(), data.input_hold());
+  const SampledFilter on_outputs(bank, data.sample_time(), interpolation);
+  Eigen::MatrixXd u(data.size(), layout.inputs * (m + 1));
+  for (int k = 0; k < layout.inputs; ++k) {
+    u.middleCols(k * (m + 1), m + 1) = on_inputs.apply(data.inputs().col(k)).leftCols(m + 1);
+  }
+  const Eigen::VectorXd u_scale = internal::column_scales(u);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(u * u_scale.cwiseInverse().asDiagonal());
+  const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(data.size(), u.cols());
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
+  for (int j = 0; j < layout.outputs; ++j) {
+    const Eigen::MatrixXd fy = on_outputs.apply(data.outputs().col(j));
+    Eigen::MatrixXd phi = -fy.rightCols(n);
+    phi -= q * (q.transpose() * phi);
+    const Eigen::VectorXd y0 = fy.col(0) - q * (q.transpose() * fy.col(0));
+    // Each output weighted by its own size, so that every channel counts alike.
+    const double w = 1.0 / std::max(fy.col(0).squaredNorm(), 1e-300);
+    normal += w * phi.transpose() * phi;
+    rhs += w * phi.transpose() * y0;
+  }
+  const Eigen::VectorXd s = internal::column_scales(normal);
+  const Eigen::VectorXd a_tail =
+      s.cwiseInverse().asDiagonal() *
+      (s.cwiseInverse().asDiagonal() * normal * s.cwiseInverse().asDiagonal())
+          .colPivHouseholderQr()
+          .solve(s.cwiseInverse().asDiagonal() * rhs);
+  if (!a_tail.allFinite()) return std::nullopt;
+  Eigen::VectorXd a(n + 1);
+  a(0) = 1.0;
+  a.tail(n) = a_tail;
+  try {
+    const AdditiveModel grouped = group_into_submodels(
+        TransferFunction(Polynomial{1.0}, Polynomial(a)), layout.orders, data.channel(0, 0));
+    std::vector<Polynomial> denominators;
+    for (const Submodel& sub : grouped.submodels()) denominators.push_back(sub.a);
+    return denominators;
+  } catch (const InvalidArgument&) {
+    return std::nullopt;  // poles that do not fit the structure: not a candidate
+  }
+}
+
+// The start: over a grid of filter bandwidths (the SISO start's, Nyquist / 128 up to Nyquist
+// by octaves), the common-denominator candidate whose least-squares numerators give the
+// smallest relative output error.
+MimoAdditiveModel automatic_start(const Layout& layout, const MimoData& data, Hold interpolation) {
+  std::optional<MimoAdditiveModel> best;
+  double best_cost = std::numeric_limits<double>::infinity();
+  const double nyquist = M_PI / data.sample_time();
+  for (double lambda = nyquist / 128.0; lambda <= nyquist * 1.0001; lambda *= 2.0) {
+    const std::optional<std::vector<Polynomial>> a =
+        common_denominator_start(layout, data, lambda, interpolation);
+    if (!a) continue;
+    MimoAdditiveModel candidate = fit_numerators(layout, data, *a);
+    const double cost = relative_output_error(layout, data, candidate);
+    if (std::isfinite(cost) && cost < best_cost) {
+      best_cost = cost;
+      best = std::move(candidate);
+    }
+  }
+  require(best.has_value(), "mimo_srivc: no start found from the data (the common-denominator ",
+          "least squares gave no model of this structure at any filter bandwidth); give an ",
+          "initial model");
+  return *best;
+}
+
+struct Step {
+  std::optional<MimoAdditiveModel> model;
+  std::string failure;  // why the step could not be taken (empty if it was)
+};
+
+// One step of the shared-pole iteration from `model` (see mimo_srivc.h).
+Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel& model,
+             Hold output_interpolation) {
+  const int n = data.size();
+  const int outputs = layout.outputs;
+  const int submodels = layout.size();
+  const std::vector<Polynomial> a = denominators(model);
+  const Eigen::MatrixXd u = numerator_regressors(layout, data, a);
+  std::vector<Eigen::MatrixXd> parts;
+  Eigen::MatrixXd total = Eigen::MatrixXd::Zero(n, outputs);
+  for (int i = 0; i < submodels; ++i) {
+    parts.push_back(submodel_outputs(layout, u, model, i));
+    total += parts.back();
+  }
+
+  // The numerator columns, scaled to unit norm, projected out with one thin QR.
+  const Eigen::VectorXd u_scale = internal::column_scales(u);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(u * u_scale.cwiseInverse().asDiagonal());
+  const Eigen::MatrixXd triangle =
+      qr.matrixQR().topRows(layout.u_count).triangularView<Eigen::Upper>();
+  const double r_max = triangle.diagonal().cwiseAbs().maxCoeff();
+  if (!(triangle.diagonal().cwiseAbs().minCoeff() > 1e-12 * r_max)) {
+    return {std::nullopt, "the numerator regressors are numerically collinear"};
+  }
+  const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(n, layout.u_count);
+
+  // The instruments' sources: p^q / A_i (p^r / A_i u_k), q = 1..n_i, for every submodel,
+  // input and r <= m_i, one cascade of two banks each (exact for the input hold), so that
+  // -p^q B_ijk / A_i^2 u_k, the a-part of the instrument of output j, is a weighted sum.
+  std::vector<std::vector<Eigen::MatrixXd>> sources(static_cast<size_t>(submodels));
+  for (int i = 0; i < submodels; ++i) {
+    const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+    const FilterRealization bank = derivative_filters(a[static_cast<size_t>(i)]);
+    for (int r = 0; r <= o.m; ++r) {
+      Eigen::VectorXd pick = Eigen::VectorXd::Zero(bank.outputs());
+      pick(r) = 1.0;
+      const SampledFilter chain(cascade(bank, pick, bank), data.sample_time(), data.input_hold());
+      for (int k = 0; k < layout.inputs; ++k) {
+        sources[static_cast<size_t>(i)].push_back(
+            chain.apply(data.inputs().col(k)).middleCols(1, o.n));
+      }
+    }
+  }
+
+  // Per output: the denominator regressors -p^q / A_i y~_ij, the instruments -p^q / A_i x_ij
+  // (x_ij submodel i's own output, B_ij. / A_i u), and the filtered residuals 1 / A_i y~_ij
+  // (one column per submodel: the K right-hand sides of (29)).
+  Eigen::MatrixXd m_a = Eigen::MatrixXd::Zero(layout.a_count, layout.a_count);
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(layout.a_count, submodels);
+  Eigen::VectorXd phi_norm = Eigen::VectorXd::Zero(layout.a_count);
+  Eigen::VectorXd psi_norm = Eigen::VectorXd::Zero(layout.a_count);
+  std::vector<Eigen::MatrixXd> q_phi(static_cast<size_t>(outputs));
+  std::vector<Eigen::MatrixXd> q_upsilon(static_cast<size_t>(outputs));
+  std::vector<SampledFilter> filters;
+  for (int i = 0; i < submodels; ++i) {
+    filters.emplace_back(derivative_filters(a[static_cast<size_t>(i)]), data.sample_time(),
+                         output_interpolation);
+  }
+  Eigen::MatrixXd phi(n, layout.a_count);
+  Eigen::MatrixXd psi(n, layout.a_count);
+  Eigen::MatrixXd upsilon(n, submodels);
+  for (int j = 0; j < outputs; ++j) {
+    for (int i = 0; i < submodels; ++i) {
+      const SampledFilter& f = filters[static_cast<size_t>(i)];
+      const int n_i = layout.orders[static_cast<size_t>(i)].n;
+      const Eigen::VectorXd residual =
+          data.outputs().col(j) - total.col(j) + parts[static_cast<size_t>(i)].col(j);
+      const Eigen::MatrixXd fy = f.apply(residual);
+      upsilon.col(i) = fy.col(0);
+      phi.middleCols(layout.a_at[static_cast<size_t>(i)], n_i) = -fy.middleCols(1, n_i);
+      auto instrument = psi.middleCols(layout.a_at[static_cast<size_t>(i)], n_i);
+      instrument.setZero();
+      const int m = layout.orders[static_cast<size_t>(i)].m;
+      for (int k = 0; k < layout.inputs; ++k) {
+        const Polynomial& b = model.numerator(i, j, k);
+        for (int r = 0; r <= std::min(m, b.degree()); ++r) {
+          instrument -=
+              b[r] * sources[static_cast<size_t>(i)][static_cast<size_t>(r * layout.inputs + k)];
+        }
+      }
+    }
+    q_phi[static_cast<size_t>(j)] = q.transpose() * phi;
+    q_upsilon[static_cast<size_t>(j)] = q.transpose() * upsilon;
+    const Eigen::MatrixXd q_psi = q.transpose() * psi;
+    m_a += psi.transpose() * phi - q_psi.transpose() * q_phi[static_cast<size_t>(j)];
+    rhs += psi.transpose() * upsilon - q_psi.transpose() * q_upsilon[static_cast<size_t>(j)];
+    phi_norm +=
+        (phi.colwise().squaredNorm() - q_phi[static_cast<size_t>(j)].colwise().squaredNorm())
+            .transpose();
+    psi_norm += (psi.colwise().squaredNorm() - q_psi.colwise().squaredNorm()).transpose();
+  }
+  if (!m_a.allFinite() || !rhs.allFinite())
+    return {std::nullopt, "a filtered signal is not finite"};
+
+  // The denominators' projected system, rows and columns scaled to unit norm.
+  const auto scale_of = [](Eigen::VectorXd squared) {
+    for (Eigen::Index k = 0; k < squared.size(); ++k) {
+      squared(k) = squared(k) > 0.0 ? std::sqrt(squared(k)) : 1.0;
+    }
+    return squared;
+  };
+  const Eigen::VectorXd s_phi = scale_of(phi_norm);
+  const Eigen::VectorXd s_psi = scale_of(psi_norm);
+  const Eigen::MatrixXd scaled =
+      s_psi.cwiseInverse().asDiagonal() * m_a * s_phi.cwiseInverse().asDiagonal();
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(scaled);
+  if (lu.rcond() < 1e-14) return {std::nullopt, "the denominators' equations are singular"};
+  const Eigen::MatrixXd alpha =
+      s_phi.cwiseInverse().asDiagonal() * lu.solve(s_psi.cwiseInverse().asDiagonal() * rhs);
+
+  // Each submodel's block of its own column: its denominator, and per output its numerators.
+  std::vector<MimoSubmodel> next;
+  for (int i = 0; i < submodels; ++i) {
+    const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+    Eigen::VectorXd coefficients(o.n + 1);
+    coefficients(0) = 1.0;
+    coefficients.tail(o.n) = alpha.block(layout.a_at[static_cast<size_t>(i)], i, o.n, 1);
+    bool reflected = false;
+    MimoSubmodel sub{internal::reflect_unstable_roots(Polynomial(coefficients), reflected), {}};
+    next.push_back(std::move(sub));
+  }
+  for (int j = 0; j < outputs; ++j) {
+    const Eigen::MatrixXd beta =
+        u_scale.cwiseInverse().asDiagonal() *
+        triangle.triangularView<Eigen::Upper>().solve(q_upsilon[static_cast<size_t>(j)] -
+                                                      q_phi[static_cast<size_t>(j)] * alpha);
+    for (int i = 0; i < submodels; ++i) {
+      const int m = layout.orders[static_cast<size_t>(i)].m;
+      for (int k = 0; k < layout.inputs; ++k) {
+        next[static_cast<size_t>(i)].b.emplace_back(
+            Eigen::VectorXd(beta.block(layout.u_column(i, k, 0), i, m + 1, 1)));
+      }
+    }
+  }
+  // Numerators were appended output by output, input by input: the model's own order.
+  for (MimoSubmodel& s : next) {
+    if (!s.a.coefficients().allFinite()) return {std::nullopt, "an iterate is not finite"};
+    for (const Polynomial& b : s.b) {
+      if (!b.coefficients().allFinite()) return {std::nullopt, "an iterate is not finite"};
+    }
+  }
+  return {MimoAdditiveModel(layout.inputs, layout.outputs, std::move(next)), {}};
+}
+
+void check_orders(const std::vector<SubmodelOrder>& orders, const MimoData& data) {
+  require(!orders.empty(), "mimo_srivc: the structure has no submodels");
+  int parameters = 0;
+  for (size_t i = 0; i < orders.size(); ++i) {
+    orders[i].validate();
+    require(orders[i].n >= 1, "mimo_srivc: submodel ", i + 1,
+            " has no poles (n = 0); every submodel needs n >= 1");
+    require(orders[i].integrators == 0, "mimo_srivc: submodel ", i + 1,
+            " has integrators, which the shared-pole estimator does not take yet");
+    require(orders[i].m <= orders[i].n, "mimo_srivc: submodel ", i + 1, " has m = ", orders[i].m,
+            " > n = ", orders[i].n, "; the model must be proper");
+    parameters += orders[i].n + data.input_count() * (orders[i].m + 1);
+  }
+  require(data.size() > 2 * parameters, "mimo_srivc: ", data.size(), " samples are too few for ",
+          parameters, " parameters per output (the record needs more than twice as many)");
+}
+
+}  // namespace
+
+MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<SubmodelOrder>& orders,
+                                const MimoRefinedIvOptions& options,
+                                const std::optional<MimoAdditiveModel>& initial_model) {
+  options.validate();
+  check_orders(orders, data);
+  const Layout layout(orders, data.input_count(), data.output_count());
+
+  MimoAdditiveModel model = [&] {
+    if (initial_model) {
+      require(initial_model->inputs() == data.input_count() &&
+                  initial_model->outputs() == data.output_count(),
+              "mimo_srivc: the initial model is ", initial_model->outputs(), " x ",
+              initial_model->inputs(), " but the data have ", data.output_count(), " outputs and ",
+              data.input_count(), " inputs");
+      require(initial_model->size() == layout.size(), "mimo_srivc: the initial model has ",
+              initial_model->size(), " submodels; the structure has ", layout.size());
+      for (int i = 0; i < layout.size(); ++i) {
+        require((*initial_model)[i].a.degree() == orders[static_cast<size_t>(i)].n,
+                "mimo_srivc: submodel ", i + 1, " of the initial model has ",
+                (*initial_model)[i].a.degree(), " poles; the structure asks for ",
+                orders[static_cast<size_t>(i)].n);
+      }
+      return *initial_model;
+    }
+    return automatic_start(layout, data, options.output_interpolation);
+  }();
+
+  MimoEstimationResult result;
+  Eigen::VectorXd previous = flatten(model);
+  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
+    Step step = iterate(layout, data, model, options.output_interpolation);
+    if (!step.model) {
+      result.termination = step.failure == "an iterate is not finite" ||
+                                   step.failure == "a filtered signal is not finite"
+                               ? Termination::non_finite
+                               : Termination::singular_equations;
+      result.message = internal::concat("mimo_srivc: stopped at iteration ", iteration, ": ",
+                                        step.failure, "; the last iterate is returned");
+      break;
+    }
+    model = std::move(*step.model);
+    result.iterations = iteration;
+    const Eigen::VectorXd current = flatten(model);
+    const double change = (current - previous).norm() / previous.norm();
+    previous = current;
+    if (change < options.tolerance) {
+      result.termination = Termination::converged;
+      result.message = internal::concat("mimo_srivc: converged after ", iteration,
+                                        " iterations (relative parameter change ", change, ")");
+      break;
+    }
+  }
+  if (result.termination == Termination::not_run) {
+    result.termination = Termination::iteration_limit;
+    result.message =
+        internal::concat("mimo_srivc: no convergence in ", options.max_iterations, " iterations");
+  }
+
+  const Eigen::MatrixXd u = numerator_regressors(layout, data, denominators(model));
+  Eigen::MatrixXd fitted = Eigen::MatrixXd::Zero(data.size(), data.output_count());
+  for (int i = 0; i < layout.size(); ++i) fitted += submodel_outputs(layout, u, model, i);
+  result.mean_squared_errors = (data.outputs() - fitted).colwise().squaredNorm().transpose() /
+                               static_cast<double>(data.size());
+  result.fit_percent.resize(data.output_count());
+  for (int j = 0; j < data.output_count(); ++j) {
+    result.fit_percent(j) = fit_percent(data.outputs().col(j), fitted.col(j));
+  }
+  result.model = std::move(model);
+  return result;
+}
+
+}  // namespace ctid
