@@ -6,8 +6,13 @@
 
 namespace ctid {
 
-MimoAdditiveModel::MimoAdditiveModel(int inputs, int outputs, std::vector<MimoSubmodel> submodels)
-    : inputs_(inputs), outputs_(outputs), submodels_(std::move(submodels)) {
+MimoAdditiveModel::MimoAdditiveModel(int inputs, int outputs, std::vector<MimoSubmodel> submodels,
+                                     Eigen::MatrixXd direct)
+    : inputs_(inputs),
+      outputs_(outputs),
+      submodels_(std::move(submodels)),
+      direct_(std::move(direct)),
+      has_direct_(direct_.size() > 0) {
   require(inputs_ >= 1 && outputs_ >= 1, "a MIMO model needs at least one input and one output; ",
           "got ", inputs_, " inputs and ", outputs_, " outputs");
   require(!submodels_.empty(), "a MIMO model needs at least one submodel");
@@ -23,6 +28,14 @@ MimoAdditiveModel::MimoAdditiveModel(int inputs, int outputs, std::vector<MimoSu
       require(b.coefficients().allFinite(), "submodel ", i + 1, ": non-finite numerator");
     }
   }
+  if (has_direct_) {
+    require(direct_.rows() == outputs_ && direct_.cols() == inputs_, "the direct term is ",
+            direct_.rows(), " x ", direct_.cols(), "; a model with ", outputs_, " outputs and ",
+            inputs_, " inputs needs ", outputs_, " x ", inputs_);
+    require(direct_.allFinite(), "the direct term has non-finite entries");
+  } else {
+    direct_ = Eigen::MatrixXd::Zero(outputs_, inputs_);
+  }
 }
 
 const Polynomial& MimoAdditiveModel::numerator(int i, int output, int input) const {
@@ -36,6 +49,8 @@ AdditiveModel MimoAdditiveModel::channel(int output, int input) const {
   for (int i = 0; i < size(); ++i) {
     siso.push_back(Submodel{submodels_[static_cast<size_t>(i)].a, numerator(i, output, input), 0});
   }
+  const double d = direct_(output, input);
+  if (d != 0.0) siso[0].b = siso[0].b + d * siso[0].a;
   return AdditiveModel(std::move(siso));
 }
 

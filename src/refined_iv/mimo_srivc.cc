@@ -1,6 +1,7 @@
 // Shared-pole refined IV for several inputs and outputs (mimo_srivc.h).
 #include "ctid/refined_iv/mimo_srivc.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -20,7 +21,7 @@ namespace {
 
 // Where each submodel's unknowns sit: the denominators' a_i1..a_in (shared by every output) in
 // one vector, and the numerator regressors p^r / A_i u_k (r = 0..m_i, the same for every
-// output) in the columns of one matrix.
+// output) in the columns of one matrix, the direct term's u_k (if any) last.
 struct Layout {
   std::vector<SubmodelOrder> orders;
   int inputs = 0;
@@ -29,16 +30,22 @@ struct Layout {
   std::vector<int> u_at;  // first numerator column of submodel i (input 0)
   int a_count = 0;
   int u_count = 0;
+  bool direct = false;
+  int d_at = 0;  // first column of the direct term (input 0)
 
-  Layout(std::vector<SubmodelOrder> o, int n_u, int n_y)
-      : orders(std::move(o)), inputs(n_u), outputs(n_y) {
+  Layout(std::vector<SubmodelOrder> o, int n_u, int n_y, bool with_direct)
+      : orders(std::move(o)), inputs(n_u), outputs(n_y), direct(with_direct) {
     for (const SubmodelOrder& s : orders) {
       a_at.push_back(a_count);
       u_at.push_back(u_count);
       a_count += s.n;
       u_count += inputs * (s.m + 1);
     }
+    d_at = u_count;
+    if (direct) u_count += inputs;
   }
+  // Right-hand sides of (29): one per submodel, and one for the direct term.
+  int columns() const { return size() + (direct ? 1 : 0); }
   int size() const { return static_cast<int>(orders.size()); }
   // Numerator column of submodel i, input k, power r.
   int u_column(int i, int k, int r) const { return u_at[i] + k * (orders[i].m + 1) + r; }
@@ -56,6 +63,7 @@ Eigen::VectorXd flatten(const MimoAdditiveModel& model) {
       for (int r = 0; r <= b.degree(); ++r) v.push_back(b[r]);
     }
   }
+  for (Eigen::Index c = 0; c < model.direct().size(); ++c) v.push_back(model.direct()(c));
   return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
 }
 
@@ -72,6 +80,7 @@ Eigen::MatrixXd numerator_regressors(const Layout& layout, const MimoData& data,
       u.middleCols(layout.u_column(i, k, 0), m + 1) = f.leftCols(m + 1);
     }
   }
+  if (layout.direct) u.middleCols(layout.d_at, layout.inputs) = data.inputs();
   return u;
 }
 
@@ -102,6 +111,21 @@ Eigen::MatrixXd submodel_outputs(const Layout& layout, const Eigen::MatrixXd& u,
          numerator_block(layout, model, i);
 }
 
+// The direct term's contribution D u at every output (N x outputs).
+Eigen::MatrixXd direct_outputs(const Layout& layout, const Eigen::MatrixXd& u,
+                               const MimoAdditiveModel& model) {
+  if (!layout.direct) return Eigen::MatrixXd::Zero(u.rows(), layout.outputs);
+  return u.middleCols(layout.d_at, layout.inputs) * model.direct().transpose();
+}
+
+// The whole model's sampled output (N x outputs).
+Eigen::MatrixXd model_outputs(const Layout& layout, const Eigen::MatrixXd& u,
+                              const MimoAdditiveModel& model) {
+  Eigen::MatrixXd fitted = direct_outputs(layout, u, model);
+  for (int i = 0; i < layout.size(); ++i) fitted += submodel_outputs(layout, u, model, i);
+  return fitted;
+}
+
 // Numerators fitted by least squares to every output for the given denominators.
 MimoAdditiveModel fit_numerators(const Layout& layout, const MimoData& data,
                                  const std::vector<Polynomial>& a) {
@@ -121,16 +145,17 @@ MimoAdditiveModel fit_numerators(const Layout& layout, const MimoData& data,
     }
     submodels.push_back(std::move(sub));
   }
-  return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels));
+  Eigen::MatrixXd direct;
+  if (layout.direct) direct = b.middleRows(layout.d_at, layout.inputs).transpose();
+  return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels), direct);
 }
 
 // Sum over the outputs of the mean squared output error relative to the output's mean square:
 // how the start's candidates are compared (every channel counts alike).
 double relative_output_error(const Layout& layout, const MimoData& data,
                              const MimoAdditiveModel& model) {
-  const Eigen::MatrixXd u = numerator_regressors(layout, data, denominators(model));
-  Eigen::MatrixXd fitted = Eigen::MatrixXd::Zero(data.size(), layout.outputs);
-  for (int i = 0; i < layout.size(); ++i) fitted += submodel_outputs(layout, u, model, i);
+  const Eigen::MatrixXd fitted =
+      model_outputs(layout, numerator_regressors(layout, data, denominators(model)), model);
   double total = 0.0;
   for (int j = 0; j < layout.outputs; ++j) {
     total += (data.outputs().col(j) - fitted.col(j)).squaredNorm() /
@@ -149,7 +174,7 @@ std::optional<std::vector<Polynomial>> common_denominator_start(const Layout& la
                                                                 Hold interpolation) {
   int n = 0;
   for (const SubmodelOrder& o : layout.orders) n += o.n;
-  int m = 0;
+  int m = layout.direct ? n : 0;  // a direct term makes every channel biproper
   for (const SubmodelOrder& o : layout.orders) m = std::max(m, o.m + n - o.n);
   Polynomial f{1.0};
   for (int q = 0; q < n; ++q) f = f * Polynomial{1.0, 1.0 / lambda};
@@ -234,7 +259,8 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
   const std::vector<Polynomial> a = denominators(model);
   const Eigen::MatrixXd u = numerator_regressors(layout, data, a);
   std::vector<Eigen::MatrixXd> parts;
-  Eigen::MatrixXd total = Eigen::MatrixXd::Zero(n, outputs);
+  const Eigen::MatrixXd direct = direct_outputs(layout, u, model);
+  Eigen::MatrixXd total = direct;
   for (int i = 0; i < submodels; ++i) {
     parts.push_back(submodel_outputs(layout, u, model, i));
     total += parts.back();
@@ -273,7 +299,7 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
   // (x_ij submodel i's own output, B_ij. / A_i u), and the filtered residuals 1 / A_i y~_ij
   // (one column per submodel: the K right-hand sides of (29)).
   Eigen::MatrixXd m_a = Eigen::MatrixXd::Zero(layout.a_count, layout.a_count);
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(layout.a_count, submodels);
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(layout.a_count, layout.columns());
   Eigen::VectorXd phi_norm = Eigen::VectorXd::Zero(layout.a_count);
   Eigen::VectorXd psi_norm = Eigen::VectorXd::Zero(layout.a_count);
   std::vector<Eigen::MatrixXd> q_phi(static_cast<size_t>(outputs));
@@ -285,7 +311,7 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
   }
   Eigen::MatrixXd phi(n, layout.a_count);
   Eigen::MatrixXd psi(n, layout.a_count);
-  Eigen::MatrixXd upsilon(n, submodels);
+  Eigen::MatrixXd upsilon(n, layout.columns());
   for (int j = 0; j < outputs; ++j) {
     for (int i = 0; i < submodels; ++i) {
       const SampledFilter& f = filters[static_cast<size_t>(i)];
@@ -306,6 +332,9 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
         }
       }
     }
+    // The direct term's own residual, unfiltered (its denominator is 1).
+    if (layout.direct)
+      upsilon.col(submodels) = data.outputs().col(j) - total.col(j) + direct.col(j);
     q_phi[static_cast<size_t>(j)] = q.transpose() * phi;
     q_upsilon[static_cast<size_t>(j)] = q.transpose() * upsilon;
     const Eigen::MatrixXd q_psi = q.transpose() * psi;
@@ -346,6 +375,8 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
     MimoSubmodel sub{internal::reflect_unstable_roots(Polynomial(coefficients), reflected), {}};
     next.push_back(std::move(sub));
   }
+  Eigen::MatrixXd next_direct;
+  if (layout.direct) next_direct.resize(outputs, layout.inputs);
   for (int j = 0; j < outputs; ++j) {
     const Eigen::MatrixXd beta =
         u_scale.cwiseInverse().asDiagonal() *
@@ -358,6 +389,9 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
             Eigen::VectorXd(beta.block(layout.u_column(i, k, 0), i, m + 1, 1)));
       }
     }
+    if (layout.direct) {
+      next_direct.row(j) = beta.block(layout.d_at, submodels, layout.inputs, 1).transpose();
+    }
   }
   // Numerators were appended output by output, input by input: the model's own order.
   for (MimoSubmodel& s : next) {
@@ -366,10 +400,28 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
       if (!b.coefficients().allFinite()) return {std::nullopt, "an iterate is not finite"};
     }
   }
-  return {MimoAdditiveModel(layout.inputs, layout.outputs, std::move(next)), {}};
+  if (!next_direct.allFinite()) return {std::nullopt, "an iterate is not finite"};
+  return {MimoAdditiveModel(layout.inputs, layout.outputs, std::move(next), next_direct), {}};
 }
 
-void check_orders(const std::vector<SubmodelOrder>& orders, const MimoData& data) {
+// Submodels of equal orders listed from the slowest up (by the geometric mean of their pole
+// magnitudes, a_n^(-1/n)), so that the order in which the start found them does not show.
+MimoAdditiveModel slowest_first(const Layout& layout, MimoAdditiveModel model) {
+  for (const SubmodelOrder& o : layout.orders) {
+    if (o.n != layout.orders[0].n || o.m != layout.orders[0].m) return model;
+  }
+  std::vector<MimoSubmodel> submodels = model.submodels();
+  const auto speed = [](const MimoSubmodel& s) {
+    return std::pow(std::abs(s.a[s.a.degree()]), -1.0 / s.a.degree());
+  };
+  std::stable_sort(
+      submodels.begin(), submodels.end(),
+      [&](const MimoSubmodel& x, const MimoSubmodel& y) { return speed(x) < speed(y); });
+  return MimoAdditiveModel(model.inputs(), model.outputs(), std::move(submodels),
+                           model.has_direct_term() ? model.direct() : Eigen::MatrixXd());
+}
+
+void check_orders(const std::vector<SubmodelOrder>& orders, const MimoData& data, bool direct) {
   require(!orders.empty(), "mimo_srivc: the structure has no submodels");
   int parameters = 0;
   for (size_t i = 0; i < orders.size(); ++i) {
@@ -382,6 +434,7 @@ void check_orders(const std::vector<SubmodelOrder>& orders, const MimoData& data
             " > n = ", orders[i].n, "; the model must be proper");
     parameters += orders[i].n + data.input_count() * (orders[i].m + 1);
   }
+  if (direct) parameters += data.input_count();
   require(data.size() > 2 * parameters, "mimo_srivc: ", data.size(), " samples are too few for ",
           parameters, " parameters per output (the record needs more than twice as many)");
 }
@@ -392,8 +445,8 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
                                 const MimoRefinedIvOptions& options,
                                 const std::optional<MimoAdditiveModel>& initial_model) {
   options.validate();
-  check_orders(orders, data);
-  const Layout layout(orders, data.input_count(), data.output_count());
+  check_orders(orders, data, options.direct_term);
+  const Layout layout(orders, data.input_count(), data.output_count(), options.direct_term);
 
   MimoAdditiveModel model = [&] {
     if (initial_model) {
@@ -447,15 +500,14 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
   }
 
   const Eigen::MatrixXd u = numerator_regressors(layout, data, denominators(model));
-  Eigen::MatrixXd fitted = Eigen::MatrixXd::Zero(data.size(), data.output_count());
-  for (int i = 0; i < layout.size(); ++i) fitted += submodel_outputs(layout, u, model, i);
+  const Eigen::MatrixXd fitted = model_outputs(layout, u, model);
   result.mean_squared_errors = (data.outputs() - fitted).colwise().squaredNorm().transpose() /
                                static_cast<double>(data.size());
   result.fit_percent.resize(data.output_count());
   for (int j = 0; j < data.output_count(); ++j) {
     result.fit_percent(j) = fit_percent(data.outputs().col(j), fitted.col(j));
   }
-  result.model = std::move(model);
+  result.model = slowest_first(layout, std::move(model));
   return result;
 }
 

@@ -33,6 +33,9 @@ struct MimoRefinedIvOptions {
   double tolerance = 1e-10;
   /// Interpolation of the measured outputs between samples before filtering.
   Hold output_interpolation = Hold::first_order_hold;
+  /// Estimate a direct term D (outputs x inputs) besides the strictly proper or biproper
+  /// submodels: G = sum_i R_i / A_i + D (e.g. accelerations from forces with m_i < n_i).
+  bool direct_term = false;
 
   static constexpr std::string_view type_name = "MimoRefinedIvOptions";
   static constexpr auto fields() {
@@ -43,6 +46,7 @@ struct MimoRefinedIvOptions {
               "Relative parameter change that stops the iteration."),
         field("output_interpolation", &O::output_interpolation,
               "Interpolation of the measured outputs before filtering."),
+        field("direct_term", &O::direct_term, "Estimate a direct term D as well."),
     };
   }
   void validate() const { validate_fields(*this); }
