@@ -3,13 +3,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <utility>
 
 #include <Eigen/Dense>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
+#include "ctid/estimation/verdict.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/initialization.h"
 #include "internal/refined_iv_engine.h"
@@ -248,6 +251,8 @@ MimoAdditiveModel automatic_start(const Layout& layout, const MimoData& data, Ho
 struct Step {
   std::optional<MimoAdditiveModel> model;
   std::string failure;  // why the step could not be taken (empty if it was)
+  Termination kind = Termination::singular_equations;  // of a failure
+  double reciprocal_condition = std::numeric_limits<double>::quiet_NaN();
 };
 
 // One step of the shared-pole iteration from `model` (see mimo_srivc.h).
@@ -345,8 +350,9 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
             .transpose();
     psi_norm += (psi.colwise().squaredNorm() - q_psi.colwise().squaredNorm()).transpose();
   }
-  if (!m_a.allFinite() || !rhs.allFinite())
-    return {std::nullopt, "a filtered signal is not finite"};
+  if (!m_a.allFinite() || !rhs.allFinite()) {
+    return {std::nullopt, "a filtered signal is not finite", Termination::non_finite};
+  }
 
   // The denominators' projected system, rows and columns scaled to unit norm.
   const auto scale_of = [](Eigen::VectorXd squared) {
@@ -360,7 +366,11 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
   const Eigen::MatrixXd scaled =
       s_psi.cwiseInverse().asDiagonal() * m_a * s_phi.cwiseInverse().asDiagonal();
   const Eigen::FullPivLU<Eigen::MatrixXd> lu(scaled);
-  if (lu.rcond() < 1e-14) return {std::nullopt, "the denominators' equations are singular"};
+  const double rcond = lu.rcond();
+  if (!(rcond >= 1e-14)) {
+    return {std::nullopt, "the denominators' equations are singular",
+            Termination::singular_equations, rcond};
+  }
   const Eigen::MatrixXd alpha =
       s_phi.cwiseInverse().asDiagonal() * lu.solve(s_psi.cwiseInverse().asDiagonal() * rhs);
 
@@ -371,6 +381,13 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
     Eigen::VectorXd coefficients(o.n + 1);
     coefficients(0) = 1.0;
     coefficients.tail(o.n) = alpha.block(layout.a_at[static_cast<size_t>(i)], i, o.n, 1);
+    if (!coefficients.allFinite()) {
+      return {std::nullopt, "an iterate is not finite", Termination::non_finite};
+    }
+    if (!(std::abs(coefficients(o.n)) > 0.0)) {
+      return {std::nullopt, "a denominator lost its leading coefficient (a pole at infinity)",
+              Termination::singular_equations, rcond};
+    }
     bool reflected = false;
     MimoSubmodel sub{internal::reflect_unstable_roots(Polynomial(coefficients), reflected), {}};
     next.push_back(std::move(sub));
@@ -394,14 +411,16 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
     }
   }
   // Numerators were appended output by output, input by input: the model's own order.
+  bool finite = next_direct.allFinite();
   for (MimoSubmodel& s : next) {
-    if (!s.a.coefficients().allFinite()) return {std::nullopt, "an iterate is not finite"};
-    for (const Polynomial& b : s.b) {
-      if (!b.coefficients().allFinite()) return {std::nullopt, "an iterate is not finite"};
-    }
+    finite = finite && s.a.coefficients().allFinite();
+    for (const Polynomial& b : s.b) finite = finite && b.coefficients().allFinite();
   }
-  if (!next_direct.allFinite()) return {std::nullopt, "an iterate is not finite"};
-  return {MimoAdditiveModel(layout.inputs, layout.outputs, std::move(next), next_direct), {}};
+  if (!finite) return {std::nullopt, "an iterate is not finite", Termination::non_finite};
+  return {MimoAdditiveModel(layout.inputs, layout.outputs, std::move(next), next_direct),
+          {},
+          Termination::converged,
+          rcond};
 }
 
 // Submodels of equal orders listed from the slowest up (by the geometric mean of their pole
@@ -468,28 +487,40 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
     return automatic_start(layout, data, options.output_interpolation);
   }();
 
+  // The iteration, keeping the iterate with the lowest output error (relative_output_error):
+  // that is what is returned, never a diverged one.
   MimoEstimationResult result;
+  const double start_cost = relative_output_error(layout, data, model);
+  MimoAdditiveModel best = model;
+  double best_cost = start_cost;
+  int best_iteration = 0;
+  double reciprocal_condition = std::numeric_limits<double>::quiet_NaN();
   Eigen::VectorXd previous = flatten(model);
   for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
     Step step = iterate(layout, data, model, options.output_interpolation);
+    reciprocal_condition = step.reciprocal_condition;
     if (!step.model) {
-      result.termination = step.failure == "an iterate is not finite" ||
-                                   step.failure == "a filtered signal is not finite"
-                               ? Termination::non_finite
-                               : Termination::singular_equations;
-      result.message = internal::concat("mimo_srivc: stopped at iteration ", iteration, ": ",
-                                        step.failure, "; the last iterate is returned");
+      result.termination = step.kind;
+      result.message =
+          internal::concat("mimo_srivc: stopped at iteration ", iteration, ": ", step.failure);
       break;
     }
     model = std::move(*step.model);
     result.iterations = iteration;
+    const double cost = relative_output_error(layout, data, model);
+    if (std::isfinite(cost) && cost <= best_cost) {
+      best = model;
+      best_cost = cost;
+      best_iteration = iteration;
+    }
     const Eigen::VectorXd current = flatten(model);
     const double change = (current - previous).norm() / previous.norm();
     previous = current;
     if (change < options.tolerance) {
       result.termination = Termination::converged;
-      result.message = internal::concat("mimo_srivc: converged after ", iteration,
-                                        " iterations (relative parameter change ", change, ")");
+      result.message =
+          internal::concat("mimo_srivc: converged after ", iteration,
+                           " iterations (relative parameter change ", format_brief(change), ")");
       break;
     }
   }
@@ -498,6 +529,14 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
     result.message =
         internal::concat("mimo_srivc: no convergence in ", options.max_iterations, " iterations");
   }
+  if (best_iteration != result.iterations) {
+    result.message +=
+        internal::concat("; the iterate with the lowest output error (",
+                         best_iteration == 0 ? std::string("the start")
+                                             : internal::concat("iteration ", best_iteration),
+                         ") is returned");
+  }
+  model = std::move(best);
 
   const Eigen::MatrixXd u = numerator_regressors(layout, data, denominators(model));
   const Eigen::MatrixXd fitted = model_outputs(layout, u, model);
@@ -507,6 +546,26 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
   for (int j = 0; j < data.output_count(); ++j) {
     result.fit_percent(j) = fit_percent(data.outputs().col(j), fitted.col(j));
   }
+
+  // The verdict: finite, stable, every output's fit not negative, the denominators'
+  // equations well conditioned at the last step.
+  std::vector<std::complex<double>> poles;
+  for (const MimoSubmodel& sub : model.submodels()) {
+    const Eigen::VectorXcd r = sub.a.roots();
+    poles.insert(poles.end(), r.data(), r.data() + r.size());
+  }
+  check_finite(result.verdict, result.fit_percent.allFinite(), "the fit");
+  check_stable(result.verdict, Eigen::Map<const Eigen::VectorXcd>(
+                                   poles.data(), static_cast<Eigen::Index>(poles.size())));
+  for (int j = 0; j < data.output_count(); ++j) {
+    if (!(result.fit_percent(j) >= 0.0)) {
+      result.verdict.fail(
+          internal::concat("output ", data.output_names()[static_cast<size_t>(j)], " is fitted at ",
+                           format_brief(result.fit_percent(j)), " %, worse than its mean"),
+          {verdict_advice::better_start, verdict_advice::lower_order});
+    }
+  }
+  check_conditioning(result.verdict, reciprocal_condition);
   result.model = slowest_first(layout, std::move(model));
   return result;
 }

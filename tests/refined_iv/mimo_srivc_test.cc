@@ -168,6 +168,41 @@ TEST(MimoSrivc, DirectTermIsRecoveredExactly) {
   EXPECT_LT(without.fit_percent.minCoeff(), 99.0);
 }
 
+// Sum over outputs of |y_j - G_j u|^2 / |y_j|^2, simulated channel by channel.
+double relative_output_error(const MimoAdditiveModel& g, const MimoData& data) {
+  double total = 0.0;
+  for (int j = 0; j < g.outputs(); ++j) {
+    Eigen::VectorXd y = Eigen::VectorXd::Zero(data.size());
+    for (int k = 0; k < g.inputs(); ++k) y += simulate(g.channel(j, k), data.inputs().col(k), kH);
+    total += (data.outputs().col(j) - y).squaredNorm() / data.outputs().col(j).squaredNorm();
+  }
+  return total;
+}
+
+TEST(MimoSrivc, ReturnsTheIterateWithTheLowestOutputError) {
+  // Noisy data, far too many modes and a poor start: whatever the iteration does, the model
+  // returned fits no worse than the start.
+  const MimoAdditiveModel truth = four_mode_beam(2, 3, 7);
+  MimoData clean = noise_free(truth, 1500, 3);
+  Eigen::MatrixXd y = clean.outputs();
+  for (int j = 0; j < 3; ++j) y.col(j) += white_noise(1500, 2.0 * y.col(j).norm() / 38.7, 50 + j);
+  const MimoData data(kH, clean.inputs(), y);
+  std::vector<MimoSubmodel> start;
+  for (double w : {0.5, 0.9, 2.0, 4.1, 7.0, 12.0, 20.0}) {
+    start.push_back({Polynomial{1.0, 0.2 / w, 1.0 / (w * w)}, std::vector<Polynomial>(6, {0.1})});
+  }
+  const MimoAdditiveModel poor(2, 3, start);
+  MimoRefinedIvOptions options;
+  options.max_iterations = 5;
+  const MimoEstimationResult r =
+      mimo_srivc(data, std::vector<SubmodelOrder>(7, {2, 0, 0}), options, poor);
+  EXPECT_LE(relative_output_error(*r.model, data), relative_output_error(poor, data) * (1 + 1e-9));
+  EXPECT_FALSE(r.converged());
+  if (r.message.find("lowest output error") == std::string::npos) {
+    EXPECT_EQ(r.iterations, 5) << r.message;
+  }
+}
+
 TEST(MimoSrivc, OneInputOneOutputIsTheAdditiveEstimator) {
   // The same equations as (29): on a noisy record both end at the same stationary point.
   const AdditiveModel truth = testing::open_loop_four_modes();

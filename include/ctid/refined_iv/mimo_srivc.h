@@ -23,6 +23,7 @@
 #include "ctid/core/mimo_data.h"
 #include "ctid/core/mimo_model.h"
 #include "ctid/estimation/termination.h"
+#include "ctid/estimation/verdict.h"
 
 namespace ctid {
 
@@ -53,13 +54,16 @@ struct MimoRefinedIvOptions {
 };
 
 struct MimoEstimationResult {
-  std::optional<MimoAdditiveModel> model;  ///< the estimate (none if nothing was computed)
+  /// The estimate: the iterate with the lowest output error (none if nothing was computed).
+  std::optional<MimoAdditiveModel> model;
   Termination termination = Termination::not_run;
   std::string message;  ///< one sentence: how the iteration ended
   int iterations = 0;
   /// Per output: mean squared output error y_j - G_j u and fit_percent on the data.
   Eigen::VectorXd mean_squared_errors;
   Eigen::VectorXd fit_percent;
+  /// Finite, stable, no output fitted worse than its mean, well-conditioned equations.
+  Verdict verdict;
   bool converged() const { return termination == Termination::converged; }
 };
 
