@@ -47,6 +47,20 @@ AutoregressiveModel fit_autoregressive(const Eigen::VectorXd& x, int max_order) 
   return best;
 }
 
+Eigen::MatrixXd adjoint_ar_filter(const Eigen::MatrixXd& x, const AutoregressiveModel& ar) {
+  // x~_s = sum_j h_j x_{s+j}, h the impulse response of 1/A: run 1/A backwards in time.
+  // Time runs along the columns of g (p x N) so each step touches contiguous memory.
+  const Eigen::Index n = x.rows();
+  Eigen::MatrixXd g = x.transpose();
+  const Eigen::Index order = ar.coefficients.size() - 1;
+  for (Eigen::Index k = n - 2; k >= 0; --k) {
+    for (Eigen::Index j = 1; j <= order && k + j < n; ++j) {
+      g.col(k) -= ar.coefficients(j) * g.col(k + j);
+    }
+  }
+  return g;
+}
+
 Eigen::MatrixXd instrumental_variable_covariance(const Eigen::MatrixXd& psi,
                                                  const Eigen::VectorXd& residual,
                                                  int parameter_count, NoiseAssumption noise,
@@ -69,15 +83,7 @@ Eigen::MatrixXd instrumental_variable_covariance(const Eigen::MatrixXd& psi,
     const AutoregressiveModel ar = fit_autoregressive(residual, max_ar_order);
     const double e2 =
         ar.innovation_variance * static_cast<double>(n) / static_cast<double>(n - parameter_count);
-    // psi~_s = sum_j h_j psi_{s+j}, h the impulse response of 1/A: run 1/A backwards in time.
-    // Time runs along the columns of g (p x N) so each step touches contiguous memory.
-    Eigen::MatrixXd g = scaled.transpose();
-    const Eigen::Index order = ar.coefficients.size() - 1;
-    for (Eigen::Index k = n - 2; k >= 0; --k) {
-      for (Eigen::Index j = 1; j <= order && k + j < n; ++j) {
-        g.col(k) -= ar.coefficients(j) * g.col(k + j);
-      }
-    }
+    const Eigen::MatrixXd g = adjoint_ar_filter(scaled, ar);
     const Eigen::MatrixXd q = e2 * (g * g.transpose());
     middle_inv = r_inv * q * r_inv;
   }

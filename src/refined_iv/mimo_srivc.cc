@@ -8,12 +8,14 @@
 #include <utility>
 
 #include <Eigen/Dense>
+#include <Eigen/SVD>
 
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/estimation/verdict.h"
 #include "ctid/filtering/filter_bank.h"
+#include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/initialization.h"
 #include "internal/refined_iv_engine.h"
 #include "internal/scaled_least_squares.h"
@@ -255,6 +257,50 @@ struct Step {
   double reciprocal_condition = std::numeric_limits<double>::quiet_NaN();
 };
 
+// The instruments' sources: p^q / A_i (p^r / A_i u_k), q = 1..n_i, for every submodel,
+// input and r <= m_i, one cascade of two banks each (exact for the input hold), so that
+// -p^q B_ijk / A_i^2 u_k, the a-part of the instrument of output j (the gradient of output
+// j's model output with respect to the denominators), is a weighted sum.
+class InstrumentSources {
+ public:
+  InstrumentSources(const Layout& layout, const MimoData& data, const std::vector<Polynomial>& a)
+      : layout_(layout), sources_(static_cast<size_t>(layout.size())) {
+    for (int i = 0; i < layout.size(); ++i) {
+      const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+      const FilterRealization bank = derivative_filters(a[static_cast<size_t>(i)]);
+      for (int r = 0; r <= o.m; ++r) {
+        Eigen::VectorXd pick = Eigen::VectorXd::Zero(bank.outputs());
+        pick(r) = 1.0;
+        const SampledFilter chain(cascade(bank, pick, bank), data.sample_time(), data.input_hold());
+        for (int k = 0; k < layout.inputs; ++k) {
+          sources_[static_cast<size_t>(i)].push_back(
+              chain.apply(data.inputs().col(k)).middleCols(1, o.n));
+        }
+      }
+    }
+  }
+
+  // psi (N x a_count) = output j's denominator instrument at `model`.
+  void denominator_instrument(const MimoAdditiveModel& model, int j, Eigen::MatrixXd& psi) const {
+    for (int i = 0; i < layout_.size(); ++i) {
+      const SubmodelOrder& o = layout_.orders[static_cast<size_t>(i)];
+      auto instrument = psi.middleCols(layout_.a_at[static_cast<size_t>(i)], o.n);
+      instrument.setZero();
+      for (int k = 0; k < layout_.inputs; ++k) {
+        const Polynomial& b = model.numerator(i, j, k);
+        for (int r = 0; r <= std::min(o.m, b.degree()); ++r) {
+          instrument -=
+              b[r] * sources_[static_cast<size_t>(i)][static_cast<size_t>(r * layout_.inputs + k)];
+        }
+      }
+    }
+  }
+
+ private:
+  const Layout& layout_;
+  std::vector<std::vector<Eigen::MatrixXd>> sources_;
+};
+
 // One step of the shared-pole iteration from `model` (see mimo_srivc.h).
 Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel& model,
              Hold output_interpolation) {
@@ -282,23 +328,7 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
   }
   const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(n, layout.u_count);
 
-  // The instruments' sources: p^q / A_i (p^r / A_i u_k), q = 1..n_i, for every submodel,
-  // input and r <= m_i, one cascade of two banks each (exact for the input hold), so that
-  // -p^q B_ijk / A_i^2 u_k, the a-part of the instrument of output j, is a weighted sum.
-  std::vector<std::vector<Eigen::MatrixXd>> sources(static_cast<size_t>(submodels));
-  for (int i = 0; i < submodels; ++i) {
-    const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
-    const FilterRealization bank = derivative_filters(a[static_cast<size_t>(i)]);
-    for (int r = 0; r <= o.m; ++r) {
-      Eigen::VectorXd pick = Eigen::VectorXd::Zero(bank.outputs());
-      pick(r) = 1.0;
-      const SampledFilter chain(cascade(bank, pick, bank), data.sample_time(), data.input_hold());
-      for (int k = 0; k < layout.inputs; ++k) {
-        sources[static_cast<size_t>(i)].push_back(
-            chain.apply(data.inputs().col(k)).middleCols(1, o.n));
-      }
-    }
-  }
+  const InstrumentSources sources(layout, data, a);
 
   // Per output: the denominator regressors -p^q / A_i y~_ij, the instruments -p^q / A_i x_ij
   // (x_ij submodel i's own output, B_ij. / A_i u), and the filtered residuals 1 / A_i y~_ij
@@ -326,17 +356,8 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
       const Eigen::MatrixXd fy = f.apply(residual);
       upsilon.col(i) = fy.col(0);
       phi.middleCols(layout.a_at[static_cast<size_t>(i)], n_i) = -fy.middleCols(1, n_i);
-      auto instrument = psi.middleCols(layout.a_at[static_cast<size_t>(i)], n_i);
-      instrument.setZero();
-      const int m = layout.orders[static_cast<size_t>(i)].m;
-      for (int k = 0; k < layout.inputs; ++k) {
-        const Polynomial& b = model.numerator(i, j, k);
-        for (int r = 0; r <= std::min(m, b.degree()); ++r) {
-          instrument -=
-              b[r] * sources[static_cast<size_t>(i)][static_cast<size_t>(r * layout.inputs + k)];
-        }
-      }
     }
+    sources.denominator_instrument(model, j, psi);
     // The direct term's own residual, unfiltered (its denominator is 1).
     if (layout.direct)
       upsilon.col(submodels) = data.outputs().col(j) - total.col(j) + direct.col(j);
@@ -423,6 +444,188 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
           rcond};
 }
 
+// Index of a parameter in the covariance's layout: every a-block, then per output the
+// numerator columns (which include D last).
+int a_index(const Layout& layout, int i, int q) {
+  return layout.a_at[static_cast<size_t>(i)] + q - 1;
+}
+int b_index(const Layout& layout, int j, int column) {
+  return layout.a_count + j * layout.u_count + column;
+}
+
+// Sandwich covariance R^-1 Q R^-1 of the estimate (outputs' noises independent): output j's
+// gradient is [psi_j, 0.., U (in j's numerator slot), 0..], R the sum of their products and Q
+// the same with each output's AR-whitened gradient (adjoint_ar_filter) times its innovation
+// variance, or its residual variance for white noise.
+Eigen::MatrixXd mimo_covariance(const Layout& layout, const MimoData& data,
+                                const MimoAdditiveModel& model, const Eigen::MatrixXd& u,
+                                const Eigen::MatrixXd& residuals, NoiseAssumption noise,
+                                int max_ar_order) {
+  const int n = data.size();
+  const int pa = layout.a_count;
+  const int pu = layout.u_count;
+  const int p = pa + layout.outputs * pu;
+  const InstrumentSources sources(layout, data, denominators(model));
+  std::vector<Eigen::MatrixXd> psi(static_cast<size_t>(layout.outputs), Eigen::MatrixXd(n, pa));
+  Eigen::VectorXd s_a = Eigen::VectorXd::Zero(pa);
+  for (int j = 0; j < layout.outputs; ++j) {
+    sources.denominator_instrument(model, j, psi[static_cast<size_t>(j)]);
+    s_a += psi[static_cast<size_t>(j)].colwise().squaredNorm().transpose();
+  }
+  for (Eigen::Index c = 0; c < pa; ++c) s_a(c) = s_a(c) > 0.0 ? std::sqrt(s_a(c)) : 1.0;
+  const Eigen::VectorXd s_u = internal::column_scales(u);
+  const Eigen::MatrixXd us = u * s_u.cwiseInverse().asDiagonal();
+  Eigen::MatrixXd r = Eigen::MatrixXd::Zero(p, p);
+  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(p, p);
+  const double dof = static_cast<double>(n) / static_cast<double>(std::max(1, n - pu - pa));
+  for (int j = 0; j < layout.outputs; ++j) {
+    const Eigen::MatrixXd ps = psi[static_cast<size_t>(j)] * s_a.cwiseInverse().asDiagonal();
+    const int at = pa + j * pu;
+    r.topLeftCorner(pa, pa) += ps.transpose() * ps;
+    r.block(0, at, pa, pu) = ps.transpose() * us;
+    r.block(at, 0, pu, pa) = r.block(0, at, pa, pu).transpose();
+    r.block(at, at, pu, pu) = us.transpose() * us;
+    Eigen::MatrixXd g(pa + pu, n);
+    double e2 = 0.0;
+    Eigen::MatrixXd both(n, pa + pu);
+    both << ps, us;
+    if (noise == NoiseAssumption::white) {
+      g = both.transpose();
+      e2 = residuals.col(j).squaredNorm() / static_cast<double>(n) * dof;
+    } else {
+      const AutoregressiveModel ar = fit_autoregressive(residuals.col(j), max_ar_order);
+      g = adjoint_ar_filter(both, ar);
+      e2 = ar.innovation_variance * dof;
+    }
+    const Eigen::MatrixXd gg = e2 * (g * g.transpose());
+    q.topLeftCorner(pa, pa) += gg.topLeftCorner(pa, pa);
+    q.block(0, at, pa, pu) = gg.topRightCorner(pa, pu);
+    q.block(at, 0, pu, pa) = gg.bottomLeftCorner(pu, pa);
+    q.block(at, at, pu, pu) = gg.bottomRightCorner(pu, pu);
+  }
+  const Eigen::MatrixXd r_inv = r.completeOrthogonalDecomposition().pseudoInverse();
+  Eigen::VectorXd scale(p);
+  scale << s_a, s_u.replicate(layout.outputs, 1);
+  return scale.cwiseInverse().asDiagonal() * (r_inv * q * r_inv) *
+         scale.cwiseInverse().asDiagonal();
+}
+
+// The mode shape of a residue matrix (see MimoMode) and its share of the residue.
+Eigen::VectorXcd principal_shape(const Eigen::MatrixXcd& residue, double* share = nullptr) {
+  const Eigen::JacobiSVD<Eigen::MatrixXcd> svd(residue, Eigen::ComputeThinU);
+  Eigen::VectorXcd shape = svd.matrixU().col(0);
+  Eigen::Index largest = 0;
+  shape.cwiseAbs().maxCoeff(&largest);
+  if (std::abs(shape(largest)) > 0.0) shape *= std::conj(shape(largest)) / std::abs(shape(largest));
+  if (share != nullptr) {
+    const Eigen::VectorXd sigma = svd.singularValues();
+    *share = sigma.squaredNorm() > 0.0 ? sigma(0) * sigma(0) / sigma.squaredNorm() : 1.0;
+  }
+  return shape;
+}
+
+// Residue matrix of submodel i (second order) at its upper pole, from its denominator
+// coefficients and per-channel numerator coefficients (numerators[j * inputs + k]).
+Eigen::MatrixXcd residue_matrix(const Layout& layout, double a1, double a2,
+                                const std::vector<Eigen::VectorXd>& numerators,
+                                std::complex<double>& pole) {
+  const std::complex<double> disc = std::sqrt(std::complex<double>(a1 * a1 - 4.0 * a2));
+  pole = (-a1 + disc) / (2.0 * a2);
+  if (pole.imag() < 0.0) pole = std::conj(pole);
+  const std::complex<double> slope = a1 + 2.0 * a2 * pole;
+  Eigen::MatrixXcd res(layout.outputs, layout.inputs);
+  for (int j = 0; j < layout.outputs; ++j) {
+    for (int k = 0; k < layout.inputs; ++k) {
+      const Eigen::VectorXd& b = numerators[static_cast<size_t>(j * layout.inputs + k)];
+      std::complex<double> value = 0.0;
+      for (Eigen::Index r = b.size() - 1; r >= 0; --r) value = value * pole + b(r);
+      res(j, k) = value / slope;
+    }
+  }
+  return res;
+}
+
+// Every second-order submodel as a MimoMode, with delta-method standard errors when the
+// covariance is given (numerical derivatives of the shape with respect to the submodel's own
+// parameters).
+std::vector<MimoMode> modes_of(const Layout& layout, const MimoAdditiveModel& model,
+                               const Eigen::MatrixXd& covariance) {
+  std::vector<MimoMode> modes;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int i = 0; i < layout.size(); ++i) {
+    const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+    const Polynomial& a = model[i].a;
+    if (o.n != 2 || !(a[1] * a[1] < 4.0 * a[2])) continue;  // a complex pair only
+    std::vector<Eigen::VectorXd> numerators;
+    std::vector<int> indices{a_index(layout, i, 1), a_index(layout, i, 2)};
+    for (int j = 0; j < layout.outputs; ++j) {
+      for (int k = 0; k < layout.inputs; ++k) {
+        Eigen::VectorXd b = Eigen::VectorXd::Zero(o.m + 1);
+        const Polynomial& given = model.numerator(i, j, k);
+        for (int r = 0; r <= std::min(o.m, given.degree()); ++r) b(r) = given[r];
+        numerators.push_back(b);
+        for (int r = 0; r <= o.m; ++r)
+          indices.push_back(b_index(layout, j, layout.u_column(i, k, r)));
+      }
+    }
+    MimoMode mode;
+    mode.submodel = i;
+    mode.natural_frequency = 1.0 / std::sqrt(a[2]);
+    mode.damping_ratio = a[1] / (2.0 * std::sqrt(a[2]));
+    std::complex<double> pole;
+    const auto shape_at = [&](double a1, double a2, const std::vector<Eigen::VectorXd>& b,
+                              double* share) {
+      return principal_shape(residue_matrix(layout, a1, a2, b, pole), share);
+    };
+    mode.shape = shape_at(a[1], a[2], numerators, &mode.rank_one_share);
+    const Eigen::MatrixXcd res = residue_matrix(layout, a[1], a[2], numerators, pole);
+    mode.participation = res.transpose() * mode.shape.conjugate();
+    mode.natural_frequency_se = mode.damping_ratio_se = nan;
+    mode.shape_se_real = mode.shape_se_imag = Eigen::VectorXd::Constant(layout.outputs, nan);
+    if (covariance.size() > 0) {
+      const Eigen::Index m = static_cast<Eigen::Index>(indices.size());
+      Eigen::MatrixXd c(m, m);
+      for (Eigen::Index x = 0; x < m; ++x) {
+        for (Eigen::Index y = 0; y < m; ++y) c(x, y) = covariance(indices[x], indices[y]);
+      }
+      // w_n = a2^(-1/2), zeta = a1 / (2 sqrt(a2)).
+      Eigen::RowVector2d dw(0.0, -0.5 * std::pow(a[2], -1.5));
+      Eigen::RowVector2d dz(0.5 / std::sqrt(a[2]), -0.25 * a[1] * std::pow(a[2], -1.5));
+      mode.natural_frequency_se = std::sqrt((dw * c.topLeftCorner(2, 2) * dw.transpose())(0));
+      mode.damping_ratio_se = std::sqrt((dz * c.topLeftCorner(2, 2) * dz.transpose())(0));
+      // Central differences of [Re shape; Im shape] in every one of the submodel's parameters.
+      Eigen::MatrixXd jac(2 * layout.outputs, m);
+      for (Eigen::Index x = 0; x < m; ++x) {
+        double a1 = a[1];
+        double a2 = a[2];
+        std::vector<Eigen::VectorXd> b = numerators;
+        double* value = nullptr;
+        if (x == 0) {
+          value = &a1;
+        } else if (x == 1) {
+          value = &a2;
+        } else {
+          const Eigen::Index c0 = x - 2;
+          value = &b[static_cast<size_t>(c0 / (o.m + 1))](c0 % (o.m + 1));
+        }
+        const double step = 1e-6 * std::max(std::abs(*value), 1e-6 * std::abs(a[x == 0 ? 1 : 2]));
+        const double saved = *value;
+        *value = saved + step;
+        const Eigen::VectorXcd plus = shape_at(a1, a2, b, nullptr);
+        *value = saved - step;
+        const Eigen::VectorXcd minus = shape_at(a1, a2, b, nullptr);
+        const Eigen::VectorXcd d = (plus - minus) / (2.0 * step);
+        jac.col(x) << d.real(), d.imag();
+      }
+      const Eigen::VectorXd var = (jac * c * jac.transpose()).diagonal();
+      mode.shape_se_real = var.head(layout.outputs).cwiseMax(0.0).cwiseSqrt();
+      mode.shape_se_imag = var.tail(layout.outputs).cwiseMax(0.0).cwiseSqrt();
+    }
+    modes.push_back(std::move(mode));
+  }
+  return modes;
+}
+
 // Submodels of equal orders listed from the slowest up (by the geometric mean of their pole
 // magnitudes, a_n^(-1/n)), so that the order in which the start found them does not show.
 MimoAdditiveModel slowest_first(const Layout& layout, MimoAdditiveModel model) {
@@ -459,6 +662,25 @@ void check_orders(const std::vector<SubmodelOrder>& orders, const MimoData& data
 }
 
 }  // namespace
+
+double modal_assurance(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b) {
+  require(a.size() == b.size(), "modal_assurance: shapes of ", a.size(), " and ", b.size(),
+          " entries; they must have equal lengths");
+  const double aa = a.squaredNorm();
+  const double bb = b.squaredNorm();
+  return aa > 0.0 && bb > 0.0 ? std::norm(a.dot(b)) / (aa * bb) : 0.0;
+}
+
+Eigen::MatrixXd modal_assurance(const std::vector<MimoMode>& a, const std::vector<MimoMode>& b) {
+  Eigen::MatrixXd mac(static_cast<Eigen::Index>(a.size()), static_cast<Eigen::Index>(b.size()));
+  for (size_t x = 0; x < a.size(); ++x) {
+    for (size_t y = 0; y < b.size(); ++y) {
+      mac(static_cast<Eigen::Index>(x), static_cast<Eigen::Index>(y)) =
+          modal_assurance(a[x].shape, b[y].shape);
+    }
+  }
+  return mac;
+}
 
 MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<SubmodelOrder>& orders,
                                 const MimoRefinedIvOptions& options,
@@ -536,7 +758,7 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
                                              : internal::concat("iteration ", best_iteration),
                          ") is returned");
   }
-  model = std::move(best);
+  model = slowest_first(layout, std::move(best));
 
   const Eigen::MatrixXd u = numerator_regressors(layout, data, denominators(model));
   const Eigen::MatrixXd fitted = model_outputs(layout, u, model);
@@ -566,7 +788,18 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
     }
   }
   check_conditioning(result.verdict, reciprocal_condition);
-  result.model = slowest_first(layout, std::move(model));
+  if (options.compute_covariance) {
+    result.covariance = mimo_covariance(layout, data, model, u, data.outputs() - fitted,
+                                        options.noise, options.noise_model_max_order);
+  }
+  result.modes = modes_of(layout, model, result.covariance);
+  for (const MimoMode& mode : result.modes) {
+    const std::string name = internal::concat("mode ", mode.submodel + 1);
+    check_standard_errors(result.verdict, {name + " natural frequency", name + " damping ratio"},
+                          Eigen::Vector2d(mode.natural_frequency, mode.damping_ratio),
+                          Eigen::Vector2d(mode.natural_frequency_se, mode.damping_ratio_se));
+  }
+  result.model = std::move(model);
   return result;
 }
 

@@ -203,6 +203,44 @@ TEST(MimoSrivc, ReturnsTheIterateWithTheLowestOutputError) {
   }
 }
 
+TEST(MimoSrivc, ModesShapesAndMacFromNoiseFreeData) {
+  // Rank-one residues with real shapes: every mode's shape is its psi (unit length, largest
+  // entry positive), its MAC with psi is 1, and different modes' shapes are told apart.
+  const MimoAdditiveModel truth = four_mode_beam(3, 5, 11);
+  const MimoData data = noise_free(truth, 2000, 5);
+  const MimoEstimationResult r = mimo_srivc(data, four_modes(), {}, perturbed(truth, 0.05, 3));
+  ASSERT_TRUE(r.converged()) << r.message;
+  ASSERT_EQ(r.modes.size(), 4u);
+  const AdditiveModel modes = testing::open_loop_four_modes();
+  for (int i = 0; i < 4; ++i) {
+    const MimoMode& m = r.modes[static_cast<size_t>(i)];
+    const ModalParameters p = *modes.modal_parameters(i);
+    EXPECT_NEAR(m.natural_frequency, p.natural_frequency, 1e-9 * p.natural_frequency);
+    EXPECT_NEAR(m.damping_ratio, p.damping_ratio, 1e-9 * p.damping_ratio);
+    // psi_j is proportional to R_i[j, 0] (rank one).
+    Eigen::VectorXcd psi(5);
+    for (int j = 0; j < 5; ++j) psi(j) = truth.numerator(i, j, 0)[0];
+    EXPECT_NEAR(modal_assurance(m.shape, psi), 1.0, 1e-9);
+    EXPECT_NEAR(m.rank_one_share, 1.0, 1e-9);
+    Eigen::Index largest = 0;
+    m.shape.cwiseAbs().maxCoeff(&largest);
+    EXPECT_GT(m.shape(largest).real(), 0.0);
+    EXPECT_NEAR(m.shape(largest).imag(), 0.0, 1e-12);
+    EXPECT_NEAR(m.shape.norm(), 1.0, 1e-12);
+    // Res = shape L^T.
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(std::abs(m.participation(k)),
+                  std::abs(m.participation(0)) * std::abs(truth.numerator(i, 0, k)[0]) /
+                      std::abs(truth.numerator(i, 0, 0)[0]),
+                  1e-9 * std::abs(m.participation(0)) + 1e-12);
+    }
+  }
+  const Eigen::MatrixXd mac = modal_assurance(r.modes, r.modes);
+  EXPECT_LT((mac.diagonal() - Eigen::VectorXd::Ones(4)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_THAT([&] { modal_assurance(Eigen::VectorXcd(3), Eigen::VectorXcd(4)); },
+              ThrowsMessage<InvalidArgument>(HasSubstr("equal lengths")));
+}
+
 TEST(MimoSrivc, OneInputOneOutputIsTheAdditiveEstimator) {
   // The same equations as (29): on a noisy record both end at the same stationary point.
   const AdditiveModel truth = testing::open_loop_four_modes();
@@ -225,6 +263,16 @@ TEST(MimoSrivc, OneInputOneOutputIsTheAdditiveEstimator) {
             1e-10);
   EXPECT_NEAR(mimo.mean_squared_errors(0), additive.mean_squared_error,
               1e-10 * additive.mean_squared_error);
+  // The same covariance (both the sandwich with an AR noise model) and modal errors.
+  o.compute_covariance = true;
+  const EstimationResult with_covariance = additive_srivc(siso, four_modes(), o);
+  ASSERT_EQ(mimo.modes.size(), with_covariance.modes.size());
+  for (size_t i = 0; i < mimo.modes.size(); ++i) {
+    const ModalParameters& se = with_covariance.modes[i].standard_error;
+    EXPECT_NEAR(mimo.modes[i].natural_frequency_se, se.natural_frequency,
+                1e-6 * se.natural_frequency);
+    EXPECT_NEAR(mimo.modes[i].damping_ratio_se, se.damping_ratio, 1e-6 * se.damping_ratio);
+  }
 }
 
 TEST(MimoSrivc, BadInputGetsOneClearMessage) {

@@ -32,6 +32,10 @@ struct AutoregressiveModel {
 };
 AutoregressiveModel fit_autoregressive(const Eigen::VectorXd& x, int max_order);
 
+/// H(q^-1)' x for the noise filter H = 1/A of `ar`, column by column (x is N x p), returned
+/// transposed (p x N): with it sum_s x~_s x~_s' = g g' is the middle factor Q of the sandwich.
+Eigen::MatrixXd adjoint_ar_filter(const Eigen::MatrixXd& x, const AutoregressiveModel& ar);
+
 /// Delta-method standard errors of natural frequency, damping ratio and modal gain for
 /// every second-order mode. For an additive model the covariance is that of its
 /// parameters(); with `unfactored` the model is one submodel B/(p^l A) whose partial-fraction

@@ -24,6 +24,7 @@
 #include "ctid/core/mimo_model.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/verdict.h"
+#include "ctid/refined_iv/refined_iv_options.h"
 
 namespace ctid {
 
@@ -37,6 +38,12 @@ struct MimoRefinedIvOptions {
   /// Estimate a direct term D (outputs x inputs) besides the strictly proper or biproper
   /// submodels: G = sum_i R_i / A_i + D (e.g. accelerations from forces with m_i < n_i).
   bool direct_term = false;
+  /// Compute the covariance and the modes' standard errors.
+  bool compute_covariance = true;
+  /// Noise on each output for the covariance: white, or coloured (an AR model of each
+  /// output's residual, order <= noise_model_max_order by AIC); outputs independent.
+  NoiseAssumption noise = NoiseAssumption::coloured;
+  int noise_model_max_order = 20;
 
   static constexpr std::string_view type_name = "MimoRefinedIvOptions";
   static constexpr auto fields() {
@@ -48,10 +55,39 @@ struct MimoRefinedIvOptions {
         field("output_interpolation", &O::output_interpolation,
               "Interpolation of the measured outputs before filtering."),
         field("direct_term", &O::direct_term, "Estimate a direct term D as well."),
+        field("compute_covariance", &O::compute_covariance,
+              "Compute the covariance and the modes' standard errors."),
+        field("noise", &O::noise, "Noise assumption of the covariance (per output)."),
+        field("noise_model_max_order", &O::noise_model_max_order, AtLeast{1},
+              "Largest AR order of each output's noise model."),
     };
   }
   void validate() const { validate_fields(*this); }
 };
+
+/// One second-order submodel as a mode shared by every channel. The residue matrix at the
+/// pole s = -zeta w_n + j w_n sqrt(1 - zeta^2) is Res = R_i(s) / A_i'(s) (outputs x inputs);
+/// the mode shape is its principal left singular vector, scaled to unit length with its
+/// largest entry real and positive (docs/decisions/0018), and the participation factors are
+/// L = Res^T conj(shape), so that Res = shape L^T when Res has rank one.
+struct MimoMode {
+  int submodel = 0;
+  double natural_frequency = 0.0;  ///< w_n [rad/s]
+  double damping_ratio = 0.0;
+  double natural_frequency_se = 0.0;  ///< NaN without a covariance
+  double damping_ratio_se = 0.0;
+  Eigen::VectorXcd shape;          ///< outputs
+  Eigen::VectorXd shape_se_real;   ///< standard errors of Re(shape), NaN without covariance
+  Eigen::VectorXd shape_se_imag;   ///< ... of Im(shape)
+  Eigen::VectorXcd participation;  ///< inputs
+  /// sigma_1^2 / sum sigma_k^2 of Res: 1 for a rank-one residue (one shape explains it).
+  double rank_one_share = 1.0;
+};
+
+/// MAC(a, b) = |a^H b|^2 / ((a^H a)(b^H b)): 1 for proportional shapes, 0 for orthogonal ones.
+double modal_assurance(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b);
+/// MAC of every pair (rows: `a`, columns: `b`).
+Eigen::MatrixXd modal_assurance(const std::vector<MimoMode>& a, const std::vector<MimoMode>& b);
 
 struct MimoEstimationResult {
   /// The estimate: the iterate with the lowest output error (none if nothing was computed).
@@ -62,8 +98,14 @@ struct MimoEstimationResult {
   /// Per output: mean squared output error y_j - G_j u and fit_percent on the data.
   Eigen::VectorXd mean_squared_errors;
   Eigen::VectorXd fit_percent;
-  /// Finite, stable, no output fitted worse than its mean, well-conditioned equations.
+  /// Finite, stable, no output fitted worse than its mean, well-conditioned equations, and
+  /// no mode whose natural frequency or damping ratio has a standard error above its value.
   Verdict verdict;
+  /// Covariance of the parameters [a of every submodel; then per output j the numerator
+  /// coefficients (submodel, input, power) and D[j, .]]; empty unless computed.
+  Eigen::MatrixXd covariance;
+  /// Every second-order submodel as a mode, in submodel order.
+  std::vector<MimoMode> modes;
   bool converged() const { return termination == Termination::converged; }
 };
 
