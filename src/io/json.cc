@@ -199,6 +199,27 @@ Eigen::VectorXd JsonObject::numbers(std::string_view key, bool allow_empty) cons
   return out;
 }
 
+std::vector<Eigen::VectorXd> JsonObject::number_rows(std::string_view key) const {
+  const nlohmann::json& v = field(key);
+  if (!v.is_array()) fail(key, "expected an array of arrays of numbers but found " + kind_of(v));
+  if (v.empty()) fail(key, "the array is empty; at least one row is needed");
+  std::vector<Eigen::VectorXd> rows;
+  for (size_t i = 0; i < v.size(); ++i) {
+    const std::string entry = std::string(key) + "[" + std::to_string(i) + "]";
+    if (!v[i].is_array()) fail(entry, "expected an array of numbers but found " + kind_of(v[i]));
+    if (v[i].empty()) fail(entry, "the array is empty; at least one number is needed");
+    Eigen::VectorXd row(static_cast<Eigen::Index>(v[i].size()));
+    for (size_t c = 0; c < v[i].size(); ++c) {
+      const std::string at = entry + "[" + std::to_string(c) + "]";
+      if (!v[i][c].is_number()) fail(at, "expected a number but found " + kind_of(v[i][c]));
+      row(static_cast<Eigen::Index>(c)) = v[i][c].get<double>();
+      if (!std::isfinite(row(static_cast<Eigen::Index>(c)))) fail(at, "value is not finite");
+    }
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
 JsonObject JsonObject::object(std::string_view key) const {
   return JsonObject(field(key), source_, field_path(key));
 }

@@ -78,6 +78,51 @@ AdditiveModel read_additive_model(const JsonObject& object) {
                    [&] { return AdditiveModel(std::move(submodels), delay); });
 }
 
+MimoAdditiveModel read_mimo_additive_model(const JsonObject& object) {
+  check_type(object, kMimoAdditiveModelType);
+  const long long inputs = object.integer("inputs");
+  const long long outputs = object.integer("outputs");
+  if (inputs < 1 || inputs > 100000) object.fail("inputs", "must be between 1 and 100000");
+  if (outputs < 1 || outputs > 100000) object.fail("outputs", "must be between 1 and 100000");
+  std::vector<MimoSubmodel> submodels;
+  for (const JsonObject& entry : object.objects("submodels")) {
+    MimoSubmodel submodel;
+    submodel.a = polynomial_field(entry, "denominator_ascending");
+    const std::vector<Eigen::VectorXd> rows = entry.number_rows("numerators_ascending");
+    if (static_cast<long long>(rows.size()) != inputs * outputs) {
+      entry.fail("numerators_ascending",
+                 internal::concat("has ", rows.size(), " numerators; ", outputs, " outputs x ",
+                                  inputs, " inputs need ", inputs * outputs,
+                                  " (output by output, input by input)"));
+    }
+    for (const Eigen::VectorXd& row : rows) submodel.b.emplace_back(row);
+    entry.string_or("description", "");
+    entry.finish();
+    submodels.push_back(std::move(submodel));
+  }
+  Eigen::MatrixXd direct;
+  if (object.has("direct")) {
+    const std::vector<Eigen::VectorXd> rows = object.number_rows("direct");
+    if (static_cast<long long>(rows.size()) != outputs) {
+      object.fail("direct", internal::concat("has ", rows.size(),
+                                             " rows; it needs one per output (", outputs, ")"));
+    }
+    direct.resize(outputs, inputs);
+    for (size_t j = 0; j < rows.size(); ++j) {
+      if (rows[j].size() != inputs) {
+        object.fail("direct", internal::concat("row ", j, " has ", rows[j].size(),
+                                               " entries; it needs one per input (", inputs, ")"));
+      }
+      direct.row(static_cast<Eigen::Index>(j)) = rows[j].transpose();
+    }
+  }
+  object.finish();
+  return construct(object, "MIMO additive model", [&] {
+    return MimoAdditiveModel(static_cast<int>(inputs), static_cast<int>(outputs),
+                             std::move(submodels), direct);
+  });
+}
+
 DiscreteTransferFunction read_discrete_transfer_function(const JsonObject& object) {
   check_type(object, kDiscreteTransferFunctionType);
   Polynomial numerator = polynomial_field(object, "numerator_ascending");
@@ -147,6 +192,35 @@ TransferFunction transfer_function_from_json(const nlohmann::json& value,
   return read_transfer_function(JsonObject(value, source));
 }
 
+nlohmann::json to_json(const MimoAdditiveModel& model) {
+  nlohmann::json submodels = nlohmann::json::array();
+  for (const MimoSubmodel& s : model.submodels()) {
+    nlohmann::json numerators = nlohmann::json::array();
+    for (const Polynomial& b : s.b) numerators.push_back(coefficients(b));
+    submodels.push_back(
+        {{"denominator_ascending", coefficients(s.a)}, {"numerators_ascending", numerators}});
+  }
+  nlohmann::json out = {{"type", kMimoAdditiveModelType},
+                        {"inputs", model.inputs()},
+                        {"outputs", model.outputs()},
+                        {"submodels", submodels}};
+  if (model.has_direct_term()) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (Eigen::Index j = 0; j < model.direct().rows(); ++j) {
+      nlohmann::json row = nlohmann::json::array();
+      for (Eigen::Index k = 0; k < model.direct().cols(); ++k) row.push_back(model.direct()(j, k));
+      rows.push_back(row);
+    }
+    out["direct"] = rows;
+  }
+  return out;
+}
+
+MimoAdditiveModel mimo_additive_model_from_json(const nlohmann::json& value,
+                                                const std::string& source) {
+  return read_mimo_additive_model(JsonObject(value, source));
+}
+
 AdditiveModel additive_model_from_json(const nlohmann::json& value, const std::string& source) {
   return read_additive_model(JsonObject(value, source));
 }
@@ -200,6 +274,7 @@ namespace ctid {
 
 nlohmann::json to_json_value(const TransferFunction& model) { return io::to_json(model); }
 nlohmann::json to_json_value(const AdditiveModel& model) { return io::to_json(model); }
+nlohmann::json to_json_value(const MimoAdditiveModel& model) { return io::to_json(model); }
 nlohmann::json to_json_value(const DiscreteTransferFunction& model) { return io::to_json(model); }
 TransferFunction from_json_value(const nlohmann::json& value, std::type_identity<TransferFunction>,
                                  const std::string& where) {
@@ -208,6 +283,10 @@ TransferFunction from_json_value(const nlohmann::json& value, std::type_identity
 AdditiveModel from_json_value(const nlohmann::json& value, std::type_identity<AdditiveModel>,
                               const std::string& where) {
   return io::additive_model_from_json(value, where);
+}
+MimoAdditiveModel from_json_value(const nlohmann::json& value,
+                                  std::type_identity<MimoAdditiveModel>, const std::string& where) {
+  return io::mimo_additive_model_from_json(value, where);
 }
 DiscreteTransferFunction from_json_value(const nlohmann::json& value,
                                          std::type_identity<DiscreteTransferFunction>,

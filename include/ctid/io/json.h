@@ -51,6 +51,9 @@ class JsonObject {
   bool boolean_or(std::string_view key, bool fallback) const;
   /// A required array of finite numbers (may be empty only if allow_empty).
   Eigen::VectorXd numbers(std::string_view key, bool allow_empty = false) const;
+  /// A required non-empty array of non-empty arrays of finite numbers (rows may differ in
+  /// length).
+  std::vector<Eigen::VectorXd> number_rows(std::string_view key) const;
   JsonObject object(std::string_view key) const;
   /// A required non-empty array of objects.
   std::vector<JsonObject> objects(std::string_view key) const;

@@ -16,6 +16,7 @@
 
 #include "ctid/core/additive_model.h"
 #include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/mimo_model.h"
 #include "ctid/core/transfer_function.h"
 #include "ctid/io/file.h"
 #include "ctid/simulation/delayed_feedback.h"
@@ -27,12 +28,17 @@ inline constexpr const char* kTransferFunctionType = "transfer_function";
 inline constexpr const char* kAdditiveModelType = "additive_model";
 inline constexpr const char* kDiscreteTransferFunctionType = "discrete_transfer_function";
 inline constexpr const char* kDelayedFeedbackLoopType = "delayed_feedback_loop";
+inline constexpr const char* kMimoAdditiveModelType = "mimo_additive_model";
 
 /// A continuous-time model as read from a file: unfactored or additive.
 using ContinuousModel = std::variant<TransferFunction, AdditiveModel>;
 
 nlohmann::json to_json(const TransferFunction& model);
 nlohmann::json to_json(const AdditiveModel& model);
+/// {"type": "mimo_additive_model", "inputs": n_u, "outputs": n_y, "submodels": [{
+/// "denominator_ascending": A_i, "numerators_ascending": [R_i[0, 0], R_i[0, 1], ...] (output by
+/// output, input by input)}], "direct": [[D[0, 0], ...], ...] (optional, one row per output)}.
+nlohmann::json to_json(const MimoAdditiveModel& model);
 nlohmann::json to_json(const DiscreteTransferFunction& model);
 nlohmann::json to_json(const ContinuousModel& model);
 /// {"type": "delayed_feedback_loop", "forward": F, "feedback": H, "delay": Δ}.
@@ -44,6 +50,8 @@ nlohmann::json to_json(const DelayedFeedbackLoop& model);
 TransferFunction transfer_function_from_json(const nlohmann::json& value,
                                              const std::string& source);
 AdditiveModel additive_model_from_json(const nlohmann::json& value, const std::string& source);
+MimoAdditiveModel mimo_additive_model_from_json(const nlohmann::json& value,
+                                                const std::string& source);
 DiscreteTransferFunction discrete_transfer_function_from_json(const nlohmann::json& value,
                                                               const std::string& source);
 /// Reads a delayed_feedback_loop; F and H are transfer_function objects. The loop is
@@ -72,11 +80,14 @@ namespace ctid {
 /// argument-dependent lookup): the model documents above, read with `where` as the source.
 nlohmann::json to_json_value(const TransferFunction& model);
 nlohmann::json to_json_value(const AdditiveModel& model);
+nlohmann::json to_json_value(const MimoAdditiveModel& model);
 nlohmann::json to_json_value(const DiscreteTransferFunction& model);
 TransferFunction from_json_value(const nlohmann::json& value, std::type_identity<TransferFunction>,
                                  const std::string& where);
 AdditiveModel from_json_value(const nlohmann::json& value, std::type_identity<AdditiveModel>,
                               const std::string& where);
+MimoAdditiveModel from_json_value(const nlohmann::json& value,
+                                  std::type_identity<MimoAdditiveModel>, const std::string& where);
 DiscreteTransferFunction from_json_value(const nlohmann::json& value,
                                          std::type_identity<DiscreteTransferFunction>,
                                          const std::string& where);

@@ -82,6 +82,24 @@ struct MimoMode {
   Eigen::VectorXcd participation;  ///< inputs
   /// sigma_1^2 / sum sigma_k^2 of Res: 1 for a rank-one residue (one shape explains it).
   double rank_one_share = 1.0;
+
+  static constexpr std::string_view type_name = "MimoMode";
+  static constexpr auto fields() {
+    using S = MimoMode;
+    return std::tuple{
+        field("submodel", &S::submodel, "Index of the submodel."),
+        field("natural_frequency", &S::natural_frequency, "w_n [rad/s]."),
+        field("damping_ratio", &S::damping_ratio, "zeta."),
+        field("natural_frequency_se", &S::natural_frequency_se, "Standard error of w_n."),
+        field("damping_ratio_se", &S::damping_ratio_se, "Standard error of zeta."),
+        field("shape", &S::shape, "Mode shape over the outputs (unit length)."),
+        field("shape_se_real", &S::shape_se_real, "Standard errors of Re(shape)."),
+        field("shape_se_imag", &S::shape_se_imag, "Standard errors of Im(shape)."),
+        field("participation", &S::participation, "Participation factors over the inputs."),
+        field("rank_one_share", &S::rank_one_share,
+              "Share of the residue explained by the shape (1: rank one)."),
+    };
+  }
 };
 
 /// MAC(a, b) = |a^H b|^2 / ((a^H a)(b^H b)): 1 for proportional shapes, 0 for orthogonal ones.
@@ -107,6 +125,24 @@ struct MimoEstimationResult {
   /// Every second-order submodel as a mode, in submodel order.
   std::vector<MimoMode> modes;
   bool converged() const { return termination == Termination::converged; }
+
+  static constexpr std::string_view type_name = "MimoEstimationResult";
+  /// The covariance is not among the fields (2 x 28 channels with 8 modes make it about a
+  /// thousand square): JSON and the field list carry the modes' standard errors instead.
+  static constexpr auto fields() {
+    using S = MimoEstimationResult;
+    return std::tuple{
+        field("model", &S::model, "The estimate (the iterate with the lowest output error)."),
+        field("termination", &S::termination, "How the iteration ended."),
+        field("message", &S::message, "One sentence: how the iteration ended."),
+        field("iterations", &S::iterations, "Iterations run."),
+        field("mean_squared_errors", &S::mean_squared_errors,
+              "Per output: mean squared output error."),
+        field("fit_percent", &S::fit_percent, "Per output: fit_percent on the data."),
+        field("verdict", &S::verdict, "Whether the model is usable, and why not."),
+        field("modes", &S::modes, "MimoMode of every second-order submodel."),
+    };
+  }
 };
 
 /// Estimates the shared denominators and every numerator of `orders` (n_i >= 1, m_i, no
