@@ -710,7 +710,7 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
   }();
 
   // The iteration, keeping the iterate with the lowest output error (relative_output_error):
-  // that is what is returned, never a diverged one.
+  // returned when the iteration does not converge, so a diverged one never is.
   MimoEstimationResult result;
   const double start_cost = relative_output_error(layout, data, model);
   MimoAdditiveModel best = model;
@@ -751,7 +751,11 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
     result.message =
         internal::concat("mimo_srivc: no convergence in ", options.max_iterations, " iterations");
   }
-  if (best_iteration != result.iterations) {
+  // Converged: the fixed point is the estimate (the covariance describes it), even where an
+  // earlier iterate fitted the outputs a little better. Otherwise the best iterate.
+  if (result.converged()) {
+    best = model;
+  } else if (best_iteration != result.iterations) {
     result.message +=
         internal::concat("; the iterate with the lowest output error (",
                          best_iteration == 0 ? std::string("the start")

@@ -108,7 +108,8 @@ double modal_assurance(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b);
 Eigen::MatrixXd modal_assurance(const std::vector<MimoMode>& a, const std::vector<MimoMode>& b);
 
 struct MimoEstimationResult {
-  /// The estimate: the iterate with the lowest output error (none if nothing was computed).
+  /// The estimate: the fixed point when the iteration converged, else the iterate with the
+  /// lowest output error (none if nothing was computed).
   std::optional<MimoAdditiveModel> model;
   Termination termination = Termination::not_run;
   std::string message;  ///< one sentence: how the iteration ended
@@ -132,7 +133,8 @@ struct MimoEstimationResult {
   static constexpr auto fields() {
     using S = MimoEstimationResult;
     return std::tuple{
-        field("model", &S::model, "The estimate (the iterate with the lowest output error)."),
+        field("model", &S::model,
+              "The estimate: the fixed point, or the iterate with the lowest output error."),
         field("termination", &S::termination, "How the iteration ended."),
         field("message", &S::message, "One sentence: how the iteration ended."),
         field("iterations", &S::iterations, "Iterations run."),
