@@ -8,6 +8,7 @@
 #include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/error.h"
 #include "ctid/core/hold.h"
+#include "ctid/core/mimo_model.h"
 #include "ctid/core/polynomial.h"
 #include "ctid/core/preprocessing.h"
 #include "ctid/core/sampled_data.h"
@@ -211,6 +212,33 @@ void bind_core(py::module_& m) {
            "ModalParameters of submodel i if it is an underdamped mode, else None.")
       .def("to_string", &AdditiveModel::to_string, "Human-readable form.")
       .def("__repr__", &AdditiveModel::to_string);
+
+  py::class_<MimoSubmodel>(m, "MimoSubmodel",
+                           "One denominator A_i shared by every channel and its numerators "
+                           "R_i[j, k] (b[j * inputs + k]).")
+      .def(py::init([](Polynomial a, std::vector<Polynomial> b) {
+             return MimoSubmodel{std::move(a), std::move(b)};
+           }),
+           py::arg("a"), py::arg("b"))
+      .def_readwrite("a", &MimoSubmodel::a, "Anti-monic denominator A_i.")
+      .def_readwrite("b", &MimoSubmodel::b, "Numerators, output by output, input by input.");
+  py::class_<MimoAdditiveModel>(m, "MimoAdditiveModel",
+                                "G(p) = sum_i R_i(p) / A_i(p) + D: poles shared by every "
+                                "input-output pair (MIMO modal model).")
+      .def(py::init<int, int, std::vector<MimoSubmodel>, Eigen::MatrixXd>(), py::arg("inputs"),
+           py::arg("outputs"), py::arg("submodels"), py::arg("direct") = Eigen::MatrixXd(),
+           "From submodels and an optional direct term D (outputs x inputs).")
+      .def_property_readonly("inputs", &MimoAdditiveModel::inputs, "n_u.")
+      .def_property_readonly("outputs", &MimoAdditiveModel::outputs, "n_y.")
+      .def_property_readonly("submodels", &MimoAdditiveModel::submodels, "The submodels.")
+      .def_property_readonly("direct", &MimoAdditiveModel::direct, "D (zero if none).")
+      .def_property_readonly("has_direct_term", &MimoAdditiveModel::has_direct_term,
+                             "Whether D was given.")
+      .def("__len__", &MimoAdditiveModel::size)
+      .def("numerator", &MimoAdditiveModel::numerator, py::arg("i"), py::arg("output"),
+           py::arg("input"), "R_i[output, input].")
+      .def("channel", &MimoAdditiveModel::channel, py::arg("output"), py::arg("input"),
+           "The SISO AdditiveModel of one channel (D folded into the first submodel).");
 
   py::class_<SampledData>(m, "SampledData",
                           "Uniformly sampled input u, output y and optional reference r at "

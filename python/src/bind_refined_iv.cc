@@ -8,6 +8,7 @@
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/initialization.h"
 #include "ctid/refined_iv/input_delay_scan.h"
+#include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 #include "ctid/refined_iv/srivc.h"
@@ -41,6 +42,34 @@ void bind_refined_iv_estimators(py::module_& m) {
   bind_enum<InitialConditions>(m, "InitialConditions",
                                "State assumed at the first sample: zero or estimate.");
   bind_options<RefinedIvOptions>(m, "Options of srivc, clsrivc, additive_srivc, additive_clsrivc.");
+
+  bind_options<MimoRefinedIvOptions>(m, "Options of mimo_srivc.");
+  bind_result<MimoMode>(m, "A mode shared by every channel: w_n, zeta, shape, participation.");
+  bind_result<MimoEstimationResult>(
+      m, "What mimo_srivc found: the model, per-output fits, the verdict and the modes.")
+      .def_readonly("covariance", &MimoEstimationResult::covariance,
+                    "Covariance of [a of every submodel; per output its numerators and D].")
+      .def("converged", &MimoEstimationResult::converged, "termination == converged.");
+  m.def(
+      "mimo_srivc",
+      [](const MimoData& data, const std::vector<SubmodelOrder>& orders,
+         const std::optional<MimoAdditiveModel>& initial_model,
+         const std::optional<MimoRefinedIvOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<MimoRefinedIvOptions>("mimo_srivc", options, kwargs);
+        py::gil_scoped_release release;
+        return mimo_srivc(data, orders, o, initial_model);
+      },
+      py::arg("data"), py::arg("orders"), py::arg("initial_model") = py::none(),
+      py::arg("options") = py::none(),
+      "Open-loop refined IV with poles shared by every input-output pair of a MimoData; "
+      "options are one MimoRefinedIvOptions or its fields as keywords.");
+  m.def("modal_assurance",
+        py::overload_cast<const Eigen::VectorXcd&, const Eigen::VectorXcd&>(&modal_assurance),
+        py::arg("a"), py::arg("b"), "MAC of two shapes: |a^H b|^2 / ((a^H a)(b^H b)).");
+  m.def("modal_assurance",
+        py::overload_cast<const std::vector<MimoMode>&, const std::vector<MimoMode>&>(
+            &modal_assurance),
+        py::arg("a"), py::arg("b"), "MAC matrix of two lists of modes.");
 
   m.def(
       "srivc",

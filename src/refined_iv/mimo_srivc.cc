@@ -626,6 +626,20 @@ std::vector<MimoMode> modes_of(const Layout& layout, const MimoAdditiveModel& mo
   return modes;
 }
 
+// The model halfway between two of the same structure, parameter by parameter.
+MimoAdditiveModel midpoint(const Layout& layout, const MimoAdditiveModel& x,
+                           const MimoAdditiveModel& y) {
+  std::vector<MimoSubmodel> submodels;
+  for (int i = 0; i < layout.size(); ++i) {
+    MimoSubmodel s{0.5 * x[i].a + 0.5 * y[i].a, {}};
+    for (size_t c = 0; c < x[i].b.size(); ++c) s.b.push_back(0.5 * x[i].b[c] + 0.5 * y[i].b[c]);
+    submodels.push_back(std::move(s));
+  }
+  Eigen::MatrixXd direct;
+  if (layout.direct) direct = 0.5 * (x.direct() + y.direct());
+  return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels), direct);
+}
+
 // Submodels of equal orders listed from the slowest up (by the geometric mean of their pole
 // magnitudes, a_n^(-1/n)), so that the order in which the start found them does not show.
 MimoAdditiveModel slowest_first(const Layout& layout, MimoAdditiveModel model) {
@@ -718,15 +732,29 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
   int best_iteration = 0;
   double reciprocal_condition = std::numeric_limits<double>::quiet_NaN();
   Eigen::VectorXd previous = flatten(model);
+  // Step control as in the SISO engine: a step to an iterate whose equations cannot be formed
+  // or solved is halved toward the last accepted iterate (kMaxHalvings times at most).
+  constexpr int kMaxHalvings = 8;
+  std::optional<MimoAdditiveModel> accepted;
+  int halvings = 0;
   for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
     Step step = iterate(layout, data, model, options.output_interpolation);
     reciprocal_condition = step.reciprocal_condition;
+    while (!step.model && accepted && halvings < kMaxHalvings) {
+      ++halvings;
+      result.step_halvings += 1;
+      model = midpoint(layout, *accepted, model);
+      step = iterate(layout, data, model, options.output_interpolation);
+      reciprocal_condition = step.reciprocal_condition;
+    }
+    halvings = 0;
     if (!step.model) {
       result.termination = step.kind;
       result.message =
           internal::concat("mimo_srivc: stopped at iteration ", iteration, ": ", step.failure);
       break;
     }
+    accepted = model;
     model = std::move(*step.model);
     result.iterations = iteration;
     const double cost = relative_output_error(layout, data, model);

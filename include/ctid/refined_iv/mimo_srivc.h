@@ -114,6 +114,9 @@ struct MimoEstimationResult {
   Termination termination = Termination::not_run;
   std::string message;  ///< one sentence: how the iteration ended
   int iterations = 0;
+  /// Steps halved toward the last accepted iterate because the equations at the new one could
+  /// not be formed or solved (numerator regressors collinear, singular denominators' system).
+  int step_halvings = 0;
   /// Per output: mean squared output error y_j - G_j u and fit_percent on the data.
   Eigen::VectorXd mean_squared_errors;
   Eigen::VectorXd fit_percent;
@@ -138,6 +141,7 @@ struct MimoEstimationResult {
         field("termination", &S::termination, "How the iteration ended."),
         field("message", &S::message, "One sentence: how the iteration ended."),
         field("iterations", &S::iterations, "Iterations run."),
+        field("step_halvings", &S::step_halvings, "Steps halved toward the last accepted one."),
         field("mean_squared_errors", &S::mean_squared_errors,
               "Per output: mean squared output error."),
         field("fit_percent", &S::fit_percent, "Per output: fit_percent on the data."),
