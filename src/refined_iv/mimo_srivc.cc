@@ -226,30 +226,6 @@ std::optional<std::vector<Polynomial>> common_denominator_start(const Layout& la
   }
 }
 
-// The start: over a grid of filter bandwidths (the SISO start's, Nyquist / 128 up to Nyquist
-// by octaves), the common-denominator candidate whose least-squares numerators give the
-// smallest relative output error.
-MimoAdditiveModel automatic_start(const Layout& layout, const MimoData& data, Hold interpolation) {
-  std::optional<MimoAdditiveModel> best;
-  double best_cost = std::numeric_limits<double>::infinity();
-  const double nyquist = M_PI / data.sample_time();
-  for (double lambda = nyquist / 128.0; lambda <= nyquist * 1.0001; lambda *= 2.0) {
-    const std::optional<std::vector<Polynomial>> a =
-        common_denominator_start(layout, data, lambda, interpolation);
-    if (!a) continue;
-    MimoAdditiveModel candidate = fit_numerators(layout, data, *a);
-    const double cost = relative_output_error(layout, data, candidate);
-    if (std::isfinite(cost) && cost < best_cost) {
-      best_cost = cost;
-      best = std::move(candidate);
-    }
-  }
-  require(best.has_value(), "mimo_srivc: no start found from the data (the common-denominator ",
-          "least squares gave no model of this structure at any filter bandwidth); give an ",
-          "initial model");
-  return *best;
-}
-
 struct Step {
   std::optional<MimoAdditiveModel> model;
   std::string failure;  // why the step could not be taken (empty if it was)
@@ -444,6 +420,135 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
           rcond};
 }
 
+// The model halfway between two of the same structure, parameter by parameter.
+MimoAdditiveModel midpoint(const Layout& layout, const MimoAdditiveModel& x,
+                           const MimoAdditiveModel& y) {
+  std::vector<MimoSubmodel> submodels;
+  for (int i = 0; i < layout.size(); ++i) {
+    MimoSubmodel s{0.5 * x[i].a + 0.5 * y[i].a, {}};
+    for (size_t c = 0; c < x[i].b.size(); ++c) s.b.push_back(0.5 * x[i].b[c] + 0.5 * y[i].b[c]);
+    submodels.push_back(std::move(s));
+  }
+  Eigen::MatrixXd direct;
+  if (layout.direct) direct = 0.5 * (x.direct() + y.direct());
+  return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels), direct);
+}
+
+// How a run of the iteration ended: the model to return (the fixed point when it converged,
+// else the iterate with the lowest output error, relative_output_error), and its account.
+struct Iterations {
+  MimoAdditiveModel model;
+  double cost = 0.0;  // relative_output_error of `model`
+  Termination termination = Termination::not_run;
+  std::string message;
+  int iterations = 0;
+  int step_halvings = 0;
+  double reciprocal_condition = std::numeric_limits<double>::quiet_NaN();
+};
+
+Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditiveModel model,
+                          int max_iterations, double tolerance, Hold output_interpolation) {
+  const double start_cost = relative_output_error(layout, data, model);
+  Iterations result{
+      model, start_cost, Termination::not_run, {}, 0, 0, std::numeric_limits<double>::quiet_NaN()};
+  MimoAdditiveModel& best = result.model;
+  double& best_cost = result.cost;
+  int best_iteration = 0;
+  Eigen::VectorXd previous = flatten(model);
+  // Step control as in the SISO engine: a step to an iterate whose equations cannot be formed
+  // or solved is halved toward the last accepted iterate (kMaxHalvings times at most).
+  constexpr int kMaxHalvings = 8;
+  std::optional<MimoAdditiveModel> accepted;
+  for (int iteration = 1; iteration <= max_iterations; ++iteration) {
+    Step step = iterate(layout, data, model, output_interpolation);
+    for (int halvings = 0; !step.model && accepted && halvings < kMaxHalvings; ++halvings) {
+      ++result.step_halvings;
+      model = midpoint(layout, *accepted, model);
+      step = iterate(layout, data, model, output_interpolation);
+    }
+    result.reciprocal_condition = step.reciprocal_condition;
+    if (!step.model) {
+      result.termination = step.kind;
+      result.message =
+          internal::concat("mimo_srivc: stopped at iteration ", iteration, ": ", step.failure);
+      break;
+    }
+    accepted = model;
+    model = std::move(*step.model);
+    result.iterations = iteration;
+    const double cost = relative_output_error(layout, data, model);
+    if (std::isfinite(cost) && cost <= best_cost) {
+      best = model;
+      best_cost = cost;
+      best_iteration = iteration;
+    }
+    const Eigen::VectorXd current = flatten(model);
+    const double change = (current - previous).norm() / previous.norm();
+    previous = current;
+    if (change < tolerance) {
+      result.termination = Termination::converged;
+      result.message =
+          internal::concat("mimo_srivc: converged after ", iteration,
+                           " iterations (relative parameter change ", format_brief(change), ")");
+      break;
+    }
+  }
+  if (result.termination == Termination::not_run) {
+    result.termination = Termination::iteration_limit;
+    result.message =
+        internal::concat("mimo_srivc: no convergence in ", max_iterations, " iterations");
+  }
+  // Converged: the fixed point is the estimate (the covariance describes it), even where an
+  // earlier iterate fitted the outputs a little better. Otherwise the best iterate.
+  if (result.termination == Termination::converged) {
+    best_cost = relative_output_error(layout, data, model);
+    best = std::move(model);
+  } else if (best_iteration != result.iterations) {
+    result.message +=
+        internal::concat("; the iterate with the lowest output error (",
+                         best_iteration == 0 ? std::string("the start")
+                                             : internal::concat("iteration ", best_iteration),
+                         ") is returned");
+  }
+  return result;
+}
+
+// The start. Candidates: the common-denominator fit at each bandwidth of the SISO start's grid
+// (Nyquist / 128 up to Nyquist by octaves), numerators by least squares. The
+// kRefinedCandidates with the smallest relative output error are each given
+// kRefinementIterations of the iteration, and the best refined one is the start (a candidate
+// that fits well as it is can still lead the iteration astray).
+constexpr int kRefinedCandidates = 3;
+constexpr int kRefinementIterations = 5;
+
+MimoAdditiveModel automatic_start(const Layout& layout, const MimoData& data, Hold interpolation) {
+  std::vector<std::pair<double, MimoAdditiveModel>> candidates;
+  const double nyquist = M_PI / data.sample_time();
+  for (double lambda = nyquist / 128.0; lambda <= nyquist * 1.0001; lambda *= 2.0) {
+    const std::optional<std::vector<Polynomial>> a =
+        common_denominator_start(layout, data, lambda, interpolation);
+    if (!a) continue;
+    MimoAdditiveModel candidate = fit_numerators(layout, data, *a);
+    const double cost = relative_output_error(layout, data, candidate);
+    if (std::isfinite(cost)) candidates.emplace_back(cost, std::move(candidate));
+  }
+  require(!candidates.empty(), "mimo_srivc: no start found from the data (the common-denominator ",
+          "least squares gave no model of this structure at any filter bandwidth); give an ",
+          "initial model");
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const auto& x, const auto& y) { return x.first < y.first; });
+  if (candidates.size() > static_cast<size_t>(kRefinedCandidates)) {
+    candidates.erase(candidates.begin() + kRefinedCandidates, candidates.end());
+  }
+  std::optional<Iterations> best;
+  for (auto& [cost, candidate] : candidates) {
+    Iterations refined = run_iterations(layout, data, std::move(candidate), kRefinementIterations,
+                                        0.0, interpolation);
+    if (!best || refined.cost < best->cost) best = std::move(refined);
+  }
+  return std::move(best->model);
+}
+
 // Index of a parameter in the covariance's layout: every a-block, then per output the
 // numerator columns (which include D last).
 int a_index(const Layout& layout, int i, int q) {
@@ -626,20 +731,6 @@ std::vector<MimoMode> modes_of(const Layout& layout, const MimoAdditiveModel& mo
   return modes;
 }
 
-// The model halfway between two of the same structure, parameter by parameter.
-MimoAdditiveModel midpoint(const Layout& layout, const MimoAdditiveModel& x,
-                           const MimoAdditiveModel& y) {
-  std::vector<MimoSubmodel> submodels;
-  for (int i = 0; i < layout.size(); ++i) {
-    MimoSubmodel s{0.5 * x[i].a + 0.5 * y[i].a, {}};
-    for (size_t c = 0; c < x[i].b.size(); ++c) s.b.push_back(0.5 * x[i].b[c] + 0.5 * y[i].b[c]);
-    submodels.push_back(std::move(s));
-  }
-  Eigen::MatrixXd direct;
-  if (layout.direct) direct = 0.5 * (x.direct() + y.direct());
-  return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels), direct);
-}
-
 // Submodels of equal orders listed from the slowest up (by the geometric mean of their pole
 // magnitudes, a_n^(-1/n)), so that the order in which the start found them does not show.
 MimoAdditiveModel slowest_first(const Layout& layout, MimoAdditiveModel model) {
@@ -723,74 +814,15 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
     return automatic_start(layout, data, options.output_interpolation);
   }();
 
-  // The iteration, keeping the iterate with the lowest output error (relative_output_error):
-  // returned when the iteration does not converge, so a diverged one never is.
   MimoEstimationResult result;
-  const double start_cost = relative_output_error(layout, data, model);
-  MimoAdditiveModel best = model;
-  double best_cost = start_cost;
-  int best_iteration = 0;
-  double reciprocal_condition = std::numeric_limits<double>::quiet_NaN();
-  Eigen::VectorXd previous = flatten(model);
-  // Step control as in the SISO engine: a step to an iterate whose equations cannot be formed
-  // or solved is halved toward the last accepted iterate (kMaxHalvings times at most).
-  constexpr int kMaxHalvings = 8;
-  std::optional<MimoAdditiveModel> accepted;
-  int halvings = 0;
-  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
-    Step step = iterate(layout, data, model, options.output_interpolation);
-    reciprocal_condition = step.reciprocal_condition;
-    while (!step.model && accepted && halvings < kMaxHalvings) {
-      ++halvings;
-      result.step_halvings += 1;
-      model = midpoint(layout, *accepted, model);
-      step = iterate(layout, data, model, options.output_interpolation);
-      reciprocal_condition = step.reciprocal_condition;
-    }
-    halvings = 0;
-    if (!step.model) {
-      result.termination = step.kind;
-      result.message =
-          internal::concat("mimo_srivc: stopped at iteration ", iteration, ": ", step.failure);
-      break;
-    }
-    accepted = model;
-    model = std::move(*step.model);
-    result.iterations = iteration;
-    const double cost = relative_output_error(layout, data, model);
-    if (std::isfinite(cost) && cost <= best_cost) {
-      best = model;
-      best_cost = cost;
-      best_iteration = iteration;
-    }
-    const Eigen::VectorXd current = flatten(model);
-    const double change = (current - previous).norm() / previous.norm();
-    previous = current;
-    if (change < options.tolerance) {
-      result.termination = Termination::converged;
-      result.message =
-          internal::concat("mimo_srivc: converged after ", iteration,
-                           " iterations (relative parameter change ", format_brief(change), ")");
-      break;
-    }
-  }
-  if (result.termination == Termination::not_run) {
-    result.termination = Termination::iteration_limit;
-    result.message =
-        internal::concat("mimo_srivc: no convergence in ", options.max_iterations, " iterations");
-  }
-  // Converged: the fixed point is the estimate (the covariance describes it), even where an
-  // earlier iterate fitted the outputs a little better. Otherwise the best iterate.
-  if (result.converged()) {
-    best = model;
-  } else if (best_iteration != result.iterations) {
-    result.message +=
-        internal::concat("; the iterate with the lowest output error (",
-                         best_iteration == 0 ? std::string("the start")
-                                             : internal::concat("iteration ", best_iteration),
-                         ") is returned");
-  }
-  model = slowest_first(layout, std::move(best));
+  Iterations run = run_iterations(layout, data, std::move(model), options.max_iterations,
+                                  options.tolerance, options.output_interpolation);
+  result.termination = run.termination;
+  result.message = std::move(run.message);
+  result.iterations = run.iterations;
+  result.step_halvings = run.step_halvings;
+  const double reciprocal_condition = run.reciprocal_condition;
+  model = slowest_first(layout, std::move(run.model));
 
   const Eigen::MatrixXd u = numerator_regressors(layout, data, denominators(model));
   const Eigen::MatrixXd fitted = model_outputs(layout, u, model);
