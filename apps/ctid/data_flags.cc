@@ -1,5 +1,6 @@
 #include "data_flags.h"
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <optional>
@@ -10,6 +11,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/io/csv.h"
+#include "ctid/io/mimo_data_csv.h"
 #include "ctid/io/sampled_data_csv.h"
 
 namespace ctid::cli {
@@ -257,6 +259,107 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
   }
   preprocessing = std::move(result.record);
   return std::move(result.data);
+}
+
+void DataFlags::add_mimo_columns(CLI::App& app) {
+  app.add_option("--input-columns", input_columns,
+                 "Several inputs: columns or ranges A:B (file order), comma-separated, e.g. "
+                 "u1,u2 or u1:u2")
+      ->delimiter(',')
+      ->group("Data");
+  app.add_option("--output-columns", output_columns,
+                 "Several outputs: columns or ranges A:B (file order), comma-separated, e.g. "
+                 "y1:y28")
+      ->delimiter(',')
+      ->group("Data");
+}
+
+bool DataFlags::mimo_asked(const CLI::App& app) const {
+  return app.count("--input-columns") > 0 || app.count("--output-columns") > 0;
+}
+
+MimoData DataFlags::load_mimo(const CLI::App& app) const {
+  if (app.count("--input-columns") > 0 && app.count("--input-column") > 0) {
+    usage_error("give --input-column or --input-columns, not both");
+  }
+  if (app.count("--output-columns") > 0 && app.count("--output-column") > 0) {
+    usage_error("give --output-column or --output-columns, not both");
+  }
+  for (const char* flag : {"--detrend", "--decimate", "--scale-input", "--scale-output",
+                           "--resample", "--reference-column"}) {
+    if (app.get_option_no_throw(flag) != nullptr && app.count(flag) > 0) {
+      usage_error(std::string(flag) +
+                  " is not available with --input-columns / --output-columns yet; of the "
+                  "preprocessing, --rows and --time apply to several columns");
+    }
+  }
+  const io::CsvTable table = io::read_csv(file);
+  io::MimoCsvColumns columns;
+  columns.time = time_column;
+  columns.inputs = input_columns.empty() ? std::vector<std::string>{input_column} : input_columns;
+  columns.outputs =
+      output_columns.empty() ? std::vector<std::string>{output_column} : output_columns;
+  const bool h_flag = app.count("--sample-time") > 0;
+  std::optional<MimoData> read;
+  if (table.has_column(time_column) && !h_flag) {
+    try {
+      read.emplace(io::mimo_data_from_table(table, columns));
+    } catch (const InvalidArgument& e) {
+      const std::string message = e.what();
+      if (message.find("time stamps") == std::string::npos) throw;
+      throw InvalidArgument(message + "; --sample-time (-T) overrides the time column");
+    }
+  } else {
+    if (!h_flag) {
+      if (app.count("--time-column") > 0) table.column(time_column);  // names the columns
+      usage_error(internal::concat(file, " has no time column '", time_column,
+                                   "'; give --sample-time (or --time-column)"));
+    }
+    // The columns by the same rules, the time column left out (it may be absent).
+    io::CsvTable untimed = table;
+    untimed.names.clear();
+    untimed.columns.clear();
+    for (std::size_t c = 0; c < table.names.size(); ++c) {
+      if (table.names[c] != time_column) untimed.add_column(table.names[c], table.columns[c]);
+    }
+    const double start = table.has_column(time_column) ? table.column(time_column)(0) : 0.0;
+    untimed.add_column(
+        time_column,
+        Eigen::VectorXd::LinSpaced(table.rows(), start, start + sample_time * (table.rows() - 1)));
+    const MimoData m = io::mimo_data_from_table(untimed, columns);
+    read.emplace(MimoData(sample_time, m.inputs(), m.outputs(), std::nullopt, start)
+                     .with_names(m.input_names(), m.output_names())
+                     .with_input_hold(m.input_hold()));
+  }
+  const std::optional<Hold> flagged = parse_hold(input_hold);
+  if (flagged) read.emplace(read->with_input_hold(*flagged));
+  if (!rows.empty() && !time.empty()) usage_error("give --rows or --time, not both");
+  int first = 0;
+  int end = read->size();
+  if (!rows.empty()) {
+    const auto [a, b] = split_range("--rows", rows);
+    first = parse_end<int>("--rows", rows, a).value_or(0);
+    end = parse_end<int>("--rows", rows, b).value_or(end);
+  }
+  if (!time.empty()) {
+    const auto [a, b] = split_range("--time", time);
+    const Eigen::VectorXd t = read->time();
+    const std::optional<double> from = parse_end<double>("--time", time, a);
+    const std::optional<double> to = parse_end<double>("--time", time, b);
+    first = static_cast<int>(
+        std::find_if(t.begin(), t.end(), [&](double x) { return !from || x >= *from; }) -
+        t.begin());
+    end = static_cast<int>(
+        std::find_if(t.begin(), t.end(), [&](double x) { return to && x >= *to; }) - t.begin());
+  }
+  if (first != 0 || end != read->size()) {
+    if (!(first >= 0 && end <= read->size() && end - first >= 2)) {
+      usage_error(internal::concat(file, ": --rows/--time keep samples [", first, ", ", end,
+                                   ") of ", read->size(), "; at least 2 must remain"));
+    }
+    read.emplace(read->segment(first, end - first));
+  }
+  return std::move(*read);
 }
 
 SampledData DataFlags::load(const CLI::App& app, bool need_reference) const {
