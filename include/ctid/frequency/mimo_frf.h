@@ -66,7 +66,7 @@ struct MimoFrf {
 /// power there, or exactly dependent inputs) the response, coherence and variance are NaN.
 /// For one input and one output, response, coherence and input level equal welch_frf's; the
 /// variance is welch_frf's times M / (M - 1) (the unbiased residual, see the header).
-/// Throws InvalidArgument when the record is shorter than L or M <= n_u.
+/// The variance is NaN when M <= n_u. Throws InvalidArgument when the record is shorter than L.
 MimoFrf welch_frf(const MimoData& data, const WelchOptions& options = {});
 
 /// FRF matrix from n_e >= n_u periodic experiments of one system with the same period length
