@@ -117,3 +117,19 @@ def test_hadamard_experiments_from_python():
     np.testing.assert_allclose(frf.input_condition, 1.0, atol=1e-9)
     with pytest.raises(ValueError, match="at least one experiment per input"):
         ctid.periodic_frf(experiments[:1], period_length=256)
+
+
+def test_orthogonal_multisines_give_a_well_conditioned_frf():
+    o = ctid.orthogonal_multisines(
+        3, period_length=512, sample_time=H, max_frequency=3.0, periods=3, seed=2
+    )
+    assert len(o.experiments) == 4 and o.experiments[0].shape == (1536, 3)
+    g = _mode(1.0, 2.0, 0.5)
+    records = [
+        ctid.MimoData(H, u, ctid.simulate(g, u.sum(axis=1), H)[:, None]) for u in o.experiments
+    ]
+    # One 25.6-s period of transient: what is left of e^{-t} is 1e-11.
+    frf = ctid.periodic_frf(records, period_length=512, transient_periods=1)
+    assert frf.lines == o.lines
+    np.testing.assert_allclose(frf.input_condition, 1.0, atol=1e-9)
+    np.testing.assert_allclose(frf.response[:, 0, 0], frf.response[:, 0, 2], rtol=1e-8)

@@ -313,6 +313,40 @@ TEST(MimoPeriodicFrf, HadamardMultisinesRecoverEveryChannelExactly) {
   EXPECT_EQ(joined.response[7], frf.response[7]);
 }
 
+TEST(MimoPeriodicFrf, OrthogonalMultisinesForThreeInputsUseFourExperiments) {
+  // Three inputs, two outputs: n_e = 4 > n_u = 3 experiments, H_p = Y_p U_p^+.
+  const auto g = system_2x3();
+  MultisineOptions ms;
+  ms.period_length = 256;
+  ms.sample_time = kH;
+  ms.max_frequency = 3.0;
+  ms.periods = 4;
+  ms.seed = 81;
+  const OrthogonalMultisines o = orthogonal_multisines(ms, 3);
+  std::vector<MimoData> experiments;
+  for (const Eigen::MatrixXd& u : o.experiments) {
+    // Outputs 1 and 2 of system_2x3 from inputs 1, 2; input 3 drives output 2 through G_31.
+    Eigen::MatrixXd y = outputs_of(g, u.leftCols(2), 0.0, 0).leftCols(2);
+    y.col(1) += simulate(g[2][0], u.col(2).eval(), kH);
+    experiments.emplace_back(kH, u, y);
+  }
+  PeriodicFrfOptions options;
+  options.period_length = 256;
+  options.transient_periods = 2;
+  const MimoFrf frf = periodic_frf(experiments, options);
+  EXPECT_EQ(frf.lines, o.lines);
+  EXPECT_LT(frf.input_condition.maxCoeff(), 1.0 + 1e-9);
+  double worst = 0.0;
+  for (std::size_t l = 0; l < frf.lines.size(); ++l) {
+    const double w = frf.frequencies(static_cast<Eigen::Index>(l));
+    worst = std::max(worst, std::abs(frf.response[l](0, 1) - zoh_response(g[0][1], w)));
+    worst = std::max(worst, std::abs(frf.response[l](1, 2) - zoh_response(g[2][0], w)));
+    worst = std::max(worst, std::abs(frf.response[l](0, 2)));
+  }
+  EXPECT_LT(worst, 1e-10);
+  EXPECT_GT(frf.coherence.minCoeff(), 1.0 - 1e-12);
+}
+
 TEST(MimoPeriodicFrf, BadExperimentsAreRefusedWithOneMessage) {
   const Eigen::MatrixXd u = white_inputs(1024, 2, 71);
   const MimoData two(kH, u, u);
