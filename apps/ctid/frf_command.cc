@@ -141,8 +141,13 @@ double median(Eigen::VectorXd v) {
 }
 
 void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
+  if (!f.model.empty()) {
+    usage_error("--model is not available with --input-columns / --output-columns yet");
+  }
+  std::filesystem::path package;
   if (!f.plot.empty()) {
-    usage_error("--plot is not available with --input-columns / --output-columns yet");
+    package = require_plotting();
+    prepare_plot_directory(f.plot, {"frf_matrix.png"}, f.force);
   }
   const MimoData data = f.data.load_mimo(app);
   MimoFrf frf;
@@ -179,10 +184,10 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
   int correlated = 0;
   for (int l = 0; l < frf.input_condition.size(); ++l) correlated += frf.inputs_correlated(l);
 
+  nlohmann::json document = io::to_json(frf);
   if (!f.output.empty()) {
     const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
     if (std::filesystem::path(f.output).extension() == ".json") {
-      nlohmann::json document = io::to_json(frf);
       document["method"] = periodic ? "periodic" : "welch";
       document["data"] = {{"file", f.data.file},
                           {"samples", data.size()},
@@ -197,6 +202,14 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
     } else {
       io::write_csv(f.output, mimo_frf_table(frf), overwrite);
     }
+  }
+  if (!f.plot.empty()) {
+    // frf_matrix.png: every input of the first four outputs, with their multiple coherence.
+    const TemporaryDirectory work;
+    io::write_json(work.path() / "frf.json", document);
+    plot(package,
+         {{"frf_matrix", work.path() / "frf.json", std::filesystem::path(f.plot) / "frf_matrix.png",
+           "ctid frf: " + std::filesystem::path(f.data.file).filename().string()}});
   }
   if (f.quiet) return;
   const auto names = [](const std::vector<std::string>& v) {
@@ -302,10 +315,10 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
   const std::vector<ResonancePeak> peaks = resonance_peaks(frf, peak_options);
 
   const io::CsvTable table = frf_table(frf);
+  nlohmann::json document = io::to_json(frf);
   if (!f.output.empty()) {
     const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
     if (std::filesystem::path(f.output).extension() == ".json") {
-      nlohmann::json document = io::to_json(frf);
       document["method"] = periodic ? "periodic" : "welch";
       document["data"] = {{"file", f.data.file},
                           {"samples", data.size()},
@@ -365,7 +378,8 @@ Command add_frf_command(CLI::App& parent) {
       "matrix H = S_yu S_uu^-1 (Welch) or Y U^-1 over experiments (--period): CSV columns "
       "frequency, frequency_hz, input_condition, input_level_<input>, coherence_<output> (the "
       "multiple coherence with all inputs) and <output>/<input>_real, _imag, _variance; -o "
-      "X.json a \"mimo_frf\" document. Peaks are those of sqrt(sum |H_ji|^2) over all channels.\n"
+      "X.json a \"mimo_frf\" document; --plot DIR draws frf_matrix.png. Peaks are those of "
+      "sqrt(sum |H_ji|^2) over all channels.\n"
       "Exit status: 0 ran, 2 bad usage or input, 1 other error.");
   f.data.add_to(*app, "data", false);
   f.data.add_mimo_columns(*app);

@@ -133,3 +133,37 @@ def test_orthogonal_multisines_give_a_well_conditioned_frf():
     assert frf.lines == o.lines
     np.testing.assert_allclose(frf.input_condition, 1.0, atol=1e-9)
     np.testing.assert_allclose(frf.response[:, 0, 0], frf.response[:, 0, 2], rtol=1e-8)
+
+
+def test_frf_matrix_figure_from_the_result_and_from_the_cli_document(tmp_path):
+    import json
+
+    import ctid.plot
+    from ctid import plotting
+
+    data, _ = _record(4096)
+    frf = ctid.welch_frf(data, segment_length=256)
+    figure = plotting.frf_matrix(frf, filename=tmp_path / "m.png")
+    assert (tmp_path / "m.png").stat().st_size > 0
+    top, bottom = figure.axes
+    drawn = {line.get_label(): line for line in top.get_lines()}
+    assert sorted(drawn) == ["a1/f1", "a1/f2", "a2/f1", "a2/f2"]
+    np.testing.assert_allclose(drawn["a2/f1"].get_xdata(), frf.frequencies / (2 * np.pi))
+    np.testing.assert_allclose(
+        drawn["a2/f1"].get_ydata(), 20 * np.log10(np.abs(frf.response[:, 1, 0]))
+    )
+    assert [line.get_label() for line in bottom.get_lines()] == ["coherence a1", "coherence a2"]
+    document = {
+        "type": "mimo_frf",
+        "inputs": frf.input_names,
+        "outputs": frf.output_names,
+        "frequencies": list(frf.frequencies),
+        "response": [[[[h.real, h.imag] for h in row] for row in m] for m in frf.response],
+        "coherence": frf.coherence.tolist(),
+    }
+    (tmp_path / "m.json").write_text(json.dumps(document))
+    again = ctid.plot.run("frf_matrix", str(tmp_path / "m.json"), str(tmp_path / "n.png"))
+    np.testing.assert_allclose(again.axes[0].get_lines()[0].get_ydata(),
+                               top.get_lines()[0].get_ydata())
+    with pytest.raises(ValueError, match="no channel a3/f1"):
+        plotting.frf_matrix(frf, channels=[("a3", "f1")])

@@ -4,6 +4,7 @@
 // with one line that names the problem.
 #include <cmath>
 #include <complex>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -203,6 +204,20 @@ TEST_F(FrfMimoCommand, BadColumnsAndFlagsExitTwoWithOneLine) {
   expect_bad_input(ctid({"frf", "d.csv", "--input-columns", "u1,u2", "--output-columns", "y1",
                          "--period", "512", "--experiments", "3"}),
                    "do not split into 3 experiments");
+}
+
+TEST_F(FrfMimoCommand, PlotDrawsTheFrfMatrix) {
+  if (testing::python_package().empty()) {
+    GTEST_SKIP() << "the ctid Python package is not built (CTID_BUILD_PYTHON=OFF); set "
+                    "CTID_PYTHONPATH to test --plot";
+  }
+  const auto r = ctid({"frf", "d.csv", "--input-columns", "u1,u2", "--output-columns", "y1:y3",
+                       "--plot", "fig", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_GT(std::filesystem::file_size(path("fig/frf_matrix.png")), 1000u);
+  expect_bad_input(ctid({"frf", "d.csv", "--input-columns", "u1,u2", "--output-columns", "y1",
+                         "--plot", "fig2", "--model", example("gonzalez_6_1_open_loop.json")}),
+                   "--model is not available with --input-columns / --output-columns yet");
 }
 
 TEST_F(FrfMimoCommand, RowsSelectTheSamplesOfEveryChannel) {
