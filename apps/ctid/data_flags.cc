@@ -10,6 +10,7 @@
 #include "command.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/core/mimo_preprocessing.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/mimo_data_csv.h"
 #include "ctid/io/sampled_data_csv.h"
@@ -227,26 +228,7 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
     }
   }
 
-  PreprocessingOptions options;
-  if (!rows.empty() && !time.empty()) usage_error("give --rows or --time, not both");
-  if (!rows.empty()) {
-    const auto [a, b] = split_range("--rows", rows);
-    options.first_row = parse_end<int>("--rows", rows, a);
-    options.end_row = parse_end<int>("--rows", rows, b);
-  }
-  if (!time.empty()) {
-    const auto [a, b] = split_range("--time", time);
-    options.start_time = parse_end<double>("--time", time, a);
-    options.end_time = parse_end<double>("--time", time, b);
-  }
-  if (decimate < 1) usage_error(internal::concat("--decimate is ", decimate, "; it must be >= 1"));
-  if (!(scale_input > 0.0) || !(scale_output > 0.0)) {
-    usage_error("--scale-input and --scale-output must be > 0");
-  }
-  options.detrend = *enum_from_name<Detrend>(detrend);
-  options.decimate = decimate;
-  options.input_scale = scale_input;
-  options.output_scale = scale_output;
+  const PreprocessingOptions options = preprocessing_options();
   PreprocessedData result = [&] {
     try {
       return preprocess(read->with_input_hold(hold), options);
@@ -278,6 +260,30 @@ bool DataFlags::mimo_asked(const CLI::App& app) const {
   return app.count("--input-columns") > 0 || app.count("--output-columns") > 0;
 }
 
+PreprocessingOptions DataFlags::preprocessing_options() const {
+  PreprocessingOptions options;
+  if (!rows.empty() && !time.empty()) usage_error("give --rows or --time, not both");
+  if (!rows.empty()) {
+    const auto [a, b] = split_range("--rows", rows);
+    options.first_row = parse_end<int>("--rows", rows, a);
+    options.end_row = parse_end<int>("--rows", rows, b);
+  }
+  if (!time.empty()) {
+    const auto [a, b] = split_range("--time", time);
+    options.start_time = parse_end<double>("--time", time, a);
+    options.end_time = parse_end<double>("--time", time, b);
+  }
+  if (decimate < 1) usage_error(internal::concat("--decimate is ", decimate, "; it must be >= 1"));
+  if (!(scale_input > 0.0) || !(scale_output > 0.0)) {
+    usage_error("--scale-input and --scale-output must be > 0");
+  }
+  options.detrend = *enum_from_name<Detrend>(detrend);
+  options.decimate = decimate;
+  options.input_scale = scale_input;
+  options.output_scale = scale_output;
+  return options;
+}
+
 MimoData DataFlags::load_mimo(const CLI::App& app) const {
   if (app.count("--input-columns") > 0 && app.count("--input-column") > 0) {
     usage_error("give --input-column or --input-columns, not both");
@@ -285,12 +291,10 @@ MimoData DataFlags::load_mimo(const CLI::App& app) const {
   if (app.count("--output-columns") > 0 && app.count("--output-column") > 0) {
     usage_error("give --output-column or --output-columns, not both");
   }
-  for (const char* flag : {"--detrend", "--decimate", "--scale-input", "--scale-output",
-                           "--resample", "--reference-column"}) {
+  for (const char* flag : {"--resample", "--reference-column"}) {
     if (app.get_option_no_throw(flag) != nullptr && app.count(flag) > 0) {
       usage_error(std::string(flag) +
-                  " is not available with --input-columns / --output-columns yet; of the "
-                  "preprocessing, --rows and --time apply to several columns");
+                  " is not available with --input-columns / --output-columns yet");
     }
   }
   const io::CsvTable table = io::read_csv(file);
@@ -331,35 +335,26 @@ MimoData DataFlags::load_mimo(const CLI::App& app) const {
                      .with_names(m.input_names(), m.output_names())
                      .with_input_hold(m.input_hold()));
   }
+  const std::optional<Hold> declared = io::declared_input_hold(table);
   const std::optional<Hold> flagged = parse_hold(input_hold);
+  if (declared && flagged && *declared != *flagged) {
+    usage_error(internal::concat("--input-hold ", input_hold, " contradicts ", file, ":",
+                                 table.declaration("input_hold")->line,
+                                 ", which declares input_hold: ", hold_flag_name(*declared)));
+  }
   if (flagged) read.emplace(read->with_input_hold(*flagged));
-  if (!rows.empty() && !time.empty()) usage_error("give --rows or --time, not both");
-  int first = 0;
-  int end = read->size();
-  if (!rows.empty()) {
-    const auto [a, b] = split_range("--rows", rows);
-    first = parse_end<int>("--rows", rows, a).value_or(0);
-    end = parse_end<int>("--rows", rows, b).value_or(end);
-  }
-  if (!time.empty()) {
-    const auto [a, b] = split_range("--time", time);
-    const Eigen::VectorXd t = read->time();
-    const std::optional<double> from = parse_end<double>("--time", time, a);
-    const std::optional<double> to = parse_end<double>("--time", time, b);
-    first = static_cast<int>(
-        std::find_if(t.begin(), t.end(), [&](double x) { return !from || x >= *from; }) -
-        t.begin());
-    end = static_cast<int>(
-        std::find_if(t.begin(), t.end(), [&](double x) { return to && x >= *to; }) - t.begin());
-  }
-  if (first != 0 || end != read->size()) {
-    if (!(first >= 0 && end <= read->size() && end - first >= 2)) {
-      usage_error(internal::concat(file, ": --rows/--time keep samples [", first, ", ", end,
-                                   ") of ", read->size(), "; at least 2 must remain"));
+  PreprocessedMimoData result = [&] {
+    try {
+      return preprocess(*read, preprocessing_options());
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(file + ": " + e.what());
     }
-    read.emplace(read->segment(first, end - first));
+  }();
+  for (const std::string& warning : result.record.warnings) {
+    std::cerr << "warning: " << file << ": " << warning << "\n";
   }
-  return std::move(*read);
+  preprocessing = std::move(result.record);
+  return std::move(result.data);
 }
 
 SampledData DataFlags::load(const CLI::App& app, bool need_reference) const {

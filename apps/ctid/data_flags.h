@@ -56,8 +56,8 @@ struct DataFlags {
   bool mimo_asked(const CLI::App& app) const;
   /// Reads a record with the columns of --input-columns / --output-columns (the single
   /// --input-column / --output-column stands in for a list not given). The sample time comes
-  /// from the time column or --sample-time; of the preprocessing only --rows and --time apply
-  /// (the others are a usage error for several columns).
+  /// from the time column or --sample-time; the preprocessing flags apply to every channel
+  /// (core/mimo_preprocessing.h); --resample and --reference-column are usage errors.
   MimoData load_mimo(const CLI::App& app) const;
 
   /// load() of every file, each read, checked and preprocessed alike.
@@ -69,6 +69,8 @@ struct DataFlags {
   bool preprocessing_asked(const CLI::App& app) const;
 
  private:
+  /// The preprocessing the flags ask for (usage errors for malformed ranges and factors).
+  PreprocessingOptions preprocessing_options() const;
   SampledData load_file(const std::string& path, const CLI::App& app, bool need_reference) const;
 };
 

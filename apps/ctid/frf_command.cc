@@ -192,7 +192,8 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
       document["data"] = {{"file", f.data.file},
                           {"samples", data.size()},
                           {"sample_time", data.sample_time()},
-                          {"input_hold", enum_name(data.input_hold())}};
+                          {"input_hold", enum_name(data.input_hold())},
+                          {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
       document["peaks_of"] =
           "sqrt(sum |H_ji|^2) over all channels, with the power-weighted multiple coherence";
       nlohmann::json listed = nlohmann::json::array();
@@ -223,6 +224,9 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
             << (frf.output_count() == 1 ? "" : "s") << ", " << frf.frequencies.size() << " lines, "
             << frf.averages << (periodic ? " periods" : " segments") << " of " << frf.block_length
             << " samples\n";
+  if (f.data.preprocessing_asked(app)) {
+    std::cout << "preprocessing: " << f.data.preprocessing.summary() << "\n";
+  }
   const Eigen::Index last = frf.frequencies.size() - 1;
   std::cout << "excited band: " << format_brief(frf.frequencies(0) / (2.0 * std::numbers::pi))
             << " to " << format_brief(frf.frequencies(last) / (2.0 * std::numbers::pi)) << " Hz, "

@@ -10,6 +10,7 @@
 #include "ctid/core/hold.h"
 #include "ctid/core/mimo_data.h"
 #include "ctid/core/mimo_model.h"
+#include "ctid/core/mimo_preprocessing.h"
 #include "ctid/core/polynomial.h"
 #include "ctid/core/preprocessing.h"
 #include "ctid/core/sampled_data.h"
@@ -348,6 +349,28 @@ void bind_core(py::module_& m) {
       },
       py::arg("data"), py::arg("options") = py::none(),
       "PreprocessedData: the record after range, detrend, decimation and scaling.");
+  py::class_<PreprocessedMimoData>(
+      m, "PreprocessedMimoData",
+      "A preprocessed MimoData, the record of what was done and each channel's removed line.")
+      .def_readonly("data", &PreprocessedMimoData::data, "The preprocessed MimoData.")
+      .def_readonly("record", &PreprocessedMimoData::record,
+                    "The PreprocessingRecord (offsets of the first channels, warnings of all).")
+      .def_readonly("input_offsets", &PreprocessedMimoData::input_offsets,
+                    "Removed offset of each input.")
+      .def_readonly("input_slopes", &PreprocessedMimoData::input_slopes,
+                    "Removed slope of each input [1/s].")
+      .def_readonly("output_offsets", &PreprocessedMimoData::output_offsets,
+                    "Removed offset of each output.")
+      .def_readonly("output_slopes", &PreprocessedMimoData::output_slopes,
+                    "Removed slope of each output [1/s].");
+  m.def(
+      "preprocess",
+      [](const MimoData& data, const std::optional<PreprocessingOptions>& options,
+         const py::kwargs& kwargs) {
+        return preprocess(data, options_from<PreprocessingOptions>("preprocess", options, kwargs));
+      },
+      py::arg("data"), py::arg("options") = py::none(),
+      "PreprocessedMimoData: every channel of a MimoData preprocessed alike.");
   m.def(
       "resample",
       [](const Eigen::VectorXd& time, const Eigen::VectorXd& input, const Eigen::VectorXd& output,

@@ -167,3 +167,12 @@ def test_frf_matrix_figure_from_the_result_and_from_the_cli_document(tmp_path):
                                top.get_lines()[0].get_ydata())
     with pytest.raises(ValueError, match="no channel a3/f1"):
         plotting.frf_matrix(frf, channels=[("a3", "f1")])
+
+
+def test_preprocessing_every_channel_alike():
+    data, _ = _record(1024)
+    p = ctid.preprocess(data, detrend=ctid.Detrend.mean, decimate=2)
+    assert p.data.inputs.shape == (512, 2) and p.data.output_names == ["a1", "a2"]
+    one = ctid.preprocess(data.channel(1, 0), detrend=ctid.Detrend.mean, decimate=2)
+    np.testing.assert_array_equal(p.data.inputs[:, 1], one.data.input)
+    assert p.input_offsets[1] == one.record.input_offset

@@ -194,8 +194,11 @@ TEST_F(FrfMimoCommand, BadColumnsAndFlagsExitTwoWithOneLine) {
                          "--output-columns", "y1"}),
                    "give --input-column or --input-columns, not both");
   expect_bad_input(ctid({"frf", "d.csv", "--input-columns", "u1,u2", "--output-columns", "y1",
-                         "--detrend", "mean"}),
-                   "--detrend is not available with --input-columns / --output-columns yet");
+                         "--resample", "0.1"}),
+                   "--resample is not available with --input-columns / --output-columns yet");
+  expect_bad_input(ctid({"frf", "d.csv", "--input-columns", "u1,u2", "--output-columns", "y1",
+                         "--decimate", "0"}),
+                   "--decimate is 0; it must be >= 1");
   expect_bad_input(ctid({"frf", "d.csv", "--input-columns", "u1,u2", "--output-columns", "y1",
                          "--experiments", "2"}),
                    "--experiments needs --period");
@@ -220,11 +223,21 @@ TEST_F(FrfMimoCommand, PlotDrawsTheFrfMatrix) {
                    "--model is not available with --input-columns / --output-columns yet");
 }
 
-TEST_F(FrfMimoCommand, RowsSelectTheSamplesOfEveryChannel) {
+TEST_F(FrfMimoCommand, PreprocessingAppliesToEveryChannel) {
   const auto r = ctid({"frf", "d.csv", "--input-columns", "u1,u2", "--output-columns", "y1",
                        "--rows", "0:16384", "--segment-length", "1024", "-q", "-o", "r.json"});
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(io::read_json(path("r.json"))["averages"], 31);
+  // Detrending and decimation apply to every channel: half the samples, twice the step.
+  const auto d =
+      ctid({"frf", "d.csv", "--input-columns", "u1,u2", "--output-columns", "y1:y3", "--detrend",
+            "mean", "--decimate", "2", "--segment-length", "1024", "-o", "d.json"});
+  ASSERT_EQ(d.status, 0) << d.err;
+  EXPECT_THAT(d.out, HasSubstr("preprocessing: "));
+  const nlohmann::json doc = io::read_json(path("d.json"));
+  EXPECT_EQ(doc["data"]["samples"], 32768);
+  EXPECT_DOUBLE_EQ(doc["data"]["sample_time"].get<double>(), 0.1);
+  EXPECT_EQ(doc["data"]["preprocessing"]["decimate"], 2);
 }
 
 }  // namespace
