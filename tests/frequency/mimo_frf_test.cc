@@ -347,6 +347,56 @@ TEST(MimoPeriodicFrf, OrthogonalMultisinesForThreeInputsUseFourExperiments) {
   EXPECT_GT(frf.coherence.minCoeff(), 1.0 - 1e-12);
 }
 
+TEST(MimoPeriodicFrf, StatedVarianceMatchesTheMonteCarloSpread) {
+  // Hadamard experiments of two inputs, white output noise drawn anew in each of R runs: the
+  // sample variance over P = 6 periods / P against the spread of H over the runs.
+  const auto g = system_2x3();
+  MultisineOptions ms;
+  ms.period_length = 128;
+  ms.sample_time = kH;
+  ms.max_frequency = 4.0;
+  ms.periods = 8;
+  ms.seed = 91;
+  const OrthogonalMultisines o = orthogonal_multisines(ms, 2);
+  std::vector<Eigen::MatrixXd> clean;
+  for (const Eigen::MatrixXd& u : o.experiments) clean.push_back(outputs_of(g, u, 0.0, 0));
+  PeriodicFrfOptions options;
+  options.period_length = 128;
+  options.transient_periods = 2;
+  const int runs = 300;
+  const auto lines = static_cast<int>(o.lines.size());
+  std::vector<Eigen::MatrixXcd> sum(static_cast<std::size_t>(lines), Eigen::MatrixXcd::Zero(3, 2));
+  std::vector<Eigen::MatrixXd> sum2(static_cast<std::size_t>(lines), Eigen::MatrixXd::Zero(3, 2));
+  std::vector<Eigen::MatrixXd> stated(static_cast<std::size_t>(lines), Eigen::MatrixXd::Zero(3, 2));
+  for (int r = 0; r < runs; ++r) {
+    std::vector<MimoData> experiments;
+    for (std::size_t e = 0; e < clean.size(); ++e) {
+      Eigen::MatrixXd y = clean[e];
+      for (int j = 0; j < 3; ++j) {
+        y.col(j) += white_noise(static_cast<int>(y.rows()), 0.3,
+                                7000 + 100 * static_cast<std::uint64_t>(r) + 10 * e + j);
+      }
+      experiments.emplace_back(kH, o.experiments[e], y);
+    }
+    const MimoFrf frf = periodic_frf(experiments, options);
+    ASSERT_EQ(static_cast<int>(frf.lines.size()), lines);
+    for (std::size_t l = 0; l < frf.lines.size(); ++l) {
+      sum[l] += frf.response[l];
+      sum2[l] += frf.response[l].cwiseAbs2();
+      stated[l] += frf.variance[l] / runs;
+    }
+  }
+  double ratio_sum = 0.0;
+  for (std::size_t l = 0; l < sum.size(); ++l) {
+    const Eigen::MatrixXcd mean = sum[l] / runs;
+    const Eigen::MatrixXd spread = (sum2[l] / runs - mean.cwiseAbs2()) * runs / (runs - 1.0);
+    ratio_sum += spread.cwiseQuotient(stated[l]).sum();
+  }
+  // The mean over runs of the sample variance is unbiased: the ratio averages to 1, within
+  // about 1/sqrt(runs x entries) = 0.01 plus the correlation between neighbouring lines.
+  EXPECT_NEAR(ratio_sum / (lines * 6), 1.0, 0.05);
+}
+
 TEST(MimoPeriodicFrf, BadExperimentsAreRefusedWithOneMessage) {
   const Eigen::MatrixXd u = white_inputs(1024, 2, 71);
   const MimoData two(kH, u, u);
