@@ -14,10 +14,13 @@
 
 #include "cli/run_ctid.h"
 #include "ctid/core/mimo_data.h"
+#include "ctid/core/mimo_model.h"
 #include "ctid/core/transfer_function.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_data_csv.h"
+#include "ctid/io/model_json.h"
+#include "ctid/simulation/discretization.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
 
@@ -31,6 +34,11 @@ constexpr double kH = 0.05;
 
 void expect_bad_input(const testing::RunResult& r, const std::string& fragment) {
   testing::expect_bad_input(r, "frf", fragment);
+}
+
+void expect_bad_input_of(const std::string& command, const testing::RunResult& r,
+                         const std::string& fragment) {
+  testing::expect_bad_input(r, command, fragment);
 }
 
 TransferFunction mode(double gain, double wn, double zeta) {
@@ -181,6 +189,53 @@ TEST_F(FrfMimoCommand, HadamardExperimentsWithPeriodAreExact) {
     const Complex h(t.column("y3/u1_real")(l), t.column("y3/u1_imag")(l));
     ASSERT_LT(std::abs(h - zoh_response(g[2][0], t.column("frequency")(l))), 1e-9) << l;
   }
+}
+
+TEST_F(FrfMimoCommand, SimulatedOrthogonalMultisinesGiveTheModelsFrfMatrix) {
+  // Two shared modes, two inputs, three outputs: ctid simulate writes the Hadamard
+  // experiments, ctid frf --period reads them back as the model's sampled FRF matrix.
+  const auto anti_monic = [](double wn, double zeta) {
+    return Polynomial{1.0, 2.0 * zeta / wn, 1.0 / (wn * wn)};
+  };
+  std::vector<Polynomial> r1, r2;
+  for (double c : {1.0, -0.4, 0.7, 0.2, -1.1, 0.5}) r1.push_back(Polynomial{c});
+  for (double c : {0.3, 0.9, -0.6, 1.2, 0.4, -0.8}) r2.push_back(Polynomial{c});
+  const MimoAdditiveModel model(2, 3, {{anti_monic(2.0, 0.3), r1}, {anti_monic(5.0, 0.2), r2}});
+  io::write_json(path("m.json"), io::to_json(model));
+  const auto s =
+      ctid({"simulate", "-m", "m.json", "--excitation", "multisine", "--samples", "4096",
+            "--periods", "4", "--sample-time", "0.05", "--max-frequency-hz", "3", "-o", "s.csv"});
+  ASSERT_EQ(s.status, 0) << s.err;
+  EXPECT_THAT(s.out, HasSubstr("2 experiments of Hadamard-phased multisines, 4 periods of 1024"));
+  const auto r = ctid({"frf", "s.csv", "--input-columns", "u1:u2", "--output-columns", "y1:y3",
+                       "--period", "1024", "-o", "f.csv", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const io::CsvTable t = io::read_csv(path("f.csv"));
+  EXPECT_EQ(t.rows(), 153);  // lines k / (1024 x 0.05 s) up to 3 Hz
+  double worst = 0.0;
+  for (int l = 0; l < t.rows(); ++l) {
+    const double w = t.column("frequency")(l);
+    for (int j = 0; j < 3; ++j) {
+      for (int k = 0; k < 2; ++k) {
+        const StateSpace d =
+            discretize_zoh(model.channel(j, k).to_transfer_function().to_state_space(), kH);
+        const Complex z = std::exp(Complex(0.0, w * kH));
+        const Eigen::MatrixXcd lhs =
+            z * Eigen::MatrixXcd::Identity(d.a.rows(), d.a.rows()) - d.a.cast<Complex>();
+        const Complex truth =
+            (d.c.cast<Complex>() * lhs.partialPivLu().solve(d.b.cast<Complex>()))(0) + d.d;
+        const std::string pair = "y" + std::to_string(j + 1) + "/u" + std::to_string(k + 1);
+        const Complex h(t.column(pair + "_real")(l), t.column(pair + "_imag")(l));
+        worst = std::max(worst, std::abs(h - truth));
+      }
+    }
+  }
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_LT(t.column("input_condition").maxCoeff(), 1.0 + 1e-9);
+  expect_bad_input_of("simulate",
+                      ctid({"simulate", "-m", "m.json", "--excitation", "white", "--samples", "100",
+                            "--sample-time", "0.05", "-o", "w.csv"}),
+                      "a mimo_additive_model is driven by orthogonal multisines");
 }
 
 TEST_F(FrfMimoCommand, BadColumnsAndFlagsExitTwoWithOneLine) {
