@@ -1,5 +1,6 @@
 #include "data_flags.h"
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <optional>
@@ -9,7 +10,9 @@
 #include "command.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/core/mimo_preprocessing.h"
 #include "ctid/io/csv.h"
+#include "ctid/io/mimo_data_csv.h"
 #include "ctid/io/sampled_data_csv.h"
 
 namespace ctid::cli {
@@ -225,6 +228,39 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
     }
   }
 
+  const PreprocessingOptions options = preprocessing_options();
+  PreprocessedData result = [&] {
+    try {
+      return preprocess(read->with_input_hold(hold), options);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(path + ": " + e.what());
+    }
+  }();
+  for (const std::string& warning : result.record.warnings) {
+    std::cerr << "warning: " << path << ": " << warning << "\n";
+  }
+  preprocessing = std::move(result.record);
+  return std::move(result.data);
+}
+
+void DataFlags::add_mimo_columns(CLI::App& app) {
+  app.add_option("--input-columns", input_columns,
+                 "Several inputs: columns or ranges A:B (file order), comma-separated, e.g. "
+                 "u1,u2 or u1:u2")
+      ->delimiter(',')
+      ->group("Data");
+  app.add_option("--output-columns", output_columns,
+                 "Several outputs: columns or ranges A:B (file order), comma-separated, e.g. "
+                 "y1:y28")
+      ->delimiter(',')
+      ->group("Data");
+}
+
+bool DataFlags::mimo_asked(const CLI::App& app) const {
+  return app.count("--input-columns") > 0 || app.count("--output-columns") > 0;
+}
+
+PreprocessingOptions DataFlags::preprocessing_options() const {
   PreprocessingOptions options;
   if (!rows.empty() && !time.empty()) usage_error("give --rows or --time, not both");
   if (!rows.empty()) {
@@ -245,15 +281,77 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
   options.decimate = decimate;
   options.input_scale = scale_input;
   options.output_scale = scale_output;
-  PreprocessedData result = [&] {
+  return options;
+}
+
+MimoData DataFlags::load_mimo(const CLI::App& app) const {
+  if (app.count("--input-columns") > 0 && app.count("--input-column") > 0) {
+    usage_error("give --input-column or --input-columns, not both");
+  }
+  if (app.count("--output-columns") > 0 && app.count("--output-column") > 0) {
+    usage_error("give --output-column or --output-columns, not both");
+  }
+  for (const char* flag : {"--resample", "--reference-column"}) {
+    if (app.get_option_no_throw(flag) != nullptr && app.count(flag) > 0) {
+      usage_error(std::string(flag) +
+                  " is not available with --input-columns / --output-columns yet");
+    }
+  }
+  const io::CsvTable table = io::read_csv(file);
+  io::MimoCsvColumns columns;
+  columns.time = time_column;
+  columns.inputs = input_columns.empty() ? std::vector<std::string>{input_column} : input_columns;
+  columns.outputs =
+      output_columns.empty() ? std::vector<std::string>{output_column} : output_columns;
+  const bool h_flag = app.count("--sample-time") > 0;
+  std::optional<MimoData> read;
+  if (table.has_column(time_column) && !h_flag) {
     try {
-      return preprocess(read->with_input_hold(hold), options);
+      read.emplace(io::mimo_data_from_table(table, columns));
     } catch (const InvalidArgument& e) {
-      throw InvalidArgument(path + ": " + e.what());
+      const std::string message = e.what();
+      if (message.find("time stamps") == std::string::npos) throw;
+      throw InvalidArgument(message + "; --sample-time (-T) overrides the time column");
+    }
+  } else {
+    if (!h_flag) {
+      if (app.count("--time-column") > 0) table.column(time_column);  // names the columns
+      usage_error(internal::concat(file, " has no time column '", time_column,
+                                   "'; give --sample-time (or --time-column)"));
+    }
+    // The columns by the same rules, the time column left out (it may be absent).
+    io::CsvTable untimed = table;
+    untimed.names.clear();
+    untimed.columns.clear();
+    for (std::size_t c = 0; c < table.names.size(); ++c) {
+      if (table.names[c] != time_column) untimed.add_column(table.names[c], table.columns[c]);
+    }
+    const double start = table.has_column(time_column) ? table.column(time_column)(0) : 0.0;
+    untimed.add_column(
+        time_column,
+        Eigen::VectorXd::LinSpaced(table.rows(), start, start + sample_time * (table.rows() - 1)));
+    const MimoData m = io::mimo_data_from_table(untimed, columns);
+    read.emplace(MimoData(sample_time, m.inputs(), m.outputs(), std::nullopt, start)
+                     .with_names(m.input_names(), m.output_names())
+                     .with_input_hold(m.input_hold()));
+  }
+  const std::optional<Hold> declared = io::declared_input_hold(table);
+  const std::optional<Hold> flagged = parse_hold(input_hold);
+  if (declared && flagged && *declared != *flagged) {
+    usage_error(internal::concat("--input-hold ", input_hold, " contradicts ", file, ":",
+                                 table.declaration("input_hold")->line,
+                                 ", which declares input_hold: ", hold_flag_name(*declared)));
+  }
+  if (flagged) read.emplace(read->with_input_hold(*flagged));
+  PreprocessedMimoData result = [&] {
+    try {
+      return preprocess(*read, preprocessing_options());
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(file + ": " + e.what());
     }
   }();
   for (const std::string& warning : result.record.warnings) {
-    std::cerr << "warning: " << path << ": " << warning << "\n";
+    std::cerr << "warning: " << file << ": " << warning << "\n";
   }
   preprocessing = std::move(result.record);
   return std::move(result.data);

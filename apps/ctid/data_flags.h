@@ -10,6 +10,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "ctid/core/mimo_data.h"
 #include "ctid/core/preprocessing.h"
 #include "ctid/core/sampled_data.h"
 
@@ -32,6 +33,10 @@ struct DataFlags {
   double scale_input = 1.0;
   double scale_output = 1.0;
 
+  /// Several inputs / outputs (add_mimo_columns): names or ranges A:B of the file's columns.
+  std::vector<std::string> input_columns;
+  std::vector<std::string> output_columns;
+
   /// What load() did to the record (set by load(), which the commands call on const flags).
   mutable PreprocessingRecord preprocessing;
 
@@ -45,6 +50,16 @@ struct DataFlags {
   /// a usage error. `app` tells which flags were given. Preprocesses the record as the flags
   /// ask, keeps the record of it in `preprocessing` and prints its warnings on stderr.
   SampledData load(const CLI::App& app, bool need_reference) const;
+  /// Adds --input-columns and --output-columns (comma lists of names and ranges A:B).
+  void add_mimo_columns(CLI::App& app);
+  /// Whether --input-columns or --output-columns was given.
+  bool mimo_asked(const CLI::App& app) const;
+  /// Reads a record with the columns of --input-columns / --output-columns (the single
+  /// --input-column / --output-column stands in for a list not given). The sample time comes
+  /// from the time column or --sample-time; the preprocessing flags apply to every channel
+  /// (core/mimo_preprocessing.h); --resample and --reference-column are usage errors.
+  MimoData load_mimo(const CLI::App& app) const;
+
   /// load() of every file, each read, checked and preprocessed alike.
   std::vector<SampledData> load_all(const CLI::App& app, bool need_reference) const;
   /// The files as the summary names them: "a.csv" or "a.csv, b.csv".
@@ -54,6 +69,8 @@ struct DataFlags {
   bool preprocessing_asked(const CLI::App& app) const;
 
  private:
+  /// The preprocessing the flags ask for (usage errors for malformed ranges and factors).
+  PreprocessingOptions preprocessing_options() const;
   SampledData load_file(const std::string& path, const CLI::App& app, bool need_reference) const;
 };
 

@@ -3,11 +3,13 @@
 // (--period N), written as CSV, with the resonance peaks listed (for choosing orders and
 // initial modes). The numerics are ctid::welch_frf, ctid::periodic_frf and
 // ctid::resonance_peaks (frequency/frf.h); figures by `python3 -m ctid.plot` (plot_support.h).
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -17,6 +19,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/frequency/frf.h"
+#include "ctid/frequency/mimo_frf.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
@@ -33,6 +36,7 @@ struct FrfFlags {
   DataFlags data;
   int period = 0;
   int transient_periods = PeriodicFrfOptions{}.transient_periods;
+  int experiments = 0;     // 0: one per input (several inputs only)
   int segment_length = 0;  // 0: default_segment_length(N)
   double overlap = WelchOptions{}.overlap;
   double min_prominence_db = PeakOptions{}.min_prominence_db;
@@ -89,6 +93,172 @@ void draw_frf(const FrfFlags& f, const std::filesystem::path& package, const Frf
   plot(package, jobs);
 }
 
+// One row per line: frequency, frequency_hz, input_condition, then per input its level, per
+// output its multiple coherence, then per (output, input) pair the real and imaginary parts
+// and the variance of H, named "<output>/<input>_real" and so on.
+io::CsvTable mimo_frf_table(const MimoFrf& frf) {
+  const Eigen::Index n = frf.frequencies.size();
+  io::CsvTable table;
+  table.add_column("frequency", frf.frequencies);
+  table.add_column("frequency_hz", frf.frequencies / (2.0 * std::numbers::pi));
+  table.add_column("input_condition", frf.input_condition);
+  for (int i = 0; i < frf.input_count(); ++i) {
+    table.add_column("input_level_" + frf.input_names[static_cast<std::size_t>(i)],
+                     frf.input_level.col(i));
+  }
+  for (int j = 0; j < frf.output_count(); ++j) {
+    table.add_column("coherence_" + frf.output_names[static_cast<std::size_t>(j)],
+                     frf.coherence.col(j));
+  }
+  for (int j = 0; j < frf.output_count(); ++j) {
+    for (int i = 0; i < frf.input_count(); ++i) {
+      Eigen::VectorXd re(n), im(n), var(n);
+      for (Eigen::Index l = 0; l < n; ++l) {
+        const auto q = static_cast<std::size_t>(l);
+        re(l) = frf.response[q](j, i).real();
+        im(l) = frf.response[q](j, i).imag();
+        var(l) = frf.variance[q](j, i);
+      }
+      const std::string pair = frf.output_names[static_cast<std::size_t>(j)] + "/" +
+                               frf.input_names[static_cast<std::size_t>(i)];
+      table.add_column(pair + "_real", re);
+      table.add_column(pair + "_imag", im);
+      table.add_column(pair + "_variance", var);
+    }
+  }
+  return table;
+}
+
+double median(Eigen::VectorXd v) {
+  std::vector<double> x;
+  for (double e : v) {
+    if (std::isfinite(e)) x.push_back(e);
+  }
+  if (x.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(x.begin(), x.end());
+  const std::size_t m = x.size() / 2;
+  return x.size() % 2 == 1 ? x[m] : 0.5 * (x[m - 1] + x[m]);
+}
+
+void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
+  if (!f.model.empty()) {
+    usage_error("--model is not available with --input-columns / --output-columns yet");
+  }
+  std::filesystem::path package;
+  if (!f.plot.empty()) {
+    package = require_plotting();
+    prepare_plot_directory(f.plot, {"frf_matrix.png"}, f.force);
+  }
+  const MimoData data = f.data.load_mimo(app);
+  MimoFrf frf;
+  if (periodic) {
+    PeriodicFrfOptions options;
+    options.period_length = f.period;
+    options.transient_periods = f.transient_periods;
+    options.line_threshold = f.line_threshold;
+    options.validate();
+    const int experiments = f.experiments > 0 ? f.experiments : data.input_count();
+    frf = periodic_frf(data, options, experiments);
+  } else {
+    WelchOptions options;
+    options.segment_length =
+        f.segment_length > 0 ? f.segment_length : default_segment_length(data.size());
+    options.overlap = f.overlap;
+    options.validate();
+    frf = welch_frf(data, options);
+  }
+  PeakOptions peak_options;
+  peak_options.min_prominence_db = f.min_prominence_db;
+  peak_options.max_peaks = f.max_peaks;
+  peak_options.line_threshold = f.line_threshold;
+  peak_options.min_coherence = f.min_coherence;
+  peak_options.validate();
+  const std::size_t all_lines = frf.lines.size();
+  frf = excited_lines(frf, f.line_threshold);
+  require(frf.frequencies.size() > 0,
+          "ctid frf: no line where every input reaches "
+          "--line-threshold ",
+          f.line_threshold, " of its largest line; lower it or check the input columns");
+  const Frf summary = summed_power_frf(frf);
+  const std::vector<ResonancePeak> peaks = resonance_peaks(summary, peak_options);
+  int correlated = 0;
+  for (int l = 0; l < frf.input_condition.size(); ++l) correlated += frf.inputs_correlated(l);
+
+  nlohmann::json document = io::to_json(frf);
+  if (!f.output.empty()) {
+    const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
+    if (std::filesystem::path(f.output).extension() == ".json") {
+      document["method"] = periodic ? "periodic" : "welch";
+      document["data"] = {{"file", f.data.file},
+                          {"samples", data.size()},
+                          {"sample_time", data.sample_time()},
+                          {"input_hold", enum_name(data.input_hold())},
+                          {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
+      document["peaks_of"] =
+          "sqrt(sum |H_ji|^2) over all channels, with the power-weighted multiple coherence";
+      nlohmann::json listed = nlohmann::json::array();
+      for (const ResonancePeak& p : peaks) listed.push_back(io::fields_to_json(p));
+      document["peaks"] = std::move(listed);
+      io::write_json(f.output, document, overwrite);
+    } else {
+      io::write_csv(f.output, mimo_frf_table(frf), overwrite);
+    }
+  }
+  if (!f.plot.empty()) {
+    // frf_matrix.png: every input of the first four outputs, with their multiple coherence.
+    const TemporaryDirectory work;
+    io::write_json(work.path() / "frf.json", document);
+    plot(package,
+         {{"frf_matrix", work.path() / "frf.json", std::filesystem::path(f.plot) / "frf_matrix.png",
+           "ctid frf: " + std::filesystem::path(f.data.file).filename().string()}});
+  }
+  if (f.quiet) return;
+  const auto names = [](const std::vector<std::string>& v) {
+    std::string text;
+    for (const std::string& name : v) text += (text.empty() ? "" : ", ") + name;
+    return text;
+  };
+  std::cout << "ctid frf: " << (periodic ? "periodic" : "Welch H1") << " on " << f.data.file << ": "
+            << frf.input_count() << " input" << (frf.input_count() == 1 ? "" : "s") << " ("
+            << names(frf.input_names) << ") x " << frf.output_count() << " output"
+            << (frf.output_count() == 1 ? "" : "s") << ", " << frf.frequencies.size() << " lines, "
+            << frf.averages << (periodic ? " periods" : " segments") << " of " << frf.block_length
+            << " samples\n";
+  if (f.data.preprocessing_asked(app)) {
+    std::cout << "preprocessing: " << f.data.preprocessing.summary() << "\n";
+  }
+  const Eigen::Index last = frf.frequencies.size() - 1;
+  std::cout << "excited band: " << format_brief(frf.frequencies(0) / (2.0 * std::numbers::pi))
+            << " to " << format_brief(frf.frequencies(last) / (2.0 * std::numbers::pi)) << " Hz, "
+            << frf.lines.size() << " of " << all_lines
+            << " lines where every input is above --line-threshold "
+            << format_number(f.line_threshold) << " of its largest line\n";
+  if (frf.input_count() > 1) {
+    std::cout << "inputs correlated (condition of the normalised S_uu > "
+              << format_number(kCorrelatedInputCondition) << ") at " << correlated << " of "
+              << frf.lines.size() << " lines; largest condition "
+              << format_significant(frf.input_condition.maxCoeff(), 3) << "\n";
+  }
+  std::cout << "multiple coherence with all inputs, median over the excited band:\n";
+  for (int j = 0; j < frf.output_count(); ++j) {
+    std::cout << "  " << frf.output_names[static_cast<std::size_t>(j)] << " "
+              << format_significant(median(frf.coherence.col(j)), 3) << "\n";
+  }
+  std::cout << peaks.size() << " resonance peak" << (peaks.size() == 1 ? "" : "s")
+            << " of sqrt(sum |H_ji|^2) over the " << frf.input_count() * frf.output_count()
+            << " channels (prominence >= " << format_number(f.min_prominence_db)
+            << " dB, power-weighted coherence >= " << format_number(f.min_coherence) << "):\n";
+  for (const ResonancePeak& p : peaks) {
+    std::cout << "  w = " << format_brief(p.frequency) << " rad/s ("
+              << format_brief(p.frequency / (2.0 * std::numbers::pi))
+              << " Hz), |H| = " << format_significant(20.0 * std::log10(p.magnitude), 4)
+              << " dB, prominence " << format_significant(p.prominence_db, 3) << " dB, damping ~ "
+              << format_significant(p.damping_ratio, 3) << ", coherence "
+              << format_significant(p.coherence, 3) << "\n";
+  }
+  if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
+}
+
 void run_frf(const FrfFlags& f, const CLI::App& app) {
   if (!f.output.empty() && !f.force && std::filesystem::exists(f.output)) {
     usage_error(f.output + ": file exists; pass --force to replace it (--output)");
@@ -103,6 +273,14 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
   }
   if (!f.model.empty() && f.plot.empty())
     usage_error("--model needs --plot (it is drawn over the FRF)");
+  if (f.data.mimo_asked(app)) {
+    if (app.count("--experiments") > 0 && !periodic) usage_error("--experiments needs --period");
+    run_mimo_frf(f, app, periodic);
+    return;
+  }
+  if (app.count("--experiments") > 0) {
+    usage_error("--experiments needs several inputs (--input-columns)");
+  }
   std::filesystem::path package;
   if (!f.plot.empty()) {
     package = require_plotting();
@@ -141,10 +319,10 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
   const std::vector<ResonancePeak> peaks = resonance_peaks(frf, peak_options);
 
   const io::CsvTable table = frf_table(frf);
+  nlohmann::json document = io::to_json(frf);
   if (!f.output.empty()) {
     const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
     if (std::filesystem::path(f.output).extension() == ".json") {
-      nlohmann::json document = io::to_json(frf);
       document["method"] = periodic ? "periodic" : "welch";
       document["data"] = {{"file", f.data.file},
                           {"samples", data.size()},
@@ -200,10 +378,21 @@ Command add_frf_command(CLI::App& parent) {
       "variance (of the complex estimate), coherence (squared, 0-1) and input_level (the input's "
       "amplitude at the line over its largest line's); only lines above --line-threshold.\n"
       "-o X.json writes a typed \"frf\" document instead (docs/formats.md), with the peaks.\n"
+      "With --input-columns / --output-columns (names or ranges A:B, e.g. y1:y28) the FRF "
+      "matrix H = S_yu S_uu^-1 (Welch) or Y U^-1 over experiments (--period): CSV columns "
+      "frequency, frequency_hz, input_condition, input_level_<input>, coherence_<output> (the "
+      "multiple coherence with all inputs) and <output>/<input>_real, _imag, _variance; -o "
+      "X.json a \"mimo_frf\" document; --plot DIR draws frf_matrix.png. Peaks are those of "
+      "sqrt(sum |H_ji|^2) over all channels.\n"
       "Exit status: 0 ran, 2 bad usage or input, 1 other error.");
   f.data.add_to(*app, "data", false);
+  f.data.add_mimo_columns(*app);
   app->add_option("--period", f.period,
                   "Samples per period of a periodic excitation: average the FRF over periods")
+      ->group("Periodic");
+  app->add_option("--experiments", f.experiments,
+                  "Several inputs: the record holds this many experiments of equal length one "
+                  "after another (default: one per input), e.g. Hadamard-phased multisines")
       ->group("Periodic");
   app->add_option("--transient-periods", f.transient_periods,
                   "Periods dropped at the start (transient)")

@@ -19,11 +19,14 @@
 #include "command.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/core/mimo_data.h"
+#include "ctid/core/mimo_model.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/excitation_spec.h"
 #include "ctid/io/feedback_result_json.h"
 #include "ctid/io/json.h"
+#include "ctid/io/mimo_data_csv.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/result_json.h"
 #include "ctid/io/sampled_data_csv.h"
@@ -152,8 +155,9 @@ InputSignal read_input_column(const SimulateFlags& f, CLI::App& app,
   return in;
 }
 
-InputSignal generate_input(const SimulateFlags& f, CLI::App& app,
-                           const std::optional<DiscreteTransferFunction>& controller) {
+// The excitation the flags or the spec file describe, validated.
+io::ExcitationSpec excitation_spec(const SimulateFlags& f, CLI::App& app,
+                                   const std::optional<DiscreteTransferFunction>& controller) {
   io::ExcitationSpec spec;
   if (!f.excitation_spec.empty()) {
     reject_unused_signal_flags(app, "--excitation-spec (the spec file sets it)", std::nullopt);
@@ -177,6 +181,12 @@ InputSignal generate_input(const SimulateFlags& f, CLI::App& app,
     }
   }
   spec.validate();
+  return spec;
+}
+
+InputSignal generate_input(const SimulateFlags& f, CLI::App& app,
+                           const std::optional<DiscreteTransferFunction>& controller) {
+  const io::ExcitationSpec spec = excitation_spec(f, app, controller);
   return InputSignal{io::generate_excitation(spec), spec.sample_time, 0.0};
 }
 
@@ -283,6 +293,59 @@ void run_simulate_loop(const SimulateFlags& f, CLI::App& app, const nlohmann::js
   }
 }
 
+// A mimo_additive_model driven by orthogonal (Hadamard-phased) multisines: n_e experiments,
+// each simulated from rest, written one after another as t, u1..u{n_u}, y1..y{n_y}, ready for
+// `ctid frf --input-columns u1:u{n_u} --output-columns y1:y{n_y} --period N --experiments n_e`.
+void run_simulate_mimo(const SimulateFlags& f, CLI::App& app, const nlohmann::json& document) {
+  for (const char* flag : {"--input", "--controller", "--noise-filter", "--snr", "--nsr"}) {
+    if (app.get_option_no_throw(flag) != nullptr && app.count(flag) > 0) {
+      usage_error(internal::concat(flag,
+                                   " is not available for a mimo_additive_model yet; it is "
+                                   "driven by orthogonal multisines (--excitation multisine)"));
+    }
+  }
+  if (f.hold == "foh") usage_error("--hold foh is not available for a mimo_additive_model yet");
+  const MimoAdditiveModel model = io::mimo_additive_model_from_json(document, f.model);
+  const io::ExcitationSpec spec = excitation_spec(f, app, std::nullopt);
+  if (spec.kind != io::ExcitationKind::multisine) {
+    usage_error(
+        internal::concat("a mimo_additive_model is driven by orthogonal multisines; the "
+                         "excitation is ",
+                         io::to_string(spec.kind), ", not multisine"));
+  }
+  const MultisineOptions options = spec.multisine_options();
+  const OrthogonalMultisines design = orthogonal_multisines(options, model.inputs());
+  const double h = spec.sample_time;
+  const auto experiments = static_cast<Eigen::Index>(design.experiments.size());
+  const Eigen::Index n = design.experiments.front().rows();
+  Eigen::MatrixXd u(n * experiments, model.inputs());
+  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(n * experiments, model.outputs());
+  for (Eigen::Index e = 0; e < experiments; ++e) {
+    const Eigen::MatrixXd& ue = design.experiments[static_cast<std::size_t>(e)];
+    u.middleRows(e * n, n) = ue;
+    for (int j = 0; j < model.outputs(); ++j) {
+      for (int k = 0; k < model.inputs(); ++k) {
+        y.col(j).segment(e * n, n) += simulate(model.channel(j, k), ue.col(k).eval(), h);
+      }
+    }
+  }
+  if (f.noise.std_option->count() > 0) {
+    // Output j's noise is white_noise(N, std, seed + j) over the whole record.
+    for (int j = 0; j < model.outputs(); ++j) {
+      y.col(j) += white_noise(static_cast<int>(y.rows()), f.noise.standard_deviation,
+                              f.noise.seed + static_cast<std::uint64_t>(j));
+    }
+  }
+  io::write_mimo_data(f.output, MimoData(h, u, y), "t",
+                      f.force ? io::Overwrite::yes : io::Overwrite::no);
+  if (!f.quiet) {
+    std::cout << "wrote " << u.rows() << " samples (t, u1..u" << model.inputs() << ", y1..y"
+              << model.outputs() << ", h = " << h << " s): " << experiments
+              << " experiments of Hadamard-phased multisines, " << options.periods << " periods of "
+              << options.period_length << " samples each, to " << f.output << "\n";
+  }
+}
+
 void run_simulate(const SimulateFlags& f, CLI::App& app) {
   const std::filesystem::path output = f.output;
   if (!f.force && std::filesystem::exists(output)) {
@@ -298,6 +361,10 @@ void run_simulate(const SimulateFlags& f, CLI::App& app) {
       usage_error(internal::concat(flag, " applies to a delayed_feedback_loop model only; ",
                                    f.model, " is simulated with a zero-order hold, exactly"));
     }
+  }
+  if (document.is_object() && document.value("type", "") == io::kMimoAdditiveModelType) {
+    run_simulate_mimo(f, app, document);
+    return;
   }
   const io::ContinuousModel model = read_model_or_result(document, f.model);
   std::optional<DiscreteTransferFunction> controller;
@@ -375,13 +442,19 @@ Command add_simulate_command(CLI::App& parent) {
       "the CSV gets an r column.\n"
       "Delayed feedback loop (model type delayed_feedback_loop): y = F e, e = u - (H y)(t - "
       "delay), input continued by --hold, RK4 with --substeps per sample; white noise only.\n"
+      "Several inputs and outputs (model type mimo_additive_model): the multisine of the "
+      "excitation flags, one per input (seed + i), Hadamard-phased over 2^ceil(log2 n_u) "
+      "experiments written one after another, each from rest, as t,u1..,y1..; --noise-std adds "
+      "white noise to output j (seed + j). ctid frf --input-columns u1:uN --output-columns "
+      "y1:yM --period N reads it back.\n"
       "Noise: v_k = H(q) e_k added to y at the samples; H = 1 unless --noise-filter; its size "
       "from --noise-std (std of e) or --snr (dB, 10 log10 var(y without noise)/var(v)).\n"
       "Formats: docs/formats.md. Exit status: 0 ran, 2 bad usage or input, 1 other error.");
 
   app->add_option("--model,-m", f.model,
-                  "Model JSON file: a transfer_function, an additive_model or a "
-                  "delayed_feedback_loop (coefficients in ascending powers of s)")
+                  "Model JSON file: a transfer_function, an additive_model, a "
+                  "mimo_additive_model or a delayed_feedback_loop (coefficients in ascending "
+                  "powers of s)")
       ->required()
       ->check(CLI::ExistingFile);
   app->add_option("--output,-o", f.output, "CSV file to write (columns t,u,y and r in closed loop)")

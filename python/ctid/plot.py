@@ -2,8 +2,9 @@
 
     /usr/bin/python3 -m ctid.plot KIND INPUT OUTPUT [--title TEXT]
 
-KIND is one of bode, modes, frf, validation, compare, residuals, mse, stabilisation; INPUT a
-JSON (bode, modes, stabilisation: the scan `ctid structure -o` writes, compare: {"t", "y",
+KIND is one of bode, modes, frf, frf_matrix, validation, compare, residuals, mse,
+stabilisation; INPUT a JSON (bode, modes, frf_matrix: the mimo_frf document of `ctid frf -o
+X.json`, stabilisation: the scan `ctid structure -o` writes, compare: {"t", "y",
 "window": [start, end], "initial_state", "models": [{"label", "output"}]}) or
 CSV (frf, validation, residuals, mse) file in the formats of docs/python.md; OUTPUT ends in .png or
 .svg. Exit status 0 on success, 2 for bad usage or input (one line on stderr), 1 otherwise.
@@ -18,7 +19,8 @@ import sys
 
 import numpy as np
 
-KINDS = ("bode", "modes", "frf", "validation", "compare", "residuals", "mse", "stabilisation")
+KINDS = ("bode", "modes", "frf", "frf_matrix", "validation", "compare", "residuals", "mse",
+         "stabilisation")
 
 
 class InputError(Exception):
@@ -165,6 +167,12 @@ def run(kind, path, output, title=None):
         return plotting.stabilisation(document, title=title, filename=output)
     if kind == "compare":
         return _compare_figure(path, output, title)
+    if kind == "frf_matrix":
+        with open(path, encoding="utf-8") as handle:
+            document = json.load(handle)
+        if not isinstance(document, dict) or document.get("type") != "mimo_frf":
+            raise InputError(f"{path}: not a mimo_frf document")
+        return plotting.frf_matrix(document, title=title, filename=output)
     rows = _read_csv(path)
     if kind == "frf":
         return plotting.frf(_Frf.from_rows(rows, path), title=title, filename=output)
@@ -195,8 +203,8 @@ def main(argv=None):
         description="Draw a ctid figure (PNG or SVG) from a JSON or CSV file.")
     parser.add_argument("kind", help="one of: " + ", ".join(KINDS))
     parser.add_argument("input",
-                        help="JSON (bode, modes, compare, stabilisation) or CSV (frf, validation, "
-                        "residuals, mse)")
+                        help="JSON (bode, modes, frf_matrix, compare, stabilisation) or CSV (frf, "
+                        "validation, residuals, mse)")
     parser.add_argument("output", help="figure file, .png or .svg")
     parser.add_argument("--title", default=None, help="figure title")
     try:

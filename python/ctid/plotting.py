@@ -232,6 +232,53 @@ def frf(estimate, title=None, filename=None):
     return _finish(figure, filename)
 
 
+def frf_matrix(estimate, channels=None, max_outputs=4, title=None, filename=None):
+    """Chosen channels of an FRF matrix over frequency in Hz: |H_ji| (dB) of each, and below
+    the multiple coherence of each chosen output with all inputs.
+
+    ``estimate``: a ctid.MimoFrf or the "mimo_frf" document of ``ctid frf -o X.json`` (a dict).
+    ``channels``: (output name, input name) pairs; default every input of the first
+    ``max_outputs`` outputs. Lines: "<output>/<input>" and "coherence <output>". Returns the
+    Figure.
+    """
+    def get(name):
+        return estimate[name] if isinstance(estimate, dict) else getattr(estimate, name)
+
+    inputs = list(get("input_names") if not isinstance(estimate, dict) else estimate["inputs"])
+    outputs = list(get("output_names") if not isinstance(estimate, dict) else estimate["outputs"])
+    hz = np.asarray(get("frequencies"), dtype=float) / (2.0 * np.pi)
+    response = get("response")
+    if isinstance(estimate, dict):
+        pairs = np.array(response, dtype=float)  # (lines, n_y, n_u, 2); null -> nan
+        response = pairs[..., 0] + 1j * pairs[..., 1]
+    response = np.asarray(response)
+    coherence = np.asarray(get("coherence"), dtype=float)
+    if channels is None:
+        channels = [(y, u) for y in outputs[:max_outputs] for u in inputs]
+    figure, axes = plt.subplots(2, 1, sharex=True, figsize=(8.0, 6.5),
+                                gridspec_kw={"height_ratios": [2, 1]})
+    shown = []
+    for output, input_name in channels:
+        if output not in outputs or input_name not in inputs:
+            raise ValueError(f"frf_matrix: no channel {output}/{input_name}; outputs "
+                             f"{', '.join(outputs)}, inputs {', '.join(inputs)}")
+        j, i = outputs.index(output), inputs.index(input_name)
+        axes[0].semilogx(hz, _db(response[:, j, i]), lw=0.8, label=f"{output}/{input_name}")
+        if output not in shown:
+            shown.append(output)
+            axes[1].semilogx(hz, coherence[:, j], lw=0.8, label=f"coherence {output}")
+    axes[0].set_ylabel("|H| [dB]")
+    axes[1].set_ylabel("multiple coherence")
+    axes[1].set_ylim(0.0, 1.05)
+    axes[1].set_xlabel("frequency [Hz]")
+    for ax in axes:
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize="small", ncol=2)
+    if title:
+        axes[0].set_title(title)
+    return _finish(figure, filename)
+
+
 def stabilisation(scan, title=None, filename=None):
     """Stabilisation diagram of a structure scan: every pole pair of every fit at its natural
     frequency [Hz] (x) and its fit's order (y). Markers: "stable" (frequency and damping within

@@ -8,7 +8,9 @@
 #include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/error.h"
 #include "ctid/core/hold.h"
+#include "ctid/core/mimo_data.h"
 #include "ctid/core/mimo_model.h"
+#include "ctid/core/mimo_preprocessing.h"
 #include "ctid/core/polynomial.h"
 #include "ctid/core/preprocessing.h"
 #include "ctid/core/sampled_data.h"
@@ -283,6 +285,51 @@ void bind_core(py::module_& m) {
           "PreprocessedData: this record after range, detrend, decimation and scaling "
           "(PreprocessingOptions or its fields as keywords).");
 
+  py::class_<MimoData>(m, "MimoData",
+                       "Uniformly sampled record with several inputs (N x n_u), outputs (N x "
+                       "n_y) and optional references (N x n_u), each channel named.")
+      .def(py::init<double, Eigen::MatrixXd, Eigen::MatrixXd, std::optional<Eigen::MatrixXd>,
+                    double>(),
+           py::arg("sample_time"), py::arg("inputs"), py::arg("outputs"),
+           py::arg("references") = py::none(), py::arg("start_time") = 0.0,
+           "Checked: h > 0, equal lengths, >= 2 samples, >= 1 input and output, finite values; "
+           "channels named u1.., y1.. until with_names.")
+      .def(py::init<const SampledData&>(), py::arg("data"), "A SISO record as a 1 x 1 one.")
+      .def("__len__", &MimoData::size)
+      .def("size", &MimoData::size, "Number of samples N.")
+      .def_property_readonly("input_count", &MimoData::input_count, "n_u.")
+      .def_property_readonly("output_count", &MimoData::output_count, "n_y.")
+      .def_property_readonly("sample_time", &MimoData::sample_time, "h [s].")
+      .def_property_readonly("start_time", &MimoData::start_time, "t_0 [s].")
+      .def_property_readonly("time", &MimoData::time, "t_k [s].")
+      .def_property_readonly("inputs", &MimoData::inputs, "N x n_u inputs.")
+      .def_property_readonly("outputs", &MimoData::outputs, "N x n_y outputs.")
+      .def("has_references", &MimoData::has_references, "True if references are present.")
+      .def_property_readonly(
+          "references",
+          [](const MimoData& d) -> std::optional<Eigen::MatrixXd> {
+            if (!d.has_references()) return std::nullopt;
+            return d.references();
+          },
+          "N x n_u references or None.")
+      .def_property_readonly("input_names", &MimoData::input_names, "Names of the inputs.")
+      .def_property_readonly("output_names", &MimoData::output_names, "Names of the outputs.")
+      .def("with_names", &MimoData::with_names, py::arg("input_names"), py::arg("output_names"),
+           "The same record with its channels named (distinct, non-empty names).")
+      .def_property_readonly("input_hold", &MimoData::input_hold,
+                             "How every input is continued between samples (Hold).")
+      .def("with_input_hold", &MimoData::with_input_hold, py::arg("hold"),
+           "The same record with its inputs continued by `hold`.")
+      .def("segment", &MimoData::segment, py::arg("begin"), py::arg("count"),
+           "Samples [begin, begin + count), names and hold kept.")
+      .def("channel", &MimoData::channel, py::arg("input"), py::arg("output"),
+           "Input `input`, output `output` (0-based) as a SISO SampledData.")
+      .def("__repr__", [](const MimoData& d) {
+        return ::ctid::internal::concat("MimoData(", d.size(), " samples, h=", d.sample_time(),
+                                        ", inputs=[", join(d.input_names()), "], outputs=[",
+                                        join(d.output_names()), "])");
+      });
+
   bind_enum<Detrend>(m, "Detrend", "What preprocess removes from each signal.");
   bind_options<PreprocessingOptions>(m, "Options of preprocess (core/preprocessing.h).");
   bind_result<PreprocessingRecord>(m, "What preprocess did, in the original units.")
@@ -302,6 +349,28 @@ void bind_core(py::module_& m) {
       },
       py::arg("data"), py::arg("options") = py::none(),
       "PreprocessedData: the record after range, detrend, decimation and scaling.");
+  py::class_<PreprocessedMimoData>(
+      m, "PreprocessedMimoData",
+      "A preprocessed MimoData, the record of what was done and each channel's removed line.")
+      .def_readonly("data", &PreprocessedMimoData::data, "The preprocessed MimoData.")
+      .def_readonly("record", &PreprocessedMimoData::record,
+                    "The PreprocessingRecord (offsets of the first channels, warnings of all).")
+      .def_readonly("input_offsets", &PreprocessedMimoData::input_offsets,
+                    "Removed offset of each input.")
+      .def_readonly("input_slopes", &PreprocessedMimoData::input_slopes,
+                    "Removed slope of each input [1/s].")
+      .def_readonly("output_offsets", &PreprocessedMimoData::output_offsets,
+                    "Removed offset of each output.")
+      .def_readonly("output_slopes", &PreprocessedMimoData::output_slopes,
+                    "Removed slope of each output [1/s].");
+  m.def(
+      "preprocess",
+      [](const MimoData& data, const std::optional<PreprocessingOptions>& options,
+         const py::kwargs& kwargs) {
+        return preprocess(data, options_from<PreprocessingOptions>("preprocess", options, kwargs));
+      },
+      py::arg("data"), py::arg("options") = py::none(),
+      "PreprocessedMimoData: every channel of a MimoData preprocessed alike.");
   m.def(
       "resample",
       [](const Eigen::VectorXd& time, const Eigen::VectorXd& input, const Eigen::VectorXd& output,

@@ -2,11 +2,103 @@
 // nonparametric FRFs (periodic averaging, Welch H1 with coherence) with resonance peaks.
 #include "common.h"
 #include "ctid/frequency/frf.h"
+#include "ctid/frequency/mimo_frf.h"
 #include "ctid/frequency/peaks.h"
 #include "ctid/frequency/response.h"
 #include "fields.h"
 
 namespace ctid::python {
+namespace {
+
+// Per-line n_y x n_u matrices as one NumPy array of shape (lines, n_y, n_u).
+template <class Matrix>
+py::array_t<typename Matrix::Scalar> stacked(const std::vector<Matrix>& per_line, int rows,
+                                             int cols) {
+  py::array_t<typename Matrix::Scalar> out({static_cast<py::ssize_t>(per_line.size()),
+                                            static_cast<py::ssize_t>(rows),
+                                            static_cast<py::ssize_t>(cols)});
+  auto view = out.template mutable_unchecked<3>();
+  for (std::size_t l = 0; l < per_line.size(); ++l) {
+    for (int j = 0; j < rows; ++j) {
+      for (int i = 0; i < cols; ++i) view(static_cast<py::ssize_t>(l), j, i) = per_line[l](j, i);
+    }
+  }
+  return out;
+}
+
+void bind_mimo_frf(py::module_& m) {
+  py::class_<MimoFrf>(m, "MimoFrf",
+                      "An FRF matrix on DFT lines: response[l, j, i] from input i to output j, "
+                      "its variance, the multiple coherence of each output, input levels and "
+                      "the inputs' condition per line.")
+      .def_readonly("lines", &MimoFrf::lines, "DFT line k of each frequency.")
+      .def_readonly("frequencies", &MimoFrf::frequencies, "2 pi k / (L h) [rad/s].")
+      .def_property_readonly(
+          "response",
+          [](const MimoFrf& f) { return stacked(f.response, f.output_count(), f.input_count()); },
+          "Complex array (lines, n_y, n_u): H[l, j, i] from input i to output j.")
+      .def_property_readonly(
+          "variance",
+          [](const MimoFrf& f) { return stacked(f.variance, f.output_count(), f.input_count()); },
+          "Array (lines, n_y, n_u): E|H_hat - H|^2 of each entry.")
+      .def_readonly("coherence", &MimoFrf::coherence,
+                    "(lines, n_y): multiple coherence of each output with all inputs.")
+      .def_readonly("output_power", &MimoFrf::output_power, "(lines, n_y): S_yjyj.")
+      .def_readonly("input_level", &MimoFrf::input_level,
+                    "(lines, n_u): each input's amplitude over its largest line's.")
+      .def_readonly("input_condition", &MimoFrf::input_condition,
+                    "Condition of the normalised input spectral matrix per line (1: "
+                    "uncorrelated inputs).")
+      .def_readonly("averages", &MimoFrf::averages, "Segments (Welch) or periods averaged.")
+      .def_readonly("block_length", &MimoFrf::block_length, "L: samples per segment/period.")
+      .def_readonly("input_names", &MimoFrf::input_names, "Names of the inputs.")
+      .def_readonly("output_names", &MimoFrf::output_names, "Names of the outputs.")
+      .def("inputs_correlated", &MimoFrf::inputs_correlated, py::arg("index"),
+           py::arg("max_condition") = kCorrelatedInputCondition,
+           "Whether input_condition at position `index` exceeds max_condition.")
+      .def("channel", &MimoFrf::channel, py::arg("input"), py::arg("output"),
+           "The SISO Frf of one entry (its output's multiple coherence, its input's level).")
+      .def("__repr__", [](const MimoFrf& f) {
+        return ::ctid::internal::concat("MimoFrf(", f.lines.size(), " lines, ", f.output_count(),
+                                        " x ", f.input_count(), ", averages=", f.averages, ")");
+      });
+  m.def(
+      "welch_frf",
+      [](const MimoData& data, const std::optional<WelchOptions>& options,
+         const py::kwargs& kwargs) {
+        return welch_frf(data, options_from<WelchOptions>("welch_frf", options, kwargs));
+      },
+      py::arg("data"), py::arg("options") = py::none(),
+      "MimoData: the H1 FRF matrix S_yu S_uu^-1 with multiple coherence and variance.");
+  m.def(
+      "periodic_frf",
+      [](const std::vector<MimoData>& experiments, const std::optional<PeriodicFrfOptions>& options,
+         const py::kwargs& kwargs) {
+        return periodic_frf(experiments,
+                            options_from<PeriodicFrfOptions>("periodic_frf", options, kwargs));
+      },
+      py::arg("experiments"), py::arg("options") = py::none(),
+      "A list of n_e >= n_u periodic MimoData experiments (e.g. Hadamard multisines): the FRF "
+      "matrix Y U^-1 averaged over periods, with its variance.");
+  m.def(
+      "periodic_frf",
+      [](const MimoData& record, int experiments, const std::optional<PeriodicFrfOptions>& options,
+         const py::kwargs& kwargs) {
+        return periodic_frf(
+            record, options_from<PeriodicFrfOptions>("periodic_frf", options, kwargs), experiments);
+      },
+      py::arg("record"), py::arg("experiments"), py::arg("options") = py::none(),
+      "One MimoData holding `experiments` periodic experiments of equal length one after "
+      "another.");
+  m.def("excited_lines", py::overload_cast<const MimoFrf&, double>(&excited_lines), py::arg("frf"),
+        py::arg("line_threshold"),
+        "The lines of a MimoFrf where every input's level exceeds line_threshold.");
+  m.def("summed_power_frf", &summed_power_frf, py::arg("frf"),
+        "One Frf for all channels: sqrt(sum |H_ji|^2), the power-weighted multiple coherence, "
+        "the smallest input level (for resonance_peaks over all channels).");
+}
+
+}  // namespace
 
 void bind_frequency(py::module_& m) {
   m.def("log_frequency_grid", &log_frequency_grid, py::arg("omega_min"), py::arg("omega_max"),
@@ -51,6 +143,7 @@ void bind_frequency(py::module_& m) {
       },
       py::arg("data"), py::arg("options") = py::none(),
       "H1 FRF with Hann-windowed Welch averaging, and the coherence.");
+  bind_mimo_frf(m);
 
   bind_result<ResonancePeak>(m, "A resonance peak of |G|.");
   bind_options<PeakOptions>(m, "Options of resonance_peaks.");
@@ -70,8 +163,8 @@ void bind_frequency(py::module_& m) {
       },
       py::arg("frf"), py::arg("options") = py::none(),
       "Resonance peaks of a measured Frf on its excited lines, with their coherence.");
-  m.def("excited_lines", &excited_lines, py::arg("frf"), py::arg("line_threshold"),
-        "The lines of an Frf whose input_level exceeds line_threshold.");
+  m.def("excited_lines", py::overload_cast<const Frf&, double>(&excited_lines), py::arg("frf"),
+        py::arg("line_threshold"), "The lines of an Frf whose input_level exceeds line_threshold.");
 
   py::class_<PeriodogramPeak>(m, "PeriodogramPeak", "A periodogram peak above its local floor.")
       .def_readonly("frequency", &PeriodogramPeak::frequency,

@@ -9,6 +9,7 @@
 #include "common.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/file.h"
+#include "ctid/io/mimo_data_csv.h"
 #include "fields.h"
 
 namespace ctid::python {
@@ -55,6 +56,30 @@ void bind_io(py::module_& m) {
   m.def("result_document_types", &io::result_document_types,
         "The \"type\" values read_result reads.");
   bind_writers(m, static_cast<io::ResultDocument*>(nullptr));
+
+  bind_options<io::MimoCsvColumns>(
+      m, "Which CSV columns hold a MimoData's signals: names or ranges 'A:B' (file order).");
+  m.def(
+      "read_mimo_data",
+      [](const std::filesystem::path& path, const std::optional<io::MimoCsvColumns>& columns,
+         const py::kwargs& kwargs) {
+        return io::read_mimo_data(
+            path, options_from<io::MimoCsvColumns>("read_mimo_data", columns, kwargs));
+      },
+      py::arg("path"), py::arg("columns") = py::none(),
+      "A MimoData from a CSV file (MimoCsvColumns or its fields as keywords, e.g. "
+      "inputs=['u1_force', 'u2_force'], outputs=['y1_acc:y28_acc']); channels named after "
+      "their columns. Raises InvalidArgument naming the file and a missing or repeated column.");
+  m.def(
+      "write_mimo_data",
+      [](const std::filesystem::path& path, const MimoData& data, const std::string& time_column,
+         bool overwrite) {
+        io::write_mimo_data(path, data, time_column,
+                            overwrite ? io::Overwrite::yes : io::Overwrite::no);
+      },
+      py::arg("path"), py::arg("data"), py::arg("time_column") = "t", py::arg("overwrite") = false,
+      "Writes a MimoData as CSV: the time column, then each channel under its name (references "
+      "as r_<input>).");
 }
 
 }  // namespace ctid::python

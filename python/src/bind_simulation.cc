@@ -108,6 +108,21 @@ void bind_simulation(py::module_& m) {
       },
       py::arg("options") = py::none(),
       "Random-phase multisine, flat on a band; options as MultisineOptions or keywords.");
+  py::class_<OrthogonalMultisines>(m, "OrthogonalMultisines",
+                                   "Hadamard-phased multisines for several inputs.")
+      .def_readonly("experiments", &OrthogonalMultisines::experiments,
+                    "n_e arrays of (samples, n_u): the inputs of each experiment.")
+      .def_readonly("lines", &OrthogonalMultisines::lines, "Excited DFT lines.")
+      .def_readonly("hadamard", &OrthogonalMultisines::hadamard, "n_e x n_e signs.");
+  m.def(
+      "orthogonal_multisines",
+      [](int inputs, const std::optional<MultisineOptions>& options, const py::kwargs& kwargs) {
+        return orthogonal_multisines(
+            options_from<MultisineOptions>("orthogonal_multisines", options, kwargs), inputs);
+      },
+      py::arg("inputs"), py::arg("options") = py::none(),
+      "n_e = next power of two >= inputs experiments; input i is hadamard[e, i] times the "
+      "multisine seeded seed + i (for periodic_frf of a MIMO system).");
   m.def("repeat_periodic", &repeat_periodic, py::arg("period"), py::arg("periods"),
         "periods copies of period one after another.");
 

@@ -7,26 +7,17 @@
 #include <numbers>
 #include <string>
 
-#include <unsupported/Eigen/FFT>
-
 #include "ctid/core/error.h"
 #include "ctid/frequency/peaks.h"
+#include "frequency/internal/dft_blocks.h"
 
 namespace ctid {
 namespace {
 
 using Complex = std::complex<double>;
 
-// Unnormalised DFT X(k) = sum_n x_n e^{-j 2 pi k n / L} of one block (kissfft backend).
-Eigen::VectorXcd dft(Eigen::FFT<double>& fft, const Eigen::VectorXd& block) {
-  Eigen::VectorXcd spectrum(block.size());
-  fft.fwd(spectrum, block);
-  return spectrum;
-}
-
-double line_frequency(int k, int block_length, double sample_time) {
-  return 2.0 * std::numbers::pi * k / (block_length * sample_time);
-}
+using internal::dft;
+using internal::line_frequency;
 
 // At most `max_peaks` (0: all) of the most prominent peaks, in the order of their index.
 void keep_most_prominent(std::vector<ResonancePeak>& peaks, int max_peaks) {
@@ -147,14 +138,8 @@ Frf welch_frf(const SampledData& data, const WelchOptions& options) {
   const int total = data.size();
   require(total >= length, "welch_frf: too few samples: the record has ", total,
           " samples, fewer than WelchOptions.segment_length = ", length);
-  const int shared = static_cast<int>(std::lround(options.overlap * length));
-  const int step = std::max(1, length - shared);
-
-  // Periodic Hann window: w_n = (1 - cos(2 pi n / L)) / 2.
-  Eigen::VectorXd window(length);
-  for (int i = 0; i < length; ++i) {
-    window(i) = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * i / length);
-  }
+  const int step = internal::welch_step(length, options.overlap);
+  const Eigen::VectorXd window = internal::periodic_hann(length);
 
   const int half = length / 2;
   Eigen::VectorXd suu = Eigen::VectorXd::Zero(half + 1);

@@ -1,6 +1,8 @@
 #include "ctid/io/report_json.h"
 
 #include <array>
+#include <cmath>
+#include <cstddef>
 #include <utility>
 #include <vector>
 
@@ -62,6 +64,53 @@ nlohmann::json to_json(const Frf& frf) { return document(frf, kFrfType); }
 
 Frf frf_from_json(const nlohmann::json& value, const std::string& source) {
   return document_fields<Frf>(value, kFrfType, {"method", "data", "peaks"}, source);
+}
+
+nlohmann::json to_json(const MimoFrf& frf) {
+  const auto nullable = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nullptr; };
+  const auto rows = [&](const Eigen::MatrixXd& m) {
+    nlohmann::json out = nlohmann::json::array();
+    for (Eigen::Index r = 0; r < m.rows(); ++r) {
+      nlohmann::json row = nlohmann::json::array();
+      for (Eigen::Index c = 0; c < m.cols(); ++c) row.push_back(nullable(m(r, c)));
+      out.push_back(std::move(row));
+    }
+    return out;
+  };
+  nlohmann::json response = nlohmann::json::array();
+  nlohmann::json variance = nlohmann::json::array();
+  for (std::size_t l = 0; l < frf.response.size(); ++l) {
+    nlohmann::json h = nlohmann::json::array();
+    for (Eigen::Index j = 0; j < frf.response[l].rows(); ++j) {
+      nlohmann::json row = nlohmann::json::array();
+      for (Eigen::Index i = 0; i < frf.response[l].cols(); ++i) {
+        row.push_back(
+            {nullable(frf.response[l](j, i).real()), nullable(frf.response[l](j, i).imag())});
+      }
+      h.push_back(std::move(row));
+    }
+    response.push_back(std::move(h));
+    variance.push_back(rows(frf.variance[l]));
+  }
+  nlohmann::json condition = nlohmann::json::array();
+  for (Eigen::Index l = 0; l < frf.input_condition.size(); ++l) {
+    condition.push_back(nullable(frf.input_condition(l)));
+  }
+  return {{"type", kMimoFrfType},
+          {"version", 1},
+          {"inputs", frf.input_names},
+          {"outputs", frf.output_names},
+          {"lines", frf.lines},
+          {"frequencies", std::vector<double>(frf.frequencies.data(),
+                                              frf.frequencies.data() + frf.frequencies.size())},
+          {"response", std::move(response)},
+          {"variance", std::move(variance)},
+          {"coherence", rows(frf.coherence)},
+          {"output_power", rows(frf.output_power)},
+          {"input_level", rows(frf.input_level)},
+          {"input_condition", std::move(condition)},
+          {"averages", frf.averages},
+          {"block_length", frf.block_length}};
 }
 
 nlohmann::json to_json(const StudySummary& summary) { return document(summary, kStudySummaryType); }

@@ -18,18 +18,25 @@ void CsvColumns::check_relations(const std::string& path) const {
       "' must differ from each other");
 }
 
-TimedSignal timed_signal_from_table(const CsvTable& table, const std::string& time_column,
-                                    const std::string& value_column, double relative_tolerance) {
+TimeGrid uniform_time_grid(const CsvTable& table, const std::string& time_column,
+                           double relative_tolerance) {
   const Eigen::VectorXd& time = table.column(time_column);
-  const Eigen::VectorXd& values = table.column(value_column);
   try {
+    // The stamps stand in for the signals: only the time check and its message are wanted.
     const SampledData checked =
-        SampledData::from_time_stamps(time, values, values, std::nullopt, relative_tolerance);
-    return TimedSignal{checked.start_time(), checked.sample_time(), values};
+        SampledData::from_time_stamps(time, time, time, std::nullopt, relative_tolerance);
+    return TimeGrid{checked.start_time(), checked.sample_time()};
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(
         internal::concat(table.source, ": column '", time_column, "': ", e.what()));
   }
+}
+
+TimedSignal timed_signal_from_table(const CsvTable& table, const std::string& time_column,
+                                    const std::string& value_column, double relative_tolerance) {
+  const Eigen::VectorXd& values = table.column(value_column);
+  const TimeGrid grid = uniform_time_grid(table, time_column, relative_tolerance);
+  return TimedSignal{grid.start_time, grid.sample_time, values};
 }
 
 std::optional<Hold> declared_input_hold(const CsvTable& table) {
@@ -43,20 +50,15 @@ std::optional<Hold> declared_input_hold(const CsvTable& table) {
 
 SampledData sampled_data_from_table(const CsvTable& table, const CsvColumns& columns) {
   columns.validate();
-  const Eigen::VectorXd& time = table.column(columns.time);
+  table.column(columns.time);  // a missing column is named before the stamps are checked
   const Eigen::VectorXd& input = table.column(columns.input);
   const Eigen::VectorXd& output = table.column(columns.output);
   std::optional<Eigen::VectorXd> reference;
   if (!columns.reference.empty()) reference = table.column(columns.reference);
   const Hold hold = declared_input_hold(table).value_or(Hold::zero_order_hold);
-  try {
-    const SampledData data = SampledData::from_time_stamps(
-        time, input, output, std::move(reference), columns.relative_tolerance);
-    return data.with_input_hold(hold);
-  } catch (const InvalidArgument& e) {
-    throw InvalidArgument(
-        internal::concat(table.source, ": column '", columns.time, "': ", e.what()));
-  }
+  const TimeGrid grid = uniform_time_grid(table, columns.time, columns.relative_tolerance);
+  return SampledData(grid.sample_time, input, output, std::move(reference), grid.start_time)
+      .with_input_hold(hold);
 }
 
 SampledData read_sampled_data(const std::filesystem::path& path, const CsvColumns& columns) {

@@ -132,4 +132,34 @@ Eigen::VectorXd repeat_periodic(const Eigen::VectorXd& period, int periods) {
   return period.replicate(periods, 1);
 }
 
+OrthogonalMultisines orthogonal_multisines(const MultisineOptions& options, int inputs) {
+  require(inputs >= 1 && inputs <= 64, "orthogonal_multisines: inputs is ", inputs,
+          "; it must be in [1, 64]");
+  int count = 1;
+  while (count < inputs) count *= 2;
+  OrthogonalMultisines result;
+  result.hadamard.resize(count, count);
+  for (int e = 0; e < count; ++e) {
+    for (int i = 0; i < count; ++i) {
+      result.hadamard(e, i) = std::popcount(static_cast<unsigned>(e & i)) % 2 == 0 ? 1.0 : -1.0;
+    }
+  }
+  std::vector<Eigen::VectorXd> signals;
+  for (int i = 0; i < inputs; ++i) {
+    MultisineOptions own = options;
+    own.seed = options.seed + static_cast<std::uint64_t>(i);
+    Multisine s = multisine(own);
+    if (i == 0) result.lines = s.lines;
+    signals.push_back(std::move(s.signal));
+  }
+  for (int e = 0; e < count; ++e) {
+    Eigen::MatrixXd u(signals.front().size(), inputs);
+    for (int i = 0; i < inputs; ++i) {
+      u.col(i) = result.hadamard(e, i) * signals[static_cast<std::size_t>(i)];
+    }
+    result.experiments.push_back(std::move(u));
+  }
+  return result;
+}
+
 }  // namespace ctid

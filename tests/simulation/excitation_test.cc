@@ -227,3 +227,32 @@ TEST(RepeatPeriodic, Copies) {
 
 }  // namespace
 }  // namespace ctid
+
+namespace ctid {
+namespace {
+
+TEST(OrthogonalMultisines, HadamardPhasedExperimentsForThreeInputs) {
+  MultisineOptions options;
+  options.period_length = 128;
+  options.sample_time = 0.1;
+  options.max_frequency = 2.0;
+  options.periods = 2;
+  options.seed = 7;
+  const OrthogonalMultisines o = orthogonal_multisines(options, 3);
+  ASSERT_EQ(o.experiments.size(), 4u);  // the next power of two
+  EXPECT_EQ(o.hadamard.transpose() * o.hadamard, 4.0 * Eigen::MatrixXd::Identity(4, 4));
+  const Multisine first = multisine(options);
+  EXPECT_EQ(o.lines, first.lines);
+  options.seed = 9;
+  const Multisine third = multisine(options);
+  for (int e = 0; e < 4; ++e) {
+    ASSERT_EQ(o.experiments[static_cast<std::size_t>(e)].rows(), 256);
+    ASSERT_EQ(o.experiments[static_cast<std::size_t>(e)].cols(), 3);
+    EXPECT_EQ(o.experiments[static_cast<std::size_t>(e)].col(0), first.signal);
+    EXPECT_EQ(o.experiments[static_cast<std::size_t>(e)].col(2), o.hadamard(e, 2) * third.signal);
+  }
+  EXPECT_THROW(orthogonal_multisines(options, 0), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace ctid

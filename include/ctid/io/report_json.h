@@ -11,6 +11,7 @@
 
 #include "ctid/estimation/validation.h"
 #include "ctid/frequency/frf.h"
+#include "ctid/frequency/mimo_frf.h"
 #include "ctid/study/paper_study.h"
 #include "ctid/study/study_output.h"
 
@@ -19,6 +20,7 @@ namespace ctid::io {
 /// The "type" values of these documents.
 inline constexpr const char* kValidationReportType = "validation_report";
 inline constexpr const char* kFrfType = "frf";
+inline constexpr const char* kMimoFrfType = "mimo_frf";
 inline constexpr const char* kStudySummaryType = "study_summary";
 
 /// {"type": "validation_report", "version": 1, <fields>} with, restating them for readers,
@@ -35,6 +37,12 @@ nlohmann::json to_json(const Frf& frf);
 /// Reads it back; the context `ctid frf` writes ("method", "data", "peaks") is accepted and
 /// not read.
 Frf frf_from_json(const nlohmann::json& value, const std::string& source);
+
+/// {"type": "mimo_frf", "version": 1, "inputs": [names], "outputs": [names], "lines",
+/// "frequencies", "response": [line][output][input] as [real, imag], "variance":
+/// [line][output][input], "coherence" and "output_power": [line][output], "input_level":
+/// [line][input], "input_condition": [line], "averages", "block_length"} (NaN as null).
+nlohmann::json to_json(const MimoFrf& frf);
 
 /// {"type": "study_summary", "version": 1, <fields>}.
 nlohmann::json to_json(const StudySummary& summary);

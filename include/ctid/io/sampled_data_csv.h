@@ -47,6 +47,18 @@ struct CsvColumns {
   void validate() const { validate_fields(*this); }
 };
 
+/// Where a uniform time column puts the samples.
+struct TimeGrid {
+  double start_time = 0.0;
+  double sample_time = 0.0;
+};
+
+/// Checks that `time_column` is uniformly sampled (SampledData::from_time_stamps's rule) and
+/// returns its grid; errors name the table's source and the column. Every CSV reader of
+/// records (SISO, MIMO, single signals) checks its time stamps here.
+TimeGrid uniform_time_grid(const CsvTable& table, const std::string& time_column,
+                           double relative_tolerance = 1e-6);
+
 /// A uniformly sampled signal read from a table's time and value columns.
 struct TimedSignal {
   double start_time = 0.0;

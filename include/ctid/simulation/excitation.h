@@ -111,6 +111,21 @@ struct Multisine {
 /// excluded). Throws InvalidArgument if no line falls in the band.
 Multisine multisine(const MultisineOptions& options);
 
+/// Orthogonal multisines for n_u inputs (Pintelon & Schoukens, System Identification, 2nd ed.,
+/// Sec. 2.7): n_e experiments, n_e the smallest power of two >= n_u; in experiment e input i is
+/// hadamard(e, i) s_i, with s_i the multisine of `options` seeded options.seed + i and
+/// hadamard the n_e x n_e Sylvester matrix, entries (-1)^popcount(e & i). At every excited line
+/// the n_u x n_e input matrix then has orthogonal rows, so that periodic_frf(experiments)
+/// inverts it with condition 1.
+struct OrthogonalMultisines {
+  std::vector<Eigen::MatrixXd> experiments;  ///< n_e records of periods * N samples x n_u
+  std::vector<int> lines;                    ///< excited DFT lines (those of every s_i)
+  Eigen::MatrixXd hadamard;                  ///< n_e x n_e, entries +-1
+};
+
+/// Throws InvalidArgument for inputs < 1 (or > 64) and as multisine() does.
+OrthogonalMultisines orthogonal_multisines(const MultisineOptions& options, int inputs);
+
 /// `periods` copies of `period` one after another.
 Eigen::VectorXd repeat_periodic(const Eigen::VectorXd& period, int periods);
 
