@@ -9,7 +9,7 @@ signs), drives it with seeded white noise, adds white output noise at the given 
 scans K-2..K+2 modes (at least 1). Variants (combinable):
 
   --integrator       the system also has one integrator b/p (a rigid-body mode), whose share
-                     of the output is drawn like a mode's (see system()); every candidate has
+                     of the output is drawn (see integrator_share()); every candidate has
                      it too, unless --scan-integrators
   --scan-integrators the candidates are K-2..K+2 modes each with 0 and with 1 integrator, so the
                      scan has to find the integrator (or find that there is none)
@@ -24,10 +24,12 @@ integrators and (--delay) the true delay in samples (docs/decisions/0016). Usage
 
     PYTHONPATH=build/python /usr/bin/python3 scripts/structure_campaign.py [--modes 1:6]
         [--seeds 20] [--snr 20] [--samples 4000] [--integrator] [--scan-integrators]
-        [--delay] [--closed-loop] [--json out.json]
+        [--delay] [--closed-loop] [--any-system] [--json out.json]
 
-Prints one line per K (with the seeds of the misses) and the overall rate; exit status 0
-always (a measurement, not a test).
+Prints one line per K (with the seeds of the misses and how many drawn systems were set aside
+because the data do not define their order, see record()) and the overall rate; exit status 0
+always (a measurement, not a test). Runtimes: about 2 min (plain, --integrator), 5 min
+(--scan-integrators), 7 min (--closed-loop) and 30 min (--delay) on one core.
 """
 
 import argparse
@@ -51,8 +53,8 @@ class Variant:
     closed_loop: bool = False
 
     def seed_offset(self):
-        """Separate seed streams per system family, so variants draw different systems but the
-        plain variant keeps the seeds it always had."""
+        """Separate seed streams per system family (the plain variant's are those of decision
+        0015's campaign)."""
         return 100_000 * (1 * self.integrator + 2 * self.delay + 4 * self.closed_loop)
 
     def name(self):
