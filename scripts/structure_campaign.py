@@ -286,11 +286,14 @@ def main():
         rows.append({"modes": modes, "seeds": len(runs), "true_structure_recommended": hits,
                      "systems_set_aside": redrawn,
                      "truths": {r.seed: r.truth for r in runs},
-                     "misses": misses, "seconds": seconds})
+                     "misses": misses, "seconds": seconds,
+                     "worse_overfits": {r.seed: r.worse for r in runs if r.worse}})
         print(f"K = {modes}: true structure recommended in {hits}/{len(runs)}"
               f" ({seconds / len(runs):.1f} s per scan, {redrawn} systems set aside);"
               f" misses (seed: chosen (modes, integrators, delay) vs true): "
-              f"{ {r.seed: (r.chosen, r.truth) for r in runs if not r.right} }", flush=True)
+              f"{ {r.seed: (r.chosen, r.truth) for r in runs if not r.right} }; seeds with usable "
+              f"over-fits worse by more than the tolerance: "
+              f"{ {r.seed: r.worse for r in runs if r.worse} }", flush=True)
     print(f"{variant.name()}: {right}/{total} = {100 * right / total:.1f} % at {args.snr} dB "
           f"in {time.perf_counter() - started:.0f} s; usable over-parameterised fits with a "
           f"held-out error above the true structure's by more than the tolerance: {bad_over} "
