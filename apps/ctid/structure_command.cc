@@ -15,9 +15,9 @@
 #include "command.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
-#include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/report_json.h"
 #include "ctid/refined_iv/structure_scan.h"
 #include "data_flags.h"
 #include "plot_support.h"
@@ -170,8 +170,7 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
   options.validate();
   const SampledData data = f.data.load(app, !f.controller.empty());
   const StructureScanResult result = scan_structures(data, candidates, options);
-  nlohmann::json document = io::fields_to_json(result);
-  document["type"] = "structure_scan_result";
+  nlohmann::json document = io::to_json(result);
   document["data"] = {
       {"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}};
   if (!f.output.empty()) {

@@ -32,6 +32,22 @@ def test_scan_recommends_two_modes_on_a_noise_free_record():
     assert all(p.fit in (0, 1, 2) for p in scan.stabilisation)
 
 
+def test_scan_result_reads_back_with_every_fit(tmp_path):
+    # A structure_scan_result document (ctid structure -o, write_result) reads back as the
+    # scan, the estimates' transfer functions included, bit for bit.
+    scan = ctid.scan_structures(_record(4), [ctid.ModelStructure.modes(k) for k in (1, 2)])
+    ctid.write_result(tmp_path / "scan.json", scan)
+    back = ctid.read_result(tmp_path / "scan.json")
+    assert isinstance(back, ctid.StructureScanResult)
+    assert ctid.result_to_json(back) == ctid.result_to_json(scan)
+    assert back.recommended == scan.recommended == 1
+    g, h = back.fits[1].transfer_function, scan.fits[1].transfer_function
+    np.testing.assert_array_equal(g.denominator.coefficients, h.denominator.coefficients)
+    np.testing.assert_array_equal(g.numerator.coefficients, h.numerator.coefficients)
+    assert [f.structure.orders[0].n for f in back.fits] == [2, 2]
+    assert "structure_scan_result" in ctid.result_document_types()
+
+
 def test_start_methods_reach_the_same_noise_free_model_or_say_why_not():
     data = _record(2)
     fits = [ctid.identify(data, ctid.ModelStructure.modes(2),
@@ -64,10 +80,7 @@ def test_peaks_of_a_measured_frf_carry_their_coherence():
     assert len(excited.lines) <= len(frf.lines)
 
 
-def test_seeded_campaign_recommends_the_true_number_of_modes():
-    # Issue 11: at 20 dB the scan recommends the true number of modes in >= 95 % of seeded
-    # runs (1-6 lightly damped modes, scripts/structure_campaign.py), and no
-    # over-parameterised fit is usable with a held-out fit worse than the true order's.
+def _campaign():
     import importlib.util
     import pathlib
 
@@ -76,9 +89,72 @@ def test_seeded_campaign_recommends_the_true_number_of_modes():
         "scripts" / "structure_campaign.py")
     campaign = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(campaign)
-    results = [campaign.scan_once(ctid, modes, seed) for modes in range(1, 7)
-               for seed in range(4)]
-    right = sum(chosen == modes for (chosen, _), modes in
-                zip(results, [m for m in range(1, 7) for _ in range(4)]))
-    assert sum(worse for _, worse in results) == 0
-    assert right >= math.ceil(0.95 * len(results)), f"{right} of {len(results)}"
+    return campaign
+
+
+def _allowed_misses(runs, rate=0.95, alpha=0.05):
+    """The most misses in `runs` seeded runs that a scan right in `rate` of runs would reach
+    with probability at least `alpha`: more misses than this are evidence (at level alpha)
+    that the rate is below `rate`. 24 runs: 3; 12 runs: 2; 8 runs: 2; 6 runs: 1."""
+    def tail(m):  # P(X > m), X ~ Binomial(runs, 1 - rate)
+        return sum(math.comb(runs, k) * (1 - rate) ** k * rate ** (runs - k)
+                   for k in range(m + 1, runs + 1))
+    return next(m for m in range(runs + 1) if tail(m) < alpha)
+
+
+def _check_campaign(variant, modes, seeds):
+    # Issue 11 (decision 0016): at 20 dB the scan recommends the true structure in >= 95 % of
+    # seeded runs of systems whose order the data define (scripts/structure_campaign.py; the
+    # full campaign, 20 seeds per K, is in the decision), and no usable over-parameterised fit
+    # scores a held-out error above the true structure's by more than the scan's tolerance.
+    campaign = _campaign()
+    runs = [campaign.scan_once(ctid, k, seed, variant=variant) for k in modes for seed in seeds]
+    misses = {(r.modes, r.seed): r.chosen for r in runs if not r.right}
+    assert sum(r.worse for r in runs) == 0
+    assert len(misses) <= _allowed_misses(len(runs)), misses
+    return runs
+
+
+def test_allowed_misses_is_the_binomial_bound():
+    assert [_allowed_misses(n) for n in (6, 8, 12, 24, 120)] == [1, 2, 2, 3, 10]
+
+
+def test_seeded_campaign_recommends_the_true_number_of_modes():
+    runs = _check_campaign(_campaign().Variant(), range(1, 7), range(4))
+    assert sum(r.right for r in runs) >= math.ceil(0.95 * len(runs))
+
+
+def test_seeded_campaign_finds_the_integrator_and_the_modes():
+    # Candidates with and without an integrator, K-2..K+2 modes each.
+    _check_campaign(_campaign().Variant(integrator=True, scan_integrators=True), range(1, 7),
+                    range(2))
+
+
+def test_a_fit_worse_than_a_structure_it_contains_is_not_usable():
+    # Found by the delay campaign (3 modes, seed 1, true delay 2 samples): the 4-mode fit stops
+    # at its iteration limit at delay 1 with a held-out fit of 74 % against the truth's 89 %,
+    # and its verdict passed it. Four modes contain three, so at its optimum it fits the
+    # estimation data at least as well: the scan marks it not usable (decision 0016).
+    campaign = _campaign()
+    data, _, delay, _, _ = campaign.record(ctid, 3, 1, 4000, 20.0, 0.01,
+                                           campaign.Variant(delay=True))
+    assert delay == 2
+    options = ctid.StructureScanOptions()
+    options.identification.delay_scan = ctid.DelayRange(min=0, max=8)
+    scan = ctid.scan_structures(data, [ctid.ModelStructure.modes(k) for k in (3, 4)], options)
+    three, four = scan.fits
+    assert three.usable and round(three.transfer_function.input_delay / 0.01) == 2
+    assert four.validation_fit < three.validation_fit - 10
+    assert not four.usable
+    assert "larger than that of a structure it contains" in four.reasons[-1]
+    assert scan.recommended == 0
+
+
+def test_seeded_campaign_finds_the_modes_and_the_delay():
+    # Every candidate scans the whole delays 0-8; right means the true delay as well.
+    _check_campaign(_campaign().Variant(delay=True), range(1, 5), range(2))
+
+
+def test_seeded_campaign_finds_the_modes_in_closed_loop():
+    # A proportional controller with a 6 dB gain margin, known to the scan.
+    _check_campaign(_campaign().Variant(closed_loop=True), range(1, 7), range(2))

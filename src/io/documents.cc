@@ -16,7 +16,8 @@ std::vector<std::string> result_document_types() {
           kValidationReportType,
           kFrfType,
           kStudySummaryType,
-          std::string(kDelayedFeedbackResultType)};
+          std::string(kDelayedFeedbackResultType),
+          kStructureScanResultType};
 }
 
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source) {
@@ -34,6 +35,7 @@ ResultDocument result_from_json(const nlohmann::json& value, const std::string& 
   if (name == kFrfType) return frf_from_json(value, source);
   if (name == kStudySummaryType) return study_summary_from_json(value, source);
   if (name == kDelayedFeedbackResultType) return delayed_feedback_result_from_json(value, source);
+  if (name == kStructureScanResultType) return structure_scan_result_from_json(value, source);
   throw InvalidArgument(source + ": \"type\" is \"" + name +
                         "\", which is not a result document (" + types + ")");
 }

@@ -8,6 +8,7 @@
 
 #include "ctid/core/error.h"
 #include "ctid/io/fields_json.h"
+#include "ctid/io/model_json.h"
 #include "ctid/io/result_json.h"
 
 namespace ctid::io {
@@ -117,6 +118,15 @@ nlohmann::json to_json(const StudySummary& summary) { return document(summary, k
 
 StudySummary study_summary_from_json(const nlohmann::json& value, const std::string& source) {
   return document_fields<StudySummary>(value, kStudySummaryType, {}, source);
+}
+
+nlohmann::json to_json(const StructureScanResult& scan) {
+  return document(scan, kStructureScanResultType);
+}
+
+StructureScanResult structure_scan_result_from_json(const nlohmann::json& value,
+                                                    const std::string& source) {
+  return document_fields<StructureScanResult>(value, kStructureScanResultType, {"data"}, source);
 }
 
 }  // namespace ctid::io

@@ -5,6 +5,9 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
@@ -29,6 +32,45 @@ std::vector<std::complex<double>> upper_poles(const TransferFunction& g) {
 
 double variance_about_mean(const Eigen::VectorXd& x) {
   return (x.array() - x.mean()).square().mean();
+}
+
+// Submodels inner[i..] matched one to one with unused submodels of outer, each inner one to an
+// outer one with as many poles and zeros and the same integrators.
+bool match_submodels(const std::vector<SubmodelOrder>& outer,
+                     const std::vector<SubmodelOrder>& inner, std::size_t i,
+                     std::vector<bool>& used) {
+  if (i == inner.size()) return true;
+  for (std::size_t j = 0; j < outer.size(); ++j) {
+    if (used[j] || outer[j].integrators != inner[i].integrators || outer[j].n < inner[i].n ||
+        outer[j].m < inner[i].m) {
+      continue;
+    }
+    used[j] = true;
+    if (match_submodels(outer, inner, i + 1, used)) return true;
+    used[j] = false;
+  }
+  return false;
+}
+
+// True when every model of `inner` is a model of `outer` or a limit of them: the same kind, and
+// each submodel of inner has its own submodel of outer with at least as many poles and zeros
+// and the same integrators (the extra leading coefficients of A and B at zero, outer's other
+// submodels at zero gain). The fit of `outer` then has at least as small an output error on
+// the estimation data at its optimum.
+bool contains(const ModelStructure& outer, const ModelStructure& inner) {
+  if (outer.kind != inner.kind || outer.orders.size() < inner.orders.size()) return false;
+  std::vector<bool> used(outer.orders.size(), false);
+  return match_submodels(outer.orders, inner.orders, 0, used);
+}
+
+std::string describe(const ModelStructure& structure) {
+  std::string out = structure.is_additive() ? "the submodels (n, m, l) = " : "(n, m, l) = ";
+  for (std::size_t i = 0; i < structure.orders.size(); ++i) {
+    const SubmodelOrder& o = structure.orders[i];
+    out += (i > 0 ? ", (" : "(") + std::to_string(o.n) + ", " + std::to_string(o.m) + ", " +
+           std::to_string(o.integrators) + ")";
+  }
+  return out;
 }
 
 }  // namespace
@@ -56,8 +98,10 @@ StructureScanResult scan_structures(const SampledData& data,
   StructureScanResult result;
   result.estimation_samples = fitted;
   result.validation_samples = held_out;
+  std::vector<double> estimation_error;  // mean squared output error on the estimation part
   for (const ModelStructure& structure : candidates) {
     StructureFit fit;
+    estimation_error.push_back(kNan);
     fit.structure = structure;
     fit.yic = fit.rt2 = fit.aic = fit.bic = kNan;
     fit.estimation_fit = fit.validation_fit = fit.validation_error = kNan;
@@ -93,6 +137,7 @@ StructureScanResult scan_structures(const SampledData& data,
               ? (data.output().tail(held_out) - simulated.tail(held_out)).squaredNorm() / held_out
               : e_est.squaredNorm() / fitted;
       const double error_variance = e_est.squaredNorm() / fitted;
+      estimation_error.back() = error_variance;
       const double output_variance = variance_about_mean(y_est);
       fit.rt2 = 1.0 - error_variance / output_variance;
       fit.aic = fitted * std::log(error_variance) + 2.0 * fit.parameters;
@@ -115,9 +160,38 @@ StructureScanResult scan_structures(const SampledData& data,
     result.fits.push_back(std::move(fit));
   }
 
-  // Recommendation: parsimony within error_tolerance of the best usable held-out error.
   const int scored = held_out > 0 ? held_out : fitted;
-  const double tolerance = options.error_tolerance.value_or(2.0 * std::sqrt(2.0 / scored));
+  const double noise_tolerance = 2.0 * std::sqrt(2.0 / scored);
+  const double tolerance = options.error_tolerance.value_or(noise_tolerance);
+
+  // A fit that matches the estimation data worse than a usable fit of a structure it contains
+  // stopped short of its optimum (at its optimum it fits at least as well): not usable
+  // (decision 0016). The refined IV optimum is not exactly the least output error one, so
+  // "worse" is beyond the noise's tolerance, whatever error_tolerance the parsimony uses.
+  std::vector<bool> usable_fit;
+  for (const StructureFit& fit : result.fits) usable_fit.push_back(fit.usable);
+  for (std::size_t i = 0; i < result.fits.size(); ++i) {
+    StructureFit& fit = result.fits[i];
+    if (!usable_fit[i]) continue;
+    std::optional<std::size_t> better;  // the contained fit with the lowest estimation error
+    for (std::size_t j = 0; j < result.fits.size(); ++j) {
+      if (j == i || !usable_fit[j] || result.fits[j].parameters >= fit.parameters ||
+          !contains(fit.structure, result.fits[j].structure) ||
+          !(estimation_error[i] > (1.0 + noise_tolerance) * estimation_error[j])) {
+        continue;
+      }
+      if (!better || estimation_error[j] < estimation_error[*better]) better = j;
+    }
+    if (!better) continue;
+    fit.usable = false;
+    fit.reasons.push_back("its estimation error " + format_significant(estimation_error[i], 4) +
+                          " is larger than that of a structure it contains, " +
+                          describe(result.fits[*better].structure) + " (" +
+                          format_significant(estimation_error[*better], 4) +
+                          "): the fit stopped short of its optimum");
+  }
+
+  // Recommendation: parsimony within error_tolerance of the best usable held-out error.
   double best = std::numeric_limits<double>::infinity();
   double best_fit = kNan;
   for (const StructureFit& fit : result.fits) {

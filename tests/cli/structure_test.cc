@@ -4,7 +4,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <variant>
+
 #include "cli/run_ctid.h"
+#include "ctid/io/documents.h"
 #include "ctid/io/json.h"
 
 namespace ctid::cli {
@@ -31,6 +34,14 @@ TEST_F(StructureCommand, RecommendsTheTrueNumberOfModesAndWritesTheScan) {
   EXPECT_GT(j.at("fits")[1].at("validation_fit").get<double>(), 99.99);
   EXPECT_TRUE(j.at("fits")[1].at("usable").get<bool>());
   EXPECT_FALSE(j.at("stabilisation").empty());
+  // The document reads back as the scan, with the context ("data") set aside.
+  const io::ResultDocument read = io::read_result(path("s.json"));
+  const auto* scan = std::get_if<StructureScanResult>(&read);
+  ASSERT_NE(scan, nullptr);
+  EXPECT_EQ(scan->recommended, 1);
+  ASSERT_EQ(scan->fits.size(), 3U);
+  EXPECT_EQ(scan->fits[1].structure.orders.size(), 4U);
+  EXPECT_EQ(scan->fits[1].transfer_function.denominator().degree(), 8);
 }
 
 TEST_F(StructureCommand, ScansIntegratorsZerosAndTheDelay) {

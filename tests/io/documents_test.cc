@@ -169,6 +169,47 @@ StudySummary example_summary() {
   return s;
 }
 
+// Two candidates of a scan: one usable two-mode fit with its diagram, one that the estimator
+// refused (NaN scores, the placeholder transfer function 1/1).
+StructureScanResult example_structure_scan() {
+  StructureScanResult scan;
+  StructureFit good;
+  good.structure = ModelStructure::modes(2);
+  good.parameters = 6;
+  good.termination = Termination::converged;
+  good.message = "converged after 7 iterations";
+  good.iterations = 7;
+  good.usable = true;
+  good.estimation_fit = 91.0 / 3.0;
+  good.validation_fit = 89.5;
+  good.validation_error = 1e-3 / 7.0;
+  good.yic = -9.25;
+  good.rt2 = 0.99;
+  good.aic = -1234.5;
+  good.bic = -1200.25;
+  good.transfer_function = two_modes().to_transfer_function();
+  StructureFit refused;
+  refused.structure = ModelStructure::unfactored(12, 11, 1);
+  refused.message = "too many parameters";
+  refused.reasons = {"the fit failed"};
+  refused.estimation_fit = refused.validation_fit = refused.validation_error = kNaN;
+  refused.yic = refused.rt2 = refused.aic = refused.bic = kNaN;
+  scan.fits = {good, refused};
+  scan.recommended = 0;
+  scan.rule = "fewest parameters among the usable fits";
+  scan.estimation_samples = 700;
+  scan.validation_samples = 300;
+  StabilisationPoint point;
+  point.fit = 0;
+  point.order = 4;
+  point.frequency = 6.25;
+  point.damping_ratio = 1.0 / 30.0;
+  point.stable_pole = true;
+  point.stable_frequency = true;
+  scan.stabilisation = {point};
+  return scan;
+}
+
 // Written, read back through the dispatcher (as JSON text, as from a file), written again.
 template <class T>
 T round_trip(const T& result, const char* type) {
@@ -321,6 +362,45 @@ TEST(Documents, StudySummaryRoundTrips) {
   EXPECT_TRUE(std::isnan(back.mse[0].predicted_mean_squared_error));
   ASSERT_EQ(back.trends.size(), 1u);
   EXPECT_TRUE(same_bits(back.trends[0].slope, -1.01));
+}
+
+TEST(Documents, StructureScanResultRoundTripsWithItsEstimates) {
+  const StructureScanResult s = example_structure_scan();
+  nlohmann::json j = to_json(s);
+  EXPECT_EQ(j.at("fits")[0].at("transfer_function").at("type"), "transfer_function");
+  EXPECT_TRUE(j.at("fits")[1].at("validation_fit").is_null());
+  const StructureScanResult back = round_trip(s, kStructureScanResultType);
+  ASSERT_EQ(back.fits.size(), 2u);
+  const StructureFit& good = back.fits[0];
+  EXPECT_EQ(good.structure.kind, ModelKind::additive);
+  EXPECT_EQ(good.structure.orders.size(), 2u);
+  EXPECT_EQ(good.termination, Termination::converged);
+  EXPECT_TRUE(good.usable);
+  EXPECT_TRUE(same_bits(good.estimation_fit, s.fits[0].estimation_fit));
+  EXPECT_TRUE(same_bits(good.validation_error, s.fits[0].validation_error));
+  const TransferFunction& g = s.fits[0].transfer_function;
+  EXPECT_EQ(good.transfer_function.numerator().coefficients(), g.numerator().coefficients());
+  EXPECT_EQ(good.transfer_function.denominator().coefficients(), g.denominator().coefficients());
+  EXPECT_EQ(good.transfer_function.input_delay(), g.input_delay());
+  const StructureFit& refused = back.fits[1];
+  EXPECT_FALSE(refused.usable);
+  EXPECT_EQ(refused.structure.orders[0].integrators, 1);
+  EXPECT_EQ(refused.reasons, s.fits[1].reasons);
+  EXPECT_TRUE(std::isnan(refused.validation_fit));
+  EXPECT_TRUE(std::isnan(refused.yic));
+  EXPECT_EQ(back.recommended, 0);
+  EXPECT_EQ(back.rule, s.rule);
+  EXPECT_EQ(back.validation_samples, 300);
+  ASSERT_EQ(back.stabilisation.size(), 1u);
+  EXPECT_TRUE(same_bits(back.stabilisation[0].damping_ratio, 1.0 / 30.0));
+  EXPECT_FALSE(back.stabilisation[0].stable_damping);
+
+  // The context `ctid structure` writes beside it is set aside; other keys are refused.
+  j["data"] = {{"file", "d.csv"}, {"samples", 1000}, {"sample_time", 0.01}};
+  EXPECT_NO_THROW(result_from_json(j, "s.json"));
+  j["fits"][0]["surprise"] = 1;
+  EXPECT_THAT([&] { result_from_json(j, "s.json"); },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("unknown field 'surprise'")));
 }
 
 TEST(Documents, WrittenFilesReadBack) {

@@ -2,7 +2,8 @@
 // "type" of a JSON object picks the reader, its "version" is checked, and the result comes
 // back as the C++ type that wrote it. Estimation results of the refined IV estimators
 // (González et al.) with their mode relocation and delay scan, the residual tests of
-// `ctid validate`, the FRF of `ctid frf` and the summary of `ctid study`.
+// `ctid validate`, the FRF of `ctid frf`, the summary of `ctid study`, the delayed-feedback
+// result of `ctid feedback` and the structure scan of `ctid structure`.
 #pragma once
 
 #include <filesystem>
@@ -20,19 +21,22 @@
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/mode_relocation.h"
+#include "ctid/refined_iv/structure_scan.h"
 #include "ctid/study/study_output.h"
 
 namespace ctid::io {
 
 /// A result read from a document, by its "type".
-using ResultDocument = std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult,
-                                    ValidationReport, Frf, StudySummary, DelayedFeedbackResult>;
+using ResultDocument =
+    std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult, ValidationReport,
+                 Frf, StudySummary, DelayedFeedbackResult, StructureScanResult>;
 
 /// The "type" values result_from_json reads, in the order of ResultDocument.
 std::vector<std::string> result_document_types();
 
 /// The result in `value`, by its "type" (estimation_result, mode_relocation_result,
-/// input_delay_scan_result, validation_report, frf, study_summary, delayed_feedback_result). Throws
+/// input_delay_scan_result, validation_report, frf, study_summary, delayed_feedback_result,
+/// structure_scan_result). Throws
 /// InvalidArgument naming `source` for a missing or unknown type, an unknown version or a bad
 /// field.
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source);

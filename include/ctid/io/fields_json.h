@@ -117,7 +117,9 @@ void value_from_json(const nlohmann::json& value, T& out, const std::string& whe
 template <class T>
 T read_value(const nlohmann::json& value, const std::string& where) {
   if constexpr (std::is_default_constructible_v<T>) {
-    T out{};
+    // Value-initialised: GCC 12 at -O3 takes `T out{}` of an aggregate holding a vector in a
+    // nested struct (StructureFit's ModelStructure) for maybe-uninitialized.
+    T out = T();
     value_from_json(value, out, where);
     return out;
   } else {

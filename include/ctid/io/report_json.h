@@ -1,7 +1,8 @@
 // Documents of the analyses around an estimate (docs/formats.md): the residual tests of a
-// model on data (`ctid validate -o`), a nonparametric FRF (`ctid frf -o X.json`) and the
-// summary of a Section 6 study of González et al. (`ctid study`). Each is a typed, versioned
-// JSON object written from its struct's field list and read back bit for bit (NaN as null).
+// model on data (`ctid validate -o`), a nonparametric FRF (`ctid frf -o X.json`), the
+// summary of a Section 6 study of González et al. (`ctid study`) and a structure scan
+// (`ctid structure -o`). Each is a typed, versioned JSON object written from its struct's
+// field list and read back bit for bit (NaN as null).
 #pragma once
 
 #include <string>
@@ -12,6 +13,7 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/frequency/mimo_frf.h"
+#include "ctid/refined_iv/structure_scan.h"
 #include "ctid/study/paper_study.h"
 #include "ctid/study/study_output.h"
 
@@ -22,6 +24,7 @@ inline constexpr const char* kValidationReportType = "validation_report";
 inline constexpr const char* kFrfType = "frf";
 inline constexpr const char* kMimoFrfType = "mimo_frf";
 inline constexpr const char* kStudySummaryType = "study_summary";
+inline constexpr const char* kStructureScanResultType = "structure_scan_result";
 
 /// {"type": "validation_report", "version": 1, <fields>} with, restating them for readers,
 /// "autocorrelation_lags" [1, max_lag], "cross_correlation_lags" (-max_lag..max_lag),
@@ -47,5 +50,13 @@ nlohmann::json to_json(const MimoFrf& frf);
 /// {"type": "study_summary", "version": 1, <fields>}.
 nlohmann::json to_json(const StudySummary& summary);
 StudySummary study_summary_from_json(const nlohmann::json& value, const std::string& source);
+
+/// {"type": "structure_scan_result", "version": 1, <fields>}: every fit with its estimate as
+/// a transfer_function document (model_json.h), the recommendation and the stabilisation
+/// diagram.
+nlohmann::json to_json(const StructureScanResult& scan);
+/// Reads it back; the context `ctid structure` writes ("data") is accepted and not read.
+StructureScanResult structure_scan_result_from_json(const nlohmann::json& value,
+                                                    const std::string& source);
 
 }  // namespace ctid::io

@@ -66,12 +66,18 @@ struct StructureFit {
   Termination termination = Termination::not_run;
   std::string message;  ///< the fit's one-line report, or the error that stopped it
   int iterations = 0;
-  /// False when the fit failed, did not give a finite, stable model, or its verdict says so.
+  /// False when the fit failed, did not give a finite, stable model, or its verdict says so,
+  /// or when it fits the estimation data worse, by more than 2 sqrt(2 / N_v) (relative; N_v
+  /// as for error_tolerance, whatever error_tolerance says), than a usable fit
+  /// of a structure it contains (same kind, each submodel within one of its own with as many
+  /// poles and zeros and the same integrators): it stopped short of its optimum.
   bool usable = false;
-  std::vector<std::string> reasons;  ///< the estimate's verdict reasons (empty when usable)
-  double estimation_fit = 0.0;       ///< fit_percent on the estimation part
-  double validation_fit = 0.0;       ///< fit_percent on the held-out part (see validation_fraction)
-  double validation_error = 0.0;     ///< mean squared output error on the held-out part
+  /// Why not usable: the estimate's verdict reasons and the scan's (empty when usable).
+  std::vector<std::string> reasons;
+
+  double estimation_fit = 0.0;    ///< fit_percent on the estimation part
+  double validation_fit = 0.0;    ///< fit_percent on the held-out part (see validation_fraction)
+  double validation_error = 0.0;  ///< mean squared output error on the held-out part
   /// Young's information criterion: ln(s_e^2 / s_y^2) + ln((1/p) sum_i P_ii / beta_i^2), with
   /// P the parameter covariance (NaN without one). More negative is better.
   double yic = 0.0;
@@ -90,7 +96,8 @@ struct StructureFit {
         field("message", &S::message, "The fit's report, or the error that stopped it."),
         field("iterations", &S::iterations, "Iterations of the fit."),
         field("usable", &S::usable, "Finite, stable, and the fit's verdict says usable."),
-        field("reasons", &S::reasons, "The estimate's verdict reasons (empty when usable)."),
+        field("reasons", &S::reasons,
+              "Why not usable: the verdict's reasons and the scan's (empty when usable)."),
         field("estimation_fit", &S::estimation_fit, "fit_percent on the estimation part."),
         field("validation_fit", &S::validation_fit, "fit_percent on the held-out part."),
         field("validation_error", &S::validation_error,
