@@ -47,8 +47,6 @@ void bind_refined_iv_estimators(py::module_& m) {
   bind_result<MimoMode>(m, "A mode shared by every channel: w_n, zeta, shape, participation.");
   bind_result<MimoEstimationResult>(
       m, "What mimo_srivc found: the model, per-output fits, the verdict and the modes.")
-      .def_readonly("covariance", &MimoEstimationResult::covariance,
-                    "Covariance of [a of every submodel; per output its numerators and D].")
       .def("converged", &MimoEstimationResult::converged, "termination == converged.");
   m.def(
       "mimo_srivc",

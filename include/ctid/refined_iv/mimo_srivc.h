@@ -131,8 +131,6 @@ struct MimoEstimationResult {
   bool converged() const { return termination == Termination::converged; }
 
   static constexpr std::string_view type_name = "MimoEstimationResult";
-  /// The covariance is not among the fields (2 x 28 channels with 8 modes make it about a
-  /// thousand square): JSON and the field list carry the modes' standard errors instead.
   static constexpr auto fields() {
     using S = MimoEstimationResult;
     return std::tuple{
@@ -146,6 +144,8 @@ struct MimoEstimationResult {
               "Per output: mean squared output error."),
         field("fit_percent", &S::fit_percent, "Per output: fit_percent on the data."),
         field("verdict", &S::verdict, "Whether the model is usable, and why not."),
+        field("covariance", &S::covariance,
+              "Covariance of [a of every submodel; per output its numerators and D]."),
         field("modes", &S::modes, "MimoMode of every second-order submodel."),
     };
   }
