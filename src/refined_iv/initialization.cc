@@ -62,6 +62,13 @@ TransferFunction lssvf(const SampledData& data, const SubmodelOrder& order, doub
                           Polynomial::monomial(l) * Polynomial::trimmed(a));
 }
 
+Polynomial mode_from_peak(const ResonancePeak& peak) {
+  const double zeta =
+      std::isfinite(peak.damping_ratio) ? std::clamp(peak.damping_ratio, 1e-3, 0.5) : 0.05;
+  const double w = peak.frequency / std::sqrt(1.0 - 2.0 * zeta * zeta);  // resonance -> w_n
+  return Polynomial{1.0, 2.0 * zeta / w, 1.0 / (w * w)};
+}
+
 std::optional<TransferFunction> frf_peak_start(const SampledData& data, const SubmodelOrder& order,
                                                int input_delay) {
   const int pairs = order.n / 2;
@@ -77,12 +84,7 @@ std::optional<TransferFunction> frf_peak_start(const SampledData& data, const Su
     if (static_cast<int>(peaks.size()) < pairs) return std::nullopt;
   }
   Polynomial a{1.0};
-  for (const ResonancePeak& peak : peaks) {
-    const double zeta =
-        std::isfinite(peak.damping_ratio) ? std::clamp(peak.damping_ratio, 1e-3, 0.5) : 0.05;
-    const double w = peak.frequency / std::sqrt(1.0 - 2.0 * zeta * zeta);  // resonance -> w_n
-    a = a * Polynomial{1.0, 2.0 * zeta / w, 1.0 / (w * w)};
-  }
+  for (const ResonancePeak& peak : peaks) a = a * mode_from_peak(peak);
   if (order.n % 2 == 1) a = a * Polynomial{1.0, 1.0 / frf.frequencies(0)};
   const TransferFunction poles_only(Polynomial{1.0}, Polynomial::monomial(order.integrators) * a);
   return group_into_submodels(poles_only, {order}, data, input_delay)

@@ -15,6 +15,8 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/estimation/verdict.h"
 #include "ctid/filtering/filter_bank.h"
+#include "ctid/frequency/frf.h"
+#include "ctid/frequency/mimo_frf.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/initialization.h"
 #include "internal/refined_iv_engine.h"
@@ -513,12 +515,47 @@ Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditi
   return result;
 }
 
+// Denominators from the most prominent peaks of the summed-power FRF over every channel
+// (summed_power_frf of the Welch FRF matrix, segments of `segment_length` samples), one mode
+// per peak (mode_from_peak); none unless every submodel is a mode (n = 2) and the FRF has as
+// many peaks as there are modes.
+std::optional<std::vector<Polynomial>> frf_peak_denominators(const Layout& layout,
+                                                             const MimoData& data,
+                                                             int segment_length) {
+  for (const SubmodelOrder& o : layout.orders) {
+    if (o.n != 2) return std::nullopt;
+  }
+  if (data.size() < segment_length) return std::nullopt;
+  WelchOptions welch;
+  welch.segment_length = segment_length;
+  PeakOptions options;
+  options.max_peaks = layout.size();
+  std::vector<ResonancePeak> peaks =
+      resonance_peaks(summed_power_frf(welch_frf(data, welch)), options);
+  if (static_cast<int>(peaks.size()) < layout.size()) return std::nullopt;
+  std::sort(peaks.begin(), peaks.end(), [](const ResonancePeak& x, const ResonancePeak& y) {
+    return x.frequency < y.frequency;
+  });
+  std::vector<Polynomial> a;
+  for (const ResonancePeak& peak : peaks) a.push_back(mode_from_peak(peak));
+  return a;
+}
+
 // The start. Candidates: the common-denominator fit at each bandwidth of the SISO start's grid
-// (Nyquist / 128 up to Nyquist by octaves), numerators by least squares. The
-// kRefinedCandidates with the smallest relative output error are each given
-// kRefinementIterations of the iteration, and the best refined one is the start (a candidate
-// that fits well as it is can still lead the iteration astray).
+// (Nyquist / 128 up to Nyquist by octaves), numerators by least squares; the
+// kRefinedCandidates of them with the smallest relative output error and the FRF-peak
+// candidates (default and fine Welch segments) are each given kRefinementIterations of the
+// iteration, and the best refined one is the start (a candidate that fits well as it is can
+// still lead the iteration astray).
 constexpr int kRefinedCandidates = 3;
+
+// The finer of the FRF-peak candidates' Welch segments: the largest power of two of at most a
+// quarter of the record (seven half-overlapping averages), so that close modes separate.
+int fine_segment_length(int samples) {
+  int length = default_segment_length(samples);
+  while (length * 2 <= samples / 4) length *= 2;
+  return length;
+}
 constexpr int kRefinementIterations = 5;
 
 MimoAdditiveModel automatic_start(const Layout& layout, const MimoData& data, Hold interpolation) {
@@ -532,14 +569,32 @@ MimoAdditiveModel automatic_start(const Layout& layout, const MimoData& data, Ho
     const double cost = relative_output_error(layout, data, candidate);
     if (std::isfinite(cost)) candidates.emplace_back(cost, std::move(candidate));
   }
-  require(!candidates.empty(), "mimo_srivc: no start found from the data (the common-denominator ",
-          "least squares gave no model of this structure at any filter bandwidth); give an ",
-          "initial model");
   std::stable_sort(candidates.begin(), candidates.end(),
                    [](const auto& x, const auto& y) { return x.first < y.first; });
   if (candidates.size() > static_cast<size_t>(kRefinedCandidates)) {
     candidates.erase(candidates.begin() + kRefinedCandidates, candidates.end());
   }
+  // The FRF-peak candidates are refined whatever their first fit: lightly damped modes put at
+  // the right frequencies with a rough damping fit badly before the iteration corrects them.
+  std::vector<int> lengths{default_segment_length(data.size())};
+  if (fine_segment_length(data.size()) > lengths[0]) {
+    lengths.push_back(fine_segment_length(data.size()));
+  }
+  for (int length : lengths) {
+    try {
+      const std::optional<std::vector<Polynomial>> a = frf_peak_denominators(layout, data, length);
+      if (a) {
+        MimoAdditiveModel candidate = fit_numerators(layout, data, *a);
+        const double cost = relative_output_error(layout, data, candidate);
+        if (std::isfinite(cost)) candidates.emplace_back(cost, std::move(candidate));
+      }
+    } catch (const InvalidArgument&) {
+      // an FRF that gives no start is not a candidate
+    }
+  }
+  require(!candidates.empty(), "mimo_srivc: no start found from the data (neither the ",
+          "common-denominator least squares at any filter bandwidth nor the FRF peaks gave a ",
+          "model of this structure); give an initial model");
   std::optional<Iterations> best;
   for (auto& [cost, candidate] : candidates) {
     Iterations refined = run_iterations(layout, data, std::move(candidate), kRefinementIterations,

@@ -18,6 +18,7 @@
 #include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/core/transfer_function.h"
+#include "ctid/frequency/frf.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 
 namespace ctid {
@@ -66,6 +67,11 @@ struct InitializationOptions {
 /// filter (1 + p/lambda)^(n + l). Open-loop least squares: biased under noise, a start only.
 TransferFunction lssvf(const SampledData& data, const SubmodelOrder& order, double bandwidth,
                        int input_delay = 0);
+
+/// The mode 1 + 2 zeta / w_n p + p^2 / w_n^2 of a resonance peak: its half-power damping
+/// clamped to [1e-3, 0.5] (0.05 where it could not be measured), w_n from the resonance
+/// frequency w_r = w_n sqrt(1 - 2 zeta^2).
+Polynomial mode_from_peak(const ResonancePeak& peak);
 
 /// A start from the resonance peaks of the record's Welch FRF (default_segment_length,
 /// resonance_peaks on its excited, coherent lines): the n/2 most prominent peaks give pole
