@@ -297,7 +297,9 @@ MimoData DataFlags::load_mimo(const CLI::App& app) const {
                   " is not available with --input-columns / --output-columns yet");
     }
   }
-  const io::CsvTable table = io::read_csv(file);
+  if (files.size() > 1) usage_error("several inputs/outputs take one data file");
+  // DATA lands in `files` when the command takes several (ctid fit), else in `file`.
+  const io::CsvTable table = io::read_csv(files.empty() ? file : files.front());
   io::MimoCsvColumns columns;
   columns.time = time_column;
   columns.inputs = input_columns.empty() ? std::vector<std::string>{input_column} : input_columns;

@@ -23,6 +23,7 @@
 #include "ctid/io/model_json.h"
 #include "ctid/io/result_json.h"
 #include "ctid/refined_iv/identification.h"
+#include "ctid/refined_iv/mimo_srivc.h"
 #include "data_flags.h"
 #include "plot_support.h"
 
@@ -54,6 +55,7 @@ struct FitFlags {
   std::string initial_conditions = "zero";
   bool history = false;
   bool relocate_modes = false;
+  bool direct_term = false;  // several inputs/outputs: estimate D
 
   std::string output;
   std::string model_output;
@@ -259,7 +261,81 @@ IdentificationOptions identification_options(const FitFlags& f) {
   return options;
 }
 
+// Several inputs and outputs (--input-columns / --output-columns): the shared-pole estimator
+// (mimo_srivc), open loop, from the automatic start.
+ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
+  const ModelStructure structure = model_structure(f, app);
+  if (!structure.is_additive()) {
+    usage_error(
+        "with --input-columns / --output-columns give the modes (--modes K or "
+        "--submodel N,M repeated); an unfactored model has no shared modes");
+  }
+  for (const char* flag :
+       {"--controller", "--delay", "--delay-scan", "--delay-range", "--record-delays", "--initial",
+        "--relocate-modes", "--history", "--model-output", "--plot"}) {
+    if (app.count(flag) > 0) {
+      usage_error(std::string(flag) +
+                  " is not available with --input-columns / --output-columns yet (the "
+                  "shared-pole estimator is open loop, from the automatic start)");
+    }
+  }
+  if (f.start != "auto")
+    usage_error("--start must be auto with --input-columns / --output-columns");
+  if (f.initial_conditions != "zero") {
+    usage_error("--initial-conditions estimate is not available with several inputs/outputs yet");
+  }
+  refuse_existing(f.output, f.force, "--output");
+  MimoRefinedIvOptions options;
+  options.max_iterations = f.max_iterations;
+  options.tolerance = f.tolerance;
+  options.output_interpolation =
+      f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
+  options.noise = f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
+  options.direct_term = f.direct_term;
+  options.validate();
+  const MimoData data = f.data.load_mimo(app);
+  const MimoEstimationResult result = mimo_srivc(data, structure.orders, options);
+
+  if (!f.output.empty()) {
+    nlohmann::json document = io::fields_to_json(result);
+    document["type"] = "mimo_estimation_result";
+    document["data"] = {
+        {"file", f.data.files.front()},      {"samples", data.size()},
+        {"sample_time", data.sample_time()}, {"inputs", data.input_names()},
+        {"outputs", data.output_names()},    {"input_hold", enum_name(data.input_hold())}};
+    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  }
+  if (!f.quiet) {
+    if (!result.verdict.usable) std::cout << "WARNING: " << result.verdict.summary() << "\n";
+    std::cout << result.message << "\n"
+              << f.data.files.front() << ": " << data.size() << " samples, " << data.input_count()
+              << " inputs x " << data.output_count()
+              << " outputs, h = " << format_number(data.sample_time()) << " s\n";
+    for (const MimoMode& m : result.modes) {
+      std::cout << "  mode " << m.submodel + 1
+                << ": f_n = " << format_significant(m.natural_frequency / (2.0 * M_PI), 7) << " +- "
+                << format_brief(m.natural_frequency_se / (2.0 * M_PI))
+                << " Hz, zeta = " << format_significant(m.damping_ratio, 4) << " +- "
+                << format_brief(m.damping_ratio_se) << ", rank-one share "
+                << format_significant(m.rank_one_share, 3) << "\n";
+    }
+    for (int j = 0; j < data.output_count(); ++j) {
+      std::cout << "  fit " << data.output_names()[static_cast<size_t>(j)] << ": "
+                << format_significant(result.fit_percent(j), 4) << " %\n";
+    }
+  } else if (!result.verdict.usable) {
+    std::cerr << "ctid fit: WARNING: " << result.verdict.summary() << "\n";
+  }
+  return result.verdict.usable ? kExitOk : kExitNoUsableModel;
+}
+
 ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
+  if (f.data.mimo_asked(app)) return run_mimo_fit(f, app);
+  if (app.count("--direct") > 0) {
+    usage_error(
+        "--direct goes with --input-columns / --output-columns (a SISO additive model "
+        "carries its direct term in a biproper submodel: --submodel N,N)");
+  }
   const ModelStructure structure = model_structure(f, app);
   if (static_cast<int>(app.count("--delay") > 0) + static_cast<int>(!f.delay_scan.empty()) +
           static_cast<int>(!f.delay_range.empty()) >
@@ -371,6 +447,9 @@ Command add_fit_command(CLI::App& parent) {
       "Structure: --poles N --zeros M [--integrators L] (one unfactored B/(p^L A)), or "
       "--submodel N,M[,L] repeated, in any order (additive), or --modes K (K second-order "
       "modes, M = 0).\n"
+      "Several inputs and outputs: --input-columns u1,u2 --output-columns y1:y28 (names or "
+      "ranges of the file's columns) fit modes shared by every channel (open loop; --direct "
+      "adds D); the summary lists the modes and every output's fit.\n"
       "Closed loop: --controller C.json (discrete controller) uses CLSRIVC / additive CL and "
       "needs the reference column.\n"
       "Output: --output RESULT.json holds everything; its \"model\" field (or --model-output) "
@@ -381,6 +460,7 @@ Command add_fit_command(CLI::App& parent) {
       "other error.");
 
   f.data.add_to(*app, "data", true, true);
+  f.data.add_mimo_columns(*app);
 
   app->add_option("--model", f.model,
                   "Model kind: unfactored or additive (default: from the "
@@ -461,6 +541,10 @@ Command add_fit_command(CLI::App& parent) {
       ->group("Iteration");
   app->add_flag("--history", f.history, "Record every iteration's parameters in the result")
       ->group("Iteration");
+  app->add_flag("--direct", f.direct_term,
+                "Several inputs/outputs: estimate a direct term D besides the modes (e.g. "
+                "accelerations from forces, with --submodel 2,1)")
+      ->group("Structure");
   app->add_flag("--relocate-modes", f.relocate_modes,
                 "Additive, open loop: after the fit, move second-order submodels to peaks of "
                 "the residual spectrum and keep moves that fit better (finds weak, lightly "
