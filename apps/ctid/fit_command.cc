@@ -21,6 +21,7 @@
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
 #include "ctid/refined_iv/identification.h"
 #include "ctid/refined_iv/mimo_srivc.h"
@@ -297,8 +298,7 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   const MimoEstimationResult result = mimo_srivc(data, structure.orders, options);
 
   if (!f.output.empty()) {
-    nlohmann::json document = io::fields_to_json(result);
-    document["type"] = "mimo_estimation_result";
+    nlohmann::json document = io::to_json(result);
     document["data"] = {
         {"file", f.data.files.front()},      {"samples", data.size()},
         {"sample_time", data.sample_time()}, {"inputs", data.input_names()},

@@ -51,8 +51,8 @@ void bind_io(py::module_& m) {
       "The result in a document written by ctid (fit -o, validate -o, frf -o X.json, study's "
       "summary.json, feedback -o, structure -o) or by write_result: EstimationResult, "
       "ModeRelocationResult, "
-      "InputDelayScanResult, ValidationReport, Frf, StudySummary, DelayedFeedbackResult or "
-      "StructureScanResult, "
+      "InputDelayScanResult, ValidationReport, Frf, StudySummary, DelayedFeedbackResult, "
+      "StructureScanResult or MimoEstimationResult, "
       "chosen by its \"type\". "
       "Raises InvalidArgument for an unknown type or version or a bad field.");
   m.def("result_document_types", &io::result_document_types,

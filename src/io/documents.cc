@@ -17,7 +17,8 @@ std::vector<std::string> result_document_types() {
           kFrfType,
           kStudySummaryType,
           std::string(kDelayedFeedbackResultType),
-          kStructureScanResultType};
+          kStructureScanResultType,
+          kMimoEstimationResultType};
 }
 
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source) {
@@ -36,6 +37,7 @@ ResultDocument result_from_json(const nlohmann::json& value, const std::string& 
   if (name == kStudySummaryType) return study_summary_from_json(value, source);
   if (name == kDelayedFeedbackResultType) return delayed_feedback_result_from_json(value, source);
   if (name == kStructureScanResultType) return structure_scan_result_from_json(value, source);
+  if (name == kMimoEstimationResultType) return mimo_estimation_result_from_json(value, source);
   throw InvalidArgument(source + ": \"type\" is \"" + name +
                         "\", which is not a result document (" + types + ")");
 }

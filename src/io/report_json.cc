@@ -129,4 +129,13 @@ StructureScanResult structure_scan_result_from_json(const nlohmann::json& value,
   return document_fields<StructureScanResult>(value, kStructureScanResultType, {"data"}, source);
 }
 
+nlohmann::json to_json(const MimoEstimationResult& result) {
+  return document(result, kMimoEstimationResultType);
+}
+
+MimoEstimationResult mimo_estimation_result_from_json(const nlohmann::json& value,
+                                                      const std::string& source) {
+  return document_fields<MimoEstimationResult>(value, kMimoEstimationResultType, {"data"}, source);
+}
+
 }  // namespace ctid::io

@@ -11,6 +11,7 @@
 #include "cli/run_ctid.h"
 #include "ctid/core/mimo_data.h"
 #include "ctid/core/mimo_model.h"
+#include "ctid/io/documents.h"
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_data_csv.h"
 #include "ctid/simulation/excitation.h"
@@ -73,6 +74,10 @@ TEST_F(FitMimoCommand, SharedModesFromNoiseFreeData) {
   EXPECT_NEAR(j.at("modes")[1].at("shape")[0][0].get<double>(), -0.4 / norm, 1e-8);
   EXPECT_NEAR(j.at("modes")[1].at("shape")[1][0].get<double>(), 1.0 / norm, 1e-8);
   EXPECT_TRUE(j.at("verdict").at("usable").get<bool>());
+  // The document reads back as the result that wrote it.
+  const auto back = std::get<MimoEstimationResult>(io::read_result(path("r.json")));
+  EXPECT_EQ(back.modes.size(), 2u);
+  EXPECT_EQ(back.model->outputs(), 3);
 }
 
 TEST_F(FitMimoCommand, BadUsageNamesTheProblem) {

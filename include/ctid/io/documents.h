@@ -20,6 +20,7 @@
 #include "ctid/io/file.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/input_delay_scan.h"
+#include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
 #include "ctid/refined_iv/structure_scan.h"
 #include "ctid/study/study_output.h"
@@ -27,16 +28,16 @@
 namespace ctid::io {
 
 /// A result read from a document, by its "type".
-using ResultDocument =
-    std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult, ValidationReport,
-                 Frf, StudySummary, DelayedFeedbackResult, StructureScanResult>;
+using ResultDocument = std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult,
+                                    ValidationReport, Frf, StudySummary, DelayedFeedbackResult,
+                                    StructureScanResult, MimoEstimationResult>;
 
 /// The "type" values result_from_json reads, in the order of ResultDocument.
 std::vector<std::string> result_document_types();
 
 /// The result in `value`, by its "type" (estimation_result, mode_relocation_result,
 /// input_delay_scan_result, validation_report, frf, study_summary, delayed_feedback_result,
-/// structure_scan_result). Throws
+/// structure_scan_result, mimo_estimation_result). Throws
 /// InvalidArgument naming `source` for a missing or unknown type, an unknown version or a bad
 /// field.
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source);

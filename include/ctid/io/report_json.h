@@ -13,6 +13,7 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/frequency/mimo_frf.h"
+#include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/structure_scan.h"
 #include "ctid/study/paper_study.h"
 #include "ctid/study/study_output.h"
@@ -25,6 +26,7 @@ inline constexpr const char* kFrfType = "frf";
 inline constexpr const char* kMimoFrfType = "mimo_frf";
 inline constexpr const char* kStudySummaryType = "study_summary";
 inline constexpr const char* kStructureScanResultType = "structure_scan_result";
+inline constexpr const char* kMimoEstimationResultType = "mimo_estimation_result";
 
 /// {"type": "validation_report", "version": 1, <fields>} with, restating them for readers,
 /// "autocorrelation_lags" [1, max_lag], "cross_correlation_lags" (-max_lag..max_lag),
@@ -55,6 +57,11 @@ StudySummary study_summary_from_json(const nlohmann::json& value, const std::str
 /// a transfer_function document (model_json.h), the recommendation and the stabilisation
 /// diagram.
 nlohmann::json to_json(const StructureScanResult& scan);
+/// The shared-pole estimate (`ctid fit --input-columns ...`): its fields; `ctid fit` adds
+/// "data", which the reader accepts.
+nlohmann::json to_json(const MimoEstimationResult& result);
+MimoEstimationResult mimo_estimation_result_from_json(const nlohmann::json& value,
+                                                      const std::string& source);
 /// Reads it back; the context `ctid structure` writes ("data") is accepted and not read.
 StructureScanResult structure_scan_result_from_json(const nlohmann::json& value,
                                                     const std::string& source);
