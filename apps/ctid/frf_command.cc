@@ -48,6 +48,32 @@ struct FrfFlags {
   std::string model;
   bool force = false;
   bool quiet = false;
+
+  // The estimators' and the peak picker's options as the flags give them (validated).
+  PeriodicFrfOptions periodic_options() const {
+    PeriodicFrfOptions options;
+    options.period_length = period;
+    options.transient_periods = transient_periods;
+    options.line_threshold = line_threshold;
+    options.validate();
+    return options;
+  }
+  WelchOptions welch_options(int samples) const {
+    WelchOptions options;
+    options.segment_length = segment_length > 0 ? segment_length : default_segment_length(samples);
+    options.overlap = overlap;
+    options.validate();
+    return options;
+  }
+  PeakOptions peak_options() const {
+    PeakOptions options;
+    options.min_prominence_db = min_prominence_db;
+    options.max_peaks = max_peaks;
+    options.line_threshold = line_threshold;
+    options.min_coherence = min_coherence;
+    options.validate();
+    return options;
+  }
 };
 
 io::CsvTable frf_table(const Frf& frf) {
@@ -152,27 +178,12 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
   const MimoData data = f.data.load_mimo(app);
   MimoFrf frf;
   if (periodic) {
-    PeriodicFrfOptions options;
-    options.period_length = f.period;
-    options.transient_periods = f.transient_periods;
-    options.line_threshold = f.line_threshold;
-    options.validate();
     const int experiments = f.experiments > 0 ? f.experiments : data.input_count();
-    frf = periodic_frf(data, options, experiments);
+    frf = periodic_frf(data, f.periodic_options(), experiments);
   } else {
-    WelchOptions options;
-    options.segment_length =
-        f.segment_length > 0 ? f.segment_length : default_segment_length(data.size());
-    options.overlap = f.overlap;
-    options.validate();
-    frf = welch_frf(data, options);
+    frf = welch_frf(data, f.welch_options(data.size()));
   }
-  PeakOptions peak_options;
-  peak_options.min_prominence_db = f.min_prominence_db;
-  peak_options.max_peaks = f.max_peaks;
-  peak_options.line_threshold = f.line_threshold;
-  peak_options.min_coherence = f.min_coherence;
-  peak_options.validate();
+  const PeakOptions peak_options = f.peak_options();
   const std::size_t all_lines = frf.lines.size();
   frf = excited_lines(frf, f.line_threshold);
   require(frf.frequencies.size() > 0,
@@ -292,26 +303,11 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
 
   Frf frf;
   if (periodic) {
-    PeriodicFrfOptions options;
-    options.period_length = f.period;
-    options.transient_periods = f.transient_periods;
-    options.line_threshold = f.line_threshold;
-    options.validate();
-    frf = periodic_frf(data, options);
+    frf = periodic_frf(data, f.periodic_options());
   } else {
-    WelchOptions options;
-    options.segment_length =
-        f.segment_length > 0 ? f.segment_length : default_segment_length(data.size());
-    options.overlap = f.overlap;
-    options.validate();
-    frf = welch_frf(data, options);
+    frf = welch_frf(data, f.welch_options(data.size()));
   }
-  PeakOptions peak_options;
-  peak_options.min_prominence_db = f.min_prominence_db;
-  peak_options.max_peaks = f.max_peaks;
-  peak_options.line_threshold = f.line_threshold;
-  peak_options.min_coherence = f.min_coherence;
-  peak_options.validate();
+  const PeakOptions peak_options = f.peak_options();
   const std::size_t all_lines = frf.lines.size();
   frf = excited_lines(frf, f.line_threshold);
   require(frf.frequencies.size() > 0, "ctid frf: no line of the input reaches --line-threshold ",
