@@ -157,6 +157,23 @@ MimoAdditiveModel fit_numerators(const Layout& layout, const MimoData& data,
   return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels), direct);
 }
 
+// u S^-1 = Q R with S the columns' norms (column_scales), Q thin (N x columns): how the
+// numerator columns, the same for every output, are projected out of each output's equations.
+struct ScaledQr {
+  Eigen::VectorXd scale;
+  Eigen::MatrixXd q;
+  Eigen::MatrixXd r;  // upper triangular
+};
+
+ScaledQr scaled_thin_qr(const Eigen::MatrixXd& u) {
+  ScaledQr f;
+  f.scale = internal::column_scales(u);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(u * f.scale.cwiseInverse().asDiagonal());
+  f.q = qr.householderQ() * Eigen::MatrixXd::Identity(u.rows(), u.cols());
+  f.r = qr.matrixQR().topRows(u.cols()).triangularView<Eigen::Upper>();
+  return f;
+}
+
 // Sum over the outputs of the mean squared output error relative to the output's mean square:
 // how the start's candidates are compared (every channel counts alike).
 double relative_output_error(const Layout& layout, const MimoData& data,
@@ -192,9 +209,7 @@ std::optional<std::vector<Polynomial>> common_denominator_start(const Layout& la
   for (int k = 0; k < layout.inputs; ++k) {
     u.middleCols(k * (m + 1), m + 1) = on_inputs.apply(data.inputs().col(k)).leftCols(m + 1);
   }
-  const Eigen::VectorXd u_scale = internal::column_scales(u);
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(u * u_scale.cwiseInverse().asDiagonal());
-  const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(data.size(), u.cols());
+  const Eigen::MatrixXd q = scaled_thin_qr(u).q;
   Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n, n);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
   for (int j = 0; j < layout.outputs; ++j) {
@@ -296,15 +311,14 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
   }
 
   // The numerator columns, scaled to unit norm, projected out with one thin QR.
-  const Eigen::VectorXd u_scale = internal::column_scales(u);
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(u * u_scale.cwiseInverse().asDiagonal());
-  const Eigen::MatrixXd triangle =
-      qr.matrixQR().topRows(layout.u_count).triangularView<Eigen::Upper>();
+  const ScaledQr factors = scaled_thin_qr(u);
+  const Eigen::VectorXd& u_scale = factors.scale;
+  const Eigen::MatrixXd& triangle = factors.r;
+  const Eigen::MatrixXd& q = factors.q;
   const double r_max = triangle.diagonal().cwiseAbs().maxCoeff();
   if (!(triangle.diagonal().cwiseAbs().minCoeff() > 1e-12 * r_max)) {
     return {std::nullopt, "the numerator regressors are numerically collinear"};
   }
-  const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(n, layout.u_count);
 
   const InstrumentSources sources(layout, data, a);
 
@@ -398,6 +412,7 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
         u_scale.cwiseInverse().asDiagonal() *
         triangle.triangularView<Eigen::Upper>().solve(q_upsilon[static_cast<size_t>(j)] -
                                                       q_phi[static_cast<size_t>(j)] * alpha);
+    // Appended output by output, input by input: the model's own order of numerators.
     for (int i = 0; i < submodels; ++i) {
       const int m = layout.orders[static_cast<size_t>(i)].m;
       for (int k = 0; k < layout.inputs; ++k) {
@@ -409,10 +424,9 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
       next_direct.row(j) = beta.block(layout.d_at, submodels, layout.inputs, 1).transpose();
     }
   }
-  // Numerators were appended output by output, input by input: the model's own order.
+  // (The denominators were checked above.)
   bool finite = next_direct.allFinite();
-  for (MimoSubmodel& s : next) {
-    finite = finite && s.a.coefficients().allFinite();
+  for (const MimoSubmodel& s : next) {
     for (const Polynomial& b : s.b) finite = finite && b.coefficients().allFinite();
   }
   if (!finite) return {std::nullopt, "an iterate is not finite", Termination::non_finite};
@@ -687,10 +701,9 @@ Eigen::VectorXcd principal_shape(const Eigen::MatrixXcd& residue, double* share 
 // Residue matrix of submodel i (second order) at its upper pole, from its denominator
 // coefficients and per-channel numerator coefficients (numerators[j * inputs + k]).
 Eigen::MatrixXcd residue_matrix(const Layout& layout, double a1, double a2,
-                                const std::vector<Eigen::VectorXd>& numerators,
-                                std::complex<double>& pole) {
+                                const std::vector<Eigen::VectorXd>& numerators) {
   const std::complex<double> disc = std::sqrt(std::complex<double>(a1 * a1 - 4.0 * a2));
-  pole = (-a1 + disc) / (2.0 * a2);
+  std::complex<double> pole = (-a1 + disc) / (2.0 * a2);
   if (pole.imag() < 0.0) pole = std::conj(pole);
   const std::complex<double> slope = a1 + 2.0 * a2 * pole;
   Eigen::MatrixXcd res(layout.outputs, layout.inputs);
@@ -732,13 +745,11 @@ std::vector<MimoMode> modes_of(const Layout& layout, const MimoAdditiveModel& mo
     mode.submodel = i;
     mode.natural_frequency = 1.0 / std::sqrt(a[2]);
     mode.damping_ratio = a[1] / (2.0 * std::sqrt(a[2]));
-    std::complex<double> pole;
-    const auto shape_at = [&](double a1, double a2, const std::vector<Eigen::VectorXd>& b,
-                              double* share) {
-      return principal_shape(residue_matrix(layout, a1, a2, b, pole), share);
+    const auto shape_at = [&](double a1, double a2, const std::vector<Eigen::VectorXd>& b) {
+      return principal_shape(residue_matrix(layout, a1, a2, b));
     };
-    mode.shape = shape_at(a[1], a[2], numerators, &mode.rank_one_share);
-    const Eigen::MatrixXcd res = residue_matrix(layout, a[1], a[2], numerators, pole);
+    const Eigen::MatrixXcd res = residue_matrix(layout, a[1], a[2], numerators);
+    mode.shape = principal_shape(res, &mode.rank_one_share);
     mode.participation = res.transpose() * mode.shape.conjugate();
     mode.natural_frequency_se = mode.damping_ratio_se = nan;
     mode.shape_se_real = mode.shape_se_imag = Eigen::VectorXd::Constant(layout.outputs, nan);
@@ -771,9 +782,9 @@ std::vector<MimoMode> modes_of(const Layout& layout, const MimoAdditiveModel& mo
         const double step = 1e-6 * std::max(std::abs(*value), 1e-6 * std::abs(a[x == 0 ? 1 : 2]));
         const double saved = *value;
         *value = saved + step;
-        const Eigen::VectorXcd plus = shape_at(a1, a2, b, nullptr);
+        const Eigen::VectorXcd plus = shape_at(a1, a2, b);
         *value = saved - step;
-        const Eigen::VectorXcd minus = shape_at(a1, a2, b, nullptr);
+        const Eigen::VectorXcd minus = shape_at(a1, a2, b);
         const Eigen::VectorXcd d = (plus - minus) / (2.0 * step);
         jac.col(x) << d.real(), d.imag();
       }
