@@ -223,6 +223,14 @@ void refuse_existing(const std::string& path, bool force, const std::string& fla
   }
 }
 
+// --interpolation and --noise as the estimators' enumerations (SISO and several channels).
+Hold output_interpolation(const FitFlags& f) {
+  return f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
+}
+NoiseAssumption noise_assumption(const FitFlags& f) {
+  return f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
+}
+
 // The flags as IdentificationOptions (the controller and --initial read from their files).
 IdentificationOptions identification_options(const FitFlags& f) {
   IdentificationOptions options;
@@ -233,9 +241,8 @@ IdentificationOptions identification_options(const FitFlags& f) {
   RefinedIvOptions& refined = options.refined_iv;
   refined.max_iterations = f.max_iterations;
   refined.tolerance = f.tolerance;
-  refined.output_interpolation =
-      f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
-  refined.noise = f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
+  refined.output_interpolation = output_interpolation(f);
+  refined.noise = noise_assumption(f);
   refined.initial_conditions =
       f.initial_conditions == "estimate" ? InitialConditions::estimate : InitialConditions::zero;
   refined.record_history = f.history;
@@ -289,9 +296,8 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   MimoRefinedIvOptions options;
   options.max_iterations = f.max_iterations;
   options.tolerance = f.tolerance;
-  options.output_interpolation =
-      f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
-  options.noise = f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
+  options.output_interpolation = output_interpolation(f);
+  options.noise = noise_assumption(f);
   options.direct_term = f.direct_term;
   options.validate();
   const MimoData data = f.data.load_mimo(app);

@@ -76,6 +76,16 @@ struct FrfFlags {
   }
 };
 
+// One line of the peak list; `response` names the FRF (G for SISO, H for the matrix's norm).
+void print_peak(std::ostream& out, const ResonancePeak& p, const char* response) {
+  out << "  w = " << format_brief(p.frequency) << " rad/s ("
+      << format_brief(p.frequency / (2.0 * std::numbers::pi)) << " Hz), |" << response
+      << "| = " << format_significant(20.0 * std::log10(p.magnitude), 4) << " dB, prominence "
+      << format_significant(p.prominence_db, 3) << " dB, damping ~ "
+      << format_significant(p.damping_ratio, 3) << ", coherence "
+      << format_significant(p.coherence, 3) << "\n";
+}
+
 io::CsvTable frf_table(const Frf& frf) {
   const Eigen::Index n = frf.frequencies.size();
   Eigen::VectorXd hz(n), db(n), deg(n), re(n), im(n);
@@ -259,14 +269,7 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
             << " of sqrt(sum |H_ji|^2) over the " << frf.input_count() * frf.output_count()
             << " channels (prominence >= " << format_number(f.min_prominence_db)
             << " dB, power-weighted coherence >= " << format_number(f.min_coherence) << "):\n";
-  for (const ResonancePeak& p : peaks) {
-    std::cout << "  w = " << format_brief(p.frequency) << " rad/s ("
-              << format_brief(p.frequency / (2.0 * std::numbers::pi))
-              << " Hz), |H| = " << format_significant(20.0 * std::log10(p.magnitude), 4)
-              << " dB, prominence " << format_significant(p.prominence_db, 3) << " dB, damping ~ "
-              << format_significant(p.damping_ratio, 3) << ", coherence "
-              << format_significant(p.coherence, 3) << "\n";
-  }
+  for (const ResonancePeak& p : peaks) print_peak(std::cout, p, "H");
   if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
 }
 
@@ -349,14 +352,7 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
     std::cout << peaks.size() << " resonance peak" << (peaks.size() == 1 ? "" : "s")
               << " (prominence >= " << format_number(f.min_prominence_db)
               << " dB, coherence >= " << format_number(f.min_coherence) << "):\n";
-    for (const ResonancePeak& p : peaks) {
-      std::cout << "  w = " << format_brief(p.frequency) << " rad/s ("
-                << format_brief(p.frequency / (2.0 * std::numbers::pi))
-                << " Hz), |G| = " << format_significant(20.0 * std::log10(p.magnitude), 4)
-                << " dB, prominence " << format_significant(p.prominence_db, 3) << " dB, damping ~ "
-                << format_significant(p.damping_ratio, 3) << ", coherence "
-                << format_significant(p.coherence, 3) << "\n";
-    }
+    for (const ResonancePeak& p : peaks) print_peak(std::cout, p, "G");
     if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
   }
   if (!f.plot.empty()) draw_frf(f, package, frf, table);
