@@ -853,6 +853,20 @@ Eigen::MatrixXd modal_assurance(const std::vector<MimoMode>& a, const std::vecto
   return mac;
 }
 
+std::vector<MimoMode> mimo_modes(const MimoAdditiveModel& model,
+                                 const std::vector<SubmodelOrder>& orders,
+                                 const Eigen::MatrixXd& covariance) {
+  require(static_cast<int>(orders.size()) == model.size(), "mimo_modes: ", orders.size(),
+          " orders for a model of ", model.size(), " submodels");
+  const Layout layout(orders, model.inputs(), model.outputs(), model.has_direct_term());
+  require(covariance.size() == 0 ||
+              (covariance.rows() == covariance.cols() &&
+               covariance.rows() == layout.a_count + layout.outputs * layout.u_count),
+          "mimo_modes: the covariance is ", covariance.rows(), " x ", covariance.cols(),
+          "; the model has ", layout.a_count + layout.outputs * layout.u_count, " parameters");
+  return modes_of(layout, model, covariance);
+}
+
 MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<SubmodelOrder>& orders,
                                 const MimoRefinedIvOptions& options,
                                 const std::optional<MimoAdditiveModel>& initial_model) {

@@ -107,6 +107,14 @@ double modal_assurance(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b);
 /// MAC of every pair (rows: `a`, columns: `b`).
 Eigen::MatrixXd modal_assurance(const std::vector<MimoMode>& a, const std::vector<MimoMode>& b);
 
+/// Every second-order submodel of `model` (structure `orders`) as a MimoMode. `covariance`,
+/// if not empty, is that of the parameters in MimoEstimationResult::covariance's layout (every
+/// submodel's a_1..a_n; then per output, per submodel, per input the numerator coefficients
+/// b_0..b_m, and D[j, .] last when the model has a direct term) and gives the standard errors.
+std::vector<MimoMode> mimo_modes(const MimoAdditiveModel& model,
+                                 const std::vector<SubmodelOrder>& orders,
+                                 const Eigen::MatrixXd& covariance = {});
+
 struct MimoEstimationResult {
   /// The estimate: the fixed point when the iteration converged, else the iterate with the
   /// lowest output error (none if nothing was computed).
