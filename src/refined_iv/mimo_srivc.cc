@@ -436,17 +436,17 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
           rcond};
 }
 
-// The model halfway between two of the same structure, parameter by parameter.
-MimoAdditiveModel midpoint(const Layout& layout, const MimoAdditiveModel& x,
-                           const MimoAdditiveModel& y) {
+// The model a fraction w of the way from x to y, parameter by parameter.
+MimoAdditiveModel blend(const Layout& layout, const MimoAdditiveModel& x,
+                        const MimoAdditiveModel& y, double w) {
   std::vector<MimoSubmodel> submodels;
   for (int i = 0; i < layout.size(); ++i) {
-    MimoSubmodel s{0.5 * x[i].a + 0.5 * y[i].a, {}};
-    for (size_t c = 0; c < x[i].b.size(); ++c) s.b.push_back(0.5 * x[i].b[c] + 0.5 * y[i].b[c]);
+    MimoSubmodel s{(1.0 - w) * x[i].a + w * y[i].a, {}};
+    for (size_t c = 0; c < x[i].b.size(); ++c) s.b.push_back((1.0 - w) * x[i].b[c] + w * y[i].b[c]);
     submodels.push_back(std::move(s));
   }
   Eigen::MatrixXd direct;
-  if (layout.direct) direct = 0.5 * (x.direct() + y.direct());
+  if (layout.direct) direct = (1.0 - w) * x.direct() + w * y.direct();
   return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels), direct);
 }
 
@@ -464,22 +464,36 @@ struct Iterations {
 
 Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditiveModel model,
                           int max_iterations, double tolerance, Hold output_interpolation) {
-  const double start_cost = relative_output_error(layout, data, model);
+  double cost = relative_output_error(layout, data, model);
   Iterations result{
-      model, start_cost, Termination::not_run, {}, 0, 0, std::numeric_limits<double>::quiet_NaN()};
+      model, cost, Termination::not_run, {}, 0, 0, std::numeric_limits<double>::quiet_NaN()};
   MimoAdditiveModel& best = result.model;
   double& best_cost = result.cost;
   int best_iteration = 0;
-  Eigen::VectorXd previous = flatten(model);
-  // Step control as in the SISO engine: a step to an iterate whose equations cannot be formed
-  // or solved is halved toward the last accepted iterate (kMaxHalvings times at most).
+  // Step control. (1) A step to an iterate whose equations cannot be formed or solved is
+  // halved toward the last accepted iterate (kMaxHalvings times at most), as in the SISO
+  // engine. (2) On lightly damped measured structures the map x -> T(x) of (29) can have an
+  // eigenvalue below -1 at its fixed point: the steps T(x) - x reverse and grow. Such an
+  // oscillation halves the relaxation w of x <- x + w (T(x) - x), which has the same fixed
+  // points. (3) A step that more than doubles the output error is halved toward x.
   constexpr int kMaxHalvings = 8;
+  constexpr double kMinRelaxation = 1.0 / 64.0;
+  double relaxation = 1.0;
+  // (4) Rounding: on long records of lightly damped modes the step T(x) - x stops shrinking
+  // near 1e-8 relative (measured on the flexible structure). Once it has stayed above its
+  // smallest value, itself below kFloorFactor * tolerance, for kStallIterations iterations,
+  // the iterate is at its fixed point to rounding and counts as converged.
+  constexpr double kFloorFactor = 1e3;
+  constexpr int kStallIterations = 10;
+  double smallest_change = std::numeric_limits<double>::infinity();
+  int smallest_at = 0;
   std::optional<MimoAdditiveModel> accepted;
+  Eigen::VectorXd last_step;
   for (int iteration = 1; iteration <= max_iterations; ++iteration) {
     Step step = iterate(layout, data, model, output_interpolation);
     for (int halvings = 0; !step.model && accepted && halvings < kMaxHalvings; ++halvings) {
       ++result.step_halvings;
-      model = midpoint(layout, *accepted, model);
+      model = blend(layout, *accepted, model, 0.5);
       step = iterate(layout, data, model, output_interpolation);
     }
     result.reciprocal_condition = step.reciprocal_condition;
@@ -489,24 +503,48 @@ Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditi
           internal::concat("mimo_srivc: stopped at iteration ", iteration, ": ", step.failure);
       break;
     }
-    accepted = model;
-    model = std::move(*step.model);
     result.iterations = iteration;
-    const double cost = relative_output_error(layout, data, model);
+    const Eigen::VectorXd here = flatten(model);
+    const Eigen::VectorXd full_step = flatten(*step.model) - here;
+    const double change = full_step.norm() / here.norm();
+    if (change < smallest_change) {
+      smallest_change = change;
+      smallest_at = iteration;
+    }
+    const bool stalled =
+        smallest_change < kFloorFactor * tolerance && iteration - smallest_at >= kStallIterations;
+    if (change < tolerance || stalled) {
+      model = std::move(*step.model);
+      result.termination = Termination::converged;
+      result.message =
+          internal::concat("mimo_srivc: converged after ", iteration,
+                           " iterations (relative parameter change ", format_brief(change),
+                           stalled ? internal::concat(", at the rounding floor: no smaller than ",
+                                                      format_brief(smallest_change), " for ",
+                                                      kStallIterations, " iterations)")
+                                   : std::string(")"));
+      break;
+    }
+    if (last_step.size() > 0 && full_step.dot(last_step) < 0.0 &&
+        full_step.norm() > 0.5 * last_step.norm() && relaxation > kMinRelaxation) {
+      relaxation *= 0.5;
+    }
+    last_step = full_step;
+    MimoAdditiveModel next =
+        relaxation < 1.0 ? blend(layout, model, *step.model, relaxation) : std::move(*step.model);
+    double next_cost = relative_output_error(layout, data, next);
+    for (int halvings = 0; halvings < kMaxHalvings && !(next_cost <= 2.0 * cost); ++halvings) {
+      ++result.step_halvings;
+      next = blend(layout, model, next, 0.5);
+      next_cost = relative_output_error(layout, data, next);
+    }
+    accepted = model;
+    model = std::move(next);
+    cost = next_cost;
     if (std::isfinite(cost) && cost <= best_cost) {
       best = model;
       best_cost = cost;
       best_iteration = iteration;
-    }
-    const Eigen::VectorXd current = flatten(model);
-    const double change = (current - previous).norm() / previous.norm();
-    previous = current;
-    if (change < tolerance) {
-      result.termination = Termination::converged;
-      result.message =
-          internal::concat("mimo_srivc: converged after ", iteration,
-                           " iterations (relative parameter change ", format_brief(change), ")");
-      break;
     }
   }
   if (result.termination == Termination::not_run) {
