@@ -259,9 +259,12 @@ std::vector<std::filesystem::path> draw_mimo_figures(const std::filesystem::path
   const std::filesystem::path result_file = work.path() / "result.json";
   io::write_json(result_file, result);
   std::vector<PlotJob> jobs;
-  WelchOptions options;
-  options.segment_length = default_segment_length(data.size());
-  const MimoFrf frf = excited_lines(welch_frf(data, options), PeriodicFrfOptions{}.line_threshold);
+  MimoFrf frf;
+  if (data.size() >= 16) {  // as draw_model_figures: too short a record has no FRF to show
+    WelchOptions options;
+    options.segment_length = default_segment_length(data.size());
+    frf = excited_lines(welch_frf(data, options), PeriodicFrfOptions{}.line_threshold);
+  }
   if (frf.frequencies.size() > 0) {
     const std::filesystem::path frf_file = work.path() / "frf.json";
     io::write_json(frf_file, io::to_json(frf));
