@@ -460,6 +460,7 @@ struct Iterations {
   int iterations = 0;
   int step_halvings = 0;
   double reciprocal_condition = std::numeric_limits<double>::quiet_NaN();
+  bool start_returned = false;  // not converged, and no iterate fitted better than the start
 };
 
 Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditiveModel model,
@@ -557,12 +558,12 @@ Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditi
   if (result.termination == Termination::converged) {
     best_cost = relative_output_error(layout, data, model);
     best = std::move(model);
+  } else if (best_iteration == 0) {
+    result.start_returned = true;
+    result.message += "; no iterate fitted the outputs better than the start, which is returned";
   } else if (best_iteration != result.iterations) {
-    result.message +=
-        internal::concat("; the iterate with the lowest output error (",
-                         best_iteration == 0 ? std::string("the start")
-                                             : internal::concat("iteration ", best_iteration),
-                         ") is returned");
+    result.message += internal::concat("; the iterate with the lowest output error (", "iteration ",
+                                       best_iteration, ") is returned");
   }
   return result;
 }
@@ -970,6 +971,10 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
     }
   }
   check_conditioning(result.verdict, reciprocal_condition);
+  if (run.start_returned) {
+    result.verdict.fail("the iteration did not improve on its start (" + result.message + ")",
+                        {verdict_advice::better_start, verdict_advice::lower_order});
+  }
   if (options.compute_covariance) {
     result.covariance = mimo_covariance(layout, data, model, u, data.outputs() - fitted,
                                         options.noise, options.noise_model_max_order);
