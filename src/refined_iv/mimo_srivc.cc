@@ -691,6 +691,10 @@ Eigen::MatrixXd mimo_covariance(const Layout& layout, const MimoData& data,
   Eigen::MatrixXd r = Eigen::MatrixXd::Zero(p, p);
   Eigen::MatrixXd q = Eigen::MatrixXd::Zero(p, p);
   const double dof = static_cast<double>(n) / static_cast<double>(std::max(1, n - pu - pa));
+  // Per output: its (whitened) gradient g_j ((pa + pu) x N) and its innovations.
+  std::vector<Eigen::MatrixXd> g(static_cast<size_t>(layout.outputs));
+  Eigen::MatrixXd innovations(n, layout.outputs);
+  Eigen::VectorXd variance(layout.outputs);  // of each output's innovations (AR or residual)
   for (int j = 0; j < layout.outputs; ++j) {
     const Eigen::MatrixXd ps = psi[static_cast<size_t>(j)] * s_a.cwiseInverse().asDiagonal();
     const int at = pa + j * pu;
@@ -698,23 +702,65 @@ Eigen::MatrixXd mimo_covariance(const Layout& layout, const MimoData& data,
     r.block(0, at, pa, pu) = ps.transpose() * us;
     r.block(at, 0, pu, pa) = r.block(0, at, pa, pu).transpose();
     r.block(at, at, pu, pu) = us.transpose() * us;
-    Eigen::MatrixXd g(pa + pu, n);
-    double e2 = 0.0;
     Eigen::MatrixXd both(n, pa + pu);
     both << ps, us;
     if (noise == NoiseAssumption::white) {
-      g = both.transpose();
-      e2 = residuals.col(j).squaredNorm() / static_cast<double>(n) * dof;
+      g[static_cast<size_t>(j)] = both.transpose();
+      innovations.col(j) = residuals.col(j);
+      variance(j) = residuals.col(j).squaredNorm() / static_cast<double>(n) * dof;
     } else {
       const AutoregressiveModel ar = fit_autoregressive(residuals.col(j), max_ar_order);
-      g = adjoint_ar_filter(both, ar);
-      e2 = ar.innovation_variance * dof;
+      g[static_cast<size_t>(j)] = adjoint_ar_filter(both, ar);
+      variance(j) = ar.innovation_variance * dof;
+      const Eigen::Index order = ar.coefficients.size() - 1;
+      for (Eigen::Index t = 0; t < n; ++t) {
+        double e = residuals(t, j);
+        for (Eigen::Index k = 1; k <= std::min(order, t); ++k) {
+          e += ar.coefficients(k) * residuals(t - k, j);
+        }
+        innovations(t, j) = e;
+      }
     }
-    const Eigen::MatrixXd gg = e2 * (g * g.transpose());
-    q.topLeftCorner(pa, pa) += gg.topLeftCorner(pa, pa);
-    q.block(0, at, pa, pu) = gg.topRightCorner(pa, pu);
-    q.block(at, 0, pu, pa) = gg.bottomLeftCorner(pu, pa);
-    q.block(at, at, pu, pu) = gg.bottomRightCorner(pu, pu);
+  }
+  // The outputs' innovations are white in time but may be correlated with each other (one
+  // disturbance seen by every sensor): Q = sum_jl Sigma_jl g_j g_l'. With Sigma diagonal this is
+  // the independent-outputs sandwich; on the measured flexible structure the cross terms
+  // make the shared denominators' errors several times larger.
+  // Sigma: each output's own innovation variance (as the SISO covariance has it) and the
+  // correlations of the innovation series between outputs.
+  const Eigen::MatrixXd products = innovations.transpose() * innovations;
+  Eigen::MatrixXd sigma(layout.outputs, layout.outputs);
+  for (int j = 0; j < layout.outputs; ++j) {
+    for (int l = 0; l < layout.outputs; ++l) {
+      const double norms = std::sqrt(products(j, j) * products(l, l));
+      const double correlation = j == l ? 1.0 : (norms > 0.0 ? products(j, l) / norms : 0.0);
+      sigma(j, l) = correlation * std::sqrt(variance(j) * variance(l));
+    }
+  }
+  for (int l = 0; l < layout.outputs; ++l) {
+    const Eigen::MatrixXd& gl = g[static_cast<size_t>(l)];
+    Eigen::MatrixXd weighted_a = Eigen::MatrixXd::Zero(pa, n);
+    for (int j = 0; j < layout.outputs; ++j) {
+      weighted_a += sigma(j, l) * g[static_cast<size_t>(j)].topRows(pa);
+    }
+    const int at = pa + l * pu;
+    q.topLeftCorner(pa, pa) += weighted_a * gl.topRows(pa).transpose();
+    q.block(0, at, pa, pu) = weighted_a * gl.bottomRows(pu).transpose();
+    q.block(at, 0, pu, pa) = q.block(0, at, pa, pu).transpose();
+  }
+  // The numerator blocks: white noise leaves every output's numerator gradient U itself.
+  const Eigen::MatrixXd uu =
+      noise == NoiseAssumption::white ? Eigen::MatrixXd(us.transpose() * us) : Eigen::MatrixXd();
+  for (int j = 0; j < layout.outputs; ++j) {
+    for (int l = j; l < layout.outputs; ++l) {
+      const Eigen::MatrixXd block =
+          noise == NoiseAssumption::white
+              ? Eigen::MatrixXd(sigma(j, l) * uu)
+              : Eigen::MatrixXd(sigma(j, l) * g[static_cast<size_t>(j)].bottomRows(pu) *
+                                g[static_cast<size_t>(l)].bottomRows(pu).transpose());
+      q.block(pa + j * pu, pa + l * pu, pu, pu) = block;
+      if (l != j) q.block(pa + l * pu, pa + j * pu, pu, pu) = block.transpose();
+    }
   }
   const Eigen::MatrixXd r_inv = r.completeOrthogonalDecomposition().pseudoInverse();
   Eigen::VectorXd scale(p);
