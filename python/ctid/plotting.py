@@ -28,6 +28,7 @@ from . import _ctid  # noqa: E402
 
 __all__ = [
     "bode",
+    "channel_fits",
     "frf",
     "frf_matrix",
     "frf_matrix_overlay",
@@ -527,6 +528,33 @@ def mac_matrix(modes_a, modes_b=None, labels=None, column_labels=None, title=Non
     ax.set_ylabel("mode" if modes_b is None else "modes of the first estimate")
     ax.set_xlabel("mode" if modes_b is None else "modes of the second estimate")
     figure.colorbar(image, ax=ax, label="MAC")
+    if title:
+        ax.set_title(title)
+    return _finish(figure, filename)
+
+
+def channel_fits(names, fits, title=None, filename=None):
+    """Fit [%] per channel (x: the channels in order) for several models or bounds side by
+    side: ``fits`` maps a label to one value per channel (NaN: not available). Returns the
+    Figure."""
+    labels = list(fits)
+    count = len(names)
+    width = 0.8 / max(len(labels), 1)
+    figure, ax = plt.subplots(figsize=(max(7.0, 0.3 * count + 2.0), 4.0))
+    x = np.arange(count)
+    for index, label in enumerate(labels):
+        values = np.asarray(fits[label], dtype=float)
+        if values.shape != (count,):
+            raise ValueError(f"channel_fits: '{label}' has {values.size} values for {count} "
+                             "channels")
+        ax.bar(x + (index - (len(labels) - 1) / 2.0) * width, values, width, label=label)
+    ax.set_xticks(x)
+    ax.set_xticklabels(names, rotation=90, fontsize="small")
+    ax.set_ylabel("fit [%]")
+    ax.set_ylim(min(0.0, np.nanmin([np.nanmin(np.asarray(v, dtype=float)) for v in
+                                     fits.values()])), 100.0)
+    ax.grid(True, axis="y", alpha=0.3)
+    ax.legend(loc="lower right", fontsize="small")
     if title:
         ax.set_title(title)
     return _finish(figure, filename)

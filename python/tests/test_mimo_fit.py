@@ -65,7 +65,7 @@ def measured_structure(outputs):
     path = os.path.join(os.path.dirname(__file__), "..", "..", "data", "daisy_flexible_structure",
                         "flexible_structure.csv")
     record = ctid.read_mimo_data(path, time="t_s", inputs=["u1_force:u2_force"], outputs=outputs)
-    return ctid.preprocess(record, decimate=2).data
+    return ctid.preprocess(record, detrend=ctid.Detrend.mean, decimate=2).data
 
 
 def test_measured_structure_converges_and_beats_one_input_on_held_out_data():

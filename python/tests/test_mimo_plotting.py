@@ -281,3 +281,20 @@ def test_plot_entry_point_refuses_bad_mimo_input(tmp_path, fit):
     done = run("mode_shapes", str(result), str(tmp_path / "shapes.png"))
     assert done.returncode == 0, done.stderr
     check_png(tmp_path / "shapes.png")
+
+
+def test_channel_fits_draws_one_bar_per_channel_and_series(tmp_path):
+    names = ["a1", "a2", "a3"]
+    fits = {"two inputs": [90.0, 80.5, 70.25], "one input": [10.0, float("nan"), -5.0]}
+    path = tmp_path / "fits.png"
+    figure = plotting.channel_fits(names, fits, title="t", filename=str(path))
+    check_png(path)
+    ax = figure.axes[0]
+    heights = [p.get_height() for p in ax.patches]
+    assert heights[:3] == fits["two inputs"]
+    assert heights[3] == 10.0 and math.isnan(heights[4]) and heights[5] == -5.0
+    assert [t.get_text() for t in ax.get_xticklabels()] == names
+    assert ax.get_ylim()[0] <= -5.0
+    plt.close(figure)
+    with pytest.raises(ValueError, match="'one input' has 2 values for 3 channels"):
+        plotting.channel_fits(names, {"one input": [1.0, 2.0]})

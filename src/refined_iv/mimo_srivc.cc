@@ -1018,7 +1018,7 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
   }
   check_conditioning(result.verdict, reciprocal_condition);
   if (run.start_returned) {
-    result.verdict.fail("the iteration did not improve on its start (" + result.message + ")",
+    result.verdict.fail("the iteration did not improve on its start",
                         {verdict_advice::better_start, verdict_advice::lower_order});
   }
   if (options.compute_covariance) {
