@@ -17,6 +17,7 @@
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/frequency/mimo_frf.h"
+#include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/initialization.h"
 #include "internal/refined_iv_engine.h"
@@ -952,12 +953,73 @@ std::vector<MimoMode> mimo_modes(const MimoAdditiveModel& model,
   return modes_of(layout, model, covariance);
 }
 
+namespace {
+
+// One input and output through the SISO additive estimator, its result in MIMO form: the
+// parameters theta_i = [a_i; b_i] of (3) reordered into the shared-pole layout (every a-block,
+// then every numerator).
+MimoEstimationResult siso_result(const Layout& layout, const MimoData& data,
+                                 const MimoRefinedIvOptions& options,
+                                 const std::optional<MimoAdditiveModel>& initial_model) {
+  RefinedIvOptions siso;
+  siso.max_iterations = options.max_iterations;
+  siso.tolerance = options.tolerance;
+  siso.output_interpolation = options.output_interpolation;
+  siso.noise = options.noise;
+  siso.noise_model_max_order = options.noise_model_max_order;
+  siso.compute_covariance = options.compute_covariance;
+  if (initial_model) siso.initial_model = initial_model->channel(0, 0);
+  const EstimationResult r = additive_srivc(data.channel(0, 0), layout.orders, siso);
+  MimoEstimationResult result;
+  std::vector<MimoSubmodel> submodels;
+  for (const Submodel& s : r.model.submodels()) submodels.push_back({s.a, {s.b}});
+  result.model = MimoAdditiveModel(1, 1, std::move(submodels));
+  result.termination = r.termination;
+  result.message = r.message;
+  result.iterations = r.iterations;
+  result.step_halvings = r.step_halvings;
+  result.mean_squared_errors = Eigen::VectorXd::Constant(1, r.mean_squared_error);
+  result.fit_percent = Eigen::VectorXd::Constant(1, r.fit_percent);
+  result.verdict = r.verdict;
+  if (r.covariance.size() > 0) {
+    // Position of each SISO parameter in the MIMO layout.
+    std::vector<Eigen::Index> at;
+    for (int i = 0; i < layout.size(); ++i) {
+      const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+      for (int q = 1; q <= o.n; ++q) at.push_back(a_index(layout, i, q));
+      for (int k = 0; k <= o.m; ++k) at.push_back(b_index(layout, 0, layout.u_column(i, 0, k)));
+    }
+    const auto p = static_cast<Eigen::Index>(at.size());
+    result.covariance.resize(p, p);
+    for (Eigen::Index x = 0; x < p; ++x) {
+      for (Eigen::Index y = 0; y < p; ++y) {
+        result.covariance(at[static_cast<size_t>(x)], at[static_cast<size_t>(y)]) =
+            r.covariance(x, y);
+      }
+    }
+  }
+  result.modes = modes_of(layout, *result.model, result.covariance);
+  return result;
+}
+
+}  // namespace
+
 MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<SubmodelOrder>& orders,
                                 const MimoRefinedIvOptions& options,
                                 const std::optional<MimoAdditiveModel>& initial_model) {
   options.validate();
   check_orders(orders, data, options.direct_term);
   const Layout layout(orders, data.input_count(), data.output_count(), options.direct_term);
+  if (options.siso_engine && layout.inputs == 1 && layout.outputs == 1 && !layout.direct) {
+    if (initial_model) {
+      require(initial_model->inputs() == 1 && initial_model->outputs() == 1 &&
+                  !initial_model->has_direct_term(),
+              "mimo_srivc: the initial model is ", initial_model->outputs(), " x ",
+              initial_model->inputs(), initial_model->has_direct_term() ? " with" : " without",
+              " a direct term but the data have 1 output and 1 input and no direct term is asked");
+    }
+    return siso_result(layout, data, options, initial_model);
+  }
 
   MimoAdditiveModel model = [&] {
     if (initial_model) {

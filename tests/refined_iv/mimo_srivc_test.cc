@@ -301,8 +301,10 @@ TEST(MimoSrivc, OneInputOneOutputIsTheAdditiveEstimator) {
 
   std::vector<MimoSubmodel> start;
   for (const Submodel& s : truth.submodels()) start.push_back({s.a, {s.b}});
+  MimoRefinedIvOptions shared_poles;
+  shared_poles.siso_engine = false;
   const MimoEstimationResult mimo =
-      mimo_srivc(MimoData(siso), four_modes(), {}, MimoAdditiveModel(1, 1, start));
+      mimo_srivc(MimoData(siso), four_modes(), shared_poles, MimoAdditiveModel(1, 1, start));
   ASSERT_TRUE(mimo.converged()) << mimo.message;
   const AdditiveModel channel = mimo.model->channel(0, 0);
   EXPECT_LT((channel.parameters() - additive.parameters).norm() / additive.parameters.norm(),
@@ -319,6 +321,38 @@ TEST(MimoSrivc, OneInputOneOutputIsTheAdditiveEstimator) {
                 1e-6 * se.natural_frequency);
     EXPECT_NEAR(mimo.modes[i].damping_ratio_se, se.damping_ratio, 1e-6 * se.damping_ratio);
   }
+}
+
+TEST(MimoSrivc, OneInputOneOutputRunsTheAdditiveEstimatorBitForBit) {
+  // By default a single channel goes through additive_srivc itself, from its own start:
+  // parameters, fit, covariance (reordered) and modal errors equal its result exactly.
+  const AdditiveModel truth = testing::open_loop_four_modes();
+  const Eigen::VectorXd u = white_noise(3000, 1.0, 4);
+  const Eigen::VectorXd y = simulate(truth, u, kH) + white_noise(3000, 0.3, 8);
+  const SampledData siso(kH, u, y);
+  const EstimationResult additive = additive_srivc(siso, four_modes());
+  ASSERT_TRUE(additive.converged()) << additive.message;
+  const MimoEstimationResult mimo = mimo_srivc(MimoData(siso), four_modes());
+  EXPECT_EQ(mimo.termination, additive.termination);
+  EXPECT_EQ(mimo.iterations, additive.iterations);
+  EXPECT_EQ(mimo.message, additive.message);
+  const AdditiveModel channel = mimo.model->channel(0, 0);
+  EXPECT_EQ(channel.parameters(), additive.parameters);
+  EXPECT_EQ(mimo.fit_percent(0), additive.fit_percent);
+  EXPECT_EQ(mimo.mean_squared_errors(0), additive.mean_squared_error);
+  EXPECT_EQ(mimo.verdict.usable, additive.verdict.usable);
+  ASSERT_EQ(mimo.modes.size(), additive.modes.size());
+  for (size_t i = 0; i < mimo.modes.size(); ++i) {
+    EXPECT_EQ(mimo.modes[i].natural_frequency, additive.modes[i].value.natural_frequency);
+    EXPECT_EQ(mimo.modes[i].damping_ratio, additive.modes[i].value.damping_ratio);
+    EXPECT_NEAR(mimo.modes[i].natural_frequency_se,
+                additive.modes[i].standard_error.natural_frequency,
+                1e-12 * additive.modes[i].standard_error.natural_frequency);
+  }
+  // Submodel i's a-block comes first in the shared-pole layout, its numerator after every
+  // a-block: covariance(a_11, a_11) and (b_10, b_10) are the SISO ones.
+  EXPECT_EQ(mimo.covariance(0, 0), additive.covariance(0, 0));
+  EXPECT_EQ(mimo.covariance(8, 8), additive.covariance(2, 2));
 }
 
 TEST(MimoSrivc, BadInputGetsOneClearMessage) {

@@ -44,6 +44,10 @@ struct MimoRefinedIvOptions {
   /// output's residual, order <= noise_model_max_order by AIC); outputs independent.
   NoiseAssumption noise = NoiseAssumption::coloured;
   int noise_model_max_order = 20;
+  /// One input, one output and no direct term: run the SISO additive estimator
+  /// (additive_srivc, its own start), so the result equals its result bit for bit. false runs
+  /// the shared-pole iteration on the single channel instead (same stationary point).
+  bool siso_engine = true;
 
   static constexpr std::string_view type_name = "MimoRefinedIvOptions";
   static constexpr auto fields() {
@@ -60,6 +64,8 @@ struct MimoRefinedIvOptions {
         field("noise", &O::noise, "Noise assumption of the covariance (per output)."),
         field("noise_model_max_order", &O::noise_model_max_order, AtLeast{1},
               "Largest AR order of each output's noise model."),
+        field("siso_engine", &O::siso_engine,
+              "One input and output, no direct term: run additive_srivc (bit-identical)."),
     };
   }
   void validate() const { validate_fields(*this); }
