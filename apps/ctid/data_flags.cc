@@ -349,11 +349,11 @@ MimoData DataFlags::load_mimo(const CLI::App& app) const {
     try {
       return preprocess(*read, preprocessing_options());
     } catch (const InvalidArgument& e) {
-      throw InvalidArgument(file + ": " + e.what());
+      throw InvalidArgument((files.empty() ? file : files.front()) + ": " + e.what());
     }
   }();
   for (const std::string& warning : result.record.warnings) {
-    std::cerr << "warning: " << file << ": " << warning << "\n";
+    std::cerr << "warning: " << (files.empty() ? file : files.front()) << ": " << warning << "\n";
   }
   preprocessing = std::move(result.record);
   return std::move(result.data);

@@ -330,7 +330,14 @@ void check_start_channels(const MimoAdditiveModel& start, const std::string& fil
 // Several inputs and outputs (--input-columns / --output-columns): the shared-pole estimator
 // (mimo_srivc), open loop, from the automatic start or a model file.
 ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
-  const ModelStructure structure = model_structure(f, app);
+  ModelStructure structure = model_structure(f, app);
+  // --modes K: a mode's residues differ in phase from channel to channel (complex shapes,
+  // and accelerations from forces: D + (b0 + b1 p) / A), so each mode gets a first-degree
+  // numerator here (docs/decisions/0018).
+  if (app.count("--modes") > 0) {
+    structure = ModelStructure::additive(
+        std::vector<SubmodelOrder>(static_cast<std::size_t>(f.modes), SubmodelOrder{2, 1, 0}));
+  }
   if (!structure.is_additive()) {
     usage_error(
         "with --input-columns / --output-columns give the modes (--modes K or "
@@ -585,7 +592,9 @@ Command add_fit_command(CLI::App& parent) {
       ->take_all()
       ->allow_extra_args(false)
       ->group("Structure");
-  app->add_option("--modes", f.modes, "Additive: K second-order modes (--submodel 2,0 K times)")
+  app->add_option("--modes", f.modes,
+                  "Additive: K second-order modes (--submodel 2,0 K times; with "
+                  "--input-columns/--output-columns --submodel 2,1: complex residues)")
       ->group("Structure");
   app->add_option("--delay", f.delay, "Known input delay in samples")
       ->capture_default_str()

@@ -177,8 +177,8 @@ TEST_F(FitMimoCommand, AStartThatDoesNotFitIsOneClearMessage) {
       ctid({"fit", "d.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a3", "--submodel",
             "2,0", "--submodel", "1,0", "--start", "m.json"}),
       "fit",
-      "submodel 2 of the start has 2 poles and numerators of degree up to 0; the structure "
-      "flags give 1 poles and 0 zeros");
+      "submodel 1 of the start has 2 poles and numerators of degree up to 1; the structure "
+      "flags give 2 poles and 0 zeros");
   io::write_json(path("siso.json"), io::to_json(two_modes().channel(0, 0)));
   testing::expect_bad_input(ctid(fit_with({"--start", "siso.json"})), "fit",
                             "a start for several inputs and outputs is a mimo_additive_model or "
