@@ -182,13 +182,37 @@ StructureScanResult scan_structures(const SampledData& data,
       }
       if (!better || estimation_error[j] < estimation_error[*better]) better = j;
     }
-    if (!better) continue;
+    if (better) {
+      fit.usable = false;
+      fit.reasons.push_back("its estimation error " + format_significant(estimation_error[i], 4) +
+                            " is larger than that of a structure it contains, " +
+                            describe(result.fits[*better].structure) + " (" +
+                            format_significant(estimation_error[*better], 4) +
+                            "): the fit stopped short of its optimum");
+      continue;
+    }
+    // Over-fitted: on held-out data it predicts worse, beyond the noise's tolerance, than a
+    // usable fit of a structure it contains; its extra parameters model the estimation
+    // record's noise (decision 0016).
+    if (held_out == 0) continue;
+    std::optional<std::size_t> simpler;  // the contained fit with the lowest held-out error
+    for (std::size_t j = 0; j < result.fits.size(); ++j) {
+      if (j == i || !usable_fit[j] || result.fits[j].parameters >= fit.parameters ||
+          !contains(fit.structure, result.fits[j].structure) ||
+          !(fit.validation_error > (1.0 + noise_tolerance) * result.fits[j].validation_error)) {
+        continue;
+      }
+      if (!simpler || result.fits[j].validation_error < result.fits[*simpler].validation_error) {
+        simpler = j;
+      }
+    }
+    if (!simpler) continue;
     fit.usable = false;
-    fit.reasons.push_back("its estimation error " + format_significant(estimation_error[i], 4) +
+    fit.reasons.push_back("its held-out error " + format_significant(fit.validation_error, 4) +
                           " is larger than that of a structure it contains, " +
-                          describe(result.fits[*better].structure) + " (" +
-                          format_significant(estimation_error[*better], 4) +
-                          "): the fit stopped short of its optimum");
+                          describe(result.fits[*simpler].structure) + " (" +
+                          format_significant(result.fits[*simpler].validation_error, 4) +
+                          "): over-fitted");
   }
 
   // Recommendation: parsimony within error_tolerance of the best usable held-out error.
