@@ -21,6 +21,8 @@ namespace {
 
 using Complex = std::complex<double>;
 constexpr Complex kJ{0.0, 1.0};
+// A relative decrease of the cost this small is rounding: the iterate is a stationary point.
+constexpr double kFlatCost = 4.0 * std::numeric_limits<double>::epsilon();
 
 // Where each parameter sits, as in MimoEstimationResult::covariance: every submodel's
 // a_1..a_n, then per output its numerator coefficients (submodel, input, power) and D[j, .].
@@ -576,11 +578,18 @@ Refined levenberg_marquardt(const Layout& layout, const Problem& p, Parameters t
             lambda = std::max(lambda / 4.0, 1e-12);
             accepted = true;
             rejected = 0;
-            if (change < tolerance || decrease < tolerance * tolerance) {
+            if (change < tolerance) {
               run.termination = Termination::converged;
               run.message = internal::concat("converged after ", run.iterations,
                                              " iterations (relative change of the denominators ",
                                              format_brief(change), ")");
+            } else if (decrease <= kFlatCost) {
+              run.termination = Termination::converged;
+              run.message = internal::concat(
+                  "converged after ", run.iterations,
+                  " iterations (the cost no longer decreases; last relative change of the "
+                  "denominators ",
+                  format_brief(change), ")");
             }
             break;
           }
