@@ -311,7 +311,8 @@ double pole_change(const Poles& x, const Poles& y) {
 // pole at the top of the band when the count is odd.
 Poles initial_poles(const Problem& p, int count) {
   Poles poles;
-  const double lo = p.w(0);
+  // A line at 0 rad/s (an analyser's DC line) would put a start pole at the origin.
+  const double lo = p.w(0) > 0.0 ? p.w(0) : p.w(std::min(1, p.lines() - 1));
   const double hi = p.w(p.lines() - 1);
   const int pairs = count / 2;
   for (int q = 0; q < pairs; ++q) {
@@ -747,18 +748,20 @@ void check_frf(const MimoFrf& frf, const FrfMatrixFitOptions& options) {
           " frequencies");
   for (Eigen::Index l = 0; l < lines; ++l) {
     const auto at = static_cast<size_t>(l);
-    require(std::isfinite(frf.frequencies(l)) && frf.frequencies(l) > 0.0,
-            "frf_matrix_fit: frequency ", l + 1, " is ", frf.frequencies(l),
-            " rad/s; every frequency must be finite and positive");
+    require(std::isfinite(frf.frequencies(l)) && frf.frequencies(l) >= 0.0,
+            "frf_matrix_fit: frequency ", l + 1, " is ", format_brief(frf.frequencies(l)),
+            " rad/s; every frequency must be finite and not negative");
     require(l == 0 || frf.frequencies(l) > frf.frequencies(l - 1), "frf_matrix_fit: frequency ",
-            l + 1, " (", frf.frequencies(l), " rad/s) does not exceed the one before (",
-            l > 0 ? frf.frequencies(l - 1) : 0.0, " rad/s); the frequencies must increase");
+            l + 1, " (", format_brief(frf.frequencies(l)),
+            " rad/s) does not exceed the one before (",
+            format_brief(l > 0 ? frf.frequencies(l - 1) : 0.0),
+            " rad/s); the frequencies must increase");
     require(frf.response[at].rows() == n_y && frf.response[at].cols() == n_u,
             "frf_matrix_fit: the response at frequency ", l + 1, " is ", frf.response[at].rows(),
             " x ", frf.response[at].cols(), " but the FRF names ", n_y, " outputs and ", n_u,
             " inputs");
     require(frf.response[at].allFinite(), "frf_matrix_fit: the response at frequency ", l + 1, " (",
-            frf.frequencies(l), " rad/s) is not finite");
+            format_brief(frf.frequencies(l)), " rad/s) is not finite");
   }
   if (options.weighting == FrfWeighting::variance) {
     require(static_cast<Eigen::Index>(frf.variance.size()) == lines,
@@ -770,7 +773,7 @@ void check_frf(const MimoFrf& frf, const FrfMatrixFitOptions& options) {
       require(v.rows() == n_y && v.cols() == n_u && v.allFinite() && v.minCoeff() > 0.0,
               "frf_matrix_fit: weighting 'variance' needs a finite, positive variance of every "
               "entry, but the variance at frequency ",
-              l + 1, " (", frf.frequencies(l), " rad/s) is not");
+              l + 1, " (", format_brief(frf.frequencies(l)), " rad/s) is not");
     }
   }
 }
@@ -797,8 +800,8 @@ void check_orders(const std::vector<SubmodelOrder>& orders, bool direct) {
 void FrfMatrixFitOptions::validate() const {
   validate_fields(*this);
   require(max_frequency <= 0.0 || min_frequency < max_frequency,
-          "FrfMatrixFitOptions: min_frequency ", min_frequency,
-          " rad/s is not below max_frequency ", max_frequency, " rad/s");
+          "FrfMatrixFitOptions: min_frequency ", format_brief(min_frequency),
+          " rad/s is not below max_frequency ", format_brief(max_frequency), " rad/s");
 }
 
 std::vector<Eigen::MatrixXcd> mimo_frequency_response(const MimoAdditiveModel& model,

@@ -158,6 +158,15 @@ TEST(FrfMatrixFit, BandLimitsTheLinesFitted) {
   EXPECT_LT(largest_modal_error(r, truth, std::vector<SubmodelOrder>(4, {2, 0, 0})), 1e-9);
 }
 
+TEST(FrfMatrixFit, ALineAtZeroFrequencyIsFitted) {
+  // Analysers export the DC line too; it is a line like any other (s = 0).
+  const MimoAdditiveModel truth = four_mode_beam(2, 3, 6);
+  const std::vector<SubmodelOrder> orders(4, {2, 0, 0});
+  const FrfMatrixFitResult r = frf_matrix_fit(frf_of(truth, grid(0.0, 20.0, 401)), orders);
+  EXPECT_TRUE(r.converged()) << r.message;
+  EXPECT_LT(largest_modal_error(r, truth, orders), 1e-9);
+}
+
 // Seeded Monte Carlo: complex white noise of a different level on each output; the spread of
 // w_n and zeta over the runs against the mean reported standard error, and the mean against
 // the truth. 200 runs: the spread's own sampling error is about 5 %, so a 20 % band.
@@ -251,6 +260,10 @@ TEST(FrfMatrixFit, BadInputGetsOneClearMessage) {
   frf = good;
   frf.frequencies(5) = frf.frequencies(4);
   fails(frf, four, {}, "the frequencies must increase");
+  frf = good;
+  frf.frequencies(0) = -0.1;
+  fails(frf, four, {},
+        "frequency 1 is -0.1 rad/s; every frequency must be finite and not negative");
   frf = good;
   frf.response.pop_back();
   fails(frf, four, {}, "99 response matrices for 100 frequencies");

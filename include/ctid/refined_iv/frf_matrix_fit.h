@@ -132,7 +132,7 @@ struct FrfMatrixFitResult {
 };
 
 /// Fits `orders` (n_i in {1, 2}, m_i <= n_i, no integrators; with options.direct_term no
-/// biproper submodel) to the FRF matrix `frf` (frequencies in rad/s, increasing, positive;
+/// biproper submodel) to the FRF matrix `frf` (frequencies in rad/s, increasing, not negative;
 /// response n_y x n_u at each line; variance used with FrfWeighting::variance), starting from
 /// `initial_model` (same orders and size) or, without one, from vector fitting. Throws
 /// InvalidArgument for bad options, orders, start or FRF (sizes that do not match, values that
