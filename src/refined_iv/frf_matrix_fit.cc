@@ -230,7 +230,7 @@ std::optional<Poles> relocate(const Problem& p, const Poles& poles,
   const int n = poles.count() + 1;
   const Eigen::MatrixXcd phi = partial_fractions(p, poles);
   const int channels = static_cast<int>(p.h.cols());
-  Eigen::MatrixXd system(channels * n + 1, n);
+  Eigen::MatrixXd system = Eigen::MatrixXd::Zero(channels * n + 1, n);
   for (int c = 0; c < channels; ++c) {
     const Eigen::VectorXd wt = channel_weights(c) * p.weight.col(c);
     Eigen::MatrixXcd row(p.lines(), 2 * n);
@@ -240,12 +240,14 @@ std::optional<Poles> relocate(const Problem& p, const Poles& poles,
                            .asDiagonal() *
                        (-phi);
     const Eigen::HouseholderQR<Eigen::MatrixXd> qr(stacked(row));
-    const Eigen::MatrixXd r = qr.matrixQR().topRows(2 * n).triangularView<Eigen::Upper>();
-    system.block(c * n, 0, n, n) = r.block(n, n, n, n);
+    // R22 of R = [R11 R12; 0 R22]: the equations left for sigma once the channel's own
+    // residues are eliminated (its strictly lower part is zero, not Householder vectors).
+    system.block(c * n, 0, n, n) =
+        qr.matrixQR().block(n, n, n, n).triangularView<Eigen::Upper>().toDenseMatrix();
   }
   // Relaxation (Gustavsen 2006): the real part of sigma summed over the lines is fixed, so the
   // trivial solution sigma = 0 is excluded without fixing sigma's constant to 1.
-  const double level = system.norm() / std::max(1, p.lines());
+  const double level = system.topRows(channels * n).norm() / std::max(1, p.lines());
   system.row(channels * n) = level * phi.real().colwise().sum();
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(channels * n + 1);
   rhs(channels * n) = level * p.lines();
@@ -666,7 +668,7 @@ MimoAdditiveModel to_model(const Layout& layout, const Parameters& theta) {
       for (int k = 0; k < layout.inputs; ++k) {
         Eigen::VectorXd b(m + 1);
         for (int r = 0; r <= m; ++r) b(r) = theta.u(layout.u_column(i, k, r), j);
-        s.b.push_back(Polynomial(b));
+        s.b.push_back(Polynomial::trimmed(b));  // an estimate may be exactly zero
       }
     }
     submodels.push_back(std::move(s));
