@@ -146,6 +146,22 @@ TEST(FrfMatrixFit, DirectTermAndGeneralNumeratorsAreRecoveredExactly) {
   EXPECT_LT((r.model->direct() - d).cwiseAbs().maxCoeff(), 1e-9);
 }
 
+TEST(FrfMatrixFit, RealPolesAndModesTogetherAreRecoveredExactly) {
+  // A real pole (n = 1) between two modes: grouped by the start, kept out of the mode table.
+  const MimoAdditiveModel modes = eight_mode_structure(3, 2, true);
+  MimoSubmodel real{Polynomial{1.0, 1.0 / 2.5}, {}};
+  for (int c = 0; c < 6; ++c) real.b.push_back(Polynomial{0.3 * (c + 1) - 1.0});
+  const MimoAdditiveModel truth(2, 3, {modes[0], real, modes[3]});
+  const std::vector<SubmodelOrder> orders{{2, 1, 0}, {1, 0, 0}, {2, 1, 0}};
+  const FrfMatrixFitResult r = frf_matrix_fit(frf_of(truth, grid(0.1, 10.0, 200)), orders);
+  ASSERT_TRUE(r.model.has_value()) << r.message;
+  EXPECT_TRUE(r.converged()) << r.message;
+  EXPECT_EQ(r.modes.size(), 2u);
+  EXPECT_LT(largest_modal_error(r, truth, orders), 1e-9);
+  EXPECT_NEAR((*r.model)[1].a[1], 0.4, 1e-10);
+  EXPECT_NEAR(r.model->numerator(1, 2, 1)[0], 0.8, 1e-9);
+}
+
 TEST(FrfMatrixFit, BandLimitsTheLinesFitted) {
   const MimoAdditiveModel truth = four_mode_beam(2, 3, 4);
   FrfMatrixFitOptions options;
@@ -168,8 +184,9 @@ TEST(FrfMatrixFit, ALineAtZeroFrequencyIsFitted) {
 }
 
 // Seeded Monte Carlo: complex white noise of a different level on each output; the spread of
-// w_n and zeta over the runs against the mean reported standard error, and the mean against
-// the truth. 200 runs: the spread's own sampling error is about 5 %, so a 20 % band.
+// w_n, zeta and the shape entries over the runs against the mean reported standard error, and
+// the mean of w_n and zeta against the truth. 200 runs: the spread's own sampling error is about 5
+// %, so a 20 % band.
 TEST(FrfMatrixFit, StandardErrorsMatchTheSpreadOfASeededMonteCarlo) {
   const MimoAdditiveModel truth = four_mode_beam(2, 4, 21);
   const std::vector<SubmodelOrder> orders(4, {2, 0, 0});
@@ -178,6 +195,8 @@ TEST(FrfMatrixFit, StandardErrorsMatchTheSpreadOfASeededMonteCarlo) {
   constexpr int kRuns = 200;
   const int modes = 4;
   Eigen::MatrixXd w(kRuns, modes), z(kRuns, modes), w_se(kRuns, modes), z_se(kRuns, modes);
+  // Real parts of every shape entry (mode i, output j at column 4 i + j) and their errors.
+  Eigen::MatrixXd shape(kRuns, 4 * modes), shape_se(kRuns, 4 * modes);
   std::mt19937_64 rng(2026);
   std::normal_distribution<double> normal;
   const auto start = std::chrono::steady_clock::now();
@@ -197,6 +216,10 @@ TEST(FrfMatrixFit, StandardErrorsMatchTheSpreadOfASeededMonteCarlo) {
       z(run, i) = r.modes[static_cast<size_t>(i)].damping_ratio;
       w_se(run, i) = r.modes[static_cast<size_t>(i)].natural_frequency_se;
       z_se(run, i) = r.modes[static_cast<size_t>(i)].damping_ratio_se;
+      for (int j = 0; j < 4; ++j) {
+        shape(run, 4 * i + j) = r.modes[static_cast<size_t>(i)].shape(j).real();
+        shape_se(run, 4 * i + j) = r.modes[static_cast<size_t>(i)].shape_se_real(j);
+      }
     }
   }
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
@@ -207,6 +230,10 @@ TEST(FrfMatrixFit, StandardErrorsMatchTheSpreadOfASeededMonteCarlo) {
   for (int i = 0; i < modes; ++i) {
     const double ws = spread(w.col(i));
     const double zs = spread(z.col(i));
+    for (int j = 0; j < 4; ++j) {
+      EXPECT_NEAR(spread(shape.col(4 * i + j)) / shape_se.col(4 * i + j).mean(), 1.0, 0.2)
+          << "Re shape entry " << j + 1 << " of mode " << i + 1;
+    }
     EXPECT_NEAR(ws / w_se.col(i).mean(), 1.0, 0.2) << "w_n of mode " << i + 1;
     EXPECT_NEAR(zs / z_se.col(i).mean(), 1.0, 0.2) << "zeta of mode " << i + 1;
     // No bias beyond 4 standard errors of the mean.
