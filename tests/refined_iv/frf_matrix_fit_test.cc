@@ -185,8 +185,8 @@ TEST(FrfMatrixFit, ALineAtZeroFrequencyIsFitted) {
 
 // Seeded Monte Carlo: complex white noise of a different level on each output; the spread of
 // w_n, zeta and the shape entries over the runs against the mean reported standard error, and
-// the mean of w_n and zeta against the truth. 200 runs: the spread's own sampling error is about 5
-// %, so a 20 % band.
+// the mean of w_n and zeta against the truth. 200 runs: the spread's own sampling error is
+// about 5 %, so a 20 % band.
 TEST(FrfMatrixFit, StandardErrorsMatchTheSpreadOfASeededMonteCarlo) {
   const MimoAdditiveModel truth = four_mode_beam(2, 4, 21);
   const std::vector<SubmodelOrder> orders(4, {2, 0, 0});
