@@ -17,8 +17,10 @@
 #include "command.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/io/documents.h"
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_frf_file.h"
+#include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
 #include "ctid/refined_iv/frf_matrix_fit.h"
 
@@ -32,6 +34,7 @@ struct FitFrfFlags {
   bool direct = false;
   std::string band;  // LO:HI [Hz]
   std::string weighting = "uniform";
+  std::string initial;
   int max_iterations = FrfMatrixFitOptions{}.max_iterations;
   double tolerance = FrfMatrixFitOptions{}.tolerance;
   std::string output;
@@ -82,6 +85,25 @@ std::pair<double, double> band_of(const std::string& text) {
   return {2.0 * std::numbers::pi * *a, 2.0 * std::numbers::pi * *b};
 }
 
+// The starting model in a mimo_additive_model file, or the model of a mimo_estimation_result
+// (ctid fit --input-columns ... -o) or frf_matrix_fit_result (ctid fit-frf -o) document.
+MimoAdditiveModel initial_model(const std::string& path) {
+  const nlohmann::json value = io::read_json(path);
+  if (value.is_object() && value.value("type", "") == io::kMimoAdditiveModelType) {
+    return io::mimo_additive_model_from_json(value, path);
+  }
+  const io::ResultDocument document = io::result_from_json(value, path);
+  std::optional<MimoAdditiveModel> model;
+  if (const auto* r = std::get_if<MimoEstimationResult>(&document)) model = r->model;
+  if (const auto* r = std::get_if<FrfMatrixFitResult>(&document)) model = r->model;
+  if (!model) {
+    usage_error("--initial " + path + " holds a " + std::string(io::document_type(document)) +
+                " without a model of several inputs and outputs; give a mimo_additive_model, a "
+                "mimo_estimation_result or an frf_matrix_fit_result");
+  }
+  return *model;
+}
+
 ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
   const std::vector<SubmodelOrder> orders = orders_of(f, app);
   FrfMatrixFitOptions options;
@@ -95,7 +117,9 @@ ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
     usage_error("--output " + f.output + " exists; give --force to replace it");
   }
   const MimoFrf frf = io::read_mimo_frf(f.file);
-  const FrfMatrixFitResult result = frf_matrix_fit(frf, orders, options);
+  std::optional<MimoAdditiveModel> start;
+  if (!f.initial.empty()) start = initial_model(f.initial);
+  const FrfMatrixFitResult result = frf_matrix_fit(frf, orders, options, start);
 
   if (!f.output.empty()) {
     nlohmann::json document = io::to_json(result);
@@ -170,6 +194,11 @@ Command add_fit_frf_command(CLI::App& parent) {
                   "uniform (every entry alike) or variance (1 / the FRF's variance column)")
       ->check(CLI::IsMember({"uniform", "variance"}))
       ->capture_default_str()
+      ->group("Fit");
+  app->add_option("--initial", f.initial,
+                  "Start from this model instead of vector fitting: a mimo_additive_model, or "
+                  "the model of a mimo_estimation_result (ctid fit -o) or frf_matrix_fit_result")
+      ->check(CLI::ExistingFile)
       ->group("Fit");
   app->add_option("--max-iterations", f.max_iterations, "Levenberg-Marquardt iteration limit")
       ->capture_default_str()

@@ -79,6 +79,16 @@ TEST_F(FitFrfCommand, SharedModesFromTheCsvTable) {
   EXPECT_NEAR(back.modes[1].damping_ratio, 0.05, 1e-8);
 }
 
+TEST_F(FitFrfCommand, StartsFromAnEarlierResult) {
+  ASSERT_EQ(ctid({"fit-frf", "h.csv", "--modes", "2", "-o", "r.json"}).status, 0);
+  const auto r = ctid({"fit-frf", "h.csv", "--modes", "2", "--initial", "r.json"});
+  ASSERT_EQ(r.status, 0) << r.err << r.out;
+  EXPECT_THAT(r.out, HasSubstr("converged after 1 iterations"));
+  EXPECT_THAT(r.out, ::testing::Not(HasSubstr("vector-fitting start")));
+  testing::expect_bad_input(ctid({"fit-frf", "h.csv", "--modes", "3", "--initial", "r.json"}),
+                            "fit-frf", "the initial model has 2 submodels; the structure has 3");
+}
+
 TEST_F(FitFrfCommand, SharedModesFromAUniversalFileInABand) {
   const auto r = ctid({"fit-frf", "h.uff", "--modes", "2", "--band", "0.1:1.5"});
   ASSERT_EQ(r.status, 0) << r.err << r.out;
