@@ -622,33 +622,53 @@ Refined levenberg_marquardt(const Layout& layout, const Problem& p, Parameters t
 
 // ---- Covariance ----
 
-// Sandwich R^-1 Q R^-1 over the whole parameter vector (outputs' noises independent, each
-// with its own level s_j^2 estimated from its weighted residual): R = sum_j J_j' J_j,
-// Q = sum_j s_j^2 J_j' J_j. Also the reciprocal condition of the scaled R.
+// Sandwich R^-1 Q R^-1 over the whole parameter vector. R = sum_j J_j' J_j (the outputs are
+// fitted alike); the outputs' weighted FRF errors are taken as correlated with each other at a
+// line (their covariance Sigma estimated from the residuals at the same line and input, real
+// and imaginary parts alike) and independent across lines and inputs, so
+// Q = sum_jl Sigma_jl J_j' J_l. Also the reciprocal condition of the scaled R.
 Eigen::MatrixXd covariance_of(const Layout& layout, const Problem& p, const Parameters& theta,
                               const Eigen::MatrixXcd& e, double* reciprocal_condition) {
   const int pa = layout.a_count;
   const int pu = layout.u_count;
+  const int per = pa + pu;
+  const int n_y = layout.outputs;
   const int total = layout.parameters();
   const Eigen::MatrixXcd inv = inverse_denominators(p, theta.a);
+  const Eigen::Index rows = 2 * static_cast<Eigen::Index>(p.lines()) * layout.inputs;
+  // Every output's Jacobian side by side, and its residuals (the same row order in each).
+  Eigen::MatrixXd jac(rows, static_cast<Eigen::Index>(n_y) * per);
+  Eigen::MatrixXd res(rows, n_y);
+  for (int j = 0; j < n_y; ++j) {
+    jac.middleCols(static_cast<Eigen::Index>(j) * per, per) =
+        output_jacobian(layout, p, theta, inv, j);
+    res.col(j) = output_residual(layout, e, j);
+  }
+  const double all = static_cast<double>(rows) * n_y;
+  const double dof = all / std::max(1.0, all - total);
+  const Eigen::MatrixXd sigma = res.transpose() * res / static_cast<double>(rows) * dof;
+  Eigen::MatrixXd jj = Eigen::MatrixXd::Zero(jac.cols(), jac.cols());
+  jj.selfadjointView<Eigen::Lower>().rankUpdate(jac.transpose());
+  jj = jj.selfadjointView<Eigen::Lower>();
   Eigen::MatrixXd r = Eigen::MatrixXd::Zero(total, total);
   Eigen::MatrixXd q = Eigen::MatrixXd::Zero(total, total);
-  const double rows = 2.0 * p.lines() * layout.inputs * layout.outputs;
-  const double dof = rows / std::max(1.0, rows - total);
-  for (int j = 0; j < layout.outputs; ++j) {
-    const Eigen::MatrixXd jac = output_jacobian(layout, p, theta, inv, j);
-    const Eigen::VectorXd res = output_residual(layout, e, j);
-    const double s2 = res.squaredNorm() / static_cast<double>(res.size()) * dof;
-    const Eigen::MatrixXd jj = jac.transpose() * jac;
-    const int at = pa + j * pu;
-    r.topLeftCorner(pa, pa) += jj.topLeftCorner(pa, pa);
-    r.block(0, at, pa, pu) = jj.topRightCorner(pa, pu);
-    r.block(at, 0, pu, pa) = jj.bottomLeftCorner(pu, pa);
-    r.block(at, at, pu, pu) = jj.bottomRightCorner(pu, pu);
-    q.topLeftCorner(pa, pa) += s2 * jj.topLeftCorner(pa, pa);
-    q.block(0, at, pa, pu) = s2 * jj.topRightCorner(pa, pu);
-    q.block(at, 0, pu, pa) = s2 * jj.bottomLeftCorner(pu, pa);
-    q.block(at, at, pu, pu) = s2 * jj.bottomRightCorner(pu, pu);
+  const auto at = [&](int j) { return pa + j * pu; };
+  for (int j = 0; j < n_y; ++j) {
+    for (int l = 0; l < n_y; ++l) {
+      const auto m = jj.block(static_cast<Eigen::Index>(j) * per,
+                              static_cast<Eigen::Index>(l) * per, per, per);
+      const double c = sigma(j, l);
+      q.topLeftCorner(pa, pa) += c * m.topLeftCorner(pa, pa);
+      q.block(0, at(l), pa, pu) += c * m.topRightCorner(pa, pu);
+      q.block(at(j), 0, pu, pa) += c * m.bottomLeftCorner(pu, pa);
+      q.block(at(j), at(l), pu, pu) += c * m.bottomRightCorner(pu, pu);
+      if (j == l) {
+        r.topLeftCorner(pa, pa) += m.topLeftCorner(pa, pa);
+        r.block(0, at(j), pa, pu) = m.topRightCorner(pa, pu);
+        r.block(at(j), 0, pu, pa) = m.bottomLeftCorner(pu, pa);
+        r.block(at(j), at(j), pu, pu) = m.bottomRightCorner(pu, pu);
+      }
+    }
   }
   const Eigen::VectorXd scale = r.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
   const Eigen::MatrixXd rs = scale.asDiagonal() * r * scale.asDiagonal();
