@@ -169,14 +169,29 @@ def index_rows(text):
     return rows
 
 
-def publish(args, name, tables, index_row):
-    """Write OUT/tables.json (the example's doc blocks and its README row); with --write-docs
-    also rewrite them in docs/examples/NAME.md and docs/examples/README.md."""
+README = os.path.join(ROOT, "README.md")
+README_BLOCK = "readme"  # the block of the top-level README.md an example may own
+
+
+def publish(args, name, tables, index_row, readme=None):
+    """Write OUT/tables.json (the example's doc blocks, its README row and, for the main job,
+    its block `readme` of the top-level README.md); with --write-docs also rewrite them in
+    docs/examples/NAME.md, docs/examples/README.md and README.md."""
+    generated = {"tables": tables, "index_row": index_row}
+    if readme is not None:
+        generated[README_BLOCK] = readme
     with open(os.path.join(args.out, "tables.json"), "w") as f:
-        json.dump({"tables": tables, "index_row": index_row}, f, indent=2)
+        json.dump(generated, f, indent=2)
         f.write("\n")
     if not getattr(args, "write_docs", False):
         return
+    if readme is not None:
+        with open(README) as f:
+            text = f.read()
+        if README_BLOCK not in generated_blocks(text, name):
+            raise SystemExit(f"{README}: no block '{begin_mark(name, README_BLOCK)}'")
+        with open(README, "w") as f:
+            f.write(replace_blocks(text, name, {README_BLOCK: readme}))
     path = os.path.join(DOCS, name + ".md")
     with open(path) as f:
         text = f.read()

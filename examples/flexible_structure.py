@@ -134,7 +134,7 @@ def main():
     diagram = "Stable-frequency poles of the diagram: " + "; ".join(stable_rows) + "."
     tables = {"results": header + "\n\n" + table, "scan": _common.scan_table(scan, describe),
               "stabilisation": diagram}
-    index_row = (f"| [flexible_structure](flexible_structure.md) (main job) | DaISy 96-013, shaker "
+    index_row = (f"| [flexible_structure](flexible_structure.md) | DaISy 96-013, shaker "
                  f"{SHAKER} → accelerometer {SENSOR} | additive, {MODES} modes; scan: "
                  f"{describe(scan.fits[scan.recommended].structure)} by held-out fit, "
                  f"{MODES} modes stable in its diagram | f_n = "

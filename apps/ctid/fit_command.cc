@@ -18,6 +18,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
+#include "ctid/io/documents.h"
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
@@ -269,8 +270,65 @@ IdentificationOptions identification_options(const FitFlags& f) {
   return options;
 }
 
+// A start for several inputs and outputs (--initial / --start FILE): a mimo_additive_model
+// document or the model of a mimo_estimation_result, checked against the structure flags
+// (submodels, their poles and zeros, the direct term); the channels are checked against the
+// data once it is read (check_start_channels).
+MimoAdditiveModel read_mimo_start(const std::string& file, const std::string& flag,
+                                  const std::vector<SubmodelOrder>& orders, bool direct_term) {
+  const nlohmann::json document = io::read_json(file);
+  const auto type = document.is_object() ? document.find("type") : document.end();
+  const std::string kind =
+      type != document.end() && type->is_string() ? type->get<std::string>() : "";
+  std::optional<MimoAdditiveModel> model;
+  if (kind == io::kMimoAdditiveModelType) {
+    model = io::mimo_additive_model_from_json(document, file);
+  } else if (kind == io::kMimoEstimationResultType) {
+    model = std::get<MimoEstimationResult>(io::result_from_json(document, file)).model;
+    if (!model) usage_error(file + " (" + flag + "): the result holds no model");
+  } else {
+    usage_error(file + " (" + flag + "): a start for several inputs and outputs is a " +
+                io::kMimoAdditiveModelType + " or " + io::kMimoEstimationResultType +
+                " document, not " +
+                (kind.empty() ? "a document without a type" : "'" + kind + "'"));
+  }
+  if (model->size() != static_cast<int>(orders.size())) {
+    usage_error(internal::concat(file, " (", flag, "): the start has ", model->size(),
+                                 " submodels; the structure flags give ", orders.size()));
+  }
+  for (int i = 0; i < model->size(); ++i) {
+    const SubmodelOrder& o = orders[static_cast<size_t>(i)];
+    int zeros = 0;
+    for (const Polynomial& b : (*model)[i].b) zeros = std::max(zeros, b.degree());
+    if ((*model)[i].a.degree() != o.n || zeros > o.m) {
+      usage_error(internal::concat(file, " (", flag, "): submodel ", i + 1, " of the start has ",
+                                   (*model)[i].a.degree(), " poles and numerators of degree up to ",
+                                   zeros, "; the structure flags give ", o.n, " poles and ", o.m,
+                                   " zeros"));
+    }
+  }
+  if (model->has_direct_term() && !direct_term) {
+    usage_error(file + " (" + flag + "): the start has a direct term D; pass --direct to fit one");
+  }
+  return *model;
+}
+
+void check_start_channels(const MimoAdditiveModel& start, const std::string& file,
+                          const std::string& flag, const MimoData& data) {
+  if (start.inputs() == data.input_count() && start.outputs() == data.output_count()) return;
+  const auto listed = [](const std::vector<std::string>& names) {
+    std::string text;
+    for (const std::string& name : names) text += (text.empty() ? "" : ",") + name;
+    return text;
+  };
+  usage_error(internal::concat(file, " (", flag, "): the start has ", start.inputs(),
+                               " inputs and ", start.outputs(), " outputs but the data have ",
+                               data.input_count(), " (", listed(data.input_names()), ") and ",
+                               data.output_count(), " (", listed(data.output_names()), ")"));
+}
+
 // Several inputs and outputs (--input-columns / --output-columns): the shared-pole estimator
-// (mimo_srivc), open loop, from the automatic start.
+// (mimo_srivc), open loop, from the automatic start or a model file.
 ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   const ModelStructure structure = model_structure(f, app);
   if (!structure.is_additive()) {
@@ -278,21 +336,35 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
         "with --input-columns / --output-columns give the modes (--modes K or "
         "--submodel N,M repeated); an unfactored model has no shared modes");
   }
-  for (const char* flag :
-       {"--controller", "--delay", "--delay-scan", "--delay-range", "--record-delays", "--initial",
-        "--relocate-modes", "--history", "--model-output", "--plot"}) {
+  for (const char* flag : {"--controller", "--delay", "--delay-scan", "--delay-range",
+                           "--record-delays", "--relocate-modes", "--history"}) {
     if (app.count(flag) > 0) {
       usage_error(std::string(flag) +
                   " is not available with --input-columns / --output-columns yet (the "
-                  "shared-pole estimator is open loop, from the automatic start)");
+                  "shared-pole estimator is open loop)");
     }
   }
-  if (f.start != "auto")
-    usage_error("--start must be auto with --input-columns / --output-columns");
+  if (!f.initial.empty() && f.start != "auto") usage_error("give --start or --initial, not both");
+  if (f.start == "lssvf" || f.start == "frf") {
+    usage_error("--start " + f.start +
+                " is for one input and output; with --input-columns / --output-columns --start "
+                "is auto or a mimo_additive_model / mimo_estimation_result file");
+  }
+  if (f.start != "auto" && !std::filesystem::is_regular_file(f.start)) {
+    usage_error("--start is '" + f.start + "': neither auto nor a model or result file");
+  }
   if (f.initial_conditions != "zero") {
     usage_error("--initial-conditions estimate is not available with several inputs/outputs yet");
   }
   refuse_existing(f.output, f.force, "--output");
+  refuse_existing(f.model_output, f.force, "--model-output");
+  std::filesystem::path package;
+  if (!f.plot.empty()) {
+    package = require_plotting();
+    const bool second_order = std::any_of(structure.orders.begin(), structure.orders.end(),
+                                          [](const SubmodelOrder& o) { return o.n == 2; });
+    prepare_plot_directory(f.plot, mimo_figure_names(second_order), f.force);
+  }
   MimoRefinedIvOptions options;
   options.max_iterations = f.max_iterations;
   options.tolerance = f.tolerance;
@@ -300,16 +372,30 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   options.noise = noise_assumption(f);
   options.direct_term = f.direct_term;
   options.validate();
+  const std::string start_file = f.initial.empty() ? (f.start == "auto" ? "" : f.start) : f.initial;
+  const std::string start_flag = f.initial.empty() ? "--start" : "--initial";
+  std::optional<MimoAdditiveModel> start;
+  if (!start_file.empty()) {
+    start = read_mimo_start(start_file, start_flag, structure.orders, f.direct_term);
+  }
   const MimoData data = f.data.load_mimo(app);
-  const MimoEstimationResult result = mimo_srivc(data, structure.orders, options);
+  if (start) check_start_channels(*start, start_file, start_flag, data);
+  const MimoEstimationResult result = mimo_srivc(data, structure.orders, options, start);
 
-  if (!f.output.empty()) {
-    nlohmann::json document = io::to_json(result);
-    document["data"] = {
-        {"file", f.data.files.front()},      {"samples", data.size()},
-        {"sample_time", data.sample_time()}, {"inputs", data.input_names()},
-        {"outputs", data.output_names()},    {"input_hold", enum_name(data.input_hold())}};
-    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  nlohmann::json document = io::to_json(result);
+  document["data"] = {
+      {"file", f.data.files.front()},      {"samples", data.size()},
+      {"sample_time", data.sample_time()}, {"inputs", data.input_names()},
+      {"outputs", data.output_names()},    {"input_hold", enum_name(data.input_hold())}};
+  const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
+  if (!f.output.empty()) io::write_json(f.output, document, overwrite);
+  if (!f.model_output.empty()) {
+    if (result.model) {
+      io::write_json(f.model_output, io::to_json(*result.model), overwrite);
+    } else {
+      std::cerr << "ctid fit: note: no model was computed; " << f.model_output
+                << " is not written\n";
+    }
   }
   if (!f.quiet) {
     if (!result.verdict.usable) std::cout << "WARNING: " << result.verdict.summary() << "\n";
@@ -317,6 +403,7 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
               << f.data.files.front() << ": " << data.size() << " samples, " << data.input_count()
               << " inputs x " << data.output_count()
               << " outputs, h = " << format_number(data.sample_time()) << " s\n";
+    if (start) std::cout << "start: " << start_file << "\n";
     for (const MimoMode& m : result.modes) {
       std::cout << "  mode " << m.submodel + 1
                 << ": f_n = " << format_significant(m.natural_frequency / (2.0 * M_PI), 7) << " +- "
@@ -331,6 +418,15 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
     }
   } else if (!result.verdict.usable) {
     std::cerr << "ctid fit: WARNING: " << result.verdict.summary() << "\n";
+  }
+  if (!f.plot.empty() && result.model) {
+    const auto written =
+        draw_mimo_figures(package, f.plot, document, data,
+                          "ctid fit: mimo_srivc on " +
+                              std::filesystem::path(f.data.files.front()).filename().string());
+    if (!f.quiet) {
+      for (const auto& file : written) std::cout << "wrote " << file.string() << "\n";
+    }
   }
   return result.verdict.usable ? kExitOk : kExitNoUsableModel;
 }
@@ -455,7 +551,8 @@ Command add_fit_command(CLI::App& parent) {
       "modes, M = 0).\n"
       "Several inputs and outputs: --input-columns u1,u2 --output-columns y1:y28 (names or "
       "ranges of the file's columns) fit modes shared by every channel (open loop; --direct "
-      "adds D); the summary lists the modes and every output's fit.\n"
+      "adds D; --start/--initial take a mimo_additive_model or mimo_estimation_result); the "
+      "summary lists the modes and every output's fit.\n"
       "Closed loop: --controller C.json (discrete controller) uses CLSRIVC / additive CL and "
       "needs the reference column.\n"
       "Output: --output RESULT.json holds everything; its \"model\" field (or --model-output) "
@@ -560,11 +657,13 @@ Command add_fit_command(CLI::App& parent) {
   app->add_option("--output,-o", f.output, "Result JSON to write (everything in the estimate)")
       ->group("Output");
   app->add_option("--model-output", f.model_output,
-                  "Also write the fitted model alone (additive_model JSON)")
+                  "Also write the fitted model alone (additive_model JSON; "
+                  "mimo_additive_model with several inputs/outputs)")
       ->group("Output");
   app->add_option("--plot", f.plot,
                   "Directory for bode.png, validation.png, residuals.png (and modes.png, "
-                  "additive) drawn by python3 -m ctid.plot")
+                  "additive; several inputs/outputs: frf_matrix_overlay.png, mode_shapes.png, "
+                  "mac.png) drawn by python3 -m ctid.plot")
       ->group("Output");
   app->add_flag("--force", f.force, "Replace output files that exist (never replaced otherwise)")
       ->group("Output");

@@ -14,9 +14,11 @@
 #include <vector>
 
 #include "ctid/core/error.h"
+#include "ctid/frequency/mimo_frf.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/report_json.h"
 
 namespace ctid::cli {
 namespace {
@@ -104,6 +106,7 @@ void plot(const std::filesystem::path& package_dir, const std::vector<PlotJob>& 
                       " -m ctid.plot " + quote(job.kind) + " " + quote(job.input.string()) + " " +
                       quote(job.output.string());
     if (!job.title.empty()) one += " --title " + quote(job.title);
+    for (const std::string& argument : job.arguments) one += " " + quote(argument);
     command += "( " + one + " > /dev/null 2> " + quote(stem + ".err") + "; echo $? > " +
                quote(stem + ".status") + " ) & ";
   }
@@ -232,6 +235,50 @@ std::vector<std::filesystem::path> draw_model_figures(
                             {"validation", signals_file, dir / "validation.png", title},
                             {"residuals", signals_file, dir / "residuals.png", title}};
   if (modes) jobs.push_back({"modes", frequency_file, dir / "modes.png", title});
+  plot(package_dir, jobs);
+  std::vector<std::filesystem::path> written;
+  for (const PlotJob& job : jobs) written.push_back(job.output);
+  return written;
+}
+
+std::vector<std::string> mimo_figure_names(bool modes) {
+  std::vector<std::string> names{"frf_matrix_overlay.png"};
+  if (modes) {
+    names.emplace_back("mode_shapes.png");
+    names.emplace_back("mac.png");
+  }
+  return names;
+}
+
+std::vector<std::filesystem::path> draw_mimo_figures(const std::filesystem::path& package_dir,
+                                                     const std::filesystem::path& dir,
+                                                     const nlohmann::json& result,
+                                                     const MimoData& data,
+                                                     const std::string& title) {
+  const TemporaryDirectory work;
+  const std::filesystem::path result_file = work.path() / "result.json";
+  io::write_json(result_file, result);
+  std::vector<PlotJob> jobs;
+  MimoFrf frf;
+  if (data.size() >= 16) {  // as draw_model_figures: too short a record has no FRF to show
+    WelchOptions options;
+    options.segment_length = default_segment_length(data.size());
+    frf = excited_lines(welch_frf(data, options), PeriodicFrfOptions{}.line_threshold);
+  }
+  if (frf.frequencies.size() > 0) {
+    const std::filesystem::path frf_file = work.path() / "frf.json";
+    io::write_json(frf_file, io::to_json(frf));
+    jobs.push_back({"frf_matrix_overlay",
+                    result_file,
+                    dir / "frf_matrix_overlay.png",
+                    title,
+                    {"--frf", frf_file.string()}});
+  }
+  const auto modes = result.find("modes");
+  if (modes != result.end() && modes->is_array() && !modes->empty()) {
+    jobs.push_back({"mode_shapes", result_file, dir / "mode_shapes.png", title});
+    jobs.push_back({"mac", result_file, dir / "mac.png", title});
+  }
   plot(package_dir, jobs);
   std::vector<std::filesystem::path> written;
   for (const PlotJob& job : jobs) written.push_back(job.output);

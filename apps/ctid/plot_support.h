@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ctid/core/additive_model.h"
+#include "ctid/core/mimo_data.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/frequency/frf.h"
@@ -28,12 +29,14 @@ std::optional<std::filesystem::path> find_python_package();
 /// package are available. Call before any work so --plot fails early.
 std::filesystem::path require_plotting();
 
-/// One figure: `python3 -m ctid.plot kind input output [--title title]`.
+/// One figure: `python3 -m ctid.plot kind input output [--title title] [arguments...]`.
 struct PlotJob {
   std::string kind;
   std::filesystem::path input;
   std::filesystem::path output;
   std::string title;
+  /// Further arguments of the kind, e.g. {"--frf", FRF.json} for frf_matrix_overlay.
+  std::vector<std::string> arguments = {};
 };
 
 /// Draws the figures, all at once (one Python process each, run concurrently, since the
@@ -75,6 +78,20 @@ std::vector<std::filesystem::path> draw_model_figures(
     const std::filesystem::path& package_dir, const std::filesystem::path& dir,
     const AdditiveModel& model, const Eigen::MatrixXd& covariance, const SampledData& data,
     const Eigen::VectorXd& simulated, bool modes, const std::string& title);
+
+/// The figure files of a fit with several inputs and outputs: frf_matrix_overlay.png and,
+/// with `modes`, mode_shapes.png and mac.png.
+std::vector<std::string> mimo_figure_names(bool modes);
+
+/// Draws mimo_figure_names into `dir` from `result` (a mimo_estimation_result document with
+/// the channels' names under "data"): the modes' shapes and their MAC matrix when the result
+/// has modes, and the model over the Welch H1 FRF matrix of `data` (default segments, the
+/// excited lines) for the channels with the largest response. Returns the files written.
+std::vector<std::filesystem::path> draw_mimo_figures(const std::filesystem::path& package_dir,
+                                                     const std::filesystem::path& dir,
+                                                     const nlohmann::json& result,
+                                                     const MimoData& data,
+                                                     const std::string& title);
 
 /// Draws `dir`/validation.png: the measured output of `data` with each model's output
 /// (validation_output with `options`) over it, labelled by its file name and fit on the window

@@ -1,13 +1,17 @@
 """Command-line entry point for ctid's figures, used by the C++ CLI's ``--plot`` flag.
 
-    /usr/bin/python3 -m ctid.plot KIND INPUT OUTPUT [--title TEXT]
+    /usr/bin/python3 -m ctid.plot KIND INPUT OUTPUT [--title TEXT] [--frf FRF.json]
+                                  [--against RESULT2.json]
 
 KIND is one of bode, modes, frf, frf_matrix, validation, compare, residuals, mse,
-stabilisation; INPUT a JSON (bode, modes, frf_matrix: the mimo_frf document of `ctid frf -o
-X.json`, stabilisation: the scan `ctid structure -o` writes, compare: {"t", "y",
-"window": [start, end], "initial_state", "models": [{"label", "output"}]}) or
-CSV (frf, validation, residuals, mse) file in the formats of docs/python.md; OUTPUT ends in .png or
-.svg. Exit status 0 on success, 2 for bad usage or input (one line on stderr), 1 otherwise.
+stabilisation, mode_shapes, mac, frf_matrix_overlay; INPUT a JSON (bode, modes, frf_matrix: the
+mimo_frf document of `ctid frf -o X.json`, stabilisation: the scan `ctid structure -o` writes,
+compare: {"t", "y", "window": [start, end], "initial_state", "models": [{"label", "output"}]},
+mode_shapes and mac: the mimo_estimation_result of `ctid fit --input-columns ... -o R.json`,
+frf_matrix_overlay: that result or a mimo_additive_model, drawn over the mimo_frf document given
+by --frf) or CSV (frf, validation, residuals, mse) file in the formats of docs/python.md;
+--against gives mac a second estimate for the columns. OUTPUT ends in .png or .svg. Exit status 0
+on success, 2 for bad usage or input (one line on stderr), 1 otherwise.
 """
 
 from __future__ import annotations
@@ -20,7 +24,8 @@ import sys
 import numpy as np
 
 KINDS = ("bode", "modes", "frf", "frf_matrix", "validation", "compare", "residuals", "mse",
-         "stabilisation")
+         "stabilisation", "mode_shapes", "mac", "frf_matrix_overlay")
+MIMO_KINDS = ("mode_shapes", "mac", "frf_matrix_overlay")
 
 
 class InputError(Exception):
@@ -55,6 +60,86 @@ def model_from_json(document, where="model"):
         return ctid.AdditiveModel(submodels, delay)
     raise InputError(f"{where}: 'type' is {kind!r}; expected 'transfer_function' or "
                      "'additive_model'")
+
+
+def mimo_model_from_json(document, where="model"):
+    """A ctid.MimoAdditiveModel from a "mimo_additive_model" document (docs/formats.md:
+    "inputs", "outputs", "submodels": [{"denominator_ascending", "numerators_ascending": output
+    by output, input by input}], optional "direct": one row per output)."""
+    import ctid
+
+    if document.get("type") != "mimo_additive_model":
+        raise InputError(f"{where}: 'type' is {document.get('type')!r}; expected "
+                         "'mimo_additive_model'")
+    for name in ("inputs", "outputs", "submodels"):
+        if name not in document:
+            raise InputError(f"{where}: missing field '{name}'")
+    inputs, outputs = int(document["inputs"]), int(document["outputs"])
+    submodels = []
+    for k, entry in enumerate(document["submodels"]):
+        place = f"{where}.submodels[{k}]"
+        numerators = entry.get("numerators_ascending")
+        if numerators is None or len(numerators) != inputs * outputs:
+            raise InputError(f"{place}: needs {inputs * outputs} numerators_ascending "
+                             f"({outputs} outputs x {inputs} inputs)")
+        submodels.append(ctid.MimoSubmodel(
+            ctid.Polynomial(_polynomial(entry, "denominator_ascending", place)),
+            [ctid.Polynomial([float(c) for c in b]) for b in numerators]))
+    direct = np.asarray(document.get("direct", np.zeros((0, 0))), dtype=float)
+    return ctid.MimoAdditiveModel(inputs, outputs, submodels, direct.reshape(
+        (outputs, inputs) if direct.size else (0, 0)))
+
+
+def _read_json(path):
+    with open(path, encoding="utf-8") as handle:
+        document = json.load(handle)
+    if not isinstance(document, dict):
+        raise InputError(f"{path}: expected a JSON object")
+    return document
+
+
+def _mimo_result(path):
+    """(MimoEstimationResult, output names or None) of a mimo_estimation_result document."""
+    import ctid
+
+    document = _read_json(path)
+    if document.get("type") != "mimo_estimation_result":
+        raise InputError(f"{path}: not a mimo_estimation_result document (type "
+                         f"{document.get('type')!r})")
+    result = ctid.read_result(path)
+    names = document.get("data", {}).get("outputs") if isinstance(
+        document.get("data"), dict) else None
+    return result, names
+
+
+def _mimo_figure(kind, path, output, title, frf=None, against=None):
+    from . import plotting
+
+    if kind == "frf_matrix_overlay":
+        if frf is None:
+            raise InputError("frf_matrix_overlay needs --frf FRF.json (a mimo_frf document, "
+                             "e.g. from ctid frf -o FRF.json)")
+        frf_document = _read_json(frf)
+        if frf_document.get("type") != "mimo_frf":
+            raise InputError(f"{frf}: not a mimo_frf document")
+        document = _read_json(path)
+        if document.get("type") == "mimo_additive_model":
+            model = mimo_model_from_json(document, path)
+        else:
+            model, _ = _mimo_result(path)
+        return plotting.frf_matrix_overlay(model, frf_document, title=title, filename=output)
+    result, names = _mimo_result(path)
+    if not result.modes:
+        raise InputError(f"{path}: the estimate has no modes (no second-order submodel)")
+    if kind == "mode_shapes":
+        return plotting.mode_shapes(result, output_names=names, title=title, filename=output)
+    second = None
+    if against is not None:
+        second, other_names = _mimo_result(against)
+        if names is not None and other_names is not None and list(names) != list(other_names):
+            raise InputError(f"{against}: its outputs ({', '.join(other_names)}) are not those "
+                             f"of {path} ({', '.join(names)})")
+    return plotting.mac_matrix(result, second, title=title, filename=output)
 
 
 class _Frf:
@@ -148,8 +233,10 @@ def _compare_figure(path, output, title):
                             filename=output)
 
 
-def run(kind, path, output, title=None):
-    """Draw one figure; returns the Figure. Raises InputError or ValueError on bad input."""
+def run(kind, path, output, title=None, frf=None, against=None):
+    """Draw one figure; returns the Figure. Raises InputError or ValueError on bad input.
+    ``frf``: the mimo_frf document frf_matrix_overlay draws under the model; ``against``: a
+    second mimo_estimation_result for the columns of mac."""
     import ctid
     from . import plotting
 
@@ -157,8 +244,14 @@ def run(kind, path, output, title=None):
         raise InputError(f"unknown kind '{kind}'; expected one of {', '.join(KINDS)}")
     if not output.lower().endswith((".png", ".svg")):
         raise InputError(f"output '{output}' must end in .png or .svg")
+    if frf is not None and kind != "frf_matrix_overlay":
+        raise InputError("--frf goes with frf_matrix_overlay")
+    if against is not None and kind != "mac":
+        raise InputError("--against goes with mac")
     if kind in ("bode", "modes"):
         return _frequency_figure(kind, path, output, title)
+    if kind in MIMO_KINDS:
+        return _mimo_figure(kind, path, output, title, frf, against)
     if kind == "stabilisation":
         with open(path, encoding="utf-8") as handle:
             document = json.load(handle)
@@ -203,16 +296,20 @@ def main(argv=None):
         description="Draw a ctid figure (PNG or SVG) from a JSON or CSV file.")
     parser.add_argument("kind", help="one of: " + ", ".join(KINDS))
     parser.add_argument("input",
-                        help="JSON (bode, modes, frf_matrix, compare, stabilisation) or CSV (frf, "
-                        "validation, residuals, mse)")
+                        help="JSON (bode, modes, frf_matrix, compare, stabilisation, mode_shapes, "
+                        "mac, frf_matrix_overlay) or CSV (frf, validation, residuals, mse)")
     parser.add_argument("output", help="figure file, .png or .svg")
     parser.add_argument("--title", default=None, help="figure title")
+    parser.add_argument("--frf", default=None,
+                        help="frf_matrix_overlay: the mimo_frf document (JSON) under the model")
+    parser.add_argument("--against", default=None,
+                        help="mac: a second mimo_estimation_result for the columns")
     try:
         args = parser.parse_args(argv)
     except SystemExit as exit_:
         return 2 if exit_.code else 0
     try:
-        run(args.kind, args.input, args.output, args.title)
+        run(args.kind, args.input, args.output, args.title, args.frf, args.against)
     except (InputError, ValueError, TypeError, OSError, json.JSONDecodeError) as error:
         print(f"ctid.plot: {error}", file=sys.stderr)
         return 2

@@ -28,12 +28,18 @@ from . import _ctid  # noqa: E402
 
 __all__ = [
     "bode",
+    "channel_fits",
     "frf",
+    "frf_matrix",
+    "frf_matrix_overlay",
+    "mode_shapes",
+    "mac_matrix",
     "modes",
     "validation",
     "compare",
     "residual_correlation",
     "mse_against_n",
+    "stabilisation",
     "frequency_response_band",
     "correlations",
     "save",
@@ -232,6 +238,23 @@ def frf(estimate, title=None, filename=None):
     return _finish(figure, filename)
 
 
+def _mimo_frf_arrays(estimate, where):
+    """(input names, output names, frequencies [rad/s], response (lines, n_y, n_u), coherence
+    (lines, n_y)) of a ctid.MimoFrf or of the "mimo_frf" document `ctid frf -o X.json` writes."""
+    if isinstance(estimate, dict):
+        if estimate.get("type") != "mimo_frf":
+            raise ValueError(f"{where}: expected a mimo_frf document, got type "
+                             f"{estimate.get('type')!r}")
+        pairs = np.array(estimate["response"], dtype=float)  # (lines, n_y, n_u, 2); null -> nan
+        response = pairs[..., 0] + 1j * pairs[..., 1]
+        return (list(estimate["inputs"]), list(estimate["outputs"]),
+                np.asarray(estimate["frequencies"], dtype=float), response,
+                np.asarray(estimate["coherence"], dtype=float))
+    return (list(estimate.input_names), list(estimate.output_names),
+            np.asarray(estimate.frequencies, dtype=float), np.asarray(estimate.response),
+            np.asarray(estimate.coherence, dtype=float))
+
+
 def frf_matrix(estimate, channels=None, max_outputs=4, title=None, filename=None):
     """Chosen channels of an FRF matrix over frequency in Hz: |H_ji| (dB) of each, and below
     the multiple coherence of each chosen output with all inputs.
@@ -241,18 +264,8 @@ def frf_matrix(estimate, channels=None, max_outputs=4, title=None, filename=None
     ``max_outputs`` outputs. Lines: "<output>/<input>" and "coherence <output>". Returns the
     Figure.
     """
-    def get(name):
-        return estimate[name] if isinstance(estimate, dict) else getattr(estimate, name)
-
-    inputs = list(get("input_names") if not isinstance(estimate, dict) else estimate["inputs"])
-    outputs = list(get("output_names") if not isinstance(estimate, dict) else estimate["outputs"])
-    hz = np.asarray(get("frequencies"), dtype=float) / (2.0 * np.pi)
-    response = get("response")
-    if isinstance(estimate, dict):
-        pairs = np.array(response, dtype=float)  # (lines, n_y, n_u, 2); null -> nan
-        response = pairs[..., 0] + 1j * pairs[..., 1]
-    response = np.asarray(response)
-    coherence = np.asarray(get("coherence"), dtype=float)
+    inputs, outputs, w, response, coherence = _mimo_frf_arrays(estimate, "frf_matrix")
+    hz = w / (2.0 * np.pi)
     if channels is None:
         channels = [(y, u) for y in outputs[:max_outputs] for u in inputs]
     figure, axes = plt.subplots(2, 1, sharex=True, figsize=(8.0, 6.5),
@@ -276,6 +289,274 @@ def frf_matrix(estimate, channels=None, max_outputs=4, title=None, filename=None
         ax.legend(fontsize="small", ncol=2)
     if title:
         axes[0].set_title(title)
+    return _finish(figure, filename)
+
+
+def _channel_index(name_or_index, names, kind, where):
+    """Position of a channel given by name or by 0-based index."""
+    if isinstance(name_or_index, (int, np.integer)) and not isinstance(name_or_index, bool):
+        if not 0 <= name_or_index < len(names):
+            raise ValueError(
+                f"{where}: {kind} index {name_or_index} is outside 0..{len(names) - 1}")
+        return int(name_or_index)
+    if name_or_index not in names:
+        raise ValueError(f"{where}: no {kind} {name_or_index!r}; {kind}s are {', '.join(names)}")
+    return names.index(name_or_index)
+
+
+def frf_matrix_overlay(model, frf, channels=None, title=None, filename=None, omegas=None,
+                       max_channels=4):
+    """Chosen channels of a measured FRF matrix with a MIMO model's frequency response over
+    them: for each channel |H_ji| in dB above its phase in degrees, over frequency in Hz.
+
+    ``model``: a ctid.MimoAdditiveModel or a ctid.MimoEstimationResult (its model); channel
+    (j, i) is ``model.channel(j, i)``, the direct term included. ``frf``: a ctid.MimoFrf (e.g.
+    ``ctid.welch_frf(mimo_data)``) or the "mimo_frf" document of ``ctid frf -o X.json``, with
+    as many inputs and outputs as the model. ``channels``: (output, input) pairs, each a name
+    of the FRF's channels or a 0-based index; default the ``max_channels`` channels with the
+    largest peak |H_ji| in the FRF, largest first. ``omegas``: the model's grid [rad/s]
+    (default 400 points over the FRF's lines). The axes come in pairs (magnitude, phase), one
+    pair per channel in the order of ``channels``, the magnitude axis titled
+    "<output>/<input>"; each holds the lines "model" and "FRF" (the FRF's phase put on the
+    model's branch). Returns the Figure.
+    """
+    if isinstance(model, _ctid.MimoEstimationResult):
+        if model.model is None:
+            raise ValueError("frf_matrix_overlay: the result holds no model")
+        model = model.model
+    if not isinstance(model, _ctid.MimoAdditiveModel):
+        raise TypeError("frf_matrix_overlay: expected a MimoAdditiveModel or "
+                        "MimoEstimationResult, got " + type(model).__name__)
+    inputs, outputs, w, response, _ = _mimo_frf_arrays(frf, "frf_matrix_overlay")
+    if response.shape[1:] != (model.outputs, model.inputs):
+        raise ValueError(
+            f"frf_matrix_overlay: the FRF is {response.shape[1]} outputs x {response.shape[2]} "
+            f"inputs but the model {model.outputs} x {model.inputs}")
+    if channels is None:
+        with np.errstate(invalid="ignore"):
+            peaks = np.nanmax(np.abs(response), axis=0) if w.size else np.zeros(
+                response.shape[1:])
+        peaks = np.where(np.isfinite(peaks), peaks, -np.inf)
+        order = np.argsort(-peaks, axis=None, kind="stable")[:max_channels]
+        pairs = [tuple(int(v) for v in np.unravel_index(k, peaks.shape)) for k in order]
+    else:
+        pairs = [(_channel_index(y, outputs, "output", "frf_matrix_overlay"),
+                  _channel_index(u, inputs, "input", "frf_matrix_overlay"))
+                 for y, u in channels]
+    if not pairs:
+        raise ValueError("frf_matrix_overlay: no channel to draw")
+    if omegas is None:
+        positive = w[w > 0]
+        if positive.size == 0:
+            raise ValueError("frf_matrix_overlay: the FRF has no line above 0 rad/s; give omegas")
+        omegas = np.logspace(np.log10(positive.min()), np.log10(positive.max()), 400)
+    omegas = np.asarray(omegas, dtype=float)
+    columns = 1 if len(pairs) == 1 else 2
+    rows = math.ceil(len(pairs) / columns)
+    # Each channel's two axes share a cell of the outer grid, so magnitude and phase sit close
+    # together and the space goes between channels (constrained layout; tight_layout cannot
+    # lay out nested grids).
+    figure = plt.figure(figsize=(6.0 * columns, 4.2 * rows + (0.4 if title else 0.0)),
+                        layout="constrained")
+    outer = figure.add_gridspec(rows, columns)
+    for c, (j, i) in enumerate(pairs):
+        row, column = divmod(c, columns)
+        cell = outer[row, column].subgridspec(2, 1, height_ratios=[2, 1], hspace=0.05)
+        ax_mag = figure.add_subplot(cell[0])
+        ax_phase = figure.add_subplot(cell[1], sharex=ax_mag)
+        g = np.asarray(_ctid.frequency_response(model.channel(j, i), omegas))
+        phase = np.degrees(np.unwrap(np.angle(g)))
+        measured = response[:, j, i]
+        measured_phase = np.degrees(np.angle(measured))
+        model_at_w = np.interp(np.log(w), np.log(omegas), phase)
+        measured_phase += 360.0 * np.round((model_at_w - measured_phase) / 360.0)
+        ax_mag.semilogx(w / (2.0 * np.pi), _db(measured), "o", ms=2.0, color="C1", label="FRF")
+        ax_mag.semilogx(omegas / (2.0 * np.pi), _db(g), color="C0", lw=1.2, label="model")
+        ax_phase.semilogx(w / (2.0 * np.pi), measured_phase, "o", ms=2.0, color="C1",
+                          label="FRF")
+        ax_phase.semilogx(omegas / (2.0 * np.pi), phase, color="C0", lw=1.2, label="model")
+        ax_mag.set_title(f"{outputs[j]}/{inputs[i]}", fontsize=9)
+        ax_mag.set_ylabel("|H| [dB]")
+        ax_phase.set_ylabel("phase [deg]")
+        ax_phase.set_xlabel("frequency [Hz]")
+        ax_mag.tick_params(labelbottom=False)
+        for ax in (ax_mag, ax_phase):
+            ax.grid(True, which="both", alpha=0.3)
+        if c == 0:
+            ax_mag.legend(fontsize=7)
+    if title:
+        figure.suptitle(title)
+    if filename is not None:
+        save(figure, filename)
+    return figure
+
+
+def _mimo_modes(result_or_modes, where):
+    """The modes of a MimoEstimationResult, or the modes given (ctid.MimoMode, or any objects
+    with its fields)."""
+    modes = list(getattr(result_or_modes, "modes", result_or_modes))
+    for m in modes:
+        if not (hasattr(m, "shape") and hasattr(m, "natural_frequency")):
+            raise TypeError(f"{where}: expected a MimoEstimationResult or MimoMode objects, got "
+                            + type(m).__name__)
+    return modes
+
+
+def _plus_minus(value, error, digits=5):
+    text = f"{value:.{digits}g}"
+    if error is not None and math.isfinite(error):
+        text += f" ± {error:.2g}"
+    return text
+
+
+def _mode_label(mode):
+    return f"{mode.submodel + 1}: {mode.natural_frequency / (2.0 * np.pi):.4g} Hz"
+
+
+def mode_shapes(result_or_modes, output_names=None, geometry=None, title=None, filename=None):
+    """Each mode's shape over the outputs (sensors), one panel per mode.
+
+    ``result_or_modes``: a ctid.MimoEstimationResult or a list of ctid.MimoMode (or objects
+    with its fields: submodel, natural_frequency, damping_ratio, their *_se, shape,
+    shape_se_real, rank_one_share). A shape is
+    scaled to unit length with its largest entry real and positive (mimo_srivc.h); drawn are
+    its real part, "Re(shape)", with error bars of one standard error (``shape_se_real``,
+    where finite), and its magnitude signed by the phase (+|psi_j| when |arg psi_j| <= 90 deg,
+    else -|psi_j|), "|shape|, signed": for a real (classically damped) mode the two coincide.
+    ``output_names``: one per output (default 1, 2, ...) for the x ticks. ``geometry``: a 1-D
+    position per output used as the x axis instead of the index (the points joined in the
+    order of position). Each panel is titled with the mode's f_n [Hz] and zeta, each with its
+    standard error, and its rank-one share. One axis per mode, in the modes' order. Returns the
+    Figure.
+    """
+    modes = _mimo_modes(result_or_modes, "mode_shapes")
+    if not modes:
+        raise ValueError("mode_shapes: no modes to draw (the model has no second-order submodel)")
+    outputs = len(modes[0].shape)
+    names = ([str(j + 1) for j in range(outputs)] if output_names is None
+             else [str(n) for n in output_names])
+    if len(names) != outputs:
+        raise ValueError(f"mode_shapes: {len(names)} output names for {outputs} outputs")
+    if geometry is None:
+        x = np.arange(1.0, outputs + 1.0)
+    else:
+        x = np.asarray(geometry, dtype=float).ravel()
+        if x.size != outputs or not np.all(np.isfinite(x)):
+            raise ValueError(f"mode_shapes: geometry needs {outputs} finite positions, one per "
+                             f"output; got {x.size}")
+    order = np.argsort(x, kind="stable")
+    columns = 1 if len(modes) == 1 else 2
+    rows = math.ceil(len(modes) / columns)
+    figure, axes = plt.subplots(rows, columns, figsize=(6.0 * columns, 3.0 * rows + 0.5),
+                                squeeze=False)
+    for ax in list(axes.flat)[len(modes):]:
+        ax.remove()
+    for ax, mode in zip(axes.flat, modes):
+        if len(mode.shape) != outputs:
+            raise ValueError("mode_shapes: the modes' shapes differ in length")
+        shape = np.asarray(mode.shape)[order]
+        signed = np.abs(shape) * np.where(np.cos(np.angle(shape)) >= 0.0, 1.0, -1.0)
+        se = np.asarray(mode.shape_se_real, dtype=float)
+        se = se[order] if se.size == outputs else np.full(outputs, np.nan)
+        ax.axhline(0.0, color="0.6", lw=0.6)
+        ax.plot(x[order], shape.real, "o-", ms=4, lw=1.2, color="C0", label="Re(shape)")
+        finite = np.isfinite(se)
+        if finite.any():
+            ax.errorbar(x[order][finite], shape.real[finite], yerr=se[finite], fmt="none",
+                        ecolor="C0", capsize=3, lw=0.8, label="± 1 se")
+        ax.plot(x[order], signed, "s", ms=6, mfc="none", color="C3", label="|shape|, signed")
+        hz = 2.0 * np.pi
+        ax.set_title(
+            f"mode {mode.submodel + 1}: f_n = "
+            f"{_plus_minus(mode.natural_frequency / hz, mode.natural_frequency_se / hz)} Hz, "
+            f"ζ = {_plus_minus(mode.damping_ratio, mode.damping_ratio_se, 4)}\n"
+            f"rank-one share {mode.rank_one_share:.3g}", fontsize=9)
+        if geometry is None:
+            ax.set_xticks(x)
+            ax.set_xticklabels(names, rotation=90 if outputs > 8 else 0,
+                               fontsize=7 if outputs > 8 else 9)
+            ax.set_xlabel("output")
+        else:
+            ax.set_xlabel("position")
+        ax.set_ylabel("shape")
+        ax.grid(True, alpha=0.3)
+    figure.axes[0].legend(fontsize=7)
+    if title:
+        figure.suptitle(title)
+    return _finish(figure, filename)
+
+
+def mac_matrix(modes_a, modes_b=None, labels=None, column_labels=None, title=None,
+               filename=None):
+    """The modal assurance criterion MAC(a, b) = |a^H b|^2 / ((a^H a)(b^H b)) as an annotated
+    heat map (ctid.modal_assurance), between the modes of one estimate (``modes_b`` None: a
+    well-separated set has a MAC near the identity) or between two estimates of the same
+    outputs (e.g. fits of two halves of a record: a mode found in both has a MAC near 1).
+
+    ``modes_a``, ``modes_b``: ctid.MimoEstimationResult or lists of ctid.MimoMode (rows and
+    columns; shapes of equal length). ``labels``, ``column_labels``: tick labels (default
+    "<submodel>: <f_n> Hz"; the columns take ``labels`` when ``modes_b`` is None). The image's
+    array is the MAC matrix and every cell carries its value to two decimals. Returns the
+    Figure.
+    """
+    rows = _mimo_modes(modes_a, "mac_matrix")
+    cols = rows if modes_b is None else _mimo_modes(modes_b, "mac_matrix")
+    if not rows or not cols:
+        raise ValueError("mac_matrix: no modes to compare")
+    mac = np.array([[_ctid.modal_assurance(np.asarray(a.shape, dtype=complex),
+                                           np.asarray(b.shape, dtype=complex)) for b in cols]
+                    for a in rows], dtype=float)
+    row_labels = [_mode_label(m) for m in rows] if labels is None else [str(v) for v in labels]
+    if column_labels is None:
+        column_labels = (row_labels if modes_b is None and labels is not None
+                         else [_mode_label(m) for m in cols])
+    column_labels = [str(v) for v in column_labels]
+    if len(row_labels) != len(rows) or len(column_labels) != len(cols):
+        raise ValueError(f"mac_matrix: {len(row_labels)} x {len(column_labels)} labels for "
+                         f"{len(rows)} x {len(cols)} modes")
+    figure, ax = plt.subplots(figsize=(max(4.5, 2.4 + 0.8 * len(cols)),
+                                       max(3.5, 1.6 + 0.55 * len(rows))))
+    image = ax.imshow(mac, vmin=0.0, vmax=1.0, cmap="Blues", aspect="auto")
+    for r in range(mac.shape[0]):
+        for c in range(mac.shape[1]):
+            ax.text(c, r, f"{mac[r, c]:.2f}", ha="center", va="center", fontsize=8,
+                    color="white" if mac[r, c] > 0.6 else "black")
+    ax.set_xticks(range(len(cols)))
+    ax.set_xticklabels(column_labels, rotation=45, ha="right", fontsize=8)
+    ax.set_yticks(range(len(rows)))
+    ax.set_yticklabels(row_labels, fontsize=8)
+    ax.set_ylabel("mode" if modes_b is None else "modes of the first estimate")
+    ax.set_xlabel("mode" if modes_b is None else "modes of the second estimate")
+    figure.colorbar(image, ax=ax, label="MAC")
+    if title:
+        ax.set_title(title)
+    return _finish(figure, filename)
+
+
+def channel_fits(names, fits, title=None, filename=None):
+    """Fit [%] per channel (x: the channels in order) for several models or bounds side by
+    side: ``fits`` maps a label to one value per channel (NaN: not available). Returns the
+    Figure."""
+    labels = list(fits)
+    count = len(names)
+    width = 0.8 / max(len(labels), 1)
+    figure, ax = plt.subplots(figsize=(max(7.0, 0.3 * count + 2.0), 4.0))
+    x = np.arange(count)
+    for index, label in enumerate(labels):
+        values = np.asarray(fits[label], dtype=float)
+        if values.shape != (count,):
+            raise ValueError(f"channel_fits: '{label}' has {values.size} values for {count} "
+                             "channels")
+        ax.bar(x + (index - (len(labels) - 1) / 2.0) * width, values, width, label=label)
+    ax.set_xticks(x)
+    ax.set_xticklabels(names, rotation=90, fontsize="small")
+    ax.set_ylabel("fit [%]")
+    ax.set_ylim(min(0.0, np.nanmin([np.nanmin(np.asarray(v, dtype=float)) for v in
+                                     fits.values()])), 100.0)
+    ax.grid(True, axis="y", alpha=0.3)
+    ax.legend(loc="lower right", fontsize="small")
+    if title:
+        ax.set_title(title)
     return _finish(figure, filename)
 
 

@@ -36,6 +36,13 @@ void bind_estimation(py::module_& m) {
         py::arg("model"), py::arg("data"), py::arg("options"),
         "Fit and residual statistics on options' window, from rest or from the least-squares "
         "initial state; both fits are reported.");
+  bind_result<MimoValidationReport>(m, "Per-output fit and residual statistics of a MIMO model.");
+  m.def("validate_model",
+        py::overload_cast<const MimoAdditiveModel&, const MimoData&, const ValidationOptions&>(
+            &validate_model),
+        py::arg("model"), py::arg("data"), py::arg("options") = ValidationOptions{},
+        "Per-output fit (from rest and from the least-squares initial state) and residual "
+        "statistics of a model with several inputs and outputs.");
   m.def("validation_output", &validation_output, py::arg("model"), py::arg("data"),
         py::arg("options") = ValidationOptions{},
         "The output validate_model scores, over the whole record.");

@@ -56,3 +56,35 @@ def test_bad_input_is_one_clear_error():
         ctid.mimo_srivc(data, [ctid.SubmodelOrder(0, 0)])
     with pytest.raises(ctid.InvalidArgument, match="tolerance"):
         ctid.mimo_srivc(data, [ctid.SubmodelOrder(2, 0)], tolerance=2.0)
+
+
+def measured_structure(outputs):
+    """The shipped flexible structure (DaISy 96-013): both shaker forces and the chosen
+    accelerometers, means removed, decimated by 2 behind the anti-alias filter."""
+    import os
+    path = os.path.join(os.path.dirname(__file__), "..", "..", "data", "daisy_flexible_structure",
+                        "flexible_structure.csv")
+    record = ctid.read_mimo_data(path, time="t_s", inputs=["u1_force:u2_force"], outputs=outputs)
+    return ctid.preprocess(record, detrend=ctid.Detrend.mean, decimate=2).data
+
+
+def test_measured_structure_converges_and_beats_one_input_on_held_out_data():
+    # On this record the undamped iteration oscillates about its fixed point and then stalls
+    # at the rounding floor (decision 0018); relaxed, it converges. Both shakers -> y28 with
+    # three modes and a direct term, fitted on the first 70 %, scored on the rest from the
+    # least-squares initial state against shaker 2 alone with the same modes.
+    data = measured_structure(["y28_acc"])
+    n = data.size()
+    estimation, validation = data.segment(0, int(0.7 * n)), data.segment(int(0.7 * n), n - int(0.7 * n))
+    r = ctid.mimo_srivc(estimation, [ctid.SubmodelOrder(2, 1)] * 3, direct_term=True)
+    assert r.converged(), r.message
+    assert r.verdict.usable, r.verdict.summary()
+    hz = [m.natural_frequency / (2 * math.pi) for m in r.modes]
+    assert hz == pytest.approx([62.4, 119.0, 154.7], abs=0.2)
+    options = ctid.ValidationOptions()
+    options.initial_state = ctid.InitialState.estimate
+    two = ctid.validate_model(r.model, validation, options).fit_percent[0]
+    siso = ctid.additive_srivc(estimation.channel(1, 0), [ctid.SubmodelOrder(2, 2)] +
+                               [ctid.SubmodelOrder(2, 1)] * 2, max_iterations=200)
+    one = ctid.validate_model(siso.model, validation.channel(1, 0), options).fit_percent
+    assert two > one + 5.0, (two, one)

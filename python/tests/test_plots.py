@@ -238,7 +238,8 @@ def test_command_line_bad_input_exits_2(tmp_path):
     assert result.returncode == 2
     assert result.stderr.strip() == ("ctid.plot: unknown kind 'nyquist'; expected one of "
                                      "bode, modes, frf, frf_matrix, validation, compare, "
-                                     "residuals, mse, stabilisation")
+                                     "residuals, mse, stabilisation, mode_shapes, mac, "
+                                     "frf_matrix_overlay")
     (tmp_path / "bad.json").write_text('{"type": "state_space"}')
     result = run_plot("bode", tmp_path / "bad.json", tmp_path / "x.png")
     assert result.returncode == 2 and "'type' is 'state_space'" in result.stderr

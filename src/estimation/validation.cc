@@ -195,6 +195,53 @@ ValidationReport validate_model(const AdditiveModel& model, const SampledData& d
   return r;
 }
 
+MimoValidationReport validate_model(const MimoAdditiveModel& model, const MimoData& data,
+                                    const ValidationOptions& options) {
+  options.validate();
+  require(model.inputs() == data.input_count() && model.outputs() == data.output_count(),
+          "validate_model: the model is ", model.outputs(), " x ", model.inputs(),
+          " (outputs x inputs) but the record has ", data.output_count(), " outputs and ",
+          data.input_count(), " inputs");
+  const Window w = scored_window(data.channel(0, 0), options);
+  const int outputs = data.output_count();
+  MimoValidationReport r;
+  r.initial_state = options.initial_state;
+  for (Eigen::VectorXd* v : {&r.fit_percent, &r.fit_zero_state, &r.fit_estimated_state,
+                             &r.max_residual_autocorrelation, &r.max_cross_correlation}) {
+    v->resize(outputs);
+  }
+  for (int j = 0; j < outputs; ++j) {
+    Eigen::VectorXd rest = Eigen::VectorXd::Zero(data.size());
+    for (int k = 0; k < data.input_count(); ++k) {
+      rest += model_output(model.channel(j, k), data.inputs().col(k), data.sample_time(),
+                           data.input_hold());
+    }
+    const SampledData first = data.channel(0, j);
+    int states = 0;
+    int rank = 0;
+    const Eigen::VectorXd estimated =
+        rest + estimated_free_response(model.channel(j, 0), first, rest, w, &states, &rank);
+    const Eigen::VectorXd& used =
+        options.initial_state == InitialState::estimate ? estimated : rest;
+    const Eigen::VectorXd y = data.outputs().col(j).segment(w.first, w.count);
+    r.fit_zero_state(j) = fit_percent(y, rest.segment(w.first, w.count));
+    r.fit_estimated_state(j) = fit_percent(y, estimated.segment(w.first, w.count));
+    r.fit_percent(j) = fit_percent(y, used.segment(w.first, w.count));
+    r.max_cross_correlation(j) = 0.0;
+    for (int k = 0; k < data.input_count(); ++k) {
+      const ValidationReport one = residual_report(data.channel(k, j).segment(w.first, w.count),
+                                                   used.segment(w.first, w.count), options.max_lag);
+      r.max_residual_autocorrelation(j) = one.max_residual_autocorrelation;
+      r.max_cross_correlation(j) = std::max(r.max_cross_correlation(j), one.max_cross_correlation);
+      r.whiteness_bound = one.whiteness_bound;
+    }
+  }
+  r.window_start = data.start_time() + w.first * data.sample_time();
+  r.window_end = data.start_time() + (w.first + w.count - 1) * data.sample_time();
+  r.window_samples = w.count;
+  return r;
+}
+
 Eigen::VectorXd validation_output(const AdditiveModel& model, const SampledData& data,
                                   const ValidationOptions& options) {
   options.validate();

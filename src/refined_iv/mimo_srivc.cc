@@ -436,17 +436,17 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
           rcond};
 }
 
-// The model halfway between two of the same structure, parameter by parameter.
-MimoAdditiveModel midpoint(const Layout& layout, const MimoAdditiveModel& x,
-                           const MimoAdditiveModel& y) {
+// The model a fraction w of the way from x to y, parameter by parameter.
+MimoAdditiveModel blend(const Layout& layout, const MimoAdditiveModel& x,
+                        const MimoAdditiveModel& y, double w) {
   std::vector<MimoSubmodel> submodels;
   for (int i = 0; i < layout.size(); ++i) {
-    MimoSubmodel s{0.5 * x[i].a + 0.5 * y[i].a, {}};
-    for (size_t c = 0; c < x[i].b.size(); ++c) s.b.push_back(0.5 * x[i].b[c] + 0.5 * y[i].b[c]);
+    MimoSubmodel s{(1.0 - w) * x[i].a + w * y[i].a, {}};
+    for (size_t c = 0; c < x[i].b.size(); ++c) s.b.push_back((1.0 - w) * x[i].b[c] + w * y[i].b[c]);
     submodels.push_back(std::move(s));
   }
   Eigen::MatrixXd direct;
-  if (layout.direct) direct = 0.5 * (x.direct() + y.direct());
+  if (layout.direct) direct = (1.0 - w) * x.direct() + w * y.direct();
   return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels), direct);
 }
 
@@ -460,26 +460,41 @@ struct Iterations {
   int iterations = 0;
   int step_halvings = 0;
   double reciprocal_condition = std::numeric_limits<double>::quiet_NaN();
+  bool start_returned = false;  // not converged, and no iterate fitted better than the start
 };
 
 Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditiveModel model,
                           int max_iterations, double tolerance, Hold output_interpolation) {
-  const double start_cost = relative_output_error(layout, data, model);
+  double cost = relative_output_error(layout, data, model);
   Iterations result{
-      model, start_cost, Termination::not_run, {}, 0, 0, std::numeric_limits<double>::quiet_NaN()};
+      model, cost, Termination::not_run, {}, 0, 0, std::numeric_limits<double>::quiet_NaN()};
   MimoAdditiveModel& best = result.model;
   double& best_cost = result.cost;
   int best_iteration = 0;
-  Eigen::VectorXd previous = flatten(model);
-  // Step control as in the SISO engine: a step to an iterate whose equations cannot be formed
-  // or solved is halved toward the last accepted iterate (kMaxHalvings times at most).
+  // Step control. (1) A step to an iterate whose equations cannot be formed or solved is
+  // halved toward the last accepted iterate (kMaxHalvings times at most), as in the SISO
+  // engine. (2) On lightly damped measured structures the map x -> T(x) of (29) can have an
+  // eigenvalue below -1 at its fixed point: the steps T(x) - x reverse and grow. Such an
+  // oscillation halves the relaxation w of x <- x + w (T(x) - x), which has the same fixed
+  // points. (3) A step that more than doubles the output error is halved toward x.
   constexpr int kMaxHalvings = 8;
+  constexpr double kMinRelaxation = 1.0 / 64.0;
+  double relaxation = 1.0;
+  // (4) Rounding: on long records of lightly damped modes the step T(x) - x stops shrinking
+  // near 1e-8 relative (measured on the flexible structure). Once it has stayed above its
+  // smallest value, itself below kFloorFactor * tolerance, for kStallIterations iterations,
+  // the iterate is at its fixed point to rounding and counts as converged.
+  constexpr double kFloorFactor = 1e3;
+  constexpr int kStallIterations = 10;
+  double smallest_change = std::numeric_limits<double>::infinity();
+  int smallest_at = 0;
   std::optional<MimoAdditiveModel> accepted;
+  Eigen::VectorXd last_step;
   for (int iteration = 1; iteration <= max_iterations; ++iteration) {
     Step step = iterate(layout, data, model, output_interpolation);
     for (int halvings = 0; !step.model && accepted && halvings < kMaxHalvings; ++halvings) {
       ++result.step_halvings;
-      model = midpoint(layout, *accepted, model);
+      model = blend(layout, *accepted, model, 0.5);
       step = iterate(layout, data, model, output_interpolation);
     }
     result.reciprocal_condition = step.reciprocal_condition;
@@ -489,24 +504,48 @@ Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditi
           internal::concat("mimo_srivc: stopped at iteration ", iteration, ": ", step.failure);
       break;
     }
-    accepted = model;
-    model = std::move(*step.model);
     result.iterations = iteration;
-    const double cost = relative_output_error(layout, data, model);
+    const Eigen::VectorXd here = flatten(model);
+    const Eigen::VectorXd full_step = flatten(*step.model) - here;
+    const double change = full_step.norm() / here.norm();
+    if (change < smallest_change) {
+      smallest_change = change;
+      smallest_at = iteration;
+    }
+    const bool stalled =
+        smallest_change < kFloorFactor * tolerance && iteration - smallest_at >= kStallIterations;
+    if (change < tolerance || stalled) {
+      model = std::move(*step.model);
+      result.termination = Termination::converged;
+      result.message =
+          internal::concat("mimo_srivc: converged after ", iteration,
+                           " iterations (relative parameter change ", format_brief(change),
+                           stalled ? internal::concat(", at the rounding floor: no smaller than ",
+                                                      format_brief(smallest_change), " for ",
+                                                      kStallIterations, " iterations)")
+                                   : std::string(")"));
+      break;
+    }
+    if (last_step.size() > 0 && full_step.dot(last_step) < 0.0 &&
+        full_step.norm() > 0.5 * last_step.norm() && relaxation > kMinRelaxation) {
+      relaxation *= 0.5;
+    }
+    last_step = full_step;
+    MimoAdditiveModel next =
+        relaxation < 1.0 ? blend(layout, model, *step.model, relaxation) : std::move(*step.model);
+    double next_cost = relative_output_error(layout, data, next);
+    for (int halvings = 0; halvings < kMaxHalvings && !(next_cost <= 2.0 * cost); ++halvings) {
+      ++result.step_halvings;
+      next = blend(layout, model, next, 0.5);
+      next_cost = relative_output_error(layout, data, next);
+    }
+    accepted = model;
+    model = std::move(next);
+    cost = next_cost;
     if (std::isfinite(cost) && cost <= best_cost) {
       best = model;
       best_cost = cost;
       best_iteration = iteration;
-    }
-    const Eigen::VectorXd current = flatten(model);
-    const double change = (current - previous).norm() / previous.norm();
-    previous = current;
-    if (change < tolerance) {
-      result.termination = Termination::converged;
-      result.message =
-          internal::concat("mimo_srivc: converged after ", iteration,
-                           " iterations (relative parameter change ", format_brief(change), ")");
-      break;
     }
   }
   if (result.termination == Termination::not_run) {
@@ -519,12 +558,12 @@ Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditi
   if (result.termination == Termination::converged) {
     best_cost = relative_output_error(layout, data, model);
     best = std::move(model);
+  } else if (best_iteration == 0) {
+    result.start_returned = true;
+    result.message += "; no iterate fitted the outputs better than the start, which is returned";
   } else if (best_iteration != result.iterations) {
-    result.message +=
-        internal::concat("; the iterate with the lowest output error (",
-                         best_iteration == 0 ? std::string("the start")
-                                             : internal::concat("iteration ", best_iteration),
-                         ") is returned");
+    result.message += internal::concat("; the iterate with the lowest output error (", "iteration ",
+                                       best_iteration, ") is returned");
   }
   return result;
 }
@@ -652,6 +691,10 @@ Eigen::MatrixXd mimo_covariance(const Layout& layout, const MimoData& data,
   Eigen::MatrixXd r = Eigen::MatrixXd::Zero(p, p);
   Eigen::MatrixXd q = Eigen::MatrixXd::Zero(p, p);
   const double dof = static_cast<double>(n) / static_cast<double>(std::max(1, n - pu - pa));
+  // Per output: its (whitened) gradient g_j ((pa + pu) x N) and its innovations.
+  std::vector<Eigen::MatrixXd> g(static_cast<size_t>(layout.outputs));
+  Eigen::MatrixXd innovations(n, layout.outputs);
+  Eigen::VectorXd variance(layout.outputs);  // of each output's innovations (AR or residual)
   for (int j = 0; j < layout.outputs; ++j) {
     const Eigen::MatrixXd ps = psi[static_cast<size_t>(j)] * s_a.cwiseInverse().asDiagonal();
     const int at = pa + j * pu;
@@ -659,23 +702,65 @@ Eigen::MatrixXd mimo_covariance(const Layout& layout, const MimoData& data,
     r.block(0, at, pa, pu) = ps.transpose() * us;
     r.block(at, 0, pu, pa) = r.block(0, at, pa, pu).transpose();
     r.block(at, at, pu, pu) = us.transpose() * us;
-    Eigen::MatrixXd g(pa + pu, n);
-    double e2 = 0.0;
     Eigen::MatrixXd both(n, pa + pu);
     both << ps, us;
     if (noise == NoiseAssumption::white) {
-      g = both.transpose();
-      e2 = residuals.col(j).squaredNorm() / static_cast<double>(n) * dof;
+      g[static_cast<size_t>(j)] = both.transpose();
+      innovations.col(j) = residuals.col(j);
+      variance(j) = residuals.col(j).squaredNorm() / static_cast<double>(n) * dof;
     } else {
       const AutoregressiveModel ar = fit_autoregressive(residuals.col(j), max_ar_order);
-      g = adjoint_ar_filter(both, ar);
-      e2 = ar.innovation_variance * dof;
+      g[static_cast<size_t>(j)] = adjoint_ar_filter(both, ar);
+      variance(j) = ar.innovation_variance * dof;
+      const Eigen::Index order = ar.coefficients.size() - 1;
+      for (Eigen::Index t = 0; t < n; ++t) {
+        double e = residuals(t, j);
+        for (Eigen::Index k = 1; k <= std::min(order, t); ++k) {
+          e += ar.coefficients(k) * residuals(t - k, j);
+        }
+        innovations(t, j) = e;
+      }
     }
-    const Eigen::MatrixXd gg = e2 * (g * g.transpose());
-    q.topLeftCorner(pa, pa) += gg.topLeftCorner(pa, pa);
-    q.block(0, at, pa, pu) = gg.topRightCorner(pa, pu);
-    q.block(at, 0, pu, pa) = gg.bottomLeftCorner(pu, pa);
-    q.block(at, at, pu, pu) = gg.bottomRightCorner(pu, pu);
+  }
+  // The outputs' innovations are white in time but may be correlated with each other (one
+  // disturbance seen by every sensor): Q = sum_jl Sigma_jl g_j g_l'. With Sigma diagonal this is
+  // the independent-outputs sandwich; on the measured flexible structure the cross terms
+  // make the shared denominators' errors several times larger.
+  // Sigma: each output's own innovation variance (as the SISO covariance has it) and the
+  // correlations of the innovation series between outputs.
+  const Eigen::MatrixXd products = innovations.transpose() * innovations;
+  Eigen::MatrixXd sigma(layout.outputs, layout.outputs);
+  for (int j = 0; j < layout.outputs; ++j) {
+    for (int l = 0; l < layout.outputs; ++l) {
+      const double norms = std::sqrt(products(j, j) * products(l, l));
+      const double correlation = j == l ? 1.0 : (norms > 0.0 ? products(j, l) / norms : 0.0);
+      sigma(j, l) = correlation * std::sqrt(variance(j) * variance(l));
+    }
+  }
+  for (int l = 0; l < layout.outputs; ++l) {
+    const Eigen::MatrixXd& gl = g[static_cast<size_t>(l)];
+    Eigen::MatrixXd weighted_a = Eigen::MatrixXd::Zero(pa, n);
+    for (int j = 0; j < layout.outputs; ++j) {
+      weighted_a += sigma(j, l) * g[static_cast<size_t>(j)].topRows(pa);
+    }
+    const int at = pa + l * pu;
+    q.topLeftCorner(pa, pa) += weighted_a * gl.topRows(pa).transpose();
+    q.block(0, at, pa, pu) = weighted_a * gl.bottomRows(pu).transpose();
+    q.block(at, 0, pu, pa) = q.block(0, at, pa, pu).transpose();
+  }
+  // The numerator blocks: white noise leaves every output's numerator gradient U itself.
+  const Eigen::MatrixXd uu =
+      noise == NoiseAssumption::white ? Eigen::MatrixXd(us.transpose() * us) : Eigen::MatrixXd();
+  for (int j = 0; j < layout.outputs; ++j) {
+    for (int l = j; l < layout.outputs; ++l) {
+      const Eigen::MatrixXd block =
+          noise == NoiseAssumption::white
+              ? Eigen::MatrixXd(sigma(j, l) * uu)
+              : Eigen::MatrixXd(sigma(j, l) * g[static_cast<size_t>(j)].bottomRows(pu) *
+                                g[static_cast<size_t>(l)].bottomRows(pu).transpose());
+      q.block(pa + j * pu, pa + l * pu, pu, pu) = block;
+      if (l != j) q.block(pa + l * pu, pa + j * pu, pu, pu) = block.transpose();
+    }
   }
   const Eigen::MatrixXd r_inv = r.completeOrthogonalDecomposition().pseudoInverse();
   Eigen::VectorXd scale(p);
@@ -932,6 +1017,10 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
     }
   }
   check_conditioning(result.verdict, reciprocal_condition);
+  if (run.start_returned) {
+    result.verdict.fail("the iteration did not improve on its start",
+                        {verdict_advice::better_start, verdict_advice::lower_order});
+  }
   if (options.compute_covariance) {
     result.covariance = mimo_covariance(layout, data, model, u, data.outputs() - fitted,
                                         options.noise, options.noise_model_max_order);

@@ -1,7 +1,11 @@
 // `ctid fit` with several inputs and outputs (--input-columns / --output-columns): the modes of a
-// noise-free two-input, three-output record recovered with their shapes in the JSON, the exit
-// status of an unusable fit, and bad usage exiting 2 with one line naming the problem.
+// noise-free two-input, three-output record recovered with their shapes in the JSON, the model
+// written alone and read back as a start (--model-output, --start/--initial FILE), the figures
+// (--plot), files never replaced without --force, and bad usage exiting 2 with one line naming
+// the problem.
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -14,6 +18,8 @@
 #include "ctid/io/documents.h"
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_data_csv.h"
+#include "ctid/io/model_json.h"
+#include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
 
@@ -21,6 +27,7 @@ namespace ctid::cli {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 constexpr double kH = 0.05;
 
@@ -94,13 +101,129 @@ TEST_F(FitMimoCommand, BadUsageNamesTheProblem) {
   testing::expect_bad_input(ctid(with({"--modes", "2", "--delay", "2"})), "fit",
                             "--delay is not available with --input-columns");
   testing::expect_bad_input(ctid(with({"--modes", "2", "--start", "frf"})), "fit",
-                            "--start must be auto");
+                            "--start frf is for one input and output");
   testing::expect_bad_input(ctid({"fit", "d.csv", "--input-columns", "f1,f9", "--output-columns",
                                   "a1:a3", "--modes", "2"}),
                             "fit", "'f9' not found");
   testing::expect_bad_input(ctid({"fit", "d.csv", "--input-column", "f1", "--output-column", "a1",
                                   "--modes", "2", "--direct"}),
                             "fit", "--direct goes with --input-columns");
+}
+
+const std::vector<std::string> kColumns{"d.csv", "--input-columns", "f1,f2", "--output-columns",
+                                        "a1:a3", "--modes",         "2"};
+
+std::vector<std::string> fit_with(std::vector<std::string> extra) {
+  std::vector<std::string> args{"fit"};
+  args.insert(args.end(), kColumns.begin(), kColumns.end());
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
+std::string contents(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST_F(FitMimoCommand, ModelOutputReadsBackAsTheModesAndRestartsTheFit) {
+  const auto r = ctid(fit_with({"-o", "r.json", "--model-output", "m.json"}));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json written = io::read_json(path("m.json"));
+  EXPECT_EQ(written.at("type"), "mimo_additive_model");
+  const MimoAdditiveModel model = io::mimo_additive_model_from_json(written, "m.json");
+  const auto result = std::get<MimoEstimationResult>(io::read_result(path("r.json")));
+  // The model file is the result's model: the same modes, to the last bit of the JSON.
+  const std::vector<MimoMode> modes = mimo_modes(model, {SubmodelOrder{2, 0}, {2, 0}});
+  ASSERT_EQ(modes.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(modes[i].natural_frequency, result.modes[i].natural_frequency);
+    EXPECT_EQ(modes[i].damping_ratio, result.modes[i].damping_ratio);
+    EXPECT_NEAR(modal_assurance(modes[i].shape, result.modes[i].shape), 1.0, 1e-14);
+  }
+  EXPECT_NEAR(modes[0].natural_frequency, 1.4, 1e-8);
+
+  // Started from the model file (and from the result), the iteration is at its fixed point.
+  for (const std::vector<std::string>& start :
+       {std::vector<std::string>{"--start", "m.json"}, {"--initial", "r.json"}}) {
+    auto args = start;
+    args.insert(args.end(), {"-o", "again.json", "--force"});
+    const auto again = ctid(fit_with(args));
+    ASSERT_EQ(again.status, 0) << again.err;
+    EXPECT_THAT(again.out, HasSubstr("start: " + start[1]));
+    EXPECT_THAT(again.out, HasSubstr("converged after 1 iterations"));
+    const auto restarted = std::get<MimoEstimationResult>(io::read_result(path("again.json")));
+    for (std::size_t i = 0; i < 2; ++i) {
+      EXPECT_NEAR(restarted.modes[i].natural_frequency, result.modes[i].natural_frequency, 1e-10);
+    }
+  }
+}
+
+TEST_F(FitMimoCommand, AStartThatDoesNotFitIsOneClearMessage) {
+  ASSERT_EQ(ctid(fit_with({"--model-output", "m.json", "-q"})).status, 0);
+  // The start has three outputs; the data asked for have two.
+  testing::expect_bad_input(
+      ctid({"fit", "d.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a2", "--modes", "2",
+            "--start", "m.json"}),
+      "fit",
+      "m.json (--start): the start has 2 inputs and 3 outputs but the data have 2 (f1,f2) and 2 "
+      "(a1,a2)");
+  testing::expect_bad_input(
+      ctid({"fit", "d.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a3", "--modes", "3",
+            "--initial", "m.json"}),
+      "fit", "m.json (--initial): the start has 2 submodels; the structure flags give 3");
+  testing::expect_bad_input(
+      ctid({"fit", "d.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a3", "--submodel",
+            "2,0", "--submodel", "1,0", "--start", "m.json"}),
+      "fit",
+      "submodel 2 of the start has 2 poles and numerators of degree up to 0; the structure "
+      "flags give 1 poles and 0 zeros");
+  io::write_json(path("siso.json"), io::to_json(two_modes().channel(0, 0)));
+  testing::expect_bad_input(ctid(fit_with({"--start", "siso.json"})), "fit",
+                            "a start for several inputs and outputs is a mimo_additive_model or "
+                            "mimo_estimation_result document, not 'additive_model'");
+  testing::expect_bad_input(ctid(fit_with({"--start", "lssvf"})), "fit",
+                            "--start lssvf is for one input and output");
+  testing::expect_bad_input(ctid(fit_with({"--start", "m.json", "--initial", "m.json"})), "fit",
+                            "give --start or --initial, not both");
+}
+
+TEST_F(FitMimoCommand, NothingIsReplacedWithoutForce) {
+  std::ofstream(path("m.json")) << "mine\n";
+  // Refused before any work: the result file is not written either.
+  testing::expect_bad_input(ctid(fit_with({"-o", "r.json", "--model-output", "m.json"})), "fit",
+                            "m.json: file exists; pass --force to replace it (--model-output)");
+  EXPECT_EQ(contents(path("m.json")), "mine\n");
+  EXPECT_FALSE(std::filesystem::exists(path("r.json")));
+  const auto forced = ctid(fit_with({"--model-output", "m.json", "--force", "-q"}));
+  ASSERT_EQ(forced.status, 0) << forced.err;
+  EXPECT_EQ(io::read_json(path("m.json")).at("type"), "mimo_additive_model");
+}
+
+// A PNG file: its signature and a plausible size in the IHDR chunk.
+void expect_png(const std::filesystem::path& file) {
+  const std::string bytes = contents(file);
+  ASSERT_GT(bytes.size(), 5000u) << file;
+  EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << file;
+  EXPECT_EQ(bytes.substr(12, 4), "IHDR") << file;
+}
+
+TEST_F(FitMimoCommand, PlotDrawsTheShapesTheMacAndTheModelOverTheFrf) {
+  if (testing::python_package().empty()) {
+    GTEST_SKIP() << "the ctid Python package is not built (CTID_BUILD_PYTHON=OFF); set "
+                    "CTID_PYTHONPATH to test --plot";
+  }
+  const auto r = ctid(fit_with({"--plot", "figures"}));
+  ASSERT_EQ(r.status, 0) << r.err;
+  for (const char* name : {"frf_matrix_overlay.png", "mode_shapes.png", "mac.png"}) {
+    expect_png(path("figures") / name);
+    EXPECT_THAT(r.out, HasSubstr(std::string("wrote figures/") + name));
+  }
+  // Not replaced without --force, and refused before the fit.
+  const auto again = ctid(fit_with({"--plot", "figures"}));
+  testing::expect_bad_input(again, "fit", "frf_matrix_overlay.png: file exists");
+  EXPECT_THAT(again.out, Not(HasSubstr("mimo_srivc")));
 }
 
 }  // namespace

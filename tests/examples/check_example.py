@@ -81,6 +81,14 @@ def check_docs(name, out):
     stale = sorted(set(in_doc) - set(generated["tables"]))
     check(not stale, f"docs/examples/{name}.md has no block the example no longer writes "
           f"({stale})")
+    if _common.README_BLOCK in generated:
+        with open(_common.README) as f:
+            block = _common.generated_blocks(f.read(), name).get(_common.README_BLOCK)
+        check(block == generated[_common.README_BLOCK],
+              f"README.md block '{_common.README_BLOCK}' of {name} matches the regenerated one")
+        if block != generated[_common.README_BLOCK]:
+            print(f"      in README.md: {block}\n      generated: "
+                  f"{generated[_common.README_BLOCK]}\n      {update}")
     with open(os.path.join(_common.DOCS, "README.md")) as f:
         row = _common.index_rows(f.read()).get(name)
     check(row == generated["index_row"],
@@ -294,7 +302,69 @@ def intersample(s, out):
     check_png(os.path.join(out, "frf_error.png"))
 
 
-CHECKS = {"flexible_structure": flexible_structure, "pt326": pt326,
+def flexible_structure_mimo(s, out):
+    import numpy as np
+    from scipy import signal
+
+    # Independent nonparametric reference: the H1 FRF matrix from SciPy's cross-spectra of the
+    # raw record (both forces, all accelerometers; 2048-sample segments, the same 0.5 Hz lines
+    # as the example's 1024 at half the rate), its summed power sum_jk |H_jk|^2 and its peaks.
+    names, table = _load("daisy_flexible_structure/flexible_structure.csv")
+    fs = 1.0 / float(np.mean(np.diff(table[:, 0])))
+    u = table[:, [names.index("u1_force"), names.index("u2_force")]]
+    y = table[:, [i for i, n in enumerate(names) if n.endswith("_acc")]]
+    u, y = u - u.mean(axis=0), y - y.mean(axis=0)
+    nper = 2048
+    f, _ = signal.welch(u[:, 0], fs=fs, nperseg=nper)
+    suu = np.empty((f.size, 2, 2), complex)
+    for a in range(2):
+        for b in range(2):
+            suu[:, a, b] = signal.csd(u[:, a], u[:, b], fs=fs, nperseg=nper)[1]
+    power = np.zeros(f.size)
+    for j in range(y.shape[1]):
+        syu = np.stack([signal.csd(u[:, b], y[:, j], fs=fs, nperseg=nper)[1] for b in range(2)],
+                       axis=1)
+        h = np.einsum("fb,fba->fa", syu, np.linalg.inv(suu))
+        power += np.sum(np.abs(h) ** 2, axis=1)
+    band = f < 256.0
+    peaks, _ = signal.find_peaks(10 * np.log10(power[band]), prominence=6)
+    peak_hz = f[band][peaks]
+    resolution = f[1] - f[0]
+    check(s["termination"] == "converged" and s["usable"],
+          f"converged and usable ({s['termination']}, usable {s['usable']})")
+    check(len(s["modes"]) == 7, "7 modes")
+    for m in s["modes"]:
+        fn = m["natural_frequency_hz"]
+        nearest = float(peak_hz[np.argmin(np.abs(peak_hz - fn))])
+        # A peak of |H| sits within the half-power band 2 zeta f_n of its mode, and a line
+        # can only place it to one line.
+        allowed = max(resolution, 2 * m["damping_ratio"] * fn)
+        check(abs(fn - nearest) <= allowed,
+              f"mode {fn:.2f} Hz within {allowed:.2f} Hz (one line or its half-power band) of a "
+              f"SciPy summed-power peak ({nearest:.2f} Hz)")
+        check(0 < m["damping_ratio"] < 0.05, f"mode {fn:.2f} Hz lightly damped")
+        shape = np.array(m["shape_real"]) + 1j * np.array(m["shape_imag"])
+        largest = shape[np.abs(shape).argmax()]
+        check(abs(np.linalg.norm(shape) - 1) < 1e-9 and largest.real > 0
+              and abs(largest.imag) < 1e-12,
+              f"mode {fn:.2f} Hz: shape of unit length, its largest entry real and positive")
+    held, single = np.array(s["held_out_fit_percent"]), np.array(s["single_input_fit_percent"])
+    check(held.size == 28 and bool(np.all(held > single)),
+          "two shakers beat shaker 2 alone on every accelerometer's held-out data "
+          f"(margins {np.round(held - single, 1).min()} .. {np.round(held - single, 1).max()})")
+    check(bool(np.all(held > 0)), "every held-out fit above 0 %")
+    check(all(s["halves_usable"]), "both halves usable")
+    for c in s["halves"]:
+        check(c["mac"] >= 0.9 and abs(c["difference_in_standard_errors"]) <= 3.0,
+              f"{c['first_hz']:.2f} Hz stable across the halves (MAC {c['mac']:.3f}, "
+              f"{c['difference_in_standard_errors']:+.1f} s.e.)")
+    for name in ("mode_shapes.png", "mac.png", "mac_halves.png", "frf_overlay.png",
+                 "stabilisation.png", "channel_fits.png"):
+        check_png(os.path.join(out, name))
+
+
+CHECKS = {"flexible_structure": flexible_structure,
+          "flexible_structure_mimo": flexible_structure_mimo, "pt326": pt326,
           "canning_river": canning_river, "emps": emps, "dryer": dryer,
           "crane": crane, "intersample": intersample}
 

@@ -1,5 +1,6 @@
 // Seeded Monte Carlo of the shared-pole estimator (issue 13): two inputs, three outputs, two
-// modes, coloured output noise of a different level on each output. Over the runs the
+// modes, coloured output noise of a different level on each output and correlated between
+// them. Over the runs the
 // estimates of w_n, zeta and the mode-shape entries show no significant bias, and their spread
 // matches the standard errors the estimator reports (the mean of the reported variances). The
 // errors are asymptotic: at N = 2000 the spread of the second mode's shape entries exceeded
@@ -55,11 +56,21 @@ MimoData record(const MimoAdditiveModel& g, int run) {
   Eigen::MatrixXd u(kSamples, 2);
   for (int k = 0; k < 2; ++k) u.col(k) = white_noise(kSamples, 1.0, 100000 + 10 * seed + k);
   Eigen::MatrixXd y = Eigen::MatrixXd::Zero(kSamples, 3);
+  // Coloured noise of a different level on each output, partly shared between the outputs
+  // (a disturbance every sensor sees): v_j = sum_m mix(j, m) c_m with c_m independent
+  // sequences through the same filter, so the innovations are correlated across outputs
+  // (correlations 0.44 to 0.50) and white in time.
   const DiscreteTransferFunction noise_filter = testing::open_loop_noise_filter();
-  const double variance[3] = {0.01, 0.04, 0.02};
+  Eigen::Matrix<double, 3, 4> mix;
+  mix << 0.1, 0.0, 0.0, 0.08,  //
+      0.0, 0.15, 0.0, 0.15,    //
+      0.0, 0.0, 0.1, 0.1;
+  Eigen::MatrixXd c(kSamples, 4);
+  for (int m = 0; m < 4; ++m)
+    c.col(m) = colored_noise(noise_filter, kSamples, 1.0, 200000 + 10 * seed + m);
   for (int j = 0; j < 3; ++j) {
     for (int k = 0; k < 2; ++k) y.col(j) += simulate(g.channel(j, k), u.col(k), kH);
-    y.col(j) += colored_noise(noise_filter, kSamples, variance[j], 200000 + 10 * seed + j);
+    y.col(j) += c * mix.row(j).transpose();
   }
   return MimoData(kH, u, y);
 }

@@ -235,6 +235,20 @@ TEST(MimoSrivc, ReturnsTheIterateWithTheLowestOutputError) {
   }
 }
 
+TEST(MimoSrivc, AStartTheIterationCannotLeaveIsNotUsable) {
+  // Two submodels with the same pole: their numerator regressors are the same columns, the
+  // first step cannot be taken and the start is all there is to return.
+  const MimoData data = noise_free(four_mode_beam(2, 3, 7), 800, 3);
+  const std::vector<Polynomial> b(6, Polynomial{0.1});
+  const MimoAdditiveModel twins(2, 3, {{Polynomial{1.0, 0.5}, b}, {Polynomial{1.0, 0.5}, b}});
+  const MimoEstimationResult r =
+      mimo_srivc(data, std::vector<SubmodelOrder>(2, {1, 0, 0}), {}, twins);
+  EXPECT_EQ(r.termination, Termination::singular_equations);
+  EXPECT_FALSE(r.verdict.usable);
+  EXPECT_NE(r.verdict.summary().find("did not improve on its start"), std::string::npos)
+      << r.verdict.summary();
+}
+
 TEST(MimoSrivc, ModesShapesAndMacFromNoiseFreeData) {
   // Rank-one residues with real shapes: every mode's shape is its psi (unit length, largest
   // entry positive), its MAC with psi is 1, and different modes' shapes are told apart.

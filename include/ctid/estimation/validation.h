@@ -14,6 +14,8 @@
 #include "ctid/core/additive_model.h"
 #include "ctid/core/fields.h"
 #include "ctid/core/hold.h"
+#include "ctid/core/mimo_data.h"
+#include "ctid/core/mimo_model.h"
 #include "ctid/core/sampled_data.h"
 
 namespace ctid {
@@ -164,6 +166,49 @@ Eigen::VectorXd validation_output(const AdditiveModel& model, const SampledData&
 /// closed loop with delayed feedback). max_lag >= 1; sizes must agree.
 ValidationReport residual_report(const SampledData& data, const Eigen::VectorXd& modelled,
                                  int max_lag = 20);
+
+/// Validation of a model with several inputs and outputs, output by output: output j's
+/// simulation is sum_k G_jk u_k from the record's first sample, and with InitialState::estimate
+/// plus the free response of channel (j, 1)'s realisation (every submodel's states) fitted
+/// on the window as validate_model does for one channel. Correlations as in ValidationReport,
+/// the cross-correlation the largest over the inputs.
+struct MimoValidationReport {
+  InitialState initial_state = InitialState::zero;  ///< the simulation fit_percent uses
+  Eigen::VectorXd fit_percent;                      ///< per output, with initial_state
+  Eigen::VectorXd fit_zero_state;                   ///< per output, from rest
+  Eigen::VectorXd fit_estimated_state;              ///< per output, from the fitted state
+  Eigen::VectorXd max_residual_autocorrelation;     ///< per output, largest |r_ee|
+  Eigen::VectorXd max_cross_correlation;            ///< per output, largest |r_eu| over inputs
+  double whiteness_bound = 0.0;                     ///< the 99 % band 2.58/sqrt(N)
+  double window_start = 0.0;                        ///< time of the first scored sample [s]
+  double window_end = 0.0;                          ///< time of the last scored sample [s]
+  int window_samples = 0;
+
+  static constexpr std::string_view type_name = "MimoValidationReport";
+  static constexpr auto fields() {
+    using S = MimoValidationReport;
+    return std::tuple{
+        field("initial_state", &S::initial_state, "The simulation fit_percent uses."),
+        field("fit_percent", &S::fit_percent, "Per output: fit % with initial_state."),
+        field("fit_zero_state", &S::fit_zero_state, "Per output: fit % from rest."),
+        field("fit_estimated_state", &S::fit_estimated_state,
+              "Per output: fit % from the least-squares initial state."),
+        field("max_residual_autocorrelation", &S::max_residual_autocorrelation,
+              "Per output: largest |r_ee| at lags 1..max_lag."),
+        field("max_cross_correlation", &S::max_cross_correlation,
+              "Per output: largest |r_eu| over the inputs and lags."),
+        field("whiteness_bound", &S::whiteness_bound, "The 99 % band 2.58/sqrt(N)."),
+        field("window_start", &S::window_start, "Time of the first scored sample [s]."),
+        field("window_end", &S::window_end, "Time of the last scored sample [s]."),
+        field("window_samples", &S::window_samples, "Samples scored."),
+    };
+  }
+};
+
+/// Throws InvalidArgument when the model's channel counts differ from the record's, or for a
+/// window as validate_model(AdditiveModel) does.
+MimoValidationReport validate_model(const MimoAdditiveModel& model, const MimoData& data,
+                                    const ValidationOptions& options = {});
 
 /// Largest n <= max_order for which the sample matrix sum_k phi_k phi_k' of the windows
 /// phi_k = [x_k, x_{k-d}, ..., x_{k-(n-1)d}] is numerically non-singular (smallest over
