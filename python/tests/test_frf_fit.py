@@ -80,3 +80,21 @@ def test_bad_input_is_one_clear_error():
         ctid.mimo_frf(w[:40], ctid.mimo_frequency_response(two_modes(), w))
     with pytest.raises(TypeError):
         ctid.frf_matrix_fit(frf, [ctid.SubmodelOrder(2, 0)], no_such_option=1)
+
+
+def test_figures_of_the_time_domain_fit_draw_an_frf_fit(tmp_path):
+    # plotting's MIMO figures take the model and the modes, whichever fit produced them.
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from ctid import plotting
+
+    truth = two_modes()
+    frf = frf_of(truth, np.linspace(0.05, 10.0, 200))
+    r = ctid.frf_matrix_fit(frf, [ctid.SubmodelOrder(2, 1)] * 2)
+    plotting.frf_matrix_overlay(r.model, frf, filename=str(tmp_path / "overlay.png"))
+    plotting.mode_shapes(r.modes, output_names=frf.output_names,
+                         filename=str(tmp_path / "shapes.png"))
+    plotting.mac_matrix(r.modes, filename=str(tmp_path / "mac.png"))
+    for name in ("overlay.png", "shapes.png", "mac.png"):
+        assert (tmp_path / name).stat().st_size > 0
