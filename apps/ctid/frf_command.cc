@@ -23,6 +23,7 @@
 #include "ctid/io/csv.h"
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
+#include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
@@ -129,42 +130,6 @@ void draw_frf(const FrfFlags& f, const std::filesystem::path& package, const Frf
   plot(package, jobs);
 }
 
-// One row per line: frequency, frequency_hz, input_condition, then per input its level, per
-// output its multiple coherence, then per (output, input) pair the real and imaginary parts
-// and the variance of H, named "<output>/<input>_real" and so on.
-io::CsvTable mimo_frf_table(const MimoFrf& frf) {
-  const Eigen::Index n = frf.frequencies.size();
-  io::CsvTable table;
-  table.add_column("frequency", frf.frequencies);
-  table.add_column("frequency_hz", frf.frequencies / (2.0 * std::numbers::pi));
-  table.add_column("input_condition", frf.input_condition);
-  for (int i = 0; i < frf.input_count(); ++i) {
-    table.add_column("input_level_" + frf.input_names[static_cast<std::size_t>(i)],
-                     frf.input_level.col(i));
-  }
-  for (int j = 0; j < frf.output_count(); ++j) {
-    table.add_column("coherence_" + frf.output_names[static_cast<std::size_t>(j)],
-                     frf.coherence.col(j));
-  }
-  for (int j = 0; j < frf.output_count(); ++j) {
-    for (int i = 0; i < frf.input_count(); ++i) {
-      Eigen::VectorXd re(n), im(n), var(n);
-      for (Eigen::Index l = 0; l < n; ++l) {
-        const auto q = static_cast<std::size_t>(l);
-        re(l) = frf.response[q](j, i).real();
-        im(l) = frf.response[q](j, i).imag();
-        var(l) = frf.variance[q](j, i);
-      }
-      const std::string pair = frf.output_names[static_cast<std::size_t>(j)] + "/" +
-                               frf.input_names[static_cast<std::size_t>(i)];
-      table.add_column(pair + "_real", re);
-      table.add_column(pair + "_imag", im);
-      table.add_column(pair + "_variance", var);
-    }
-  }
-  return table;
-}
-
 double median(Eigen::VectorXd v) {
   std::vector<double> x;
   for (double e : v) {
@@ -222,7 +187,7 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
       document["peaks"] = std::move(listed);
       io::write_json(f.output, document, overwrite);
     } else {
-      io::write_csv(f.output, mimo_frf_table(frf), overwrite);
+      io::write_csv(f.output, io::mimo_frf_table(frf), overwrite);
     }
   }
   if (!f.plot.empty()) {

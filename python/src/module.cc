@@ -21,6 +21,7 @@ PYBIND11_MODULE(_ctid, m) {
   ctid::python::bind_frequency(m);
   ctid::python::bind_estimation(m);
   ctid::python::bind_refined_iv(m);
+  ctid::python::bind_frf_fit(m);
   ctid::python::bind_identification(m);
   ctid::python::bind_delayed_feedback(m);
   ctid::python::bind_study(m);

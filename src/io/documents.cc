@@ -18,7 +18,8 @@ std::vector<std::string> result_document_types() {
           kStudySummaryType,
           std::string(kDelayedFeedbackResultType),
           kStructureScanResultType,
-          kMimoEstimationResultType};
+          kMimoEstimationResultType,
+          kFrfMatrixFitResultType};
 }
 
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source) {
@@ -38,6 +39,7 @@ ResultDocument result_from_json(const nlohmann::json& value, const std::string& 
   if (name == kDelayedFeedbackResultType) return delayed_feedback_result_from_json(value, source);
   if (name == kStructureScanResultType) return structure_scan_result_from_json(value, source);
   if (name == kMimoEstimationResultType) return mimo_estimation_result_from_json(value, source);
+  if (name == kFrfMatrixFitResultType) return frf_matrix_fit_result_from_json(value, source);
   throw InvalidArgument(source + ": \"type\" is \"" + name +
                         "\", which is not a result document (" + types + ")");
 }

@@ -138,4 +138,13 @@ MimoEstimationResult mimo_estimation_result_from_json(const nlohmann::json& valu
   return document_fields<MimoEstimationResult>(value, kMimoEstimationResultType, {"data"}, source);
 }
 
+nlohmann::json to_json(const FrfMatrixFitResult& result) {
+  return document(result, kFrfMatrixFitResultType);
+}
+
+FrfMatrixFitResult frf_matrix_fit_result_from_json(const nlohmann::json& value,
+                                                   const std::string& source) {
+  return document_fields<FrfMatrixFitResult>(value, kFrfMatrixFitResultType, {"data"}, source);
+}
+
 }  // namespace ctid::io

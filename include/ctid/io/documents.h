@@ -2,8 +2,9 @@
 // "type" of a JSON object picks the reader, its "version" is checked, and the result comes
 // back as the C++ type that wrote it. Estimation results of the refined IV estimators
 // (González et al.) with their mode relocation and delay scan, the residual tests of
-// `ctid validate`, the FRF of `ctid frf`, the summary of `ctid study`, the delayed-feedback
-// result of `ctid feedback` and the structure scan of `ctid structure`.
+// `ctid validate`, the FRF of `ctid frf`, the FRF-matrix fit of `ctid fit-frf`, the summary of
+// `ctid study`, the delayed-feedback result of `ctid feedback` and the structure scan of `ctid
+// structure`.
 #pragma once
 
 #include <filesystem>
@@ -19,6 +20,7 @@
 #include "ctid/io/feedback_result_json.h"
 #include "ctid/io/file.h"
 #include "ctid/refined_iv/estimation_result.h"
+#include "ctid/refined_iv/frf_matrix_fit.h"
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
@@ -30,14 +32,14 @@ namespace ctid::io {
 /// A result read from a document, by its "type".
 using ResultDocument = std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult,
                                     ValidationReport, Frf, StudySummary, DelayedFeedbackResult,
-                                    StructureScanResult, MimoEstimationResult>;
+                                    StructureScanResult, MimoEstimationResult, FrfMatrixFitResult>;
 
 /// The "type" values result_from_json reads, in the order of ResultDocument.
 std::vector<std::string> result_document_types();
 
 /// The result in `value`, by its "type" (estimation_result, mode_relocation_result,
 /// input_delay_scan_result, validation_report, frf, study_summary, delayed_feedback_result,
-/// structure_scan_result, mimo_estimation_result). Throws
+/// structure_scan_result, mimo_estimation_result, frf_matrix_fit_result). Throws
 /// InvalidArgument naming `source` for a missing or unknown type, an unknown version or a bad
 /// field.
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source);

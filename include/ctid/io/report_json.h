@@ -13,6 +13,7 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/frequency/mimo_frf.h"
+#include "ctid/refined_iv/frf_matrix_fit.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/structure_scan.h"
 #include "ctid/study/paper_study.h"
@@ -27,6 +28,7 @@ inline constexpr const char* kMimoFrfType = "mimo_frf";
 inline constexpr const char* kStudySummaryType = "study_summary";
 inline constexpr const char* kStructureScanResultType = "structure_scan_result";
 inline constexpr const char* kMimoEstimationResultType = "mimo_estimation_result";
+inline constexpr const char* kFrfMatrixFitResultType = "frf_matrix_fit_result";
 
 /// {"type": "validation_report", "version": 1, <fields>} with, restating them for readers,
 /// "autocorrelation_lags" [1, max_lag], "cross_correlation_lags" (-max_lag..max_lag),
@@ -62,6 +64,11 @@ nlohmann::json to_json(const StructureScanResult& scan);
 nlohmann::json to_json(const MimoEstimationResult& result);
 MimoEstimationResult mimo_estimation_result_from_json(const nlohmann::json& value,
                                                       const std::string& source);
+/// The modal model fitted to an FRF matrix (`ctid fit-frf -o`): its fields; `ctid fit-frf`
+/// adds "data" (the FRF file and its size), which the reader accepts.
+nlohmann::json to_json(const FrfMatrixFitResult& result);
+FrfMatrixFitResult frf_matrix_fit_result_from_json(const nlohmann::json& value,
+                                                   const std::string& source);
 /// Reads it back; the context `ctid structure` writes ("data") is accepted and not read.
 StructureScanResult structure_scan_result_from_json(const nlohmann::json& value,
                                                     const std::string& source);
