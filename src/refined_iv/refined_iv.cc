@@ -73,6 +73,28 @@ struct Layout {
   }
 };
 
+// The stopping rule's relative change, block by block: the largest over the submodels of
+// ||d a_i|| / ||a_i|| and ||d b_i|| / ||b_i||. One norm over the whole of beta lets the block
+// with the largest coefficients decide: with a gain of 1e6 the numerators dominate and the
+// iteration stopped with the poles still moving by 1e-4 (issue 16). A block whose norm
+// vanishes is measured against the whole vector's norm.
+double relative_change(const Layout& layout, const Eigen::VectorXd& from,
+                       const Eigen::VectorXd& to) {
+  const double whole = std::max(from.norm(), 1e-300);
+  double largest = 0.0;
+  for (int i = 0; i < layout.size(); ++i) {
+    const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+    const int at = layout.offset[static_cast<size_t>(i)];
+    for (const auto& [first, count] : {std::pair{at, o.n}, std::pair{at + o.n, o.m + 1}}) {
+      if (count == 0) continue;
+      const double size = from.segment(first, count).norm();
+      const double step = (to.segment(first, count) - from.segment(first, count)).norm();
+      largest = std::max(largest, step / (size > 1e-12 * whole ? size : whole));
+    }
+  }
+  return largest;
+}
+
 Polynomial denominator_of(const Layout& layout, const Eigen::VectorXd& beta, int i) {
   const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
   Eigen::VectorXd a(o.n + 1);
@@ -284,16 +306,20 @@ SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& be
   if (need_instrument) {
     const bool with_model = !closed_loop;
     const int rows = o.m + 1 + o.n + (with_model ? 1 : 0);
+    // The cascade carries B / ||B||, and ||B|| multiplies its outputs instead: with B in the
+    // coupling of the state matrix, a gain of 1e6 made the discretised chain lose the
+    // small entries and moved the fixed point of noise-free data by 1e-4 (issue 16).
+    const double gain = w.norm() > 0.0 ? w.norm() : 1.0;
     FilterRealization chain = bank;
-    if (o.n > 0) chain = cascade(bank, w, derivative_filters(a));
+    if (o.n > 0) chain = cascade(bank, w / gain, derivative_filters(a));
     const int states = chain.order();
     Eigen::MatrixXd c = Eigen::MatrixXd::Zero(rows, states);
     Eigen::VectorXd d = Eigen::VectorXd::Zero(rows);
     c.topLeftCorner(o.m + 1, s1) = bank.c.topRows(o.m + 1);
     d.head(o.m + 1) = bank.d.head(o.m + 1);
     if (o.n > 0) {
-      c.middleRows(o.m + 1, o.n) = chain.c.middleRows(1, o.n);
-      d.segment(o.m + 1, o.n) = chain.d.segment(1, o.n);
+      c.middleRows(o.m + 1, o.n) = gain * chain.c.middleRows(1, o.n);
+      d.segment(o.m + 1, o.n) = gain * chain.d.segment(1, o.n);
     }
     if (with_model) {
       c.block(rows - 1, 0, 1, s1) = model_c;
@@ -985,7 +1011,7 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
       break;
     }
     reflect_all(next);
-    const double change = (next - beta).norm() / std::max(beta.norm(), 1e-300);
+    const double change = relative_change(layout, beta, next);
     result.off_diagonal_norm = off.norm() / std::max(next.norm(), 1e-300);
     result.relative_change = change;
     result.iterations = iteration;

@@ -67,7 +67,8 @@ constexpr std::span<const Enumerator<InitialConditions>> enumerators(InitialCond
 struct RefinedIvOptions {
   /// Upper bound on the iterations of (29)/(30). >= 1.
   int max_iterations = 100;
-  /// Stop when ||beta_{j+1} - beta_j|| / ||beta_j|| < tolerance. > 0 and < 1. The rounding
+  /// Stop when the largest relative change of a block of beta (each submodel's a and b,
+  /// decision 0020) is below tolerance. > 0 and < 1. The rounding
   /// floor is about 1e-15 (additive) to 5e-14 (8-pole unfactored).
   double tolerance = 1e-10;
   /// Starting model. Any model is accepted: if its submodel orders differ from the requested
