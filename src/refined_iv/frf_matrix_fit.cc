@@ -13,6 +13,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/estimation/verdict.h"
+#include "internal/mimo_layout.h"
 #include "internal/scaled_least_squares.h"
 
 namespace ctid {
@@ -24,42 +25,7 @@ constexpr Complex kJ{0.0, 1.0};
 // A relative decrease of the cost this small is rounding: the iterate is a stationary point.
 constexpr double kFlatCost = 4.0 * std::numeric_limits<double>::epsilon();
 
-// Where each parameter sits, as in MimoEstimationResult::covariance: every submodel's
-// a_1..a_n, then per output its numerator coefficients (submodel, input, power) and D[j, .].
-struct Layout {
-  std::vector<SubmodelOrder> orders;
-  int inputs = 0;
-  int outputs = 0;
-  std::vector<int> a_at;
-  std::vector<int> u_at;
-  int a_count = 0;
-  int u_count = 0;  // parameters of one output
-  bool direct = false;
-  int d_at = 0;
-
-  Layout(std::vector<SubmodelOrder> o, int n_u, int n_y, bool with_direct)
-      : orders(std::move(o)), inputs(n_u), outputs(n_y), direct(with_direct) {
-    for (const SubmodelOrder& s : orders) {
-      a_at.push_back(a_count);
-      u_at.push_back(u_count);
-      a_count += s.n;
-      u_count += inputs * (s.m + 1);
-    }
-    d_at = u_count;
-    if (direct) u_count += inputs;
-  }
-  int size() const { return static_cast<int>(orders.size()); }
-  int parameters() const { return a_count + outputs * u_count; }
-  int u_column(int i, int k, int r) const {
-    return u_at[static_cast<size_t>(i)] + k * (orders[static_cast<size_t>(i)].m + 1) + r;
-  }
-  // Parameters that one channel's response depends on: its submodels' numerators and D.
-  int channel_columns() const {
-    int c = direct ? 1 : 0;
-    for (const SubmodelOrder& s : orders) c += s.m + 1;
-    return c;
-  }
-};
+using Layout = internal::MimoLayout;
 
 // The lines fitted: s = j w, the response per channel (column c = j * inputs + k) and the
 // square roots of the weights.

@@ -20,6 +20,7 @@
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/initialization.h"
+#include "internal/mimo_layout.h"
 #include "internal/refined_iv_engine.h"
 #include "internal/scaled_least_squares.h"
 
@@ -27,37 +28,7 @@ namespace ctid {
 
 namespace {
 
-// Where each submodel's unknowns sit: the denominators' a_i1..a_in (shared by every output) in
-// one vector, and the numerator regressors p^r / A_i u_k (r = 0..m_i, the same for every
-// output) in the columns of one matrix, the direct term's u_k (if any) last.
-struct Layout {
-  std::vector<SubmodelOrder> orders;
-  int inputs = 0;
-  int outputs = 0;
-  std::vector<int> a_at;  // first a-entry of submodel i
-  std::vector<int> u_at;  // first numerator column of submodel i (input 0)
-  int a_count = 0;
-  int u_count = 0;
-  bool direct = false;
-  int d_at = 0;  // first column of the direct term (input 0)
-
-  Layout(std::vector<SubmodelOrder> o, int n_u, int n_y, bool with_direct)
-      : orders(std::move(o)), inputs(n_u), outputs(n_y), direct(with_direct) {
-    for (const SubmodelOrder& s : orders) {
-      a_at.push_back(a_count);
-      u_at.push_back(u_count);
-      a_count += s.n;
-      u_count += inputs * (s.m + 1);
-    }
-    d_at = u_count;
-    if (direct) u_count += inputs;
-  }
-  // Right-hand sides of (29): one per submodel, and one for the direct term.
-  int columns() const { return size() + (direct ? 1 : 0); }
-  int size() const { return static_cast<int>(orders.size()); }
-  // Numerator column of submodel i, input k, power r.
-  int u_column(int i, int k, int r) const { return u_at[i] + k * (orders[i].m + 1) + r; }
-};
+using Layout = internal::MimoLayout;
 
 // The model's parameters in one vector: every a-block, then every numerator (submodel,
 // output, input, power), for the stopping rule.
@@ -658,19 +629,9 @@ MimoAdditiveModel automatic_start(const Layout& layout, const MimoData& data, Ho
   return std::move(best->model);
 }
 
-// Index of a parameter in the covariance's layout: every a-block, then per output the
-// numerator columns (which include D last).
-int a_index(const Layout& layout, int i, int q) {
-  return layout.a_at[static_cast<size_t>(i)] + q - 1;
-}
-int b_index(const Layout& layout, int j, int column) {
-  return layout.a_count + j * layout.u_count + column;
-}
-
-// Sandwich covariance R^-1 Q R^-1 of the estimate (outputs' noises independent): output j's
-// gradient is [psi_j, 0.., U (in j's numerator slot), 0..], R the sum of their products and Q
-// the same with each output's AR-whitened gradient (adjoint_ar_filter) times its innovation
-// variance, or its residual variance for white noise.
+// Sandwich covariance R^-1 Q R^-1 of the estimate: output j's gradient is [psi_j, 0.., U (in
+// j's numerator slot), 0..], R the sum of their products and Q that of the AR-whitened
+// gradients (adjoint_ar_filter) weighted by the outputs' innovation covariance (below).
 Eigen::MatrixXd mimo_covariance(const Layout& layout, const MimoData& data,
                                 const MimoAdditiveModel& model, const Eigen::MatrixXd& u,
                                 const Eigen::MatrixXd& residuals, NoiseAssumption noise,
@@ -816,7 +777,7 @@ std::vector<MimoMode> modes_of(const Layout& layout, const MimoAdditiveModel& mo
     const Polynomial& a = model[i].a;
     if (o.n != 2 || !(a[1] * a[1] < 4.0 * a[2])) continue;  // a complex pair only
     std::vector<Eigen::VectorXd> numerators;
-    std::vector<int> indices{a_index(layout, i, 1), a_index(layout, i, 2)};
+    std::vector<int> indices{layout.a_index(i, 1), layout.a_index(i, 2)};
     for (int j = 0; j < layout.outputs; ++j) {
       for (int k = 0; k < layout.inputs; ++k) {
         Eigen::VectorXd b = Eigen::VectorXd::Zero(o.m + 1);
@@ -824,7 +785,7 @@ std::vector<MimoMode> modes_of(const Layout& layout, const MimoAdditiveModel& mo
         for (int r = 0; r <= std::min(o.m, given.degree()); ++r) b(r) = given[r];
         numerators.push_back(b);
         for (int r = 0; r <= o.m; ++r)
-          indices.push_back(b_index(layout, j, layout.u_column(i, k, r)));
+          indices.push_back(layout.b_index(j, layout.u_column(i, k, r)));
       }
     }
     MimoMode mode;
@@ -986,8 +947,8 @@ MimoEstimationResult siso_result(const Layout& layout, const MimoData& data,
     std::vector<Eigen::Index> at;
     for (int i = 0; i < layout.size(); ++i) {
       const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
-      for (int q = 1; q <= o.n; ++q) at.push_back(a_index(layout, i, q));
-      for (int k = 0; k <= o.m; ++k) at.push_back(b_index(layout, 0, layout.u_column(i, 0, k)));
+      for (int q = 1; q <= o.n; ++q) at.push_back(layout.a_index(i, q));
+      for (int k = 0; k <= o.m; ++k) at.push_back(layout.b_index(0, layout.u_column(i, 0, k)));
     }
     const auto p = static_cast<Eigen::Index>(at.size());
     result.covariance.resize(p, p);

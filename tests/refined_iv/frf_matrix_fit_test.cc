@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "support/mimo_systems.h"
 #include "support/paper_systems.h"
 
 namespace ctid {
@@ -21,28 +22,7 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
-// The four modes of Section 6.1 with rank-one residues R_i[j, k] = g_i psi_ij l_ik, shape and
-// participation from a seeded normal distribution (as in mimo_srivc_test.cc).
-MimoAdditiveModel four_mode_beam(int inputs, int outputs, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal;
-  std::vector<MimoSubmodel> submodels;
-  const AdditiveModel modes = testing::open_loop_four_modes();
-  for (const Submodel& mode : modes.submodels()) {
-    MimoSubmodel s{mode.a, {}};
-    Eigen::VectorXd shape(outputs);
-    Eigen::VectorXd participation(inputs);
-    for (int j = 0; j < outputs; ++j) shape(j) = normal(rng);
-    for (int k = 0; k < inputs; ++k) participation(k) = normal(rng);
-    for (int j = 0; j < outputs; ++j) {
-      for (int k = 0; k < inputs; ++k) {
-        s.b.push_back(Polynomial{mode.b[0] * shape(j) * participation(k)});
-      }
-    }
-    submodels.push_back(std::move(s));
-  }
-  return MimoAdditiveModel(inputs, outputs, std::move(submodels));
-}
+using testing::four_mode_beam;
 
 // Eight lightly damped modes (1-14 rad/s, damping 0.01-0.05) over two inputs and `outputs`
 // sensors, with general numerators b_0 + b_1 p (complex residues) when `general`.

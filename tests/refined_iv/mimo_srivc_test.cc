@@ -14,6 +14,7 @@
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
+#include "support/mimo_systems.h"
 #include "support/paper_systems.h"
 
 namespace ctid {
@@ -24,28 +25,7 @@ using ::testing::ThrowsMessage;
 
 constexpr double kH = testing::kPaperSampleTime;
 
-// The four modes of Section 6.1 with rank-one residues: R_i[j, k] = g_i psi_ij l_ik, the shape
-// psi_i and participation l_i drawn from a seeded normal distribution.
-MimoAdditiveModel four_mode_beam(int inputs, int outputs, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal;
-  std::vector<MimoSubmodel> submodels;
-  const AdditiveModel modes = testing::open_loop_four_modes();
-  for (const Submodel& mode : modes.submodels()) {
-    MimoSubmodel s{mode.a, {}};
-    Eigen::VectorXd shape(outputs);
-    Eigen::VectorXd participation(inputs);
-    for (int j = 0; j < outputs; ++j) shape(j) = normal(rng);
-    for (int k = 0; k < inputs; ++k) participation(k) = normal(rng);
-    for (int j = 0; j < outputs; ++j) {
-      for (int k = 0; k < inputs; ++k) {
-        s.b.push_back(Polynomial{mode.b[0] * shape(j) * participation(k)});
-      }
-    }
-    submodels.push_back(std::move(s));
-  }
-  return MimoAdditiveModel(inputs, outputs, std::move(submodels));
-}
+using testing::four_mode_beam;
 
 // Eight modes (natural frequencies 1-14 rad/s, damping 0.01-0.05) with seeded rank-one
 // residues over `outputs` sensors and two inputs, the size of the flexible structure.

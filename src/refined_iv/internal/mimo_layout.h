@@ -1,0 +1,56 @@
+// Where the parameters of a MimoAdditiveModel sit, shared by the time-domain (mimo_srivc) and
+// the FRF-matrix (frf_matrix_fit) estimators and the layout of their covariance: every
+// submodel's a_i1..a_in in one block, then per output j its numerator coefficients (submodel
+// i, input k, power r) and D[j, .] last. Private to refined_iv.
+#pragma once
+
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include "ctid/core/additive_model.h"
+
+namespace ctid::internal {
+
+struct MimoLayout {
+  std::vector<SubmodelOrder> orders;
+  int inputs = 0;
+  int outputs = 0;
+  std::vector<int> a_at;  // first a-entry of submodel i
+  std::vector<int> u_at;  // first numerator column of submodel i (input 0)
+  int a_count = 0;
+  int u_count = 0;  // numerator columns (and D) of one output
+  bool direct = false;
+  int d_at = 0;  // first column of the direct term (input 0)
+
+  MimoLayout(std::vector<SubmodelOrder> o, int n_u, int n_y, bool with_direct)
+      : orders(std::move(o)), inputs(n_u), outputs(n_y), direct(with_direct) {
+    for (const SubmodelOrder& s : orders) {
+      a_at.push_back(a_count);
+      u_at.push_back(u_count);
+      a_count += s.n;
+      u_count += inputs * (s.m + 1);
+    }
+    d_at = u_count;
+    if (direct) u_count += inputs;
+  }
+  int size() const { return static_cast<int>(orders.size()); }
+  /// Right-hand sides of (29): one per submodel, and one for the direct term.
+  int columns() const { return size() + (direct ? 1 : 0); }
+  int parameters() const { return a_count + outputs * u_count; }
+  /// Numerator column of submodel i, input k, power r.
+  int u_column(int i, int k, int r) const {
+    return u_at[static_cast<std::size_t>(i)] + k * (orders[static_cast<std::size_t>(i)].m + 1) + r;
+  }
+  /// Parameters one channel's response depends on: its submodels' numerators and D.
+  int channel_columns() const {
+    int c = direct ? 1 : 0;
+    for (const SubmodelOrder& s : orders) c += s.m + 1;
+    return c;
+  }
+  /// Index in the covariance's layout of a_iq and of output j's numerator column.
+  int a_index(int i, int q) const { return a_at[static_cast<std::size_t>(i)] + q - 1; }
+  int b_index(int j, int column) const { return a_count + j * u_count + column; }
+};
+
+}  // namespace ctid::internal
