@@ -833,16 +833,8 @@ FrfMatrixFitResult frf_matrix_fit(const MimoFrf& frf, const std::vector<Submodel
   result.lines = p.lines();
   Parameters theta;
   if (initial_model) {
-    require(initial_model->inputs() == layout.inputs && initial_model->outputs() == layout.outputs,
-            "frf_matrix_fit: the initial model is ", initial_model->outputs(), " x ",
-            initial_model->inputs(), " but the FRF is ", layout.outputs, " x ", layout.inputs);
-    require(initial_model->size() == layout.size(), "frf_matrix_fit: the initial model has ",
-            initial_model->size(), " submodels; the structure has ", layout.size());
+    internal::check_initial_model(layout, *initial_model, "frf_matrix_fit", "the FRF");
     for (int i = 0; i < layout.size(); ++i) {
-      require((*initial_model)[i].a.degree() == orders[static_cast<size_t>(i)].n,
-              "frf_matrix_fit: submodel ", i + 1, " of the initial model has ",
-              (*initial_model)[i].a.degree(), " poles; the structure asks for ",
-              orders[static_cast<size_t>(i)].n);
       theta.a.push_back((*initial_model)[i].a.coefficients());
     }
   } else {

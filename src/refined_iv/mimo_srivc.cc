@@ -984,19 +984,7 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
 
   MimoAdditiveModel model = [&] {
     if (initial_model) {
-      require(initial_model->inputs() == data.input_count() &&
-                  initial_model->outputs() == data.output_count(),
-              "mimo_srivc: the initial model is ", initial_model->outputs(), " x ",
-              initial_model->inputs(), " but the data have ", data.output_count(), " outputs and ",
-              data.input_count(), " inputs");
-      require(initial_model->size() == layout.size(), "mimo_srivc: the initial model has ",
-              initial_model->size(), " submodels; the structure has ", layout.size());
-      for (int i = 0; i < layout.size(); ++i) {
-        require((*initial_model)[i].a.degree() == orders[static_cast<size_t>(i)].n,
-                "mimo_srivc: submodel ", i + 1, " of the initial model has ",
-                (*initial_model)[i].a.degree(), " poles; the structure asks for ",
-                orders[static_cast<size_t>(i)].n);
-      }
+      internal::check_initial_model(layout, *initial_model, "mimo_srivc", "the data");
       return *initial_model;
     }
     return automatic_start(layout, data, options.output_interpolation);

@@ -301,9 +301,9 @@ TEST(FrfMatrixFit, BadInputGetsOneClearMessage) {
   FrfMatrixFitOptions bad;
   bad.max_iterations = 0;
   fails(good, four, bad, "max_iterations");
-  EXPECT_THAT(
-      [&] { frf_matrix_fit(good, four, {}, four_mode_beam(2, 4, 1)); },
-      ThrowsMessage<InvalidArgument>(HasSubstr("the initial model is 4 x 2 but the FRF is 3 x 2")));
+  EXPECT_THAT([&] { frf_matrix_fit(good, four, {}, four_mode_beam(2, 4, 1)); },
+              ThrowsMessage<InvalidArgument>(
+                  HasSubstr("the initial model is 4 x 2 but the FRF is 3 x 2 (outputs x inputs)")));
 }
 
 }  // namespace

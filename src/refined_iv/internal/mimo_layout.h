@@ -5,10 +5,13 @@
 #pragma once
 
 #include <cstddef>
+#include <string_view>
 #include <utility>
 #include <vector>
 
 #include "ctid/core/additive_model.h"
+#include "ctid/core/error.h"
+#include "ctid/core/mimo_model.h"
 
 namespace ctid::internal {
 
@@ -52,5 +55,21 @@ struct MimoLayout {
   int a_index(int i, int q) const { return a_at[static_cast<std::size_t>(i)] + q - 1; }
   int b_index(int j, int column) const { return a_count + j * u_count + column; }
 };
+
+/// Throws InvalidArgument (message from `who`) unless `start` has the layout's channels (those
+/// of `data`, e.g. "the data" or "the FRF"), submodel count and pole counts.
+inline void check_initial_model(const MimoLayout& layout, const MimoAdditiveModel& start,
+                                std::string_view who, std::string_view data) {
+  require(start.inputs() == layout.inputs && start.outputs() == layout.outputs, who,
+          ": the initial model is ", start.outputs(), " x ", start.inputs(), " but ", data, " is ",
+          layout.outputs, " x ", layout.inputs, " (outputs x inputs)");
+  require(start.size() == layout.size(), who, ": the initial model has ", start.size(),
+          " submodels; the structure has ", layout.size());
+  for (int i = 0; i < layout.size(); ++i) {
+    const int n = layout.orders[static_cast<std::size_t>(i)].n;
+    require(start[i].a.degree() == n, who, ": submodel ", i + 1, " of the initial model has ",
+            start[i].a.degree(), " poles; the structure asks for ", n);
+  }
+}
 
 }  // namespace ctid::internal
