@@ -42,12 +42,29 @@ bool same_file(const std::string& a, const std::string& b) {
   return !ec_a && !ec_b && canonical_a == canonical_b;
 }
 
+// Whether the chain of symbolic links from `path` leads through /proc: /dev/stdout and
+// /dev/fd/N name an open descriptor, which io::write_text_file appends to as a stream
+// whatever file is behind it (decision 0021).
+bool links_through_proc(const fs::path& path) {
+  fs::path current = path;
+  for (int hop = 0; hop < 40; ++hop) {
+    std::error_code ec;
+    if (!fs::is_symlink(fs::symlink_status(current, ec))) return false;
+    const fs::path target = fs::read_symlink(current, ec);
+    if (ec) return false;
+    current = target.is_absolute() ? target : current.parent_path() / target;
+    if (current.lexically_normal().string().rfind("/proc/", 0) == 0) return true;
+  }
+  return false;
+}
+
 // An output that may be written to a file: missing, or a regular file (possibly through a
 // link). Streams and folders are left out of the comparison.
 bool is_file_output(const std::string& value) {
   std::error_code ec;
   const fs::file_status status = fs::status(value, ec);
-  return !fs::exists(status) || fs::is_regular_file(status);
+  if (!fs::exists(status)) return true;
+  return fs::is_regular_file(status) && !links_through_proc(value);
 }
 
 std::string in_quotes(const std::string& text) { return "'" + text + "'"; }

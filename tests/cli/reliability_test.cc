@@ -109,6 +109,14 @@ TEST_F(ReliabilityTest, ForcedOutputOntoASymlinkToStdoutDoesNotReplaceTheLink) {
   EXPECT_THAT(r.out, ::testing::StartsWith("t,u,y\n"));
 }
 
+TEST_F(ReliabilityTest, OutputOntoStdoutRedirectedToAFileNeedsNoForce) {
+  // The test's runner sends stdout to a file: -o /dev/stdout appends to it as a stream.
+  const auto r = ctid({"simulate", "-m", "g.json", "-e", "white", "-n", "10", "-T", "0.05", "-o",
+                       "/dev/stdout", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, ::testing::StartsWith("t,u,y\n"));
+}
+
 TEST_F(ReliabilityTest, OutputOntoDevNullNeedsNoForce) {
   const auto r = ctid(
       {"simulate", "-m", "g.json", "-e", "white", "-n", "10", "-T", "0.05", "-o", "/dev/null"});
