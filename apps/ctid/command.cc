@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <charconv>
 #include <cstdint>
+#include <iostream>
 #include <limits>
 #include <system_error>
-#include <iostream>
 
 #include "ctid/core/error.h"
 #include "ctid/io/file.h"
