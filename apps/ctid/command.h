@@ -75,6 +75,10 @@ std::optional<T> parse_number(const std::string& text) {
   return value;
 }
 
+/// A CLI11 check for seed flags: the text must be a whole number from 0 to 2^64 - 1 (CLI11
+/// would otherwise wrap "-1" and clamp larger values silently).
+CLI::Validator seed_validator();
+
 }  // namespace ctid::cli
 
 /// Registers `factory` (a CommandFactory) at position `order` in the help listing.

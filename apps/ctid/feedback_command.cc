@@ -48,8 +48,6 @@ void run_feedback(const FeedbackFlags& f) {
   if (!scan && !(f.delay >= 0.0))
     usage_error("--delay must be >= 0, got " + std::to_string(f.delay));
   const std::filesystem::path output(f.output);
-  if (!f.output.empty() && !f.force && std::filesystem::exists(output))
-    usage_error(output.string() + ": file exists; pass --force to replace it");
 
   io::CsvColumns columns;
   columns.time = f.time_column;

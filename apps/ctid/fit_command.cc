@@ -90,6 +90,13 @@ SubmodelOrder parse_submodel(const std::string& text) {
     usage_error("--submodel '" + text + "': expected n,m or n,m,l (poles, zeros, integrators)");
   }
   const std::vector<int> counts = parse_counts(text, "--submodel '" + text + "'");
+  if (counts.size() == 3 && counts[2] > io::kMaxIntegrators) {
+    usage_error(internal::concat("--submodel '", text, "': ", counts[2],
+                                 " integrators; a model document holds at most ",
+                                 io::kMaxIntegrators,
+                                 " per submodel, so ctid could not read the "
+                                 "fitted model back"));
+  }
   return SubmodelOrder{counts[0], counts[1], counts.size() == 3 ? counts[2] : 0};
 }
 
@@ -116,6 +123,11 @@ ModelStructure model_structure(const FitFlags& f, const CLI::App& app) {
   }
   if (unfactored) {
     if (app.count("--zeros") == 0) usage_error("--poles needs --zeros (numerator degree)");
+    if (f.integrators > io::kMaxIntegrators) {
+      usage_error(internal::concat("--integrators is ", f.integrators,
+                                   "; a model document holds at most ", io::kMaxIntegrators,
+                                   ", so ctid could not read the fitted model back"));
+    }
     return ModelStructure::unfactored(f.poles, f.zeros, f.integrators);
   }
   if (submodels) {
@@ -215,13 +227,6 @@ void print_delay_scan(std::ostream& out, const InputDelayScanResult& scan) {
         << "  " << (scan.usable[k] ? "usable" : "not usable") << "\n";
   }
   if (!scan.note.empty()) out << "warning: " << scan.note << "\n";
-}
-
-void refuse_existing(const std::string& path, bool force, const std::string& flag) {
-  if (path.empty() || force) return;
-  if (std::filesystem::exists(path)) {
-    usage_error(path + ": file exists; pass --force to replace it (" + flag + ")");
-  }
 }
 
 // --interpolation and --noise as the estimators' enumerations (SISO and several channels).
@@ -363,8 +368,6 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   if (f.initial_conditions != "zero") {
     usage_error("--initial-conditions estimate is not available with several inputs/outputs yet");
   }
-  refuse_existing(f.output, f.force, "--output");
-  refuse_existing(f.model_output, f.force, "--model-output");
   std::filesystem::path package;
   if (!f.plot.empty()) {
     package = require_plotting();
@@ -451,8 +454,6 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
       1) {
     usage_error("give one of --delay, --delay-scan and --delay-range");
   }
-  refuse_existing(f.output, f.force, "--output");
-  refuse_existing(f.model_output, f.force, "--model-output");
   std::filesystem::path package;
   if (!f.plot.empty()) {
     package = require_plotting();
@@ -492,6 +493,19 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   const std::string estimator(enum_name(identified.estimator));
   const std::optional<InputDelayScanResult>& scanned = identified.delay_scan;
   const std::optional<ModeRelocationResult>& relocated = identified.mode_relocation;
+
+  // What the fit writes, ctid must read back (validate, simulate, --initial): the model goes
+  // through the model reader before anything is written.
+  if (!f.output.empty() || !f.model_output.empty()) {
+    try {
+      (void)io::continuous_model_from_json(io::to_json(io::ContinuousModel(result.model)),
+                                           "the fitted model");
+    } catch (const InvalidArgument& e) {
+      throw ComputationError(std::string(e.what()) +
+                             "; ctid could not read the fitted model back, so nothing was "
+                             "written (try fewer modes or a lower order)");
+    }
+  }
 
   if (!f.output.empty()) {
     nlohmann::json document = io::to_json(result);

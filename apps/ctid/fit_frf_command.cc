@@ -113,9 +113,6 @@ ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
   options.max_iterations = f.max_iterations;
   options.tolerance = f.tolerance;
   options.validate();
-  if (!f.output.empty() && !f.force && std::filesystem::exists(f.output)) {
-    usage_error("--output " + f.output + " exists; give --force to replace it");
-  }
   const MimoFrf frf = io::read_mimo_frf(f.file);
   std::optional<MimoAdditiveModel> start;
   if (!f.initial.empty()) start = initial_model(f.initial);

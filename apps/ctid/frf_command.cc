@@ -130,6 +130,47 @@ void draw_frf(const FrfFlags& f, const std::filesystem::path& package, const Frf
   plot(package, jobs);
 }
 
+// Every number ctid frf writes is finite (docs/cli.md): an FRF with an infinite or NaN entry
+// is refused, naming the column and the line, instead of written. Values whose squares
+// overflow or vanish in double precision (|u| ~ 1e200) cause it.
+void require_finite(const io::CsvTable& table, const std::string& file) {
+  const Eigen::VectorXd& hz = table.column("frequency_hz");
+  for (std::size_t c = 0; c < table.names.size(); ++c) {
+    const Eigen::VectorXd& v = table.columns[c];
+    for (Eigen::Index k = 0; k < v.size(); ++k) {
+      if (std::isfinite(v(k))) continue;
+      usage_error(internal::concat(
+          file, ": the FRF's ", table.names[c], " is ", v(k), " at ", hz(k),
+          " Hz; the input or output values are too large or too small for the spectra "
+          "(their squares must stay within double precision); rescale them with "
+          "--scale-input / --scale-output"));
+    }
+  }
+}
+
+// The largest magnitude of a column the spectra can square and sum without overflowing.
+constexpr double kMaxSpectralValue = 1e100;
+
+// A column whose values the spectra cannot square (|x| > 1e100), and an output that is zero
+// at every sample (no response to estimate: its FRF is 0, -inf dB, with no coherence), are
+// refused before the spectra are computed.
+void require_spectral_column(const Eigen::VectorXd& x, const std::string& file,
+                             const std::string& column, bool is_output) {
+  if (x.size() == 0) return;
+  const double largest = x.cwiseAbs().maxCoeff();
+  if (largest > kMaxSpectralValue) {
+    usage_error(internal::concat(
+        file, ": column '", column, "' holds values up to ", largest,
+        "; the spectra square them, which overflows double precision above ", kMaxSpectralValue,
+        "; rescale it with ", is_output ? "--scale-output" : "--scale-input"));
+  }
+  if (is_output && largest == 0.0) {
+    usage_error(file + ": output column '" + column +
+                "' is zero at every sample; there is no response to estimate (check "
+                "--output-column)");
+  }
+}
+
 double median(Eigen::VectorXd v) {
   std::vector<double> x;
   for (double e : v) {
@@ -151,6 +192,14 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
     prepare_plot_directory(f.plot, {"frf_matrix.png"}, f.force);
   }
   const MimoData data = f.data.load_mimo(app);
+  for (Eigen::Index j = 0; j < data.outputs().cols(); ++j) {
+    require_spectral_column(data.outputs().col(j), f.data.file,
+                            data.output_names()[static_cast<std::size_t>(j)], true);
+  }
+  for (Eigen::Index i = 0; i < data.inputs().cols(); ++i) {
+    require_spectral_column(data.inputs().col(i), f.data.file,
+                            data.input_names()[static_cast<std::size_t>(i)], false);
+  }
   MimoFrf frf;
   if (periodic) {
     const int experiments = f.experiments > 0 ? f.experiments : data.input_count();
@@ -170,6 +219,8 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
   int correlated = 0;
   for (int l = 0; l < frf.input_condition.size(); ++l) correlated += frf.inputs_correlated(l);
 
+  const io::CsvTable table = io::mimo_frf_table(frf);
+  require_finite(table, f.data.file);
   nlohmann::json document = io::to_json(frf);
   if (!f.output.empty()) {
     const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
@@ -187,7 +238,7 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
       document["peaks"] = std::move(listed);
       io::write_json(f.output, document, overwrite);
     } else {
-      io::write_csv(f.output, io::mimo_frf_table(frf), overwrite);
+      io::write_csv(f.output, table, overwrite);
     }
   }
   if (!f.plot.empty()) {
@@ -239,13 +290,14 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
 }
 
 void run_frf(const FrfFlags& f, const CLI::App& app) {
-  if (!f.output.empty() && !f.force && std::filesystem::exists(f.output)) {
-    usage_error(f.output + ": file exists; pass --force to replace it (--output)");
-  }
   const bool periodic = app.count("--period") > 0;
   if (periodic && (app.count("--segment-length") > 0 || app.count("--overlap") > 0)) {
     usage_error(
         "--segment-length and --overlap are Welch flags; they have no effect with --period");
+  }
+  if (app.count("--segment-length") > 0 && f.segment_length < 1) {
+    usage_error("--segment-length is " + std::to_string(f.segment_length) +
+                "; give a positive number of samples, or leave the flag out for the default");
   }
   if (!periodic && app.count("--transient-periods") > 0) {
     usage_error("--transient-periods needs --period");
@@ -268,6 +320,8 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
     prepare_plot_directory(f.plot, figures, f.force);
   }
   const SampledData data = f.data.load(app, false);
+  require_spectral_column(data.input(), f.data.file, f.data.input_column, false);
+  require_spectral_column(data.output(), f.data.file, f.data.output_column, true);
 
   Frf frf;
   if (periodic) {
@@ -283,6 +337,7 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
   const std::vector<ResonancePeak> peaks = resonance_peaks(frf, peak_options);
 
   const io::CsvTable table = frf_table(frf);
+  require_finite(table, f.data.file);
   nlohmann::json document = io::to_json(frf);
   if (!f.output.empty()) {
     const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
@@ -356,7 +411,7 @@ Command add_frf_command(CLI::App& parent) {
       ->capture_default_str()
       ->group("Periodic");
   app->add_option("--segment-length", f.segment_length,
-                  "Welch: samples per segment (default: largest power of 2 <= N/8, 8..4096)")
+                  "Welch: samples per segment (not given: largest power of 2 <= N/8, 8..4096)")
       ->group("Welch");
   app->add_option("--overlap", f.overlap, "Welch: fraction shared by consecutive segments")
       ->capture_default_str()

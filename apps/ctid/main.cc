@@ -2,6 +2,9 @@
 // The subcommands register themselves (command.h); this file parses the command line,
 // runs the chosen command and returns its exit status (0 ran, 3 ran but no usable model,
 // 2 bad usage or input, 1 other error).
+#include <signal.h>
+
+#include <csignal>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -9,13 +12,39 @@
 #include <CLI/CLI.hpp>
 
 #include "command.h"
+#include "ctid/io/file.h"
+#include "output_paths.h"
 
 #ifndef CTID_VERSION
 #define CTID_VERSION "unknown"
 #endif
 
+namespace {
+
+// SIGINT, SIGTERM and SIGHUP remove the temporary files of writes in progress (the target is
+// untouched until its temporary is complete) and then end the process by the signal, so the
+// exit status is the conventional 128 + signal.
+extern "C" void remove_temporaries_and_die(int signal_number) {
+  ctid::io::remove_pending_temporaries();
+  std::signal(signal_number, SIG_DFL);
+  std::raise(signal_number);
+}
+
+void install_signal_handlers() {
+  for (const int signal_number : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction action {};
+    action.sa_handler = remove_temporaries_and_die;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESETHAND;
+    sigaction(signal_number, &action, nullptr);
+  }
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace ctid::cli;
+  install_signal_handlers();
   CLI::App app{
       "ctid: continuous-time system identification from sampled data.\n"
       "Models are JSON files with coefficients in ascending powers (docs/formats.md);\n"
@@ -55,7 +84,14 @@ int main(int argc, char** argv) {
   }
 
   for (const Command& command : commands) {
-    if (command.app->parsed()) return run_command("ctid " + command.app->get_name(), command.run);
+    if (command.app->parsed()) {
+      // No output may be an input or another output (output_paths.h): checked before the
+      // command reads or writes anything.
+      return run_command("ctid " + command.app->get_name(), [&command] {
+        check_output_paths(*command.app);
+        return command.run();
+      });
+    }
   }
   std::cerr << "ctid: error: no command given (see 'ctid --help')\n";
   return kExitUsage;

@@ -232,6 +232,7 @@ void add_noise_flags(CLI::App& app, NoiseFlags& f) {
                      ->group("Output noise");
   f.std_option->excludes(f.snr_option);
   f.seed_option = app.add_option("--noise-seed", f.seed, "Seed of the noise e")
+                      ->check(seed_validator())
                       ->capture_default_str()
                       ->group("Output noise");
 }
@@ -348,9 +349,6 @@ void run_simulate_mimo(const SimulateFlags& f, CLI::App& app, const nlohmann::js
 
 void run_simulate(const SimulateFlags& f, CLI::App& app) {
   const std::filesystem::path output = f.output;
-  if (!f.force && std::filesystem::exists(output)) {
-    usage_error(output.string() + ": file exists; pass --force to replace it");
-  }
   const nlohmann::json document = io::read_json(f.model);
   if (io::is_delayed_feedback_loop(document) || io::is_delayed_feedback_result(document)) {
     run_simulate_loop(f, app, document);
@@ -496,6 +494,7 @@ Command add_simulate_command(CLI::App& parent) {
   app->add_option("--seed", f.spec.seed,
                   "Seed of the white noise or multisine phases; for prbs it picks the start "
                   "state")
+      ->check(seed_validator())
       ->capture_default_str()
       ->group("Generated input");
   app->add_option("--std", f.spec.standard_deviation, "white: standard deviation")

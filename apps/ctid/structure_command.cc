@@ -114,12 +114,14 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
   if (!f.delay_scan.empty() && app.count("--delay") > 0) {
     usage_error("give --delay or --delay-scan, not both");
   }
-  if (!f.output.empty() && !f.force && std::filesystem::exists(f.output)) {
-    usage_error(f.output + ": file exists; pass --force to replace it (--output)");
-  }
   std::vector<ModelStructure> candidates;
   const auto [l_low, l_high] =
       f.integrators.empty() ? std::pair{0, 0} : parse_range(f.integrators, "--integrators", 0);
+  if (l_high > io::kMaxIntegrators) {
+    usage_error(internal::concat("--integrators goes up to ", l_high,
+                                 "; a model document holds at most ", io::kMaxIntegrators,
+                                 ", so ctid could not read such a model back"));
+  }
   // A pure integrator (0 poles besides the origin) is a candidate when integrators are scanned.
   const auto [low, high] =
       parse_range(modes ? f.modes : f.poles, modes ? "--modes" : "--poles", l_high > 0 ? 0 : 1);

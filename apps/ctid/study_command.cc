@@ -181,7 +181,7 @@ Command add_study_command(CLI::App& parent) {
   app->add_option("--threads,-j", f.threads, "Worker threads (0: every core)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  app->add_option("--seed", f.seed, "Study seed")->capture_default_str();
+  app->add_option("--seed", f.seed, "Study seed")->check(seed_validator())->capture_default_str();
   app->add_option("--size-index", f.size_index, "Replay one run: the sample-size index j")
       ->check(CLI::NonNegativeNumber);
   app->add_option("--run-index", f.run_index, "Replay one run: the run index r")

@@ -132,9 +132,6 @@ void print_table(const std::vector<std::string>& names,
 }
 
 void run_validate(const ValidateFlags& f, const CLI::App& app) {
-  if (!f.output.empty() && !f.force && std::filesystem::exists(f.output)) {
-    usage_error(f.output + ": file exists; pass --force to replace it (--output)");
-  }
   std::vector<std::string> files{f.model};
   files.insert(files.end(), f.more_models.begin(), f.more_models.end());
   const bool several = files.size() > 1;

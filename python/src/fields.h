@@ -16,6 +16,7 @@
 #include "common.h"
 #include "ctid/core/fields.h"
 #include "ctid/io/fields_json.h"
+#include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
 
 namespace ctid::python {
@@ -94,12 +95,8 @@ void register_options_json() {
       [](const py::object& object) { return io::fields_to_json(object.cast<const S&>()).dump(); },
       [name](const std::string& text) {
         const std::string source = "options_from_json";
-        nlohmann::json document;
-        try {
-          document = nlohmann::json::parse(text);
-        } catch (const nlohmann::json::parse_error& e) {
-          throw InvalidArgument(source + ": " + name + ": malformed JSON: " + e.what());
-        }
+        // io::parse_json refuses documents nested too deeply before parsing them.
+        const nlohmann::json document = io::parse_json(text, source + ": " + name);
         return py::cast(io::options_from_json<S>(document, source));
       }};
 }

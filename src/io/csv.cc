@@ -56,6 +56,27 @@ std::optional<double> parse_number(std::string_view field) {
   return value;
 }
 
+// A field as it is echoed in a message: control bytes escaped (\x0d), and cut after 80
+// characters with the full length stated, so a binary or huge field keeps the message one
+// readable line.
+std::string echo(std::string_view field) {
+  constexpr size_t kShown = 80;
+  std::string out;
+  for (size_t i = 0; i < field.size() && i < kShown; ++i) {
+    const auto c = static_cast<unsigned char>(field[i]);
+    if (c < 0x20 || c == 0x7f) {
+      constexpr char kHex[] = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[c >> 4];
+      out += kHex[c & 0xf];
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  if (field.size() > kShown) out += "... (" + std::to_string(field.size()) + " bytes)";
+  return out;
+}
+
 bool valid_name(std::string_view name) {
   return !name.empty() && name.find_first_of(",\n\r") == std::string_view::npos &&
          trim(name) == name;
@@ -65,7 +86,7 @@ std::string join_names(const std::vector<std::string>& names) {
   std::string joined;
   for (size_t i = 0; i < names.size(); ++i) {
     if (i > 0) joined += ", ";
-    joined += names[i];
+    joined += echo(names[i]);
   }
   return joined;
 }
@@ -129,12 +150,18 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
   std::vector<std::vector<double>> values;
   int header_line = 0;
   int line_number = 0;
-  size_t position = 0;
+  // A UTF-8 byte order mark (spreadsheets write one) is not part of the first column name.
+  size_t position = text.substr(0, 3) == "\xEF\xBB\xBF" ? 3 : 0;
   while (position < text.size()) {
-    size_t end = text.find('\n', position);
+    // Lines end with LF, CRLF or a lone CR (old Mac files).
+    size_t end = text.find_first_of("\r\n", position);
     if (end == std::string_view::npos) end = text.size();
     const std::string_view line = trim(text.substr(position, end - position));
     position = end + 1;
+    if (end < text.size() && text[end] == '\r' && position < text.size() &&
+        text[position] == '\n') {
+      ++position;
+    }
     ++line_number;
     if (line.empty()) continue;
     if (line.front() == '#') {
@@ -154,7 +181,7 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
         require(!name.empty(), source, ":", line_number, ": header field ", i + 1,
                 " is empty; every column needs a name");
         for (size_t j = 0; j < i; ++j) {
-          require(fields[j] != name, source, ":", line_number, ": column name '", name,
+          require(fields[j] != name, source, ":", line_number, ": column name '", echo(name),
                   "' appears twice in the header");
         }
         all_numbers = all_numbers && parse_number(name).has_value();
@@ -177,8 +204,8 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
       };
       require(!fields[i].empty(), where(), "empty field; expected a number");
       const std::optional<double> value = parse_number(fields[i]);
-      require(value.has_value(), where(), "malformed number '", fields[i], "'");
-      require(std::isfinite(*value), where(), "value '", fields[i],
+      require(value.has_value(), where(), "malformed number '", echo(fields[i]), "'");
+      require(std::isfinite(*value), where(), "value '", echo(fields[i]),
               "' is not finite; every value must be a finite number");
       values[i].push_back(*value);
     }

@@ -1,5 +1,6 @@
 #include "ctid/io/file.h"
 
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
@@ -7,6 +8,8 @@
 #include <sstream>
 #include <system_error>
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "ctid/core/error.h"
@@ -29,6 +32,40 @@ std::string read_text_file(const fs::path& path) {
 
 namespace {
 
+// Temporaries being written, so that a signal handler can remove them
+// (remove_pending_temporaries). Fixed-size slots: the handler may neither allocate nor lock.
+constexpr size_t kTemporarySlots = 64;
+constexpr size_t kTemporaryPathBytes = 4096;
+std::array<std::atomic<int>, kTemporarySlots> slot_state{};  // 0 free, 1 claimed, 2 pending
+std::array<std::array<char, kTemporaryPathBytes>, kTemporarySlots> slot_path{};
+
+// Remembers `path` until the returned guard is destroyed; paths that do not fit (or when
+// every slot is taken) are simply not remembered.
+class PendingTemporary {
+ public:
+  explicit PendingTemporary(const fs::path& path) {
+    const std::string& text = path.native();
+    if (text.size() >= kTemporaryPathBytes) return;
+    for (size_t i = 0; i < kTemporarySlots; ++i) {
+      int expected = 0;
+      if (slot_state[i].compare_exchange_strong(expected, 1)) {
+        std::memcpy(slot_path[i].data(), text.c_str(), text.size() + 1);
+        slot_state[i].store(2);
+        slot_ = static_cast<int>(i);
+        return;
+      }
+    }
+  }
+  ~PendingTemporary() {
+    if (slot_ >= 0) slot_state[static_cast<size_t>(slot_)].store(0);
+  }
+  PendingTemporary(const PendingTemporary&) = delete;
+  PendingTemporary& operator=(const PendingTemporary&) = delete;
+
+ private:
+  int slot_ = -1;
+};
+
 // A name for the temporary file that no other writer in this or another process picks.
 fs::path temporary_path_for(const fs::path& path) {
   static std::atomic<unsigned> counter{0};
@@ -41,33 +78,100 @@ void remove_quietly(const fs::path& path) {
   fs::remove(path, ignored);
 }
 
+// Follows the chain of symbolic links that starts at `path` (at most 40 links, as the
+// kernel does). `through_proc` is set when a link leads into /proc: /dev/stdout and
+// /dev/fd/N name an open file descriptor of the process, a stream, whatever file is
+// behind it.
+fs::path resolve_links(const fs::path& path, bool& through_proc) {
+  fs::path current = path;
+  through_proc = false;
+  for (int hop = 0; hop < 40; ++hop) {
+    std::error_code ec;
+    if (!fs::is_symlink(fs::symlink_status(current, ec))) return current;
+    const fs::path target = fs::read_symlink(current, ec);
+    if (ec) return current;
+    current = target.is_absolute() ? target : current.parent_path() / target;
+    const std::string text = current.lexically_normal().string();
+    if (text.rfind("/proc/", 0) == 0) through_proc = true;
+  }
+  throw InvalidArgument(path.string() + ": too many levels of symbolic links");
+}
+
+std::string kind_of_node(const fs::file_status& status) {
+  if (fs::is_block_file(status)) return "a block device";
+  if (fs::is_socket(status)) return "a socket";
+  if (fs::is_character_file(status)) return "a character device";
+  if (fs::is_fifo(status)) return "a pipe";
+  return "not a regular file";
+}
+
+// Appends `content` to a stream the user named (a character device, a pipe, an open file
+// descriptor through /dev/stdout): nothing is created, truncated or renamed.
+void write_into_stream(const fs::path& path, std::string_view content) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_NOCTTY | O_CLOEXEC);
+  if (fd < 0) {
+    throw IoError(path.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
+  }
+  size_t written = 0;
+  while (written < content.size()) {
+    const ssize_t n = ::write(fd, content.data() + written, content.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int error = errno;
+      ::close(fd);
+      throw IoError(path.string() + ": write failed (" + std::strerror(error) + ")");
+    }
+    written += static_cast<size_t>(n);
+  }
+  ::close(fd);
+}
+
 }  // namespace
+
+void remove_pending_temporaries() noexcept {
+  for (size_t i = 0; i < kTemporarySlots; ++i) {
+    if (slot_state[i].load() == 2) ::unlink(slot_path[i].data());
+  }
+}
 
 void write_text_file(const fs::path& path, std::string_view content, Overwrite overwrite) {
   require(!path.empty() && path.has_filename(), "output path '", path.string(),
           "' does not name a file");
-  const fs::path parent = path.parent_path().empty() ? fs::path(".") : path.parent_path();
   std::error_code ec;
-  require(fs::is_directory(parent, ec), path.string(), ": directory '", parent.string(),
-          "' does not exist");
   require(!fs::is_directory(path, ec), path.string(), ": is a directory, not a file");
   const fs::file_status status = fs::status(path, ec);
+  bool through_proc = false;
+  // A symbolic link is never replaced: the file it names is written instead.
+  const fs::path target = resolve_links(path, through_proc);
   if (fs::exists(status) && !fs::is_regular_file(status)) {
-    // A device, pipe or socket (/dev/null, /dev/stdout, a FIFO): write into it. Moving a
-    // temporary file over it would replace the node itself, and nothing is overwritten here.
-    std::ofstream out(path, std::ios::binary);
-    if (!out) {
-      throw IoError(path.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
-    }
-    out.write(content.data(), static_cast<std::streamsize>(content.size()));
-    out.flush();
-    if (!out) throw IoError(path.string() + ": write failed (" + std::strerror(errno) + ")");
+    // Streams the user meant (/dev/null, a terminal, a FIFO, /dev/stdout onto a pipe) are
+    // written into; other nodes (a block device, a socket) are refused. Moving a temporary
+    // over either would replace the node itself (decision 0021).
+    require(fs::is_character_file(status) || fs::is_fifo(status), path.string(), ": is ",
+            kind_of_node(status),
+            "; ctid writes regular files, character devices (/dev/null, a terminal) and pipes");
+    write_into_stream(path, content);
     return;
   }
+  if (through_proc && fs::exists(status)) {
+    // /dev/stdout redirected to a file (ctid ... -o /dev/stdout > out.csv): the shell opened
+    // that file; append to the descriptor rather than rename anything (decision 0021).
+    write_into_stream(path, content);
+    return;
+  }
+  const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  require(fs::is_directory(parent, ec), path.string(), ": directory '", parent.string(),
+          "' does not exist");
   require(overwrite == Overwrite::yes || !fs::exists(status), path.string(),
           ": file exists and overwriting was not requested");
+  struct stat existing {};
+  const bool replacing = fs::exists(status) && ::stat(target.c_str(), &existing) == 0;
+  // A read-only file is one the user protected: --force does not override that.
+  require(!replacing || (existing.st_mode & 0222) != 0, path.string(),
+          ": file is read-only; make it writable first to replace it");
 
-  const fs::path temporary = temporary_path_for(path);
+  const fs::path temporary = temporary_path_for(target);
+  const PendingTemporary pending(temporary);
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     if (!out) {
@@ -82,9 +186,11 @@ void write_text_file(const fs::path& path, std::string_view content, Overwrite o
       throw IoError(path.string() + ": write failed (" + std::strerror(errno) + ")");
     }
   }
+  // The replaced file keeps its permissions.
+  if (replacing) ::chmod(temporary.c_str(), existing.st_mode & 07777);
 
   if (overwrite == Overwrite::yes) {
-    fs::rename(temporary, path, ec);
+    fs::rename(temporary, target, ec);
     if (ec) {
       remove_quietly(temporary);
       throw IoError(path.string() + ": cannot move the temporary file into place (" + ec.message() +
@@ -94,7 +200,7 @@ void write_text_file(const fs::path& path, std::string_view content, Overwrite o
   }
   // A hard link fails if the target exists, so "check, then move" cannot race with another
   // writer. File systems without hard links fall back to an existence check and a rename.
-  fs::create_hard_link(temporary, path, ec);
+  fs::create_hard_link(temporary, target, ec);
   if (!ec) {
     remove_quietly(temporary);
     return;
@@ -104,11 +210,11 @@ void write_text_file(const fs::path& path, std::string_view content, Overwrite o
     throw InvalidArgument(path.string() + ": file exists and overwriting was not requested");
   }
   std::error_code exists_ec;
-  if (fs::exists(path, exists_ec)) {
+  if (fs::exists(target, exists_ec)) {
     remove_quietly(temporary);
     throw InvalidArgument(path.string() + ": file exists and overwriting was not requested");
   }
-  fs::rename(temporary, path, ec);
+  fs::rename(temporary, target, ec);
   if (ec) {
     remove_quietly(temporary);
     throw IoError(path.string() + ": cannot move the temporary file into place (" + ec.message() +

@@ -111,13 +111,25 @@ void write_json(const std::filesystem::path& path, const nlohmann::json& value,
   write_text_file(path, value.dump(2) + "\n", overwrite);
 }
 
-JsonObject::JsonObject(const nlohmann::json& value, std::string source, std::string path)
-    : value_(value), source_(std::move(source)), path_(std::move(path)) {
+namespace {
+
+// The type is checked before JsonObject copies the value, so a document that is not an
+// object (a huge array, say) is refused without being copied.
+const nlohmann::json& require_object(const nlohmann::json& value, const std::string& source,
+                                     const std::string& path) {
   if (!value.is_object()) {
-    throw InvalidArgument(internal::concat(source_, ": ", path_.empty() ? "document" : path_,
+    throw InvalidArgument(internal::concat(source, ": ", path.empty() ? "document" : path,
                                            ": expected a JSON object but found ", kind_of(value)));
   }
+  return value;
 }
+
+}  // namespace
+
+JsonObject::JsonObject(const nlohmann::json& value, std::string source, std::string path)
+    : value_(require_object(value, source, path)),
+      source_(std::move(source)),
+      path_(std::move(path)) {}
 
 std::string JsonObject::field_path(std::string_view key) const {
   return path_.empty() ? std::string(key) : path_ + "." + std::string(key);

@@ -63,9 +63,9 @@ AdditiveModel read_additive_model(const JsonObject& object) {
     submodel.a = polynomial_field(entry, "denominator_ascending");
     submodel.b = polynomial_field(entry, "numerator_ascending");
     const long long integrators = entry.integer_or("integrators", 0);
-    if (integrators < 0 || integrators > 16) {
-      entry.fail("integrators",
-                 internal::concat("is ", integrators, "; it must be between 0 and 16"));
+    if (integrators < 0 || integrators > kMaxIntegrators) {
+      entry.fail("integrators", internal::concat("is ", integrators, "; it must be between 0 and ",
+                                                 kMaxIntegrators));
     }
     submodel.integrators = static_cast<int>(integrators);
     entry.string_or("description", "");

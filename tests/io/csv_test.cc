@@ -37,6 +37,28 @@ TEST(Csv, ParsesNamedColumnsSkippingCommentsBlankLinesAndCarriageReturns) {
   EXPECT_FALSE(table.has_column("r"));
 }
 
+TEST(Csv, ByteOrderMarkIsSkipped) {
+  const CsvTable table = parse_csv("\xEF\xBB\xBFt,u\n0,1\n", "bom.csv");
+  EXPECT_EQ(table.names, (std::vector<std::string>{"t", "u"}));
+}
+
+TEST(Csv, LoneCarriageReturnsEndLinesAndLinesAreCounted) {
+  const CsvTable table = parse_csv("t,u\r0,1\r1,2\r", "cr.csv");
+  EXPECT_EQ(table.names, (std::vector<std::string>{"t", "u"}));
+  EXPECT_EQ(table.rows(), 2);
+  EXPECT_EQ(table.column("u")(1), 2.0);
+  EXPECT_THAT(parse_error("t,u\r0,1\r\n1,x\r"), HasSubstr("data.csv:3: column 'u'"));
+}
+
+TEST(Csv, EchoedFieldsAreCutAndControlBytesEscaped) {
+  const std::string message = parse_error("t,u\n0," + std::string(100000, '7') + "x\n");
+  EXPECT_THAT(message,
+              HasSubstr("malformed number '" + std::string(80, '7') + "... (100001 bytes)'"));
+  EXPECT_LT(message.size(), 200u);
+  EXPECT_THAT(parse_error(std::string("t,u\n0,\x01\x1b[0m\n")),
+              HasSubstr("malformed number '\\x01\\x1b[0m'"));
+}
+
 TEST(Csv, MalformedNumberNamesFileLineAndColumn) {
   EXPECT_EQ(parse_error("t,u,y\n0,1,2\n0.1,abc,3\n"),
             "data.csv:3: column 'u' (field 2): malformed number 'abc'");

@@ -42,5 +42,60 @@ TEST(WriteTextFile, RegularFilesStillNeedOverwrite) {
   EXPECT_EQ(read_text_file(dir / "a.csv"), "2\n");
 }
 
+TEST(WriteTextFile, ASymlinkIsWrittenThroughAndKept) {
+  const testing::TestDirectory dir;
+  write_text_file(dir / "target.csv", "old\n", Overwrite::no);
+  std::filesystem::create_symlink("target.csv", dir / "link.csv");
+  EXPECT_THROW(write_text_file(dir / "link.csv", "new\n", Overwrite::no), InvalidArgument);
+  write_text_file(dir / "link.csv", "new\n", Overwrite::yes);
+  EXPECT_TRUE(std::filesystem::is_symlink(std::filesystem::symlink_status(dir / "link.csv")));
+  EXPECT_EQ(read_text_file(dir / "target.csv"), "new\n");
+  // A dangling link creates its target.
+  std::filesystem::create_symlink("fresh.csv", dir / "dangling.csv");
+  write_text_file(dir / "dangling.csv", "x\n", Overwrite::no);
+  EXPECT_TRUE(std::filesystem::is_symlink(std::filesystem::symlink_status(dir / "dangling.csv")));
+  EXPECT_EQ(read_text_file(dir / "fresh.csv"), "x\n");
+}
+
+TEST(WriteTextFile, ADescriptorLinkThroughProcIsAppendedToNotReplaced) {
+  // /dev/stdout redirected to a file is /proc/self/fd/1 -> that file.
+  const testing::TestDirectory dir;
+  write_text_file(dir / "shell.txt", "before\n", Overwrite::no);
+  const int fd = ::open((dir / "shell.txt").c_str(), O_WRONLY | O_APPEND);
+  ASSERT_GE(fd, 0);
+  std::filesystem::create_symlink("/proc/self/fd/" + std::to_string(fd), dir / "stdout");
+  write_text_file(dir / "stdout", "data\n", Overwrite::yes);
+  ::close(fd);
+  EXPECT_TRUE(std::filesystem::is_symlink(std::filesystem::symlink_status(dir / "stdout")));
+  EXPECT_EQ(read_text_file(dir / "shell.txt"), "before\ndata\n");
+}
+
+TEST(WriteTextFile, AReadOnlyFileIsNotReplacedAndAReplacedFileKeepsItsMode) {
+  const testing::TestDirectory dir;
+  write_text_file(dir / "ro.csv", "keep\n", Overwrite::no);
+  std::filesystem::permissions(dir / "ro.csv", std::filesystem::perms::owner_read);
+  EXPECT_THROW(write_text_file(dir / "ro.csv", "new\n", Overwrite::yes), InvalidArgument);
+  EXPECT_EQ(read_text_file(dir / "ro.csv"), "keep\n");
+
+  write_text_file(dir / "x.csv", "1\n", Overwrite::no);
+  ASSERT_EQ(::chmod((dir / "x.csv").c_str(), 0640), 0);
+  write_text_file(dir / "x.csv", "2\n", Overwrite::yes);
+  struct stat info {};
+  ASSERT_EQ(::stat((dir / "x.csv").c_str(), &info), 0);
+  EXPECT_EQ(info.st_mode & 0777, 0640u);
+}
+
+TEST(WriteTextFile, NoTemporaryIsLeftBehindAndNoneIsPendingAfterwards) {
+  const testing::TestDirectory dir;
+  write_text_file(dir / "a.csv", "1\n", Overwrite::no);
+  remove_pending_temporaries();  // nothing pending: removes nothing
+  int files = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    ++files;
+  }
+  EXPECT_EQ(files, 1);
+  EXPECT_EQ(read_text_file(dir / "a.csv"), "1\n");
+}
+
 }  // namespace
 }  // namespace ctid::io

@@ -1,6 +1,8 @@
 // Whole-file text input and output for the io layer. Errors name the file. Writes go to a
 // temporary file beside the target and are then moved into place, so a reader never sees
 // a half-written file, and an existing file is replaced only when the caller asks for it.
+// Symbolic links are followed, never replaced; streams (devices, pipes) are written into
+// (docs/decisions/0021-output-targets.md).
 #pragma once
 
 #include <filesystem>
@@ -30,7 +32,21 @@ std::string read_text_file(const std::filesystem::path& path);
 /// check and the move are one atomic step where the file system supports hard links).
 /// The parent directory must exist (InvalidArgument otherwise). Throws IoError when the
 /// write itself fails.
+///
+/// What `path` names decides how it is written (decision 0021):
+/// - a symbolic link: the file it finally names is written (through a temporary beside that
+///   file); the link stays;
+/// - a character device or a pipe (/dev/null, a terminal, a FIFO), or an open descriptor
+///   through /proc (/dev/stdout redirected to a file): appended to in place, without
+///   Overwrite and without creating, truncating or renaming anything;
+/// - a block device, a socket or anything else that is not a regular file: InvalidArgument;
+/// - a read-only regular file: InvalidArgument even with Overwrite::yes; a replaced file
+///   keeps its permissions.
 void write_text_file(const std::filesystem::path& path, std::string_view content,
                      Overwrite overwrite = Overwrite::no);
+
+/// Removes the temporary files that writes in progress have created. Async-signal-safe:
+/// meant for a SIGINT/SIGTERM handler, which then ends the process (the CLI installs one).
+void remove_pending_temporaries() noexcept;
 
 }  // namespace ctid::io

@@ -24,6 +24,9 @@
 namespace ctid::io {
 
 /// The "type" values of the model formats.
+/// The most integrators (poles at the origin) a submodel of a model document may have; the
+/// readers refuse more, and ctid fit refuses to estimate more (it could not read them back).
+inline constexpr int kMaxIntegrators = 16;
 inline constexpr const char* kTransferFunctionType = "transfer_function";
 inline constexpr const char* kAdditiveModelType = "additive_model";
 inline constexpr const char* kDiscreteTransferFunctionType = "discrete_transfer_function";
