@@ -4,7 +4,6 @@
 // spread of a seeded Monte Carlo, and one clear message for each kind of bad input.
 #include "ctid/refined_iv/frf_matrix_fit.h"
 
-#include <chrono>
 #include <cmath>
 #include <complex>
 #include <random>
@@ -180,7 +179,6 @@ TEST(FrfMatrixFit, StandardErrorsMatchTheSpreadOfASeededMonteCarlo) {
   Eigen::MatrixXd shape(kRuns, 4 * modes), shape_se(kRuns, 4 * modes);
   std::mt19937_64 rng(2026);
   std::normal_distribution<double> normal;
-  const auto start = std::chrono::steady_clock::now();
   for (int run = 0; run < kRuns; ++run) {
     MimoFrf noisy = clean;
     for (Eigen::MatrixXcd& h : noisy.response) {
@@ -206,7 +204,6 @@ TEST(FrfMatrixFit, StandardErrorsMatchTheSpreadOfASeededMonteCarlo) {
       }
     }
   }
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
   const std::vector<MimoMode> expected = mimo_modes(truth, orders);
   const auto spread = [](const Eigen::VectorXd& x) {
     return std::sqrt((x.array() - x.mean()).square().sum() / (x.size() - 1.0));
