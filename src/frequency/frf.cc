@@ -77,20 +77,12 @@ Frf periodic_frf(const SampledData& data, const PeriodicFrfOptions& options) {
   Frf result;
   result.averages = periods;
   result.block_length = n;
-  if (options.lines.empty()) {
-    for (int k = 1; k <= half; ++k) {
-      if (excited(k)) result.lines.push_back(k);
-    }
-  } else {
-    result.lines = options.lines;
-    std::sort(result.lines.begin(), result.lines.end());
-    result.lines.erase(std::unique(result.lines.begin(), result.lines.end()), result.lines.end());
-    for (int k : result.lines) {
-      require(excited(k), "periodic_frf: line ", k,
-              " requested in PeriodicFrfOptions.lines is not excited by the input (|U| = ",
-              std::abs(u_mean(k)), ", threshold ", threshold, ")");
-    }
-  }
+  result.lines = internal::periodic_lines(options.lines, half, excited, [&](int k) {
+    throw InvalidArgument(internal::concat(
+        "periodic_frf: line ", k,
+        " requested in PeriodicFrfOptions.lines is not excited by the input (|U| = ",
+        std::abs(u_mean(k)), ", threshold ", threshold, ")"));
+  });
 
   const auto count = static_cast<Eigen::Index>(result.lines.size());
   result.frequencies.resize(count);

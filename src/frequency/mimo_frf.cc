@@ -274,24 +274,14 @@ MimoFrf periodic_frf(const std::vector<MimoData>& experiments, const PeriodicFrf
   };
 
   MimoFrf result = empty_result(first, periods, n);
-  if (options.lines.empty()) {
-    for (int k = 1; k <= half; ++k) {
-      if (excited(k)) result.lines.push_back(k);
-    }
-  } else {
-    result.lines = options.lines;
-    std::sort(result.lines.begin(), result.lines.end());
-    result.lines.erase(std::unique(result.lines.begin(), result.lines.end()), result.lines.end());
-    for (int k : result.lines) {
-      require(excited(k), "periodic_frf: line ", k,
-              " requested in PeriodicFrfOptions.lines is not excited by every input (smallest "
-              "relative level ",
-              level.row(k).minCoeff(), ", threshold ", threshold,
-              ") or the inputs are dependent "
-              "there (condition ",
-              condition(k), ")");
-    }
-  }
+  result.lines = internal::periodic_lines(options.lines, half, excited, [&](int k) {
+    throw InvalidArgument(internal::concat(
+        "periodic_frf: line ", k,
+        " requested in PeriodicFrfOptions.lines is not excited by every input (smallest "
+        "relative level ",
+        level.row(k).minCoeff(), ", threshold ", threshold,
+        ") or the inputs are dependent there (condition ", condition(k), ")"));
+  });
 
   const auto count = static_cast<Eigen::Index>(result.lines.size());
   resize(result, count, n_u, n_y);

@@ -1,11 +1,13 @@
 // What the nonparametric FRFs (SISO frf.cc, MIMO mimo_frf.cc) share: the unnormalised DFT
-// of a block, the frequency of a DFT line, the periodic Hann window and the Welch segment
-// step, so that the MIMO estimate with one input and one output is the SISO one.
+// of a block, the frequency of a DFT line, the periodic Hann window, the Welch segment
+// step and the periodic estimate's choice of lines, so that the MIMO estimate with one input and
+// one output is the SISO one.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include <Eigen/Core>
 #include <unsupported/Eigen/FFT>
@@ -36,6 +38,26 @@ inline Eigen::VectorXd periodic_hann(int length) {
 inline int welch_step(int length, double overlap) {
   const int shared = static_cast<int>(std::lround(overlap * length));
   return std::max(1, length - shared);
+}
+
+// The lines of a periodic FRF: without `requested`, every line 1..half that `excited(k)`
+// accepts; otherwise the requested lines, sorted and without repeats, each of which must be
+// excited (`refuse(k)` throws, naming why it is not).
+template <class Excited, class Refuse>
+std::vector<int> periodic_lines(std::vector<int> requested, int half, const Excited& excited,
+                                const Refuse& refuse) {
+  if (requested.empty()) {
+    for (int k = 1; k <= half; ++k) {
+      if (excited(k)) requested.push_back(k);
+    }
+    return requested;
+  }
+  std::sort(requested.begin(), requested.end());
+  requested.erase(std::unique(requested.begin(), requested.end()), requested.end());
+  for (int k : requested) {
+    if (!excited(k)) refuse(k);
+  }
+  return requested;
 }
 
 }  // namespace ctid::internal
