@@ -17,27 +17,14 @@
 #include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/uff58.h"
 #include "ctid/refined_iv/frf_matrix_fit.h"
+#include "support/mimo_systems.h"
 
 namespace ctid::cli {
 namespace {
 
 using ::testing::HasSubstr;
 
-// Two modes (1.4 and 4 rad/s) with rank-one residues over three outputs and two inputs.
-MimoAdditiveModel two_modes() {
-  const double shapes[2][3] = {{1.0, 0.5, -0.3}, {-0.4, 1.0, 0.6}};
-  const double participation[2][2] = {{1.0, 0.6}, {-0.5, 0.8}};
-  std::vector<MimoSubmodel> submodels;
-  const double w[2] = {1.4, 4.0};
-  for (int i = 0; i < 2; ++i) {
-    MimoSubmodel s{Polynomial{1.0, 0.1 / w[i], 1.0 / (w[i] * w[i])}, {}};
-    for (int j = 0; j < 3; ++j) {
-      for (int k = 0; k < 2; ++k) s.b.push_back(Polynomial{shapes[i][j] * participation[i][k]});
-    }
-    submodels.push_back(std::move(s));
-  }
-  return MimoAdditiveModel(2, 3, std::move(submodels));
-}
+using ctid::testing::two_mode_structure;
 
 class FitFrfCommand : public testing::CliTest {
  protected:
@@ -45,13 +32,13 @@ class FitFrfCommand : public testing::CliTest {
     CliTest::SetUp();
     MimoFrf frf;
     frf.frequencies = Eigen::VectorXd::LinSpaced(200, 0.05, 10.0);
-    frf.response = mimo_frequency_response(two_modes(), frf.frequencies);
+    frf.response = mimo_frequency_response(two_mode_structure(), frf.frequencies);
     frf.input_names = {"101+X", "102+X"};
     frf.output_names = {"1+Z", "2+Z", "3+Z"};
     io::write_csv(path("h.csv"), io::mimo_frf_table(frf));
     // The UFF abscissa holds six digits: a grid exact in them (0.01 .. 1.6 Hz).
     frf.frequencies = 2.0 * M_PI * Eigen::VectorXd::LinSpaced(160, 0.01, 1.6);
-    frf.response = mimo_frequency_response(two_modes(), frf.frequencies);
+    frf.response = mimo_frequency_response(two_mode_structure(), frf.frequencies);
     io::write_uff58(path("h.uff"), frf);
     // Noise only: nothing to fit.
     std::mt19937_64 rng(3);

@@ -22,6 +22,7 @@
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
+#include "support/mimo_systems.h"
 
 namespace ctid::cli {
 namespace {
@@ -31,27 +32,13 @@ using ::testing::Not;
 
 constexpr double kH = 0.05;
 
-// Two modes (1.4 and 4 rad/s) with rank-one residues over three outputs and two inputs.
-MimoAdditiveModel two_modes() {
-  const double shapes[2][3] = {{1.0, 0.5, -0.3}, {-0.4, 1.0, 0.6}};
-  const double participation[2][2] = {{1.0, 0.6}, {-0.5, 0.8}};
-  std::vector<MimoSubmodel> submodels;
-  const double w[2] = {1.4, 4.0};
-  for (int i = 0; i < 2; ++i) {
-    MimoSubmodel s{Polynomial{1.0, 0.1 / w[i], 1.0 / (w[i] * w[i])}, {}};
-    for (int j = 0; j < 3; ++j) {
-      for (int k = 0; k < 2; ++k) s.b.push_back(Polynomial{shapes[i][j] * participation[i][k]});
-    }
-    submodels.push_back(std::move(s));
-  }
-  return MimoAdditiveModel(2, 3, std::move(submodels));
-}
+using ctid::testing::two_mode_structure;
 
 class FitMimoCommand : public testing::CliTest {
  protected:
   void SetUp() override {
     CliTest::SetUp();
-    const MimoAdditiveModel g = two_modes();
+    const MimoAdditiveModel g = two_mode_structure();
     Eigen::MatrixXd u(2000, 2);
     for (int k = 0; k < 2; ++k) u.col(k) = white_noise(2000, 1.0, 5 + k);
     Eigen::MatrixXd y = Eigen::MatrixXd::Zero(2000, 3);
@@ -179,7 +166,7 @@ TEST_F(FitMimoCommand, AStartThatDoesNotFitIsOneClearMessage) {
       "fit",
       "submodel 1 of the start has 2 poles and numerators of degree up to 1; the structure "
       "flags give 2 poles and 0 zeros");
-  io::write_json(path("siso.json"), io::to_json(two_modes().channel(0, 0)));
+  io::write_json(path("siso.json"), io::to_json(two_mode_structure().channel(0, 0)));
   testing::expect_bad_input(ctid(fit_with({"--start", "siso.json"})), "fit",
                             "a start for several inputs and outputs is a mimo_additive_model or "
                             "mimo_estimation_result document, not 'additive_model'");

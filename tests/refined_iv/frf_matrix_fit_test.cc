@@ -23,32 +23,7 @@ using ::testing::ThrowsMessage;
 
 using testing::four_mode_beam;
 
-// Eight lightly damped modes (1-14 rad/s, damping 0.01-0.05) over two inputs and `outputs`
-// sensors, with general numerators b_0 + b_1 p (complex residues) when `general`.
-MimoAdditiveModel eight_mode_structure(int outputs, unsigned seed, bool general) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal;
-  const double frequencies[] = {1.0, 1.9, 3.1, 4.4, 6.0, 8.1, 10.6, 13.9};
-  const double damping[] = {0.02, 0.01, 0.03, 0.015, 0.05, 0.02, 0.04, 0.03};
-  std::vector<MimoSubmodel> submodels;
-  for (int i = 0; i < 8; ++i) {
-    const double w = frequencies[i];
-    MimoSubmodel s{Polynomial{1.0, 2.0 * damping[i] / w, 1.0 / (w * w)}, {}};
-    const double l[] = {normal(rng), normal(rng)};
-    for (int j = 0; j < outputs; ++j) {
-      const double psi = normal(rng);
-      for (double lk : l) {
-        if (general) {
-          s.b.push_back(Polynomial{psi * lk, 0.3 * normal(rng) / w});
-        } else {
-          s.b.push_back(Polynomial{psi * lk});
-        }
-      }
-    }
-    submodels.push_back(std::move(s));
-  }
-  return MimoAdditiveModel(2, outputs, std::move(submodels));
-}
+using testing::eight_mode_structure;
 
 MimoFrf frf_of(const MimoAdditiveModel& g, const Eigen::VectorXd& w) {
   MimoFrf frf;

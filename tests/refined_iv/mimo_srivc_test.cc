@@ -27,26 +27,7 @@ constexpr double kH = testing::kPaperSampleTime;
 
 using testing::four_mode_beam;
 
-// Eight modes (natural frequencies 1-14 rad/s, damping 0.01-0.05) with seeded rank-one
-// residues over `outputs` sensors and two inputs, the size of the flexible structure.
-MimoAdditiveModel eight_mode_structure(int outputs, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal;
-  const double frequencies[] = {1.0, 1.9, 3.1, 4.4, 6.0, 8.1, 10.6, 13.9};
-  const double damping[] = {0.02, 0.01, 0.03, 0.015, 0.05, 0.02, 0.04, 0.03};
-  std::vector<MimoSubmodel> submodels;
-  for (int i = 0; i < 8; ++i) {
-    const double w = frequencies[i];
-    MimoSubmodel s{Polynomial{1.0, 2.0 * damping[i] / w, 1.0 / (w * w)}, {}};
-    const double l[] = {normal(rng), normal(rng)};
-    for (int j = 0; j < outputs; ++j) {
-      const double psi = normal(rng);
-      for (double lk : l) s.b.push_back(Polynomial{psi * lk});
-    }
-    submodels.push_back(std::move(s));
-  }
-  return MimoAdditiveModel(2, outputs, std::move(submodels));
-}
+using testing::eight_mode_structure;
 
 MimoData noise_free(const MimoAdditiveModel& g, int samples, unsigned seed) {
   Eigen::MatrixXd u(samples, g.inputs());
