@@ -182,6 +182,31 @@ double median(Eigen::VectorXd v) {
   return x.size() % 2 == 1 ? x[m] : 0.5 * (x[m - 1] + x[m]);
 }
 
+// -o: the CSV table, or for a .json name the FRF's document with the method, the data it came
+// from (samples, h, hold, preprocessing) and the peaks (and, if given, what they are peaks of)
+// added to `document`.
+void write_output(const FrfFlags& f, const io::CsvTable& table, nlohmann::json& document,
+                  bool periodic, int samples, double sample_time, Hold input_hold,
+                  const std::vector<ResonancePeak>& peaks, const char* peaks_of = nullptr) {
+  if (f.output.empty()) return;
+  const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
+  if (std::filesystem::path(f.output).extension() != ".json") {
+    io::write_csv(f.output, table, overwrite);
+    return;
+  }
+  document["method"] = periodic ? "periodic" : "welch";
+  document["data"] = {{"file", f.data.file},
+                      {"samples", samples},
+                      {"sample_time", sample_time},
+                      {"input_hold", enum_name(input_hold)},
+                      {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
+  if (peaks_of != nullptr) document["peaks_of"] = peaks_of;
+  nlohmann::json listed = nlohmann::json::array();
+  for (const ResonancePeak& p : peaks) listed.push_back(io::fields_to_json(p));
+  document["peaks"] = std::move(listed);
+  io::write_json(f.output, document, overwrite);
+}
+
 void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
   if (!f.model.empty()) {
     usage_error("--model is not available with --input-columns / --output-columns yet");
@@ -222,25 +247,9 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
   const io::CsvTable table = io::mimo_frf_table(frf);
   require_finite(table, f.data.file);
   nlohmann::json document = io::to_json(frf);
-  if (!f.output.empty()) {
-    const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
-    if (std::filesystem::path(f.output).extension() == ".json") {
-      document["method"] = periodic ? "periodic" : "welch";
-      document["data"] = {{"file", f.data.file},
-                          {"samples", data.size()},
-                          {"sample_time", data.sample_time()},
-                          {"input_hold", enum_name(data.input_hold())},
-                          {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
-      document["peaks_of"] =
-          "sqrt(sum |H_ji|^2) over all channels, with the power-weighted multiple coherence";
-      nlohmann::json listed = nlohmann::json::array();
-      for (const ResonancePeak& p : peaks) listed.push_back(io::fields_to_json(p));
-      document["peaks"] = std::move(listed);
-      io::write_json(f.output, document, overwrite);
-    } else {
-      io::write_csv(f.output, table, overwrite);
-    }
-  }
+  write_output(f, table, document, periodic, data.size(), data.sample_time(), data.input_hold(),
+               peaks,
+               "sqrt(sum |H_ji|^2) over all channels, with the power-weighted multiple coherence");
   if (!f.plot.empty()) {
     // frf_matrix.png: every input of the first four outputs, with their multiple coherence.
     const TemporaryDirectory work;
@@ -339,23 +348,8 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
   const io::CsvTable table = frf_table(frf);
   require_finite(table, f.data.file);
   nlohmann::json document = io::to_json(frf);
-  if (!f.output.empty()) {
-    const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
-    if (std::filesystem::path(f.output).extension() == ".json") {
-      document["method"] = periodic ? "periodic" : "welch";
-      document["data"] = {{"file", f.data.file},
-                          {"samples", data.size()},
-                          {"sample_time", data.sample_time()},
-                          {"input_hold", enum_name(data.input_hold())},
-                          {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
-      nlohmann::json listed = nlohmann::json::array();
-      for (const ResonancePeak& p : peaks) listed.push_back(io::fields_to_json(p));
-      document["peaks"] = std::move(listed);
-      io::write_json(f.output, document, overwrite);
-    } else {
-      io::write_csv(f.output, table, overwrite);
-    }
-  }
+  write_output(f, table, document, periodic, data.size(), data.sample_time(), data.input_hold(),
+               peaks);
   if (!f.quiet) {
     std::cout << "ctid frf: " << (periodic ? "periodic" : "Welch H1") << " on " << f.data.file
               << ": " << frf.frequencies.size() << " lines, " << frf.averages
