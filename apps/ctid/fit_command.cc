@@ -45,7 +45,8 @@ struct FitFlags {
   int delay = 0;
   std::string delay_scan;
   std::string delay_range;
-  std::string record_delays;  // D1,D2,...
+  std::string record_delays;         // D1,D2,...
+  std::vector<double> input_delays;  // several inputs: one per input, samples
 
   std::string controller;
   std::string initial;
@@ -318,14 +319,16 @@ MimoAdditiveModel read_mimo_start(const std::string& file, const std::string& fl
   return *model;
 }
 
+// "a,b,c": channel names for a message.
+std::string listed(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& name : names) text += (text.empty() ? "" : ",") + name;
+  return text;
+}
+
 void check_start_channels(const MimoAdditiveModel& start, const std::string& file,
                           const std::string& flag, const MimoData& data) {
   if (start.inputs() == data.input_count() && start.outputs() == data.output_count()) return;
-  const auto listed = [](const std::vector<std::string>& names) {
-    std::string text;
-    for (const std::string& name : names) text += (text.empty() ? "" : ",") + name;
-    return text;
-  };
   usage_error(internal::concat(file, " (", flag, "): the start has ", start.inputs(),
                                " inputs and ", start.outputs(), " outputs but the data have ",
                                data.input_count(), " (", listed(data.input_names()), ") and ",
@@ -353,7 +356,7 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
     if (app.count(flag) > 0) {
       usage_error(std::string(flag) +
                   " is not available with --input-columns / --output-columns yet (the "
-                  "shared-pole estimator is open loop)");
+                  "shared-pole estimator is open loop; known per-input delays: --input-delays)");
     }
   }
   if (!f.initial.empty() && f.start != "auto") usage_error("give --start or --initial, not both");
@@ -381,6 +384,7 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   options.output_interpolation = output_interpolation(f);
   options.noise = noise_assumption(f);
   options.direct_term = f.direct_term;
+  options.input_delays = f.input_delays;
   options.validate();
   const std::string start_file = f.initial.empty() ? (f.start == "auto" ? "" : f.start) : f.initial;
   const std::string start_flag = f.initial.empty() ? "--start" : "--initial";
@@ -390,6 +394,11 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   }
   const MimoData data = f.data.load_mimo(app);
   if (start) check_start_channels(*start, start_file, start_flag, data);
+  if (!f.input_delays.empty() && static_cast<int>(f.input_delays.size()) != data.input_count()) {
+    usage_error(internal::concat("--input-delays has ", f.input_delays.size(),
+                                 " values but the data have ", data.input_count(), " inputs (",
+                                 listed(data.input_names()), "): give one delay per input"));
+  }
   const MimoEstimationResult result = mimo_srivc(data, structure.orders, options, start);
 
   nlohmann::json document = io::to_json(result);
@@ -414,6 +423,16 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
               << " inputs x " << data.output_count()
               << " outputs, h = " << format_number(data.sample_time()) << " s\n";
     if (start) std::cout << "start: " << start_file << "\n";
+    if (result.model && result.model->has_input_delays()) {
+      std::cout << "input delays (known):";
+      for (int k = 0; k < data.input_count(); ++k) {
+        const double tau = result.model->input_delays()(k);
+        std::cout << (k > 0 ? "," : "") << " " << data.input_names()[static_cast<std::size_t>(k)]
+                  << " " << format_number(tau) << " s (" << format_brief(tau / data.sample_time())
+                  << " samples)";
+      }
+      std::cout << "\n";
+    }
     for (const MimoMode& m : result.modes) {
       std::cout << "  mode " << m.submodel + 1
                 << ": f_n = " << format_significant(m.natural_frequency / (2.0 * M_PI), 7) << " +- "
@@ -443,6 +462,11 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
 
 ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   if (f.data.mimo_asked(app)) return run_mimo_fit(f, app);
+  if (app.count("--input-delays") > 0) {
+    usage_error(
+        "--input-delays goes with --input-columns / --output-columns (one delay per input); "
+        "with one input give --delay");
+  }
   if (app.count("--direct") > 0) {
     usage_error(
         "--direct goes with --input-columns / --output-columns (a SISO additive model "
@@ -612,6 +636,12 @@ Command add_fit_command(CLI::App& parent) {
       ->group("Structure");
   app->add_option("--delay", f.delay, "Known input delay in samples")
       ->capture_default_str()
+      ->check(CLI::NonNegativeNumber)
+      ->group("Structure");
+  app->add_option("--input-delays", f.input_delays,
+                  "Several inputs: the known delay of each input in samples, D1,D2,... (one per "
+                  "--input-columns entry; fractions allowed)")
+      ->delimiter(',')
       ->check(CLI::NonNegativeNumber)
       ->group("Structure");
   app->add_option("--delay-scan", f.delay_scan,

@@ -86,8 +86,9 @@ def mimo_model_from_json(document, where="model"):
             ctid.Polynomial(_polynomial(entry, "denominator_ascending", place)),
             [ctid.Polynomial([float(c) for c in b]) for b in numerators]))
     direct = np.asarray(document.get("direct", np.zeros((0, 0))), dtype=float)
+    delays = np.asarray(document.get("input_delays", []), dtype=float)
     return ctid.MimoAdditiveModel(inputs, outputs, submodels, direct.reshape(
-        (outputs, inputs) if direct.size else (0, 0)))
+        (outputs, inputs) if direct.size else (0, 0)), delays)
 
 
 def _read_json(path):

@@ -227,15 +227,21 @@ void bind_core(py::module_& m) {
   py::class_<MimoAdditiveModel>(m, "MimoAdditiveModel",
                                 "G(p) = sum_i R_i(p) / A_i(p) + D: poles shared by every "
                                 "input-output pair (MIMO modal model).")
-      .def(py::init<int, int, std::vector<MimoSubmodel>, Eigen::MatrixXd>(), py::arg("inputs"),
-           py::arg("outputs"), py::arg("submodels"), py::arg("direct") = Eigen::MatrixXd(),
-           "From submodels and an optional direct term D (outputs x inputs).")
+      .def(py::init<int, int, std::vector<MimoSubmodel>, Eigen::MatrixXd, Eigen::VectorXd>(),
+           py::arg("inputs"), py::arg("outputs"), py::arg("submodels"),
+           py::arg("direct") = Eigen::MatrixXd(), py::arg("input_delays") = Eigen::VectorXd(),
+           "From submodels, an optional direct term D (outputs x inputs) and optional "
+           "per-input delays [s].")
       .def_property_readonly("inputs", &MimoAdditiveModel::inputs, "n_u.")
       .def_property_readonly("outputs", &MimoAdditiveModel::outputs, "n_y.")
       .def_property_readonly("submodels", &MimoAdditiveModel::submodels, "The submodels.")
       .def_property_readonly("direct", &MimoAdditiveModel::direct, "D (zero if none).")
       .def_property_readonly("has_direct_term", &MimoAdditiveModel::has_direct_term,
                              "Whether D was given.")
+      .def_property_readonly("input_delays", &MimoAdditiveModel::input_delays,
+                             "tau_k [s] per input (zeros if none).")
+      .def("with_input_delays", &MimoAdditiveModel::with_input_delays, py::arg("input_delays"),
+           "The same model with these per-input delays [s].")
       .def("__len__", &MimoAdditiveModel::size)
       .def("numerator", &MimoAdditiveModel::numerator, py::arg("i"), py::arg("output"),
            py::arg("input"), "R_i[output, input].")

@@ -176,3 +176,41 @@ def test_preprocessing_every_channel_alike():
     one = ctid.preprocess(data.channel(1, 0), detrend=ctid.Detrend.mean, decimate=2)
     np.testing.assert_array_equal(p.data.inputs[:, 1], one.data.input)
     assert p.input_offsets[1] == one.record.input_offset
+
+
+def test_known_input_delays_from_python_and_through_the_model_document():
+    h = 0.05
+    shapes = [[1.0, 0.5, -0.3], [-0.4, 1.0, 0.6]]
+    participation = [[1.0, 0.6], [-0.5, 0.8]]
+    submodels = []
+    for i, w in enumerate((1.4, 4.0)):
+        submodels.append(ctid.MimoSubmodel(
+            ctid.Polynomial([1.0, 0.1 / w, 1.0 / w**2]),
+            [ctid.Polynomial([shapes[i][j] * participation[i][k]])
+             for j in range(3) for k in range(2)]))
+    truth = ctid.MimoAdditiveModel(2, 3, submodels, np.zeros((0, 0)), np.array([0.0, 2.5 * h]))
+    u = np.column_stack([ctid.white_noise(2000, 1.0, 5 + k) for k in range(2)])
+    y = np.zeros((2000, 3))
+    for j in range(3):
+        for k in range(2):
+            y[:, j] += ctid.model_output(truth.channel(j, k), u[:, k], h)
+    options = ctid.MimoRefinedIvOptions(input_delays=[0.0, 2.5])
+    r = ctid.mimo_srivc(ctid.MimoData(h, u, y), [ctid.SubmodelOrder(2, 0, 0)] * 2,
+                        options=options)
+    assert r.converged(), r.message
+    assert np.allclose(r.model.input_delays, [0.0, 2.5 * h], rtol=0, atol=1e-15)
+    for i in range(2):
+        assert np.allclose(r.model.submodels[i].a.coefficients,
+                           truth.submodels[i].a.coefficients, rtol=1e-9)
+    # The model document keeps the delays (docs/formats.md), and ctid.plot reads them back.
+    from ctid import plot
+    document = {"type": "mimo_additive_model", "inputs": 2, "outputs": 3,
+                "submodels": [{"denominator_ascending": list(s.a.coefficients),
+                               "numerators_ascending": [list(b.coefficients) for b in s.b]}
+                              for s in r.model.submodels],
+                "input_delays": list(r.model.input_delays)}
+    back = plot.mimo_model_from_json(document)
+    assert np.array_equal(back.input_delays, r.model.input_delays)
+    with pytest.raises(ValueError, match="input_delays has 1 entries but the data have 2"):
+        ctid.mimo_srivc(ctid.MimoData(h, u, y), [ctid.SubmodelOrder(2, 0, 0)] * 2,
+                        options=ctid.MimoRefinedIvOptions(input_delays=[1.0]))

@@ -1,5 +1,6 @@
 #include "ctid/core/mimo_model.h"
 
+#include <cmath>
 #include <utility>
 
 #include "ctid/core/error.h"
@@ -7,12 +8,13 @@
 namespace ctid {
 
 MimoAdditiveModel::MimoAdditiveModel(int inputs, int outputs, std::vector<MimoSubmodel> submodels,
-                                     Eigen::MatrixXd direct)
+                                     Eigen::MatrixXd direct, Eigen::VectorXd input_delays)
     : inputs_(inputs),
       outputs_(outputs),
       submodels_(std::move(submodels)),
       direct_(std::move(direct)),
-      has_direct_(direct_.size() > 0) {
+      has_direct_(direct_.size() > 0),
+      input_delays_(std::move(input_delays)) {
   require(inputs_ >= 1 && outputs_ >= 1, "a MIMO model needs at least one input and one output; ",
           "got ", inputs_, " inputs and ", outputs_, " outputs");
   require(!submodels_.empty(), "a MIMO model needs at least one submodel");
@@ -36,6 +38,21 @@ MimoAdditiveModel::MimoAdditiveModel(int inputs, int outputs, std::vector<MimoSu
   } else {
     direct_ = Eigen::MatrixXd::Zero(outputs_, inputs_);
   }
+  if (input_delays_.size() == 0) {
+    input_delays_ = Eigen::VectorXd::Zero(inputs_);
+  } else {
+    require(input_delays_.size() == inputs_, "the model has ", input_delays_.size(),
+            " input delays; a model with ", inputs_, " inputs needs one per input");
+    for (Eigen::Index k = 0; k < input_delays_.size(); ++k) {
+      require(std::isfinite(input_delays_(k)) && input_delays_(k) >= 0.0, "input ", k + 1,
+              ": the delay is ", input_delays_(k), " s; it must be finite and >= 0");
+    }
+  }
+}
+
+MimoAdditiveModel MimoAdditiveModel::with_input_delays(Eigen::VectorXd input_delays) const {
+  return MimoAdditiveModel(inputs_, outputs_, submodels_, has_direct_ ? direct_ : Eigen::MatrixXd(),
+                           std::move(input_delays));
 }
 
 const Polynomial& MimoAdditiveModel::numerator(int i, int output, int input) const {
@@ -51,7 +68,7 @@ AdditiveModel MimoAdditiveModel::channel(int output, int input) const {
   }
   const double d = direct_(output, input);
   if (d != 0.0) siso[0].b = siso[0].b + d * siso[0].a;
-  return AdditiveModel(std::move(siso));
+  return AdditiveModel(std::move(siso), input_delays_(input));
 }
 
 }  // namespace ctid

@@ -95,7 +95,8 @@ MimoAdditiveModel read_mimo_additive_model(const JsonObject& object) {
                                   inputs, " inputs need ", inputs * outputs,
                                   " (output by output, input by input)"));
     }
-    for (const Eigen::VectorXd& row : rows) submodel.b.emplace_back(row);
+    // A numerator written with trailing zeros ([0.5, 0.0]) is the polynomial it denotes.
+    for (const Eigen::VectorXd& row : rows) submodel.b.push_back(Polynomial::trimmed(row));
     entry.string_or("description", "");
     entry.finish();
     submodels.push_back(std::move(submodel));
@@ -116,10 +117,19 @@ MimoAdditiveModel read_mimo_additive_model(const JsonObject& object) {
       direct.row(static_cast<Eigen::Index>(j)) = rows[j].transpose();
     }
   }
+  Eigen::VectorXd delays;
+  if (object.has("input_delays")) {
+    delays = object.numbers("input_delays");
+    if (delays.size() != inputs) {
+      object.fail("input_delays",
+                  internal::concat("has ", delays.size(), " entries; it needs one per input (",
+                                   inputs, ") in seconds"));
+    }
+  }
   object.finish();
   return construct(object, "MIMO additive model", [&] {
     return MimoAdditiveModel(static_cast<int>(inputs), static_cast<int>(outputs),
-                             std::move(submodels), direct);
+                             std::move(submodels), direct, delays);
   });
 }
 
@@ -212,6 +222,10 @@ nlohmann::json to_json(const MimoAdditiveModel& model) {
       rows.push_back(row);
     }
     out["direct"] = rows;
+  }
+  if (model.has_input_delays()) {
+    out["input_delays"] =
+        std::vector<double>(model.input_delays().begin(), model.input_delays().end());
   }
   return out;
 }

@@ -808,6 +808,9 @@ std::vector<Eigen::MatrixXcd> mimo_frequency_response(const MimoAdditiveModel& m
         }
       }
     }
+    if (model.has_input_delays()) {
+      for (int k = 0; k < model.inputs(); ++k) h.col(k) *= std::exp(-s * model.input_delays()(k));
+    }
     g.push_back(std::move(h));
   }
   return g;

@@ -20,6 +20,8 @@
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/initialization.h"
+#include "ctid/simulation/discretization.h"
+#include "ctid/simulation/simulate.h"
 #include "internal/mimo_layout.h"
 #include "internal/refined_iv_engine.h"
 #include "internal/scaled_least_squares.h"
@@ -31,19 +33,41 @@ namespace {
 using Layout = internal::MimoLayout;
 
 // The model's parameters in one vector: every a-block, then every numerator (submodel,
-// output, input, power), for the stopping rule.
-Eigen::VectorXd flatten(const MimoAdditiveModel& model) {
+// output, input, power r <= m_i; a numerator trimmed of exact zeros counts them as zeros),
+// then D, for the stopping rule.
+Eigen::VectorXd flatten(const Layout& layout, const MimoAdditiveModel& model) {
   std::vector<double> v;
   for (const MimoSubmodel& s : model.submodels()) {
     for (int q = 1; q <= s.a.degree(); ++q) v.push_back(s.a[q]);
   }
-  for (const MimoSubmodel& s : model.submodels()) {
-    for (const Polynomial& b : s.b) {
-      for (int r = 0; r <= b.degree(); ++r) v.push_back(b[r]);
+  for (int i = 0; i < model.size(); ++i) {
+    const int m = layout.orders[static_cast<size_t>(i)].m;
+    for (const Polynomial& b : model[i].b) {
+      for (int r = 0; r <= m; ++r) v.push_back(r <= b.degree() ? b[r] : 0.0);
     }
   }
   for (Eigen::Index c = 0; c < model.direct().size(); ++c) v.push_back(model.direct()(c));
   return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+
+// `bank` run over input k, exact for the input hold and the input's delay fraction.
+Eigen::MatrixXd filtered_input(const Layout& layout, const FilterRealization& bank,
+                               const MimoData& data, int k) {
+  return SampledFilter(bank, data.sample_time(), data.input_hold(), layout.input_fraction(k))
+      .apply(data.inputs().col(k));
+}
+
+// The inputs at the sample times, each delayed by its fraction of a sample (the direct term's
+// columns): u_k itself without one.
+Eigen::MatrixXd held_inputs(const Layout& layout, const MimoData& data) {
+  Eigen::MatrixXd u = data.inputs();
+  for (int k = 0; k < layout.inputs; ++k) {
+    if (layout.input_fraction(k) == 0.0) continue;
+    const DelayedSample now = delayed_sample(layout.input_fraction(k), data.input_hold());
+    u.col(k) =
+        now.previous * delay_samples(data.inputs().col(k), 1) + now.current * data.inputs().col(k);
+  }
+  return u;
 }
 
 // p^r / A_i u_k for every submodel, input and r <= m_i (N x u_count), exact for the input hold.
@@ -51,15 +75,14 @@ Eigen::MatrixXd numerator_regressors(const Layout& layout, const MimoData& data,
                                      const std::vector<Polynomial>& a) {
   Eigen::MatrixXd u(data.size(), layout.u_count);
   for (int i = 0; i < layout.size(); ++i) {
-    const SampledFilter filter(derivative_filters(a[static_cast<size_t>(i)]), data.sample_time(),
-                               data.input_hold());
+    const FilterRealization bank = derivative_filters(a[static_cast<size_t>(i)]);
     const int m = layout.orders[static_cast<size_t>(i)].m;
     for (int k = 0; k < layout.inputs; ++k) {
-      const Eigen::MatrixXd f = filter.apply(data.inputs().col(k));
-      u.middleCols(layout.u_column(i, k, 0), m + 1) = f.leftCols(m + 1);
+      u.middleCols(layout.u_column(i, k, 0), m + 1) =
+          filtered_input(layout, bank, data, k).leftCols(m + 1);
     }
   }
-  if (layout.direct) u.middleCols(layout.d_at, layout.inputs) = data.inputs();
+  if (layout.direct) u.middleCols(layout.d_at, layout.inputs) = held_inputs(layout, data);
   return u;
 }
 
@@ -119,7 +142,9 @@ MimoAdditiveModel fit_numerators(const Layout& layout, const MimoData& data,
     const int m = layout.orders[static_cast<size_t>(i)].m;
     for (int j = 0; j < layout.outputs; ++j) {
       for (int k = 0; k < layout.inputs; ++k) {
-        sub.b.emplace_back(Eigen::VectorXd(b.block(layout.u_column(i, k, 0), j, m + 1, 1)));
+        // An estimate may be exactly zero (a numerator the data do not need).
+        sub.b.push_back(
+            Polynomial::trimmed(Eigen::VectorXd(b.block(layout.u_column(i, k, 0), j, m + 1, 1))));
       }
     }
     submodels.push_back(std::move(sub));
@@ -175,11 +200,10 @@ std::optional<std::vector<Polynomial>> common_denominator_start(const Layout& la
   Polynomial f{1.0};
   for (int q = 0; q < n; ++q) f = f * Polynomial{1.0, 1.0 / lambda};
   const FilterRealization bank = derivative_filters(f);
-  const SampledFilter on_inputs(bank, data.sample_time(), data.input_hold());
   const SampledFilter on_outputs(bank, data.sample_time(), interpolation);
   Eigen::MatrixXd u(data.size(), layout.inputs * (m + 1));
   for (int k = 0; k < layout.inputs; ++k) {
-    u.middleCols(k * (m + 1), m + 1) = on_inputs.apply(data.inputs().col(k)).leftCols(m + 1);
+    u.middleCols(k * (m + 1), m + 1) = filtered_input(layout, bank, data, k).leftCols(m + 1);
   }
   const Eigen::MatrixXd q = scaled_thin_qr(u).q;
   Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n, n);
@@ -236,10 +260,10 @@ class InstrumentSources {
       for (int r = 0; r <= o.m; ++r) {
         Eigen::VectorXd pick = Eigen::VectorXd::Zero(bank.outputs());
         pick(r) = 1.0;
-        const SampledFilter chain(cascade(bank, pick, bank), data.sample_time(), data.input_hold());
+        const FilterRealization chain = cascade(bank, pick, bank);
         for (int k = 0; k < layout.inputs; ++k) {
           sources_[static_cast<size_t>(i)].push_back(
-              chain.apply(data.inputs().col(k)).middleCols(1, o.n));
+              filtered_input(layout, chain, data, k).middleCols(1, o.n));
         }
       }
     }
@@ -388,8 +412,8 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
     for (int i = 0; i < submodels; ++i) {
       const int m = layout.orders[static_cast<size_t>(i)].m;
       for (int k = 0; k < layout.inputs; ++k) {
-        next[static_cast<size_t>(i)].b.emplace_back(
-            Eigen::VectorXd(beta.block(layout.u_column(i, k, 0), i, m + 1, 1)));
+        next[static_cast<size_t>(i)].b.push_back(Polynomial::trimmed(
+            Eigen::VectorXd(beta.block(layout.u_column(i, k, 0), i, m + 1, 1))));
       }
     }
     if (layout.direct) {
@@ -477,8 +501,8 @@ Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditi
       break;
     }
     result.iterations = iteration;
-    const Eigen::VectorXd here = flatten(model);
-    const Eigen::VectorXd full_step = flatten(*step.model) - here;
+    const Eigen::VectorXd here = flatten(layout, model);
+    const Eigen::VectorXd full_step = flatten(layout, *step.model) - here;
     const double change = full_step.norm() / here.norm();
     if (change < smallest_change) {
       smallest_change = change;
@@ -929,12 +953,19 @@ MimoEstimationResult siso_result(const Layout& layout, const MimoData& data,
   siso.noise = options.noise;
   siso.noise_model_max_order = options.noise_model_max_order;
   siso.compute_covariance = options.compute_covariance;
-  if (initial_model) siso.initial_model = initial_model->channel(0, 0);
+  if (!options.input_delays.empty()) {
+    const DelaySplit delay =
+        split_delay(options.input_delays.front() * data.sample_time(), data.sample_time());
+    siso.input_delay = delay.samples;
+    siso.input_delay_fraction = delay.fraction;
+  }
+  if (initial_model) siso.initial_model = initial_model->channel(0, 0).with_input_delay(0.0);
   const EstimationResult r = additive_srivc(data.channel(0, 0), layout.orders, siso);
   MimoEstimationResult result;
   std::vector<MimoSubmodel> submodels;
   for (const Submodel& s : r.model.submodels()) submodels.push_back({s.a, {s.b}});
-  result.model = MimoAdditiveModel(1, 1, std::move(submodels));
+  result.model = MimoAdditiveModel(1, 1, std::move(submodels), {},
+                                   Eigen::VectorXd::Constant(1, r.model.input_delay()));
   result.termination = r.termination;
   result.message = r.message;
   result.iterations = r.iterations;
@@ -963,25 +994,10 @@ MimoEstimationResult siso_result(const Layout& layout, const MimoData& data,
   return result;
 }
 
-}  // namespace
-
-MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<SubmodelOrder>& orders,
-                                const MimoRefinedIvOptions& options,
-                                const std::optional<MimoAdditiveModel>& initial_model) {
-  options.validate();
-  check_orders(orders, data, options.direct_term);
-  const Layout layout(orders, data.input_count(), data.output_count(), options.direct_term);
-  if (options.siso_engine && layout.inputs == 1 && layout.outputs == 1 && !layout.direct) {
-    if (initial_model) {
-      require(initial_model->inputs() == 1 && initial_model->outputs() == 1 &&
-                  !initial_model->has_direct_term(),
-              "mimo_srivc: the initial model is ", initial_model->outputs(), " x ",
-              initial_model->inputs(), initial_model->has_direct_term() ? " with" : " without",
-              " a direct term but the data have 1 output and 1 input and no direct term is asked");
-    }
-    return siso_result(layout, data, options, initial_model);
-  }
-
+MimoEstimationResult estimate(const Layout& layout, const MimoData& data,
+                              const MimoRefinedIvOptions& options,
+                              const std::optional<MimoAdditiveModel>& initial_model,
+                              const Eigen::VectorXd& input_delays) {
   MimoAdditiveModel model = [&] {
     if (initial_model) {
       internal::check_initial_model(layout, *initial_model, "mimo_srivc", "the data");
@@ -1043,8 +1059,69 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
                           Eigen::Vector2d(mode.natural_frequency, mode.damping_ratio),
                           Eigen::Vector2d(mode.natural_frequency_se, mode.damping_ratio_se));
   }
-  result.model = std::move(model);
+  result.model = model.with_input_delays(input_delays);
   return result;
+}
+
+// The record with every input shifted by its whole samples of delay (none when no input is
+// delayed), the fractions set in the layout, and the delays in seconds for the model.
+struct DelayedInputs {
+  std::optional<MimoData> data;
+  Eigen::VectorXd seconds;  // empty: none
+};
+
+DelayedInputs delay_inputs(Layout& layout, const MimoData& data,
+                           const std::vector<double>& delays) {
+  DelayedInputs out;
+  if (std::none_of(delays.begin(), delays.end(), [](double d) { return d != 0.0; })) return out;
+  const double h = data.sample_time();
+  out.seconds.resize(layout.inputs);
+  layout.input_fractions.assign(static_cast<size_t>(layout.inputs), 0.0);
+  Eigen::MatrixXd inputs(data.size(), layout.inputs);
+  for (int k = 0; k < layout.inputs; ++k) {
+    const double samples = delays[static_cast<size_t>(k)];
+    require(samples < 0.5 * data.size(), "mimo_srivc: input ",
+            data.input_names()[static_cast<size_t>(k)], " is delayed by ", samples,
+            " samples, more than half of the record's ", data.size());
+    out.seconds(k) = samples * h;
+    const DelaySplit split = split_delay(out.seconds(k), h);
+    inputs.col(k) = delay_samples(data.inputs().col(k), split.samples);
+    layout.input_fractions[static_cast<size_t>(k)] = split.fraction;
+  }
+  out.data = MimoData(h, std::move(inputs), data.outputs(), std::nullopt, data.start_time())
+                 .with_names(data.input_names(), data.output_names())
+                 .with_input_hold(data.input_hold());
+  return out;
+}
+
+}  // namespace
+
+MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<SubmodelOrder>& orders,
+                                const MimoRefinedIvOptions& options,
+                                const std::optional<MimoAdditiveModel>& initial_model) {
+  options.validate();
+  check_orders(orders, data, options.direct_term);
+  require(options.input_delays.empty() ||
+              static_cast<int>(options.input_delays.size()) == data.input_count(),
+          "mimo_srivc: input_delays has ", options.input_delays.size(),
+          " entries but the data have ", data.input_count(),
+          " inputs (one delay per input, in samples)");
+  Layout layout(orders, data.input_count(), data.output_count(), options.direct_term);
+  if (options.siso_engine && layout.inputs == 1 && layout.outputs == 1 && !layout.direct) {
+    if (initial_model) {
+      require(initial_model->inputs() == 1 && initial_model->outputs() == 1 &&
+                  !initial_model->has_direct_term(),
+              "mimo_srivc: the initial model is ", initial_model->outputs(), " x ",
+              initial_model->inputs(), initial_model->has_direct_term() ? " with" : " without",
+              " a direct term but the data have 1 output and 1 input and no direct term is asked");
+    }
+    return siso_result(layout, data, options, initial_model);
+  }
+  // Known input delays: whole samples shifted into the record once, the fractions left to the
+  // filters (layout.input_fractions); every step below runs on the shifted record.
+  const DelayedInputs delayed = delay_inputs(layout, data, options.input_delays);
+  const MimoData& record = delayed.data ? *delayed.data : data;
+  return estimate(layout, record, options, initial_model, delayed.seconds);
 }
 
 }  // namespace ctid

@@ -97,6 +97,41 @@ TEST_F(FitMimoCommand, BadUsageNamesTheProblem) {
                             "fit", "--direct goes with --input-columns");
 }
 
+TEST_F(FitMimoCommand, KnownInputDelaysAreFittedAndWrittenWithTheModel) {
+  // Shaker f2 acts three samples late.
+  const MimoAdditiveModel g =
+      two_mode_structure().with_input_delays(Eigen::Vector2d(0.0, 3.0 * kH));
+  Eigen::MatrixXd u(2000, 2);
+  for (int k = 0; k < 2; ++k) u.col(k) = white_noise(2000, 1.0, 5 + k);
+  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(2000, 3);
+  for (int j = 0; j < 3; ++j) {
+    for (int k = 0; k < 2; ++k) y.col(j) += simulate(g.channel(j, k), u.col(k), kH);
+  }
+  io::write_mimo_data(path("late.csv"),
+                      MimoData(kH, u, y).with_names({"f1", "f2"}, {"a1", "a2", "a3"}));
+  const std::vector<std::string> args{
+      "fit", "late.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a3", "--modes", "2"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> all = args;
+    all.insert(all.end(), extra.begin(), extra.end());
+    return all;
+  };
+  const auto r = ctid(with({"--input-delays", "0,3", "--model-output", "m.json"}));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("input delays (known): f1 0 s (0 samples), f2 0.15 s (3 samples)"));
+  EXPECT_THAT(r.out, HasSubstr("fit a3: 100 %"));
+  const MimoAdditiveModel back =
+      io::mimo_additive_model_from_json(io::read_json(path("m.json")), "m.json");
+  EXPECT_NEAR(back.input_delays()(1), 0.15, 1e-15);
+  EXPECT_NEAR(back[1].a[1], g[1].a[1], 1e-9 * std::abs(g[1].a[1]));
+  testing::expect_bad_input(ctid(with({"--input-delays", "3"})), "fit",
+                            "--input-delays has 1 values but the data have 2 inputs (f1,f2)");
+  testing::expect_bad_input(ctid(with({"--input-delays", "0,-3"})), "fit", "--input-delays");
+  testing::expect_bad_input(ctid({"fit", "late.csv", "--input-column", "f1", "--output-column",
+                                  "a1", "--modes", "2", "--input-delays", "3"}),
+                            "fit", "--input-delays goes with --input-columns");
+}
+
 const std::vector<std::string> kColumns{"d.csv", "--input-columns", "f1,f2", "--output-columns",
                                         "a1:a3", "--modes",         "2"};
 

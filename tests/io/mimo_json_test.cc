@@ -41,6 +41,7 @@ void expect_equal(const MimoAdditiveModel& a, const MimoAdditiveModel& b) {
   }
   EXPECT_EQ(a.has_direct_term(), b.has_direct_term());
   EXPECT_EQ(a.direct(), b.direct());
+  EXPECT_EQ(a.input_delays(), b.input_delays());
 }
 
 TEST(MimoJson, ModelRoundTrip) {
@@ -50,6 +51,11 @@ TEST(MimoJson, ModelRoundTrip) {
     EXPECT_EQ(j.at("type"), "mimo_additive_model");
     EXPECT_EQ(j.at("submodels")[0].at("numerators_ascending").size(), 6u);
     expect_equal(io::mimo_additive_model_from_json(j, "m.json"), g);
+    EXPECT_FALSE(j.contains("input_delays"));
+    const MimoAdditiveModel delayed = g.with_input_delays(Eigen::Vector2d(0.0, 0.0125));
+    const nlohmann::json jd = io::to_json(delayed);
+    EXPECT_EQ(jd.at("input_delays")[1], 0.0125);
+    expect_equal(io::mimo_additive_model_from_json(jd, "m.json"), delayed);
   }
 }
 
@@ -67,6 +73,14 @@ TEST(MimoJson, MalformedModelsNameTheField) {
   j["submodels"][0]["denominator_ascending"] = nlohmann::json::array({2.0, 1.0});
   EXPECT_THAT([&] { io::mimo_additive_model_from_json(j, "m.json"); },
               ThrowsMessage<InvalidArgument>(HasSubstr("anti-monic")));
+  j = io::to_json(two_by_three(false));
+  j["input_delays"] = nlohmann::json::array({0.1});
+  EXPECT_THAT([&] { io::mimo_additive_model_from_json(j, "m.json"); },
+              ThrowsMessage<InvalidArgument>(
+                  HasSubstr("input_delays: has 1 entries; it needs one per input (2)")));
+  j["input_delays"] = nlohmann::json::array({0.1, -0.5});
+  EXPECT_THAT([&] { io::mimo_additive_model_from_json(j, "m.json"); },
+              ThrowsMessage<InvalidArgument>(HasSubstr("input 2: the delay is -0.5 s")));
   j = io::to_json(two_by_three(false));
   j["colour"] = "red";
   EXPECT_THAT([&] { io::mimo_additive_model_from_json(j, "m.json"); },

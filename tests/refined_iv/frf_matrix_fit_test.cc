@@ -61,6 +61,22 @@ Eigen::VectorXd grid(double lo, double hi, int lines) {
   return Eigen::VectorXd::LinSpaced(lines, lo, hi);
 }
 
+TEST(FrfMatrixFit, ResponseOfADelayedModelIsThatOfItsChannels) {
+  const MimoAdditiveModel g =
+      four_mode_beam(3, 2, 5).with_input_delays(Eigen::Vector3d(0.0, 0.02, 0.135));
+  const Eigen::VectorXd w = grid(0.1, 20.0, 7);
+  const std::vector<Eigen::MatrixXcd> h = mimo_frequency_response(g, w);
+  for (Eigen::Index l = 0; l < w.size(); ++l) {
+    for (int j = 0; j < 2; ++j) {
+      for (int k = 0; k < 3; ++k) {
+        const std::complex<double> expected =
+            g.channel(j, k).to_transfer_function().frequency_response(w(l));
+        EXPECT_LT(std::abs(h[static_cast<size_t>(l)](j, k) - expected), 1e-12 * std::abs(expected));
+      }
+    }
+  }
+}
+
 TEST(FrfMatrixFit, NoiseFreeThreeInputFiveOutputBeamIsRecoveredExactly) {
   const MimoAdditiveModel truth = four_mode_beam(3, 5, 11);
   const std::vector<SubmodelOrder> orders(4, {2, 0, 0});

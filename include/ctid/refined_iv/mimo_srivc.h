@@ -48,6 +48,10 @@ struct MimoRefinedIvOptions {
   /// (additive_srivc, its own start), so the result equals its result bit for bit. false runs
   /// the shared-pole iteration on the single channel instead (same stationary point).
   bool siso_engine = true;
+  /// Known delay of every input in samples (whole and fractional, each >= 0; the filters see
+  /// input k delayed exactly by input_delays[k] h, held as the record's input hold says), or
+  /// empty for none. The model's input_delays() are these times h.
+  std::vector<double> input_delays;
 
   static constexpr std::string_view type_name = "MimoRefinedIvOptions";
   static constexpr auto fields() {
@@ -66,6 +70,8 @@ struct MimoRefinedIvOptions {
               "Largest AR order of each output's noise model."),
         field("siso_engine", &O::siso_engine,
               "One input and output, no direct term: run additive_srivc (bit-identical)."),
+        field("input_delays", &O::input_delays, Each{Finite{AtLeast{0.0}}},
+              "Known delay of every input [samples, may be fractional]; empty: none."),
     };
   }
   void validate() const { validate_fields(*this); }

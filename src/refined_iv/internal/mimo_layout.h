@@ -25,6 +25,9 @@ struct MimoLayout {
   int u_count = 0;  // numerator columns (and D) of one output
   bool direct = false;
   int d_at = 0;  // first column of the direct term (input 0)
+  // Time domain only: the fraction of a sample by which each input is delayed after its whole
+  // samples were shifted into the record (mimo_srivc's input_delays); empty: none.
+  std::vector<double> input_fractions;
 
   MimoLayout(std::vector<SubmodelOrder> o, int n_u, int n_y, bool with_direct)
       : orders(std::move(o)), inputs(n_u), outputs(n_y), direct(with_direct) {
@@ -50,6 +53,10 @@ struct MimoLayout {
     int c = direct ? 1 : 0;
     for (const SubmodelOrder& s : orders) c += s.m + 1;
     return c;
+  }
+  /// Input k's delay fraction in [0, 1).
+  double input_fraction(int k) const {
+    return input_fractions.empty() ? 0.0 : input_fractions[static_cast<std::size_t>(k)];
   }
   /// Index in the covariance's layout of a_iq and of output j's numerator column.
   int a_index(int i, int q) const { return a_at[static_cast<std::size_t>(i)] + q - 1; }
