@@ -84,7 +84,8 @@ def mimo_model_from_json(document, where="model"):
                              f"({outputs} outputs x {inputs} inputs)")
         submodels.append(ctid.MimoSubmodel(
             ctid.Polynomial(_polynomial(entry, "denominator_ascending", place)),
-            [ctid.Polynomial([float(c) for c in b]) for b in numerators]))
+            [ctid.Polynomial([float(c) for c in b]) for b in numerators],
+            int(entry.get("integrators", 0))))
     direct = np.asarray(document.get("direct", np.zeros((0, 0))), dtype=float)
     delays = np.asarray(document.get("input_delays", []), dtype=float)
     return ctid.MimoAdditiveModel(inputs, outputs, submodels, direct.reshape(

@@ -218,12 +218,14 @@ void bind_core(py::module_& m) {
   py::class_<MimoSubmodel>(m, "MimoSubmodel",
                            "One denominator A_i shared by every channel and its numerators "
                            "R_i[j, k] (b[j * inputs + k]).")
-      .def(py::init([](Polynomial a, std::vector<Polynomial> b) {
-             return MimoSubmodel{std::move(a), std::move(b)};
+      .def(py::init([](Polynomial a, std::vector<Polynomial> b, int integrators) {
+             return MimoSubmodel{std::move(a), std::move(b), integrators};
            }),
-           py::arg("a"), py::arg("b"))
+           py::arg("a"), py::arg("b"), py::arg("integrators") = 0)
       .def_readwrite("a", &MimoSubmodel::a, "Anti-monic denominator A_i.")
-      .def_readwrite("b", &MimoSubmodel::b, "Numerators, output by output, input by input.");
+      .def_readwrite("b", &MimoSubmodel::b, "Numerators, output by output, input by input.")
+      .def_readwrite("integrators", &MimoSubmodel::integrators,
+                     "l_i poles at the origin (R_i / (p^l_i A_i); a rigid-body mode: 2).");
   py::class_<MimoAdditiveModel>(m, "MimoAdditiveModel",
                                 "G(p) = sum_i R_i(p) / A_i(p) + D: poles shared by every "
                                 "input-output pair (MIMO modal model).")

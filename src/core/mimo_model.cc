@@ -20,8 +20,12 @@ MimoAdditiveModel::MimoAdditiveModel(int inputs, int outputs, std::vector<MimoSu
   require(!submodels_.empty(), "a MIMO model needs at least one submodel");
   for (size_t i = 0; i < submodels_.size(); ++i) {
     const MimoSubmodel& s = submodels_[i];
-    require(s.a.degree() >= 1 && s.a[0] == 1.0, "submodel ", i + 1,
-            ": the denominator must be anti-monic (a[0] = 1) of degree >= 1");
+    require(s.integrators >= 0, "submodel ", i + 1, " has ", s.integrators,
+            " integrators; the count must be >= 0");
+    require(s.a.degree() >= 0 && s.a[0] == 1.0 && s.a.degree() + s.integrators >= 1, "submodel ",
+            i + 1,
+            ": the denominator must be anti-monic (a[0] = 1) with at least one pole (degree >= 1 "
+            "or integrators)");
     require(s.a.coefficients().allFinite(), "submodel ", i + 1, ": non-finite denominator");
     require(static_cast<int>(s.b.size()) == inputs_ * outputs_, "submodel ", i + 1, " has ",
             s.b.size(), " numerators; ", outputs_, " outputs x ", inputs_, " inputs need ",
@@ -64,10 +68,11 @@ const Polynomial& MimoAdditiveModel::numerator(int i, int output, int input) con
 AdditiveModel MimoAdditiveModel::channel(int output, int input) const {
   std::vector<Submodel> siso;
   for (int i = 0; i < size(); ++i) {
-    siso.push_back(Submodel{submodels_[static_cast<size_t>(i)].a, numerator(i, output, input), 0});
+    const MimoSubmodel& s = submodels_[static_cast<size_t>(i)];
+    siso.push_back(Submodel{s.a, numerator(i, output, input), s.integrators});
   }
   const double d = direct_(output, input);
-  if (d != 0.0) siso[0].b = siso[0].b + d * siso[0].a;
+  if (d != 0.0) siso[0].b = siso[0].b + d * (Polynomial::monomial(siso[0].integrators) * siso[0].a);
   return AdditiveModel(std::move(siso), input_delays_(input));
 }
 

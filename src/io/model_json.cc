@@ -97,6 +97,12 @@ MimoAdditiveModel read_mimo_additive_model(const JsonObject& object) {
     }
     // A numerator written with trailing zeros ([0.5, 0.0]) is the polynomial it denotes.
     for (const Eigen::VectorXd& row : rows) submodel.b.push_back(Polynomial::trimmed(row));
+    const long long integrators = entry.integer_or("integrators", 0);
+    if (integrators < 0 || integrators > kMaxIntegrators) {
+      entry.fail("integrators", internal::concat("is ", integrators, "; it must be between 0 and ",
+                                                 kMaxIntegrators));
+    }
+    submodel.integrators = static_cast<int>(integrators);
     entry.string_or("description", "");
     entry.finish();
     submodels.push_back(std::move(submodel));
@@ -207,8 +213,10 @@ nlohmann::json to_json(const MimoAdditiveModel& model) {
   for (const MimoSubmodel& s : model.submodels()) {
     nlohmann::json numerators = nlohmann::json::array();
     for (const Polynomial& b : s.b) numerators.push_back(coefficients(b));
-    submodels.push_back(
-        {{"denominator_ascending", coefficients(s.a)}, {"numerators_ascending", numerators}});
+    nlohmann::json entry = {{"denominator_ascending", coefficients(s.a)},
+                            {"numerators_ascending", numerators}};
+    if (s.integrators > 0) entry["integrators"] = s.integrators;
+    submodels.push_back(std::move(entry));
   }
   nlohmann::json out = {{"type", kMimoAdditiveModelType},
                         {"inputs", model.inputs()},

@@ -800,7 +800,9 @@ std::vector<Eigen::MatrixXcd> mimo_frequency_response(const MimoAdditiveModel& m
     Eigen::MatrixXcd h = model.direct().cast<Complex>();
     if (h.size() == 0) h = Eigen::MatrixXcd::Zero(model.outputs(), model.inputs());
     for (const MimoSubmodel& sub : model.submodels()) {
-      const Complex inv = 1.0 / horner(sub.a.coefficients(), s);
+      Complex den = horner(sub.a.coefficients(), s);
+      for (int q = 0; q < sub.integrators; ++q) den *= s;
+      const Complex inv = 1.0 / den;
       for (int j = 0; j < model.outputs(); ++j) {
         for (int k = 0; k < model.inputs(); ++k) {
           h(j, k) +=

@@ -70,12 +70,20 @@ Eigen::MatrixXd held_inputs(const Layout& layout, const MimoData& data) {
   return u;
 }
 
-// p^r / A_i u_k for every submodel, input and r <= m_i (N x u_count), exact for the input hold.
+// The filters p^r / (p^{l_i} A_i) of submodel i's numerator columns (l_i its integrators).
+FilterRealization input_bank(const Layout& layout, const std::vector<Polynomial>& a, int i) {
+  return derivative_filters(
+      Polynomial::monomial(layout.orders[static_cast<size_t>(i)].integrators) *
+      a[static_cast<size_t>(i)]);
+}
+
+// p^r / (p^l_i A_i) u_k for every submodel, input and r <= m_i (N x u_count), exact for the
+// input hold.
 Eigen::MatrixXd numerator_regressors(const Layout& layout, const MimoData& data,
                                      const std::vector<Polynomial>& a) {
   Eigen::MatrixXd u(data.size(), layout.u_count);
   for (int i = 0; i < layout.size(); ++i) {
-    const FilterRealization bank = derivative_filters(a[static_cast<size_t>(i)]);
+    const FilterRealization bank = input_bank(layout, a, i);
     const int m = layout.orders[static_cast<size_t>(i)].m;
     for (int k = 0; k < layout.inputs; ++k) {
       u.middleCols(layout.u_column(i, k, 0), m + 1) =
@@ -138,7 +146,8 @@ MimoAdditiveModel fit_numerators(const Layout& layout, const MimoData& data,
       (u * s.cwiseInverse().asDiagonal()).colPivHouseholderQr().solve(data.outputs());
   std::vector<MimoSubmodel> submodels;
   for (int i = 0; i < layout.size(); ++i) {
-    MimoSubmodel sub{a[static_cast<size_t>(i)], {}};
+    MimoSubmodel sub{
+        a[static_cast<size_t>(i)], {}, layout.orders[static_cast<size_t>(i)].integrators};
     const int m = layout.orders[static_cast<size_t>(i)].m;
     for (int j = 0; j < layout.outputs; ++j) {
       for (int k = 0; k < layout.inputs; ++k) {
@@ -193,12 +202,19 @@ double relative_output_error(const Layout& layout, const MimoData& data,
 std::optional<std::vector<Polynomial>> common_denominator_start(const Layout& layout,
                                                                 const MimoData& data, double lambda,
                                                                 Hold interpolation) {
+  // With l integrators (in at most one submodel) the common form is A(p) p^l y_j = B_j(p) u:
+  // the output's derivatives start at p^l, and A holds the other poles only.
   int n = 0;
-  for (const SubmodelOrder& o : layout.orders) n += o.n;
-  int m = layout.direct ? n : 0;  // a direct term makes every channel biproper
-  for (const SubmodelOrder& o : layout.orders) m = std::max(m, o.m + n - o.n);
+  int l = 0;
+  for (const SubmodelOrder& o : layout.orders) {
+    n += o.n;
+    l += o.integrators;
+  }
+  if (n == 0) return std::vector<Polynomial>(layout.orders.size(), Polynomial{1.0});
+  int m = layout.direct ? n + l : 0;  // a direct term makes every channel biproper
+  for (const SubmodelOrder& o : layout.orders) m = std::max(m, o.m + n - o.n + l - o.integrators);
   Polynomial f{1.0};
-  for (int q = 0; q < n; ++q) f = f * Polynomial{1.0, 1.0 / lambda};
+  for (int q = 0; q < n + l; ++q) f = f * Polynomial{1.0, 1.0 / lambda};
   const FilterRealization bank = derivative_filters(f);
   const SampledFilter on_outputs(bank, data.sample_time(), interpolation);
   Eigen::MatrixXd u(data.size(), layout.inputs * (m + 1));
@@ -210,11 +226,11 @@ std::optional<std::vector<Polynomial>> common_denominator_start(const Layout& la
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
   for (int j = 0; j < layout.outputs; ++j) {
     const Eigen::MatrixXd fy = on_outputs.apply(data.outputs().col(j));
-    Eigen::MatrixXd phi = -fy.rightCols(n);
+    Eigen::MatrixXd phi = -fy.middleCols(l + 1, n);
     phi -= q * (q.transpose() * phi);
-    const Eigen::VectorXd y0 = fy.col(0) - q * (q.transpose() * fy.col(0));
+    const Eigen::VectorXd y0 = fy.col(l) - q * (q.transpose() * fy.col(l));
     // Each output weighted by its own size, so that every channel counts alike.
-    const double w = 1.0 / std::max(fy.col(0).squaredNorm(), 1e-300);
+    const double w = 1.0 / std::max(fy.col(l).squaredNorm(), 1e-300);
     normal += w * phi.transpose() * phi;
     rhs += w * phi.transpose() * y0;
   }
@@ -229,10 +245,22 @@ std::optional<std::vector<Polynomial>> common_denominator_start(const Layout& la
   a(0) = 1.0;
   a.tail(n) = a_tail;
   try {
+    // A's poles grouped into the submodels that have poles besides integrators.
+    std::vector<SubmodelOrder> with_poles;
+    for (SubmodelOrder o : layout.orders) {
+      if (o.n == 0) continue;
+      o.m = std::min(o.m, o.n);
+      o.integrators = 0;
+      with_poles.push_back(o);
+    }
     const AdditiveModel grouped = group_into_submodels(
-        TransferFunction(Polynomial{1.0}, Polynomial(a)), layout.orders, data.channel(0, 0));
+        TransferFunction(Polynomial{1.0}, Polynomial(a)), with_poles, data.channel(0, 0));
     std::vector<Polynomial> denominators;
-    for (const Submodel& sub : grouped.submodels()) denominators.push_back(sub.a);
+    int next = 0;
+    for (const SubmodelOrder& o : layout.orders) {
+      denominators.push_back(o.n == 0 ? Polynomial{1.0}
+                                      : grouped.submodels()[static_cast<size_t>(next++)].a);
+    }
     return denominators;
   } catch (const InvalidArgument&) {
     return std::nullopt;  // poles that do not fit the structure: not a candidate
@@ -256,11 +284,13 @@ class InstrumentSources {
       : layout_(layout), sources_(static_cast<size_t>(layout.size())) {
     for (int i = 0; i < layout.size(); ++i) {
       const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
-      const FilterRealization bank = derivative_filters(a[static_cast<size_t>(i)]);
+      if (o.n == 0) continue;  // integrators alone: no denominator to estimate
+      const FilterRealization bank = input_bank(layout, a, i);
+      const FilterRealization own = derivative_filters(a[static_cast<size_t>(i)]);
       for (int r = 0; r <= o.m; ++r) {
         Eigen::VectorXd pick = Eigen::VectorXd::Zero(bank.outputs());
         pick(r) = 1.0;
-        const FilterRealization chain = cascade(bank, pick, bank);
+        const FilterRealization chain = cascade(bank, pick, own);
         for (int k = 0; k < layout.inputs; ++k) {
           sources_[static_cast<size_t>(i)].push_back(
               filtered_input(layout, chain, data, k).middleCols(1, o.n));
@@ -273,6 +303,7 @@ class InstrumentSources {
   void denominator_instrument(const MimoAdditiveModel& model, int j, Eigen::MatrixXd& psi) const {
     for (int i = 0; i < layout_.size(); ++i) {
       const SubmodelOrder& o = layout_.orders[static_cast<size_t>(i)];
+      if (o.n == 0) continue;
       auto instrument = psi.middleCols(layout_.a_at[static_cast<size_t>(i)], o.n);
       instrument.setZero();
       for (int k = 0; k < layout_.inputs; ++k) {
@@ -327,21 +358,27 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
   Eigen::VectorXd psi_norm = Eigen::VectorXd::Zero(layout.a_count);
   std::vector<Eigen::MatrixXd> q_phi(static_cast<size_t>(outputs));
   std::vector<Eigen::MatrixXd> q_upsilon(static_cast<size_t>(outputs));
-  std::vector<SampledFilter> filters;
+  // 1 / A_i on the residuals (not 1 / (p^l_i A_i): (32) of the paper); none for a submodel of
+  // integrators alone, whose residual enters as it is.
+  std::vector<std::optional<SampledFilter>> filters(static_cast<size_t>(submodels));
   for (int i = 0; i < submodels; ++i) {
-    filters.emplace_back(derivative_filters(a[static_cast<size_t>(i)]), data.sample_time(),
-                         output_interpolation);
+    if (layout.orders[static_cast<size_t>(i)].n == 0) continue;
+    filters[static_cast<size_t>(i)].emplace(derivative_filters(a[static_cast<size_t>(i)]),
+                                            data.sample_time(), output_interpolation);
   }
   Eigen::MatrixXd phi(n, layout.a_count);
   Eigen::MatrixXd psi(n, layout.a_count);
   Eigen::MatrixXd upsilon(n, layout.columns());
   for (int j = 0; j < outputs; ++j) {
     for (int i = 0; i < submodels; ++i) {
-      const SampledFilter& f = filters[static_cast<size_t>(i)];
       const int n_i = layout.orders[static_cast<size_t>(i)].n;
       const Eigen::VectorXd residual =
           data.outputs().col(j) - total.col(j) + parts[static_cast<size_t>(i)].col(j);
-      const Eigen::MatrixXd fy = f.apply(residual);
+      if (n_i == 0) {
+        upsilon.col(i) = residual;
+        continue;
+      }
+      const Eigen::MatrixXd fy = filters[static_cast<size_t>(i)]->apply(residual);
       upsilon.col(i) = fy.col(0);
       phi.middleCols(layout.a_at[static_cast<size_t>(i)], n_i) = -fy.middleCols(1, n_i);
     }
@@ -398,7 +435,11 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
               Termination::singular_equations, rcond};
     }
     bool reflected = false;
-    MimoSubmodel sub{internal::reflect_unstable_roots(Polynomial(coefficients), reflected), {}};
+    MimoSubmodel sub{o.n == 0
+                         ? Polynomial{1.0}
+                         : internal::reflect_unstable_roots(Polynomial(coefficients), reflected),
+                     {},
+                     o.integrators};
     next.push_back(std::move(sub));
   }
   Eigen::MatrixXd next_direct;
@@ -437,7 +478,7 @@ MimoAdditiveModel blend(const Layout& layout, const MimoAdditiveModel& x,
                         const MimoAdditiveModel& y, double w) {
   std::vector<MimoSubmodel> submodels;
   for (int i = 0; i < layout.size(); ++i) {
-    MimoSubmodel s{(1.0 - w) * x[i].a + w * y[i].a, {}};
+    MimoSubmodel s{(1.0 - w) * x[i].a + w * y[i].a, {}, x[i].integrators};
     for (size_t c = 0; c < x[i].b.size(); ++c) s.b.push_back((1.0 - w) * x[i].b[c] + w * y[i].b[c]);
     submodels.push_back(std::move(s));
   }
@@ -571,22 +612,31 @@ Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditi
 std::optional<std::vector<Polynomial>> frf_peak_denominators(const Layout& layout,
                                                              const MimoData& data,
                                                              int segment_length) {
+  // Integrators alone (a rigid-body submodel) have A = 1; every other submodel must be a mode.
+  int modes = 0;
   for (const SubmodelOrder& o : layout.orders) {
-    if (o.n != 2) return std::nullopt;
+    if (o.n == 2 && o.integrators == 0) {
+      ++modes;
+    } else if (o.n != 0) {
+      return std::nullopt;
+    }
   }
-  if (data.size() < segment_length) return std::nullopt;
+  if (modes == 0 || data.size() < segment_length) return std::nullopt;
   WelchOptions welch;
   welch.segment_length = segment_length;
   PeakOptions options;
-  options.max_peaks = layout.size();
+  options.max_peaks = modes;
   std::vector<ResonancePeak> peaks =
       resonance_peaks(summed_power_frf(welch_frf(data, welch)), options);
-  if (static_cast<int>(peaks.size()) < layout.size()) return std::nullopt;
+  if (static_cast<int>(peaks.size()) < modes) return std::nullopt;
   std::sort(peaks.begin(), peaks.end(), [](const ResonancePeak& x, const ResonancePeak& y) {
     return x.frequency < y.frequency;
   });
   std::vector<Polynomial> a;
-  for (const ResonancePeak& peak : peaks) a.push_back(mode_from_peak(peak));
+  auto peak = peaks.begin();
+  for (const SubmodelOrder& o : layout.orders) {
+    a.push_back(o.n == 0 ? Polynomial{1.0} : mode_from_peak(*peak++));
+  }
   return a;
 }
 
@@ -799,7 +849,8 @@ std::vector<MimoMode> modes_of(const Layout& layout, const MimoAdditiveModel& mo
   for (int i = 0; i < layout.size(); ++i) {
     const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
     const Polynomial& a = model[i].a;
-    if (o.n != 2 || !(a[1] * a[1] < 4.0 * a[2])) continue;  // a complex pair only
+    // A complex pair only (not one times integrators).
+    if (o.n != 2 || o.integrators > 0 || !(a[1] * a[1] < 4.0 * a[2])) continue;
     std::vector<Eigen::VectorXd> numerators;
     std::vector<int> indices{layout.a_index(i, 1), layout.a_index(i, 2)};
     for (int j = 0; j < layout.outputs; ++j) {
@@ -872,7 +923,7 @@ std::vector<MimoMode> modes_of(const Layout& layout, const MimoAdditiveModel& mo
 // magnitudes, a_n^(-1/n)), so that the order in which the start found them does not show.
 MimoAdditiveModel slowest_first(const Layout& layout, MimoAdditiveModel model) {
   for (const SubmodelOrder& o : layout.orders) {
-    if (o.n != layout.orders[0].n || o.m != layout.orders[0].m) return model;
+    if (o.n != layout.orders[0].n || o.m != layout.orders[0].m || o.integrators > 0) return model;
   }
   std::vector<MimoSubmodel> submodels = model.submodels();
   const auto speed = [](const MimoSubmodel& s) {
@@ -882,22 +933,29 @@ MimoAdditiveModel slowest_first(const Layout& layout, MimoAdditiveModel model) {
       submodels.begin(), submodels.end(),
       [&](const MimoSubmodel& x, const MimoSubmodel& y) { return speed(x) < speed(y); });
   return MimoAdditiveModel(model.inputs(), model.outputs(), std::move(submodels),
-                           model.has_direct_term() ? model.direct() : Eigen::MatrixXd());
+                           model.has_direct_term() ? model.direct() : Eigen::MatrixXd(),
+                           model.input_delays());
 }
 
 void check_orders(const std::vector<SubmodelOrder>& orders, const MimoData& data, bool direct) {
   require(!orders.empty(), "mimo_srivc: the structure has no submodels");
   int parameters = 0;
+  int integrating = 0;
   for (size_t i = 0; i < orders.size(); ++i) {
     orders[i].validate();
-    require(orders[i].n >= 1, "mimo_srivc: submodel ", i + 1,
-            " has no poles (n = 0); every submodel needs n >= 1");
-    require(orders[i].integrators == 0, "mimo_srivc: submodel ", i + 1,
-            " has integrators, which the shared-pole estimator does not take yet");
-    require(orders[i].m <= orders[i].n, "mimo_srivc: submodel ", i + 1, " has m = ", orders[i].m,
-            " > n = ", orders[i].n, "; the model must be proper");
+    const SubmodelOrder& o = orders[i];
+    require(o.n + o.integrators >= 1, "mimo_srivc: submodel ", i + 1,
+            " has no poles (n = 0 and no integrators)");
+    require(o.integrators <= 4, "mimo_srivc: submodel ", i + 1, " has ", o.integrators,
+            " integrators; at most 4 (a rigid-body mode has 2)");
+    require(o.m <= o.n + o.integrators, "mimo_srivc: submodel ", i + 1, " has m = ", o.m,
+            " > n + integrators = ", o.n + o.integrators, "; the model must be proper");
+    if (o.integrators > 0) ++integrating;
     parameters += orders[i].n + data.input_count() * (orders[i].m + 1);
   }
+  require(integrating <= 1, "mimo_srivc: ", integrating,
+          " submodels have integrators; at most one may have poles at the origin (their "
+          "responses would be indistinguishable)");
   if (direct) parameters += data.input_count();
   require(data.size() > 2 * parameters, "mimo_srivc: ", data.size(), " samples are too few for ",
           parameters, " parameters per output (the record needs more than twice as many)");
@@ -963,7 +1021,7 @@ MimoEstimationResult siso_result(const Layout& layout, const MimoData& data,
   const EstimationResult r = additive_srivc(data.channel(0, 0), layout.orders, siso);
   MimoEstimationResult result;
   std::vector<MimoSubmodel> submodels;
-  for (const Submodel& s : r.model.submodels()) submodels.push_back({s.a, {s.b}});
+  for (const Submodel& s : r.model.submodels()) submodels.push_back({s.a, {s.b}, s.integrators});
   result.model = MimoAdditiveModel(1, 1, std::move(submodels), {},
                                    Eigen::VectorXd::Constant(1, r.model.input_delay()));
   result.termination = r.termination;

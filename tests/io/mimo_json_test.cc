@@ -35,6 +35,7 @@ void expect_equal(const MimoAdditiveModel& a, const MimoAdditiveModel& b) {
   EXPECT_EQ(a.outputs(), b.outputs());
   for (int i = 0; i < a.size(); ++i) {
     EXPECT_EQ(a[i].a.coefficients(), b[i].a.coefficients());
+    EXPECT_EQ(a[i].integrators, b[i].integrators);
     for (size_t c = 0; c < a[i].b.size(); ++c) {
       EXPECT_EQ(a[i].b[c].coefficients(), b[i].b[c].coefficients());
     }
@@ -57,6 +58,15 @@ TEST(MimoJson, ModelRoundTrip) {
     EXPECT_EQ(jd.at("input_delays")[1], 0.0125);
     expect_equal(io::mimo_additive_model_from_json(jd, "m.json"), delayed);
   }
+  // A rigid-body submodel: R_0 / p^2, written with its integrators.
+  std::vector<MimoSubmodel> submodels = two_by_three(false).submodels();
+  submodels.push_back(
+      MimoSubmodel{Polynomial{1.0}, std::vector<Polynomial>(6, Polynomial{0.3}), 2});
+  const MimoAdditiveModel rigid(2, 3, submodels);
+  const nlohmann::json j = io::to_json(rigid);
+  EXPECT_EQ(j.at("submodels")[2].at("integrators"), 2);
+  EXPECT_FALSE(j.at("submodels")[0].contains("integrators"));
+  expect_equal(io::mimo_additive_model_from_json(j, "m.json"), rigid);
 }
 
 TEST(MimoJson, MalformedModelsNameTheField) {

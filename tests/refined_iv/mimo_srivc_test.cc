@@ -63,7 +63,7 @@ MimoAdditiveModel perturbed(const MimoAdditiveModel& g, double amount, unsigned 
   for (const MimoSubmodel& s : g.submodels()) {
     Eigen::VectorXd a = s.a.coefficients();
     for (Eigen::Index q = 1; q < a.size(); ++q) a(q) *= factor(rng);
-    MimoSubmodel p{Polynomial(a), {}};
+    MimoSubmodel p{Polynomial(a), {}, s.integrators};
     for (const Polynomial& b : s.b) p.b.push_back(factor(rng) * b);
     submodels.push_back(std::move(p));
   }
@@ -400,6 +400,64 @@ TEST(MimoSrivc, OneDelayedInputAndOutputIsTheAdditiveEstimatorBitForBit) {
   EXPECT_EQ(mimo.model->input_delays()(0), additive.model.input_delay());
 }
 
+// A free-floating structure: a rigid-body submodel R_0 / p^2 (one constant per channel) and
+// three flexible modes with complex residues, two inputs, four outputs.
+MimoAdditiveModel free_structure(int rigid_zeros) {
+  std::mt19937_64 rng(47);
+  std::normal_distribution<double> normal;
+  std::vector<MimoSubmodel> submodels;
+  MimoSubmodel rigid{Polynomial{1.0}, {}, 2};
+  for (int c = 0; c < 2 * 4; ++c) {
+    Eigen::VectorXd b(rigid_zeros + 1);
+    for (Eigen::Index r = 0; r <= rigid_zeros; ++r) b(r) = 0.05 * normal(rng);
+    rigid.b.emplace_back(b);
+  }
+  submodels.push_back(std::move(rigid));
+  for (double w : {1.3, 3.7, 8.2}) {
+    MimoSubmodel s{Polynomial{1.0, 0.04 / w, 1.0 / (w * w)}, {}};
+    for (int c = 0; c < 2 * 4; ++c) s.b.push_back(Polynomial{normal(rng), 0.1 * normal(rng)});
+    submodels.push_back(std::move(s));
+  }
+  return MimoAdditiveModel(2, 4, std::move(submodels));
+}
+
+TEST(MimoSrivc, RigidBodyIntegratorsAndModesAreRecoveredExactlyFromTheData) {
+  for (int rigid_zeros : {0, 1}) {
+    const MimoAdditiveModel truth = free_structure(rigid_zeros);
+    const MimoData data = noise_free(truth, 3000, 61);
+    std::vector<SubmodelOrder> orders{{0, rigid_zeros, 2}};
+    for (int i = 0; i < 3; ++i) orders.push_back({2, 1, 0});
+    const MimoEstimationResult r = mimo_srivc(data, orders);
+    ASSERT_TRUE(r.converged()) << r.message;
+    EXPECT_TRUE(r.verdict.usable) << r.verdict.summary();
+    EXPECT_LT(largest_relative_error(*r.model, truth), 1e-9) << "rigid_zeros " << rigid_zeros;
+    EXPECT_EQ((*r.model)[0].integrators, 2);
+    // The rigid body is not a mode; the three flexible ones are.
+    ASSERT_EQ(r.modes.size(), 3u);
+    EXPECT_EQ(r.modes[0].submodel, 1);
+    EXPECT_NEAR(r.modes[0].natural_frequency, 1.3, 1e-9);
+  }
+}
+
+TEST(MimoSrivc, AModeWithAnIntegratorIsRecoveredExactlyFromATrueStart) {
+  // R_1 / (p A_1) beside two plain modes: the instrument's a-part carries the integrator.
+  std::mt19937_64 rng(53);
+  std::normal_distribution<double> normal;
+  std::vector<MimoSubmodel> submodels;
+  for (double w : {0.9, 2.9, 6.1}) {
+    MimoSubmodel s{Polynomial{1.0, 0.06 / w, 1.0 / (w * w)}, {}, w < 1.0 ? 1 : 0};
+    for (int c = 0; c < 2 * 3; ++c) s.b.push_back(Polynomial{normal(rng), 0.2 * normal(rng)});
+    submodels.push_back(std::move(s));
+  }
+  const MimoAdditiveModel truth(2, 3, submodels);
+  const MimoData data = noise_free(truth, 3000, 67);
+  const std::vector<SubmodelOrder> orders{{2, 1, 1}, {2, 1, 0}, {2, 1, 0}};
+  const MimoEstimationResult r = mimo_srivc(data, orders, {}, perturbed(truth, 0.02, 3));
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_LT(largest_relative_error(*r.model, truth), 1e-9);
+  EXPECT_EQ(r.modes.size(), 2u);  // the submodel with an integrator is not a mode
+}
+
 TEST(MimoSrivc, BadInputGetsOneClearMessage) {
   const MimoAdditiveModel truth = four_mode_beam(2, 3, 1);
   const MimoData data = noise_free(truth, 400, 2);
@@ -429,6 +487,22 @@ TEST(MimoSrivc, BadInputGetsOneClearMessage) {
         MimoAdditiveModel(2, 3, {{Polynomial{1.0, 0.1, 1.0}, {Polynomial{1.0}}}});
       },
       ThrowsMessage<InvalidArgument>(HasSubstr("3 outputs x 2 inputs need 6")));
+  EXPECT_THAT(
+      [&] {
+        mimo_srivc(data, {{0, 0, 2}, {1, 0, 1}});
+      },
+      ThrowsMessage<InvalidArgument>(HasSubstr("2 submodels have integrators; at most one")));
+  EXPECT_THAT(
+      [&] {
+        mimo_srivc(data, {{0, 3, 2}});
+      },
+      ThrowsMessage<InvalidArgument>(HasSubstr("m = 3 > n + integrators = 2")));
+  EXPECT_THAT(
+      [&] {
+        mimo_srivc(data, {{2, 0, 1}, {2, 0, 0}, {2, 0, 0}, {2, 0, 0}}, {}, truth);
+      },
+      ThrowsMessage<InvalidArgument>(HasSubstr(
+          "submodel 1 of the initial model has 0 integrators; the structure asks for 1")));
   MimoRefinedIvOptions delays;
   delays.input_delays = {1.0, 2.0, 3.0};
   EXPECT_THAT([&] { mimo_srivc(data, four_modes(), delays); },

@@ -17,8 +17,9 @@
 namespace ctid {
 
 struct MimoSubmodel {
-  Polynomial a;               ///< anti-monic A_i, a[0] == 1, degree >= 1
+  Polynomial a;               ///< anti-monic A_i, a[0] == 1 (degree 0 only with integrators)
   std::vector<Polynomial> b;  ///< R_i[j, k] at b[j * inputs + k]
+  int integrators = 0;        ///< l_i poles at the origin: R_i / (p^{l_i} A_i) (rigid body: 2)
 };
 
 class MimoAdditiveModel {
@@ -45,9 +46,9 @@ class MimoAdditiveModel {
   bool has_input_delays() const { return (input_delays_.array() != 0.0).any(); }
   /// The same model with these per-input delays [s] (one per input, or empty for none).
   MimoAdditiveModel with_input_delays(Eigen::VectorXd input_delays) const;
-  /// The SISO additive model of one channel: sum_i R_i[output, input] / A_i, with D[output,
-  /// input] added to the first submodel's numerator as D A_1 (which makes it biproper), and
-  /// the input's delay.
+  /// The SISO additive model of one channel: sum_i R_i[output, input] / (p^{l_i} A_i), with
+  /// D[output, input] added to the first submodel's numerator as D p^{l_1} A_1 (which makes it
+  /// biproper), and the input's delay.
   AdditiveModel channel(int output, int input) const;
 
  private:

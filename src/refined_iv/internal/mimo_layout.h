@@ -76,6 +76,9 @@ inline void check_initial_model(const MimoLayout& layout, const MimoAdditiveMode
     const int n = layout.orders[static_cast<std::size_t>(i)].n;
     require(start[i].a.degree() == n, who, ": submodel ", i + 1, " of the initial model has ",
             start[i].a.degree(), " poles; the structure asks for ", n);
+    const int l = layout.orders[static_cast<std::size_t>(i)].integrators;
+    require(start[i].integrators == l, who, ": submodel ", i + 1, " of the initial model has ",
+            start[i].integrators, " integrators; the structure asks for ", l);
   }
 }
 
