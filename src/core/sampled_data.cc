@@ -21,12 +21,16 @@ void require_finite_signal(const Eigen::VectorXd& v, const char* name) {
 
 // The fewest significant digits (1..17) whose decimal text reads back as x: how many digits
 // x was printed with, trailing zeros aside.
+bool reads_back(double x, int digits) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.*e", digits - 1, x);
+  return std::strtod(buffer, nullptr) == x;
+}
+
 int significant_digits(double x) {
   if (x == 0.0) return 1;
-  char buffer[40];
   for (int digits = 1; digits < 17; ++digits) {
-    std::snprintf(buffer, sizeof buffer, "%.*e", digits - 1, x);
-    if (std::strtod(buffer, nullptr) == x) return digits;
+    if (reads_back(x, digits)) return digits;
   }
   return 17;
 }
@@ -85,7 +89,11 @@ TimeStampCheck check_time_stamps(const Eigen::VectorXd& time, double relative_to
           " s");
   double largest = 0.0;
   for (Eigen::Index k = 0; k < n; ++k) {
-    check.digits = std::max(check.digits, significant_digits(time(k)));
+    // Only the largest count matters: a stamp that reads back at the count so far cannot
+    // raise it, and at 17 nothing can (one conversion per stamp instead of up to 16).
+    if (check.digits < 17 && !reads_back(time(k), check.digits)) {
+      check.digits = std::max(check.digits, significant_digits(time(k)));
+    }
     largest = std::max(largest, std::abs(time(k)));
   }
   // One unit in the last printed digit of the largest stamp: half a unit of rounding on the
