@@ -13,6 +13,7 @@
 #include "ctid/core/mimo_preprocessing.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/mimo_data_csv.h"
+#include "ctid/io/npy.h"
 #include "ctid/io/sampled_data_csv.h"
 
 namespace ctid::cli {
@@ -61,12 +62,15 @@ bool same_sample_time(double a, double b) { return std::abs(a - b) <= 1e-9 * std
 void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_reference, bool several) {
   if (several) {
     app.add_option(name, files,
-                   "CSV data file(s) with a header row of column names; several files are "
-                   "records of one system fitted together")
+                   "CSV data file(s) with a header row of column names, or .npy arrays "
+                   "(columns 0, 1, ...); several files are records of one system fitted "
+                   "together")
         ->required()
         ->check(CLI::ExistingFile);
   } else {
-    app.add_option(name, file, "CSV data file with a header row of column names")
+    app.add_option(name, file,
+                   "CSV data file with a header row of column names, or a .npy array (columns "
+                   "0, 1, ...)")
         ->required()
         ->check(CLI::ExistingFile);
   }
@@ -128,7 +132,7 @@ bool DataFlags::preprocessing_asked(const CLI::App& app) const {
 
 SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
                                  bool need_reference) const {
-  const io::CsvTable table = io::read_csv(path);
+  const io::CsvTable table = io::read_table(path);
   const bool reference_flag = app.get_option_no_throw("--reference-column") != nullptr &&
                               app.count("--reference-column") > 0;
   std::optional<Eigen::VectorXd> reference;
@@ -299,7 +303,7 @@ MimoData DataFlags::load_mimo(const CLI::App& app) const {
   }
   if (files.size() > 1) usage_error("several inputs/outputs take one data file");
   // DATA lands in `files` when the command takes several (ctid fit), else in `file`.
-  const io::CsvTable table = io::read_csv(files.empty() ? file : files.front());
+  const io::CsvTable table = io::read_table(files.empty() ? file : files.front());
   io::MimoCsvColumns columns;
   columns.time = time_column;
   columns.inputs = input_columns.empty() ? std::vector<std::string>{input_column} : input_columns;

@@ -48,8 +48,9 @@ int main(int argc, char** argv) {
   CLI::App app{
       "ctid: continuous-time system identification from sampled data.\n"
       "Models are JSON files with coefficients in ascending powers (docs/formats.md);\n"
-      "data are CSV files with a header row of column names. Run 'ctid <command> --help'\n"
-      "for a command's flags. Exit status: 0 ran, 2 bad usage or input, 1 other error,\n"
+      "data are CSV files with a header row of column names, or .npy arrays whose columns\n"
+      "are named 0, 1, ... Run 'ctid <command> --help' for a command's flags.\n"
+      "Exit status: 0 ran, 2 bad usage or input, 1 other error,\n"
       "3 ran but no usable model (fit).",
       "ctid"};
   app.set_version_flag("--version", std::string("ctid ") + CTID_VERSION,

@@ -28,6 +28,7 @@
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_data_csv.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/npy.h"
 #include "ctid/io/result_json.h"
 #include "ctid/io/sampled_data_csv.h"
 #include "ctid/simulation/closed_loop.h"
@@ -125,7 +126,7 @@ struct InputSignal {
 InputSignal read_input_column(const SimulateFlags& f, CLI::App& app,
                               const std::optional<DiscreteTransferFunction>& controller) {
   reject_unused_signal_flags(app, "--input (it applies to generated input)", std::nullopt);
-  const io::CsvTable table = io::read_csv(f.input);
+  const io::CsvTable table = io::read_table(f.input);
   InputSignal in;
   const bool time_flag_given = app.count("--time-column") > 0;
   if (table.has_column(f.time_column)) {
@@ -460,11 +461,12 @@ Command add_simulate_command(CLI::App& parent) {
   app->add_flag("--force", f.force, "Replace --output if it exists (never replaced otherwise)");
   app->add_flag("--quiet,-q", f.quiet, "Print nothing on success");
 
-  auto* input = app->add_option("--input,-i", f.input,
-                                "CSV file holding the input (or, with --controller, the reference) "
-                                "in a named column")
-                    ->check(CLI::ExistingFile)
-                    ->group("Input from a file");
+  auto* input =
+      app->add_option("--input,-i", f.input,
+                      "CSV file (or .npy array, columns 0, 1, ...) holding the input (or, "
+                      "with --controller, the reference) in a named column")
+          ->check(CLI::ExistingFile)
+          ->group("Input from a file");
   app->add_option("--input-column", f.input_column, "Column of --input to use")
       ->capture_default_str()
       ->group("Input from a file");

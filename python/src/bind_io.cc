@@ -69,7 +69,8 @@ void bind_io(py::module_& m) {
             path, options_from<io::MimoCsvColumns>("read_mimo_data", columns, kwargs));
       },
       py::arg("path"), py::arg("columns") = py::none(),
-      "A MimoData from a CSV file (MimoCsvColumns or its fields as keywords, e.g. "
+      "A MimoData from a CSV file or a .npy array (columns named '0', '1', ...) (MimoCsvColumns or "
+      "its fields as keywords, e.g. "
       "inputs=['u1_force', 'u2_force'], outputs=['y1_acc:y28_acc']); channels named after "
       "their columns. Raises InvalidArgument naming the file and a missing or repeated column.");
   m.def(

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "ctid/core/error.h"
+#include "ctid/io/npy.h"
 #include "ctid/io/sampled_data_csv.h"
 
 namespace ctid::io {
@@ -117,7 +118,7 @@ MimoData mimo_data_from_table(const CsvTable& table, const MimoCsvColumns& colum
 
 MimoData read_mimo_data(const std::filesystem::path& path, const MimoCsvColumns& columns) {
   columns.validate();
-  return mimo_data_from_table(read_csv(path), columns);
+  return mimo_data_from_table(read_table(path), columns);
 }
 
 CsvTable to_csv_table(const MimoData& data, const std::string& time_column) {

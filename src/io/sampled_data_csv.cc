@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "ctid/core/error.h"
+#include "ctid/io/npy.h"
 
 namespace ctid::io {
 
@@ -63,7 +64,7 @@ SampledData sampled_data_from_table(const CsvTable& table, const CsvColumns& col
 
 SampledData read_sampled_data(const std::filesystem::path& path, const CsvColumns& columns) {
   columns.validate();
-  return sampled_data_from_table(read_csv(path), columns);
+  return sampled_data_from_table(read_table(path), columns);
 }
 
 CsvTable to_csv_table(const SampledData& data, const CsvColumns& columns) {

@@ -177,6 +177,53 @@ TEST(Csv, WriteRefusesToOverwriteUnlessAsked) {
   EXPECT_EQ(files, 1);
 }
 
+// Well-formed rows take a fast path; odd ones (blanks, '+', tabs, a value strtod must read)
+// are read the slow way. Both must give strtod's value for every field.
+TEST(Csv, EveryRowReadsAsStrtodWhicheverPathTakesIt) {
+  std::mt19937_64 random(5);
+  std::uniform_real_distribution<double> mantissa(-10.0, 10.0);
+  std::uniform_int_distribution<int> exponent(-320, 300);
+  std::string text = "a,b\n";
+  std::vector<std::pair<double, double>> expected;
+  char a[40];
+  char b[40];
+  for (int k = 0; k < 400; ++k) {
+    std::snprintf(a, sizeof a, "%.17g",
+                  std::abs(mantissa(random)) * std::pow(10.0, exponent(random)));
+    const double second = mantissa(random) * std::pow(10.0, exponent(random) / 10);
+    if (k % 3 == 0) {
+      std::snprintf(b, sizeof b, "%.3g", k % 4 >= 2 ? std::abs(second) : second);
+    } else {
+      std::snprintf(b, sizeof b, "%.17g", k % 4 >= 2 ? std::abs(second) : second);
+    }
+    const std::string x = a;
+    const std::string y = b;
+    switch (k % 4) {
+      case 0:
+        text += x + "," + y + "\n";
+        break;
+      case 1:
+        text += " " + x + " ,\t" + y + " \r\n";
+        break;
+      case 2:
+        text += "+" + x + "," + y + "\r";
+        break;
+      default:
+        text += x + " , +" + y + "\n";
+        break;
+    }
+    expected.emplace_back(std::strtod(a, nullptr), std::strtod(b, nullptr));
+  }
+  text += "1e-400,2\n";  // underflow: only strtod gives the signed zero or denormal
+  expected.emplace_back(std::strtod("1e-400", nullptr), 2.0);
+  const CsvTable table = parse_csv(text, "r.csv");
+  ASSERT_EQ(table.rows(), static_cast<int>(expected.size()));
+  for (int k = 0; k < table.rows(); ++k) {
+    EXPECT_EQ(table.column("a")(k), expected[static_cast<size_t>(k)].first) << k;
+    EXPECT_EQ(table.column("b")(k), expected[static_cast<size_t>(k)].second) << k;
+  }
+}
+
 TEST(Csv, ReadingAMissingFileNamesIt) {
   try {
     read_csv("/nonexistent/dir/data.csv");
