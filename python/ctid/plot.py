@@ -298,7 +298,8 @@ def _frequency_figure(kind, path, output, title, frf_path=None, unit="Hz"):
     covariance = document.get("covariance")
     omegas = None
     if "frequency_range" in document:
-        low, high = document["frequency_range"]
+        # Widened to every resonance of the model, which must not fall off the axis.
+        low, high = plotting._cover(*(float(v) for v in document["frequency_range"]), model)
         omegas = np.logspace(np.log10(low), np.log10(high), 400)
     if kind == "bode":
         return plotting.bode(model, frf=frf, covariance=covariance, omegas=omegas,
