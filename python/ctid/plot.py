@@ -45,62 +45,28 @@ class InputError(Exception):
     """Bad input file or arguments (exit status 2)."""
 
 
-def _polynomial(document, field, where):
-    if field not in document:
-        raise InputError(f"{where}: missing field '{field}'")
-    return [float(c) for c in document[field]]
-
-
 def model_from_json(document, where="model"):
     """A ctid.TransferFunction or ctid.AdditiveModel from the model JSON of docs/formats.md
-    (coefficients under *_ascending, a "type" field)."""
+    (coefficients under *_ascending, a "type" field), read by the C++ reader
+    (ctid.model_from_json)."""
     import ctid
 
-    kind = document.get("type")
-    delay = float(document.get("input_delay", 0.0))
-    if kind == "transfer_function":
-        return ctid.TransferFunction(
-            _polynomial(document, "numerator_ascending", where),
-            _polynomial(document, "denominator_ascending", where), delay)
-    if kind == "additive_model":
-        submodels = [
-            ctid.Submodel(
-                ctid.Polynomial(_polynomial(s, "denominator_ascending", f"{where}.submodels")),
-                ctid.Polynomial(_polynomial(s, "numerator_ascending", f"{where}.submodels")),
-                int(s.get("integrators", 0)))
-            for s in document.get("submodels", [])
-        ]
-        return ctid.AdditiveModel(submodels, delay)
-    raise InputError(f"{where}: 'type' is {kind!r}; expected 'transfer_function' or "
-                     "'additive_model'")
+    model = ctid.model_from_json(document, where)
+    if not isinstance(model, (ctid.TransferFunction, ctid.AdditiveModel)):
+        raise InputError(f"{where}: 'type' is {document.get('type')!r}; expected "
+                         "'transfer_function' or 'additive_model'")
+    return model
 
 
 def mimo_model_from_json(document, where="model"):
-    """A ctid.MimoAdditiveModel from a "mimo_additive_model" document (docs/formats.md:
-    "inputs", "outputs", "submodels": [{"denominator_ascending", "numerators_ascending": output
-    by output, input by input}], optional "direct": one row per output)."""
+    """A ctid.MimoAdditiveModel from a "mimo_additive_model" document (docs/formats.md),
+    read by the C++ reader (ctid.model_from_json)."""
     import ctid
 
     if document.get("type") != "mimo_additive_model":
         raise InputError(f"{where}: 'type' is {document.get('type')!r}; expected "
                          "'mimo_additive_model'")
-    for name in ("inputs", "outputs", "submodels"):
-        if name not in document:
-            raise InputError(f"{where}: missing field '{name}'")
-    inputs, outputs = int(document["inputs"]), int(document["outputs"])
-    submodels = []
-    for k, entry in enumerate(document["submodels"]):
-        place = f"{where}.submodels[{k}]"
-        numerators = entry.get("numerators_ascending")
-        if numerators is None or len(numerators) != inputs * outputs:
-            raise InputError(f"{place}: needs {inputs * outputs} numerators_ascending "
-                             f"({outputs} outputs x {inputs} inputs)")
-        submodels.append(ctid.MimoSubmodel(
-            ctid.Polynomial(_polynomial(entry, "denominator_ascending", place)),
-            [ctid.Polynomial([float(c) for c in b]) for b in numerators]))
-    direct = np.asarray(document.get("direct", np.zeros((0, 0))), dtype=float)
-    return ctid.MimoAdditiveModel(inputs, outputs, submodels, direct.reshape(
-        (outputs, inputs) if direct.size else (0, 0)))
+    return ctid.model_from_json(document, where)
 
 
 def _read_json(path):

@@ -13,7 +13,9 @@
 #include "ctid/io/csv.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/file.h"
+#include "ctid/io/json.h"
 #include "ctid/io/mimo_data_csv.h"
+#include "ctid/io/model_json.h"
 #include "ctid/io/sampled_data_csv.h"
 #include "fields.h"
 
@@ -117,6 +119,48 @@ SampledData read_csv_record(const std::filesystem::path& path, const io::CsvColu
   }
 }
 
+// The model a model document holds, as the Python class of its "type" (docs/formats.md).
+py::object model_from_document(const nlohmann::json& value, const std::string& source) {
+  const auto type = value.is_object() ? value.find("type") : value.end();
+  const std::string name =
+      type != value.end() && type->is_string() ? type->get<std::string>() : std::string();
+  if (name == io::kTransferFunctionType) {
+    return py::cast(io::transfer_function_from_json(value, source));
+  }
+  if (name == io::kAdditiveModelType) return py::cast(io::additive_model_from_json(value, source));
+  if (name == io::kMimoAdditiveModelType) {
+    return py::cast(io::mimo_additive_model_from_json(value, source));
+  }
+  if (name == io::kDiscreteTransferFunctionType) {
+    return py::cast(io::discrete_transfer_function_from_json(value, source));
+  }
+  if (name == io::kDelayedFeedbackLoopType) {
+    return py::cast(io::delayed_feedback_loop_from_json(value, source));
+  }
+  throw InvalidArgument(::ctid::internal::concat(
+      source, ": \"type\" is ", type == value.end() ? "missing" : type->dump(),
+      "; a model document is one of ", io::kTransferFunctionType, ", ", io::kAdditiveModelType,
+      ", ", io::kMimoAdditiveModelType, ", ", io::kDiscreteTransferFunctionType, ", ",
+      io::kDelayedFeedbackLoopType));
+}
+
+template <class Model>
+void bind_model_writer(py::module_& m) {
+  m.def(
+      "model_to_json",
+      [](const Model& model, int indent) { return io::to_json(model).dump(indent); },
+      py::arg("model"), py::arg("indent") = 2,
+      "The model document of a model as JSON text (read back by model_from_json bit for bit).");
+  m.def(
+      "write_model",
+      [](const std::filesystem::path& path, const Model& model, bool overwrite) {
+        io::write_json(path, io::to_json(model),
+                       overwrite ? io::Overwrite::yes : io::Overwrite::no);
+      },
+      py::arg("path"), py::arg("model"), py::arg("overwrite") = false,
+      "Writes the model document of a model (refuses an existing file unless overwrite).");
+}
+
 }  // namespace
 
 void bind_io(py::module_& m) {
@@ -137,6 +181,34 @@ void bind_io(py::module_& m) {
   m.def("result_document_types", &io::result_document_types,
         "The \"type\" values read_result reads.");
   bind_writers(m, static_cast<io::ResultDocument*>(nullptr));
+
+  m.def(
+      "read_model",
+      [](const std::filesystem::path& path) {
+        return model_from_document(io::read_json(path), path.string());
+      },
+      py::arg("path"),
+      "The model in a model document (ctid fit --model-output, the files of examples/models): "
+      "TransferFunction, AdditiveModel, MimoAdditiveModel, DiscreteTransferFunction or "
+      "DelayedFeedbackLoop, chosen by its \"type\". Raises InvalidArgument naming the file "
+      "and the field.");
+  m.def(
+      "model_from_json",
+      [](const py::object& document, const std::string& source) {
+        const std::string text =
+            py::isinstance<py::str>(document)
+                ? document.cast<std::string>()
+                : py::module_::import("json").attr("dumps")(document).cast<std::string>();
+        return model_from_document(io::parse_json(text, source), source);
+      },
+      py::arg("document"), py::arg("source") = "model",
+      "The model of a model document given as a dict or JSON text (as read_model); `source` "
+      "names it in error messages.");
+  bind_model_writer<TransferFunction>(m);
+  bind_model_writer<AdditiveModel>(m);
+  bind_model_writer<MimoAdditiveModel>(m);
+  bind_model_writer<DiscreteTransferFunction>(m);
+  bind_model_writer<DelayedFeedbackLoop>(m);
 
   m.def(
       "read_csv",

@@ -401,3 +401,38 @@ def test_every_class_reached_from_the_results_prints_its_values(documents, exper
                  "ZohDiscretization", "FohDiscretization", "DelayedStateSpace"):
         assert name in found, f"{name} not reached"
     assert repr(found["Frf"]).startswith("Frf(lines=[1, 2, 3")
+
+
+def test_model_documents_read_back_as_their_classes(tmp_path, run, data):
+    # ctid fit --model-output writes the model document; read_model reads it as its class.
+    folder = run("fit", data, "--modes", "4", "--model-output", "model.json", "-q")
+    model = ctid.read_model(folder / "model.json")
+    assert isinstance(model, ctid.AdditiveModel) and len(model) == 4
+    assert json.loads(ctid.model_to_json(model)) == json.loads((folder / "model.json").read_text())
+    expected = {"gonzalez_6_1_open_loop.json": ctid.AdditiveModel,
+                "gonzalez_6_2_plant.json": ctid.AdditiveModel,
+                "gonzalez_6_2_pid.json": ctid.DiscreteTransferFunction,
+                "de_iuliis_section4_loop.json": ctid.DelayedFeedbackLoop}
+    for name, cls in expected.items():
+        read = ctid.read_model(MODELS / name)
+        assert type(read) is cls, name
+        # Written and read back, the same document (bit for bit).
+        ctid.write_model(tmp_path / name, read)
+        assert ctid.model_to_json(ctid.read_model(tmp_path / name)) == ctid.model_to_json(read)
+    g = ctid.TransferFunction([1600.0, -6400.0], [1600.0, 416.0, 408.0, 5.0, 1.0], 0.1)
+    ctid.write_model(tmp_path / "tf.json", g)
+    assert type(ctid.read_model(tmp_path / "tf.json")) is ctid.TransferFunction
+    assert ctid.model_to_json(ctid.read_model(tmp_path / "tf.json")) == ctid.model_to_json(g)
+    with pytest.raises(ctid.InvalidArgument, match="exists"):
+        ctid.write_model(tmp_path / "tf.json", g)
+    from test_mimo_fit import two_modes
+    mimo = two_modes()
+    back = ctid.model_from_json(json.loads(ctid.model_to_json(mimo)))
+    assert isinstance(back, ctid.MimoAdditiveModel)
+    assert ctid.model_to_json(back) == ctid.model_to_json(mimo)
+    with pytest.raises(ctid.InvalidArgument, match='x.json: "type" is "state_space"; a model '
+                                                   "document is one of transfer_function"):
+        ctid.model_from_json({"type": "state_space"}, "x.json")
+    with pytest.raises(ctid.InvalidArgument, match="m.json: .*numerator_ascending"):
+        ctid.model_from_json({"type": "transfer_function", "denominator_ascending": [1.0]},
+                             "m.json")

@@ -247,7 +247,7 @@ def test_command_line_bad_input_exits_2(tmp_path):
                                      "frf_matrix_overlay")
     (tmp_path / "bad.json").write_text('{"type": "state_space"}')
     result = run_plot("bode", tmp_path / "bad.json", tmp_path / "x.png")
-    assert result.returncode == 2 and "'type' is 'state_space'" in result.stderr
+    assert result.returncode == 2 and '"type" is "state_space"' in result.stderr
     (tmp_path / "tf.json").write_text(
         '{"type": "transfer_function", "numerator_ascending": [1], '
         '"denominator_ascending": [0, 0]}')
