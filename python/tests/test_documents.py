@@ -387,6 +387,22 @@ def test_every_class_reached_from_the_results_prints_its_values(documents, exper
         ctid.identify(data, ctid.ModelStructure.modes(1)),
         ctid.study_setup(ctid.StudyKind.open_loop),
     ]
+    welch = ctid.welch_frf(data, segment_length=256)
+    roots += [
+        experiment["g"], experiment["u"], welch, ctid.resonance_peaks(welch),
+        ctid.fit_autoregressive(experiment["noise"], 4),
+        ctid.orthogonal_multisines(2, period_length=64, sample_time=0.05, periods=2),
+        ctid.periodogram_peaks(data.output, 0.05),
+        ctid.srivc_delay_scan(data, ctid.SubmodelOrder(2, 0), 0, 2),
+        ctid.preprocess(mimo, detrend=ctid.Detrend.mean),
+    ]
+    # Every class that constructs without arguments (the options classes and more).
+    for cls in vars(ctid).values():
+        if isinstance(cls, type) and cls.__module__.startswith("ctid"):
+            try:
+                roots.append(cls())
+            except Exception:  # noqa: BLE001 - needs arguments
+                pass
     found = _reachable_instances(roots)
     for name, value in found.items():
         text = repr(value)
@@ -398,7 +414,11 @@ def test_every_class_reached_from_the_results_prints_its_values(documents, exper
                  "MimoMode", "MimoAdditiveModel", "MimoSubmodel", "FrfMatrixFitResult",
                  "MimoValidationReport", "SampledData", "MimoData", "Verdict", "DataChecks",
                  "PreprocessedData", "TimeStampCheck", "StudySetup", "StateSpace",
-                 "ZohDiscretization", "FohDiscretization", "DelayedStateSpace"):
+                 "ZohDiscretization", "FohDiscretization", "DelayedStateSpace",
+                 "TransferFunction", "Multisine", "ResonancePeak", "AutoregressiveModel",
+                 "OrthogonalMultisines", "InputDelayScanResult", "PreprocessedMimoData",
+                 "RefinedIvOptions", "IdentificationOptions", "FeedbackIdentificationOptions",
+                 "StudyOptions", "WelchOptions", "ValidationOptions", "MimoCsvColumns"):
         assert name in found, f"{name} not reached"
     assert repr(found["Frf"]).startswith("Frf(lines=[1, 2, 3")
 
