@@ -88,7 +88,8 @@ def main():
     summary_peaks = [p.frequency / (2 * math.pi) for p in peaks]
     band = np.asarray(frf.frequencies) < 2 * math.pi * CUTOFF_HZ
     shown = types.SimpleNamespace(frequencies=np.asarray(frf.frequencies)[band],
-                                  response=np.asarray(frf.response)[band])
+                                  response=np.asarray(frf.response)[band],
+                                  coherence=np.asarray(frf.coherence)[band])
     omegas = np.linspace(shown.frequencies[0], 2 * math.pi * CUTOFF_HZ, 4000)
     title = f"shaker {SHAKER} -> accelerometer {SENSOR}"
     ctid.plotting.bode(result, frf=shown, omegas=omegas, title=title,

@@ -11,6 +11,7 @@
 #include <random>
 #include <sstream>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "ctid/core/error.h"
@@ -183,14 +184,21 @@ nlohmann::json frf_json(const Frf& frf) {
   nlohmann::json real = nlohmann::json::array();
   nlohmann::json imag = nlohmann::json::array();
   nlohmann::json variance = nlohmann::json::array();
+  nlohmann::json coherence = nlohmann::json::array();
+  const auto nullable = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nullptr; };
+  const bool coherent = frf.coherence.size() == frf.frequencies.size();
   for (Eigen::Index k = 0; k < frf.frequencies.size(); ++k) {
     frequencies.push_back(frf.frequencies(k));
     real.push_back(frf.response(k).real());
     imag.push_back(frf.response(k).imag());
-    variance.push_back(std::isfinite(frf.variance(k)) ? nlohmann::json(frf.variance(k))
-                                                      : nlohmann::json(nullptr));
+    variance.push_back(nullable(frf.variance(k)));
+    if (coherent) coherence.push_back(nullable(frf.coherence(k)));
   }
-  return {{"frequencies", frequencies}, {"real", real}, {"imag", imag}, {"variance", variance}};
+  nlohmann::json out = {
+      {"frequencies", frequencies}, {"real", real}, {"imag", imag}, {"variance", variance}};
+  // The figures shade the lines of low coherence (python/ctid/plotting.py).
+  if (coherent) out["coherence"] = std::move(coherence);
+  return out;
 }
 
 std::vector<std::filesystem::path> draw_model_figures(

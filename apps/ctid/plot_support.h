@@ -67,7 +67,7 @@ void prepare_plot_directory(const std::filesystem::path& dir,
 /// with `modes`, modes.png.
 std::vector<std::string> model_figure_names(bool modes);
 
-/// The FRF as the "frf" object of the ctid.plot JSON input.
+/// The FRF as the "frf" object of the ctid.plot JSON input (with its coherence, if known).
 nlohmann::json frf_json(const Frf& frf);
 
 /// Draws model_figure_names(modes) into `dir`: the model over the Welch H1 FRF of `data`

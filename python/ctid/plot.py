@@ -1,17 +1,30 @@
 """Command-line entry point for ctid's figures, used by the C++ CLI's ``--plot`` flag.
 
-    /usr/bin/python3 -m ctid.plot KIND INPUT OUTPUT [--title TEXT] [--frf FRF.json]
-                                  [--against RESULT2.json]
+    /usr/bin/python3 -m ctid.plot KIND INPUT OUTPUT [--title TEXT] [--frf FRF]
+                                  [--against RESULT2.json] [--frequency-unit Hz|rad/s]
 
 KIND is one of bode, modes, frf, frf_matrix, validation, compare, residuals, mse,
-stabilisation, mode_shapes, mac, frf_matrix_overlay; INPUT a JSON (bode, modes, frf_matrix: the
-mimo_frf document of `ctid frf -o X.json`, stabilisation: the scan `ctid structure -o` writes,
-compare: {"t", "y", "window": [start, end], "initial_state", "models": [{"label", "output"}]},
-mode_shapes and mac: the mimo_estimation_result of `ctid fit --input-columns ... -o R.json`,
-frf_matrix_overlay: that result or a mimo_additive_model, drawn over the mimo_frf document given
-by --frf) or CSV (frf, validation, residuals, mse) file in the formats of docs/python.md;
---against gives mac a second estimate for the columns. OUTPUT ends in .png or .svg. Exit status 0
-on success, 2 for bad usage or input (one line on stderr), 1 otherwise.
+stabilisation, mode_shapes, mac, frf_matrix_overlay. INPUT is a result document the command
+line writes (read by ctid.read_result; the table below says which kinds draw it) or one of the
+files of docs/python.md (the CLI's --plot inputs and CSV tables):
+
+    estimation_result (ctid fit -o), mode_relocation_result,
+    input_delay_scan_result          bode, modes (the estimate)
+    structure_scan_result (structure) stabilisation; bode (the recommended fit)
+    delayed_feedback_result (feedback) bode (forward and feedback paths)
+    frf (ctid frf -o X.json)          frf
+    mimo_frf (frf --input-columns)    frf_matrix
+    validation_report (validate -o)   residuals
+    study_summary (study's summary)   mse
+    mimo_estimation_result (fit --input-columns -o), frf_matrix_fit_result (fit-frf -o)
+                                      mode_shapes, mac, frf_matrix_overlay (with --frf)
+
+--frf gives the measured FRF drawn under the model: bode and modes take an frf document or the
+CSV of `ctid frf -o X.csv`, frf_matrix_overlay a mimo_frf document, the CSV table of
+`ctid frf --input-columns ... -o X.csv` or a universal file. --against gives mac a second
+estimate for the columns. Frequency axes are in Hz unless --frequency-unit rad/s. OUTPUT ends in
+.png or .svg. Exit status 0 on success, 2 for bad usage or input (one line on stderr), 1
+otherwise.
 """
 
 from __future__ import annotations
@@ -32,64 +45,28 @@ class InputError(Exception):
     """Bad input file or arguments (exit status 2)."""
 
 
-def _polynomial(document, field, where):
-    if field not in document:
-        raise InputError(f"{where}: missing field '{field}'")
-    return [float(c) for c in document[field]]
-
-
 def model_from_json(document, where="model"):
     """A ctid.TransferFunction or ctid.AdditiveModel from the model JSON of docs/formats.md
-    (coefficients under *_ascending, a "type" field)."""
+    (coefficients under *_ascending, a "type" field), read by the C++ reader
+    (ctid.model_from_json)."""
     import ctid
 
-    kind = document.get("type")
-    delay = float(document.get("input_delay", 0.0))
-    if kind == "transfer_function":
-        return ctid.TransferFunction(
-            _polynomial(document, "numerator_ascending", where),
-            _polynomial(document, "denominator_ascending", where), delay)
-    if kind == "additive_model":
-        submodels = [
-            ctid.Submodel(
-                ctid.Polynomial(_polynomial(s, "denominator_ascending", f"{where}.submodels")),
-                ctid.Polynomial(_polynomial(s, "numerator_ascending", f"{where}.submodels")),
-                int(s.get("integrators", 0)))
-            for s in document.get("submodels", [])
-        ]
-        return ctid.AdditiveModel(submodels, delay)
-    raise InputError(f"{where}: 'type' is {kind!r}; expected 'transfer_function' or "
-                     "'additive_model'")
+    model = ctid.model_from_json(document, where)
+    if not isinstance(model, (ctid.TransferFunction, ctid.AdditiveModel)):
+        raise InputError(f"{where}: 'type' is {document.get('type')!r}; expected "
+                         "'transfer_function' or 'additive_model'")
+    return model
 
 
 def mimo_model_from_json(document, where="model"):
-    """A ctid.MimoAdditiveModel from a "mimo_additive_model" document (docs/formats.md:
-    "inputs", "outputs", "submodels": [{"denominator_ascending", "numerators_ascending": output
-    by output, input by input}], optional "direct": one row per output)."""
+    """A ctid.MimoAdditiveModel from a "mimo_additive_model" document (docs/formats.md),
+    read by the C++ reader (ctid.model_from_json)."""
     import ctid
 
     if document.get("type") != "mimo_additive_model":
         raise InputError(f"{where}: 'type' is {document.get('type')!r}; expected "
                          "'mimo_additive_model'")
-    for name in ("inputs", "outputs", "submodels"):
-        if name not in document:
-            raise InputError(f"{where}: missing field '{name}'")
-    inputs, outputs = int(document["inputs"]), int(document["outputs"])
-    submodels = []
-    for k, entry in enumerate(document["submodels"]):
-        place = f"{where}.submodels[{k}]"
-        numerators = entry.get("numerators_ascending")
-        if numerators is None or len(numerators) != inputs * outputs:
-            raise InputError(f"{place}: needs {inputs * outputs} numerators_ascending "
-                             f"({outputs} outputs x {inputs} inputs)")
-        submodels.append(ctid.MimoSubmodel(
-            ctid.Polynomial(_polynomial(entry, "denominator_ascending", place)),
-            [ctid.Polynomial([float(c) for c in b]) for b in numerators],
-            int(entry.get("integrators", 0))))
-    direct = np.asarray(document.get("direct", np.zeros((0, 0))), dtype=float)
-    delays = np.asarray(document.get("input_delays", []), dtype=float)
-    return ctid.MimoAdditiveModel(inputs, outputs, submodels, direct.reshape(
-        (outputs, inputs) if direct.size else (0, 0)), delays)
+    return ctid.model_from_json(document, where)
 
 
 def _read_json(path):
@@ -100,36 +77,80 @@ def _read_json(path):
     return document
 
 
-def _mimo_result(path):
-    """(MimoEstimationResult, output names or None) of a mimo_estimation_result document."""
+# Which kinds draw each result document (the module docstring's table).
+DOCUMENT_KINDS = {
+    "estimation_result": ("bode", "modes"),
+    "mode_relocation_result": ("bode", "modes"),
+    "input_delay_scan_result": ("bode", "modes"),
+    "structure_scan_result": ("stabilisation", "bode"),
+    "delayed_feedback_result": ("bode",),
+    "frf": ("frf",),
+    "mimo_frf": ("frf_matrix",),
+    "validation_report": ("residuals",),
+    "study_summary": ("mse",),
+    "mimo_estimation_result": MIMO_KINDS,
+    "frf_matrix_fit_result": MIMO_KINDS,
+}
+
+
+def _result_document(path, kind, document=None):
+    """The result of a document the command line wrote, read by ctid.read_result, after
+    checking that ``kind`` draws it; None if the file is not a result document."""
     import ctid
 
+    if document is None:
+        if not str(path).lower().endswith(".json"):
+            return None
+        document = _read_json(path)
+    name = document.get("type")
+    if name not in DOCUMENT_KINDS:
+        return None
+    if kind not in DOCUMENT_KINDS[name]:
+        raise InputError(f"{path}: a {name} document is drawn by "
+                         f"{' or '.join(DOCUMENT_KINDS[name])}, not {kind}")
+    return ctid.read_result(path)
+
+
+def _mimo_result(path):
+    """(MimoEstimationResult or FrfMatrixFitResult, output names or None) of its document."""
     document = _read_json(path)
-    if document.get("type") != "mimo_estimation_result":
-        raise InputError(f"{path}: not a mimo_estimation_result document (type "
-                         f"{document.get('type')!r})")
-    result = ctid.read_result(path)
+    if document.get("type") not in ("mimo_estimation_result", "frf_matrix_fit_result"):
+        raise InputError(f"{path}: not a mimo_estimation_result or frf_matrix_fit_result "
+                         f"document (type {document.get('type')!r})")
+    result = _result_document(path, "mode_shapes", document)
     names = document.get("data", {}).get("outputs") if isinstance(
         document.get("data"), dict) else None
     return result, names
 
 
-def _mimo_figure(kind, path, output, title, frf=None, against=None):
+def _mimo_frf(path):
+    """A ctid.MimoFrf from a mimo_frf document, the CSV table of ctid frf or a universal file."""
+    import ctid
+
+    if str(path).lower().endswith(".json"):
+        document = _read_json(path)
+        if document.get("type") != "mimo_frf":
+            raise InputError(f"{path}: not a mimo_frf document (type {document.get('type')!r})")
+        return ctid.read_result(path)
+    return ctid.read_mimo_frf(path)
+
+
+def _mimo_figure(kind, path, output, title, frf=None, against=None, unit="Hz"):
     from . import plotting
 
     if kind == "frf_matrix_overlay":
         if frf is None:
             raise InputError("frf_matrix_overlay needs --frf FRF.json (a mimo_frf document, "
                              "e.g. from ctid frf -o FRF.json)")
-        frf_document = _read_json(frf)
-        if frf_document.get("type") != "mimo_frf":
-            raise InputError(f"{frf}: not a mimo_frf document")
+        measured = _mimo_frf(frf)
         document = _read_json(path)
         if document.get("type") == "mimo_additive_model":
             model = mimo_model_from_json(document, path)
         else:
-            model, _ = _mimo_result(path)
-        return plotting.frf_matrix_overlay(model, frf_document, title=title, filename=output)
+            result, _ = _mimo_result(path)
+            model = result.model
+        return plotting.frf_matrix_overlay(model, measured, title=title, filename=output,
+                                           frequency_unit=unit)
     result, names = _mimo_result(path)
     if not result.modes:
         raise InputError(f"{path}: the estimate has no modes (no second-order submodel)")
@@ -166,6 +187,7 @@ class _Frf:
         if self.frequencies.shape != self.response.shape:
             raise InputError("frf: frequencies, real and imag must have the same length")
         self.variance = np.asarray(document.get("variance", []), dtype=float)
+        self.coherence = np.asarray(document.get("coherence", []), dtype=float)
 
 
 def _read_csv(path):
@@ -183,26 +205,73 @@ def _column(rows, names, path):
     raise InputError(f"{path}: needs a column named {' or '.join(names)}")
 
 
-def _frequency_figure(kind, path, output, title):
+def _measured_frf(path):
+    """The FRF --frf names for bode and modes: an frf document (ctid frf -o X.json) or the CSV
+    of ctid frf -o X.csv."""
+    import ctid
+
+    if str(path).lower().endswith(".json"):
+        document = _read_json(path)
+        if document.get("type") != "frf":
+            raise InputError(f"{path}: not an frf document (type {document.get('type')!r})")
+        return ctid.read_result(path)
+    return _Frf.from_rows(_read_csv(path), path)
+
+
+def _model_of_result(result, path, kind):
+    """(model to draw, further (label, model) pairs) of a result read by ctid.read_result."""
+    import ctid
+
+    if isinstance(result, ctid.ModeRelocationResult):
+        result = result.estimate
+    elif isinstance(result, ctid.InputDelayScanResult):
+        result = result.best
+    if isinstance(result, ctid.EstimationResult):
+        return result, []
+    if isinstance(result, ctid.StructureScanResult):
+        if not 0 <= result.recommended < len(result.fits):
+            raise InputError(f"{path}: the scan recommends no fit (none was usable)")
+        return result.fits[result.recommended].transfer_function, []
+    if isinstance(result, ctid.DelayedFeedbackResult):
+        loop = result.identification.loop
+        if not np.any(np.asarray(loop.forward.numerator.coefficients)):
+            raise InputError(f"{path}: the identification found no loop to draw "
+                             f"({result.identification.message})")
+        return loop.forward, [("feedback H", loop.feedback)]
+    raise InputError(f"{path}: holds no model that {kind} draws")
+
+
+def _frequency_figure(kind, path, output, title, frf_path=None, unit="Hz"):
     from . import plotting
 
-    with open(path) as stream:
-        document = json.load(stream)
+    document = _read_json(path)
+    frf = _measured_frf(frf_path) if frf_path is not None else None
+    result = _result_document(path, kind, document)
+    if result is not None:
+        model, more = _model_of_result(result, path, kind)
+        if kind == "bode":
+            return plotting.bode(model, frf=frf, more=more, title=title, filename=output,
+                                 frequency_unit=unit)
+        return plotting.modes(model, frf=frf, title=title, filename=output, frequency_unit=unit)
     if "type" in document:
         document = {"model": document}
     if "model" not in document:
-        raise InputError(f"{path}: needs a 'model' object or a model document")
+        raise InputError(f"{path}: needs a 'model' object, a model document or a result "
+                         f"document ({', '.join(sorted(DOCUMENT_KINDS))})")
     model = model_from_json(document["model"], f"{path}: model")
-    frf = _Frf(document["frf"]) if "frf" in document else None
+    if frf is None and "frf" in document:
+        frf = _Frf(document["frf"])
     covariance = document.get("covariance")
     omegas = None
     if "frequency_range" in document:
-        low, high = document["frequency_range"]
+        # Widened to every resonance of the model, which must not fall off the axis.
+        low, high = plotting._cover(*(float(v) for v in document["frequency_range"]), model)
         omegas = np.logspace(np.log10(low), np.log10(high), 400)
     if kind == "bode":
         return plotting.bode(model, frf=frf, covariance=covariance, omegas=omegas,
-                             title=title, filename=output)
-    return plotting.modes(model, omegas=omegas, frf=frf, title=title, filename=output)
+                             title=title, filename=output, frequency_unit=unit)
+    return plotting.modes(model, omegas=omegas, frf=frf, title=title, filename=output,
+                          frequency_unit=unit)
 
 
 def _compare_figure(path, output, title):
@@ -235,10 +304,11 @@ def _compare_figure(path, output, title):
                             filename=output)
 
 
-def run(kind, path, output, title=None, frf=None, against=None):
+def run(kind, path, output, title=None, frf=None, against=None, frequency_unit="Hz"):
     """Draw one figure; returns the Figure. Raises InputError or ValueError on bad input.
-    ``frf``: the mimo_frf document frf_matrix_overlay draws under the model; ``against``: a
-    second mimo_estimation_result for the columns of mac."""
+    ``frf``: the measured FRF drawn under the model (bode, modes: an frf document or CSV;
+    frf_matrix_overlay: a mimo_frf document, CSV table or universal file); ``against``: a
+    second MIMO estimate for the columns of mac; ``frequency_unit``: "Hz" or "rad/s"."""
     import ctid
     from . import plotting
 
@@ -246,31 +316,44 @@ def run(kind, path, output, title=None, frf=None, against=None):
         raise InputError(f"unknown kind '{kind}'; expected one of {', '.join(KINDS)}")
     if not output.lower().endswith((".png", ".svg")):
         raise InputError(f"output '{output}' must end in .png or .svg")
-    if frf is not None and kind != "frf_matrix_overlay":
-        raise InputError("--frf goes with frf_matrix_overlay")
+    if frequency_unit not in ("Hz", "rad/s"):
+        raise InputError(f"--frequency-unit is '{frequency_unit}'; expected Hz or rad/s")
+    if frf is not None and kind not in ("bode", "modes", "frf_matrix_overlay"):
+        raise InputError("--frf goes with bode, modes and frf_matrix_overlay")
     if against is not None and kind != "mac":
         raise InputError("--against goes with mac")
+    unit = frequency_unit
     if kind in ("bode", "modes"):
-        return _frequency_figure(kind, path, output, title)
+        return _frequency_figure(kind, path, output, title, frf, unit)
     if kind in MIMO_KINDS:
-        return _mimo_figure(kind, path, output, title, frf, against)
+        return _mimo_figure(kind, path, output, title, frf, against, unit)
+    result = _result_document(path, kind)
     if kind == "stabilisation":
-        with open(path, encoding="utf-8") as handle:
-            document = json.load(handle)
-        if not isinstance(document, dict) or "stabilisation" not in document:
-            raise InputError(f"{path}: not a structure scan (no 'stabilisation' field)")
-        return plotting.stabilisation(document, title=title, filename=output)
+        if result is None:
+            document = _read_json(path)
+            if "stabilisation" not in document:
+                raise InputError(f"{path}: not a structure scan (no 'stabilisation' field)")
+            result = document
+        return plotting.stabilisation(result, title=title, filename=output, frequency_unit=unit)
     if kind == "compare":
         return _compare_figure(path, output, title)
     if kind == "frf_matrix":
-        with open(path, encoding="utf-8") as handle:
-            document = json.load(handle)
-        if not isinstance(document, dict) or document.get("type") != "mimo_frf":
+        if result is None:
             raise InputError(f"{path}: not a mimo_frf document")
-        return plotting.frf_matrix(document, title=title, filename=output)
+        return plotting.frf_matrix(result, title=title, filename=output, frequency_unit=unit)
+    if result is not None:  # frf, residuals, mse from their documents
+        if kind == "frf":
+            return plotting.frf(result, title=title, filename=output, frequency_unit=unit)
+        if kind == "residuals":
+            return plotting.residual_correlation(result, title=title, filename=output)
+        return plotting.mse_against_n(result, title=title, filename=output)
+    if str(path).lower().endswith(".json"):
+        raise InputError(f"{path}: {kind} draws a CSV file or a result document "
+                         f"({', '.join(n for n, k in DOCUMENT_KINDS.items() if kind in k)})")
     rows = _read_csv(path)
     if kind == "frf":
-        return plotting.frf(_Frf.from_rows(rows, path), title=title, filename=output)
+        return plotting.frf(_Frf.from_rows(rows, path), title=title, filename=output,
+                            frequency_unit=unit)
     if kind == "validation":
         t = _column(rows, ("t", "time"), path)
         y = _column(rows, ("y",), path)
@@ -298,20 +381,26 @@ def main(argv=None):
         description="Draw a ctid figure (PNG or SVG) from a JSON or CSV file.")
     parser.add_argument("kind", help="one of: " + ", ".join(KINDS))
     parser.add_argument("input",
-                        help="JSON (bode, modes, frf_matrix, compare, stabilisation, mode_shapes, "
-                        "mac, frf_matrix_overlay) or CSV (frf, validation, residuals, mse)")
+                        help="a result document the command line writes, or the JSON (bode, "
+                        "modes, compare) or CSV (frf, validation, residuals, mse) of "
+                        "docs/python.md")
     parser.add_argument("output", help="figure file, .png or .svg")
     parser.add_argument("--title", default=None, help="figure title")
     parser.add_argument("--frf", default=None,
-                        help="frf_matrix_overlay: the mimo_frf document (JSON) under the model")
+                        help="the measured FRF under the model: bode, modes: an frf document "
+                        "or the CSV of ctid frf; frf_matrix_overlay: a mimo_frf document, CSV "
+                        "table or universal file")
     parser.add_argument("--against", default=None,
                         help="mac: a second mimo_estimation_result for the columns")
+    parser.add_argument("--frequency-unit", default="Hz", choices=("Hz", "rad/s"),
+                        help="unit of the frequency axes (default Hz)")
     try:
         args = parser.parse_args(argv)
     except SystemExit as exit_:
         return 2 if exit_.code else 0
     try:
-        run(args.kind, args.input, args.output, args.title, args.frf, args.against)
+        run(args.kind, args.input, args.output, args.title, args.frf, args.against,
+            args.frequency_unit)
     except (InputError, ValueError, TypeError, OSError, json.JSONDecodeError) as error:
         print(f"ctid.plot: {error}", file=sys.stderr)
         return 2

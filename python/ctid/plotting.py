@@ -1,9 +1,22 @@
 """Figures for ctid results, drawn with matplotlib (Agg backend, no display needed).
 
 Every function returns the :class:`matplotlib.figure.Figure` and, given ``filename``
-(``.png`` or ``.svg``), also saves it there. Frequencies are in rad/s, magnitudes in dB,
-phases in degrees. Lines carry labels ("model", "FRF", "measured", ...) so callers and tests
-can find them again with ``line.get_label()``.
+(``.png`` or ``.svg``), also saves it there. Frequencies given to these functions are in rad/s
+(the library's unit); the figures' frequency axes are in Hz unless ``frequency_unit="rad/s"``
+is asked. Magnitudes are in dB, phases in degrees. Lines carry labels ("model", "FRF",
+"measured", ...) so callers and tests can find them again with ``line.get_label()``.
+
+Rules every figure keeps (python/tests/test_figure_rules.py checks them):
+
+- A model's phase is unwrapped along its own dense grid (a continuous curve, so unwrapping is
+  coherent) and starts in (-180, 180] deg; a measured FRF's phase is put on the model's branch
+  when a model is drawn, and is otherwise wrapped to (-180, 180] deg (unwrapping noisy,
+  sparse lines would invent turns).
+- The default frequency range covers the measured lines and every resonance of the model
+  (complex poles with damping ratio below 0.5), so a mode outside the data's band is seen.
+- Where the coherence of an FRF is known, the frequencies where it is below 0.5 are shaded
+  ("coherence < 0.5") behind the FRF.
+- Layout is matplotlib's constrained layout: no label is cut off at the canvas edge.
 
 Confidence bands of a Bode plot come from the parameter covariance P by first-order
 propagation (the delta method): the Jacobian J = dG(jw)/dtheta is taken by central finite
@@ -60,11 +73,108 @@ def save(figure, filename):
     return figure
 
 
+def _figure(*args, **kwargs):
+    """plt.subplots with constrained layout (labels, titles and legends kept on the canvas)."""
+    kwargs.setdefault("layout", "constrained")
+    return plt.subplots(*args, **kwargs)
+
+
 def _finish(figure, filename):
-    figure.tight_layout()
+    if figure.get_layout_engine() is None:
+        figure.set_layout_engine("constrained")
     if filename is not None:
         save(figure, filename)
     return figure
+
+
+_FREQUENCY_UNITS = ("Hz", "rad/s")
+
+
+def _frequency_axis(frequency_unit, where):
+    """(factor from rad/s to the axis unit, axis label) for frequency_unit 'Hz' or 'rad/s'."""
+    if frequency_unit not in _FREQUENCY_UNITS:
+        raise ValueError(f"{where}: frequency_unit is {frequency_unit!r}; it must be 'Hz' or "
+                         "'rad/s'")
+    factor = 1.0 / (2.0 * np.pi) if frequency_unit == "Hz" else 1.0
+    return factor, f"frequency [{frequency_unit}]"
+
+
+def wrap_phase(degrees):
+    """Phase in degrees wrapped to (-180, 180]."""
+    return 180.0 - np.mod(180.0 - np.asarray(degrees, dtype=float), 360.0)
+
+
+def _model_phase(response):
+    """The phase [deg] of a model's response on a dense grid, unwrapped along the grid (a
+    continuous curve) and starting in (-180, 180]."""
+    return np.degrees(np.unwrap(np.angle(np.asarray(response))))
+
+
+def _on_branch(measured_phase, w, model_w, model_phase):
+    """Measured phases [deg] moved by whole turns to lie nearest the model's curve."""
+    if len(model_w) < 2:
+        return wrap_phase(measured_phase)
+    reference = np.interp(np.log(w), np.log(model_w), model_phase)
+    return measured_phase + 360.0 * np.round((reference - measured_phase) / 360.0)
+
+
+def _shade_low_coherence(axes, frequencies, coherence, threshold=0.5):
+    """Shades, on every axis, the frequency bands (axis units) where the coherence is below
+    ``threshold``; each run of low lines reaches halfway (geometrically) to its neighbours.
+    The first span carries the label "coherence < threshold". Returns the number of runs."""
+    f = np.asarray(frequencies, dtype=float)
+    c = np.asarray(coherence, dtype=float)
+    if f.size == 0 or c.size != f.size:
+        return 0
+    low = ~(c >= threshold)  # NaN (unknown) counts as low
+    positive = f > 0
+    low &= positive
+    if not low.any():
+        return 0
+    edges = np.empty(f.size + 1)
+    inner = np.sqrt(np.maximum(f[:-1], 1e-300) * np.maximum(f[1:], 1e-300))
+    edges[1:-1] = inner
+    edges[0] = f[0] / (inner[0] / f[0]) if f.size > 1 and f[0] > 0 else f[0]
+    edges[-1] = f[-1] * (f[-1] / inner[-1]) if f.size > 1 else f[-1]
+    runs = 0
+    k = 0
+    while k < f.size:
+        if not low[k]:
+            k += 1
+            continue
+        start = k
+        while k + 1 < f.size and low[k + 1]:
+            k += 1
+        for n, ax in enumerate(axes):
+            ax.axvspan(edges[start], edges[k + 1], color="0.5", alpha=0.15, lw=0, zorder=0,
+                       label=f"coherence < {threshold:g}" if runs == 0 and n == 0 else None)
+        runs += 1
+        k += 1
+    return runs
+
+
+def _resonances(model):
+    """Natural frequencies [rad/s] of the model's resonant poles: complex pairs with damping
+    ratio below 0.5 (the poles of an AdditiveModel, TransferFunction or MimoAdditiveModel)."""
+    if isinstance(model, _ctid.MimoAdditiveModel):
+        poles = []
+        for sub in model.submodels:
+            poles.extend(np.roots(np.asarray(sub.a.coefficients, dtype=float)[::-1]))
+        poles = np.asarray(poles, dtype=complex)
+    else:
+        g = model.to_transfer_function() if isinstance(model, _ctid.AdditiveModel) else model
+        poles = np.asarray(g.poles(), dtype=complex)
+    radius = np.abs(poles)
+    keep = (np.abs(poles.imag) > 0) & (radius > 0)
+    damping = -poles.real[keep] / radius[keep]
+    return np.unique(radius[keep][damping < 0.5])
+
+
+def _cover(low, high, model):
+    """[low, high] widened to hold every resonance of ``model`` with a factor 1.5 around it."""
+    for w in _resonances(model):
+        low, high = min(low, w / 1.5), max(high, w * 1.5)
+    return low, high
 
 
 def _as_model(model):
@@ -81,9 +191,13 @@ def _as_model(model):
 
 
 def _default_omegas(model, frf=None, count=400):
-    if frf is not None and len(frf.frequencies):
-        w = np.asarray(frf.frequencies)
-        return np.logspace(np.log10(w.min()), np.log10(w.max()), count)
+    """The model's grid [rad/s]: the FRF's lines widened to the model's resonances, or, without
+    an FRF, a decade beyond the poles on either side."""
+    w = np.asarray(frf.frequencies, dtype=float) if frf is not None else np.zeros(0)
+    w = w[w > 0]
+    if w.size:
+        low, high = _cover(w.min(), w.max(), model)
+        return np.logspace(np.log10(low), np.log10(high), count)
     g = model.to_transfer_function() if isinstance(model, _ctid.AdditiveModel) else model
     poles = np.abs(np.asarray(g.poles()))
     poles = poles[poles > 0]
@@ -139,37 +253,50 @@ def _db(x):
 
 
 def bode(model, frf=None, covariance=None, omegas=None, confidence=0.95, title=None,
-         filename=None, sampled=None):
+         filename=None, sampled=None, frequency_unit="Hz", more=None):
     """Bode plot of a fitted model over a nonparametric FRF, with confidence bands.
 
     ``model``: EstimationResult (its covariance gives the band), AdditiveModel or
-    TransferFunction. ``frf``: a ctid.Frf (or any object with ``frequencies`` and
-    ``response``) drawn as markers. ``omegas``: the model's grid [rad/s]
-    (default: the FRF's range, or a decade around the poles). ``sampled``: (h, ctid.Hold) of
-    the data behind the FRF, to draw also the model as the samples see it
-    (ctid.sampled_frequency_response: the hold and the sampling included), which is what an
-    FRF of sampled data estimates. Lines: "model", "FRF", "model, sampled (zoh|foh)"; bands:
-    "<confidence>% band". Returns the Figure (saved to ``filename`` if given).
+    TransferFunction. ``frf``: a ctid.Frf (or any object with ``frequencies`` [rad/s] and
+    ``response``, optionally ``coherence``) drawn as markers, its phase put on the model's
+    branch; where its coherence is below 0.5 the band is shaded. ``omegas``: the model's grid
+    [rad/s] (default: the FRF's range widened to the model's resonances, or a decade around
+    the poles). ``sampled``: (h, ctid.Hold) of the data behind the FRF, to draw also the model
+    as the samples see it (ctid.sampled_frequency_response: the hold and the sampling
+    included), which is what an FRF of sampled data estimates. ``frequency_unit``: "Hz"
+    (default) or "rad/s" for the axis. ``more``: further (label, model) pairs drawn as lines
+    over the same grid (e.g. the feedback path beside the forward one). Lines: "model", "FRF",
+    "model, sampled (zoh|foh)", the labels of ``more``; bands: "<confidence>% band". Returns
+    the Figure (saved to ``filename`` if given).
     """
     base, _, _ = _as_model(model)
+    factor, axis_label = _frequency_axis(frequency_unit, "bode")
     if omegas is None:
         omegas = _default_omegas(base, frf)
     omegas = np.asarray(omegas, dtype=float)
     response, mag_sigma, phase_sigma, z = frequency_response_band(
         model, omegas, covariance, confidence)
-    figure, (ax_mag, ax_phase) = plt.subplots(2, 1, sharex=True, figsize=(7.0, 6.0))
-    phase = np.degrees(np.unwrap(np.angle(response)))
+    figure, (ax_mag, ax_phase) = _figure(2, 1, sharex=True, figsize=(7.0, 6.0))
+    x = omegas * factor
+    phase = _model_phase(response)
     band_label = f"{100 * confidence:g}% band"
     if mag_sigma is not None:
         magnitude = np.abs(response)
         lower = np.maximum(magnitude - z * mag_sigma, magnitude * 1e-6)
-        ax_mag.fill_between(omegas, _db(lower), _db(magnitude + z * mag_sigma), alpha=0.3,
+        ax_mag.fill_between(x, _db(lower), _db(magnitude + z * mag_sigma), alpha=0.3,
                             color="C0", label=band_label, linewidth=0)
-        ax_phase.fill_between(omegas, phase - np.degrees(z * phase_sigma),
+        ax_phase.fill_between(x, phase - np.degrees(z * phase_sigma),
                               phase + np.degrees(z * phase_sigma), alpha=0.3, color="C0",
                               label=band_label, linewidth=0)
-    ax_mag.semilogx(omegas, _db(response), color="C0", label="model")
-    ax_phase.semilogx(omegas, phase, color="C0", label="model")
+    ax_mag.semilogx(x, _db(response), color="C0", label="model")
+    ax_phase.semilogx(x, phase, color="C0", label="model")
+    shown = [_db(response)]
+    for k, (label, other) in enumerate(more or []):
+        other_base, _, _ = _as_model(other)
+        g = np.asarray(_ctid.frequency_response(other_base, omegas))
+        ax_mag.semilogx(x, _db(g), color=f"C{k + 3}", label=label)
+        ax_phase.semilogx(x, _model_phase(g), color=f"C{k + 3}", label=label)
+        shown.append(_db(g))
     if sampled is not None:
         h, hold = sampled
         additive = (base if isinstance(base, _ctid.AdditiveModel)
@@ -180,27 +307,28 @@ def bode(model, frf=None, covariance=None, omegas=None, confidence=0.95, title=N
         seen_phase = np.degrees(np.unwrap(np.angle(seen)))
         if seen.size:
             seen_phase += 360.0 * np.round((phase[0] - seen_phase[0]) / 360.0)
-        ax_mag.semilogx(seen_at, _db(seen), "--", color="C2", label=f"model, sampled ({name})")
-        ax_phase.semilogx(seen_at, seen_phase, "--", color="C2",
+        ax_mag.semilogx(seen_at * factor, _db(seen), "--", color="C2",
+                        label=f"model, sampled ({name})")
+        ax_phase.semilogx(seen_at * factor, seen_phase, "--", color="C2",
                           label=f"model, sampled ({name})")
     if frf is not None:
-        w = np.asarray(frf.frequencies)
+        w = np.asarray(frf.frequencies, dtype=float)
         g = np.asarray(frf.response)
-        ax_mag.semilogx(w, _db(g), "o", ms=2.5, color="C1", label="FRF")
-        frf_phase = np.degrees(np.angle(g))
-        # Put the FRF's phase on the model's branch so the two can be compared by eye.
-        model_at_w = np.interp(np.log(w), np.log(omegas), phase)
-        frf_phase += 360.0 * np.round((model_at_w - frf_phase) / 360.0)
-        ax_phase.semilogx(w, frf_phase, "o", ms=2.5, color="C1", label="FRF")
+        coherence = np.asarray(getattr(frf, "coherence", []), dtype=float)
+        _shade_low_coherence((ax_mag, ax_phase), w * factor, coherence)
+        ax_mag.semilogx(w * factor, _db(g), "o", ms=2.5, color="C1", label="FRF")
+        # The FRF's phase on the model's branch, so the two can be compared by eye.
+        frf_phase = _on_branch(np.degrees(np.angle(g)), w, omegas, phase)
+        ax_phase.semilogx(w * factor, frf_phase, "o", ms=2.5, color="C1", label="FRF")
+        shown.append(_db(g))
     # The axis follows the model and the FRF, not the band: a band reaching to |G| ~ 0 near an
     # antiresonance would otherwise squash the plot to a few pixels.
-    shown = [_db(response)] + ([_db(np.asarray(frf.response))] if frf is not None else [])
     shown = np.concatenate([v[np.isfinite(v)] for v in shown])
     if shown.size:
         ax_mag.set_ylim(shown.min() - 10.0, shown.max() + 10.0)
     ax_mag.set_ylabel("magnitude [dB]")
     ax_phase.set_ylabel("phase [deg]")
-    ax_phase.set_xlabel("frequency [rad/s]")
+    ax_phase.set_xlabel(axis_label)
     for ax in (ax_mag, ax_phase):
         ax.grid(True, which="both", alpha=0.3)
     ax_mag.legend(fontsize=8)
@@ -209,30 +337,40 @@ def bode(model, frf=None, covariance=None, omegas=None, confidence=0.95, title=N
     return _finish(figure, filename)
 
 
-def frf(estimate, title=None, filename=None):
-    """A nonparametric FRF on its own: magnitude (dB), phase (deg) and, when the estimate has
-    one (Welch), the squared coherence.
+def frf(estimate, title=None, filename=None, frequency_unit="Hz", coherence_threshold=0.5):
+    """A nonparametric FRF on its own: magnitude (dB), phase (deg, wrapped to (-180, 180]: with
+    no model to follow, unwrapping noisy lines would invent turns) and, when the estimate has
+    one, the squared coherence, the lines below ``coherence_threshold`` shaded in every panel.
 
     ``estimate``: a ctid.Frf or any object with ``frequencies`` [rad/s], complex ``response``
-    and optionally ``coherence``. Lines: "FRF" in each panel, "coherence". Returns the Figure.
+    and optionally ``coherence``. ``frequency_unit``: "Hz" (default) or "rad/s". Lines: "FRF"
+    in each panel, "coherence". Returns the Figure.
     """
+    factor, axis_label = _frequency_axis(frequency_unit, "frf")
     w = np.asarray(estimate.frequencies, dtype=float)
     g = np.asarray(estimate.response)
     coherence = np.asarray(getattr(estimate, "coherence", []), dtype=float)
     coherent = coherence.size == w.size and w.size > 0
-    figure, axes = plt.subplots(3 if coherent else 2, 1, sharex=True,
-                                figsize=(7.0, 7.0 if coherent else 5.5))
-    axes[0].semilogx(w, _db(g), ".-", ms=3, lw=0.8, label="FRF")
-    axes[0].set_ylabel("magnitude [dB]")
-    axes[1].semilogx(w, np.degrees(np.unwrap(np.angle(g))), ".-", ms=3, lw=0.8, label="FRF")
-    axes[1].set_ylabel("phase [deg]")
+    figure, axes = _figure(3 if coherent else 2, 1, sharex=True,
+                           figsize=(7.0, 7.0 if coherent else 5.5))
+    x = w * factor
     if coherent:
-        axes[2].semilogx(w, coherence, ".-", ms=3, lw=0.8, label="coherence")
+        _shade_low_coherence(axes, x, coherence, coherence_threshold)
+    axes[0].semilogx(x, _db(g), ".-", ms=3, lw=0.8, label="FRF")
+    axes[0].set_ylabel("magnitude [dB]")
+    axes[1].semilogx(x, wrap_phase(np.degrees(np.angle(g))), ".", ms=3, label="FRF")
+    axes[1].set_ylabel("phase [deg]")
+    axes[1].set_ylim(-190.0, 190.0)
+    axes[1].set_yticks([-180, -90, 0, 90, 180])
+    if coherent:
+        axes[2].semilogx(x, coherence, ".-", ms=3, lw=0.8, label="coherence")
         axes[2].set_ylabel("coherence")
         axes[2].set_ylim(0.0, 1.05)
+        if (coherence < coherence_threshold).any():
+            axes[0].legend(fontsize=8)
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
-    axes[-1].set_xlabel("frequency [rad/s]")
+    axes[-1].set_xlabel(axis_label)
     if title:
         axes[0].set_title(title)
     return _finish(figure, filename)
@@ -255,21 +393,23 @@ def _mimo_frf_arrays(estimate, where):
             np.asarray(estimate.coherence, dtype=float))
 
 
-def frf_matrix(estimate, channels=None, max_outputs=4, title=None, filename=None):
+def frf_matrix(estimate, channels=None, max_outputs=4, title=None, filename=None,
+               frequency_unit="Hz"):
     """Chosen channels of an FRF matrix over frequency in Hz: |H_ji| (dB) of each, and below
     the multiple coherence of each chosen output with all inputs.
 
     ``estimate``: a ctid.MimoFrf or the "mimo_frf" document of ``ctid frf -o X.json`` (a dict).
     ``channels``: (output name, input name) pairs; default every input of the first
-    ``max_outputs`` outputs. Lines: "<output>/<input>" and "coherence <output>". Returns the
-    Figure.
+    ``max_outputs`` outputs. ``frequency_unit``: "Hz" (default) or "rad/s". Lines:
+    "<output>/<input>" and "coherence <output>". Returns the Figure.
     """
+    factor, axis_label = _frequency_axis(frequency_unit, "frf_matrix")
     inputs, outputs, w, response, coherence = _mimo_frf_arrays(estimate, "frf_matrix")
-    hz = w / (2.0 * np.pi)
+    hz = w * factor
     if channels is None:
         channels = [(y, u) for y in outputs[:max_outputs] for u in inputs]
-    figure, axes = plt.subplots(2, 1, sharex=True, figsize=(8.0, 6.5),
-                                gridspec_kw={"height_ratios": [2, 1]})
+    figure, axes = _figure(2, 1, sharex=True, figsize=(8.0, 6.5),
+                           gridspec_kw={"height_ratios": [2, 1]})
     shown = []
     for output, input_name in channels:
         if output not in outputs or input_name not in inputs:
@@ -283,7 +423,7 @@ def frf_matrix(estimate, channels=None, max_outputs=4, title=None, filename=None
     axes[0].set_ylabel("|H| [dB]")
     axes[1].set_ylabel("multiple coherence")
     axes[1].set_ylim(0.0, 1.05)
-    axes[1].set_xlabel("frequency [Hz]")
+    axes[1].set_xlabel(axis_label)
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize="small", ncol=2)
@@ -305,7 +445,7 @@ def _channel_index(name_or_index, names, kind, where):
 
 
 def frf_matrix_overlay(model, frf, channels=None, title=None, filename=None, omegas=None,
-                       max_channels=4):
+                       max_channels=4, frequency_unit="Hz"):
     """Chosen channels of a measured FRF matrix with a MIMO model's frequency response over
     them: for each channel |H_ji| in dB above its phase in degrees, over frequency in Hz.
 
@@ -315,7 +455,9 @@ def frf_matrix_overlay(model, frf, channels=None, title=None, filename=None, ome
     as many inputs and outputs as the model. ``channels``: (output, input) pairs, each a name
     of the FRF's channels or a 0-based index; default the ``max_channels`` channels with the
     largest peak |H_ji| in the FRF, largest first. ``omegas``: the model's grid [rad/s]
-    (default 400 points over the FRF's lines). The axes come in pairs (magnitude, phase), one
+    (default 400 points over the FRF's lines, widened to the model's resonances).
+    ``frequency_unit``: "Hz" (default) or "rad/s". Where the output's multiple coherence is
+    below 0.5 the channel's axes are shaded. The axes come in pairs (magnitude, phase), one
     pair per channel in the order of ``channels``, the magnitude axis titled
     "<output>/<input>"; each holds the lines "model" and "FRF" (the FRF's phase put on the
     model's branch). Returns the Figure.
@@ -327,7 +469,8 @@ def frf_matrix_overlay(model, frf, channels=None, title=None, filename=None, ome
     if not isinstance(model, _ctid.MimoAdditiveModel):
         raise TypeError("frf_matrix_overlay: expected a MimoAdditiveModel or "
                         "MimoEstimationResult, got " + type(model).__name__)
-    inputs, outputs, w, response, _ = _mimo_frf_arrays(frf, "frf_matrix_overlay")
+    factor, axis_label = _frequency_axis(frequency_unit, "frf_matrix_overlay")
+    inputs, outputs, w, response, coherence = _mimo_frf_arrays(frf, "frf_matrix_overlay")
     if response.shape[1:] != (model.outputs, model.inputs):
         raise ValueError(
             f"frf_matrix_overlay: the FRF is {response.shape[1]} outputs x {response.shape[2]} "
@@ -349,7 +492,8 @@ def frf_matrix_overlay(model, frf, channels=None, title=None, filename=None, ome
         positive = w[w > 0]
         if positive.size == 0:
             raise ValueError("frf_matrix_overlay: the FRF has no line above 0 rad/s; give omegas")
-        omegas = np.logspace(np.log10(positive.min()), np.log10(positive.max()), 400)
+        low, high = _cover(positive.min(), positive.max(), model)
+        omegas = np.logspace(np.log10(low), np.log10(high), 400)
     omegas = np.asarray(omegas, dtype=float)
     columns = 1 if len(pairs) == 1 else 2
     rows = math.ceil(len(pairs) / columns)
@@ -365,20 +509,19 @@ def frf_matrix_overlay(model, frf, channels=None, title=None, filename=None, ome
         ax_mag = figure.add_subplot(cell[0])
         ax_phase = figure.add_subplot(cell[1], sharex=ax_mag)
         g = np.asarray(_ctid.frequency_response(model.channel(j, i), omegas))
-        phase = np.degrees(np.unwrap(np.angle(g)))
+        phase = _model_phase(g)
         measured = response[:, j, i]
-        measured_phase = np.degrees(np.angle(measured))
-        model_at_w = np.interp(np.log(w), np.log(omegas), phase)
-        measured_phase += 360.0 * np.round((model_at_w - measured_phase) / 360.0)
-        ax_mag.semilogx(w / (2.0 * np.pi), _db(measured), "o", ms=2.0, color="C1", label="FRF")
-        ax_mag.semilogx(omegas / (2.0 * np.pi), _db(g), color="C0", lw=1.2, label="model")
-        ax_phase.semilogx(w / (2.0 * np.pi), measured_phase, "o", ms=2.0, color="C1",
-                          label="FRF")
-        ax_phase.semilogx(omegas / (2.0 * np.pi), phase, color="C0", lw=1.2, label="model")
+        measured_phase = _on_branch(np.degrees(np.angle(measured)), w, omegas, phase)
+        if coherence.shape[:1] == w.shape and coherence.ndim == 2:
+            _shade_low_coherence((ax_mag, ax_phase), w * factor, coherence[:, j])
+        ax_mag.semilogx(w * factor, _db(measured), "o", ms=2.0, color="C1", label="FRF")
+        ax_mag.semilogx(omegas * factor, _db(g), color="C0", lw=1.2, label="model")
+        ax_phase.semilogx(w * factor, measured_phase, "o", ms=2.0, color="C1", label="FRF")
+        ax_phase.semilogx(omegas * factor, phase, color="C0", lw=1.2, label="model")
         ax_mag.set_title(f"{outputs[j]}/{inputs[i]}", fontsize=9)
         ax_mag.set_ylabel("|H| [dB]")
         ax_phase.set_ylabel("phase [deg]")
-        ax_phase.set_xlabel("frequency [Hz]")
+        ax_phase.set_xlabel(axis_label)
         ax_mag.tick_params(labelbottom=False)
         for ax in (ax_mag, ax_phase):
             ax.grid(True, which="both", alpha=0.3)
@@ -447,7 +590,7 @@ def mode_shapes(result_or_modes, output_names=None, geometry=None, title=None, f
     order = np.argsort(x, kind="stable")
     columns = 1 if len(modes) == 1 else 2
     rows = math.ceil(len(modes) / columns)
-    figure, axes = plt.subplots(rows, columns, figsize=(6.0 * columns, 3.0 * rows + 0.5),
+    figure, axes = _figure(rows, columns, figsize=(6.0 * columns, 3.0 * rows + 0.5),
                                 squeeze=False)
     for ax in list(axes.flat)[len(modes):]:
         ax.remove()
@@ -514,7 +657,7 @@ def mac_matrix(modes_a, modes_b=None, labels=None, column_labels=None, title=Non
     if len(row_labels) != len(rows) or len(column_labels) != len(cols):
         raise ValueError(f"mac_matrix: {len(row_labels)} x {len(column_labels)} labels for "
                          f"{len(rows)} x {len(cols)} modes")
-    figure, ax = plt.subplots(figsize=(max(4.5, 2.4 + 0.8 * len(cols)),
+    figure, ax = _figure(figsize=(max(4.5, 2.4 + 0.8 * len(cols)),
                                        max(3.5, 1.6 + 0.55 * len(rows))))
     image = ax.imshow(mac, vmin=0.0, vmax=1.0, cmap="Blues", aspect="auto")
     for r in range(mac.shape[0]):
@@ -540,7 +683,7 @@ def channel_fits(names, fits, title=None, filename=None):
     labels = list(fits)
     count = len(names)
     width = 0.8 / max(len(labels), 1)
-    figure, ax = plt.subplots(figsize=(max(7.0, 0.3 * count + 2.0), 4.0))
+    figure, ax = _figure(figsize=(max(7.0, 0.3 * count + 2.0), 4.0))
     x = np.arange(count)
     for index, label in enumerate(labels):
         values = np.asarray(fits[label], dtype=float)
@@ -560,15 +703,16 @@ def channel_fits(names, fits, title=None, filename=None):
     return _finish(figure, filename)
 
 
-def stabilisation(scan, title=None, filename=None):
+def stabilisation(scan, title=None, filename=None, frequency_unit="Hz"):
     """Stabilisation diagram of a structure scan: every pole pair of every fit at its natural
     frequency [Hz] (x) and its fit's order (y). Markers: "stable" (frequency and damping within
     the scan's tolerances of the previous order's), "stable frequency", "new", "unstable pole";
     the recommended fit's row is marked.
 
     ``scan``: a ctid.StructureScanResult or the JSON document `ctid structure -o` writes.
-    Returns the Figure.
+    ``frequency_unit``: "Hz" (default) or "rad/s". Returns the Figure.
     """
+    factor, axis_label = _frequency_axis(frequency_unit, "stabilisation")
     def get(obj, name):
         return obj[name] if isinstance(obj, dict) else getattr(obj, name)
 
@@ -585,9 +729,9 @@ def stabilisation(scan, title=None, filename=None):
             name = "stable frequency"
         else:
             name = "new"
-        groups[name][0].append(get(p, "frequency") / (2.0 * np.pi))
+        groups[name][0].append(get(p, "frequency") * factor)
         groups[name][1].append(get(p, "order"))
-    figure, ax = plt.subplots(figsize=(7.0, 4.5))
+    figure, ax = _figure(figsize=(7.0, 4.5))
     for name, marker, colour in styles:
         x, y = groups[name]
         if x:
@@ -598,7 +742,7 @@ def stabilisation(scan, title=None, filename=None):
         orders = [get(p, "order") for p in points if get(p, "fit") == recommended]
         if orders:
             ax.axhline(orders[0], color="k", lw=0.8, ls="--", label="recommended")
-    ax.set_xlabel("natural frequency [Hz]")
+    ax.set_xlabel(f"natural {axis_label}")
     ax.set_ylabel("model order (poles)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize="small")
@@ -607,12 +751,16 @@ def stabilisation(scan, title=None, filename=None):
     return _finish(figure, filename)
 
 
-def modes(model, omegas=None, frf=None, title=None, filename=None):
-    """Magnitude of each submodel of an additive model, their sum, and optionally the FRF.
+def modes(model, omegas=None, frf=None, title=None, filename=None, frequency_unit="Hz"):
+    """Magnitude of each submodel of an additive model, their sum, and optionally the FRF
+    (shaded where its coherence, if known, is below 0.5).
 
-    ``model``: EstimationResult or AdditiveModel. Lines: "submodel i" (with w_n and zeta
-    for a second-order mode), "sum", "FRF". Returns the Figure.
+    ``model``: EstimationResult or AdditiveModel. ``omegas`` [rad/s]: the grid (default as
+    in bode). ``frequency_unit``: "Hz" (default) or "rad/s", for the axis and the labels.
+    Lines: "submodel i" (with f_n or w_n and zeta for a second-order mode), "sum", "FRF".
+    Returns the Figure.
     """
+    factor, axis_label = _frequency_axis(frequency_unit, "modes")
     base, _, _ = _as_model(model)
     if not isinstance(base, _ctid.AdditiveModel):
         raise TypeError("modes: needs an additive model")
@@ -620,19 +768,23 @@ def modes(model, omegas=None, frf=None, title=None, filename=None):
         omegas = _default_omegas(base, frf)
     omegas = np.asarray(omegas, dtype=float)
     columns = np.asarray(_ctid.submodel_frequency_responses(base, omegas))
-    figure, ax = plt.subplots(figsize=(7.0, 4.5))
+    figure, ax = _figure(figsize=(7.0, 4.5))
+    x = omegas * factor
     for i in range(columns.shape[1]):
         label = f"submodel {i + 1}"
         modal = base.modal_parameters(i)
         if modal is not None:
-            label += (f" (w_n = {modal.natural_frequency:.4g} rad/s, "
+            name = "f_n" if frequency_unit == "Hz" else "w_n"
+            label += (f" ({name} = {modal.natural_frequency * factor:.4g} {frequency_unit}, "
                       f"zeta = {modal.damping_ratio:.3g})")
-        ax.semilogx(omegas, _db(columns[:, i]), "--", lw=1, label=label)
-    ax.semilogx(omegas, _db(_ctid.frequency_response(base, omegas)), "k", lw=1.5, label="sum")
+        ax.semilogx(x, _db(columns[:, i]), "--", lw=1, label=label)
+    ax.semilogx(x, _db(_ctid.frequency_response(base, omegas)), "k", lw=1.5, label="sum")
     if frf is not None:
-        ax.semilogx(np.asarray(frf.frequencies), _db(frf.response), "o", ms=2.5, color="0.4",
-                    label="FRF")
-    ax.set_xlabel("frequency [rad/s]")
+        w = np.asarray(frf.frequencies, dtype=float)
+        _shade_low_coherence((ax,), w * factor,
+                             np.asarray(getattr(frf, "coherence", []), dtype=float))
+        ax.semilogx(w * factor, _db(frf.response), "o", ms=2.5, color="0.4", label="FRF")
+    ax.set_xlabel(axis_label)
     ax.set_ylabel("magnitude [dB]")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
@@ -657,7 +809,7 @@ def validation(data, simulated, title=None, filename=None):
     simulated = np.asarray(simulated, dtype=float)
     measured = np.asarray(data.output)
     fit = _ctid.fit_percent(measured, simulated)
-    figure, ax = plt.subplots(figsize=(8.0, 4.0))
+    figure, ax = _figure(figsize=(8.0, 4.0))
     t = np.asarray(data.time)
     ax.plot(t, measured, color="0.5", lw=1, label="measured")
     ax.plot(t, simulated, color="C0", lw=1, label="simulated")
@@ -690,7 +842,7 @@ def compare(data, models, labels=None, options=None, title=None, filename=None):
     inside = (t >= start - 1e-9) & (t <= end + 1e-9)
     if inside.sum() < 2:
         raise ValueError(f"compare: the window [{start}, {end}] s holds fewer than 2 samples")
-    figure, ax = plt.subplots(figsize=(8.0, 4.0))
+    figure, ax = _figure(figsize=(8.0, 4.0))
     ax.plot(t, measured, color="0.5", lw=1, label="measured")
     for i, (model, label) in enumerate(zip(models, labels)):
         if isinstance(model, (np.ndarray, list, tuple)):
@@ -738,17 +890,36 @@ def correlations(residual, input, max_lag=25):
     return lags_auto, r_e, lags_cross, r_eu
 
 
-def residual_correlation(residual, input, max_lag=25, confidence=0.99, title=None,
+def residual_correlation(residual, input=None, max_lag=25, confidence=0.99, title=None,
                          filename=None):
     """Residual autocorrelation and residual-input cross-correlation with confidence bounds.
 
-    The bounds +-z/sqrt(N) (z = 2.58 for 99 %) are those of a white residual uncorrelated
-    with the input. Lines: "autocorrelation", "cross-correlation", and the bounds labelled
-    "99% bound". Returns the Figure.
+    ``residual`` and ``input``: sample arrays (the correlations of :func:`correlations`), or
+    ``residual`` a ctid.ValidationReport (``ctid validate -o``; ``input`` None), whose
+    correlations (r_ee at lags 1..max_lag, r_eu at -max_lag..max_lag, the same sign
+    convention) and 99 % bound are drawn as they are. The bounds +-z/sqrt(N) (z = 2.58 for
+    99 %) are those of a white residual uncorrelated with the input. r_eu(k) pairs e(t + k)
+    with u(t), so a peak at k > 0 means the input leads the residual (the model misses some of
+    the input's effect), at k < 0 that the residual leads the input (feedback). Lines:
+    "autocorrelation", "cross-correlation", and the bounds labelled "99% bound". Returns the
+    Figure.
     """
-    lags_auto, r_e, lags_cross, r_eu = correlations(residual, input, max_lag)
-    bound = NormalDist().inv_cdf(0.5 + confidence / 2.0) / math.sqrt(len(residual))
-    figure, (ax_auto, ax_cross) = plt.subplots(2, 1, figsize=(7.0, 5.5))
+    if isinstance(residual, _ctid.ValidationReport):
+        report = residual
+        if report.max_lag < 1:
+            raise ValueError("residual_correlation: the report has no correlation lags")
+        lags_auto = np.arange(1, report.max_lag + 1)
+        r_e = np.asarray(report.residual_autocorrelation, dtype=float)
+        lags_cross = np.arange(-report.max_lag, report.max_lag + 1)
+        r_eu = np.asarray(report.cross_correlation, dtype=float)
+        bound = report.whiteness_bound
+        confidence = 0.99
+    else:
+        if input is None:
+            raise TypeError("residual_correlation: give the input beside the residual samples")
+        lags_auto, r_e, lags_cross, r_eu = correlations(residual, input, max_lag)
+        bound = NormalDist().inv_cdf(0.5 + confidence / 2.0) / math.sqrt(len(residual))
+    figure, (ax_auto, ax_cross) = _figure(2, 1, figsize=(7.0, 5.5))
     label = f"{100 * confidence:g}% bound"
     ax_auto.plot(lags_auto, r_e, "o-", ms=3, lw=1, label="autocorrelation")
     ax_cross.plot(lags_cross, r_eu, "o-", ms=3, lw=1, color="C2", label="cross-correlation")
@@ -759,7 +930,8 @@ def residual_correlation(residual, input, max_lag=25, confidence=0.99, title=Non
         ax.legend(fontsize=8)
     ax_auto.set_xlabel("lag [samples]")
     ax_auto.set_ylabel("residual autocorrelation")
-    ax_cross.set_xlabel("lag [samples] (residual leads input for lag > 0)")
+    ax_cross.set_xlabel("lag k [samples]: r(k) pairs e(t + k) with u(t); k > 0: input leads "
+                        "residual")
     ax_cross.set_ylabel("residual-input correlation")
     if title:
         ax_auto.set_title(title)
@@ -768,7 +940,7 @@ def residual_correlation(residual, input, max_lag=25, confidence=0.99, title=Non
 
 def _mse_rows(source):
     """Rows as dicts estimator, N, parameter, mse, predicted_mse."""
-    if isinstance(source, _ctid.StudyResult):
+    if isinstance(source, (_ctid.StudyResult, _ctid.StudySummary)):
         rows = []
         for row in source.mse:
             rows.append({
@@ -796,8 +968,9 @@ def mse_against_n(study, title=None, filename=None):
     line per estimator ("<estimator>") and the asymptotic-covariance prediction dashed
     ("<estimator> (predicted)").
 
-    ``study``: a ctid.StudyResult, or rows (dicts) with the columns of the CLI's mse.csv
-    (estimator, N, parameter, mse, predicted_mse). Returns the Figure.
+    ``study``: a ctid.StudyResult or ctid.StudySummary (``ctid study``'s summary.json), or
+    rows (dicts) with the columns of the CLI's mse.csv (estimator, N, parameter, mse,
+    predicted_mse). Returns the Figure.
     """
     rows = _mse_rows(study)
     if not rows:
@@ -806,7 +979,7 @@ def mse_against_n(study, title=None, filename=None):
     estimators = list(dict.fromkeys(r["estimator"] for r in rows))
     cols = min(len(parameters), 2 if len(parameters) <= 4 else 3)
     nrows = math.ceil(len(parameters) / cols)
-    figure, axes = plt.subplots(nrows, cols, figsize=(4.2 * cols, 3.2 * nrows), squeeze=False)
+    figure, axes = _figure(nrows, cols, figsize=(4.2 * cols, 3.2 * nrows), squeeze=False)
     for ax, parameter in zip(axes.flat, parameters):
         for k, estimator in enumerate(estimators):
             sel = sorted((r for r in rows

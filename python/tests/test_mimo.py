@@ -136,8 +136,6 @@ def test_orthogonal_multisines_give_a_well_conditioned_frf():
 
 
 def test_frf_matrix_figure_from_the_result_and_from_the_cli_document(tmp_path):
-    import json
-
     import ctid.plot
     from ctid import plotting
 
@@ -153,15 +151,7 @@ def test_frf_matrix_figure_from_the_result_and_from_the_cli_document(tmp_path):
         drawn["a2/f1"].get_ydata(), 20 * np.log10(np.abs(frf.response[:, 1, 0]))
     )
     assert [line.get_label() for line in bottom.get_lines()] == ["coherence a1", "coherence a2"]
-    document = {
-        "type": "mimo_frf",
-        "inputs": frf.input_names,
-        "outputs": frf.output_names,
-        "frequencies": list(frf.frequencies),
-        "response": [[[[h.real, h.imag] for h in row] for row in m] for m in frf.response],
-        "coherence": frf.coherence.tolist(),
-    }
-    (tmp_path / "m.json").write_text(json.dumps(document))
+    ctid.write_result(str(tmp_path / "m.json"), frf)  # the mimo_frf document of ctid frf
     again = ctid.plot.run("frf_matrix", str(tmp_path / "m.json"), str(tmp_path / "n.png"))
     np.testing.assert_allclose(again.axes[0].get_lines()[0].get_ydata(),
                                top.get_lines()[0].get_ydata())

@@ -207,13 +207,8 @@ def test_frf_matrix_overlay_defaults_to_the_largest_channels(fit, data):
 
 
 def mimo_frf_document(frf):
-    """The mimo_frf document `ctid frf -o X.json` writes, built from a MimoFrf."""
-    response = np.asarray(frf.response)
-    return {"type": "mimo_frf", "version": 1, "inputs": list(frf.input_names),
-            "outputs": list(frf.output_names), "lines": list(frf.lines),
-            "frequencies": list(np.asarray(frf.frequencies)),
-            "response": np.stack([response.real, response.imag], axis=-1).tolist(),
-            "coherence": np.asarray(frf.coherence).tolist()}
+    """The mimo_frf document `ctid frf -o X.json` writes, from a MimoFrf."""
+    return json.loads(ctid.result_to_json(frf))
 
 
 def write_fit(path, result, outputs=OUTPUTS):
@@ -271,13 +266,15 @@ def test_plot_entry_point_refuses_bad_mimo_input(tmp_path, fit):
     assert done.returncode == 2
     assert done.stderr.startswith("ctid.plot: frf_matrix_overlay needs --frf FRF.json")
     done = run("mode_shapes", str(result), str(tmp_path / "o.png"), "--frf", str(result))
-    assert done.returncode == 2 and "--frf goes with frf_matrix_overlay" in done.stderr
+    assert done.returncode == 2
+    assert "--frf goes with bode, modes and frf_matrix_overlay" in done.stderr
     siso = tmp_path / "siso.json"
     with open(siso, "w") as stream:
         json.dump({"type": "additive_model", "submodels": []}, stream)
     done = run("mac", str(siso), str(tmp_path / "o.png"))
     assert done.returncode == 2
-    assert "not a mimo_estimation_result document (type 'additive_model')" in done.stderr
+    assert ("not a mimo_estimation_result or frf_matrix_fit_result document (type "
+            "'additive_model')") in done.stderr
     done = run("mode_shapes", str(result), str(tmp_path / "shapes.png"))
     assert done.returncode == 0, done.stderr
     check_png(tmp_path / "shapes.png")

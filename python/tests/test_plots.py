@@ -42,13 +42,13 @@ def test_bode_draws_the_model_frf_and_band(tmp_path, experiment, fitted):
     check_png(path)
     ax_mag, ax_phase = figure.axes
     model = line(ax_mag, "model")
-    w = model.get_xdata()
+    w = model.get_xdata() * 2 * np.pi  # the axis is in Hz
     expected = np.asarray(ctid.frequency_response(fitted.model, w))
     np.testing.assert_allclose(model.get_ydata(), 20 * np.log10(np.abs(expected)), rtol=1e-12)
     np.testing.assert_allclose(np.deg2rad(line(ax_phase, "model").get_ydata()),
                                np.unwrap(np.angle(expected)), atol=1e-12)
     measured = line(ax_mag, "FRF")
-    np.testing.assert_allclose(measured.get_xdata(), frf.frequencies)
+    np.testing.assert_allclose(measured.get_xdata(), frf.frequencies / (2 * np.pi))
     np.testing.assert_allclose(measured.get_ydata(), 20 * np.log10(np.abs(frf.response)))
     # The band is there and brackets the model.
     bands = [c for c in ax_mag.collections if c.get_label() == "95% band"]
@@ -68,7 +68,7 @@ def test_bode_draws_the_model_as_the_samples_see_it(tmp_path, experiment, fitted
                            filename=tmp_path / "bode.png")
     ax_mag, ax_phase = figure.axes
     seen = line(ax_mag, "model, sampled (zoh)")
-    w = seen.get_xdata()
+    w = seen.get_xdata() * 2 * np.pi
     assert w.max() < np.pi / h
     expected = np.asarray(ctid.sampled_frequency_response(fitted.model, w, h,
                                                           ctid.Hold.zero_order_hold))
@@ -96,12 +96,17 @@ def test_modes_draws_each_submodel(tmp_path):
         ctid.Submodel(ctid.Polynomial([1.0, 0.02, 0.25]), ctid.Polynomial([1.0])),
         ctid.Submodel(ctid.Polynomial([1.0, 0.005, 1 / 144.0]), ctid.Polynomial([0.3]))])
     path = tmp_path / "modes.png"
-    figure = plotting.modes(model, filename=path)
+    figure = plotting.modes(model, filename=path, frequency_unit="rad/s")
     check_png(path)
     ax = figure.axes[0]
     labels = [l.get_label() for l in ax.get_lines()]
     assert labels[0].startswith("submodel 1 (w_n = 2 rad/s")
     assert labels[1].startswith("submodel 2 (w_n = 12 rad/s")
+    hz = plotting.modes(model).axes[0]
+    assert [l.get_label() for l in hz.get_lines()][0].startswith(
+        f"submodel 1 (f_n = {2 / (2 * np.pi):.4g} Hz")
+    np.testing.assert_allclose(line(hz, "sum").get_xdata() * 2 * np.pi,
+                               line(ax, "sum").get_xdata(), rtol=1e-14)
     total = line(ax, "sum")
     columns = ctid.submodel_frequency_responses(model, total.get_xdata())
     np.testing.assert_allclose(ax.get_lines()[1].get_ydata(),
@@ -242,7 +247,7 @@ def test_command_line_bad_input_exits_2(tmp_path):
                                      "frf_matrix_overlay")
     (tmp_path / "bad.json").write_text('{"type": "state_space"}')
     result = run_plot("bode", tmp_path / "bad.json", tmp_path / "x.png")
-    assert result.returncode == 2 and "'type' is 'state_space'" in result.stderr
+    assert result.returncode == 2 and '"type" is "state_space"' in result.stderr
     (tmp_path / "tf.json").write_text(
         '{"type": "transfer_function", "numerator_ascending": [1], '
         '"denominator_ascending": [0, 0]}')

@@ -19,7 +19,8 @@ std::vector<std::string> result_document_types() {
           std::string(kDelayedFeedbackResultType),
           kStructureScanResultType,
           kMimoEstimationResultType,
-          kFrfMatrixFitResultType};
+          kFrfMatrixFitResultType,
+          kMimoFrfType};
 }
 
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source) {
@@ -40,6 +41,7 @@ ResultDocument result_from_json(const nlohmann::json& value, const std::string& 
   if (name == kStructureScanResultType) return structure_scan_result_from_json(value, source);
   if (name == kMimoEstimationResultType) return mimo_estimation_result_from_json(value, source);
   if (name == kFrfMatrixFitResultType) return frf_matrix_fit_result_from_json(value, source);
+  if (name == kMimoFrfType) return mimo_frf_from_json(value, source);
   throw InvalidArgument(source + ": \"type\" is \"" + name +
                         "\", which is not a result document (" + types + ")");
 }

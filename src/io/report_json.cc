@@ -3,6 +3,8 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <limits>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -112,6 +114,132 @@ nlohmann::json to_json(const MimoFrf& frf) {
           {"input_condition", std::move(condition)},
           {"averages", frf.averages},
           {"block_length", frf.block_length}};
+}
+
+namespace {
+
+// The readers of the mimo_frf arrays: every level's length is checked against the FRF's lines,
+// outputs and inputs, and errors name the source and the entry ("response[3][0][1]").
+class MimoFrfReader {
+ public:
+  MimoFrfReader(const nlohmann::json& value, const std::string& source)
+      : value_(value), source_(source) {}
+
+  const nlohmann::json& field(const char* key) const {
+    const auto found = value_.find(key);
+    require(found != value_.end(), source_, ": ", key, ": required field is missing");
+    return *found;
+  }
+  const nlohmann::json& array(const nlohmann::json& v, std::size_t size,
+                              const std::string& where) const {
+    require(v.is_array() && v.size() == size, source_, ": ", where, ": expected an array of ", size,
+            " entries");
+    return v;
+  }
+  // A number; null is the writer's unknown value, NaN.
+  double number(const nlohmann::json& v, const std::string& where) const {
+    if (v.is_null()) return std::numeric_limits<double>::quiet_NaN();
+    require(v.is_number(), source_, ": ", where, ": expected a number or null");
+    return v.get<double>();
+  }
+  int integer(const nlohmann::json& v, const std::string& where) const {
+    require(v.is_number_integer(), source_, ": ", where, ": expected an integer");
+    return v.get<int>();
+  }
+  std::vector<std::string> names(const char* key) const {
+    const nlohmann::json& v = field(key);
+    require(v.is_array() && !v.empty(), source_, ": ", key, ": expected a non-empty array");
+    std::vector<std::string> out;
+    for (const auto& name : v) {
+      require(name.is_string(), source_, ": ", key, ": expected names (strings)");
+      out.push_back(name.get<std::string>());
+    }
+    return out;
+  }
+  // A (lines x columns) matrix written as one row per line.
+  Eigen::MatrixXd matrix(const char* key, std::size_t lines, std::size_t columns) const {
+    const nlohmann::json& rows = array(field(key), lines, key);
+    Eigen::MatrixXd out(static_cast<Eigen::Index>(lines), static_cast<Eigen::Index>(columns));
+    for (std::size_t l = 0; l < lines; ++l) {
+      const std::string where = ctid::internal::concat(key, "[", l, "]");
+      const nlohmann::json& row = array(rows[l], columns, where);
+      for (std::size_t c = 0; c < columns; ++c) {
+        out(static_cast<Eigen::Index>(l), static_cast<Eigen::Index>(c)) =
+            number(row[c], ctid::internal::concat(where, "[", c, "]"));
+      }
+    }
+    return out;
+  }
+
+ private:
+  const nlohmann::json& value_;
+  const std::string& source_;
+};
+
+}  // namespace
+
+MimoFrf mimo_frf_from_json(const nlohmann::json& value, const std::string& source) {
+  check_document(value, kMimoFrfType, source);
+  check_keys(value,
+             {"inputs", "outputs", "lines", "frequencies", "response", "variance", "coherence",
+              "output_power", "input_level", "input_condition", "averages", "block_length"},
+             {"type", "version", "method", "data", "peaks_of", "peaks"}, source);
+  const MimoFrfReader read(value, source);
+  MimoFrf frf;
+  frf.input_names = read.names("inputs");
+  frf.output_names = read.names("outputs");
+  const std::size_t n_u = frf.input_names.size();
+  const std::size_t n_y = frf.output_names.size();
+  const nlohmann::json& frequencies = read.field("frequencies");
+  require(frequencies.is_array(), source, ": frequencies: expected an array");
+  const std::size_t lines = frequencies.size();
+  frf.frequencies.resize(static_cast<Eigen::Index>(lines));
+  const nlohmann::json& line_numbers = read.array(read.field("lines"), lines, "lines");
+  const nlohmann::json& response = read.array(read.field("response"), lines, "response");
+  const Eigen::MatrixXd coherence = read.matrix("coherence", lines, n_y);
+  const Eigen::MatrixXd output_power = read.matrix("output_power", lines, n_y);
+  const Eigen::MatrixXd input_level = read.matrix("input_level", lines, n_u);
+  const nlohmann::json& condition =
+      read.array(read.field("input_condition"), lines, "input_condition");
+  const nlohmann::json& variance = read.array(read.field("variance"), lines, "variance");
+  for (std::size_t l = 0; l < lines; ++l) {
+    const auto e = static_cast<Eigen::Index>(l);
+    frf.frequencies(e) =
+        read.number(frequencies[l], ctid::internal::concat("frequencies[", l, "]"));
+    frf.lines.push_back(read.integer(line_numbers[l], ctid::internal::concat("lines[", l, "]")));
+    Eigen::MatrixXcd h(static_cast<Eigen::Index>(n_y), static_cast<Eigen::Index>(n_u));
+    Eigen::MatrixXd v(static_cast<Eigen::Index>(n_y), static_cast<Eigen::Index>(n_u));
+    const std::string at = ctid::internal::concat("[", l, "]");
+    const nlohmann::json& h_rows = read.array(response[l], n_y, "response" + at);
+    const nlohmann::json& v_rows = read.array(variance[l], n_y, "variance" + at);
+    for (std::size_t j = 0; j < n_y; ++j) {
+      const std::string row = ctid::internal::concat(at, "[", j, "]");
+      const nlohmann::json& h_row = read.array(h_rows[j], n_u, "response" + row);
+      const nlohmann::json& v_row = read.array(v_rows[j], n_u, "variance" + row);
+      for (std::size_t i = 0; i < n_u; ++i) {
+        const std::string entry = ctid::internal::concat(row, "[", i, "]");
+        const nlohmann::json& pair = read.array(h_row[i], 2, "response" + entry);
+        const auto r = static_cast<Eigen::Index>(j);
+        const auto c = static_cast<Eigen::Index>(i);
+        h(r, c) = {read.number(pair[0], "response" + entry + "[0]"),
+                   read.number(pair[1], "response" + entry + "[1]")};
+        v(r, c) = read.number(v_row[i], "variance" + entry);
+      }
+    }
+    frf.response.push_back(std::move(h));
+    frf.variance.push_back(std::move(v));
+  }
+  frf.coherence = coherence;
+  frf.output_power = output_power;
+  frf.input_level = input_level;
+  frf.input_condition.resize(static_cast<Eigen::Index>(lines));
+  for (std::size_t l = 0; l < lines; ++l) {
+    frf.input_condition(static_cast<Eigen::Index>(l)) =
+        read.number(condition[l], ctid::internal::concat("input_condition[", l, "]"));
+  }
+  frf.averages = read.integer(read.field("averages"), "averages");
+  frf.block_length = read.integer(read.field("block_length"), "block_length");
+  return frf;
 }
 
 nlohmann::json to_json(const StudySummary& summary) { return document(summary, kStudySummaryType); }

@@ -30,16 +30,17 @@
 namespace ctid::io {
 
 /// A result read from a document, by its "type".
-using ResultDocument = std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult,
-                                    ValidationReport, Frf, StudySummary, DelayedFeedbackResult,
-                                    StructureScanResult, MimoEstimationResult, FrfMatrixFitResult>;
+using ResultDocument =
+    std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult, ValidationReport,
+                 Frf, StudySummary, DelayedFeedbackResult, StructureScanResult,
+                 MimoEstimationResult, FrfMatrixFitResult, MimoFrf>;
 
 /// The "type" values result_from_json reads, in the order of ResultDocument.
 std::vector<std::string> result_document_types();
 
 /// The result in `value`, by its "type" (estimation_result, mode_relocation_result,
 /// input_delay_scan_result, validation_report, frf, study_summary, delayed_feedback_result,
-/// structure_scan_result, mimo_estimation_result, frf_matrix_fit_result). Throws
+/// structure_scan_result, mimo_estimation_result, frf_matrix_fit_result, mimo_frf). Throws
 /// InvalidArgument naming `source` for a missing or unknown type, an unknown version or a bad
 /// field.
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source);

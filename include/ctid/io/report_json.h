@@ -50,6 +50,10 @@ Frf frf_from_json(const nlohmann::json& value, const std::string& source);
 /// [line][output][input], "coherence" and "output_power": [line][output], "input_level":
 /// [line][input], "input_condition": [line], "averages", "block_length"} (NaN as null).
 nlohmann::json to_json(const MimoFrf& frf);
+/// Reads it back (null as NaN); the context `ctid frf` writes ("method", "data", "peaks_of",
+/// "peaks") is accepted and not read. Every array's length is checked against the lines,
+/// outputs and inputs, and an error names the entry.
+MimoFrf mimo_frf_from_json(const nlohmann::json& value, const std::string& source);
 
 /// {"type": "study_summary", "version": 1, <fields>}.
 nlohmann::json to_json(const StudySummary& summary);
