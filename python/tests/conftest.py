@@ -24,6 +24,27 @@ def _reference_binary():
     return None
 
 
+def _ctid_binary():
+    candidates = []
+    if os.environ.get("CTID_BUILD_DIR"):
+        candidates.append(pathlib.Path(os.environ["CTID_BUILD_DIR"]))
+    candidates.append(pathlib.Path(ctid.__file__).resolve().parents[2])
+    for build in candidates:
+        binary = build / "apps" / "ctid" / "ctid"
+        if binary.exists():
+            return binary
+    return None
+
+
+@pytest.fixture(scope="session")
+def cli():
+    """The ctid command line of the build the package comes from (or CTID_BUILD_DIR's)."""
+    binary = _ctid_binary()
+    if binary is None:
+        pytest.fail("the ctid command line was not found (set CTID_BUILD_DIR)")
+    return binary
+
+
 @pytest.fixture(scope="session")
 def reference_binary():
     binary = _reference_binary()

@@ -3,7 +3,6 @@ Python class of its result, with the values the command reported; result_to_json
 write_result give documents that read back equal."""
 
 import json
-import os
 import pathlib
 import subprocess
 import sys
@@ -15,25 +14,6 @@ import ctid
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 MODELS = ROOT / "examples" / "models"
-
-
-def _cli():
-    candidates = []
-    if os.environ.get("CTID_BUILD_DIR"):
-        candidates.append(pathlib.Path(os.environ["CTID_BUILD_DIR"]) / "apps" / "ctid" / "ctid")
-    candidates.append(pathlib.Path(ctid.__file__).resolve().parents[2] / "apps" / "ctid" / "ctid")
-    for binary in candidates:
-        if binary.exists():
-            return binary
-    return None
-
-
-@pytest.fixture(scope="module")
-def cli():
-    binary = _cli()
-    if binary is None:
-        pytest.fail("the ctid command line was not found (set CTID_BUILD_DIR)")
-    return binary
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,6 @@ result file must hold the very numbers Python returns; identify() must also equa
 estimator bit for bit, and bad options raise ctid.InvalidArgument naming the field."""
 
 import json
-import os
 import pathlib
 import subprocess
 
@@ -22,26 +21,6 @@ TRUTH = ctid.AdditiveModel.from_parameters(MODES, [0.25, 0.25, 3.0, 0.01, 0.025,
 PID = ctid.DiscreteTransferFunction(ctid.Polynomial([0.00454, -0.02058, 0.02329]),
                                     ctid.Polynomial([0.0, -1.0, 1.0]), H)
 PID_FILE = pathlib.Path(__file__).resolve().parents[2] / "examples/models/gonzalez_6_2_pid.json"
-
-
-def _ctid_binary():
-    candidates = []
-    if os.environ.get("CTID_BUILD_DIR"):
-        candidates.append(pathlib.Path(os.environ["CTID_BUILD_DIR"]))
-    candidates.append(pathlib.Path(ctid.__file__).resolve().parents[2])
-    for build in candidates:
-        binary = build / "apps" / "ctid" / "ctid"
-        if binary.exists():
-            return binary
-    return None
-
-
-@pytest.fixture(scope="module")
-def cli():
-    binary = _ctid_binary()
-    if binary is None:
-        pytest.fail("the ctid CLI was not built in the build folder of the ctid package")
-    return binary
 
 
 def write_csv(path, columns):

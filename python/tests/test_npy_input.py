@@ -3,8 +3,6 @@ ctid command line fits the same model from both, bit for bit, and ctid.read_mimo
 the same arrays; float32 and integer arrays are read as doubles; a Fortran-order array is
 refused with one line naming the file."""
 
-import os
-import pathlib
 import subprocess
 
 import numpy as np
@@ -13,25 +11,6 @@ import pytest
 import ctid
 
 H = 0.05
-
-
-def _cli():
-    candidates = []
-    if os.environ.get("CTID_BUILD_DIR"):
-        candidates.append(pathlib.Path(os.environ["CTID_BUILD_DIR"]) / "apps" / "ctid" / "ctid")
-    candidates.append(pathlib.Path(ctid.__file__).resolve().parents[2] / "apps" / "ctid" / "ctid")
-    for binary in candidates:
-        if binary.exists():
-            return binary
-    return None
-
-
-@pytest.fixture(scope="module")
-def cli():
-    binary = _cli()
-    if binary is None:
-        pytest.fail("the ctid command line was not found (set CTID_BUILD_DIR)")
-    return binary
 
 
 @pytest.fixture(scope="module")
