@@ -38,14 +38,17 @@ class FitMimoCommand : public testing::CliTest {
  protected:
   void SetUp() override {
     CliTest::SetUp();
-    const MimoAdditiveModel g = two_mode_structure();
+    write_record("d.csv", two_mode_structure());
+  }
+  // 2000 noise-free samples of `g` (forces f1, f2; accelerations a1..a3) to `name`.
+  void write_record(const std::string& name, const MimoAdditiveModel& g) {
     Eigen::MatrixXd u(2000, 2);
     for (int k = 0; k < 2; ++k) u.col(k) = white_noise(2000, 1.0, 5 + k);
     Eigen::MatrixXd y = Eigen::MatrixXd::Zero(2000, 3);
     for (int j = 0; j < 3; ++j) {
       for (int k = 0; k < 2; ++k) y.col(j) += simulate(g.channel(j, k), u.col(k), kH);
     }
-    io::write_mimo_data(path("d.csv"),
+    io::write_mimo_data(path(name),
                         MimoData(kH, u, y).with_names({"f1", "f2"}, {"a1", "a2", "a3"}));
   }
 };
@@ -101,14 +104,7 @@ TEST_F(FitMimoCommand, KnownInputDelaysAreFittedAndWrittenWithTheModel) {
   // Shaker f2 acts three samples late.
   const MimoAdditiveModel g =
       two_mode_structure().with_input_delays(Eigen::Vector2d(0.0, 3.0 * kH));
-  Eigen::MatrixXd u(2000, 2);
-  for (int k = 0; k < 2; ++k) u.col(k) = white_noise(2000, 1.0, 5 + k);
-  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(2000, 3);
-  for (int j = 0; j < 3; ++j) {
-    for (int k = 0; k < 2; ++k) y.col(j) += simulate(g.channel(j, k), u.col(k), kH);
-  }
-  io::write_mimo_data(path("late.csv"),
-                      MimoData(kH, u, y).with_names({"f1", "f2"}, {"a1", "a2", "a3"}));
+  write_record("late.csv", g);
   const std::vector<std::string> args{
       "fit", "late.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a3", "--modes", "2"};
   auto with = [&](std::vector<std::string> extra) {

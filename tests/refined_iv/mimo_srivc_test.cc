@@ -135,19 +135,25 @@ TEST(MimoSrivc, StartsFromTheFrfPeaksOfALightlyDampedStructure) {
   EXPECT_TRUE(r.verdict.usable);
 }
 
-TEST(MimoSrivc, DirectTermIsRecoveredExactly) {
-  // Accelerations from forces: modes with first-order numerators and a direct term.
-  std::mt19937_64 rng(41);
+// Accelerations from two forces: modes at 1.3, 3.7 and 8.2 rad/s with random first-order
+// numerators and a random direct term.
+MimoAdditiveModel accelerance(int outputs, unsigned seed, Eigen::VectorXd input_delays = {}) {
+  std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal;
   std::vector<MimoSubmodel> submodels;
   for (double w : {1.3, 3.7, 8.2}) {
     MimoSubmodel s{Polynomial{1.0, 0.04 / w, 1.0 / (w * w)}, {}};
-    for (int c = 0; c < 2 * 6; ++c) s.b.push_back(Polynomial{normal(rng), normal(rng)});
+    for (int c = 0; c < 2 * outputs; ++c) s.b.push_back(Polynomial{normal(rng), normal(rng)});
     submodels.push_back(std::move(s));
   }
-  Eigen::MatrixXd d(6, 2);
+  Eigen::MatrixXd d(outputs, 2);
   for (Eigen::Index c = 0; c < d.size(); ++c) d(c) = normal(rng);
-  const MimoAdditiveModel truth(2, 6, submodels, d);
+  return MimoAdditiveModel(2, outputs, submodels, d, std::move(input_delays));
+}
+
+TEST(MimoSrivc, DirectTermIsRecoveredExactly) {
+  const MimoAdditiveModel truth = accelerance(6, 41);
+  const Eigen::MatrixXd d = truth.direct();
   const MimoData data = noise_free(truth, 3000, 21);
   MimoRefinedIvOptions options;
   options.direct_term = true;
@@ -348,18 +354,9 @@ TEST(MimoSrivc, PerInputDelaysInWholeSamplesAreRecoveredExactly) {
 
 TEST(MimoSrivc, FractionalInputDelaysWithADirectTermAreRecoveredExactly) {
   // Accelerations from forces through actuators with their own lags, under both holds.
-  std::mt19937_64 rng(43);
-  std::normal_distribution<double> normal;
-  std::vector<MimoSubmodel> submodels;
-  for (double w : {1.3, 3.7, 8.2}) {
-    MimoSubmodel s{Polynomial{1.0, 0.04 / w, 1.0 / (w * w)}, {}};
-    for (int c = 0; c < 2 * 4; ++c) s.b.push_back(Polynomial{normal(rng), normal(rng)});
-    submodels.push_back(std::move(s));
-  }
-  Eigen::MatrixXd d(4, 2);
-  for (Eigen::Index c = 0; c < d.size(); ++c) d(c) = normal(rng);
   const std::vector<double> delays{2.5, 0.25};
-  const MimoAdditiveModel truth(2, 4, submodels, d, Eigen::Vector2d(2.5 * kH, 0.25 * kH));
+  const MimoAdditiveModel truth = accelerance(4, 43, Eigen::Vector2d(2.5 * kH, 0.25 * kH));
+  const Eigen::MatrixXd d = truth.direct();
   Eigen::MatrixXd u(3000, 2);
   for (int k = 0; k < 2; ++k) u.col(k) = white_noise(3000, 1.0, 90 + k);
   for (Hold hold : {Hold::zero_order_hold, Hold::first_order_hold}) {
