@@ -1052,6 +1052,243 @@ MimoEstimationResult siso_result(const Layout& layout, const MimoData& data,
   return result;
 }
 
+// Rank-one residues (MimoRefinedIvOptions::rank_one_residues): with the shared poles fixed, each
+// mode's residue matrix is restricted to Res_i = psi_i L_i^T and the numerators are fitted to
+// the outputs by least squares, alternating between the shapes psi (every output's equations
+// apart, linear) and the participations L (all outputs together, linear). With
+// c_jk = A_i'(s) Res_i[j, k] = psi_j L'_k (s the upper pole, L' = A_i'(s) L), the mode's output
+// j is sum_k Re(c_jk) e_k - Im(c_jk) f_k with e_k = p^0 / A_i u_k and, for m_i = 1,
+// f_k = -(p / A_i u_k - Re(s) e_k) / Im(s); so N0 = Re c - Re(s) Im c / Im s, N1 = Im c / Im s.
+// A mode with m_i = 0 has real c: psi and L real. Every other column (integrators, real poles,
+// other modes, D) stays general and is refitted with the shapes. One thin QR of the columns
+// turns every step into a problem of their number, whatever the record's length.
+struct RankOneFit {
+  MimoAdditiveModel model;
+  int iterations = 0;
+  int modes = 0;
+};
+
+RankOneFit rank_one_residues(const Layout& layout, const MimoData& data,
+                             const MimoAdditiveModel& general) {
+  struct Mode {
+    int submodel;
+    bool complex;  // m_i = 1
+    std::complex<double> pole;
+    int at;  // first basis column: e_0..e_{nu-1}, then f_0..f_{nu-1} when complex
+    Eigen::VectorXcd psi;
+    Eigen::VectorXcd l;
+  };
+  const int nu = layout.inputs;
+  const int ny = layout.outputs;
+  const Eigen::MatrixXd u = numerator_regressors(layout, data, denominators(general));
+  std::vector<Mode> modes;
+  std::vector<bool> in_mode(static_cast<size_t>(layout.u_count), false);
+  int p = 0;
+  for (int i = 0; i < layout.size(); ++i) {
+    const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+    const Polynomial& a = general[i].a;
+    if (o.n != 2 || o.integrators > 0 || o.m > 1 || !(a[1] * a[1] < 4.0 * a[2])) continue;
+    std::complex<double> pole =
+        (-a[1] + std::sqrt(std::complex<double>(a[1] * a[1] - 4.0 * a[2]))) / (2.0 * a[2]);
+    if (pole.imag() < 0.0) pole = std::conj(pole);
+    modes.push_back({i, o.m == 1, pole, p, {}, {}});
+    p += o.m == 1 ? 2 * nu : nu;
+    for (int k = 0; k < nu; ++k) {
+      for (int r = 0; r <= o.m; ++r) in_mode[static_cast<size_t>(layout.u_column(i, k, r))] = true;
+    }
+  }
+  std::vector<int> others;
+  for (int c = 0; c < layout.u_count; ++c) {
+    if (!in_mode[static_cast<size_t>(c)]) others.push_back(c);
+  }
+  if (modes.empty()) return {general, 0, 0};
+  const int n_modes = static_cast<int>(modes.size());
+  const int n_other = static_cast<int>(others.size());
+  const int p_all = p + n_other;
+
+  // The basis F = [e, f of every mode | the other columns] and its thin QR.
+  Eigen::MatrixXd f(data.size(), p_all);
+  for (const Mode& m : modes) {
+    for (int k = 0; k < nu; ++k) {
+      const auto e = u.col(layout.u_column(m.submodel, k, 0));
+      f.col(m.at + k) = e;
+      if (m.complex) {
+        f.col(m.at + nu + k) =
+            -(u.col(layout.u_column(m.submodel, k, 1)) - m.pole.real() * e) / m.pole.imag();
+      }
+    }
+  }
+  for (int c = 0; c < n_other; ++c) f.col(p + c) = u.col(others[static_cast<size_t>(c)]);
+  const ScaledQr qr = scaled_thin_qr(f);
+  // F = Q R S (S the column norms): R S maps coefficients of F to the QR coordinates, q_y = Q^T y.
+  const Eigen::MatrixXd r = qr.r * qr.scale.asDiagonal();
+  const Eigen::MatrixXd q_y = qr.q.transpose() * data.outputs();
+
+  // Start: the principal singular pair of each mode's c = A'(s) Res matrix.
+  for (Mode& m : modes) {
+    Eigen::MatrixXcd c(ny, nu);
+    for (int j = 0; j < ny; ++j) {
+      for (int k = 0; k < nu; ++k) {
+        const Polynomial& b = general.numerator(m.submodel, j, k);
+        std::complex<double> value = 0.0;
+        for (int q = b.degree(); q >= 0; --q) value = value * m.pole + b[q];
+        c(j, k) = value;
+      }
+    }
+    if (!m.complex) c = c.real().cast<std::complex<double>>();
+    const Eigen::JacobiSVD<Eigen::MatrixXcd> svd(c, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    m.psi = svd.matrixU().col(0) * svd.singularValues()(0);
+    m.l = svd.matrixV().col(0).conjugate();
+    if (!m.complex) {
+      // A real matrix's singular vectors may carry a common phase: take it out.
+      Eigen::Index big = 0;
+      m.psi.cwiseAbs().maxCoeff(&big);
+      const std::complex<double> phase = m.psi(big) / std::abs(m.psi(big));
+      m.psi = (m.psi / phase).real().cast<std::complex<double>>();
+      m.l = (m.l * phase).real().cast<std::complex<double>>();
+    }
+  }
+
+  // Coefficients of output j in F's columns for given shapes and participations.
+  const auto theta_of = [&](int j, const Eigen::VectorXd& general_part) {
+    Eigen::VectorXd theta(p_all);
+    for (const Mode& m : modes) {
+      for (int k = 0; k < nu; ++k) {
+        const std::complex<double> c = m.psi(j) * m.l(k);
+        theta(m.at + k) = c.real();
+        if (m.complex) theta(m.at + nu + k) = -c.imag();
+      }
+    }
+    theta.tail(n_other) = general_part;
+    return theta;
+  };
+  Eigen::MatrixXd other(n_other, ny);  // the general columns' coefficients, per output
+  double cost = std::numeric_limits<double>::infinity();
+  int iteration = 0;
+  constexpr int kMaxSweeps = 2000;
+  for (iteration = 1; iteration <= kMaxSweeps; ++iteration) {
+    // Shapes (and the other columns), output by output: theta_j = T(L) [Re psi, Im psi, other].
+    int q_cols = n_other;
+    for (const Mode& m : modes) q_cols += m.complex ? 2 : 1;
+    Eigen::MatrixXd t = Eigen::MatrixXd::Zero(p_all, q_cols);
+    int col = 0;
+    for (const Mode& m : modes) {
+      for (int k = 0; k < nu; ++k) {
+        // Re c = Re psi Re L - Im psi Im L; -Im c = -(Re psi Im L + Im psi Re L).
+        t(m.at + k, col) = m.l(k).real();
+        if (m.complex) {
+          t(m.at + k, col + 1) = -m.l(k).imag();
+          t(m.at + nu + k, col) = -m.l(k).imag();
+          t(m.at + nu + k, col + 1) = -m.l(k).real();
+        }
+      }
+      col += m.complex ? 2 : 1;
+    }
+    for (int c = 0; c < n_other; ++c) t(p + c, col + c) = 1.0;
+    const Eigen::MatrixXd shapes = (r * t).colPivHouseholderQr().solve(q_y);
+    col = 0;
+    for (Mode& m : modes) {
+      for (int j = 0; j < ny; ++j) {
+        m.psi(j) = m.complex ? std::complex<double>(shapes(col, j), shapes(col + 1, j))
+                             : std::complex<double>(shapes(col, j), 0.0);
+      }
+      col += m.complex ? 2 : 1;
+    }
+    other = shapes.bottomRows(n_other);
+    // Participations, every output together: theta_j = S(psi_j) lambda + [0; other_j].
+    int l_cols = 0;
+    for (const Mode& m : modes) l_cols += m.complex ? 2 * nu : nu;
+    Eigen::MatrixXd stacked(static_cast<Eigen::Index>(ny) * p_all, l_cols);
+    Eigen::VectorXd target(static_cast<Eigen::Index>(ny) * p_all);
+    for (int j = 0; j < ny; ++j) {
+      Eigen::MatrixXd s_j = Eigen::MatrixXd::Zero(p_all, l_cols);
+      int at = 0;
+      for (const Mode& m : modes) {
+        const double re = m.psi(j).real();
+        const double im = m.psi(j).imag();
+        for (int k = 0; k < nu; ++k) {
+          if (m.complex) {
+            // lambda = [Re L_0..Re L_{nu-1}, Im L_0..Im L_{nu-1}] of this mode.
+            s_j(m.at + k, at + k) = re;
+            s_j(m.at + k, at + nu + k) = -im;
+            s_j(m.at + nu + k, at + k) = -im;
+            s_j(m.at + nu + k, at + nu + k) = -re;
+          } else {
+            s_j(m.at + k, at + k) = re;
+          }
+        }
+        at += m.complex ? 2 * nu : nu;
+      }
+      Eigen::VectorXd fixed = Eigen::VectorXd::Zero(p_all);
+      fixed.tail(n_other) = other.col(j);
+      stacked.middleRows(static_cast<Eigen::Index>(j) * p_all, p_all) = r * s_j;
+      target.segment(static_cast<Eigen::Index>(j) * p_all, p_all) = q_y.col(j) - r * fixed;
+    }
+    const Eigen::VectorXd lambda = stacked.colPivHouseholderQr().solve(target);
+    int at = 0;
+    for (Mode& m : modes) {
+      for (int k = 0; k < nu; ++k) {
+        m.l(k) = m.complex ? std::complex<double>(lambda(at + k), lambda(at + nu + k))
+                           : std::complex<double>(lambda(at + k), 0.0);
+      }
+      at += m.complex ? 2 * nu : nu;
+      // Scale: psi of unit length (the product psi L' is what the model holds).
+      const double norm = m.psi.norm();
+      if (norm > 0.0) {
+        m.psi /= norm;
+        m.l *= norm;
+      }
+    }
+    double next = 0.0;
+    for (int j = 0; j < ny; ++j) next += (q_y.col(j) - r * theta_of(j, other.col(j))).squaredNorm();
+    const bool done = !(next < cost * (1.0 - 1e-13)) && iteration > 1;
+    cost = next;
+    if (done || !std::isfinite(next)) break;
+  }
+
+  // The model: each mode's numerators from c = psi L', the other columns as fitted.
+  std::vector<MimoSubmodel> submodels = general.submodels();
+  Eigen::MatrixXd direct = general.has_direct_term() ? general.direct() : Eigen::MatrixXd();
+  for (const Mode& m : modes) {
+    std::vector<Polynomial>& b = submodels[static_cast<size_t>(m.submodel)].b;
+    for (int j = 0; j < ny; ++j) {
+      for (int k = 0; k < nu; ++k) {
+        const std::complex<double> c = m.psi(j) * m.l(k);
+        const double n1 = m.complex ? c.imag() / m.pole.imag() : 0.0;
+        Eigen::VectorXd coefficients(m.complex ? 2 : 1);
+        coefficients(0) = c.real() - m.pole.real() * n1;
+        if (m.complex) coefficients(1) = n1;
+        b[static_cast<size_t>(j * nu + k)] = Polynomial::trimmed(coefficients);
+      }
+    }
+  }
+  for (int c = 0; c < n_other; ++c) {
+    const int column = others[static_cast<size_t>(c)];
+    for (int j = 0; j < ny; ++j) {
+      const double value = other(c, j);
+      if (layout.direct && column >= layout.d_at) {
+        direct(j, column - layout.d_at) = value;
+        continue;
+      }
+      // Which submodel, input and power the column is.
+      for (int i = 0; i < layout.size(); ++i) {
+        const int m_i = layout.orders[static_cast<size_t>(i)].m;
+        const int first = layout.u_column(i, 0, 0);
+        if (column < first || column >= first + nu * (m_i + 1)) continue;
+        const int k = (column - first) / (m_i + 1);
+        const int power = (column - first) % (m_i + 1);
+        Polynomial& slot = submodels[static_cast<size_t>(i)].b[static_cast<size_t>(j * nu + k)];
+        Eigen::VectorXd v = Eigen::VectorXd::Zero(m_i + 1);
+        for (int q = 0; q <= std::min(m_i, slot.degree()); ++q) v(q) = slot[q];
+        v(power) = value;
+        slot = Polynomial::trimmed(v);
+      }
+    }
+  }
+  return {MimoAdditiveModel(nu, ny, std::move(submodels), direct, general.input_delays()),
+          iteration, n_modes};
+}
+
 MimoEstimationResult estimate(const Layout& layout, const MimoData& data,
                               const MimoRefinedIvOptions& options,
                               const std::optional<MimoAdditiveModel>& initial_model,
@@ -1073,6 +1310,15 @@ MimoEstimationResult estimate(const Layout& layout, const MimoData& data,
   result.step_halvings = run.step_halvings;
   const double reciprocal_condition = run.reciprocal_condition;
   model = slowest_first(layout, std::move(run.model));
+  if (options.rank_one_residues) {
+    RankOneFit one = rank_one_residues(layout, data, model);
+    if (one.modes > 0) {
+      result.message += internal::concat(
+          "; residues of ", one.modes, one.modes == 1 ? " mode" : " modes",
+          " constrained to rank one (", one.iterations, " alternating least-squares sweeps)");
+    }
+    model = std::move(one.model);
+  }
 
   const Eigen::MatrixXd u = numerator_regressors(layout, data, denominators(model));
   const Eigen::MatrixXd fitted = model_outputs(layout, u, model);

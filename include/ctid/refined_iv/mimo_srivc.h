@@ -52,6 +52,11 @@ struct MimoRefinedIvOptions {
   /// input k delayed exactly by input_delays[k] h, held as the record's input hold says), or
   /// empty for none. The model's input_delays() are these times h.
   std::vector<double> input_delays;
+  /// Restrict each mode's residue matrix to rank one, Res_i = psi_i L_i^T (one shape, one
+  /// participation vector): with the iteration's poles fixed, the numerators are refitted by
+  /// alternating least squares. Standard errors stay those of the general residues
+  /// (docs/decisions/0018).
+  bool rank_one_residues = false;
 
   static constexpr std::string_view type_name = "MimoRefinedIvOptions";
   static constexpr auto fields() {
@@ -72,6 +77,8 @@ struct MimoRefinedIvOptions {
               "One input and output, no direct term: run additive_srivc (bit-identical)."),
         field("input_delays", &O::input_delays, Each{Finite{AtLeast{0.0}}},
               "Known delay of every input [samples, may be fractional]; empty: none."),
+        field("rank_one_residues", &O::rank_one_residues,
+              "Restrict every mode's residue matrix to rank one (shape x participation)."),
     };
   }
   void validate() const { validate_fields(*this); }
