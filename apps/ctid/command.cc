@@ -6,6 +6,7 @@
 #include <iostream>
 #include <limits>
 #include <system_error>
+#include <vector>
 
 #include "ctid/core/error.h"
 #include "ctid/io/file.h"
@@ -46,6 +47,15 @@ std::string one_line(const std::string& text) {
   return out;
 }
 
+// Whether `part` is `whole` with characters left out.
+bool is_subsequence(const std::string& part, const std::string& whole) {
+  std::size_t at = 0;
+  for (const char c : whole) {
+    if (at < part.size() && part[at] == c) ++at;
+  }
+  return at == part.size();
+}
+
 }  // namespace
 
 bool register_command(int order, CommandFactory factory) {
@@ -79,15 +89,71 @@ int run_command(const std::string& command_path, const std::function<ExitStatus(
 }
 
 int report_parse_error(const CLI::App& app, const CLI::ParseError& error,
-                       const std::string& command_path) {
+                       const std::string& command_path, const std::string& hint) {
   if (dynamic_cast<const CLI::CallForHelp*>(&error) != nullptr ||
       dynamic_cast<const CLI::CallForAllHelp*>(&error) != nullptr ||
       dynamic_cast<const CLI::CallForVersion*>(&error) != nullptr) {
     return const_cast<CLI::App&>(app).exit(error);  // prints help or version on stdout
   }
-  std::cerr << command_path << ": error: " << one_line(error.what()) << " (see '" << command_path
-            << " --help')\n";
+  std::cerr << command_path << ": error: " << one_line(error.what())
+            << (hint.empty() ? "" : "; " + hint) << " (see '" << command_path << " --help')\n";
   return kExitUsage;
+}
+
+int edit_distance(const std::string& a, const std::string& b) {
+  // d[i][j]: distance of the first i characters of a and the first j of b.
+  const std::size_t n = a.size();
+  const std::size_t m = b.size();
+  std::vector<std::vector<int>> d(n + 1, std::vector<int>(m + 1, 0));
+  for (std::size_t i = 0; i <= n; ++i) d[i][0] = static_cast<int>(i);
+  for (std::size_t j = 0; j <= m; ++j) d[0][j] = static_cast<int>(j);
+  for (std::size_t i = 1; i <= n; ++i) {
+    for (std::size_t j = 1; j <= m; ++j) {
+      const int substitution = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + substitution});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+      }
+    }
+  }
+  return d[n][m];
+}
+
+std::string closest_name(const CLI::App& app, const std::vector<std::string>& unexpected) {
+  for (const std::string& word : unexpected) {
+    const bool flag = word.rfind("--", 0) == 0;
+    if (!flag && !word.empty() && word.front() == '-') continue;  // a short flag or a number
+    // The flag's name, without "--" and without "=VALUE".
+    const std::string typed = flag ? word.substr(2, word.find('=') - 2) : word;
+    if (typed.empty()) continue;
+    std::vector<std::string> names;
+    if (flag) {
+      for (const CLI::Option* option : app.get_options()) {
+        for (const std::string& name : option->get_lnames()) names.push_back(name);
+      }
+    } else {
+      for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+        names.push_back(sub->get_name());
+      }
+    }
+    const int allowed = typed.size() <= 3 ? 1 : std::max(2, static_cast<int>(typed.size()) / 3);
+    int best = allowed + 1;
+    bool best_missed = false;
+    std::string chosen;
+    for (const std::string& name : names) {
+      const int distance = edit_distance(typed, name);
+      // Of names equally close, one the word is the name with characters left out of (a
+      // missed key: --input-colums is --input-columns rather than --input-column).
+      const bool missed = is_subsequence(typed, name);
+      if (distance > 0 && (distance < best || (distance == best && missed && !best_missed))) {
+        best = distance;
+        best_missed = missed;
+        chosen = name;
+      }
+    }
+    if (!chosen.empty()) return "did you mean " + std::string(flag ? "--" : "") + chosen + "?";
+  }
+  return {};
 }
 
 void usage_error(const std::string& message) { throw InvalidArgument(message); }

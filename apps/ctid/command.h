@@ -47,9 +47,21 @@ std::vector<CommandRegistration> registered_commands();
 int run_command(const std::string& command_path, const std::function<ExitStatus()>& action);
 
 /// Prints a CLI11 parse error as one line naming the command and the help flag, and
-/// returns 2; --help and --version print to stdout and return 0.
+/// returns 2; --help and --version print to stdout and return 0. A non-empty `hint` (such as
+/// closest_name() gives) is added to the message after "; ".
 int report_parse_error(const CLI::App& app, const CLI::ParseError& error,
-                       const std::string& command_path);
+                       const std::string& command_path, const std::string& hint = {});
+
+/// Edit distance of `a` and `b`: insertions, deletions, substitutions and transpositions of
+/// two adjacent characters each count 1 (optimal string alignment).
+int edit_distance(const std::string& a, const std::string& b);
+
+/// "did you mean --modes?" for the first word of `unexpected` that is close to a name `app`
+/// knows: a word starting with "--" against the long flags of `app`, a bare word against its
+/// subcommands. Close: at most 1 edit for words of up to 3 characters, otherwise at most 2 or
+/// a third of the word, whichever is more; of names equally close, one the word is the name
+/// with characters left out of. Empty when nothing is close.
+std::string closest_name(const CLI::App& app, const std::vector<std::string>& unexpected);
 
 /// Throws ctid::InvalidArgument with `message` (usage errors found after parsing, such as
 /// two inputs given at once).

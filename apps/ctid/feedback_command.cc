@@ -16,6 +16,7 @@
 #include "ctid/delayed_feedback/identification.h"
 #include "ctid/io/feedback_result_json.h"
 #include "ctid/io/sampled_data_csv.h"
+#include "progress.h"
 
 namespace ctid::cli {
 namespace {
@@ -85,8 +86,10 @@ void run_feedback(const FeedbackFlags& f) {
     d.scan.points = f.scan_points;
     d.scan.regressors = options.regressors;
     d.scan.hold = options.output_error.hold;
-    const DelayIdentificationResult s =
-        identify_delayed_feedback_with_delay_scan(data, f.forward_order, f.feedback_order, d);
+    Progress progress("ctid feedback", f.quiet);
+    const DelayIdentificationResult s = identify_delayed_feedback_with_delay_scan(
+        data, f.forward_order, f.feedback_order, d, progress.callback("delay scan"));
+    progress.clear();
     r = s.identification;
     document.delay_scan = s.scan;
   } else {

@@ -28,6 +28,7 @@
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "data_flags.h"
 #include "plot_support.h"
+#include "progress.h"
 
 namespace ctid::cli {
 namespace {
@@ -512,7 +513,11 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
                                  format_number(data.sample_time()), " s"));
   }
 
-  const IdentificationResult identified = identify(records, structure, options);
+  Progress progress("ctid fit", f.quiet);
+  const IdentificationResult identified =
+      identify(records, structure, options,
+               {progress.callback("delay scan"), progress.callback("mode relocation trial")});
+  progress.clear();
   const EstimationResult& result = identified.estimate;
   const std::string estimator(enum_name(identified.estimator));
   const std::optional<InputDelayScanResult>& scanned = identified.delay_scan;

@@ -68,18 +68,21 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& error) {
     std::string path = "ctid";
     std::vector<std::string> unexpected = app.remaining();
+    const CLI::App* chosen = &app;  // the command whose flags a misspelt one is compared with
     for (const Command& command : commands) {
       if (command.app->parsed()) {
         path += " " + command.app->get_name();
+        chosen = command.app;
         const std::vector<std::string> extra = command.app->remaining();
         unexpected.insert(unexpected.end(), extra.begin(), extra.end());
       }
     }
     // CLI11 checks required flags before unknown ones; a misspelt flag is the likelier
-    // cause of both, so it is the one reported.
+    // cause of both, so it is the one reported, with the closest known name when one is close.
     if (!unexpected.empty() && dynamic_cast<const CLI::CallForHelp*>(&error) == nullptr &&
         dynamic_cast<const CLI::CallForVersion*>(&error) == nullptr) {
-      return report_parse_error(app, CLI::ExtrasError(unexpected), path);
+      return report_parse_error(app, CLI::ExtrasError(unexpected), path,
+                                closest_name(*chosen, unexpected));
     }
     return report_parse_error(app, error, path);
   }

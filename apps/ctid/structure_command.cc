@@ -21,6 +21,7 @@
 #include "ctid/refined_iv/structure_scan.h"
 #include "data_flags.h"
 #include "plot_support.h"
+#include "progress.h"
 
 namespace ctid::cli {
 namespace {
@@ -171,7 +172,10 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
       f.initial_conditions == "estimate" ? InitialConditions::estimate : InitialConditions::zero;
   options.validate();
   const SampledData data = f.data.load(app, !f.controller.empty());
-  const StructureScanResult result = scan_structures(data, candidates, options);
+  Progress progress("ctid structure", f.quiet);
+  const StructureScanResult result =
+      scan_structures(data, candidates, options, progress.callback("structure"));
+  progress.clear();
   nlohmann::json document = io::to_json(result);
   document["data"] = {
       {"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}};

@@ -23,6 +23,7 @@
 #include "ctid/study/paper_study.h"
 #include "ctid/study/study_output.h"
 #include "plot_support.h"
+#include "progress.h"
 
 namespace ctid::cli {
 namespace {
@@ -105,20 +106,11 @@ void run_study_command(const StudyFlags& f) {
 
   const auto start = std::chrono::steady_clock::now();
   const int total = options.sizes * options.runs;
-  int last_percent = -1;
-  auto progress = [&](int done, int all) {
-    const int percent = static_cast<int>(100LL * done / all);
-    if (f.quiet || percent == last_percent) return;
-    last_percent = percent;
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::cerr << "\rctid study: " << done << "/" << all << " cases (" << percent << " %), "
-              << static_cast<int>(seconds) << " s" << std::flush;
-  };
-  const StudyResult result = run_study(options, progress);
+  Progress progress("ctid study", f.quiet);
+  const StudyResult result = run_study(options, progress.callback("case"));
+  progress.clear();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (!f.quiet) std::cerr << "\n";
 
   {
     std::ofstream out = open_output(folder / "runs.csv");

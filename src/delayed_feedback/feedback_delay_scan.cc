@@ -25,7 +25,8 @@ void FeedbackDelayScanOptions::check_relations(const std::string& path) const {
 }
 
 FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int n, int m,
-                                            const FeedbackDelayScanOptions& options) {
+                                            const FeedbackDelayScanOptions& options,
+                                            const std::function<void(int, int)>& progress) {
   options.validate();
   require(n >= 1 && m >= 1, "scan_feedback_delay: orders must be >= 1, got n = ", n, ", m = ", m);
   const double inf = std::numeric_limits<double>::infinity();
@@ -83,6 +84,7 @@ FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int n, int 
   for (int i = 0; i < options.points; ++i) {
     r.criterion(i) = criterion(r.delays(i));
     if (r.criterion(i) < r.criterion(best)) best = i;
+    if (progress) progress(i + 1, options.points);
   }
   r.delay = r.delays(best);
   r.best_criterion = r.criterion(best);

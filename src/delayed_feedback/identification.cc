@@ -232,12 +232,13 @@ void DelayIdentificationOptions::check_relations(const std::string& path) const 
 }
 
 DelayIdentificationResult identify_delayed_feedback_with_delay_scan(
-    const SampledData& data, int n, int m, const DelayIdentificationOptions& options) {
+    const SampledData& data, int n, int m, const DelayIdentificationOptions& options,
+    const std::function<void(int, int)>& progress) {
   options.validate();
   DelayIdentificationResult r;
   FeedbackDelayScanOptions scan = options.scan;
   scan.refine = false;
-  r.scan = scan_feedback_delay(data, n, m, scan);
+  r.scan = scan_feedback_delay(data, n, m, scan, progress);
   r.delay = r.scan.delay;
   // The outcome is the identification's at the returned Δ.
   const auto finish = [&r, &data]() -> DelayIdentificationResult& {

@@ -90,7 +90,8 @@ namespace {
 template <class Run>
 EstimationResult estimate_delay(std::span<const SampledData> records, const DelayInterval& range,
                                 const RefinedIvOptions& base, const Run& run,
-                                std::optional<InputDelayScanResult>& scanned) {
+                                std::optional<InputDelayScanResult>& scanned,
+                                const std::function<void(int, int)>& progress) {
   const SampledData* shortest = &records.front();
   for (const SampledData& record : records) {
     if (record.size() < shortest->size()) shortest = &record;
@@ -116,7 +117,7 @@ EstimationResult estimate_delay(std::span<const SampledData> records, const Dela
   std::optional<EstimationResult> best;
   if (first <= last) {
     scanned = scan_input_delay([&](int delay) { return at(delay * h, std::nullopt, false); }, first,
-                               last);
+                               last, progress);
     best = scanned->best;
   } else {
     best = at(0.5 * (range.min + range.max), std::nullopt, false);
@@ -159,7 +160,8 @@ EstimationResult estimate_delay(std::span<const SampledData> records, const Dela
 
 IdentificationResult identify_records(std::span<const SampledData> records,
                                       const ModelStructure& structure,
-                                      const IdentificationOptions& options) {
+                                      const IdentificationOptions& options,
+                                      const IdentificationProgress& progress) {
   validate_identification(structure, options);
   require(!records.empty(), "identify: no data record was given");
   require(!options.relocate_modes || records.size() == 1,
@@ -189,10 +191,12 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   std::optional<InputDelayScanResult> scanned;
   std::optional<EstimationResult> fitted;
   if (options.delay_scan) {
-    scanned = scan_input_delay(estimate, options.delay_scan->min, options.delay_scan->max);
+    scanned = scan_input_delay(estimate, options.delay_scan->min, options.delay_scan->max,
+                               progress.delay_scan);
     fitted = scanned->best;
   } else if (options.delay_range) {
-    fitted = estimate_delay(records, *options.delay_range, options.refined_iv, run, scanned);
+    fitted = estimate_delay(records, *options.delay_range, options.refined_iv, run, scanned,
+                            progress.delay_scan);
   } else {
     fitted = estimate(options.refined_iv.input_delay);
   }
@@ -202,7 +206,7 @@ IdentificationResult identify_records(std::span<const SampledData> records,
     o.input_delay = fitted->input_delay;
     o.input_delay_fraction = fitted->input_delay_fraction;
     o.initial_model = fitted->model;
-    relocated = additive_srivc_relocated(data, orders, o, options.relocation);
+    relocated = additive_srivc_relocated(data, orders, o, options.relocation, progress.relocation);
     fitted = relocated->estimate;
   }
 
@@ -217,14 +221,15 @@ IdentificationResult identify_records(std::span<const SampledData> records,
 }  // namespace
 
 IdentificationResult identify(const SampledData& data, const ModelStructure& structure,
-                              const IdentificationOptions& options) {
-  return identify_records(std::span<const SampledData>(&data, 1), structure, options);
+                              const IdentificationOptions& options,
+                              const IdentificationProgress& progress) {
+  return identify_records(std::span<const SampledData>(&data, 1), structure, options, progress);
 }
 
 IdentificationResult identify(const std::vector<SampledData>& records,
-                              const ModelStructure& structure,
-                              const IdentificationOptions& options) {
-  return identify_records(records, structure, options);
+                              const ModelStructure& structure, const IdentificationOptions& options,
+                              const IdentificationProgress& progress) {
+  return identify_records(records, structure, options, progress);
 }
 
 }  // namespace ctid

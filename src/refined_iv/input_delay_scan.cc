@@ -14,7 +14,8 @@
 namespace ctid {
 
 InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>& estimate,
-                                      int min_delay, int max_delay) {
+                                      int min_delay, int max_delay,
+                                      const std::function<void(int, int)>& progress) {
   require(min_delay >= 0 && max_delay >= min_delay, "scan_input_delay: the delay range [",
           min_delay, ", ", max_delay, "] must satisfy 0 <= min_delay <= max_delay");
   std::optional<EstimationResult> best;
@@ -47,6 +48,7 @@ InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>
       table.terminations.push_back(Termination::not_run);  // the estimator refused this delay
       table.usable.push_back(false);
     }
+    if (progress) progress(d - min_delay + 1, max_delay - min_delay + 1);
   }
   require(best.has_value(),
           "scan_input_delay: every delay failed; the first error was: ", first_error);

@@ -148,7 +148,8 @@ struct Candidate {
 ModeRelocationResult additive_srivc_relocated(const SampledData& data,
                                               const std::vector<SubmodelOrder>& orders,
                                               const RefinedIvOptions& options,
-                                              const ModeRelocationOptions& relocation) {
+                                              const ModeRelocationOptions& relocation,
+                                              const std::function<void(int, int)>& progress) {
   relocation.validate();
   options.validate();
   RefinedIvOptions trial_options = options;
@@ -267,6 +268,10 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
       trial.projected_mean_squared_error = projected_mse(r, orders, data);
       trial.termination = r.termination;
       out.trials.push_back(trial);
+      if (progress) {
+        progress(static_cast<int>(out.trials.size()),
+                 relocation.max_relocations * relocation.trials_per_round);
+      }
       double score = projected ? trial.projected_mean_squared_error : r.mean_squared_error;
       const std::optional<ModalParameters> after = r.model.modal_parameters(c.submodel);
       const bool stayed = after && std::abs(after->natural_frequency - c.start.frequency) <

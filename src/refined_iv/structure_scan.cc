@@ -77,7 +77,8 @@ std::string describe(const ModelStructure& structure) {
 
 StructureScanResult scan_structures(const SampledData& data,
                                     const std::vector<ModelStructure>& candidates,
-                                    const StructureScanOptions& options) {
+                                    const StructureScanOptions& options,
+                                    const std::function<void(int, int)>& progress) {
   options.validate();
   require(!candidates.empty(), "scan_structures: no candidate structure given");
   for (std::size_t i = 0; i < candidates.size(); ++i) {
@@ -158,6 +159,9 @@ StructureScanResult scan_structures(const SampledData& data,
       fit.usable = false;
     }
     result.fits.push_back(std::move(fit));
+    if (progress) {
+      progress(static_cast<int>(result.fits.size()), static_cast<int>(candidates.size()));
+    }
   }
 
   const int scored = held_out > 0 ? held_out : fitted;

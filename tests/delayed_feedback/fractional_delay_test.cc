@@ -85,6 +85,20 @@ TEST(FeedbackFractionalDelay, ScanFindsTheDelayNoiseFree) {
             1e-6);
 }
 
+TEST(FeedbackFractionalDelay, ScanReportsEachGridPoint) {
+  const DelayIdentificationOptions options = scan_options();
+  std::vector<int> done;
+  const DelayIdentificationResult r = identify_delayed_feedback_with_delay_scan(
+      record(0.0, 0), 3, 3, options, [&](int step, int total) {
+        EXPECT_EQ(total, options.scan.points);
+        done.push_back(step);
+      });
+  ASSERT_EQ(done.size(), static_cast<std::size_t>(options.scan.points));
+  for (std::size_t k = 0; k < done.size(); ++k) EXPECT_EQ(done[k], static_cast<int>(k) + 1);
+  EXPECT_EQ(r.delay,
+            identify_delayed_feedback_with_delay_scan(record(0.0, 0), 3, 3, options).delay);
+}
+
 TEST(FeedbackFractionalDelay, ScanFindsTheDelayWithNoise) {
   // White output noise sd 1e-4 (y rms 1.6): Δ within δ/10 and within 3 standard deviations of
   // the bound with Δ unknown; the fit at the noise level; and the estimate is the global

@@ -4,6 +4,8 @@
 #include "ctid/refined_iv/identification.h"
 
 #include <cstring>
+#include <utility>
+#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -139,6 +141,28 @@ TEST_F(Identify, RelocationStartsFromTheEstimateAtItsDelay) {
   expect_same(result.estimate, direct.estimate);
   EXPECT_EQ(result.mode_relocation->message, direct.message);
   EXPECT_EQ(result.estimate.input_delay, 2);
+}
+
+TEST_F(Identify, ReportsProgressOfTheScanAndTheRelocationWithoutChangingTheResult) {
+  IdentificationOptions options;
+  options.delay_scan = DelayRange{1, 3};
+  options.relocate_modes = true;
+  options.relocation.max_relocations = 1;
+  std::vector<std::pair<int, int>> scan;
+  std::vector<std::pair<int, int>> trials;
+  IdentificationProgress progress;
+  progress.delay_scan = [&](int done, int total) { scan.emplace_back(done, total); };
+  progress.relocation = [&](int done, int total) { trials.emplace_back(done, total); };
+  const IdentificationResult reported = identify(open, ModelStructure::modes(2), options, progress);
+  EXPECT_EQ(scan, (std::vector<std::pair<int, int>>{{1, 3}, {2, 3}, {3, 3}}));
+  ASSERT_TRUE(reported.mode_relocation.has_value());
+  ASSERT_EQ(trials.size(), reported.mode_relocation->trials.size());
+  for (std::size_t k = 0; k < trials.size(); ++k) {
+    EXPECT_EQ(trials[k].first, static_cast<int>(k) + 1);
+    EXPECT_EQ(trials[k].second,
+              options.relocation.max_relocations * options.relocation.trials_per_round);
+  }
+  expect_same(reported.estimate, identify(open, ModelStructure::modes(2), options).estimate);
 }
 
 void expect_refused(const SampledData& data, const ModelStructure& structure,

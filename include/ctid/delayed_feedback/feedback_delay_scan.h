@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <limits>
 #include <span>
 #include <string>
@@ -112,8 +113,11 @@ struct FeedbackDelayScanResult : Outcome {
 };
 
 /// For each Δ: step 1 (batch) and the output error of W = α̂/(β̂ + γ̂ e^{-Δs}) on the data.
+/// `progress`, if given, is called after each grid point with the points done and
+/// options.points.
 FeedbackDelayScanResult scan_feedback_delay(const SampledData& data, int forward_order,
                                             int feedback_order,
-                                            const FeedbackDelayScanOptions& options = {});
+                                            const FeedbackDelayScanOptions& options = {},
+                                            const std::function<void(int, int)>& progress = {});
 
 }  // namespace ctid

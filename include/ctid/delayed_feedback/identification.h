@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <span>
@@ -248,8 +249,10 @@ struct DelayIdentificationResult : Outcome {
   }
 };
 
+/// `progress`, if given, is passed to scan_feedback_delay (one call per grid point).
 DelayIdentificationResult identify_delayed_feedback_with_delay_scan(
     const SampledData& data, int forward_order, int feedback_order,
-    const DelayIdentificationOptions& options = {});
+    const DelayIdentificationOptions& options = {},
+    const std::function<void(int, int)>& progress = {});
 
 }  // namespace ctid

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -197,6 +198,15 @@ struct IdentificationResult {
   }
 };
 
+/// Progress reports of identify() for a caller that shows them; each, if given, is called with
+/// (done, total) as the run goes.
+struct IdentificationProgress {
+  /// After each whole-sample delay of the delay scan (delay_scan, or the scan of delay_range).
+  std::function<void(int, int)> delay_scan;
+  /// After each trial of the mode relocation (additive_srivc_relocated's progress).
+  std::function<void(int, int)> relocation;
+};
+
 /// Throws InvalidArgument if the structure or the options are bad or do not go together
 /// (relocation of an unfactored or closed-loop model). identify() calls it first.
 void validate_identification(const ModelStructure& structure, const IdentificationOptions& options);
@@ -208,7 +218,8 @@ void validate_identification(const ModelStructure& structure, const Identificati
 /// stops at once and the scan is not repeated). Throws InvalidArgument for bad input (as the
 /// estimators do); how the iteration ended is result.estimate.termination.
 IdentificationResult identify(const SampledData& data, const ModelStructure& structure,
-                              const IdentificationOptions& options = {});
+                              const IdentificationOptions& options = {},
+                              const IdentificationProgress& progress = {});
 
 /// identify() on several records of one system (separate experiments, or pieces of one
 /// record): one parameter vector fitted to all of them, each record's filters starting at
@@ -218,6 +229,7 @@ IdentificationResult identify(const SampledData& data, const ModelStructure& str
 /// record. One record gives exactly identify(data, ...).
 IdentificationResult identify(const std::vector<SampledData>& records,
                               const ModelStructure& structure,
-                              const IdentificationOptions& options = {});
+                              const IdentificationOptions& options = {},
+                              const IdentificationProgress& progress = {});
 
 }  // namespace ctid

@@ -52,8 +52,11 @@ inline constexpr double kDelayScanTieRatio = 0.01;
 /// smallest output error among those whose verdict is usable (among all if none is), whether
 /// or not its iteration converged: convergence of (29) says nothing about the fit. Throws
 /// InvalidArgument for a bad range or if every delay throws (the first message is passed on).
+/// `progress`, if given, is called after each delay with the number of delays tried and the
+/// number in the range.
 InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>& estimate,
-                                      int min_delay, int max_delay);
+                                      int min_delay, int max_delay,
+                                      const std::function<void(int, int)>& progress = {});
 
 /// additive_srivc over a delay range (options.input_delay is overridden).
 InputDelayScanResult additive_srivc_delay_scan(const SampledData& data,

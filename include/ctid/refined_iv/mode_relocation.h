@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -200,9 +201,12 @@ struct ModeRelocationResult {
 /// With a delay scan: run additive_srivc_delay_scan first, then this with
 /// options.input_delay = scan.best.input_delay and options.initial_model = scan.best.model
 /// (the plain run then stops at once); or pass a lambda calling this to scan_input_delay.
+/// `progress`, if given, is called after each trial with the trials run and the most there can
+/// be (max_relocations x trials_per_round; the relocation usually stops sooner).
 ModeRelocationResult additive_srivc_relocated(const SampledData& data,
                                               const std::vector<SubmodelOrder>& orders,
                                               const RefinedIvOptions& options = {},
-                                              const ModeRelocationOptions& relocation = {});
+                                              const ModeRelocationOptions& relocation = {},
+                                              const std::function<void(int, int)>& progress = {});
 
 }  // namespace ctid

@@ -7,6 +7,7 @@
 // previous order has a pole close to it), as modal-analysis tools draw it.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -165,8 +166,11 @@ struct StructureScanResult {
 /// InvalidArgument only for bad options, an empty candidate list or too short a record.
 /// Recommendation: among usable fits, the fewest parameters whose held-out mean squared error
 /// is within error_tolerance (relative) of the best usable one's (ties: lower YIC).
+/// `progress`, if given, is called after each candidate with the number fitted and the number
+/// of candidates.
 StructureScanResult scan_structures(const SampledData& data,
                                     const std::vector<ModelStructure>& candidates,
-                                    const StructureScanOptions& options = {});
+                                    const StructureScanOptions& options = {},
+                                    const std::function<void(int, int)>& progress = {});
 
 }  // namespace ctid
