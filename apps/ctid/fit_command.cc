@@ -48,6 +48,7 @@ struct FitFlags {
   std::string delay_range;
   std::string record_delays;         // D1,D2,...
   std::vector<double> input_delays;  // several inputs: one per input, samples
+  bool rank_one = false;             // several inputs and outputs: Res_i = psi_i L_i^T
 
   std::string controller;
   std::string initial;
@@ -386,6 +387,7 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   options.noise = noise_assumption(f);
   options.direct_term = f.direct_term;
   options.input_delays = f.input_delays;
+  options.rank_one_residues = f.rank_one;
   options.validate();
   const std::string start_file = f.initial.empty() ? (f.start == "auto" ? "" : f.start) : f.initial;
   const std::string start_flag = f.initial.empty() ? "--start" : "--initial";
@@ -463,6 +465,11 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
 
 ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   if (f.data.mimo_asked(app)) return run_mimo_fit(f, app);
+  if (app.count("--rank-one") > 0) {
+    usage_error(
+        "--rank-one goes with --input-columns / --output-columns (a single channel's residue is "
+        "always rank one)");
+  }
   if (app.count("--input-delays") > 0) {
     usage_error(
         "--input-delays goes with --input-columns / --output-columns (one delay per input); "
@@ -648,6 +655,10 @@ Command add_fit_command(CLI::App& parent) {
                   "--input-columns entry; fractions allowed)")
       ->delimiter(',')
       ->check(CLI::NonNegativeNumber)
+      ->group("Structure");
+  app->add_flag("--rank-one", f.rank_one,
+                "Several inputs and outputs: restrict every mode's residues to one shape times "
+                "one participation vector (rank one)")
       ->group("Structure");
   app->add_option("--delay-scan", f.delay_scan,
                   "Estimate the delay: fit every delay MIN:MAX (samples), keep the smallest "

@@ -100,6 +100,18 @@ TEST_F(FitMimoCommand, BadUsageNamesTheProblem) {
                             "fit", "--direct goes with --input-columns");
 }
 
+TEST_F(FitMimoCommand, RankOneResiduesOnRequest) {
+  const auto r = ctid({"fit", "d.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a3",
+                       "--modes", "2", "--rank-one", "-o", "r.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("residues of 2 modes constrained to rank one"));
+  EXPECT_THAT(r.out, HasSubstr("rank-one share 1\n"));
+  EXPECT_THAT(r.out, HasSubstr("fit a3: 100 %"));
+  testing::expect_bad_input(ctid({"fit", "d.csv", "--input-column", "f1", "--output-column", "a1",
+                                  "--modes", "2", "--rank-one"}),
+                            "fit", "--rank-one goes with --input-columns");
+}
+
 TEST_F(FitMimoCommand, KnownInputDelaysAreFittedAndWrittenWithTheModel) {
   // Shaker f2 acts three samples late.
   const MimoAdditiveModel g =
