@@ -3,6 +3,7 @@
 // Reads the CSV table `ctid frf -o X.csv` writes or a universal file (dataset 58), prints the
 // mode table, every channel's fit and the verdict like `ctid fit` with several inputs and
 // outputs, and writes an frf_matrix_fit_result document. No numerics here.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -23,6 +24,7 @@
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
 #include "ctid/refined_iv/frf_matrix_fit.h"
+#include "plot_support.h"
 
 namespace ctid::cli {
 namespace {
@@ -38,6 +40,7 @@ struct FitFrfFlags {
   int max_iterations = FrfMatrixFitOptions{}.max_iterations;
   double tolerance = FrfMatrixFitOptions{}.tolerance;
   std::string output;
+  std::string plot;  // DIR
   bool force = false;
   bool quiet = false;
 };
@@ -113,17 +116,24 @@ ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
   options.max_iterations = f.max_iterations;
   options.tolerance = f.tolerance;
   options.validate();
+  std::filesystem::path package;
+  if (!f.plot.empty()) {
+    package = require_plotting();
+    const bool modes =
+        std::any_of(orders.begin(), orders.end(), [](const SubmodelOrder& o) { return o.n == 2; });
+    prepare_plot_directory(f.plot, mimo_figure_names(modes), f.force);
+  }
   const MimoFrf frf = io::read_mimo_frf(f.file);
   std::optional<MimoAdditiveModel> start;
   if (!f.initial.empty()) start = initial_model(f.initial);
   const FrfMatrixFitResult result = frf_matrix_fit(frf, orders, options, start);
 
+  nlohmann::json document = io::to_json(result);
+  document["data"] = {{"file", f.file},
+                      {"lines", frf.frequencies.size()},
+                      {"inputs", frf.input_names},
+                      {"outputs", frf.output_names}};
   if (!f.output.empty()) {
-    nlohmann::json document = io::to_json(result);
-    document["data"] = {{"file", f.file},
-                        {"lines", frf.frequencies.size()},
-                        {"inputs", frf.input_names},
-                        {"outputs", frf.output_names}};
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
   if (!f.quiet) {
@@ -152,6 +162,14 @@ ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
     }
   } else if (!result.verdict.usable) {
     std::cerr << "ctid fit-frf: WARNING: " << result.verdict.summary() << "\n";
+  }
+  if (!f.plot.empty() && result.model) {
+    const auto written =
+        draw_mimo_figures(package, f.plot, document, frf,
+                          "ctid fit-frf on " + std::filesystem::path(f.file).filename().string());
+    if (!f.quiet) {
+      for (const auto& file : written) std::cout << "wrote " << file.string() << "\n";
+    }
   }
   return result.verdict.usable ? kExitOk : kExitNoUsableModel;
 }
@@ -205,6 +223,10 @@ Command add_fit_frf_command(CLI::App& parent) {
       ->capture_default_str()
       ->group("Fit");
   app->add_option("--output,-o", f.output, "Result JSON to write (frf_matrix_fit_result)")
+      ->group("Output");
+  app->add_option("--plot", f.plot,
+                  "Draw the figures into DIR (frf_matrix_overlay.png: the model over the fitted "
+                  "FRF; mode_shapes.png, mac.png) with python3 -m ctid.plot")
       ->group("Output");
   app->add_flag("--force", f.force, "Replace an output file that exists")->group("Output");
   app->add_flag("--quiet,-q", f.quiet, "Print no summary")->group("Output");

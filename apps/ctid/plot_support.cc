@@ -263,16 +263,23 @@ std::vector<std::filesystem::path> draw_mimo_figures(const std::filesystem::path
                                                      const nlohmann::json& result,
                                                      const MimoData& data,
                                                      const std::string& title) {
-  const TemporaryDirectory work;
-  const std::filesystem::path result_file = work.path() / "result.json";
-  io::write_json(result_file, result);
-  std::vector<PlotJob> jobs;
   MimoFrf frf;
   if (data.size() >= 16) {  // as draw_model_figures: too short a record has no FRF to show
     WelchOptions options;
     options.segment_length = default_segment_length(data.size());
     frf = excited_lines(welch_frf(data, options), PeriodicFrfOptions{}.line_threshold);
   }
+  return draw_mimo_figures(package_dir, dir, result, frf, title);
+}
+
+std::vector<std::filesystem::path> draw_mimo_figures(const std::filesystem::path& package_dir,
+                                                     const std::filesystem::path& dir,
+                                                     const nlohmann::json& result,
+                                                     const MimoFrf& frf, const std::string& title) {
+  const TemporaryDirectory work;
+  const std::filesystem::path result_file = work.path() / "result.json";
+  io::write_json(result_file, result);
+  std::vector<PlotJob> jobs;
   if (frf.frequencies.size() > 0) {
     const std::filesystem::path frf_file = work.path() / "frf.json";
     io::write_json(frf_file, io::to_json(frf));

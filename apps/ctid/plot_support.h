@@ -18,6 +18,7 @@
 #include "ctid/core/sampled_data.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/frequency/frf.h"
+#include "ctid/frequency/mimo_frf.h"
 
 namespace ctid::cli {
 
@@ -92,6 +93,12 @@ std::vector<std::filesystem::path> draw_mimo_figures(const std::filesystem::path
                                                      const nlohmann::json& result,
                                                      const MimoData& data,
                                                      const std::string& title);
+/// The same figures over a measured FRF matrix `frf` (e.g. the one ctid fit-frf fitted): the
+/// overlay only when it has lines.
+std::vector<std::filesystem::path> draw_mimo_figures(const std::filesystem::path& package_dir,
+                                                     const std::filesystem::path& dir,
+                                                     const nlohmann::json& result,
+                                                     const MimoFrf& frf, const std::string& title);
 
 /// Draws `dir`/validation.png: the measured output of `data` with each model's output
 /// (validation_output with `options`) over it, labelled by its file name and fit on the window

@@ -80,6 +80,20 @@ nlohmann::json to_json(const MimoFrf& frf) {
     }
     return out;
   };
+  // An FRF read from a table or a universal file has no DFT lines, variances, coherences or
+  // input levels: those are written as -1 (lines) and null, in the shape the reader checks.
+  const auto n = static_cast<Eigen::Index>(frf.response.size());
+  const auto n_y = static_cast<Eigen::Index>(frf.output_count());
+  const auto n_u = static_cast<Eigen::Index>(frf.input_count());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto shaped = [&](const Eigen::MatrixXd& m, Eigen::Index cols) {
+    return m.rows() == n && m.cols() == cols ? m : Eigen::MatrixXd::Constant(n, cols, nan);
+  };
+  const bool has_variance = static_cast<Eigen::Index>(frf.variance.size()) == n;
+  std::vector<int> line_numbers = frf.lines;
+  if (static_cast<Eigen::Index>(line_numbers.size()) != n) {
+    line_numbers.assign(static_cast<std::size_t>(n), -1);
+  }
   nlohmann::json response = nlohmann::json::array();
   nlohmann::json variance = nlohmann::json::array();
   for (std::size_t l = 0; l < frf.response.size(); ++l) {
@@ -93,24 +107,26 @@ nlohmann::json to_json(const MimoFrf& frf) {
       h.push_back(std::move(row));
     }
     response.push_back(std::move(h));
-    variance.push_back(rows(frf.variance[l]));
+    variance.push_back(
+        rows(has_variance ? frf.variance[l] : Eigen::MatrixXd::Constant(n_y, n_u, nan)));
   }
   nlohmann::json condition = nlohmann::json::array();
-  for (Eigen::Index l = 0; l < frf.input_condition.size(); ++l) {
-    condition.push_back(nullable(frf.input_condition(l)));
+  for (Eigen::Index l = 0; l < n; ++l) {
+    condition.push_back(frf.input_condition.size() == n ? nullable(frf.input_condition(l))
+                                                        : nlohmann::json(nullptr));
   }
   return {{"type", kMimoFrfType},
           {"version", 1},
           {"inputs", frf.input_names},
           {"outputs", frf.output_names},
-          {"lines", frf.lines},
+          {"lines", line_numbers},
           {"frequencies", std::vector<double>(frf.frequencies.data(),
                                               frf.frequencies.data() + frf.frequencies.size())},
           {"response", std::move(response)},
           {"variance", std::move(variance)},
-          {"coherence", rows(frf.coherence)},
-          {"output_power", rows(frf.output_power)},
-          {"input_level", rows(frf.input_level)},
+          {"coherence", rows(shaped(frf.coherence, n_y))},
+          {"output_power", rows(shaped(frf.output_power, n_y))},
+          {"input_level", rows(shaped(frf.input_level, n_u))},
           {"input_condition", std::move(condition)},
           {"averages", frf.averages},
           {"block_length", frf.block_length}};

@@ -66,6 +66,21 @@ TEST_F(FitFrfCommand, SharedModesFromTheCsvTable) {
   EXPECT_NEAR(back.modes[1].damping_ratio, 0.05, 1e-8);
 }
 
+TEST_F(FitFrfCommand, PlotDrawsTheModelOverTheFittedFrfAndTheModes) {
+  if (testing::python_package().empty()) {
+    GTEST_SKIP() << "the ctid Python package is not built (CTID_BUILD_PYTHON=OFF); set "
+                    "CTID_PYTHONPATH to test --plot";
+  }
+  const auto r = ctid({"fit-frf", "h.csv", "--modes", "2", "--plot", "figures"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  for (const char* name : {"frf_matrix_overlay.png", "mode_shapes.png", "mac.png"}) {
+    testing::expect_png(path("figures") / name);
+    EXPECT_THAT(r.out, HasSubstr(std::string("wrote figures/") + name));
+  }
+  const auto again = ctid({"fit-frf", "h.csv", "--modes", "2", "--plot", "figures"});
+  testing::expect_bad_input(again, "fit-frf", "frf_matrix_overlay.png: file exists");
+}
+
 TEST_F(FitFrfCommand, StartsFromAnEarlierResult) {
   ASSERT_EQ(ctid({"fit-frf", "h.csv", "--modes", "2", "-o", "r.json"}).status, 0);
   const auto r = ctid({"fit-frf", "h.csv", "--modes", "2", "--initial", "r.json"});

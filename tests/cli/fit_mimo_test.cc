@@ -231,14 +231,6 @@ TEST_F(FitMimoCommand, NothingIsReplacedWithoutForce) {
   EXPECT_EQ(io::read_json(path("m.json")).at("type"), "mimo_additive_model");
 }
 
-// A PNG file: its signature and a plausible size in the IHDR chunk.
-void expect_png(const std::filesystem::path& file) {
-  const std::string bytes = contents(file);
-  ASSERT_GT(bytes.size(), 5000u) << file;
-  EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << file;
-  EXPECT_EQ(bytes.substr(12, 4), "IHDR") << file;
-}
-
 TEST_F(FitMimoCommand, PlotDrawsTheShapesTheMacAndTheModelOverTheFrf) {
   if (testing::python_package().empty()) {
     GTEST_SKIP() << "the ctid Python package is not built (CTID_BUILD_PYTHON=OFF); set "
@@ -247,7 +239,7 @@ TEST_F(FitMimoCommand, PlotDrawsTheShapesTheMacAndTheModelOverTheFrf) {
   const auto r = ctid(fit_with({"--plot", "figures"}));
   ASSERT_EQ(r.status, 0) << r.err;
   for (const char* name : {"frf_matrix_overlay.png", "mode_shapes.png", "mac.png"}) {
-    expect_png(path("figures") / name);
+    testing::expect_png(path("figures") / name);
     EXPECT_THAT(r.out, HasSubstr(std::string("wrote figures/") + name));
   }
   // Not replaced without --force, and refused before the fit.

@@ -502,21 +502,6 @@ TEST_F(FitCommand, NeverReplacesAFileWithoutForce) {
   EXPECT_EQ(read("r.json").at("type"), "estimation_result");
 }
 
-// A PNG file of at least 300 x 200 pixels.
-void expect_png(const std::filesystem::path& file) {
-  const std::string bytes = testing::slurp(file);
-  ASSERT_GT(bytes.size(), 10000u) << file;
-  EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << file;
-  auto be32 = [&](size_t at) {
-    std::uint32_t v = 0;
-    for (size_t i = 0; i < 4; ++i) v = (v << 8) | static_cast<unsigned char>(bytes[at + i]);
-    return v;
-  };
-  EXPECT_EQ(bytes.substr(12, 4), "IHDR");
-  EXPECT_GE(be32(16), 300u) << file;
-  EXPECT_GE(be32(20), 200u) << file;
-}
-
 TEST_F(FitCommand, PlotWritesPngFigures) {
   if (testing::python_package().empty()) {
     GTEST_SKIP() << "the ctid Python package is not built (CTID_BUILD_PYTHON=OFF); set "
@@ -526,7 +511,7 @@ TEST_F(FitCommand, PlotWritesPngFigures) {
   const auto r = ctid({"fit", "d.csv", "--modes", "4", "--plot", "figures", "-q"});
   ASSERT_EQ(r.status, 0) << r.err;
   for (const char* name : {"bode.png", "validation.png", "residuals.png", "modes.png"}) {
-    expect_png(path("figures") / name);
+    testing::expect_png(path("figures") / name);
   }
   // The figures are not replaced without --force.
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "4", "--plot", "figures", "-q"}),

@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -128,6 +129,21 @@ inline std::string python_package() {
   const std::filesystem::path dir =
       std::filesystem::path(CTID_CLI_PATH).parent_path() / ".." / ".." / "python";
   return std::filesystem::exists(dir / "ctid" / "plot.py") ? dir.string() : "";
+}
+
+/// Expects `file` to be a PNG image of at least 300 x 200 pixels (signature, IHDR size).
+inline void expect_png(const std::filesystem::path& file) {
+  const std::string bytes = slurp(file);
+  ASSERT_GT(bytes.size(), 5000u) << file;
+  EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << file;
+  auto be32 = [&](std::size_t at) {
+    std::uint32_t v = 0;
+    for (std::size_t i = 0; i < 4; ++i) v = (v << 8) | static_cast<unsigned char>(bytes[at + i]);
+    return v;
+  };
+  EXPECT_EQ(bytes.substr(12, 4), "IHDR") << file;
+  EXPECT_GE(be32(16), 300u) << file;
+  EXPECT_GE(be32(20), 200u) << file;
 }
 
 }  // namespace ctid::cli::testing
