@@ -68,3 +68,49 @@ def _give_every_class_a_repr():
 
 
 _give_every_class_a_repr()
+
+
+def _check_real_samples(where, name, value):
+    """Refuse complex samples (NumPy would drop their imaginary parts with only a warning) and
+    arrays of anything but numbers, naming the argument. Other values pass to the binding."""
+    import numpy as np
+
+    if not isinstance(value, (list, tuple, np.ndarray)):
+        return
+    array = np.asarray(value)
+    if np.iscomplexobj(array):
+        raise InvalidArgument(f"{where}: {name} has complex values; ctid takes real samples "
+                              "(pass .real or .imag explicitly)")
+    if array.dtype.kind not in "biuf":
+        raise InvalidArgument(f"{where}: {name} must be numbers, not {array.dtype} values")
+
+
+def _guard_record_constructors():
+    """SampledData and MimoData (and SampledData.from_time_stamps) check their arrays first."""
+    import functools
+
+    from . import _ctid
+
+    def guarded(function, where, names, method):
+        @functools.wraps(function)
+        def wrapper(*args, **kwargs):
+            given = args[1:] if method else args  # a method's first argument is self
+            for name, value in zip(names, given):
+                _check_real_samples(where, name, value)
+            for name, value in kwargs.items():
+                _check_real_samples(where, name, value)
+            return function(*args, **kwargs)
+        return wrapper
+
+    _ctid.SampledData.__init__ = guarded(
+        _ctid.SampledData.__init__, "SampledData",
+        ["sample_time", "input", "output", "reference", "start_time"], True)
+    _ctid.MimoData.__init__ = guarded(
+        _ctid.MimoData.__init__, "MimoData",
+        ["sample_time", "inputs", "outputs", "references", "start_time"], True)
+    _ctid.SampledData.from_time_stamps = staticmethod(guarded(
+        _ctid.SampledData.from_time_stamps, "SampledData.from_time_stamps",
+        ["time", "input", "output", "reference"], False))
+
+
+_guard_record_constructors()

@@ -132,3 +132,22 @@ def test_initial_conditions_are_estimated_for_a_record_that_starts_mid_motion():
     zero = ctid.srivc(data, order)  # default: at rest
     assert np.max(np.abs(zero.parameters - truth) / truth) > 1e-4
     assert zero.initial_conditions.size == 0
+
+
+def test_complex_or_text_samples_are_refused_naming_the_argument():
+    # NumPy would cast complex samples to real with only a warning: the record refuses them.
+    u = np.ones(100)
+    y = np.ones(100)
+    with pytest.raises(ctid.InvalidArgument, match="SampledData: input has complex values"):
+        ctid.SampledData(0.1, u + 0j, y)
+    with pytest.raises(ctid.InvalidArgument, match="SampledData: reference has complex values"):
+        ctid.SampledData(0.1, u, y, reference=1j * u)
+    with pytest.raises(ctid.InvalidArgument, match="MimoData: outputs has complex values"):
+        ctid.MimoData(0.1, np.ones((100, 2)), np.ones((100, 1)) * 1j)
+    with pytest.raises(ctid.InvalidArgument, match="from_time_stamps: output has complex"):
+        ctid.SampledData.from_time_stamps(np.arange(100) * 0.1, u, y * 1j)
+    with pytest.raises(ctid.InvalidArgument, match="input must be numbers"):
+        ctid.SampledData(0.1, ["1"] * 100, y)
+    # Real arrays, lists and the SISO-to-MIMO conversion are untouched.
+    record = ctid.SampledData(sample_time=0.1, input=list(u), output=y.astype(np.float32))
+    assert len(ctid.MimoData(record)) == 100
