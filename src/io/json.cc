@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
+#include <string>
+#include <vector>
 
 #include "ctid/core/error.h"
 
@@ -79,8 +82,29 @@ nlohmann::json parse_json(std::string_view text, const std::string& source) {
                           ": malformed JSON: arrays and objects nested deeper than " +
                           std::to_string(kMaxNestingDepth) + " levels");
   }
+  // A key given twice in one object would silently keep its last value: refused instead.
+  struct DuplicateKey {
+    std::string key;
+  };
+  std::vector<std::set<std::string>> keys;  // of each object being parsed, innermost last
+  const nlohmann::json::parser_callback_t check_keys =
+      [&keys](int /*depth*/, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+        using Event = nlohmann::json::parse_event_t;
+        if (event == Event::object_start) {
+          keys.emplace_back();
+        } else if (event == Event::object_end) {
+          if (!keys.empty()) keys.pop_back();
+        } else if (event == Event::key && !keys.empty()) {
+          const std::string& key = parsed.get_ref<const std::string&>();
+          if (!keys.back().insert(key).second) throw DuplicateKey{key};
+        }
+        return true;
+      };
   try {
-    return nlohmann::json::parse(text.begin(), text.end());
+    return nlohmann::json::parse(text.begin(), text.end(), check_keys);
+  } catch (const DuplicateKey& d) {
+    throw InvalidArgument(source + ": malformed JSON: the key \"" + d.key +
+                          "\" appears twice in one object");
   } catch (const nlohmann::json::parse_error& e) {
     throw InvalidArgument(source + ":" + parse_error_location(text, e.byte) +
                           ": malformed JSON: " + parse_error_reason(e.what()));

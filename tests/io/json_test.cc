@@ -36,6 +36,16 @@ TEST(Json, DeepNestingIsRefusedBeforeParsing) {
             "m.json:2:256: malformed JSON: arrays and objects nested deeper than 256 levels");
 }
 
+TEST(Json, AKeyGivenTwiceInOneObjectIsRefused) {
+  // nlohmann keeps the last of two equal keys silently; a model file with "inputs" twice is a
+  // mistake to report, not a choice to make.
+  EXPECT_EQ(parse_error("{\"type\": \"a\", \"inputs\": 2, \"inputs\": 3}"),
+            "m.json: malformed JSON: the key \"inputs\" appears twice in one object");
+  EXPECT_EQ(parse_error("{\"s\": [{\"b\": 1}, {\"b\": 2, \"c\": {\"b\": 3}}], \"b\": 4}"), "");
+  EXPECT_THAT(parse_error("{\"s\": [{\"b\": 1, \"c\": 2, \"b\": 3}]}"),
+              HasSubstr("the key \"b\" appears twice"));
+}
+
 TEST(Json, SyntaxErrorsNameFileLineAndColumn) {
   EXPECT_THAT(parse_error("{\n  \"a\": 1,\n  \"b\": NaN\n}\n"),
               StartsWith("m.json:3:8: malformed JSON"));
