@@ -164,6 +164,11 @@ void require_spectral_column(const Eigen::VectorXd& x, const std::string& file,
         "; the spectra square them, which overflows double precision above ", kMaxSpectralValue,
         "; rescale it with ", is_output ? "--scale-output" : "--scale-input"));
   }
+  if (!is_output && (x.array() == x(0)).all()) {
+    usage_error(internal::concat(file, ": input column '", column, "' is ", x(0),
+                                 " at every sample; an FRF needs an input that varies (check "
+                                 "--input-column)"));
+  }
   if (is_output && largest == 0.0) {
     usage_error(file + ": output column '" + column +
                 "' is zero at every sample; there is no response to estimate (check "
@@ -217,6 +222,10 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
     prepare_plot_directory(f.plot, {"frf_matrix.png"}, f.force);
   }
   const MimoData data = f.data.load_mimo(app);
+  for (Eigen::Index k = 0; k < data.inputs().cols(); ++k) {
+    require_spectral_column(data.inputs().col(k), f.data.file,
+                            data.input_names()[static_cast<std::size_t>(k)], false);
+  }
   for (Eigen::Index j = 0; j < data.outputs().cols(); ++j) {
     require_spectral_column(data.outputs().col(j), f.data.file,
                             data.output_names()[static_cast<std::size_t>(j)], true);

@@ -190,6 +190,27 @@ TEST_F(ReliabilityTest, FrfOfAZeroOutputIsRefused) {
                  "zero.csv: output column 'y' is zero at every sample");
 }
 
+TEST_F(ReliabilityTest, FrfOfAConstantInputIsRefused) {
+  // A constant input leaks into line 1 through the window and looked like a 1-line FRF.
+  std::string text = "t,u,y,u2\n";
+  for (int k = 0; k < 400; ++k) {
+    text += std::to_string(0.05 * k) + ",1," + std::to_string(k % 7 - 3) + "," +
+            std::to_string(k % 5) + "\n";
+  }
+  write("flat.csv", text);
+  // (The data check's warning about the input's mean comes first; the error is the last line.)
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"frf", "flat.csv", "-o", "f.csv"},
+        std::vector<std::string>{"frf", "flat.csv", "--input-columns", "u2,u", "--output-columns",
+                                 "y"}}) {
+    const auto r = ctid(args);
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_THAT(r.err, HasSubstr("ctid frf: error: flat.csv: input column 'u' is 1 at every "
+                                 "sample; an FRF needs an input that varies"));
+  }
+  EXPECT_FALSE(std::filesystem::exists(path("f.csv")));
+}
+
 TEST_F(ReliabilityTest, FrfOfValuesTooLargeForTheSpectraIsRefused) {
   std::string text = "t,u,y\n";
   for (int k = 0; k < 400; ++k) {
