@@ -9,14 +9,15 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/io/file.h"
 #include "ctid/io/json.h"
 #include "ctid/io/report_json.h"
 #include "ctid/study/monte_carlo.h"
@@ -73,10 +74,13 @@ StudyOptions options_from_flags(const StudyFlags& f) {
   return options;
 }
 
-std::ofstream open_output(const std::filesystem::path& path) {
-  std::ofstream out(path);
-  if (!out) throw ComputationError("cannot write " + path.string());
-  return out;
+// Writes what `fill` prints to `path` through a temporary file moved into place (io layer), so
+// an interrupted study leaves no half-written table.
+template <class Fill>
+void write_table(const std::filesystem::path& path, Fill fill) {
+  std::ostringstream text;
+  fill(text);
+  io::write_text_file(path, text.str(), io::Overwrite::yes);
 }
 
 void run_study_command(const StudyFlags& f) {
@@ -98,8 +102,8 @@ void run_study_command(const StudyFlags& f) {
       usage_error("--size-index and --run-index replay one run: give both");
     }
     const std::vector<StudyRecord> records = run_study_case(options, f.size_index, f.run_index);
-    std::ofstream out = open_output(folder / "runs.csv");
-    write_records_csv(records, setup.parameter_names, out);
+    write_table(folder / "runs.csv",
+                [&](std::ostream& out) { write_records_csv(records, setup.parameter_names, out); });
     if (!f.quiet) write_records_csv(records, setup.parameter_names, std::cout);
     return;
   }
@@ -112,18 +116,9 @@ void run_study_command(const StudyFlags& f) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  {
-    std::ofstream out = open_output(folder / "runs.csv");
-    write_records_csv(result, out);
-  }
-  {
-    std::ofstream out = open_output(folder / "mse.csv");
-    write_mse_csv(result, out);
-  }
-  {
-    std::ofstream out = open_output(folder / "trends.csv");
-    write_trends_csv(result, out);
-  }
+  write_table(folder / "runs.csv", [&](std::ostream& out) { write_records_csv(result, out); });
+  write_table(folder / "mse.csv", [&](std::ostream& out) { write_mse_csv(result, out); });
+  write_table(folder / "trends.csv", [&](std::ostream& out) { write_trends_csv(result, out); });
   io::write_json(folder / "summary.json", io::to_json(study_summary(result)), io::Overwrite::yes);
   if (!f.quiet) {
     std::cout << "ctid study " << to_string(options.kind) << ": " << total << " cases x "
