@@ -137,13 +137,10 @@ Eigen::MatrixXd model_outputs(const Layout& layout, const Eigen::MatrixXd& u,
 }
 
 // Numerators fitted by least squares to every output for the given denominators.
-MimoAdditiveModel fit_numerators(const Layout& layout, const MimoData& data,
-                                 const std::vector<Polynomial>& a) {
-  const Eigen::MatrixXd u = numerator_regressors(layout, data, a);
-  const Eigen::VectorXd s = internal::column_scales(u);
-  const Eigen::MatrixXd b =
-      s.cwiseInverse().asDiagonal() *
-      (u * s.cwiseInverse().asDiagonal()).colPivHouseholderQr().solve(data.outputs());
+// The model of denominators `a` whose numerators and D are the coefficients `b` of the
+// numerator columns (u_count x outputs, one column per output).
+MimoAdditiveModel model_from_columns(const Layout& layout, const std::vector<Polynomial>& a,
+                                     const Eigen::MatrixXd& b) {
   std::vector<MimoSubmodel> submodels;
   for (int i = 0; i < layout.size(); ++i) {
     MimoSubmodel sub{
@@ -161,6 +158,16 @@ MimoAdditiveModel fit_numerators(const Layout& layout, const MimoData& data,
   Eigen::MatrixXd direct;
   if (layout.direct) direct = b.middleRows(layout.d_at, layout.inputs).transpose();
   return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels), direct);
+}
+
+MimoAdditiveModel fit_numerators(const Layout& layout, const MimoData& data,
+                                 const std::vector<Polynomial>& a) {
+  const Eigen::MatrixXd u = numerator_regressors(layout, data, a);
+  const Eigen::VectorXd s = internal::column_scales(u);
+  return model_from_columns(
+      layout, a,
+      s.cwiseInverse().asDiagonal() *
+          (u * s.cwiseInverse().asDiagonal()).colPivHouseholderQr().solve(data.outputs()));
 }
 
 // u S^-1 = Q R with S the columns' norms (column_scales), Q thin (N x columns): how the
@@ -821,11 +828,16 @@ Eigen::VectorXcd principal_shape(const Eigen::MatrixXcd& residue, double* share 
 
 // Residue matrix of submodel i (second order) at its upper pole, from its denominator
 // coefficients and per-channel numerator coefficients (numerators[j * inputs + k]).
+// The root with a non-negative imaginary part of 1 + a1 s + a2 s^2.
+std::complex<double> upper_pole(double a1, double a2) {
+  const std::complex<double> pole =
+      (-a1 + std::sqrt(std::complex<double>(a1 * a1 - 4.0 * a2))) / (2.0 * a2);
+  return pole.imag() < 0.0 ? std::conj(pole) : pole;
+}
+
 Eigen::MatrixXcd residue_matrix(const Layout& layout, double a1, double a2,
                                 const std::vector<Eigen::VectorXd>& numerators) {
-  const std::complex<double> disc = std::sqrt(std::complex<double>(a1 * a1 - 4.0 * a2));
-  std::complex<double> pole = (-a1 + disc) / (2.0 * a2);
-  if (pole.imag() < 0.0) pole = std::conj(pole);
+  const std::complex<double> pole = upper_pole(a1, a2);
   const std::complex<double> slope = a1 + 2.0 * a2 * pole;
   Eigen::MatrixXcd res(layout.outputs, layout.inputs);
   for (int j = 0; j < layout.outputs; ++j) {
@@ -1088,10 +1100,7 @@ RankOneFit rank_one_residues(const Layout& layout, const MimoData& data,
     const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
     const Polynomial& a = general[i].a;
     if (o.n != 2 || o.integrators > 0 || o.m > 1 || !(a[1] * a[1] < 4.0 * a[2])) continue;
-    std::complex<double> pole =
-        (-a[1] + std::sqrt(std::complex<double>(a[1] * a[1] - 4.0 * a[2]))) / (2.0 * a[2]);
-    if (pole.imag() < 0.0) pole = std::conj(pole);
-    modes.push_back({i, o.m == 1, pole, p, {}, {}});
+    modes.push_back({i, o.m == 1, upper_pole(a[1], a[2]), p, {}, {}});
     p += o.m == 1 ? 2 * nu : nu;
     for (int k = 0; k < nu; ++k) {
       for (int r = 0; r <= o.m; ++r) in_mode[static_cast<size_t>(layout.u_column(i, k, r))] = true;
@@ -1247,45 +1256,20 @@ RankOneFit rank_one_residues(const Layout& layout, const MimoData& data,
   }
 
   // The model: each mode's numerators from c = psi L', the other columns as fitted.
-  std::vector<MimoSubmodel> submodels = general.submodels();
-  Eigen::MatrixXd direct = general.has_direct_term() ? general.direct() : Eigen::MatrixXd();
+  Eigen::MatrixXd b(layout.u_count, ny);
+  for (int c = 0; c < n_other; ++c) b.row(others[static_cast<size_t>(c)]) = other.row(c);
   for (const Mode& m : modes) {
-    std::vector<Polynomial>& b = submodels[static_cast<size_t>(m.submodel)].b;
     for (int j = 0; j < ny; ++j) {
       for (int k = 0; k < nu; ++k) {
         const std::complex<double> c = m.psi(j) * m.l(k);
         const double n1 = m.complex ? c.imag() / m.pole.imag() : 0.0;
-        Eigen::VectorXd coefficients(m.complex ? 2 : 1);
-        coefficients(0) = c.real() - m.pole.real() * n1;
-        if (m.complex) coefficients(1) = n1;
-        b[static_cast<size_t>(j * nu + k)] = Polynomial::trimmed(coefficients);
+        b(layout.u_column(m.submodel, k, 0), j) = c.real() - m.pole.real() * n1;
+        if (m.complex) b(layout.u_column(m.submodel, k, 1), j) = n1;
       }
     }
   }
-  for (int c = 0; c < n_other; ++c) {
-    const int column = others[static_cast<size_t>(c)];
-    for (int j = 0; j < ny; ++j) {
-      const double value = other(c, j);
-      if (layout.direct && column >= layout.d_at) {
-        direct(j, column - layout.d_at) = value;
-        continue;
-      }
-      // Which submodel, input and power the column is.
-      for (int i = 0; i < layout.size(); ++i) {
-        const int m_i = layout.orders[static_cast<size_t>(i)].m;
-        const int first = layout.u_column(i, 0, 0);
-        if (column < first || column >= first + nu * (m_i + 1)) continue;
-        const int k = (column - first) / (m_i + 1);
-        const int power = (column - first) % (m_i + 1);
-        Polynomial& slot = submodels[static_cast<size_t>(i)].b[static_cast<size_t>(j * nu + k)];
-        Eigen::VectorXd v = Eigen::VectorXd::Zero(m_i + 1);
-        for (int q = 0; q <= std::min(m_i, slot.degree()); ++q) v(q) = slot[q];
-        v(power) = value;
-        slot = Polynomial::trimmed(v);
-      }
-    }
-  }
-  return {MimoAdditiveModel(nu, ny, std::move(submodels), direct, general.input_delays()),
+  return {model_from_columns(layout, denominators(general), b)
+              .with_input_delays(general.input_delays()),
           iteration, n_modes};
 }
 
