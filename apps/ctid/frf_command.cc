@@ -27,6 +27,7 @@
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
+#include "ctid/io/uff58.h"
 #include "data_flags.h"
 #include "plot_support.h"
 
@@ -187,14 +188,20 @@ double median(Eigen::VectorXd v) {
   return x.size() % 2 == 1 ? x[m] : 0.5 * (x[m - 1] + x[m]);
 }
 
-// -o: the CSV table, or for a .json name the FRF's document with the method, the data it came
+// -o: the CSV table, for a .json name the FRF's document with the method, the data it came
 // from (samples, h, hold, preprocessing) and the peaks (and, if given, what they are peaks of)
-// added to `document`.
+// added to `document`, and for a universal-file name (.uff, .unv, .uf) the FRF matrix `mimo`
+// as dataset 58 records (checked_output_name refuses that name without one).
 void write_output(const FrfFlags& f, const io::CsvTable& table, nlohmann::json& document,
                   bool periodic, int samples, double sample_time, Hold input_hold,
-                  const std::vector<ResonancePeak>& peaks, const char* peaks_of = nullptr) {
+                  const std::vector<ResonancePeak>& peaks, const char* peaks_of = nullptr,
+                  const MimoFrf* mimo = nullptr) {
   if (f.output.empty()) return;
   const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
+  if (mimo != nullptr && io::is_universal_file_path(f.output)) {
+    io::write_uff58(f.output, *mimo, overwrite);
+    return;
+  }
   if (std::filesystem::path(f.output).extension() != ".json") {
     io::write_csv(f.output, table, overwrite);
     return;
@@ -230,10 +237,6 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
     require_spectral_column(data.outputs().col(j), f.data.file,
                             data.output_names()[static_cast<std::size_t>(j)], true);
   }
-  for (Eigen::Index i = 0; i < data.inputs().cols(); ++i) {
-    require_spectral_column(data.inputs().col(i), f.data.file,
-                            data.input_names()[static_cast<std::size_t>(i)], false);
-  }
   MimoFrf frf;
   if (periodic) {
     const int experiments = f.experiments > 0 ? f.experiments : data.input_count();
@@ -256,9 +259,9 @@ void run_mimo_frf(const FrfFlags& f, const CLI::App& app, bool periodic) {
   const io::CsvTable table = io::mimo_frf_table(frf);
   require_finite(table, f.data.file);
   nlohmann::json document = io::to_json(frf);
-  write_output(f, table, document, periodic, data.size(), data.sample_time(), data.input_hold(),
-               peaks,
-               "sqrt(sum |H_ji|^2) over all channels, with the power-weighted multiple coherence");
+  write_output(
+      f, table, document, periodic, data.size(), data.sample_time(), data.input_hold(), peaks,
+      "sqrt(sum |H_ji|^2) over all channels, with the power-weighted multiple coherence", &frf);
   if (!f.plot.empty()) {
     // frf_matrix.png: every input of the first four outputs, with their multiple coherence.
     const TemporaryDirectory work;
@@ -329,6 +332,11 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
   }
   if (app.count("--experiments") > 0) {
     usage_error("--experiments needs several inputs (--input-columns)");
+  }
+  if (io::is_universal_file_path(f.output)) {
+    usage_error("-o " + f.output +
+                ": a universal file (dataset 58) holds an FRF matrix; give --input-columns / "
+                "--output-columns, or write .csv or .json");
   }
   std::filesystem::path package;
   if (!f.plot.empty()) {
@@ -435,7 +443,9 @@ Command add_frf_command(CLI::App& parent) {
                   "Peaks: smallest squared coherence at the peak (0-1)")
       ->capture_default_str()
       ->group("Peaks");
-  app->add_option("--output,-o", f.output, "CSV file to write (.json: an frf document)")
+  app->add_option("--output,-o", f.output,
+                  "CSV file to write (.json: an frf document; .uff/.unv with several channels: "
+                  "universal file dataset 58, which fit-frf reads)")
       ->group("Output");
   app->add_option("--plot", f.plot, "Directory for frf.png (and bode.png of --model over the FRF)")
       ->group("Output");

@@ -11,6 +11,8 @@
 #include <vector>
 
 #include "ctid/core/error.h"
+#include "ctid/io/json.h"
+#include "ctid/io/report_json.h"
 #include "ctid/io/uff58.h"
 
 namespace ctid::io {
@@ -171,11 +173,25 @@ CsvTable mimo_frf_table(const MimoFrf& frf) {
   return table;
 }
 
-MimoFrf read_mimo_frf(const std::filesystem::path& path) {
+namespace {
+
+std::string lower_extension(const std::filesystem::path& path) {
   std::string extension = path.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (extension == ".uff" || extension == ".unv" || extension == ".uf") return read_uff58(path);
+  return extension;
+}
+
+}  // namespace
+
+bool is_universal_file_path(const std::filesystem::path& path) {
+  const std::string extension = lower_extension(path);
+  return extension == ".uff" || extension == ".unv" || extension == ".uf";
+}
+
+MimoFrf read_mimo_frf(const std::filesystem::path& path) {
+  if (is_universal_file_path(path)) return read_uff58(path);
+  if (lower_extension(path) == ".json") return mimo_frf_from_json(read_json(path), path.string());
   return read_mimo_frf_csv(path);
 }
 

@@ -17,8 +17,10 @@
 #include "ctid/core/mimo_model.h"
 #include "ctid/core/transfer_function.h"
 #include "ctid/io/csv.h"
+#include "ctid/io/file.h"
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_data_csv.h"
+#include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/model_json.h"
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/excitation.h"
@@ -135,6 +137,35 @@ TEST_F(FrfMimoCommand, JsonDocumentHoldsTheMatrixAndThePeaks) {
   EXPECT_EQ(doc["response"][5][1].size(), 2u);  // inputs
   EXPECT_EQ(doc["coherence"][5].size(), 2u);
   EXPECT_TRUE(doc["peaks"].is_array());
+}
+
+// What `ctid frf` writes with several channels, `ctid fit-frf` reads: the CSV table, the
+// "mimo_frf" document (.json) and the universal file (.uff, dataset 58) give the same matrix.
+TEST_F(FrfMimoCommand, EveryMatrixFileItWritesFitFrfReads) {
+  for (const char* name : {"m.csv", "m.json", "m.uff"}) {
+    const auto r = ctid({"frf", "d.csv", "--input-columns", "u1:u2", "--output-columns", "y1:y3",
+                         "-o", name, "-q"});
+    ASSERT_EQ(r.status, 0) << name << ": " << r.err;
+  }
+  const MimoFrf csv = io::read_mimo_frf(path("m.csv"));
+  const MimoFrf json = io::read_mimo_frf(path("m.json"));
+  const MimoFrf uff = io::read_mimo_frf(path("m.uff"));
+  EXPECT_EQ(io::read_text_file(path("m.uff")).substr(0, 12), "    -1\n    5");
+  ASSERT_EQ(json.frequencies.size(), csv.frequencies.size());
+  ASSERT_EQ(uff.frequencies.size(), csv.frequencies.size());
+  EXPECT_EQ(json.output_names, csv.output_names);
+  for (Eigen::Index l = 0; l < csv.frequencies.size(); ++l) {
+    EXPECT_EQ(json.response[l], csv.response[l]) << "line " << l;
+    // The universal file holds 6-7 significant digits.
+    EXPECT_LT((uff.response[l] - csv.response[l]).norm(), 1e-5 * csv.response[l].norm())
+        << "line " << l;
+  }
+  const auto fitted = ctid({"fit-frf", "m.json", "--modes", "2", "-q"});
+  EXPECT_NE(fitted.status, 2) << fitted.err;
+  testing::expect_bad_input(
+      ctid({"frf", "d.csv", "--input-column", "u1", "--output-column", "y1", "-o", "s.uff"}), "frf",
+      "-o s.uff: a universal file (dataset 58) holds an FRF matrix");
+  EXPECT_FALSE(std::filesystem::exists(path("s.uff")));
 }
 
 TEST_F(FrfMimoCommand, OneByOneEqualsTheSisoCommand) {

@@ -28,8 +28,11 @@ MimoFrf read_mimo_frf_csv(const std::filesystem::path& path);
 /// the FRF does not have are left out).
 CsvTable mimo_frf_table(const MimoFrf& frf);
 
-/// By extension: .uff, .unv or .uf as universal file dataset 58 (read_uff58), anything else as
-/// CSV.
+/// Whether `path` names a universal file by its extension (.uff, .unv or .uf, any case).
+bool is_universal_file_path(const std::filesystem::path& path);
+
+/// By extension: .uff, .unv or .uf as universal file dataset 58 (read_uff58), .json as the
+/// "mimo_frf" document `ctid frf -o X.json` writes, anything else as CSV.
 MimoFrf read_mimo_frf(const std::filesystem::path& path);
 
 }  // namespace ctid::io
