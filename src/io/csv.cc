@@ -217,7 +217,10 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
     // Lines end with LF, CRLF or a lone CR (old Mac files).
     size_t end = text.find_first_of("\r\n", position);
     if (end == std::string_view::npos) end = text.size();
-    const std::string_view line = trim(text.substr(position, end - position));
+    std::string_view line = trim(text.substr(position, end - position));
+    // A byte order mark before the header row after comment lines (files joined by tools) is
+    // not part of the first name either.
+    if (header_line == 0 && line.substr(0, 3) == "\xEF\xBB\xBF") line = trim(line.substr(3));
     position = end + 1;
     if (end < text.size() && text[end] == '\r' && position < text.size() &&
         text[position] == '\n') {

@@ -9,7 +9,9 @@
 namespace ctid::io {
 namespace {
 
+// The zero polynomial (no coefficients) is written [0.0], which the readers take back.
 nlohmann::json coefficients(const Polynomial& p) {
+  if (p.coefficients().size() == 0) return nlohmann::json::array({0.0});
   nlohmann::json array = nlohmann::json::array();
   for (Eigen::Index k = 0; k < p.coefficients().size(); ++k) array.push_back(p.coefficients()(k));
   return array;

@@ -139,7 +139,8 @@ void check_document(const nlohmann::json& value, std::string_view type, const st
 
 void check_keys(const nlohmann::json& value, const std::vector<std::string>& fields,
                 const std::vector<std::string>& extra, const std::string& source) {
-  for (const auto& [key, element] : value.items()) {
+  for (const auto& item : value.items()) {
+    const std::string& key = item.key();  // a named reference, which clang 14 lambdas capture
     const auto known = [&](const std::vector<std::string>& names) {
       return std::find(names.begin(), names.end(), key) != names.end();
     };

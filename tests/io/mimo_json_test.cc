@@ -69,6 +69,19 @@ TEST(MimoJson, ModelRoundTrip) {
   expect_equal(io::mimo_additive_model_from_json(j, "m.json"), rigid);
 }
 
+// Found by fuzz_model_json: a numerator read as [0.0] was written [] (the zero polynomial has
+// no coefficients), which the reader refuses; ctid must read every model it writes.
+TEST(MimoJson, ZeroNumeratorIsWrittenAsZeroAndReadBack) {
+  const nlohmann::json document = nlohmann::json::parse(
+      R"({"type": "mimo_additive_model", "inputs": 2, "outputs": 1, "submodels": [
+          {"denominator_ascending": [1.0, 0.2, 1.0], "numerators_ascending": [[0.0], [0.5]]}]})");
+  const MimoAdditiveModel model = io::mimo_additive_model_from_json(document, "zero.json");
+  const nlohmann::json written = io::to_json(model);
+  EXPECT_EQ(written["submodels"][0]["numerators_ascending"][0], nlohmann::json::array({0.0}));
+  const MimoAdditiveModel back = io::mimo_additive_model_from_json(written, "again.json");
+  EXPECT_EQ(back.submodels()[0].b[1].coefficients(), model.submodels()[0].b[1].coefficients());
+}
+
 TEST(MimoJson, MalformedModelsNameTheField) {
   nlohmann::json j = io::to_json(two_by_three(true));
   j["submodels"][1]["numerators_ascending"].erase(0);

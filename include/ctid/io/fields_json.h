@@ -232,7 +232,11 @@ nlohmann::json fields_to_json(const S& object) {
 template <HasFields S>
 void fields_from_json(const nlohmann::json& value, S& object, const std::string& where) {
   if (!value.is_object()) internal::wrong_type(where, "an object", value);
-  for (const auto& [key, element] : value.items()) {
+  for (const auto& item : value.items()) {
+    // Named references, not a structured binding, which clang before 16 cannot capture in a
+    // lambda (the fuzz build, fuzz/, uses clang 14).
+    const std::string& key = item.key();
+    const nlohmann::json& element = item.value();
     bool known = false;
     for_each_field<S>([&](const auto& f) {
       if (!known && f.name == key) {
