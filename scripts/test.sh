@@ -3,9 +3,12 @@
 #   1. clang-format check of every tracked C++ file
 #   2. ctest on the Release build in build/ (unit tests + install/find_package consumer test)
 #   3. unit tests again under AddressSanitizer + UndefinedBehaviorSanitizer (build-asan/)
-#   4. pytest on python/tests with /usr/bin/python3, when that folder exists
+#   4. the libFuzzer harnesses of the readers (fuzz/, clang): every committed seed and past
+#      crash once, then 15 s of fuzzing each (scripts/fuzz.sh; an hour: docs/fuzzing.md)
+#   5. pytest on python/tests with /usr/bin/python3, when that folder exists
 # Every step runs even if an earlier one failed; exits non-zero if any failed.
-# Environment: CTID_JOBS (parallel jobs, default nproc), CTID_SKIP_ASAN=1 (skip step 3).
+# Environment: CTID_JOBS (parallel jobs, default nproc), CTID_SKIP_ASAN=1 (skip step 3),
+# CTID_SKIP_FUZZ=1 (skip step 4).
 set -uo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -55,6 +58,10 @@ asan_tests() {
     ctest --preset asan -j "$jobs"
 }
 
+fuzz_tests() {
+  bash scripts/fuzz.sh regress && bash scripts/fuzz.sh run 15
+}
+
 python_tests() {
   if [[ ! -d python/tests ]]; then
     echo "no python/tests yet: skipped"
@@ -75,6 +82,9 @@ run_step "clang-format" format_check
 run_step "ctest (Release)" release_tests
 if [[ ${CTID_SKIP_ASAN:-0} != 1 ]]; then
   run_step "ctest (ASan+UBSan)" asan_tests
+fi
+if [[ ${CTID_SKIP_FUZZ:-0} != 1 ]]; then
+  run_step "fuzz (readers)" fuzz_tests
 fi
 run_step "pytest" python_tests
 
