@@ -217,3 +217,28 @@ def test_import_ctid_does_not_import_dask():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env=dict(os.environ), check=True).stdout
     assert out.strip() == "False"
+
+
+CLI_STUDY = ["study", "closed-loop", "--runs", "8", "--sizes", "2", "--min-samples", "300",
+             "--max-samples", "600", "--seed", "3", "--no-plot", "-q"]
+
+
+def test_cli_scheduler_writes_the_files_of_the_local_study(cli, cluster, tmp_path):
+    local = subprocess.run([str(cli), *CLI_STUDY, "-o", str(tmp_path / "local"), "-j", "1"],
+                           capture_output=True, text=True)
+    assert local.returncode == 0, local.stderr
+    remote = subprocess.run([str(cli), *CLI_STUDY, "-o", str(tmp_path / "dask"), "--scheduler",
+                             cluster.scheduler_address], capture_output=True, text=True)
+    assert remote.returncode == 0, remote.stderr
+    for name in ("runs.csv", "mse.csv", "trends.csv", "summary.json"):
+        assert (tmp_path / "dask" / name).read_bytes() == (tmp_path / "local" / name).read_bytes()
+
+
+def test_cli_scheduler_env_needs_the_variable(cli, tmp_path):
+    environment = {k: v for k, v in os.environ.items() if k != "DASK_SCHEDULER_ADDRESS"}
+    run = subprocess.run([str(cli), *CLI_STUDY, "-o", str(tmp_path), "--scheduler", "env"],
+                         capture_output=True, text=True, env=environment)
+    assert run.returncode == 2
+    assert "DASK_SCHEDULER_ADDRESS is not set" in run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "runs.csv").exists()
