@@ -9,12 +9,15 @@ Runs the same study three times: ctid.run_study with one thread (serial), ctid.r
 one thread each on 127.0.0.1, started before the clock and stopped after; or the scheduler at
 --scheduler, whose workers are counted). Prints runs/s (a run is one Monte Carlo case: every
 estimator on one data set), the speed-up over serial and the scaling efficiency (speed-up /
-workers), then whether every record and MSE row of the three runs is identical to the serial
+workers), the CPU seconds each mode used (this process, plus the workers' for Dask: on a
+shared machine the wall times say little, the CPU times say what the work and the overhead
+cost), then whether every record and MSE row of the three runs is identical to the serial
 one (IDENTICAL or DIFFERENT; exit status 1 if DIFFERENT).
 """
 
 import argparse
 import math
+import os
 import sys
 import time
 
@@ -48,9 +51,15 @@ def identical(a, b):
 
 
 def timed(function):
-    start = time.perf_counter()
+    """function(), its wall time and the CPU time of this process during it."""
+    start, cpu = time.perf_counter(), time.process_time()
     value = function()
-    return value, time.perf_counter() - start
+    return value, time.perf_counter() - start, time.process_time() - cpu
+
+
+def worker_cpu_seconds(client):
+    """CPU seconds used so far by each worker process (user + system)."""
+    return client.run(time.process_time)
 
 
 def main():
@@ -82,9 +91,9 @@ def main():
           f"covariance {options.compute_covariance}")
 
     options.threads = 1
-    serial, serial_seconds = timed(lambda: ctid.run_study(options))
+    serial, serial_seconds, serial_cpu = timed(lambda: ctid.run_study(options))
     options.threads = arguments.workers
-    threads, threads_seconds = timed(lambda: ctid.run_study(options))
+    threads, threads_seconds, threads_cpu = timed(lambda: ctid.run_study(options))
     options.threads = 1
 
     from dask.distributed import Client, LocalCluster
@@ -100,24 +109,29 @@ def main():
         dask_workers = sum(client.nthreads().values())
         # Workers import ctid on their first task: warm them up outside the clock.
         client.run(lambda: __import__("ctid") and None)
-        on_dask, dask_seconds = timed(
+        before = worker_cpu_seconds(client)
+        on_dask, dask_seconds, dask_cpu = timed(
             lambda: ctid.study(options, client=client, chunk_runs=arguments.chunk_runs))
+        after = worker_cpu_seconds(client)
+        dask_cpu += sum(after[w] - before.get(w, 0.0) for w in after)
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
 
-    rows = [("serial (run_study, 1 thread)", 1, serial_seconds),
+    rows = [("serial (run_study, 1 thread)", 1, serial_seconds, serial_cpu),
             (f"threads (run_study, {arguments.workers} threads)", arguments.workers,
-             threads_seconds),
+             threads_seconds, threads_cpu),
             (f"Dask ({dask_workers} workers x 1 thread, chunk {arguments.chunk_runs})",
-             dask_workers, dask_seconds)]
+             dask_workers, dask_seconds, dask_cpu)]
+    print("load average (1, 5, 15 min) at the end: " +
+          ", ".join(f"{x:.2f}" for x in os.getloadavg()) + f" on {os.cpu_count()} cores")
     print(f"{'mode':44} {'workers':>7} {'seconds':>8} {'runs/s':>8} {'speed-up':>8} "
-          f"{'efficiency':>10}")
-    for name, workers, seconds in rows:
+          f"{'efficiency':>10} {'CPU s':>8}")
+    for name, workers, seconds, cpu in rows:
         speed_up = serial_seconds / seconds
         print(f"{name:44} {workers:7d} {seconds:8.2f} {cases / seconds:8.1f} {speed_up:8.2f} "
-              f"{speed_up / workers:10.2f}")
+              f"{speed_up / workers:10.2f} {cpu:8.2f}")
     same_threads = identical(threads, serial)
     same_dask = identical(on_dask, serial)
     print(f"threads vs serial: {'IDENTICAL' if same_threads else 'DIFFERENT'} "
