@@ -105,8 +105,9 @@ def study(options=None, *, client=None, chunk_runs=DEFAULT_CHUNK_RUNS, progress=
     client: None runs ``ctid.run_study(options)`` in this process (options.threads threads);
         a dask.distributed Client runs the cases on its cluster (options.threads is not used
         there: each task runs one case at a time, a worker runs as many tasks as it has
-        threads); a string is a scheduler address, ``"env"`` meaning $DASK_SCHEDULER_ADDRESS,
-        connected to for this call and closed afterwards.
+        threads); a cluster object (LocalCluster, dask-jobqueue's SLURMCluster, ...) or a
+        string, a scheduler address with ``"env"`` meaning $DASK_SCHEDULER_ADDRESS, is
+        connected to for this call and the connection closed afterwards.
     chunk_runs: runs per task (consecutive runs at one sample size). It changes the task count
         and overhead, never the result.
     progress: called as progress(finished_cases, total_cases) from this thread as tasks finish
@@ -131,6 +132,10 @@ def study(options=None, *, client=None, chunk_runs=DEFAULT_CHUNK_RUNS, progress=
     owned = None
     if isinstance(client, str):
         client = owned = client_from_address(client)
+    elif not hasattr(client, "submit") and hasattr(client, "scheduler_address"):
+        from dask.distributed import Client
+
+        client = owned = Client(client)  # a cluster object (LocalCluster, SLURMCluster, ...)
     try:
         import json
 

@@ -160,6 +160,7 @@ def test_address_string_and_environment_variable(cluster, monkeypatch):
     options = ctid.StudyOptions(**dict(CLOSED_LOOP, runs=5, sizes=1))
     expected = ctid.run_study(options)
     assert ctid.study(options, client=cluster.scheduler_address) == expected
+    assert ctid.study(options, client=cluster) == expected
     monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", cluster.scheduler_address)
     assert ctid.study(options, client="env") == expected
     monkeypatch.delenv("DASK_SCHEDULER_ADDRESS")
