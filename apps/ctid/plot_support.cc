@@ -131,6 +131,25 @@ void plot(const std::filesystem::path& package_dir, const std::vector<PlotJob>& 
   }
 }
 
+void run_python_module(const std::filesystem::path& package_dir, const std::string& module,
+                       const std::vector<std::string>& arguments, const std::string& what) {
+  const TemporaryDirectory status_dir;
+  const std::string errors = (status_dir.path() / "stderr").string();
+  std::string command =
+      "PYTHONPATH=" + quote(package_dir.string()) + " " + kPython + " -m " + quote(module);
+  for (const std::string& argument : arguments) command += " " + quote(argument);
+  command += " > /dev/null 2> " + quote(errors);
+  const int raw = std::system(command.c_str());
+  if (raw != -1 && WIFEXITED(raw) && WEXITSTATUS(raw) == 0) return;
+  std::ifstream in(errors);
+  std::ostringstream text;
+  text << in.rdbuf();
+  std::string message = what + " failed";
+  if (const std::string line = last_line(text.str()); !line.empty()) message += ": " + line;
+  if (raw != -1 && WIFEXITED(raw) && WEXITSTATUS(raw) == 2) throw InvalidArgument(message);
+  throw ComputationError(message);
+}
+
 TemporaryDirectory::TemporaryDirectory() {
   std::random_device device;
   for (int attempt = 0; attempt < 100; ++attempt) {

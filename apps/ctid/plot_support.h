@@ -45,6 +45,14 @@ struct PlotJob {
 /// rejected (exit status 2) and ComputationError otherwise, with the plotter's stderr line.
 void plot(const std::filesystem::path& package_dir, const std::vector<PlotJob>& jobs);
 
+/// Runs `/usr/bin/python3 -m module arguments...` (e.g. ctid.distributed for `ctid study
+/// --scheduler`) with PYTHONPATH set to `package_dir` (find_python_package), the environment
+/// otherwise inherited and stdout discarded, and waits for it. Throws InvalidArgument if it
+/// exits with status 2 and ComputationError on any other failure, with `what` and the last
+/// line it wrote to stderr.
+void run_python_module(const std::filesystem::path& package_dir, const std::string& module,
+                       const std::vector<std::string>& arguments, const std::string& what);
+
 /// A fresh, empty directory under the system's temporary directory, removed with the object.
 class TemporaryDirectory {
  public:

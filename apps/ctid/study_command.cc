@@ -4,19 +4,25 @@
 // summary.json (a study_summary document, io/report_json.h) and mse.png (MSE against N, log-log, by
 // `python3 -m ctid.plot mse`; plot_support.h). Existing result files are not replaced without
 // --force.
-// --size-index/--run-index replay one run and write only its records.
+// --size-index/--run-index replay one run and write only its records. --scheduler ADDRESS runs
+// the cases on a Dask cluster through `python3 -m ctid.distributed study` (docs/distributed.md),
+// which returns the records; the result is assembled and written here, as for a local study.
 #include <chrono>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/io/fields_json.h"
 #include "ctid/io/file.h"
 #include "ctid/io/json.h"
 #include "ctid/io/report_json.h"
@@ -43,6 +49,7 @@ struct StudyFlags {
   int max_iterations = -1;
   double tolerance = -1.0;
   std::vector<std::string> estimators;
+  std::string scheduler;
   bool no_covariance = false;
   bool no_plot = false;
   bool force = false;
@@ -83,14 +90,94 @@ void write_table(const std::filesystem::path& path, Fill fill) {
   io::write_text_file(path, text.str(), io::Overwrite::yes);
 }
 
+// A double of a study_records document: a number, or "nan", "-nan", "inf", "-inf" (JSON has
+// no non-finite numbers; the sign of a NaN is kept, so runs.csv prints what a local study does).
+double record_double(const nlohmann::json& value, const std::string& where) {
+  if (value.is_number()) return value.get<double>();
+  if (value.is_string()) {
+    const std::string& text = value.get_ref<const std::string&>();
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    if (text == "nan") return nan;
+    if (text == "-nan") return -nan;
+    if (text == "inf") return inf;
+    if (text == "-inf") return -inf;
+  }
+  throw ComputationError(where + " is " + value.dump() + "; expected a number");
+}
+
+// The records in the study_records document that `python3 -m ctid.distributed study` wrote:
+// every field by io::fields_from_json, the two vectors by record_double.
+std::vector<StudyRecord> read_study_records(const std::filesystem::path& path) {
+  const nlohmann::json document = io::read_json(path);
+  const std::string source = path.string();
+  if (!document.is_object() || !document.contains("type") || document["type"] != "study_records" ||
+      !document.contains("records") || !document["records"].is_array()) {
+    throw ComputationError(source + ": not a study_records document");
+  }
+  std::vector<StudyRecord> records;
+  records.reserve(document["records"].size());
+  for (std::size_t k = 0; k < document["records"].size(); ++k) {
+    const std::string where = source + ": records[" + std::to_string(k) + "]";
+    nlohmann::json fields = document["records"][k];
+    if (!fields.is_object()) throw ComputationError(where + " is not an object");
+    StudyRecord record;
+    for (auto [name, vector] : {std::pair{"estimate", &record.estimate},
+                                std::pair{"standard_error", &record.standard_error}}) {
+      if (!fields.contains(name)) continue;
+      const nlohmann::json& array = fields[name];
+      if (!array.is_array()) throw ComputationError(where + "." + name + " is not an array");
+      vector->resize(static_cast<Eigen::Index>(array.size()));
+      for (std::size_t i = 0; i < array.size(); ++i) {
+        (*vector)[static_cast<Eigen::Index>(i)] =
+            record_double(array[i], where + "." + name + "[" + std::to_string(i) + "]");
+      }
+      fields.erase(name);
+    }
+    io::fields_from_json(fields, record, where);
+    records.push_back(std::move(record));
+  }
+  return records;
+}
+
+// The study's cases on the Dask cluster at `scheduler` (an address, or "env" for
+// $DASK_SCHEDULER_ADDRESS): the options go to `python3 -m ctid.distributed study` as JSON, the
+// records come back as JSON, and study_result_from_records assembles them as run_study does.
+StudyResult run_study_on_dask(const StudyOptions& options, const std::filesystem::path& package,
+                              const std::string& scheduler) {
+  const TemporaryDirectory work;
+  const std::filesystem::path options_file = work.path() / "options.json";
+  const std::filesystem::path records_file = work.path() / "records.json";
+  io::write_json(options_file, io::fields_to_json(options), io::Overwrite::yes);
+  run_python_module(package, "ctid.distributed",
+                    {"study", options_file.string(), "--scheduler", scheduler, "--out",
+                     records_file.string(), "--quiet"},
+                    "--scheduler " + scheduler);
+  return study_result_from_records(options, read_study_records(records_file));
+}
+
 void run_study_command(const StudyFlags& f) {
   const StudyOptions options = options_from_flags(f);
   const std::filesystem::path folder(f.output);
   const bool replay = f.size_index >= 0 || f.run_index >= 0;
   const bool draw = !f.no_plot && !replay;
-  // Before any work: plotting must be possible, and no earlier result is replaced silently.
+  const bool dask = !f.scheduler.empty();
+  if (dask && replay) {
+    usage_error("--scheduler runs a whole study; --size-index/--run-index replay one run here");
+  }
+  // Before any work: plotting and Dask must be possible, and no earlier result is replaced
+  // silently.
   std::filesystem::path package;
   if (draw) package = require_plotting();
+  if (dask) {
+    const std::optional<std::filesystem::path> found = find_python_package();
+    if (!found) {
+      throw ComputationError(
+          "--scheduler needs the ctid Python package (build with -DCTID_BUILD_PYTHON=ON, or set "
+          "CTID_PYTHONPATH to the folder holding ctid/)");
+    }
+    package = *found;
+  }
   std::vector<std::string> files{"runs.csv"};
   if (!replay) files.insert(files.end(), {"mse.csv", "trends.csv", "summary.json"});
   if (draw) files.emplace_back("mse.png");
@@ -110,9 +197,14 @@ void run_study_command(const StudyFlags& f) {
 
   const auto start = std::chrono::steady_clock::now();
   const int total = options.sizes * options.runs;
-  Progress progress("ctid study", f.quiet);
-  const StudyResult result = run_study(options, progress.callback("case"));
-  progress.clear();
+  StudyResult result;
+  if (dask) {
+    result = run_study_on_dask(options, package, f.scheduler);
+  } else {
+    Progress progress("ctid study", f.quiet);
+    result = run_study(options, progress.callback("case"));
+    progress.clear();
+  }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -122,8 +214,12 @@ void run_study_command(const StudyFlags& f) {
   io::write_json(folder / "summary.json", io::to_json(study_summary(result)), io::Overwrite::yes);
   if (!f.quiet) {
     std::cout << "ctid study " << to_string(options.kind) << ": " << total << " cases x "
-              << options.active_estimators().size() << " estimators in " << seconds << " s on "
-              << resolve_thread_count(options.threads) << " threads\n";
+              << options.active_estimators().size() << " estimators in " << seconds << " s ";
+    if (dask) {
+      std::cout << "on the Dask cluster at " << f.scheduler << "\n";
+    } else {
+      std::cout << "on " << resolve_thread_count(options.threads) << " threads\n";
+    }
     write_trends_csv(result, std::cout);
   }
   if (draw) {
@@ -148,7 +244,8 @@ Command add_study_command(CLI::App& parent) {
       "parameter with the covariance prediction), DIR/trends.csv (log-log slopes, MSE ratios), "
       "DIR/summary.json (a study_summary document: MSE table and trends) and DIR/mse.png. Run r at "
       "size j is a pure function of (--seed, j, r): the output does "
-      "not depend on --threads, and --size-index j --run-index r replays that run alone.\n"
+      "not depend on --threads or --scheduler, and --size-index j --run-index r replays that run "
+      "alone. --scheduler ADDRESS runs the cases on a Dask cluster (docs/distributed.md).\n"
       "Docs: docs/study.md. Exit status: 0 ran, 2 bad usage or input, 1 other error.");
   app->add_option("kind", f.kind, "open-loop (Section 6.1) or closed-loop (Section 6.2)")
       ->required()
@@ -181,6 +278,13 @@ Command add_study_command(CLI::App& parent) {
       ->check(CLI::PositiveNumber);
   app->add_option("--estimators", f.estimators,
                   "Subset of estimators (srivc, clsrivc, additive_srivc, additive_clsrivc)");
+  app->add_option("--scheduler", f.scheduler,
+                  "Run the cases on the Dask cluster of this scheduler (tcp://host:8786; env: "
+                  "$DASK_SCHEDULER_ADDRESS) through python3 -m ctid.distributed; same outputs, "
+                  "identical to a local study (docs/distributed.md)")
+      ->check([](const std::string& value) {
+        return value.empty() ? std::string("an address is needed") : std::string();
+      });
   app->add_flag("--no-covariance", f.no_covariance,
                 "Skip the estimators' covariance (no standard errors or predicted MSE; faster)");
   app->add_flag("--no-plot", f.no_plot, "Do not draw mse.png");

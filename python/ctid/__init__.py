@@ -114,3 +114,5 @@ def _guard_record_constructors():
 
 
 _guard_record_constructors()
+
+from .distributed import study  # noqa: E402

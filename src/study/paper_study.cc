@@ -330,15 +330,42 @@ std::vector<MseRow> summarize_study(const std::vector<StudyRecord>& records,
   return rows;
 }
 
-StudyResult run_study(const StudyOptions& options, const std::function<void(int, int)>& progress) {
+StudyResult study_result_from_records(const StudyOptions& options,
+                                      std::vector<StudyRecord> records) {
   options.validate();
+  const std::vector<StudyEstimator> estimators = options.active_estimators();
+  const std::size_t count = static_cast<std::size_t>(options.sizes) *
+                            static_cast<std::size_t>(options.runs) * estimators.size();
+  require(records.size() == count, "study_result_from_records: ", records.size(),
+          " records; the study has ", count, " (", options.sizes, " sizes x ", options.runs,
+          " runs x ", estimators.size(), " estimators)");
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::size_t per_size = static_cast<std::size_t>(options.runs) * estimators.size();
+    const int size_index = static_cast<int>(k / per_size);
+    const int run_index = static_cast<int>(k % per_size / estimators.size());
+    const StudyEstimator estimator = estimators[k % estimators.size()];
+    const StudyRecord& record = records[k];
+    require(record.size_index == size_index && record.run_index == run_index &&
+                record.estimator == estimator,
+            "study_result_from_records: record ", k, " is (size ", record.size_index, ", run ",
+            record.run_index, ", ", to_string(record.estimator),
+            "); the study's order needs (size ", size_index, ", run ", run_index, ", ",
+            to_string(estimator), ") there");
+  }
   const StudySetup setup = study_setup(options.kind);
   StudyResult result;
   result.options = options;
   result.sample_sizes = log_spaced_sizes(options.min_samples, options.max_samples, options.sizes);
   result.parameter_names = setup.parameter_names;
   result.true_parameters = setup.true_parameters;
+  result.records = std::move(records);
+  result.mse =
+      summarize_study(result.records, result.sample_sizes, estimators, result.true_parameters);
+  return result;
+}
 
+StudyResult run_study(const StudyOptions& options, const std::function<void(int, int)>& progress) {
+  options.validate();
   const int cases = options.sizes * options.runs;
   std::vector<std::vector<StudyRecord>> per_case(static_cast<size_t>(cases));
   std::mutex progress_mutex;
@@ -354,12 +381,11 @@ StudyResult run_study(const StudyOptions& options, const std::function<void(int,
       progress(++finished, cases);
     }
   });
-  for (std::vector<StudyRecord>& records : per_case) {
-    for (StudyRecord& record : records) result.records.push_back(std::move(record));
+  std::vector<StudyRecord> records;
+  for (std::vector<StudyRecord>& each : per_case) {
+    for (StudyRecord& record : each) records.push_back(std::move(record));
   }
-  result.mse = summarize_study(result.records, result.sample_sizes, options.active_estimators(),
-                               result.true_parameters);
-  return result;
+  return study_result_from_records(options, std::move(records));
 }
 
 }  // namespace ctid

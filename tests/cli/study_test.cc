@@ -1,6 +1,7 @@
 // `ctid study` run as a user would, on a tiny closed-loop study: the files it promises, a
 // replayed run equal to its row in runs.csv, thread count not changing the result, results
-// never replaced without --force, bad flags exiting 2 with one line.
+// never replaced without --force, bad flags exiting 2 with one line. (--scheduler on a real
+// LocalCluster: python/tests/test_distributed_study.py.)
 #include <string>
 #include <variant>
 #include <vector>
@@ -93,6 +94,14 @@ TEST_F(StudyCommand, BadFlagsExitTwo) {
   expect_bad_input(ctid({"study", "closed-loop", "-o", "s", "--min-samples", "900", "--max-samples",
                          "800", "--no-plot"}),
                    "");
+}
+
+TEST_F(StudyCommand, SchedulerFlagIsCheckedBeforeAnyNetwork) {
+  // No scheduler listens at port 1: both are refused before anything connects.
+  expect_bad_input(
+      tiny("s", {"--scheduler", "tcp://127.0.0.1:1", "--size-index", "0", "--run-index", "0"}),
+      "replay one run here");
+  expect_bad_input(tiny("s", {"--scheduler", ""}), "an address is needed");
 }
 
 TEST_F(StudyCommand, PlotDrawsMseAgainstN) {

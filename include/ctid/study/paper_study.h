@@ -258,6 +258,14 @@ std::vector<MseRow> summarize_study(const std::vector<StudyRecord>& records,
                                     const std::vector<StudyEstimator>& estimators,
                                     const Eigen::VectorXd& true_parameters);
 
+/// The StudyResult of a study whose cases were run elsewhere (e.g. on a Dask cluster, by
+/// run_study_case): the options, sample sizes, compared parameters, `records` and their MSE
+/// table, assembled exactly as run_study assembles its own. `records` must be in the study's
+/// order (size index, then run index, then active estimator), one per case and estimator;
+/// otherwise InvalidArgument names the first record out of place.
+StudyResult study_result_from_records(const StudyOptions& options,
+                                      std::vector<StudyRecord> records);
+
 /// The whole study in parallel (options.threads). `progress`, if given, is called after each
 /// finished case with the number finished and the total (from worker threads, serialised).
 StudyResult run_study(const StudyOptions& options,
