@@ -3,11 +3,14 @@
 
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/core/parallel.h"
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/srivc.h"
 
@@ -29,10 +32,30 @@ InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>
       {},
       true,
       {}};
-  for (int d = min_delay; d <= max_delay; ++d) {
-    table.delays.push_back(d);
+  // The fits run in parallel (core/parallel.h), each into its own slot; the table and the
+  // choice are then made in delay order, so the outcome is the serial one.
+  const int count = max_delay - min_delay + 1;
+  std::vector<std::optional<EstimationResult>> fits(static_cast<std::size_t>(count));
+  std::vector<std::string> errors(static_cast<std::size_t>(count));
+  std::mutex progress_mutex;
+  int done = 0;
+  parallel_for(count, 0, [&](int k) {
+    const auto slot = static_cast<std::size_t>(k);
     try {
-      EstimationResult r = estimate(d);
+      fits[slot] = estimate(min_delay + k);
+    } catch (const InvalidArgument& e) {
+      errors[slot] = e.what();
+    }
+    if (progress) {
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      progress(++done, count);
+    }
+  });
+  for (int k = 0; k < count; ++k) {
+    const auto slot = static_cast<std::size_t>(k);
+    table.delays.push_back(min_delay + k);
+    if (fits[slot]) {
+      EstimationResult& r = *fits[slot];
       table.mean_squared_errors.push_back(r.mean_squared_error);
       table.terminations.push_back(r.termination);
       table.usable.push_back(r.verdict.usable);
@@ -42,13 +65,12 @@ InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>
                            (r.mean_squared_error < best->mean_squared_error ||
                             std::isnan(best->mean_squared_error)));
       if (better) best = std::move(r);
-    } catch (const InvalidArgument& e) {
-      if (first_error.empty()) first_error = e.what();
+    } else {
+      if (first_error.empty()) first_error = errors[slot];
       table.mean_squared_errors.push_back(std::numeric_limits<double>::infinity());
       table.terminations.push_back(Termination::not_run);  // the estimator refused this delay
       table.usable.push_back(false);
     }
-    if (progress) progress(d - min_delay + 1, max_delay - min_delay + 1);
   }
   require(best.has_value(),
           "scan_input_delay: every delay failed; the first error was: ", first_error);

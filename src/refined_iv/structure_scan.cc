@@ -5,12 +5,14 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/core/parallel.h"
 #include "ctid/estimation/validation.h"
 
 namespace ctid {
@@ -99,10 +101,17 @@ StructureScanResult scan_structures(const SampledData& data,
   StructureScanResult result;
   result.estimation_samples = fitted;
   result.validation_samples = held_out;
-  std::vector<double> estimation_error;  // mean squared output error on the estimation part
-  for (const ModelStructure& structure : candidates) {
+  // Mean squared output error on the estimation part, per candidate.
+  std::vector<double> estimation_error(candidates.size(), kNan);
+  // The candidates are fitted in parallel (core/parallel.h), each into its own slot, so the
+  // table is the serial one whatever the number of threads.
+  result.fits.resize(candidates.size());
+  std::mutex progress_mutex;
+  int done = 0;
+  parallel_for(static_cast<int>(candidates.size()), 0, [&](int index) {
+    const auto slot = static_cast<std::size_t>(index);
+    const ModelStructure& structure = candidates[slot];
     StructureFit fit;
-    estimation_error.push_back(kNan);
     fit.structure = structure;
     fit.yic = fit.rt2 = fit.aic = fit.bic = kNan;
     fit.estimation_fit = fit.validation_fit = fit.validation_error = kNan;
@@ -138,7 +147,7 @@ StructureScanResult scan_structures(const SampledData& data,
               ? (data.output().tail(held_out) - simulated.tail(held_out)).squaredNorm() / held_out
               : e_est.squaredNorm() / fitted;
       const double error_variance = e_est.squaredNorm() / fitted;
-      estimation_error.back() = error_variance;
+      estimation_error[slot] = error_variance;
       const double output_variance = variance_about_mean(y_est);
       fit.rt2 = 1.0 - error_variance / output_variance;
       fit.aic = fitted * std::log(error_variance) + 2.0 * fit.parameters;
@@ -158,11 +167,12 @@ StructureScanResult scan_structures(const SampledData& data,
       fit.message = error.what();
       fit.usable = false;
     }
-    result.fits.push_back(std::move(fit));
+    result.fits[slot] = std::move(fit);
     if (progress) {
-      progress(static_cast<int>(result.fits.size()), static_cast<int>(candidates.size()));
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      progress(++done, static_cast<int>(candidates.size()));
     }
-  }
+  });
 
   const int scored = held_out > 0 ? held_out : fitted;
   const double noise_tolerance = 2.0 * std::sqrt(2.0 / scored);

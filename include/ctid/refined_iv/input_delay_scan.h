@@ -53,7 +53,9 @@ inline constexpr double kDelayScanTieRatio = 0.01;
 /// or not its iteration converged: convergence of (29) says nothing about the fit. Throws
 /// InvalidArgument for a bad range or if every delay throws (the first message is passed on).
 /// `progress`, if given, is called after each delay with the number of delays tried and the
-/// number in the range.
+/// number in the range. The delays are fitted in parallel on all cores (core/parallel.h), so
+/// `estimate` must be safe to call from several threads at once (progress is called under a
+/// lock); the result is the serial one whatever the number of threads.
 InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>& estimate,
                                       int min_delay, int max_delay,
                                       const std::function<void(int, int)>& progress = {});

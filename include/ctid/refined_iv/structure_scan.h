@@ -167,7 +167,8 @@ struct StructureScanResult {
 /// Recommendation: among usable fits, the fewest parameters whose held-out mean squared error
 /// is within error_tolerance (relative) of the best usable one's (ties: lower YIC).
 /// `progress`, if given, is called after each candidate with the number fitted and the number
-/// of candidates.
+/// of candidates (under a lock, from the worker threads: the candidates are fitted in parallel
+/// on all cores, core/parallel.h, and the result is the serial one whatever their number).
 StructureScanResult scan_structures(const SampledData& data,
                                     const std::vector<ModelStructure>& candidates,
                                     const StructureScanOptions& options = {},

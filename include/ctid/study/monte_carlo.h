@@ -1,8 +1,8 @@
 // The replayable Monte Carlo engine behind ctid's studies: per-run seeds derived by a fixed
 // hash (splitmix64) of (study seed, sample-size index, run index), so any run can be
-// replayed alone; a parallel loop whose results are stored by index, so a parallel study
-// equals the serial one bit for bit; log-spaced sample sizes; and the mean-square error
-// summary of González et al., Section 6 (Figs. 3 and 4).
+// replayed alone; a parallel loop whose results are stored by index (core/parallel.h), so a
+// parallel study equals the serial one bit for bit; log-spaced sample sizes; and the mean-square
+// error summary of González et al., Section 6 (Figs. 3 and 4).
 #pragma once
 
 #include <cstdint>
@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 
 #include "ctid/core/fields.h"
+#include "ctid/core/parallel.h"  // parallel_for, resolve_thread_count (the study's loop)
 
 namespace ctid {
 
@@ -34,16 +35,6 @@ std::uint64_t stream_seed(std::uint64_t seed, int stream);
 /// `count` integers rounded from a geometric sequence from `first` to `last` (both kept
 /// exactly). count >= 1 (count == 1 gives {first}); 1 <= first <= last.
 std::vector<int> log_spaced_sizes(int first, int last, int count);
-
-/// The worker count used for `threads`: `threads` itself if > 0, otherwise
-/// std::thread::hardware_concurrency() (at least 1).
-int resolve_thread_count(int threads);
-
-/// Calls body(i) for every i in [0, count) on up to `threads` threads (0: all cores). Indices
-/// are handed out in increasing order; body must write only to storage owned by index i,
-/// which makes the outcome independent of the thread count. The first exception thrown by a
-/// body is rethrown after all threads have stopped (remaining indices are skipped).
-void parallel_for(int count, int threads, const std::function<void(int)>& body);
 
 /// Mean-square error of one parameter over the valid runs: errors e_r = estimate_r - truth.
 struct ErrorSummary {
