@@ -1,6 +1,8 @@
 // Mode tracking results as JSON and CSV (tracking_json.h).
 #include "ctid/io/tracking_json.h"
 
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <cstddef>
 #include <numbers>
@@ -28,13 +30,12 @@ nlohmann::json hz(const std::vector<double>& rad_per_s) {
   return out;
 }
 
-// A number as the table writes it: shortest round-trip text, empty when not finite.
+// A number as the table writes it: the shortest text that reads back exactly, empty when not finite.
 std::string cell(double x) {
   if (!std::isfinite(x)) return "";
-  std::ostringstream out;
-  out.precision(17);
-  out << x;
-  return out.str();
+  std::array<char, 32> text{};
+  const auto written = std::to_chars(text.data(), text.data() + text.size(), x);
+  return std::string(text.data(), written.ptr);
 }
 
 }  // namespace
