@@ -30,7 +30,8 @@ nlohmann::json hz(const std::vector<double>& rad_per_s) {
   return out;
 }
 
-// A number as the table writes it: the shortest text that reads back exactly, empty when not finite.
+// A number as the table writes it: the shortest text that reads back exactly; empty when not
+// finite.
 std::string cell(double x) {
   if (!std::isfinite(x)) return "";
   std::array<char, 32> text{};
