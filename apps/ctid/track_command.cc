@@ -151,11 +151,22 @@ ExitStatus run_track(const TrackFlags& f, const CLI::App& app) {
   if (!(f.window > 0.0))
     usage_error("--window is " + format_number(f.window) + " s; it must be > 0");
   const bool force = f.force;
+  if (!f.table.empty()) {
+    // The table may not be the data or the JSON output (the frame checks --output alone).
+    const auto same = [&](const std::string& other) {
+      std::error_code ignored;
+      return other == f.table || std::filesystem::equivalent(other, f.table, ignored);
+    };
+    if (same(f.data.file)) {
+      usage_error("--table '" + f.table + "' is the input file '" + f.data.file +
+                  "' (data); writing it would destroy the input, so nothing was run");
+    }
+    if (!f.output.empty() && same(f.output)) {
+      usage_error("--table and --output name the same file " + f.table);
+    }
+  }
   if (!f.table.empty() && !force && std::filesystem::exists(f.table)) {
     usage_error("--table " + f.table + " exists; pass --force to replace it");
-  }
-  if (!f.table.empty() && f.table == f.output) {
-    usage_error("--table and --output name the same file " + f.table);
   }
   std::filesystem::path package;
   if (!f.plot.empty()) {

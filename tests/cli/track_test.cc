@@ -67,6 +67,9 @@ TEST_F(TrackCommand, FollowsTheModeAndWritesTheDocumentAndTheTable) {
                    "t.json");
   expect_bad_input(ctid({"track", "d.csv", "--window", "30", "--modes", "1", "--table", "t.csv"}),
                    "--table t.csv exists; pass --force to replace it");
+  expect_bad_input(
+      ctid({"track", "d.csv", "--window", "30", "--modes", "1", "--table", "d.csv", "--force"}),
+      "--table 'd.csv' is the input file 'd.csv' (data)");
   EXPECT_EQ(ctid({"track", "d.csv", "--window", "30", "--modes", "1", "-o", "t.json", "--table",
                   "t.csv", "--force", "-q"})
                 .status,
