@@ -188,6 +188,8 @@ TrackingResult track_modes(const SampledData& data, const ModelStructure& struct
   std::vector<ModalParameters> last;
   const double h = data.sample_time();
   bool previous_usable = false;
+  bool ran = false;                          // some window was fitted
+  std::optional<std::string> first_refusal;  // the first window the estimator refused
   for (int w = 0; w < layout.count; ++w) {
     TrackingWindow window;
     window.first_sample = w * layout.step_samples;
@@ -198,21 +200,38 @@ TrackingResult track_modes(const SampledData& data, const ModelStructure& struct
     const SampledData piece = data.segment(window.first_sample, layout.window_samples);
 
     IdentificationOptions cold = options.identification;
+    // A window the estimator refuses for its own data (a quiet stretch: no excitation) is
+    // recorded as not usable; bad input that every window shares is thrown after the loop.
     std::optional<EstimationResult> estimate;
-    if (w > 0 && options.warm_start && previous_usable) {
-      IdentificationOptions warm = cold;
-      warm.refined_iv.initial_model = *result.windows.back().model;
-      estimate = identify(piece, structure, warm).estimate;
-      window.start = WindowStart::previous_window;
-      if (!estimate->verdict.usable && options.retry_unusable) {
+    try {
+      if (w > 0 && options.warm_start && previous_usable) {
+        IdentificationOptions warm = cold;
+        warm.refined_iv.initial_model = *result.windows.back().model;
+        window.start = WindowStart::previous_window;
+        estimate = identify(piece, structure, warm).estimate;
+        if (!estimate->verdict.usable && options.retry_unusable) {
+          window.start = WindowStart::retried;
+          estimate = identify(piece, structure, cold).estimate;
+        }
+      } else {
+        window.start =
+            w > 0 && options.warm_start ? WindowStart::after_unusable : WindowStart::automatic;
         estimate = identify(piece, structure, cold).estimate;
-        window.start = WindowStart::retried;
       }
-    } else {
-      estimate = identify(piece, structure, cold).estimate;
-      window.start =
-          w > 0 && options.warm_start ? WindowStart::after_unusable : WindowStart::automatic;
+    } catch (const InvalidArgument& e) {
+      if (!first_refusal) first_refusal = e.what();
+      estimate.reset();
+      window.termination = Termination::not_run;
+      window.message = e.what();
+      window.verdict.fail(internal::concat("the estimator refused the window: ", e.what()), {});
     }
+    if (!estimate) {
+      previous_usable = false;
+      result.windows.push_back(std::move(window));
+      if (progress) progress(w + 1, layout.count);
+      continue;
+    }
+    ran = true;
     fill_window(window, *estimate);
     previous_usable = estimate->verdict.usable;
 
@@ -242,6 +261,10 @@ TrackingResult track_modes(const SampledData& data, const ModelStructure& struct
     if (progress) progress(w + 1, layout.count);
   }
 
+  if (!ran) {
+    // Every window refused alike: bad input for this record, not an outcome.
+    throw InvalidArgument(internal::concat("every window was refused; window 1: ", *first_refusal));
+  }
   for (ModeTrack& track : result.tracks) {
     double sum = 0.0;
     double first = kNaN;

@@ -13,6 +13,7 @@
 
 #include "ctid/core/error.h"
 #include "ctid/core/state_space.h"
+#include "ctid/estimation/termination.h"
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/excitation.h"
 
@@ -128,6 +129,57 @@ TEST(ModeTracking, OverlappingWindowsFollowTheStep) {
   ASSERT_EQ(r.tracks.size(), 1u);
   EXPECT_EQ(r.tracks[0].windows_matched, 5);
   for (double w : r.tracks[0].natural_frequency) EXPECT_NEAR(w, 2.0, 1e-8);
+}
+
+TEST(ModeTracking, AWindowWithoutExcitationIsNotUsableAndTheTracksResumeAfterIt) {
+  const double h = 0.02;
+  const int length = 1500;
+  const int windows = 5;
+  const std::vector<std::vector<Mode>> truth = drifting_modes(windows);
+  Eigen::VectorXd u = white_noise(length * windows, 1.0, 23);
+  u.segment(2 * length, length).setZero();  // window 3: the input is off
+  const SampledData data(h, u, piecewise_output(truth, length, u, h));
+  TrackingOptions options;
+  options.window = length * h;
+  options.identification.refined_iv.initial_conditions = InitialConditions::estimate;
+  const TrackingResult r = track_modes(data, ModelStructure::modes(2), options);
+  ASSERT_EQ(r.windows.size(), 5u);
+  EXPECT_EQ(r.usable_windows, 4);
+  const TrackingWindow& quiet = r.windows[2];
+  EXPECT_FALSE(quiet.verdict.usable);
+  EXPECT_EQ(quiet.termination, Termination::not_run);
+  ASSERT_EQ(quiet.verdict.reasons.size(), 1u);
+  EXPECT_THAT(quiet.verdict.reasons[0],
+              HasSubstr("the estimator refused the window: additive_srivc: the input is "
+                        "persistently exciting of order 0 only"));
+  EXPECT_FALSE(quiet.model.has_value());
+  EXPECT_EQ(r.windows[3].start, WindowStart::after_unusable);
+  EXPECT_EQ(r.windows[4].start, WindowStart::previous_window);
+  // The window lost both modes; each track takes its mode back in window 4.
+  ASSERT_EQ(r.tracks.size(), 2u);
+  const int slow = r.tracks[0].natural_frequency[0] < r.tracks[1].natural_frequency[0] ? 0 : 1;
+  for (int t = 0; t < 2; ++t) {
+    const ModeTrack& track = r.tracks[static_cast<std::size_t>(t)];
+    EXPECT_TRUE(std::isnan(track.natural_frequency[2]));
+    EXPECT_EQ(track.windows_matched, 4);
+    for (int w : {3, 4}) {
+      const double truth_w = truth[static_cast<std::size_t>(w)][t == slow ? 0 : 1].w;
+      EXPECT_NEAR(track.natural_frequency[static_cast<std::size_t>(w)], truth_w, 1e-8 * truth_w);
+    }
+  }
+}
+
+TEST(ModeTracking, EveryWindowRefusedIsBadInput) {
+  const SampledData data(0.02, Eigen::VectorXd::Zero(3000), Eigen::VectorXd::Zero(3000));
+  TrackingOptions options;
+  options.window = 20.0;
+  try {
+    (void)track_modes(data, ModelStructure::modes(1), options);
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("every window was refused; window 1: additive_srivc: the "
+                                    "input is persistently exciting of order 0 only"));
+  }
 }
 
 ModalParameters mode(double w, double zeta) { return ModalParameters{w, zeta, 1.0}; }

@@ -210,9 +210,11 @@ std::vector<int> assign_modes(const std::vector<ModalParameters>& tracks,
 /// window after the first started from the previous window's model (options.warm_start) when
 /// that fit was usable and from the automatic start otherwise, and matches the modes of the
 /// usable windows into tracks (assign_modes against each track's last matched mode; a mode
-/// left over starts a new track). Throws InvalidArgument for bad options or data (before any
-/// fit); how each fit ended is in its window. `progress`, if given, is called with
-/// (windows done, windows) after each window.
+/// left over starts a new track). Throws InvalidArgument for bad options or windows (before
+/// any fit), and when the estimator refuses every window (its message for window 1); a window
+/// it refuses for that window's data alone (a stretch without excitation) is kept as not
+/// usable, its reason the estimator's message. How each fit ended is in its window.
+/// `progress`, if given, is called with (windows done, windows) after each window.
 TrackingResult track_modes(const SampledData& data, const ModelStructure& structure,
                            const TrackingOptions& options,
                            const std::function<void(int, int)>& progress = {});
