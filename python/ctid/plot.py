@@ -4,9 +4,10 @@
                                   [--against RESULT2.json] [--frequency-unit Hz|rad/s]
 
 KIND is one of bode, modes, frf, frf_matrix, validation, compare, residuals, mse,
-stabilisation, mode_shapes, mac, frf_matrix_overlay. INPUT is a result document the command
-line writes (read by ctid.read_result; the table below says which kinds draw it) or one of the
-files of docs/python.md (the CLI's --plot inputs and CSV tables):
+stabilisation, mode_shapes, mac, frf_matrix_overlay, tracking. INPUT is a result document the
+command line writes (read by ctid.read_result, or as JSON for tracking; the table below says
+which kinds draw it) or one of the files of docs/python.md (the CLI's --plot inputs and CSV
+tables):
 
     estimation_result (ctid fit -o), mode_relocation_result,
     input_delay_scan_result          bode, modes (the estimate)
@@ -18,6 +19,7 @@ files of docs/python.md (the CLI's --plot inputs and CSV tables):
     study_summary (study's summary)   mse
     mimo_estimation_result (fit --input-columns -o), frf_matrix_fit_result (fit-frf -o)
                                       mode_shapes, mac, frf_matrix_overlay (with --frf)
+    mode_tracking_result (ctid track -o) tracking (frequency and damping against time)
 
 --frf gives the measured FRF drawn under the model: bode and modes take an frf document or the
 CSV of `ctid frf -o X.csv`, frf_matrix_overlay a mimo_frf document, the CSV table of
@@ -37,7 +39,7 @@ import sys
 import numpy as np
 
 KINDS = ("bode", "modes", "frf", "frf_matrix", "validation", "compare", "residuals", "mse",
-         "stabilisation", "mode_shapes", "mac", "frf_matrix_overlay")
+         "stabilisation", "mode_shapes", "mac", "frf_matrix_overlay", "tracking")
 MIMO_KINDS = ("mode_shapes", "mac", "frf_matrix_overlay")
 
 
@@ -90,6 +92,7 @@ DOCUMENT_KINDS = {
     "study_summary": ("mse",),
     "mimo_estimation_result": MIMO_KINDS,
     "frf_matrix_fit_result": MIMO_KINDS,
+    "mode_tracking_result": ("tracking",),
 }
 
 
@@ -304,6 +307,26 @@ def _compare_figure(path, output, title):
                             filename=output)
 
 
+def _tracking_figure(path, output, title, unit):
+    """The tracking figure of a mode_tracking_result document (ctid track -o), read as JSON
+    (the command line writes it; no C++ reader is needed to draw it)."""
+    from . import plotting
+
+    if not str(path).lower().endswith(".json"):
+        raise InputError(f"{path}: tracking draws a mode_tracking_result document "
+                         "(ctid track -o)")
+    document = _read_json(path)
+    if document.get("type") != "mode_tracking_result":
+        raise InputError(f"{path}: not a mode_tracking_result document "
+                         f"(type {document.get('type')!r})")
+    for name in ("windows", "tracks"):
+        if not isinstance(document.get(name), list):
+            raise InputError(f"{path}: missing field '{name}'")
+    if not document["windows"]:
+        raise InputError(f"{path}: the tracking has no windows")
+    return plotting.mode_tracking(document, title=title, filename=output, frequency_unit=unit)
+
+
 def run(kind, path, output, title=None, frf=None, against=None, frequency_unit="Hz"):
     """Draw one figure; returns the Figure. Raises InputError or ValueError on bad input.
     ``frf``: the measured FRF drawn under the model (bode, modes: an frf document or CSV;
@@ -323,6 +346,8 @@ def run(kind, path, output, title=None, frf=None, against=None, frequency_unit="
     if against is not None and kind != "mac":
         raise InputError("--against goes with mac")
     unit = frequency_unit
+    if kind == "tracking":
+        return _tracking_figure(path, output, title, unit)
     if kind in ("bode", "modes"):
         return _frequency_figure(kind, path, output, title, frf, unit)
     if kind in MIMO_KINDS:

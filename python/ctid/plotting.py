@@ -52,6 +52,7 @@ __all__ = [
     "compare",
     "residual_correlation",
     "mse_against_n",
+    "mode_tracking",
     "stabilisation",
     "frequency_response_band",
     "correlations",
@@ -1001,6 +1002,75 @@ def mse_against_n(study, title=None, filename=None):
     for ax in list(axes.flat)[len(parameters):]:
         ax.axis("off")
     axes.flat[0].legend(fontsize=7)
+    if title:
+        figure.suptitle(title)
+    return _finish(figure, filename)
+
+
+# --- Mode tracking (issue 17) -------------------------------------------------------------------
+
+def _tracking_arrays(result):
+    """(centre times [s], usable flags, tracks as dicts of float arrays in rad/s) of a
+    ctid.TrackingResult or the mode_tracking_result document `ctid track -o` writes."""
+    def get(obj, name):
+        return obj[name] if isinstance(obj, dict) else getattr(obj, name)
+
+    def floats(values):
+        return np.array([np.nan if v is None else v for v in values], dtype=float)
+
+    windows = get(result, "windows")
+    times = np.array([get(w, "centre_time") for w in windows], dtype=float)
+    usable = np.array([bool(get(get(w, "verdict"), "usable")) for w in windows])
+    tracks = []
+    for track in get(result, "tracks"):
+        tracks.append({name: floats(get(track, name)) for name in (
+            "natural_frequency", "natural_frequency_se", "damping_ratio", "damping_ratio_se")})
+    return times, usable, tracks
+
+
+def mode_tracking(result, standard_errors=1.0, title=None, filename=None, frequency_unit="Hz"):
+    """Tracked modes against time: natural frequency (top) and damping ratio (bottom) of every
+    track at each window's centre, with error bars of ``standard_errors`` standard errors
+    (default one). Windows without a usable model are shaded ("no usable model").
+
+    ``result``: a ctid.TrackingResult (ctid.track_modes) or the mode_tracking_result document
+    `ctid track -o` writes (a dict). ``frequency_unit``: "Hz" (default) or "rad/s". Lines are
+    labelled "track k". Returns the Figure.
+    """
+    factor, _ = _frequency_axis(frequency_unit, "mode_tracking")
+    times, usable, tracks = _tracking_arrays(result)
+    if len(times) == 0:
+        raise ValueError("mode_tracking: the result has no windows")
+    figure, (top, bottom) = _figure(2, 1, figsize=(7.5, 5.5), sharex=True)
+    for k, track in enumerate(tracks):
+        shown = np.isfinite(track["natural_frequency"])
+        if not shown.any():
+            continue
+        colour = f"C{k % 10}"
+        se = np.nan_to_num(track["natural_frequency_se"], nan=0.0) * standard_errors
+        top.errorbar(times[shown], track["natural_frequency"][shown] * factor,
+                     yerr=se[shown] * factor, fmt="o-", ms=3, lw=1, capsize=2, color=colour,
+                     label=f"track {k + 1}")
+        se = np.nan_to_num(track["damping_ratio_se"], nan=0.0) * standard_errors
+        bottom.errorbar(times[shown], track["damping_ratio"][shown], yerr=se[shown], fmt="o-",
+                        ms=3, lw=1, capsize=2, color=colour, label=f"track {k + 1}")
+    if (~usable).any():
+        half = 0.5 * (np.median(np.diff(times)) if len(times) > 1 else 1.0)
+        labelled = False
+        for t in times[~usable]:
+            for ax in (top, bottom):
+                ax.axvspan(t - half, t + half, color="tab:red", alpha=0.12, lw=0,
+                           label=None if labelled or ax is bottom else "no usable model")
+            labelled = True
+    band = "" if standard_errors == 1.0 else f"{standard_errors:g} "
+    top.set_ylabel(f"natural frequency [{frequency_unit}]")
+    bottom.set_ylabel("damping ratio")
+    bottom.set_xlabel("time at the window's centre [s]")
+    top.set_title(f"error bars: ± {band}standard error", fontsize="small")
+    for ax in (top, bottom):
+        ax.grid(True, alpha=0.3)
+    if tracks:
+        top.legend(loc="best", fontsize="small")
     if title:
         figure.suptitle(title)
     return _finish(figure, filename)

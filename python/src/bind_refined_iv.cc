@@ -10,6 +10,7 @@
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
+#include "ctid/refined_iv/mode_tracking.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 #include "ctid/refined_iv/srivc.h"
 #include "fields.h"
@@ -202,6 +203,42 @@ void bind_covariance(py::module_& m) {
         py::arg("unfactored") = false, "Modal parameters with delta-method standard errors.");
 }
 
+// --- Mode tracking (issue 17; refined_iv/mode_tracking.h) ------------------------------------
+void bind_mode_tracking(py::module_& m) {
+  bind_options<TrackingOptions>(
+      m, "Options of track_modes: window and step [s], identify() options, matching gates.");
+  bind_enum<WindowStart>(m, "WindowStart", "Where a tracking window's fit started.");
+  bind_result<TrackingWindow>(
+      m, "One tracking window: where it lies, how its fit started and ended, its modes.")
+      .def("converged", &TrackingWindow::converged, "termination == converged.")
+      .def("brief_report", &TrackingWindow::brief_report,
+           "One line: termination, iterations and, unless converged, why.");
+  bind_result<ModeTrack>(m, "A mode followed across windows (per window; NaN where unmatched).");
+  bind_result<TrackingResult>(m, "Every window of track_modes and the tracks of their modes.");
+  m.def(
+      "track_modes",
+      [](const SampledData& data, const ModelStructure& structure,
+         const std::optional<TrackingOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<TrackingOptions>("track_modes", options, kwargs);
+        py::gil_scoped_release release;
+        return track_modes(data, structure, o);
+      },
+      py::arg("data"), py::arg("structure"), py::arg("options") = py::none(),
+      "Fit `structure` to consecutive windows of `data` (each started from the previous "
+      "window's model) and match their modes into tracks, as `ctid track` does. Options are one "
+      "TrackingOptions or its fields as keywords (window [s] is required).");
+  m.def(
+      "assign_modes",
+      [](const std::vector<ModalParameters>& tracks, const std::vector<ModalParameters>& modes,
+         const std::optional<TrackingOptions>& options, const py::kwargs& kwargs) {
+        return assign_modes(tracks, modes,
+                            options_from<TrackingOptions>("assign_modes", options, kwargs));
+      },
+      py::arg("tracks"), py::arg("modes"), py::arg("options") = py::none(),
+      "The track of each mode (-1: none) under the matching of track_modes.");
+}
+// --- end of mode tracking ----------------------------------------------------------------------
+
 }  // namespace
 
 void bind_refined_iv(py::module_& m) {
@@ -209,6 +246,7 @@ void bind_refined_iv(py::module_& m) {
   bind_refined_iv_estimators(m);
   bind_initialization(m);
   bind_covariance(m);
+  bind_mode_tracking(m);  // mode tracking (issue 17)
 }
 
 }  // namespace ctid::python

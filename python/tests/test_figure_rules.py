@@ -368,6 +368,42 @@ def test_the_remaining_figures_keep_their_text_on_the_canvas(mimo):
         texts_inside_canvas(figure)
 
 
+@pytest.mark.parametrize("unit", ["Hz", "rad/s"])
+def test_mode_tracking_draws_each_track_in_the_unit_on_the_canvas(record, unit):
+    options = ctid.TrackingOptions(window=256 * H)
+    options.identification.refined_iv.initial_conditions = ctid.InitialConditions.estimate
+    result = ctid.track_modes(record, ctid.ModelStructure.modes(1), options)
+    assert len(result.windows) == 8 and len(result.tracks) == 1
+    figure = plotting.mode_tracking(result, title="tracking of a long title " * 3,
+                                    frequency_unit=unit)
+    top, bottom = figure.axes[:2]
+    assert top.get_ylabel() == f"natural frequency [{unit}]"
+    line = top.get_lines()[0]
+    np.testing.assert_allclose(line.get_xdata(), [w.centre_time for w in result.windows])
+    np.testing.assert_allclose(to_rad_per_s(line.get_ydata(), unit),
+                               result.tracks[0].natural_frequency, rtol=1e-12)
+    np.testing.assert_allclose(bottom.get_lines()[0].get_ydata(), result.tracks[0].damping_ratio)
+    texts_inside_canvas(figure)
+
+
+def test_mode_tracking_shades_windows_without_a_usable_model():
+    nan = float("nan")
+    document = {
+        "windows": [{"centre_time": t, "verdict": {"usable": ok}}
+                    for t, ok in ((5.0, True), (15.0, False), (25.0, True))],
+        "tracks": [{"natural_frequency": [6.0, nan, 6.1],
+                    "natural_frequency_se": [0.1, nan, None],
+                    "damping_ratio": [0.02, nan, 0.021],
+                    "damping_ratio_se": [0.001, nan, 0.001]}],
+    }
+    figure = plotting.mode_tracking(document)
+    top = figure.axes[0]
+    np.testing.assert_allclose(top.get_lines()[0].get_ydata(), np.array([6.0, 6.1]) / (2 * np.pi))
+    labels = [p.get_label() for p in top.patches]
+    assert labels.count("no usable model") == 1
+    texts_inside_canvas(figure)
+
+
 def test_unknown_frequency_unit_is_refused(estimate):
     with pytest.raises(ValueError, match="frequency_unit is 'Hertz'"):
         plotting.bode(estimate, frequency_unit="Hertz")

@@ -1,0 +1,352 @@
+// `ctid track`: follows the modes of one channel through time (issue 17) with the library's
+// track_modes (refined_iv/mode_tracking.h): consecutive windows of the record, each fitted with a
+// warm start from the previous window's model, the modes matched into tracks. Writes the whole
+// result as JSON (io/tracking_json.h), the per-window table as CSV and the tracking figure, and
+// prints one line per track.
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "command.h"
+#include "ctid/core/error.h"
+#include "ctid/core/format.h"
+#include "ctid/io/fields_json.h"
+#include "ctid/io/json.h"
+#include "ctid/io/model_json.h"
+#include "ctid/io/result_json.h"
+#include "ctid/io/tracking_json.h"
+#include "ctid/refined_iv/mode_tracking.h"
+#include "data_flags.h"
+#include "plot_support.h"
+#include "progress.h"
+#include "structure_flags.h"
+
+namespace ctid::cli {
+namespace {
+
+struct TrackFlags {
+  DataFlags data;
+
+  double window = 0.0;
+  std::optional<double> step;
+
+  std::string model;
+  int poles = 0;
+  int zeros = 0;
+  int integrators = 0;
+  std::vector<std::string> submodels;
+  int modes = 0;
+
+  int delay = 0;
+  std::string controller;
+  std::string start = "auto";
+  int max_iterations = RefinedIvOptions{}.max_iterations;
+  double tolerance = RefinedIvOptions{}.tolerance;
+  std::string interpolation = "foh";
+  std::string noise = "coloured";
+  std::string initial_conditions = "estimate";
+  bool no_warm_start = false;
+  double max_frequency_jump = TrackingOptions{}.max_frequency_jump;
+  double damping_weight = TrackingOptions{}.damping_weight;
+
+  std::string output;
+  std::string table;
+  std::string plot;
+  bool force = false;
+  bool quiet = false;
+};
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+TrackingOptions tracking_options(const TrackFlags& f) {
+  TrackingOptions options;
+  options.window = f.window;
+  options.step = f.step;
+  options.warm_start = !f.no_warm_start;
+  options.max_frequency_jump = f.max_frequency_jump;
+  options.damping_weight = f.damping_weight;
+  IdentificationOptions& identification = options.identification;
+  if (!f.controller.empty()) {
+    identification.controller = io::read_discrete_transfer_function(f.controller);
+  }
+  RefinedIvOptions& refined = identification.refined_iv;
+  refined.input_delay = f.delay;
+  refined.max_iterations = f.max_iterations;
+  refined.tolerance = f.tolerance;
+  refined.output_interpolation =
+      f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
+  refined.noise = f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
+  refined.initial_conditions =
+      f.initial_conditions == "zero" ? InitialConditions::zero : InitialConditions::estimate;
+  if (f.start == "lssvf") {
+    refined.start = StartMethod::lssvf;
+  } else if (f.start == "frf") {
+    refined.start = StartMethod::frf;
+  } else if (f.start != "auto") {
+    if (!std::filesystem::is_regular_file(f.start)) {
+      usage_error("--start is '" + f.start +
+                  "': neither auto, lssvf nor frf, and not a model or result file");
+    }
+    refined.initial_model = io::read_fitted_model(f.start).model;
+  }
+  return options;
+}
+
+// "1, 4 and 9" (at most `shown` numbers, then "...").
+std::string window_list(const std::vector<int>& windows, std::size_t shown = 10) {
+  std::string text;
+  for (std::size_t i = 0; i < windows.size() && i < shown; ++i) {
+    if (i > 0) text += (i + 1 == windows.size()) ? " and " : ", ";
+    text += std::to_string(windows[i]);
+  }
+  if (windows.size() > shown) text += ", ...";
+  return text;
+}
+
+void print_summary(std::ostream& out, const TrackingResult& r, const SampledData& data,
+                   const std::string& file) {
+  const double h = data.sample_time();
+  out << "ctid track: " << r.windows.size() << " windows of " << format_number(r.window_samples * h)
+      << " s (" << r.window_samples << " samples, step " << r.step_samples << ") on " << file
+      << " (N = " << data.size() << ", h = " << format_number(h) << " s)\n";
+  int warm = 0;
+  for (const TrackingWindow& w : r.windows) warm += w.start == WindowStart::previous_window;
+  out << "usable windows: " << r.usable_windows << " of " << r.windows.size()
+      << "; warm starts: " << warm << "\n";
+  for (std::size_t t = 0; t < r.tracks.size(); ++t) {
+    const ModeTrack& track = r.tracks[t];
+    out << "track " << t + 1
+        << ": mean f_n = " << format_significant(track.mean_natural_frequency / kTwoPi, 6)
+        << " Hz, drift " << format_brief(track.frequency_drift / kTwoPi) << " Hz ("
+        << format_brief(100.0 * track.frequency_drift / track.mean_natural_frequency)
+        << " %), matched in " << track.windows_matched << " of " << r.windows.size()
+        << " windows\n";
+  }
+}
+
+// The warning about windows without a usable model (empty when every window is usable).
+std::string unusable_warning(const TrackingResult& r) {
+  std::vector<int> unusable;
+  for (std::size_t w = 0; w < r.windows.size(); ++w) {
+    if (!r.windows[w].verdict.usable) unusable.push_back(static_cast<int>(w) + 1);
+  }
+  if (unusable.empty()) return "";
+  return internal::concat(
+      "WARNING: ", unusable.size(), " of ", r.windows.size(),
+      " windows gave no usable model (window", unusable.size() > 1 ? "s " : " ",
+      window_list(unusable), "); their modes are not tracked. First reason: ",
+      r.windows[static_cast<std::size_t>(unusable.front() - 1)].verdict.summary());
+}
+
+ExitStatus run_track(const TrackFlags& f, const CLI::App& app) {
+  const ModelStructure structure = model_structure(f, app);
+  if (f.step && !(*f.step > 0.0)) {
+    usage_error("--step is " + format_number(*f.step) + " s; it must be > 0");
+  }
+  if (!(f.window > 0.0))
+    usage_error("--window is " + format_number(f.window) + " s; it must be > 0");
+  const bool force = f.force;
+  if (!f.table.empty()) {
+    // The table may not be the data or the JSON output (the frame checks --output alone).
+    const auto same = [&](const std::string& other) {
+      std::error_code ignored;
+      return other == f.table || std::filesystem::equivalent(other, f.table, ignored);
+    };
+    if (same(f.data.file)) {
+      usage_error("--table '" + f.table + "' is the input file '" + f.data.file +
+                  "' (data); writing it would destroy the input, so nothing was run");
+    }
+    if (!f.output.empty() && same(f.output)) {
+      usage_error("--table and --output name the same file " + f.table);
+    }
+  }
+  if (!f.table.empty() && !force && std::filesystem::exists(f.table)) {
+    usage_error("--table " + f.table + " exists; pass --force to replace it");
+  }
+  std::filesystem::path package;
+  if (!f.plot.empty()) {
+    package = require_plotting();
+    prepare_plot_directory(f.plot, {"tracking.png"}, force);
+  }
+  const TrackingOptions options = tracking_options(f);
+  options.validate();
+  validate_identification(structure, options.identification);
+  const SampledData data = f.data.load(app, options.identification.controller.has_value());
+  if (options.identification.controller &&
+      !same_sample_time(options.identification.controller->sample_time(), data.sample_time())) {
+    usage_error(internal::concat("the controller in ", f.controller, " has sample time ",
+                                 format_number(options.identification.controller->sample_time()),
+                                 " s but ", f.data.file, " is sampled every ",
+                                 format_number(data.sample_time()), " s"));
+  }
+  // The windows are checked against the record before any fit (one line for a bad window).
+  (void)window_layout(options, data.size(), data.sample_time());
+
+  Progress progress("ctid track", f.quiet);
+  const TrackingResult result = track_modes(data, structure, options, progress.callback("window"));
+  progress.clear();
+
+  nlohmann::json document = io::to_json(result);
+  document["data"] = {{"file", f.data.file},
+                      {"samples", data.size()},
+                      {"sample_time", data.sample_time()},
+                      {"start_time", data.start_time()},
+                      {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
+  document["structure"] = io::fields_to_json(structure);
+  document["options"] = io::fields_to_json(options);
+  const io::Overwrite overwrite = force ? io::Overwrite::yes : io::Overwrite::no;
+  if (!f.output.empty()) io::write_json(f.output, document, overwrite);
+  if (!f.table.empty()) io::write_tracking_table(f.table, result, overwrite);
+
+  const std::string warning = unusable_warning(result);
+  if (!f.quiet) {
+    if (!warning.empty()) std::cout << warning << "\n";
+    print_summary(std::cout, result, data, f.data.file);
+    if (f.data.preprocessing_asked(app)) {
+      std::cout << "preprocessing: " << f.data.preprocessing.summary() << "\n";
+    }
+    if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
+    if (!f.table.empty()) std::cout << "wrote " << f.table << "\n";
+  } else if (!warning.empty()) {
+    std::cerr << "ctid track: " << warning << "\n";
+  }
+  if (!f.plot.empty() && !result.tracks.empty()) {
+    const TemporaryDirectory work;
+    io::write_json(work.path() / "tracking.json", document);
+    const std::filesystem::path figure = std::filesystem::path(f.plot) / "tracking.png";
+    plot(package, {{"tracking", work.path() / "tracking.json", figure,
+                    "ctid track: " + std::filesystem::path(f.data.file).filename().string()}});
+    if (!f.quiet) std::cout << "wrote " << figure.string() << "\n";
+  }
+  return result.usable_windows == 0 ? kExitNoUsableModel : kExitOk;
+}
+
+Command add_track_command(CLI::App& parent) {
+  auto flags = std::make_shared<TrackFlags>();
+  TrackFlags& f = *flags;
+  CLI::App* app = parent.add_subcommand(
+      "track",
+      "Follow the modes of one channel through time: fit consecutive windows (each started from "
+      "the previous window's model) and match their modes into tracks.");
+  app->footer(
+      "Windows: --window SECONDS long, starting every --step SECONDS (default: the window, "
+      "adjacent windows), both rounded to whole samples; at least 2 windows must fit the "
+      "record. Each window's initial state is estimated by default (--initial-conditions).\n"
+      "Structure: as ctid fit (--modes K, --submodel N,M[,L] repeated, or --poles N --zeros M).\n"
+      "Matching: a window's modes join the tracks by the least total cost |w - w_t|/w_t + "
+      "--damping-weight |zeta - zeta_t| among the assignments with the most pairs; a mode more "
+      "than --max-frequency-jump (relative) from every track starts a new one. Modes of windows "
+      "without a usable model are not tracked.\n"
+      "Output: -o TRACKING.json (mode_tracking_result, docs/formats.md), --table TRACKING.csv "
+      "(one row per window and track), --plot DIR (tracking.png: frequency and damping against "
+      "time with one standard error).\n"
+      "Exit status: 0 ran and at least one window gave a usable model, 3 no window did (a "
+      "WARNING line says why), 2 bad usage or input, 1 other error.");
+
+  f.data.add_to(*app, "data", true);
+  app->add_option("--window", f.window, "Window length in seconds")->required()->group("Windows");
+  app->add_option("--step", f.step,
+                  "Seconds between window starts (default: the window length; smaller "
+                  "overlaps the windows)")
+      ->group("Windows");
+
+  app->add_option("--model", f.model,
+                  "Model kind: unfactored or additive (default: from the "
+                  "structure flags)")
+      ->check(CLI::IsMember({"unfactored", "additive"}))
+      ->group("Structure");
+  app->add_option("--poles", f.poles, "Unfactored: poles n (deg A), besides integrators")
+      ->check(CLI::NonNegativeNumber)
+      ->group("Structure");
+  app->add_option("--zeros", f.zeros, "Unfactored: zeros m (deg B)")
+      ->check(CLI::NonNegativeNumber)
+      ->group("Structure");
+  app->add_option("--integrators", f.integrators, "Unfactored: poles at the origin l")
+      ->check(CLI::NonNegativeNumber)
+      ->group("Structure");
+  app->add_option("--submodel", f.submodels,
+                  "Additive: one submodel N,M[,L] (poles, zeros, integrators); repeat")
+      ->take_all()
+      ->allow_extra_args(false)
+      ->group("Structure");
+  app->add_option("--modes", f.modes, "Additive: K second-order modes (--submodel 2,0 K times)")
+      ->group("Structure");
+  app->add_option("--delay", f.delay, "Known input delay in samples")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber)
+      ->group("Structure");
+  app->add_option("--controller,-c", f.controller,
+                  "Discrete controller JSON (discrete_transfer_function in q): closed loop")
+      ->check(CLI::ExistingFile)
+      ->group("Structure");
+
+  app->add_option("--start", f.start,
+                  "Start of the first window (and of windows after an unusable one): auto, "
+                  "lssvf, frf, or a model/result JSON")
+      ->capture_default_str()
+      ->group("Iteration");
+  app->add_flag("--no-warm-start", f.no_warm_start,
+                "Start every window as the first (no warm start from the previous window)")
+      ->group("Iteration");
+  app->add_option("--max-iterations", f.max_iterations, "Iteration limit of each window")
+      ->capture_default_str()
+      ->group("Iteration");
+  app->add_option("--tolerance", f.tolerance,
+                  "Stop when the relative parameter change falls below this")
+      ->capture_default_str()
+      ->group("Iteration");
+  app->add_option("--interpolation", f.interpolation,
+                  "Output interpolation between samples before filtering: zoh or foh")
+      ->check(CLI::IsMember({"zoh", "foh"}))
+      ->capture_default_str()
+      ->group("Iteration");
+  app->add_option("--noise", f.noise, "Noise assumed by the covariance: white or coloured")
+      ->check(CLI::IsMember({"white", "coloured"}))
+      ->capture_default_str()
+      ->group("Iteration");
+  app->add_option("--initial-conditions", f.initial_conditions,
+                  "State at each window's first sample: estimate (windows start mid-motion) or "
+                  "zero (at rest)")
+      ->check(CLI::IsMember({"zero", "estimate"}))
+      ->capture_default_str()
+      ->group("Iteration");
+
+  app->add_option("--max-frequency-jump", f.max_frequency_jump,
+                  "Largest relative frequency difference of a mode and the track it joins")
+      ->capture_default_str()
+      ->group("Matching");
+  app->add_option("--damping-weight", f.damping_weight,
+                  "Weight of the damping-ratio difference in the matching cost")
+      ->capture_default_str()
+      ->group("Matching");
+
+  app->add_option("--output,-o", f.output, "Tracking JSON to write (the whole result)")
+      ->group("Output");
+  app->add_option("--table", f.table,
+                  "CSV to write: one row per window and track (window, t_start, t_centre, t_end, "
+                  "track, frequency_hz, frequency_se_hz, damping, damping_se, usable)")
+      ->group("Output");
+  app->add_option("--plot", f.plot,
+                  "Directory for tracking.png (frequency and damping against time) drawn by "
+                  "python3 -m ctid.plot")
+      ->group("Output");
+  app->add_flag("--force", f.force, "Replace output files that exist (never replaced otherwise)")
+      ->group("Output");
+  app->add_flag("--quiet,-q", f.quiet, "Print no summary")->group("Output");
+
+  Command command;
+  command.app = app;
+  command.run = [flags, app] { return run_track(*flags, *app); };
+  return command;
+}
+
+}  // namespace
+
+CTID_REGISTER_COMMAND(27, add_track_command);
+
+}  // namespace ctid::cli

@@ -1,0 +1,36 @@
+// Mode tracking results as JSON (docs/formats.md, "mode_tracking_result"): every field of a
+// TrackingResult (refined_iv/mode_tracking.h), with frequencies in rad/s and Hz beside, and the
+// per-window, per-track table `ctid track --table` writes.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "ctid/io/file.h"
+#include "ctid/refined_iv/mode_tracking.h"
+
+namespace ctid::io {
+
+/// The "type" of a mode tracking document.
+inline constexpr const char* kModeTrackingResultType = "mode_tracking_result";
+
+/// The result as one JSON object with "type": "mode_tracking_result" and "version": 1: the
+/// fields of TrackingResult, each window's modes flat as in an estimation_result
+/// (natural_frequency, natural_frequency_standard_error, natural_frequency_hz, ...,
+/// damping_ratio, gain, with "track"), and each track's per-window arrays with
+/// natural_frequency_hz and natural_frequency_se_hz beside (null where not matched).
+nlohmann::json to_json(const TrackingResult& result);
+
+/// The tracking table as CSV text: one row per window and track, columns window, t_start,
+/// t_centre, t_end, track, frequency_hz, frequency_se_hz, damping, damping_se, usable
+/// (windows and tracks counted from 1; empty cells where the track has no mode in the window;
+/// usable is 1 or 0). A result without tracks gives one row per window with empty track cells.
+std::string tracking_table_csv(const TrackingResult& result);
+
+/// Writes tracking_table_csv() to `path` (through a temporary moved into place).
+void write_tracking_table(const std::filesystem::path& path, const TrackingResult& result,
+                          Overwrite overwrite = Overwrite::no);
+
+}  // namespace ctid::io

@@ -1,0 +1,107 @@
+// Mode tracking results as JSON and CSV (tracking_json.h).
+#include "ctid/io/tracking_json.h"
+
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstddef>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "ctid/io/fields_json.h"
+#include "ctid/io/model_json.h"
+#include "ctid/io/result_json.h"
+
+namespace ctid::io {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+nlohmann::json number(double x) {
+  if (!std::isfinite(x)) return nullptr;
+  return x;
+}
+
+nlohmann::json hz(const std::vector<double>& rad_per_s) {
+  nlohmann::json out = nlohmann::json::array();
+  for (double w : rad_per_s) out.push_back(number(w / kTwoPi));
+  return out;
+}
+
+// A number as the table writes it: the shortest text that reads back exactly; empty when not
+// finite.
+std::string cell(double x) {
+  if (!std::isfinite(x)) return "";
+  std::array<char, 32> text{};
+  const auto written = std::to_chars(text.data(), text.data() + text.size(), x);
+  return std::string(text.data(), written.ptr);
+}
+
+}  // namespace
+
+nlohmann::json to_json(const TrackingResult& result) {
+  nlohmann::json value = fields_to_json(result);
+  for (std::size_t w = 0; w < result.windows.size(); ++w) {
+    const TrackingWindow& window = result.windows[w];
+    nlohmann::json modes = nlohmann::json::array();
+    for (std::size_t k = 0; k < window.modes.size(); ++k) {
+      const ModalParameters& v = window.modes[k].value;
+      const ModalParameters& se = window.modes[k].standard_error;
+      modes.push_back(
+          {{"submodel", window.modes[k].submodel},
+           {"track", window.tracks[k]},
+           {"natural_frequency", number(v.natural_frequency)},
+           {"natural_frequency_standard_error", number(se.natural_frequency)},
+           {"natural_frequency_hz", number(v.natural_frequency / kTwoPi)},
+           {"natural_frequency_hz_standard_error", number(se.natural_frequency / kTwoPi)},
+           {"damping_ratio", number(v.damping_ratio)},
+           {"damping_ratio_standard_error", number(se.damping_ratio)},
+           {"gain", number(v.gain)},
+           {"gain_standard_error", number(se.gain)}});
+    }
+    value["windows"][w]["modes"] = std::move(modes);
+  }
+  for (std::size_t t = 0; t < result.tracks.size(); ++t) {
+    const ModeTrack& track = result.tracks[t];
+    nlohmann::json& out = value["tracks"][t];
+    out["natural_frequency_hz"] = hz(track.natural_frequency);
+    out["natural_frequency_se_hz"] = hz(track.natural_frequency_se);
+    out["mean_natural_frequency_hz"] = number(track.mean_natural_frequency / kTwoPi);
+    out["frequency_drift_hz"] = number(track.frequency_drift / kTwoPi);
+  }
+  value["type"] = kModeTrackingResultType;
+  value["version"] = kResultDocumentVersion;
+  return value;
+}
+
+std::string tracking_table_csv(const TrackingResult& result) {
+  std::ostringstream out;
+  out << "window,t_start,t_centre,t_end,track,frequency_hz,frequency_se_hz,damping,damping_se,"
+         "usable\n";
+  for (std::size_t w = 0; w < result.windows.size(); ++w) {
+    const TrackingWindow& window = result.windows[w];
+    const std::string head = std::to_string(w + 1) + "," + cell(window.start_time) + "," +
+                             cell(window.centre_time) + "," + cell(window.end_time) + ",";
+    const std::string usable = window.verdict.usable ? "1" : "0";
+    if (result.tracks.empty()) {
+      out << head << ",,,,," << usable << "\n";
+      continue;
+    }
+    for (std::size_t t = 0; t < result.tracks.size(); ++t) {
+      const ModeTrack& track = result.tracks[t];
+      out << head << t + 1 << "," << cell(track.natural_frequency[w] / kTwoPi) << ","
+          << cell(track.natural_frequency_se[w] / kTwoPi) << "," << cell(track.damping_ratio[w])
+          << "," << cell(track.damping_ratio_se[w]) << "," << usable << "\n";
+    }
+  }
+  return out.str();
+}
+
+void write_tracking_table(const std::filesystem::path& path, const TrackingResult& result,
+                          Overwrite overwrite) {
+  write_text_file(path, tracking_table_csv(result), overwrite);
+}
+
+}  // namespace ctid::io
