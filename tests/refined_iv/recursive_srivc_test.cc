@@ -126,13 +126,21 @@ TEST(RecursiveSrivc, WithoutForgettingItEndsAtTheBatchEstimateAndCovariance) {
   const RecursiveSrivcResult r = recursive_srivc(data, kOrder, model_of(start));
   const Eigen::VectorXd theta = r.parameters.bottomRows(1).transpose();
   const Eigen::VectorXd se = r.standard_errors.bottomRows(1).transpose();
+  // Measured: within 0.17 batch standard errors, standard errors 1.2-2.1 % larger.
   for (int i = 0; i < 4; ++i) {
     SCOPED_TRACE(i);
-    EXPECT_LT(std::abs(theta(i) - batch.parameters(i)), 2.0 * batch.standard_errors(i));
+    EXPECT_LT(std::abs(theta(i) - batch.parameters(i)), 0.5 * batch.standard_errors(i));
     const double ratio = se(i) / batch.standard_errors(i);
-    EXPECT_GT(ratio, 0.5);
-    EXPECT_LT(ratio, 2.0);
+    EXPECT_GT(ratio, 0.8);
+    EXPECT_LT(ratio, 1.25);
   }
+  // The default refresh every 10 samples against the textbook refresh at every sample:
+  // measured 0.010 standard errors apart (the docs quote it).
+  RecursiveSrivcOptions every;
+  every.refresh_interval = 1;
+  const RecursiveSrivcResult r1 = recursive_srivc(data, kOrder, model_of(start), every);
+  const Eigen::VectorXd theta1 = r1.parameters.bottomRows(1).transpose();
+  EXPECT_LT((theta - theta1).cwiseAbs().cwiseQuotient(se).maxCoeff(), 0.05);
 }
 
 TEST(RecursiveSrivc, TwoStandardErrorIntervalsCoverTheTruth) {
