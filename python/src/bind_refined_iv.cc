@@ -11,6 +11,7 @@
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
 #include "ctid/refined_iv/mode_tracking.h"
+#include "ctid/refined_iv/recursive_srivc.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 #include "ctid/refined_iv/srivc.h"
 #include "fields.h"
@@ -239,6 +240,59 @@ void bind_mode_tracking(py::module_& m) {
 }
 // --- end of mode tracking ----------------------------------------------------------------------
 
+// --- Recursive SRIVC (issue 17): options, the estimator class, the free function ----------
+void bind_recursive_srivc(py::module_& m) {
+  bind_enum<CovarianceHistory>(m, "CovarianceHistory",
+                               "What RecursiveSrivcResult keeps of the covariance per sample.");
+  bind_options<RecursiveSrivcOptions>(m, "Options of recursive_srivc and RecursiveSrivc.");
+  bind_result<RecursiveSrivcResult>(
+      m,
+      "Per-sample parameters, standard errors and covariance of recursive_srivc; the final "
+      "model and the stability/finiteness verdict.");
+  py::class_<RecursiveSrivc>(m, "RecursiveSrivc",
+                             "Recursive SRIVC of one unfactored model B/A, advanced by update().")
+      .def(
+          py::init([](const SubmodelOrder& order, double sample_time, const TransferFunction& start,
+                      Hold input_hold, const std::optional<RecursiveSrivcOptions>& options,
+                      const py::kwargs& kwargs) {
+            return RecursiveSrivc(
+                order, sample_time, input_hold, start,
+                options_from<RecursiveSrivcOptions>("RecursiveSrivc", options, kwargs));
+          }),
+          py::arg("order"), py::arg("sample_time"), py::arg("start"),
+          py::arg("input_hold") = Hold::zero_order_hold, py::arg("options") = py::none(),
+          "From the structure, the sample time, a stable start and options (one "
+          "RecursiveSrivcOptions or its fields as keywords).")
+      .def("update", &RecursiveSrivc::update, py::arg("u"), py::arg("y"),
+           "Advance one sample (u_k, y_k).")
+      .def_property_readonly("parameters", &RecursiveSrivc::parameters,
+                             "theta = [a_1 .. a_n, b_0 .. b_m].")
+      .def("model", &RecursiveSrivc::model, "B/A of the current theta.")
+      .def_property_readonly("covariance", &RecursiveSrivc::covariance,
+                             "sigma^2 (P + P')/2, np x np.")
+      .def_property_readonly("gain_matrix", &RecursiveSrivc::gain_matrix,
+                             "P of the recursion (not scaled by sigma^2).")
+      .def_property_readonly("noise_variance", &RecursiveSrivc::noise_variance,
+                             "Weighted output-error variance sigma^2.")
+      .def_property_readonly("steps", &RecursiveSrivc::steps, "Samples processed.")
+      .def_property_readonly("rejected_refreshes", &RecursiveSrivc::rejected_refreshes,
+                             "Refreshes refused because A was unstable.")
+      .def_property_readonly("skipped_updates", &RecursiveSrivc::skipped_updates,
+                             "Updates skipped (non-finite theta or P).");
+  m.def(
+      "recursive_srivc",
+      [](const SampledData& data, const SubmodelOrder& order, const TransferFunction& start,
+         const std::optional<RecursiveSrivcOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<RecursiveSrivcOptions>("recursive_srivc", options, kwargs);
+        py::gil_scoped_release release;
+        return recursive_srivc(data, order, start, o);
+      },
+      py::arg("data"), py::arg("order"), py::arg("start"), py::arg("options") = py::none(),
+      "Recursive SRIVC over the record from `start` (exponential forgetting and/or a random "
+      "walk); options are one RecursiveSrivcOptions or its fields as keywords.");
+}
+// --- end of recursive SRIVC --------------------------------------------------------------
+
 }  // namespace
 
 void bind_refined_iv(py::module_& m) {
@@ -247,6 +301,7 @@ void bind_refined_iv(py::module_& m) {
   bind_initialization(m);
   bind_covariance(m);
   bind_mode_tracking(m);  // mode tracking (issue 17)
+  bind_recursive_srivc(m);
 }
 
 }  // namespace ctid::python
