@@ -146,3 +146,38 @@ def test_the_binding_tracks_as_the_command_line_does(tracked):
         ctid.track_modes(record, ctid.ModelStructure.modes(1))
     assert ctid.assign_modes([ctid.ModalParameters(1.0, 0.01, 1.0)],
                              [ctid.ModalParameters(2.0, 0.01, 1.0)]) == [-1]
+
+
+DOCUMENTED_SEEDS = [2024, 1, 2, 3, 4, 5, 6, 7, 8, 9]
+
+
+def coverage_row(cli, folder, seed):
+    """The row of docs/tracking.md's coverage table for one seed of the drifting record."""
+    u, y = drifting_record(seed)
+    t = np.arange(len(u)) * H
+    np.savetxt(folder / f"drift{seed}.csv", np.column_stack([t, u, y]), delimiter=",",
+               header="t,u,y", comments="", fmt="%.17g")
+    subprocess.run([str(cli), "track", f"drift{seed}.csv", "--window", str(WINDOW_SAMPLES * H),
+                    "--modes", "1", "-o", f"tracking{seed}.json", "-q"], cwd=folder, check=True)
+    document = json.loads((folder / f"tracking{seed}.json").read_text())
+    track = document["tracks"][0]
+    estimate = np.array(track["natural_frequency"], dtype=float)
+    se = np.array(track["natural_frequency_se"], dtype=float)
+    truth = natural_frequency([w["centre_time"] for w in document["windows"]])
+    z = np.abs(estimate - truth) / se
+    median = f"{np.median(se / truth):.1e}".replace("e-0", "e-")
+    within = " | ".join(f"{np.mean(z <= k):.0%}".replace("%", " %") for k in (1, 2, 3))
+    return f"| {seed} | {within} | {np.max(z):.2f} | {median} |"
+
+
+def test_the_documented_coverage_table_is_what_ctid_track_measures(cli, tmp_path):
+    with open(f"{ctid_root()}/docs/tracking.md") as f:
+        documented = f.read()
+    for seed in DOCUMENTED_SEEDS:
+        row = coverage_row(cli, tmp_path, seed)
+        assert row in documented, f"docs/tracking.md's row for seed {seed} is now: {row}"
+
+
+def ctid_root():
+    import os
+    return os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
