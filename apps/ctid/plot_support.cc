@@ -80,10 +80,15 @@ std::optional<std::filesystem::path> find_python_package() {
   return std::nullopt;
 }
 
-std::filesystem::path require_plotting() {
+std::filesystem::path require_plotting() { return require_python_package("--plot"); }
+
+std::string python_executable() { return kPython; }
+
+std::filesystem::path require_python_package(const std::string& flag) {
   if (::access(kPython, X_OK) != 0) {
-    throw ComputationError(std::string("--plot needs ") + kPython +
-                           " with matplotlib, which is not installed");
+    throw ComputationError(flag + " needs " + kPython +
+                           (flag == "--plot" ? " with matplotlib" : "") +
+                           ", which is not installed");
   }
   if (auto dir = find_python_package()) return *dir;
   std::string looked;
@@ -91,7 +96,8 @@ std::filesystem::path require_plotting() {
     looked += (looked.empty() ? "" : ", ") + dir.lexically_normal().string();
   }
   throw ComputationError(
-      "--plot needs the ctid Python package (build with -DCTID_BUILD_PYTHON=ON, or set "
+      flag +
+      " needs the ctid Python package (build with -DCTID_BUILD_PYTHON=ON, or set "
       "CTID_PYTHONPATH to the folder holding ctid/); looked in " +
       looked);
 }

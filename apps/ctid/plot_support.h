@@ -30,6 +30,13 @@ std::optional<std::filesystem::path> find_python_package();
 /// package are available. Call before any work so --plot fails early.
 std::filesystem::path require_plotting();
 
+/// As require_plotting, for another use of the package: the message names `flag` (e.g.
+/// --scheduler, which runs `python3 -m ctid.batch`).
+std::filesystem::path require_python_package(const std::string& flag);
+
+/// The Python interpreter the CLI runs (/usr/bin/python3).
+std::string python_executable();
+
 /// One figure: `python3 -m ctid.plot kind input output [--title title] [arguments...]`.
 struct PlotJob {
   std::string kind;

@@ -1,0 +1,928 @@
+// `ctid batch`: runs `ctid fit` on many records (a JSON or CSV manifest, or a glob with one
+// shared spec) and writes one result document per record and a summary table. The spec is
+// fit's own flags (a JSON object keyed by fit's long flag names); each record runs exactly
+// `ctid fit DATA <flags> --output OUT/<name>.json --quiet` as a child process of this one
+// (decision 0023: the fit prints on the process's std::cerr and a crash on one file must not
+// end the batch), on --jobs worker threads. Finished records are skipped on a rerun (resume);
+// a failed record leaves OUT/<name>.error.json. --scheduler hands the batch to the Python
+// package's Dask runner (python3 -m ctid.batch). docs/batch.md.
+#include <fcntl.h>
+#include <glob.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "command.h"
+#include "ctid/core/error.h"
+#include "ctid/core/format.h"
+#include "ctid/io/file.h"
+#include "ctid/io/json.h"
+#include "ctid/study/monte_carlo.h"
+#include "plot_support.h"
+#include "progress.h"
+
+namespace ctid::cli {
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct BatchFlags {
+  std::string manifest;
+  std::string glob_pattern;
+  std::string spec;
+  std::string out;
+  int jobs = 0;
+  bool retry_failed = false;
+  bool force = false;
+  bool strict = false;
+  bool plan = false;
+  bool summarize = false;
+  std::string scheduler;
+  bool quiet = false;
+};
+
+// The files the batch itself writes in OUT; no record may take their names.
+constexpr const char* kSummaryCsv = "summary.csv";
+constexpr const char* kSummaryJson = "summary.json";
+constexpr const char* kTimings = "timings.json";
+constexpr const char* kSummaryHeader = "name,data,status,";
+
+// fit's flags that the batch sets itself (or that write files the batch does not manage).
+const std::map<std::string, std::string>& reserved_flags() {
+  static const std::map<std::string, std::string> reserved{
+      {"output", "the batch writes OUT/<name>.json (--out)"},
+      {"force", "give --force to ctid batch"},
+      {"quiet", "records always run quietly"},
+      {"plot", "figures are not drawn in a batch"},
+      {"model-output", "the model is the \"model\" field of OUT/<name>.json"},
+      {"help", "not a fit setting"},
+      {"help-all", "not a fit setting"}};
+  return reserved;
+}
+
+// One record of the manifest with its settings merged over the shared spec.
+struct Task {
+  std::string name;
+  std::vector<std::string> data;  // as passed to ctid fit
+  std::vector<std::string> args;  // after the executable: "fit", DATA..., flags
+  std::string output;             // OUT/<name>.json
+  std::string error_output;       // OUT/<name>.error.json
+};
+
+// A record's flag value as written: JSON in a JSON manifest or spec, text in a CSV cell.
+struct FlagValue {
+  json value;
+  bool from_csv = false;
+};
+using FlagSet = std::map<std::string, FlagValue>;
+
+// Where a setting came from, for messages: "m.json: record 3 ('a')".
+std::string where(const std::string& source, int index, const std::string& name) {
+  std::string text = source;
+  if (index >= 0) {
+    text += ": record " + std::to_string(index + 1);
+    if (!name.empty()) text += " ('" + name + "')";
+  }
+  return text;
+}
+
+// The subcommand `fit` on a scratch app, to check flag names against.
+class FitFlagsReference {
+ public:
+  FitFlagsReference() {
+    for (const CommandRegistration& registration : registered_commands()) {
+      registration.factory(app_);
+    }
+    fit_ = app_.get_subcommand("fit");
+  }
+  const CLI::App& fit() const { return *fit_; }
+  const CLI::Option* option(const std::string& key) const {
+    const CLI::Option* option = fit_->get_option_no_throw("--" + key);
+    return option != nullptr && option->nonpositional() ? option : nullptr;
+  }
+
+ private:
+  CLI::App app_;
+  CLI::App* fit_ = nullptr;
+};
+
+// The words a flag adds to fit's argument vector ("--modes=2"; "--submodel=2,0" "--submodel=2,1";
+// "--history"; nothing for a flag set to false or a value left empty).
+std::vector<std::string> flag_words(const std::string& key, const FlagValue& given,
+                                    const CLI::Option& option, const std::string& context) {
+  const bool is_flag = option.get_type_size_max() == 0;
+  const bool several = option.get_items_expected_max() > 1;
+  const json& v = given.value;
+  const std::string flag = "--" + key;
+  const auto bad = [&](const std::string& rule) {
+    usage_error(context + ": field '" + key + "' is " +
+                (v.is_string() ? v.get<std::string>() : v.dump()) + "; " + rule);
+  };
+  if (v.is_null()) return {};
+  if (is_flag) {
+    if (v.is_boolean())
+      return v.get<bool>() ? std::vector<std::string>{flag} : std::vector<std::string>{};
+    if (given.from_csv && v.is_string()) {
+      const std::string text = v.get<std::string>();
+      if (text == "true" || text == "1" || text == "yes") return {flag};
+      if (text == "false" || text == "0" || text == "no") return {};
+    }
+    bad(flag + " is a flag without value: write true or false");
+  }
+  if (v.is_boolean()) bad(flag + " takes a value, not true or false");
+  const auto text_of = [&](const json& item) -> std::string {
+    if (item.is_string()) return item.get<std::string>();
+    if (item.is_number()) return item.dump();
+    bad("a value is a string or a number");
+    return {};
+  };
+  std::vector<std::string> items;
+  if (v.is_array()) {
+    if (v.empty()) bad("an empty list gives no value");
+    for (const json& item : v) items.push_back(text_of(item));
+  } else if (given.from_csv && several) {
+    // A CSV cell with several values separates them with spaces ("2,0 2,1").
+    const std::string text = v.get<std::string>();
+    std::size_t at = 0;
+    while (at < text.size()) {
+      const std::size_t start = text.find_first_not_of(' ', at);
+      if (start == std::string::npos) break;
+      const std::size_t stop = std::min(text.find(' ', start), text.size());
+      items.push_back(text.substr(start, stop - start));
+      at = stop;
+    }
+  } else {
+    items.push_back(text_of(v));
+  }
+  if (several) {  // repeated: "--submodel=2,0" "--submodel=2,1"
+    std::vector<std::string> words;
+    for (const std::string& item : items) words.push_back(flag + "=" + item);
+    return words;
+  }
+  std::string joined;
+  for (const std::string& item : items) joined += (joined.empty() ? "" : ",") + item;
+  return {flag + "=" + joined};
+}
+
+// Checks a flag name of the spec or a record against fit's flags.
+void check_flag_name(const FitFlagsReference& fit, const std::string& key,
+                     const std::string& context) {
+  const auto reserved = reserved_flags().find(key);
+  if (reserved != reserved_flags().end()) {
+    usage_error(context + ": field '" + key + "' cannot be set in a batch (" + reserved->second +
+                ")");
+  }
+  if (fit.option(key) == nullptr) {
+    std::string hint = closest_name(fit.fit(), {"--" + key});
+    usage_error(context + ": field '" + key + "' is not a ctid fit flag" +
+                (hint.empty() ? " (see 'ctid fit --help')" : "; " + hint));
+  }
+}
+
+FlagSet flags_from_json(const FitFlagsReference& fit, const json& object,
+                        const std::string& context, bool record) {
+  FlagSet flags;
+  for (const auto& [key, value] : object.items()) {
+    if (record && (key == "name" || key == "data")) continue;
+    if (!record && (key == "name" || key == "data")) {
+      usage_error(context + ": field '" + key + "' belongs to a record, not to the shared spec");
+    }
+    check_flag_name(fit, key, context);
+    flags[key] = FlagValue{value, false};
+  }
+  return flags;
+}
+
+json read_json_object(const std::string& file, const std::string& what) {
+  const json document = io::read_json(file);
+  if (!document.is_object()) usage_error(file + ": " + what + " is a JSON object");
+  return document;
+}
+
+// A record name is a file name on every system: letters, digits, '.', '_', '-', not starting
+// with '.', and not one of the batch's own files.
+void check_name(const std::string& name, const std::string& context) {
+  if (name.empty() || name.size() > 200) {
+    usage_error(context + ": field 'name' must have 1 to 200 characters");
+  }
+  for (const char c : name) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '.' || c == '_' || c == '-';
+    if (!ok) {
+      usage_error(context + ": field 'name' is '" + name +
+                  "'; a name holds only letters, digits, '.', '_' and '-' (it names the "
+                  "record's files)");
+    }
+  }
+  if (name.front() == '.' || name.front() == '-') {
+    usage_error(context + ": field 'name' is '" + name + "'; it may not start with '.' or '-'");
+  }
+  if (name == "summary" || name == "timings" || name.ends_with(".error")) {
+    usage_error(context + ": field 'name' is '" + name +
+                "'; summary, timings and names ending in .error are the batch's own files");
+  }
+}
+
+// ---- CSV manifests (a small reader: quoted cells, "" inside quotes, CRLF) ----
+
+std::vector<std::vector<std::string>> parse_csv(const std::string& text, const std::string& file) {
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::string> row;
+  std::string cell;
+  bool quoted = false;
+  bool any = false;
+  int line = 1;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
+        cell += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        if (c == '\n') ++line;
+        cell += c;
+      }
+      continue;
+    }
+    if (c == '"' && cell.empty()) {
+      quoted = true;
+      any = true;
+    } else if (c == ',') {
+      row.push_back(cell);
+      cell.clear();
+      any = true;
+    } else if (c == '\n' || c == '\r') {
+      if (c == '\r' && i + 1 < text.size() && text[i + 1] == '\n') ++i;
+      if (any || !cell.empty()) {
+        row.push_back(cell);
+        rows.push_back(row);
+      }
+      row.clear();
+      cell.clear();
+      any = false;
+      ++line;
+    } else {
+      cell += c;
+      any = true;
+    }
+  }
+  if (quoted) usage_error(file + ": line " + std::to_string(line) + ": a quote is not closed");
+  if (any || !cell.empty()) {
+    row.push_back(cell);
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+struct RecordEntry {
+  std::string name;  // empty: from the file
+  std::vector<std::string> data;
+  FlagSet flags;
+  std::string context;
+};
+
+// "data": a path or a list of paths, relative ones taken from the manifest's folder.
+std::vector<std::string> data_paths(const json& value, const fs::path& base,
+                                    const std::string& context) {
+  std::vector<std::string> paths;
+  const auto add = [&](const json& item) {
+    if (!item.is_string() || item.get<std::string>().empty()) {
+      usage_error(context + ": field 'data' is " + item.dump() +
+                  "; it is a file path or a list of them");
+    }
+    fs::path path(item.get<std::string>());
+    if (path.is_relative()) path = base / path;
+    std::string text = path.lexically_normal().string();
+    if (text.front() == '-') text = "./" + text;  // never read as a flag
+    paths.push_back(text);
+  };
+  if (value.is_array() && !value.empty()) {
+    for (const json& item : value) add(item);
+  } else {
+    add(value);
+  }
+  return paths;
+}
+
+std::vector<RecordEntry> records_from_json(const FitFlagsReference& fit, const std::string& file,
+                                           FlagSet& spec) {
+  const json manifest = read_json_object(file, "a manifest");
+  for (const auto& [key, value] : manifest.items()) {
+    if (key != "spec" && key != "records") {
+      usage_error(file + ": field '" + key + "' is not a manifest field (spec, records)");
+    }
+  }
+  if (manifest.contains("spec")) {
+    if (!manifest["spec"].is_object()) usage_error(file + ": field 'spec' is a JSON object");
+    for (auto& [key, value] : flags_from_json(fit, manifest["spec"], file + ": spec", false)) {
+      spec[key] = value;
+    }
+  }
+  if (!manifest.contains("records") || !manifest["records"].is_array()) {
+    usage_error(file + ": field 'records' (a list of records) is missing");
+  }
+  const fs::path base = fs::path(file).parent_path();
+  std::vector<RecordEntry> entries;
+  int index = 0;
+  for (const json& record : manifest["records"]) {
+    std::string name;
+    if (record.is_object() && record.contains("name")) {
+      if (!record["name"].is_string()) {
+        usage_error(where(file, index, "") + ": field 'name' is " + record["name"].dump() +
+                    "; it is a string");
+      }
+      name = record["name"].get<std::string>();
+    }
+    const std::string context = where(file, index, name);
+    if (!record.is_object()) usage_error(context + ": a record is a JSON object");
+    if (!record.contains("data")) usage_error(context + ": field 'data' is missing");
+    entries.push_back({name, data_paths(record["data"], base, context),
+                       flags_from_json(fit, record, context, true), context});
+    ++index;
+  }
+  return entries;
+}
+
+std::vector<RecordEntry> records_from_csv(const FitFlagsReference& fit, const std::string& file) {
+  const auto rows = parse_csv(io::read_text_file(file), file);
+  if (rows.empty()) usage_error(file + ": the manifest is empty (expected a header name,data,...)");
+  const std::vector<std::string>& header = rows.front();
+  std::optional<std::size_t> data_column;
+  std::optional<std::size_t> name_column;
+  std::set<std::string> seen;
+  for (std::size_t c = 0; c < header.size(); ++c) {
+    const std::string& key = header[c];
+    if (!seen.insert(key).second) usage_error(file + ": column '" + key + "' is given twice");
+    if (key == "data") {
+      data_column = c;
+    } else if (key == "name") {
+      name_column = c;
+    } else {
+      check_flag_name(fit, key, file + ": header");
+    }
+  }
+  if (!data_column) usage_error(file + ": column 'data' is missing from the header");
+  const fs::path base = fs::path(file).parent_path();
+  std::vector<RecordEntry> entries;
+  for (std::size_t r = 1; r < rows.size(); ++r) {
+    const std::vector<std::string>& row = rows[r];
+    const int index = static_cast<int>(r) - 1;
+    const std::string name = name_column && *name_column < row.size() ? row[*name_column] : "";
+    const std::string context = where(file, index, name);
+    if (row.size() != header.size()) {
+      usage_error(context + ": " + std::to_string(row.size()) + " cells; the header has " +
+                  std::to_string(header.size()));
+    }
+    if (row[*data_column].empty()) usage_error(context + ": field 'data' is missing");
+    RecordEntry entry{name, data_paths(json(row[*data_column]), base, context), {}, context};
+    for (std::size_t c = 0; c < header.size(); ++c) {
+      if (c == *data_column || (name_column && c == *name_column) || row[c].empty()) continue;
+      entry.flags[header[c]] = FlagValue{json(row[c]), true};
+    }
+    entries.push_back(std::move(entry));
+  }
+  return entries;
+}
+
+std::vector<RecordEntry> records_from_glob(const std::string& pattern) {
+  glob_t matches{};
+  const int status = ::glob(pattern.c_str(), 0, nullptr, &matches);
+  std::vector<RecordEntry> entries;
+  if (status == 0) {
+    for (std::size_t i = 0; i < matches.gl_pathc; ++i) {
+      std::string path = matches.gl_pathv[i];
+      if (!fs::is_regular_file(path)) continue;
+      if (path.front() == '-') path = "./" + path;
+      entries.push_back({"", {path}, {}, "--glob '" + pattern + "': " + path});
+    }
+  }
+  ::globfree(&matches);
+  if (entries.empty()) usage_error("--glob '" + pattern + "' matches no file");
+  return entries;
+}
+
+std::string join_path(const std::string& dir, const std::string& file) {
+  return (fs::path(dir) / file).string();
+}
+
+// The manifest as tasks, in manifest order.
+std::vector<Task> expand(const BatchFlags& f) {
+  const FitFlagsReference fit;
+  if (f.manifest.empty() == f.glob_pattern.empty()) {
+    usage_error("give a manifest (MANIFEST.json or MANIFEST.csv) or --glob PATTERN, not both");
+  }
+  FlagSet spec;
+  if (!f.spec.empty())
+    spec = flags_from_json(fit, read_json_object(f.spec, "a spec"), f.spec, false);
+  std::vector<RecordEntry> entries;
+  if (!f.glob_pattern.empty()) {
+    entries = records_from_glob(f.glob_pattern);
+  } else if (fs::path(f.manifest).extension() == ".csv") {
+    entries = records_from_csv(fit, f.manifest);
+  } else {
+    entries = records_from_json(fit, f.manifest, spec);
+  }
+  if (entries.empty()) usage_error(f.manifest + ": the manifest has no records");
+  std::vector<Task> tasks;
+  std::map<std::string, std::string> names;  // name -> context of its first record
+  for (const RecordEntry& entry : entries) {
+    Task task;
+    task.name = entry.name.empty() ? fs::path(entry.data.front()).stem().string() : entry.name;
+    check_name(task.name, entry.context);
+    const auto [first, inserted] = names.emplace(task.name, entry.context);
+    if (!inserted) {
+      usage_error(entry.context + ": the name '" + task.name + "' is taken by " + first->second +
+                  "; names must be unique (give \"name\")");
+    }
+    task.data = entry.data;
+    task.output = join_path(f.out, task.name + ".json");
+    task.error_output = join_path(f.out, task.name + ".error.json");
+    FlagSet merged = spec;
+    for (const auto& [key, value] : entry.flags) merged[key] = value;
+    task.args.push_back("fit");
+    task.args.insert(task.args.end(), task.data.begin(), task.data.end());
+    for (const auto& [key, value] : merged) {
+      const auto words = flag_words(key, value, *fit.option(key), entry.context);
+      task.args.insert(task.args.end(), words.begin(), words.end());
+    }
+    task.args.insert(task.args.end(), {"--output", task.output, "--quiet"});
+    if (f.force) task.args.push_back("--force");
+    tasks.push_back(std::move(task));
+  }
+  return tasks;
+}
+
+// ---- running one record ----
+
+fs::path self_executable() {
+  std::error_code error;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", error);
+  if (error) throw ComputationError("cannot find the ctid executable (/proc/self/exe)");
+  return exe;
+}
+
+struct ChildResult {
+  int exit_status = -1;  // 128 + signal when killed
+  std::string err;       // the child's stderr (its last 64 KiB)
+};
+
+// Runs `program args...` with stdout on /dev/null and stderr captured. The child is sent
+// SIGTERM if this thread ends first (a killed batch takes its fits with it, and their
+// temporary files are removed by their signal handler).
+ChildResult run_child(const std::string& program, const std::vector<std::string>& args) {
+  std::vector<std::string> words{program};
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& word : words) argv.push_back(word.data());
+  argv.push_back(nullptr);
+  int pipe_fds[2];
+  if (::pipe2(pipe_fds, O_CLOEXEC) != 0) throw io::IoError("cannot create a pipe for ctid fit");
+  const int null_fd = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(pipe_fds[0]);
+    ::close(pipe_fds[1]);
+    if (null_fd >= 0) ::close(null_fd);
+    throw io::IoError("cannot start ctid fit (fork failed)");
+  }
+  if (pid == 0) {
+    // Only async-signal-safe calls between fork and exec.
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (::getppid() != parent) ::_exit(127);
+    if (null_fd >= 0) ::dup2(null_fd, STDOUT_FILENO);
+    ::dup2(pipe_fds[1], STDERR_FILENO);
+    ::execv(program.c_str(), argv.data());
+    ::_exit(127);
+  }
+  ::close(pipe_fds[1]);
+  if (null_fd >= 0) ::close(null_fd);
+  ChildResult result;
+  char buffer[4096];
+  while (true) {
+    const ssize_t got = ::read(pipe_fds[0], buffer, sizeof buffer);
+    if (got < 0 && errno == EINTR) continue;
+    if (got <= 0) break;
+    result.err.append(buffer, static_cast<std::size_t>(got));
+    constexpr std::size_t kKeep = 64 * 1024;
+    if (result.err.size() > 2 * kKeep) result.err.erase(0, result.err.size() - kKeep);
+  }
+  ::close(pipe_fds[0]);
+  int raw = 0;
+  while (::waitpid(pid, &raw, 0) < 0 && errno == EINTR) {
+  }
+  result.exit_status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
+  return result;
+}
+
+// The message of a failed fit: its "ctid fit: error: ..." line, else its last line.
+std::string failure_message(const ChildResult& child) {
+  std::string last;
+  std::string error_line;
+  std::size_t at = 0;
+  while (at < child.err.size()) {
+    const std::size_t stop = std::min(child.err.find('\n', at), child.err.size());
+    std::string line = child.err.substr(at, stop - at);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (!line.empty()) last = line;
+    if (line.rfind("ctid fit: error: ", 0) == 0) error_line = line;
+    at = stop + 1;
+  }
+  if (!error_line.empty()) return error_line;
+  if (child.exit_status > 128) {
+    return "ctid fit was ended by signal " + std::to_string(child.exit_status - 128) +
+           (last.empty() ? "" : " (" + last + ")");
+  }
+  if (!last.empty()) return last;
+  return "ctid fit ended with exit status " + std::to_string(child.exit_status) + " and no message";
+}
+
+void remove_file(const std::string& path) {
+  std::error_code ignored;
+  fs::remove(path, ignored);
+}
+
+// Runs one record; returns its wall time in seconds.
+double run_task(const std::string& exe, const Task& task) {
+  remove_file(task.error_output);  // a retried or forced record
+  const auto start = std::chrono::steady_clock::now();
+  const ChildResult child = run_child(exe, task.args);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const bool wrote = fs::exists(task.output);
+  if ((child.exit_status == kExitOk || child.exit_status == kExitNoUsableModel) && wrote) {
+    return seconds;
+  }
+  const json error = {
+      {"type", "ctid_batch_error"},
+      {"record", task.name},
+      {"message", wrote || child.exit_status != kExitOk ? failure_message(child)
+                                                        : "ctid fit wrote no result document"},
+      {"exit_status", child.exit_status}};
+  io::write_text_file(task.error_output, error.dump(2) + "\n", io::Overwrite::yes);
+  return seconds;
+}
+
+// ---- the summary ----
+
+std::string csv_cell(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (const char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+// A JSON value as a cell: numbers exactly as the document holds them, null empty.
+std::string cell_of(const json& value) {
+  if (value.is_null()) return "";
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_boolean()) return value.get<bool>() ? "true" : "false";
+  if (value.is_number_float()) return format_round_trip(value.get<double>());
+  return value.dump();
+}
+
+json number_or_null(const json& object, const char* key) {
+  const auto it = object.find(key);
+  return it != object.end() && it->is_number() ? *it : json(nullptr);
+}
+
+struct Row {
+  json fields =
+      json::object();  // name, data, status, usable, fit_percent, estimator, seconds, message
+  json modes = json::array();  // {frequency_hz, frequency_se_hz, damping, damping_se}
+};
+
+Row summary_row(const Task& task, const json& timings) {
+  Row row;
+  row.fields["name"] = task.name;
+  std::string data;
+  for (const std::string& file : task.data) data += (data.empty() ? "" : ";") + file;
+  row.fields["data"] = data;
+  row.fields["status"] = "failed";
+  row.fields["usable"] = nullptr;
+  row.fields["fit_percent"] = nullptr;
+  row.fields["estimator"] = nullptr;
+  row.fields["seconds"] = timings.contains(task.name) ? timings[task.name] : json(nullptr);
+  row.fields["message"] = "";
+  const auto read = [](const std::string& file) -> std::optional<json> {
+    try {
+      return io::read_json(file);
+    } catch (const std::exception&) {
+      return std::nullopt;
+    }
+  };
+  if (fs::exists(task.output)) {
+    const std::optional<json> document = read(task.output);
+    if (!document || !document->is_object() || !document->contains("verdict")) {
+      row.fields["message"] = task.output + " is not a ctid fit result document";
+      return row;
+    }
+    const json& verdict = (*document)["verdict"];
+    const bool usable = verdict.is_object() && verdict.value("usable", false);
+    row.fields["status"] = usable ? "ok" : "no_usable_model";
+    row.fields["usable"] = usable;
+    row.fields["fit_percent"] = number_or_null(*document, "fit_percent");
+    if (document->contains("estimator")) row.fields["estimator"] = (*document)["estimator"];
+    if (!usable && verdict.is_object()) {
+      std::string reasons;
+      if (verdict.contains("reasons") && verdict["reasons"].is_array()) {
+        for (const json& reason : verdict["reasons"]) {
+          if (reason.is_string())
+            reasons += (reasons.empty() ? "" : "; ") + reason.get<std::string>();
+        }
+      }
+      row.fields["message"] = reasons;
+    }
+    const auto modes = document->find("modes");
+    if (modes != document->end() && modes->is_array()) {
+      for (const json& mode : *modes) {
+        if (!mode.is_object()) continue;
+        json entry = {
+            {"frequency_hz", number_or_null(mode, "natural_frequency_hz")},
+            {"frequency_se_hz", number_or_null(mode, "natural_frequency_hz_standard_error")},
+            {"damping", number_or_null(mode, "damping_ratio")},
+            {"damping_se", number_or_null(mode, "damping_ratio_standard_error")}};
+        row.modes.push_back(std::move(entry));
+      }
+    }
+    return row;
+  }
+  if (fs::exists(task.error_output)) {
+    const std::optional<json> error = read(task.error_output);
+    row.fields["message"] = error && error->is_object() && (*error)["message"].is_string()
+                                ? (*error)["message"].get<std::string>()
+                                : task.error_output + " cannot be read";
+    return row;
+  }
+  row.fields["status"] = "not_run";
+  return row;
+}
+
+// Whether the batch may replace `file`: missing, or a summary it wrote.
+bool ours_or_missing(const std::string& file, bool is_json) {
+  if (!fs::exists(file)) return true;
+  try {
+    if (is_json) {
+      const json document = io::read_json(file);
+      return document.is_object() && document.value("type", "") == "ctid_batch_summary";
+    }
+    return io::read_text_file(file).rfind(kSummaryHeader, 0) == 0;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+void check_own_files(const BatchFlags& f) {
+  if (f.force) return;
+  for (const char* name : {kSummaryCsv, kSummaryJson}) {
+    const std::string file = join_path(f.out, name);
+    if (!ours_or_missing(file, name == kSummaryJson)) {
+      usage_error(file +
+                  ": file exists and is not a ctid batch summary; pass --force to replace it");
+    }
+  }
+}
+
+json read_timings(const std::string& file) {
+  try {
+    if (fs::exists(file)) {
+      json timings = io::read_json(file);
+      if (timings.is_object()) return timings;
+    }
+  } catch (const std::exception&) {
+  }
+  return json::object();
+}
+
+struct Counts {
+  int ok = 0;
+  int no_usable_model = 0;
+  int failed = 0;
+  int not_run = 0;
+};
+
+Counts write_summary(const BatchFlags& f, const std::vector<Task>& tasks) {
+  const json timings = read_timings(join_path(f.out, kTimings));
+  std::vector<Row> rows;
+  std::size_t most_modes = 0;
+  Counts counts;
+  for (const Task& task : tasks) {
+    rows.push_back(summary_row(task, timings));
+    most_modes = std::max(most_modes, rows.back().modes.size());
+    const std::string status = rows.back().fields["status"].get<std::string>();
+    (status == "ok"                ? counts.ok
+     : status == "no_usable_model" ? counts.no_usable_model
+     : status == "failed"          ? counts.failed
+                                   : counts.not_run) += 1;
+  }
+  std::string csv = "name,data,status,usable,fit_percent,estimator";
+  for (std::size_t k = 1; k <= most_modes; ++k) {
+    const std::string mode = "mode" + std::to_string(k);
+    csv += "," + mode + "_frequency_hz," + mode + "_frequency_se_hz," + mode + "_damping," + mode +
+           "_damping_se";
+  }
+  csv += ",seconds,message\n";
+  json records = json::array();
+  for (const Row& row : rows) {
+    for (const char* key : {"name", "data", "status", "usable", "fit_percent", "estimator"}) {
+      csv += (std::string(key) == "name" ? "" : ",") + csv_cell(cell_of(row.fields[key]));
+    }
+    for (std::size_t k = 0; k < most_modes; ++k) {
+      for (const char* key : {"frequency_hz", "frequency_se_hz", "damping", "damping_se"}) {
+        csv += "," + (k < row.modes.size() ? csv_cell(cell_of(row.modes[k][key])) : "");
+      }
+    }
+    csv += "," + csv_cell(cell_of(row.fields["seconds"])) + "," +
+           csv_cell(cell_of(row.fields["message"])) + "\n";
+    json record = row.fields;
+    record["modes"] = row.modes;
+    records.push_back(std::move(record));
+  }
+  const json summary = {{"type", "ctid_batch_summary"}, {"records", records}};
+  io::write_text_file(join_path(f.out, kSummaryCsv), csv, io::Overwrite::yes);
+  io::write_text_file(join_path(f.out, kSummaryJson), summary.dump(2) + "\n", io::Overwrite::yes);
+  return counts;
+}
+
+ExitStatus exit_status(const BatchFlags& f, const Counts& counts) {
+  if (!f.strict) return kExitOk;
+  if (counts.failed > 0 || counts.not_run > 0) return kExitFailure;
+  return counts.no_usable_model > 0 ? kExitNoUsableModel : kExitOk;
+}
+
+void prepare_out(const BatchFlags& f) {
+  std::error_code error;
+  if (fs::exists(f.out, error) && !fs::is_directory(f.out, error)) {
+    usage_error("--out " + f.out + ": exists and is not a directory");
+  }
+  fs::create_directories(f.out, error);
+  if (error) {
+    usage_error("--out " + f.out + ": cannot create the directory (" + error.message() + ")");
+  }
+}
+
+// --scheduler: the Python package runs the batch on a Dask cluster.
+ExitStatus run_on_scheduler(const BatchFlags& f) {
+  const fs::path package = require_python_package("--scheduler");
+  std::vector<std::string> args{"-m", "ctid.batch"};
+  if (!f.manifest.empty()) args.push_back(f.manifest);
+  if (!f.glob_pattern.empty()) args.insert(args.end(), {"--glob", f.glob_pattern});
+  if (!f.spec.empty()) args.insert(args.end(), {"--spec", f.spec});
+  args.insert(args.end(), {"--out", f.out, "--scheduler", f.scheduler});
+  if (f.jobs > 0) args.insert(args.end(), {"--jobs", std::to_string(f.jobs)});
+  if (f.retry_failed) args.push_back("--retry-failed");
+  if (f.force) args.push_back("--force");
+  if (f.strict) args.push_back("--strict");
+  if (f.quiet) args.push_back("--quiet");
+  ::setenv("PYTHONPATH", package.string().c_str(), 1);
+  ::setenv("CTID_EXECUTABLE", self_executable().string().c_str(), 1);
+  std::vector<std::string> words{python_executable()};
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& word : words) argv.push_back(word.data());
+  argv.push_back(nullptr);
+  std::cout.flush();
+  const pid_t pid = ::fork();
+  if (pid < 0) throw ComputationError("cannot start " + words.front());
+  if (pid == 0) {
+    ::execv(words.front().c_str(), argv.data());
+    ::_exit(127);
+  }
+  int raw = 0;
+  while (::waitpid(pid, &raw, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(raw)) throw ComputationError("python3 -m ctid.batch was ended by a signal");
+  if (WEXITSTATUS(raw) == 127) throw ComputationError("could not run " + words.front());
+  return static_cast<ExitStatus>(WEXITSTATUS(raw));
+}
+
+ExitStatus run_batch(const BatchFlags& f) {
+  if (f.plan && f.summarize) usage_error("give --plan or --summarize, not both");
+  if (!f.scheduler.empty()) {
+    if (f.plan || f.summarize)
+      usage_error("--scheduler runs the batch; it goes without --plan and --summarize");
+    return run_on_scheduler(f);
+  }
+  const std::vector<Task> tasks = expand(f);
+  if (f.plan) {
+    json plan = json::array();
+    for (const Task& task : tasks) {
+      const bool done = !f.force && (fs::exists(task.output) ||
+                                     (!f.retry_failed && fs::exists(task.error_output)));
+      plan.push_back({{"name", task.name},
+                      {"data", task.data.size() == 1 ? json(task.data.front()) : json(task.data)},
+                      {"args", task.args},
+                      {"output", task.output},
+                      {"error_output", task.error_output},
+                      {"done", done}});
+    }
+    std::cout << plan.dump(2) << "\n";
+    return kExitOk;
+  }
+  prepare_out(f);
+  check_own_files(f);
+  if (!f.summarize) {
+    std::vector<int> pending;
+    for (int i = 0; i < static_cast<int>(tasks.size()); ++i) {
+      const Task& task = tasks[static_cast<std::size_t>(i)];
+      if (f.force ||
+          (!fs::exists(task.output) && (f.retry_failed || !fs::exists(task.error_output)))) {
+        pending.push_back(i);
+      }
+    }
+    const std::string exe = self_executable().string();
+    std::vector<double> seconds(pending.size(), 0.0);
+    Progress progress("ctid batch", f.quiet);
+    std::atomic<int> done{0};
+    const int total = static_cast<int>(pending.size());
+    parallel_for(total, resolve_thread_count(f.jobs), [&](int k) {
+      const auto index = static_cast<std::size_t>(pending[static_cast<std::size_t>(k)]);
+      seconds[static_cast<std::size_t>(k)] = run_task(exe, tasks[index]);
+      progress.update("records", ++done, total);
+    });
+    progress.clear();
+    if (!pending.empty()) {
+      const std::string timings_file = join_path(f.out, kTimings);
+      json timings = read_timings(timings_file);
+      for (std::size_t k = 0; k < pending.size(); ++k) {
+        timings[tasks[static_cast<std::size_t>(pending[k])].name] = seconds[k];
+      }
+      io::write_text_file(timings_file, timings.dump(2) + "\n", io::Overwrite::yes);
+    }
+  }
+  const Counts counts = write_summary(f, tasks);
+  if (!f.quiet) {
+    std::cout << "ctid batch: " << counts.ok << " ok, " << counts.no_usable_model
+              << " no usable model, " << counts.failed << " failed";
+    if (counts.not_run > 0) std::cout << ", " << counts.not_run << " not run";
+    std::cout << "; summary in " << join_path(f.out, kSummaryCsv) << "\n";
+  }
+  return exit_status(f, counts);
+}
+
+Command add_batch_command(CLI::App& parent) {
+  auto flags = std::make_shared<BatchFlags>();
+  BatchFlags& f = *flags;
+  CLI::App* app = parent.add_subcommand(
+      "batch",
+      "Run ctid fit on many records (a manifest or a glob) and write one result per record and "
+      "a summary table; resumable, one bad file never stops the batch.");
+  app->footer(
+      "Manifest: JSON {\"spec\": {FLAGS}, \"records\": [{\"name\": N, \"data\": FILE, FLAGS}]} "
+      "or CSV with a header name,data,<flag>...; FLAGS are ctid fit's long flags without dashes "
+      "({\"modes\": 2, \"detrend\": \"linear\", \"history\": true}). Relative data paths are "
+      "taken from the manifest's folder.\n"
+      "Outputs in --out DIR: <name>.json (what 'ctid fit DATA FLAGS -o' writes), "
+      "<name>.error.json for a record that failed, summary.csv and summary.json. A rerun skips "
+      "finished records.\n"
+      "Exit status: 0 every record ran (some may have failed: see the summary; --strict: 1 if "
+      "any failed, 3 if any has no usable model), 2 bad manifest or usage, 1 other error. "
+      "docs/batch.md.");
+  app->add_option("manifest", f.manifest, "Manifest: records as JSON or CSV (.csv)")
+      ->check(CLI::ExistingFile);
+  app->add_option("--glob", f.glob_pattern,
+                  "Fit every file matching this pattern (quote it) with the --spec flags");
+  app->add_option("--spec", f.spec, "JSON object of ctid fit flags shared by every record")
+      ->check(CLI::ExistingFile);
+  app->add_option("--out,-o", f.out, "Folder for the results (created if missing)")->required();
+  app->add_option("--jobs,-j", f.jobs, "Records fitted at once (0: every core)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app->add_flag("--retry-failed", f.retry_failed, "Run again the records that failed before");
+  app->add_flag("--force", f.force, "Run every record again and replace its result");
+  app->add_flag("--strict", f.strict, "Exit 1 if any record failed, 3 if any has no usable model");
+  app->add_flag("--plan", f.plan, "Print the records' ctid fit commands as JSON and run nothing");
+  app->add_flag("--summarize", f.summarize,
+                "Only rebuild summary.csv and summary.json from the documents in --out");
+  app->add_option("--scheduler", f.scheduler,
+                  "Run the records on the Dask cluster at this scheduler address "
+                  "(tcp://HOST:8786), through python3 -m ctid.batch");
+  app->add_flag("--quiet,-q", f.quiet, "Print no count line and no progress");
+  Command command;
+  command.app = app;
+  command.run = [flags] { return run_batch(*flags); };
+  return command;
+}
+
+}  // namespace
+
+CTID_REGISTER_COMMAND(27, add_batch_command);
+
+}  // namespace ctid::cli
