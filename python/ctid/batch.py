@@ -1,0 +1,363 @@
+"""Many ``ctid fit`` runs, locally or on a Dask cluster: the Python twin of ``ctid batch``.
+
+    fit_many(records, spec=None, *, out_dir, client=None, jobs=None,
+             ctid_executable=None, retry_failed=False, force=False) -> list[dict]
+
+    /usr/bin/python3 -m ctid.batch MANIFEST --out DIR [--scheduler ADDRESS] [--jobs N]
+                                   [--spec SPEC.json] [--glob PATTERN] [--retry-failed]
+                                   [--force] [--strict] [--quiet]
+
+The manifest is read in one place, the C++ command line: ``ctid batch ... --plan`` gives the
+records' ``ctid fit`` argument vectors. Each record then runs as a ``ctid fit`` process:
+one after another (``jobs=1``), on a local thread pool (``jobs>1``, default every core), or as
+one Dask task per record (``client``, a ``distributed.Client``), the worker reading the record
+itself. Workers therefore need the files and the ``ctid`` executable at the same paths as the
+client (a shared file system) and run in the client's working directory, so relative paths in
+the manifest mean the same everywhere. A record that fails leaves ``OUT/<name>.error.json``
+with its message; nothing a record does stops the batch. ``ctid batch ... --summarize`` then
+writes ``summary.csv`` and ``summary.json``, whose rows are returned. The documents are the
+bytes a single ``ctid fit DATA FLAGS -o OUT/<name>.json`` writes (docs/batch.md).
+
+The executable is the ``ctid_executable`` argument, else ``$CTID_EXECUTABLE``, else
+``$CTID_BUILD_DIR/apps/ctid/ctid``, else the build tree or install this package belongs to,
+else ``ctid`` on the PATH.
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import json
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import uuid
+
+__all__ = ["fit_many", "find_executable", "plan", "run_task"]
+
+_SUMMARY_ROWS = "summary.json"
+_TIMINGS = "timings.json"
+
+
+def find_executable(ctid_executable=None) -> str:
+    """The ``ctid`` command line to run, searched as the module docstring says."""
+    tried = []
+    candidates = []
+    if ctid_executable is not None:
+        candidates.append(("ctid_executable", pathlib.Path(ctid_executable)))
+    if os.environ.get("CTID_EXECUTABLE"):
+        candidates.append(("$CTID_EXECUTABLE", pathlib.Path(os.environ["CTID_EXECUTABLE"])))
+    if os.environ.get("CTID_BUILD_DIR"):
+        candidates.append(("$CTID_BUILD_DIR",
+                           pathlib.Path(os.environ["CTID_BUILD_DIR"]) / "apps" / "ctid" / "ctid"))
+    package = pathlib.Path(__file__).resolve().parent
+    candidates.append(("build tree", package.parents[1] / "apps" / "ctid" / "ctid"))
+    candidates.append(("install", package.parents[3] / "bin" / "ctid"))
+    for label, path in candidates:
+        if path.is_file() and os.access(path, os.X_OK):
+            return str(path)
+        tried.append(f"{label} {path}")
+        if label == "ctid_executable":
+            break  # an explicit choice is not silently replaced
+    if ctid_executable is None:
+        found = shutil.which("ctid")
+        if found:
+            return found
+        tried.append("ctid on the PATH")
+    raise FileNotFoundError("the ctid command line was not found; tried " + "; ".join(tried))
+
+
+def _invalid(message):
+    try:
+        from ctid import InvalidArgument
+    except ImportError:  # the package's extension is not built: a plain ValueError
+        InvalidArgument = ValueError
+    return InvalidArgument(message)
+
+
+def _last_line(text):
+    lines = [line for line in text.splitlines() if line.strip()]
+    return lines[-1] if lines else ""
+
+
+def _source_arguments(records, spec, scratch):
+    """The ``ctid batch`` arguments naming the records: a manifest, or --glob, and --spec."""
+    args = []
+    if isinstance(records, (str, os.PathLike)):
+        text = os.fspath(records)
+        if not os.path.exists(text) and any(c in text for c in "*?["):
+            args += ["--glob", text]
+        else:
+            args.append(text)
+    else:
+        records = list(records)
+        entries = []
+        for record in records:
+            if not isinstance(record, dict):
+                raise _invalid(f"a record is a dict with 'data' and fit flags, not {record!r}")
+            entry = dict(record)
+            # The manifest is written in a scratch folder: relative paths are the caller's.
+            data = entry.get("data")
+            if isinstance(data, (str, os.PathLike)):
+                entry["data"] = os.path.abspath(os.fspath(data))
+            elif isinstance(data, (list, tuple)):
+                entry["data"] = [os.path.abspath(os.fspath(d)) for d in data]
+            entries.append(entry)
+        manifest = pathlib.Path(scratch) / "manifest.json"
+        manifest.write_text(json.dumps({"records": entries}))
+        args.append(str(manifest))
+    if spec is not None:
+        if isinstance(spec, dict):
+            spec_file = pathlib.Path(scratch) / "spec.json"
+            spec_file.write_text(json.dumps(spec))
+            args += ["--spec", str(spec_file)]
+        else:
+            args += ["--spec", os.fspath(spec)]
+    return args
+
+
+def _run_batch_command(executable, args):
+    completed = subprocess.run([executable, "batch", *args], capture_output=True, text=True)
+    if completed.returncode == 2:
+        raise _invalid(_last_line(completed.stderr))
+    if completed.returncode not in (0, 1, 3) or (completed.returncode == 1 and
+                                                  "ctid batch: error:" in completed.stderr):
+        raise RuntimeError(_last_line(completed.stderr) or
+                           f"ctid batch ended with exit status {completed.returncode}")
+    return completed
+
+
+def plan(records, spec=None, *, out_dir, ctid_executable=None, retry_failed=False,
+         force=False):
+    """The tasks of a batch as ``ctid batch ... --plan`` gives them: dicts with name, data,
+    args (after the executable), output, error_output and done (finished before)."""
+    executable = find_executable(ctid_executable)
+    with tempfile.TemporaryDirectory(prefix="ctid-batch-") as scratch:
+        args = _source_arguments(records, spec, scratch)
+        args += ["--out", os.fspath(out_dir), "--plan"]
+        if retry_failed:
+            args.append("--retry-failed")
+        if force:
+            args.append("--force")
+        completed = _run_batch_command(executable, args)
+    return json.loads(completed.stdout)
+
+
+def _failure_message(stderr, exit_status):
+    """The message of a failed fit, worded as ctid batch words it (batch_command.cc)."""
+    last = ""
+    error_line = ""
+    for line in stderr.split("\n"):
+        line = line.rstrip("\r")
+        if line:
+            last = line
+        if line.startswith("ctid fit: error: "):
+            error_line = line
+    if error_line:
+        return error_line
+    if exit_status > 128:
+        return (f"ctid fit was ended by signal {exit_status - 128}" +
+                (f" ({last})" if last else ""))
+    if last:
+        return last
+    return f"ctid fit ended with exit status {exit_status} and no message"
+
+
+def _write_json_atomically(path, value):
+    path = pathlib.Path(path)
+    temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
+    try:
+        temporary.write_text(json.dumps(value, indent=2, sort_keys=True, ensure_ascii=False) +
+                             "\n", encoding="utf-8")
+        os.replace(temporary, path)
+    finally:
+        if temporary.exists():
+            temporary.unlink()
+
+
+def run_task(task, executable, cwd=None):
+    """Runs one record's ``ctid fit`` (in `cwd`) and returns {"name", "seconds", "error"}:
+    error None when the fit wrote its document, else the error document, which is also written
+    to the task's error_output when possible. Never raises."""
+    start = time.monotonic()
+    error = None
+    try:
+        workdir = pathlib.Path(cwd) if cwd is not None else pathlib.Path.cwd()
+        error_output = workdir / task["error_output"]
+        if error_output.exists():
+            error_output.unlink()  # a retried or forced record
+        completed = subprocess.run([executable, *task["args"]], cwd=workdir,
+                                   stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                   text=True, errors="replace")
+        status = completed.returncode if completed.returncode >= 0 else 128 - completed.returncode
+        wrote = (workdir / task["output"]).exists()
+        if status not in (0, 3) or not wrote:
+            message = (_failure_message(completed.stderr, status) if wrote or status != 0
+                       else "ctid fit wrote no result document")
+            error = {"type": "ctid_batch_error", "record": task["name"], "message": message,
+                     "exit_status": status}
+    except Exception as exc:  # noqa: BLE001 - a record's failure never stops the batch
+        error = {"type": "ctid_batch_error", "record": task.get("name", "?"),
+                 "message": f"ctid.batch: {type(exc).__name__}: {exc}", "exit_status": 1}
+    seconds = time.monotonic() - start
+    if error is not None:
+        try:
+            _write_json_atomically(pathlib.Path(cwd or ".") / task["error_output"], error)
+            written = True
+        except Exception:  # noqa: BLE001 - the client writes it instead
+            written = False
+        error = dict(error, written=written)
+    return {"name": task.get("name"), "seconds": seconds, "error": error}
+
+
+def _record_outcomes(outcomes, tasks, out_dir):
+    """Error documents the workers could not write, and the records' times (timings.json,
+    which the summary's seconds column reads)."""
+    by_name = {task["name"]: task for task in tasks}
+    for outcome in outcomes:
+        error = outcome.get("error")
+        if error is not None and not error.get("written", False):
+            document = {key: value for key, value in error.items() if key != "written"}
+            _write_json_atomically(by_name[outcome["name"]]["error_output"], document)
+    timings_file = pathlib.Path(out_dir) / _TIMINGS
+    timings = {}
+    if timings_file.exists():
+        try:
+            timings = json.loads(timings_file.read_text())
+        except (OSError, ValueError):
+            timings = {}
+    if not isinstance(timings, dict):
+        timings = {}
+    for outcome in outcomes:
+        timings[outcome["name"]] = outcome["seconds"]
+    if outcomes:
+        _write_json_atomically(timings_file, timings)
+
+
+def _run_all(tasks, executable, client, jobs):
+    cwd = os.getcwd()
+    if client is not None:
+        keys = [f"ctid-fit-{task['name']}-{uuid.uuid4().hex[:8]}" for task in tasks]
+        futures = client.map(run_task, tasks, [executable] * len(tasks), [cwd] * len(tasks),
+                             key=keys, pure=False)
+        outcomes = []
+        for task, future in zip(tasks, futures):
+            try:
+                outcomes.append(future.result())
+            except Exception as exc:  # noqa: BLE001 - e.g. a worker lost mid-task
+                outcomes.append({"name": task["name"], "seconds": float("nan"), "error": {
+                    "type": "ctid_batch_error", "record": task["name"],
+                    "message": f"ctid.batch: the Dask task failed: {type(exc).__name__}: {exc}",
+                    "exit_status": 1, "written": False}})
+        return outcomes
+    workers = jobs if jobs is not None and jobs > 0 else (os.cpu_count() or 1)
+    if workers == 1:
+        return [run_task(task, executable, cwd) for task in tasks]
+    with concurrent.futures.ThreadPoolExecutor(max_workers=workers) as pool:
+        return list(pool.map(lambda task: run_task(task, executable, cwd), tasks))
+
+
+def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, force, strict):
+    executable = find_executable(ctid_executable)
+    out_dir = os.fspath(out_dir)
+    with tempfile.TemporaryDirectory(prefix="ctid-batch-") as scratch:
+        source = _source_arguments(records, spec, scratch)
+        flags = (["--retry-failed"] if retry_failed else []) + (["--force"] if force else [])
+        planned = json.loads(_run_batch_command(
+            executable, [*source, "--out", out_dir, "--plan", *flags]).stdout)
+        os.makedirs(out_dir, exist_ok=True)
+        pending = [task for task in planned if not task["done"]]
+        outcomes = _run_all(pending, executable, client, jobs)
+        _record_outcomes(outcomes, pending, out_dir)
+        summarize = [*source, "--out", out_dir, "--summarize", "--quiet"]
+        if strict:
+            summarize.append("--strict")
+        completed = _run_batch_command(executable, summarize)
+    rows = json.loads((pathlib.Path(out_dir) / _SUMMARY_ROWS).read_text())["records"]
+    return rows, completed.returncode
+
+
+def fit_many(records, spec=None, *, out_dir, client=None, jobs=None, ctid_executable=None,
+             retry_failed=False, force=False):
+    """Fits every record with ``ctid fit`` and returns the summary rows (dicts: name, data,
+    status ok | no_usable_model | failed, usable, fit_percent, estimator, modes, seconds,
+    message).
+
+    records: a manifest file (JSON or CSV, as ``ctid batch`` reads), a glob pattern, or a list
+    of dicts {"name" (optional), "data": path, fit flags...}; relative paths are the current
+    directory's. spec: fit flags shared by every record (a dict or a JSON file). client: a
+    ``distributed.Client`` to run the records on; else ``jobs`` local threads (default every
+    core; 1 runs them one after another). Finished records in out_dir are skipped unless
+    ``force``; failed ones are run again with ``retry_failed``.
+    """
+    rows, _ = _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, force,
+                     strict=False)
+    return rows
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(
+        prog="python3 -m ctid.batch",
+        description="Run ctid fit on the records of a manifest, locally or on a Dask cluster.")
+    parser.add_argument("manifest", nargs="?", help="manifest (JSON or CSV)")
+    parser.add_argument("--glob", help="fit every file matching this pattern with --spec")
+    parser.add_argument("--spec", help="JSON object of ctid fit flags shared by every record")
+    parser.add_argument("--out", "-o", required=True, help="folder for the results")
+    parser.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
+    parser.add_argument("--jobs", "-j", type=int, default=None,
+                        help="local threads when no scheduler is given (default: every core)")
+    parser.add_argument("--retry-failed", action="store_true")
+    parser.add_argument("--force", action="store_true")
+    parser.add_argument("--strict", action="store_true")
+    parser.add_argument("--quiet", "-q", action="store_true")
+    parser.add_argument("--ctid", dest="ctid_executable", help="the ctid executable to run")
+    options = parser.parse_args(argv)
+    if (options.manifest is None) == (options.glob is None):
+        print("ctid.batch: error: give a manifest or --glob PATTERN, not both", file=sys.stderr)
+        return 2
+    records = options.manifest if options.manifest is not None else options.glob
+    client = None
+    try:
+        if options.scheduler:
+            try:
+                from distributed import Client
+            except ImportError:
+                print("ctid.batch: error: --scheduler needs the Python package distributed "
+                      "(dask.distributed)", file=sys.stderr)
+                return 1
+            try:
+                client = Client(options.scheduler, timeout="30s")
+            except Exception as exc:  # noqa: BLE001 - one line, exit 1
+                print(f"ctid.batch: error: cannot reach the Dask scheduler at "
+                      f"{options.scheduler}: {exc}", file=sys.stderr)
+                return 1
+        if options.glob is not None:
+            records = options.glob
+        rows, status = _batch(records, options.spec, options.out, client, options.jobs,
+                              options.ctid_executable, options.retry_failed, options.force,
+                              options.strict)
+    except ValueError as exc:
+        print(f"ctid.batch: error: {exc}", file=sys.stderr)
+        return 2
+    except (OSError, RuntimeError) as exc:
+        print(f"ctid.batch: error: {exc}", file=sys.stderr)
+        return 1
+    finally:
+        if client is not None:
+            client.close()
+    if not options.quiet:
+        counts = {status_name: sum(1 for row in rows if row["status"] == status_name)
+                  for status_name in ("ok", "no_usable_model", "failed")}
+        where = "on " + options.scheduler if options.scheduler else "locally"
+        print(f"ctid batch: {counts['ok']} ok, {counts['no_usable_model']} no usable model, "
+              f"{counts['failed']} failed ({where}); summary in "
+              f"{os.path.join(options.out, 'summary.csv')}")
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main())
