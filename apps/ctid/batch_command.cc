@@ -125,7 +125,7 @@ class FitFlagsReference {
 // "--history"; nothing for a flag set to false or a value left empty).
 std::vector<std::string> flag_words(const std::string& key, const FlagValue& given,
                                     const CLI::Option& option, const std::string& context) {
-  const bool is_flag = option.get_type_size_max() == 0;
+  const bool is_flag = option.get_expected_max() == 0 || option.get_type_size_max() == 0;
   const bool several = option.get_items_expected_max() > 1;
   const json& v = given.value;
   const std::string flag = "--" + key;
@@ -188,7 +188,13 @@ void check_flag_name(const FitFlagsReference& fit, const std::string& key,
                 ")");
   }
   if (fit.option(key) == nullptr) {
+    // closest_name words it for the command line ("did you mean --modes?"); a manifest
+    // names the flag without dashes.
     std::string hint = closest_name(fit.fit(), {"--" + key});
+    if (const auto dashes = hint.find("--"); dashes != std::string::npos) {
+      hint =
+          hint.substr(0, dashes) + "'" + hint.substr(dashes + 2, hint.size() - dashes - 3) + "'?";
+    }
     usage_error(context + ": field '" + key + "' is not a ctid fit flag" +
                 (hint.empty() ? " (see 'ctid fit --help')" : "; " + hint));
   }
@@ -576,7 +582,9 @@ double run_task(const std::string& exe, const Task& task) {
       {"message", wrote || child.exit_status != kExitOk ? failure_message(child)
                                                         : "ctid fit wrote no result document"},
       {"exit_status", child.exit_status}};
-  io::write_text_file(task.error_output, error.dump(2) + "\n", io::Overwrite::yes);
+  io::write_text_file(task.error_output,
+                      error.dump(2, ' ', false, json::error_handler_t::replace) + "\n",
+                      io::Overwrite::yes);
   return seconds;
 }
 
@@ -757,7 +765,9 @@ Counts write_summary(const BatchFlags& f, const std::vector<Task>& tasks) {
   }
   const json summary = {{"type", "ctid_batch_summary"}, {"records", records}};
   io::write_text_file(join_path(f.out, kSummaryCsv), csv, io::Overwrite::yes);
-  io::write_text_file(join_path(f.out, kSummaryJson), summary.dump(2) + "\n", io::Overwrite::yes);
+  io::write_text_file(join_path(f.out, kSummaryJson),
+                      summary.dump(2, ' ', false, json::error_handler_t::replace) + "\n",
+                      io::Overwrite::yes);
   return counts;
 }
 
@@ -833,7 +843,7 @@ ExitStatus run_batch(const BatchFlags& f) {
                       {"error_output", task.error_output},
                       {"done", done}});
     }
-    std::cout << plan.dump(2) << "\n";
+    std::cout << plan.dump(2, ' ', false, json::error_handler_t::replace) << "\n";
     return kExitOk;
   }
   prepare_out(f);
@@ -864,7 +874,9 @@ ExitStatus run_batch(const BatchFlags& f) {
       for (std::size_t k = 0; k < pending.size(); ++k) {
         timings[tasks[static_cast<std::size_t>(pending[k])].name] = seconds[k];
       }
-      io::write_text_file(timings_file, timings.dump(2) + "\n", io::Overwrite::yes);
+      io::write_text_file(timings_file,
+                          timings.dump(2, ' ', false, json::error_handler_t::replace) + "\n",
+                          io::Overwrite::yes);
     }
   }
   const Counts counts = write_summary(f, tasks);
