@@ -82,6 +82,7 @@ struct Task {
   std::vector<std::string> args;  // after the executable: "fit", DATA..., flags
   std::string output;             // OUT/<name>.json
   std::string error_output;       // OUT/<name>.error.json
+  std::string context;            // where the record is in the manifest, for messages
 };
 
 // A record's flag value as written: JSON in a JSON manifest or spec, text in a CSV cell.
@@ -106,7 +107,7 @@ class FitFlagsReference {
  public:
   FitFlagsReference() {
     for (const CommandRegistration& registration : registered_commands()) {
-      registration.factory(app_);
+      commands_.push_back(registration.factory(app_));
     }
     fit_ = app_.get_subcommand("fit");
   }
@@ -118,6 +119,7 @@ class FitFlagsReference {
 
  private:
   CLI::App app_;
+  std::vector<Command> commands_;  // own the storage the flags are bound to
   CLI::App* fit_ = nullptr;
 };
 
@@ -428,6 +430,35 @@ std::string join_path(const std::string& dir, const std::string& file) {
   return (fs::path(dir) / file).string();
 }
 
+// The flags of every record parsed as `ctid fit` parses them (a value that is not a number,
+// not one of a flag's choices, a controller file that does not exist), so that a bad spec is
+// one usage error before anything runs rather than the same failure for every record. Each
+// distinct set of flags is parsed once; a record whose data file is missing is left to fail
+// on its own.
+void check_flag_values(const std::vector<Task>& tasks) {
+  std::set<std::vector<std::string>> checked;
+  for (const Task& task : tasks) {
+    std::error_code ignored;
+    if (!fs::is_regular_file(task.data.front(), ignored)) continue;
+    const auto first_flag = task.args.begin() + 1 + static_cast<std::ptrdiff_t>(task.data.size());
+    std::vector<std::string> flags(first_flag, task.args.end());
+    if (!checked.insert(flags).second) continue;
+    CLI::App top;
+    std::vector<Command> commands;  // own the storage the flags are parsed into
+    for (const CommandRegistration& registration : registered_commands()) {
+      commands.push_back(registration.factory(top));
+    }
+    std::vector<std::string> words{"fit", task.data.front()};
+    words.insert(words.end(), flags.begin(), flags.end());
+    std::reverse(words.begin(), words.end());  // CLI11 takes the arguments last first
+    try {
+      top.parse(words);
+    } catch (const CLI::ParseError& e) {
+      usage_error(task.context + ": the flags are not valid for ctid fit: " + e.what());
+    }
+  }
+}
+
 // The manifest as tasks, in manifest order.
 std::vector<Task> expand(const BatchFlags& f) {
   const FitFlagsReference fit;
@@ -470,8 +501,10 @@ std::vector<Task> expand(const BatchFlags& f) {
     }
     task.args.insert(task.args.end(), {"--output", task.output, "--quiet"});
     if (f.force) task.args.push_back("--force");
+    task.context = entry.context;
     tasks.push_back(std::move(task));
   }
+  check_flag_values(tasks);
   return tasks;
 }
 
@@ -832,6 +865,7 @@ ExitStatus run_batch(const BatchFlags& f) {
   }
   const std::vector<Task> tasks = expand(f);
   if (f.plan) {
+    if (fs::is_directory(f.out)) check_own_files(f);  // as a run would, before it runs
     json plan = json::array();
     for (const Task& task : tasks) {
       const bool done = !f.force && (fs::exists(task.output) ||

@@ -227,6 +227,11 @@ TEST_F(BatchCommand, BadManifestsExitTwoWithOneLine) {
   expect_bad_input(ctid({"batch", "output.json", "--out", "out"}), "batch",
                    "field 'output' cannot be set in a batch");
 
+  write("value.json", R"({"spec": {"modes": "two"}, "records": [{"data": "records/a1.csv"}]})");
+  r = ctid({"batch", "value.json", "--out", "out"});
+  expect_bad_input(r, "batch", "value.json: record 1: the flags are not valid for ctid fit: ");
+  EXPECT_THAT(r.err, HasSubstr("--modes"));
+
   write("nodata.csv", "name,modes\nx,1\n");
   expect_bad_input(ctid({"batch", "nodata.csv", "--out", "out"}), "batch",
                    "nodata.csv: column 'data' is missing");
