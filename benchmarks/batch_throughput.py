@@ -110,11 +110,11 @@ def main():
     w = options.workers
     print(f"{n} records of N = {options.samples} samples (1 mode, 2 modes, unfactored 2/1, "
           f"detrend), best of {options.repeat}, runners taking turns; {w} workers")
-    print(f"| runner | workers | seconds | records/s | speed-up | scaling efficiency |")
-    print(f"|---|---|---|---|---|---|")
+    print("| runner | workers | seconds | records/s | speed-up | scaling efficiency |")
+    print("|---|---|---|---|---|---|")
     for label, workers, seconds in (("ctid batch --jobs 1", 1, serial),
                                     (f"ctid batch --jobs {w}", w, threads),
-                                    (f"fit_many, Dask LocalCluster", w, dask)):
+                                    ("fit_many, Dask LocalCluster", w, dask)):
         speed_up = serial / seconds
         print(f"| {label} | {workers} | {seconds:.2f} | {n / seconds:.1f} | {speed_up:.2f} | "
               f"{speed_up / workers:.2f} |")

@@ -84,12 +84,13 @@ def _last_line(text):
     return lines[-1] if lines else ""
 
 
-def _source_arguments(records, spec, scratch):
-    """The ``ctid batch`` arguments naming the records: a manifest, or --glob, and --spec."""
+def _source_arguments(records, spec, scratch, glob=False):
+    """The ``ctid batch`` arguments naming the records: a manifest, or --glob, and --spec.
+    A string that names no file and holds a wildcard is a glob pattern (``glob`` forces it)."""
     args = []
     if isinstance(records, (str, os.PathLike)):
         text = os.fspath(records)
-        if not os.path.exists(text) and any(c in text for c in "*?["):
+        if glob or (not os.path.exists(text) and any(c in text for c in "*?[")):
             args += ["--glob", text]
         else:
             args.append(text)
@@ -261,11 +262,12 @@ def _run_all(tasks, executable, client, jobs):
         return list(pool.map(lambda task: run_task(task, executable, cwd), tasks))
 
 
-def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, force, strict):
+def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, force, strict,
+           glob=False):
     executable = find_executable(ctid_executable)
     out_dir = os.fspath(out_dir)
     with tempfile.TemporaryDirectory(prefix="ctid-batch-") as scratch:
-        source = _source_arguments(records, spec, scratch)
+        source = _source_arguments(records, spec, scratch, glob)
         flags = (["--retry-failed"] if retry_failed else []) + (["--force"] if force else [])
         planned = json.loads(_run_batch_command(
             executable, [*source, "--out", out_dir, "--plan", *flags]).stdout)
@@ -335,11 +337,9 @@ def main(argv=None):
                 print(f"ctid.batch: error: cannot reach the Dask scheduler at "
                       f"{options.scheduler}: {exc}", file=sys.stderr)
                 return 1
-        if options.glob is not None:
-            records = options.glob
         rows, status = _batch(records, options.spec, options.out, client, options.jobs,
                               options.ctid_executable, options.retry_failed, options.force,
-                              options.strict)
+                              options.strict, glob=options.glob is not None)
     except ValueError as exc:
         print(f"ctid.batch: error: {exc}", file=sys.stderr)
         return 2

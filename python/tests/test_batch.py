@@ -207,3 +207,29 @@ def test_a_bad_manifest_is_one_clear_error(batch, tmp_path):
         ctid.batch.fit_many(manifest, out_dir=tmp_path / "out", jobs=1)
     with pytest.raises(FileNotFoundError, match="ctid_executable"):
         ctid.batch.find_executable(tmp_path / "no-such-ctid")
+
+
+def test_a_task_that_cannot_run_becomes_its_error_document(tmp_path):
+    task = {"name": "x", "args": ["fit", "x.csv"], "output": str(tmp_path / "x.json"),
+            "error_output": str(tmp_path / "x.error.json")}
+    outcome = ctid.batch.run_task(task, str(tmp_path / "no-such-ctid"), cwd=tmp_path)
+    assert outcome["name"] == "x" and outcome["error"]["written"]
+    error = json.loads((tmp_path / "x.error.json").read_text())
+    assert error["record"] == "x" and error["exit_status"] == 1
+    assert "no-such-ctid" in error["message"]
+
+
+def test_python_m_ctid_batch_with_a_glob(cli, batch, tmp_path):
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"modes": 1}))
+    out = tmp_path / "glob"
+    completed = subprocess.run(
+        [os.sys.executable, "-m", "ctid.batch", "--glob", str(batch["root"] / "records" /
+                                                             "r00[0-3].csv"),
+         "--spec", str(spec), "--out", str(out), "--jobs", "2", "--ctid", str(cli)],
+        capture_output=True, text=True)
+    assert completed.returncode == 0, completed.stderr
+    assert completed.stdout == (f"ctid batch: 4 ok, 0 no usable model, 0 failed (locally); "
+                                f"summary in {out / 'summary.csv'}\n")
+    assert sorted(_documents(out)) == ["r000.json", "r001.json", "r002.json", "r003.json"]
+    assert _documents(out)["r000.json"] == (batch["serial"] / "r000.json").read_bytes()
