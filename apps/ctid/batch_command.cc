@@ -442,7 +442,10 @@ void check_flag_values(const std::vector<Task>& tasks) {
     if (!fs::is_regular_file(task.data.front(), ignored)) continue;
     const auto first_flag = task.args.begin() + 1 + static_cast<std::ptrdiff_t>(task.data.size());
     std::vector<std::string> flags(first_flag, task.args.end());
-    if (!checked.insert(flags).second) continue;
+    std::vector<std::string> key = flags;  // without the record's own output file
+    const auto output = std::find(key.begin(), key.end(), "--output");
+    if (output != key.end() && output + 1 != key.end()) key.erase(output + 1);
+    if (!checked.insert(key).second) continue;
     CLI::App top;
     std::vector<Command> commands;  // own the storage the flags are parsed into
     for (const CommandRegistration& registration : registered_commands()) {
@@ -681,6 +684,22 @@ Row summary_row(const Task& task, const json& timings) {
     row.fields["usable"] = usable;
     row.fields["fit_percent"] = number_or_null(*document, "fit_percent");
     if (document->contains("estimator")) row.fields["estimator"] = (*document)["estimator"];
+    const bool mimo = document->value("type", "") == "mimo_estimation_result";
+    if (mimo) {
+      // Several outputs: one fit per output, reported as their mean; the modes are given in
+      // rad/s (MimoMode).
+      row.fields["estimator"] = "mimo_srivc";
+      const auto fits = document->find("fit_percent");
+      if (fits != document->end() && fits->is_array() && !fits->empty()) {
+        double sum = 0.0;
+        bool finite = true;
+        for (const json& fit : *fits) {
+          finite = finite && fit.is_number();
+          if (fit.is_number()) sum += fit.get<double>();
+        }
+        if (finite) row.fields["fit_percent"] = sum / static_cast<double>(fits->size());
+      }
+    }
     if (!usable && verdict.is_object()) {
       std::string reasons;
       if (verdict.contains("reasons") && verdict["reasons"].is_array()) {
@@ -695,6 +714,17 @@ Row summary_row(const Task& task, const json& timings) {
     if (modes != document->end() && modes->is_array()) {
       for (const json& mode : *modes) {
         if (!mode.is_object()) continue;
+        if (mimo) {
+          const auto hz = [&](const char* key) {
+            const json value = number_or_null(mode, key);
+            return value.is_null() ? value : json(value.get<double>() / (2.0 * std::numbers::pi));
+          };
+          row.modes.push_back({{"frequency_hz", hz("natural_frequency")},
+                               {"frequency_se_hz", hz("natural_frequency_se")},
+                               {"damping", number_or_null(mode, "damping_ratio")},
+                               {"damping_se", number_or_null(mode, "damping_ratio_se")}});
+          continue;
+        }
         json entry = {
             {"frequency_hz", number_or_null(mode, "natural_frequency_hz")},
             {"frequency_se_hz", number_or_null(mode, "natural_frequency_hz_standard_error")},
