@@ -91,12 +91,12 @@ void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_referen
   app.add_option("--sample-time,-T", sample_time,
                  "Sample time h in seconds; overrides a time column (its first stamp stays the "
                  "start time)")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->group("Data");
   app.add_option("--resample", resample,
                  "Irregular time stamps: move the record onto a uniform grid of this step "
                  "(seconds) from the first stamp, the input as it is held, the output linearly")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->group("Data");
   app.add_option("--input-hold", input_hold,
                  "How u is continued between samples: zoh or foh (default: the file's "

@@ -224,7 +224,7 @@ void add_noise_flags(CLI::App& app, NoiseFlags& f) {
       ->group("Output noise");
   f.std_option = app.add_option("--noise-std", f.standard_deviation,
                                 "Standard deviation of the white noise e driving H(q)")
-                     ->check(CLI::PositiveNumber)
+                     ->check(positive_number())
                      ->group("Output noise");
   f.snr_option = app.add_option("--snr", f.snr,
                                 "Signal-to-noise ratio in dB, 10 log10(var y0 / var v), y0 the "
@@ -491,7 +491,7 @@ Command add_simulate_command(CLI::App& parent) {
   app->add_option("--sample-time,-T", f.sample_time,
                   "Sample time h in seconds (default: from the input's time column or the "
                   "controller)")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->group("Generated input");
   app->add_option("--seed", f.spec.seed,
                   "Seed of the white noise or multisine phases; for prbs it picks the start "
@@ -542,7 +542,7 @@ Command add_simulate_command(CLI::App& parent) {
   auto* nsr = app->add_option("--nsr", f.nsr,
                               "delayed_feedback_loop: white noise scaled to the noise-to-signal "
                               "ratio mean|v| / mean|y0| (De Iuliis et al.), e.g. 0.05")
-                  ->check(CLI::PositiveNumber)
+                  ->check(positive_number())
                   ->group("Output noise");
   nsr->excludes(f.noise.std_option);
   nsr->excludes(f.noise.snr_option);
