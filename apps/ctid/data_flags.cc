@@ -240,11 +240,19 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
       throw InvalidArgument(path + ": " + e.what());
     }
   }();
-  for (const std::string& warning : result.record.warnings) {
-    std::cerr << "warning: " << path << ": " << warning << "\n";
+  if (!defer_warnings) {
+    for (const std::string& warning : result.record.warnings) {
+      std::cerr << "warning: " << path << ": " << warning << "\n";
+    }
   }
   preprocessing = std::move(result.record);
   return std::move(result.data);
+}
+
+void DataFlags::print_warnings() const {
+  for (const std::string& warning : preprocessing.warnings) {
+    std::cerr << "warning: " << file << ": " << warning << "\n";
+  }
 }
 
 void DataFlags::add_mimo_columns(CLI::App& app) {

@@ -349,9 +349,12 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
     if (!f.model.empty()) figures.emplace_back("bode.png");
     prepare_plot_directory(f.plot, figures, f.force);
   }
+  // The data checks' warnings (e.g. about a constant input's mean; defer_warnings is set in
+  // add_frf_command) come after the refusals below: a refused record gets its one line only.
   const SampledData data = f.data.load(app, false);
   require_spectral_column(data.input(), f.data.file, f.data.input_column, false);
   require_spectral_column(data.output(), f.data.file, f.data.output_column, true);
+  f.data.print_warnings();
 
   Frf frf;
   if (periodic) {
@@ -414,6 +417,7 @@ Command add_frf_command(CLI::App& parent) {
       "Exit status: 0 ran, 2 bad usage or input, 1 other error.");
   f.data.add_to(*app, "data", false);
   f.data.add_mimo_columns(*app);
+  f.data.defer_warnings = true;
   app->add_option("--period", f.period,
                   "Samples per period of a periodic excitation: average the FRF over periods")
       ->group("Periodic");
