@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <iostream>
 #include <limits>
@@ -171,6 +172,18 @@ CLI::Validator seed_validator() {
         return "";
       },
       "SEED");
+}
+
+CLI::Validator positive_number() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        const std::optional<double> value = parse_number<double>(text);
+        if (!value || !std::isfinite(*value) || *value <= 0.0) {
+          return "'" + text + "' is not a positive number";
+        }
+        return "";
+      },
+      "POSITIVE");
 }
 
 }  // namespace ctid::cli

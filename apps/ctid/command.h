@@ -91,6 +91,10 @@ std::optional<T> parse_number(const std::string& text) {
 /// would otherwise wrap "-1" and clamp larger values silently).
 CLI::Validator seed_validator();
 
+/// A CLI11 check for flags that take a positive finite number: "'-1' is not a positive
+/// number" (CLI::PositiveNumber printed its range, up to DBL_MAX written out in 309 digits).
+CLI::Validator positive_number();
+
 }  // namespace ctid::cli
 
 /// Registers `factory` (a CommandFactory) at position `order` in the help listing.

@@ -91,12 +91,12 @@ void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_referen
   app.add_option("--sample-time,-T", sample_time,
                  "Sample time h in seconds; overrides a time column (its first stamp stays the "
                  "start time)")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->group("Data");
   app.add_option("--resample", resample,
                  "Irregular time stamps: move the record onto a uniform grid of this step "
                  "(seconds) from the first stamp, the input as it is held, the output linearly")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->group("Data");
   app.add_option("--input-hold", input_hold,
                  "How u is continued between samples: zoh or foh (default: the file's "
@@ -240,11 +240,19 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
       throw InvalidArgument(path + ": " + e.what());
     }
   }();
-  for (const std::string& warning : result.record.warnings) {
-    std::cerr << "warning: " << path << ": " << warning << "\n";
+  if (!defer_warnings) {
+    for (const std::string& warning : result.record.warnings) {
+      std::cerr << "warning: " << path << ": " << warning << "\n";
+    }
   }
   preprocessing = std::move(result.record);
   return std::move(result.data);
+}
+
+void DataFlags::print_warnings() const {
+  for (const std::string& warning : preprocessing.warnings) {
+    std::cerr << "warning: " << file << ": " << warning << "\n";
+  }
 }
 
 void DataFlags::add_mimo_columns(CLI::App& app) {

@@ -12,6 +12,7 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -115,15 +116,14 @@ io::CsvTable frf_table(const Frf& frf) {
 // frf.png (the FRF with its coherence) and, with --model, bode.png (the model over the FRF),
 // drawn by `python3 -m ctid.plot` from files in a temporary folder.
 void draw_frf(const FrfFlags& f, const std::filesystem::path& package, const Frf& frf,
-              const io::CsvTable& table) {
+              const io::CsvTable& table, const std::optional<io::FittedModel>& fitted) {
   const TemporaryDirectory work;
   const std::string title = "ctid frf: " + std::filesystem::path(f.data.file).filename().string();
   const std::filesystem::path dir(f.plot);
   io::write_csv(work.path() / "frf.csv", table);
   std::vector<PlotJob> jobs{{"frf", work.path() / "frf.csv", dir / "frf.png", title}};
-  if (!f.model.empty()) {
-    const io::FittedModel fitted = io::read_fitted_model(f.model);
-    nlohmann::json input = {{"model", io::to_json(fitted.model)}, {"frf", frf_json(frf)}};
+  if (fitted) {
+    nlohmann::json input = {{"model", io::to_json(fitted->model)}, {"frf", frf_json(frf)}};
     input["frequency_range"] = {frf.frequencies(0), frf.frequencies(frf.frequencies.size() - 1)};
     io::write_json(work.path() / "bode.json", input);
     jobs.push_back({"bode", work.path() / "bode.json", dir / "bode.png", title});
@@ -339,15 +339,22 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
                 "--output-columns, or write .csv or .json");
   }
   std::filesystem::path package;
+  // --model is read before any work: a bad model file used to be found only after the FRF
+  // was computed, printed and written with -o, which then stayed behind.
+  std::optional<io::FittedModel> fitted;
   if (!f.plot.empty()) {
     package = require_plotting();
+    if (!f.model.empty()) fitted = io::read_fitted_model(f.model);
     std::vector<std::string> figures{"frf.png"};
     if (!f.model.empty()) figures.emplace_back("bode.png");
     prepare_plot_directory(f.plot, figures, f.force);
   }
+  // The data checks' warnings (e.g. about a constant input's mean; defer_warnings is set in
+  // add_frf_command) come after the refusals below: a refused record gets its one line only.
   const SampledData data = f.data.load(app, false);
   require_spectral_column(data.input(), f.data.file, f.data.input_column, false);
   require_spectral_column(data.output(), f.data.file, f.data.output_column, true);
+  f.data.print_warnings();
 
   Frf frf;
   if (periodic) {
@@ -386,7 +393,7 @@ void run_frf(const FrfFlags& f, const CLI::App& app) {
     for (const ResonancePeak& p : peaks) print_peak(std::cout, p, "G");
     if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
   }
-  if (!f.plot.empty()) draw_frf(f, package, frf, table);
+  if (!f.plot.empty()) draw_frf(f, package, frf, table, fitted);
 }
 
 Command add_frf_command(CLI::App& parent) {
@@ -410,6 +417,7 @@ Command add_frf_command(CLI::App& parent) {
       "Exit status: 0 ran, 2 bad usage or input, 1 other error.");
   f.data.add_to(*app, "data", false);
   f.data.add_mimo_columns(*app);
+  f.data.defer_warnings = true;
   app->add_option("--period", f.period,
                   "Samples per period of a periodic excitation: average the FRF over periods")
       ->group("Periodic");

@@ -156,6 +156,10 @@ InputSignal read_input_column(const SimulateFlags& f, CLI::App& app,
   return in;
 }
 
+// The most samples a generated input may have: 10^7 take about 1.2 GB and 20 s; -n 1e8 ran
+// out of memory after minutes (issue 16), so larger records are refused before any work.
+constexpr int kMaxGeneratedSamples = 10'000'000;
+
 // The excitation the flags or the spec file describe, validated.
 io::ExcitationSpec excitation_spec(const SimulateFlags& f, CLI::App& app,
                                    const std::optional<DiscreteTransferFunction>& controller) {
@@ -182,6 +186,12 @@ io::ExcitationSpec excitation_spec(const SimulateFlags& f, CLI::App& app,
     }
   }
   spec.validate();
+  if (spec.samples > kMaxGeneratedSamples) {
+    usage_error(internal::concat(
+        f.excitation_spec.empty() ? "--samples is " : f.excitation_spec + ": samples is ",
+        spec.samples, "; ctid simulate generates at most ", kMaxGeneratedSamples,
+        " samples (about 120 bytes each while simulating and writing)"));
+  }
   return spec;
 }
 
@@ -224,7 +234,7 @@ void add_noise_flags(CLI::App& app, NoiseFlags& f) {
       ->group("Output noise");
   f.std_option = app.add_option("--noise-std", f.standard_deviation,
                                 "Standard deviation of the white noise e driving H(q)")
-                     ->check(CLI::PositiveNumber)
+                     ->check(positive_number())
                      ->group("Output noise");
   f.snr_option = app.add_option("--snr", f.snr,
                                 "Signal-to-noise ratio in dB, 10 log10(var y0 / var v), y0 the "
@@ -486,12 +496,12 @@ Command add_simulate_command(CLI::App& parent) {
                         ->group("Generated input");
   app->add_option("--samples,-n", f.spec.samples, "Number of samples N")
       ->capture_default_str()
-      ->check(CLI::Range(2, 100000000))
+      ->check(CLI::Range(2, kMaxGeneratedSamples))
       ->group("Generated input");
   app->add_option("--sample-time,-T", f.sample_time,
                   "Sample time h in seconds (default: from the input's time column or the "
                   "controller)")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->group("Generated input");
   app->add_option("--seed", f.spec.seed,
                   "Seed of the white noise or multisine phases; for prbs it picks the start "
@@ -542,7 +552,7 @@ Command add_simulate_command(CLI::App& parent) {
   auto* nsr = app->add_option("--nsr", f.nsr,
                               "delayed_feedback_loop: white noise scaled to the noise-to-signal "
                               "ratio mean|v| / mean|y0| (De Iuliis et al.), e.g. 0.05")
-                  ->check(CLI::PositiveNumber)
+                  ->check(positive_number())
                   ->group("Output noise");
   nsr->excludes(f.noise.std_option);
   nsr->excludes(f.noise.snr_option);

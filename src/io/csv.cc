@@ -105,8 +105,8 @@ const Eigen::VectorXd& CsvTable::column(std::string_view name) const {
   for (size_t i = 0; i < names.size(); ++i) {
     if (names[i] == name) return columns[i];
   }
-  throw InvalidArgument(
-      internal::concat(source, ": no column '", name, "' (columns: ", join_names(names), ")"));
+  throw InvalidArgument(internal::concat(source, ": no column '", echo(name),
+                                         "' (columns: ", join_names(names), ")"));
 }
 
 void CsvTable::add_column(std::string name, Eigen::VectorXd values) {
@@ -265,8 +265,8 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
             join_names(table.names), ") but found ", fields.size());
     for (size_t i = 0; i < fields.size(); ++i) {
       const auto where = [&] {
-        return internal::concat(source, ":", line_number, ": column '", table.names[i], "' (field ",
-                                i + 1, "): ");
+        return internal::concat(source, ":", line_number, ": column '", echo(table.names[i]),
+                                "' (field ", i + 1, "): ");
       };
       if (fields[i].empty()) throw InvalidArgument(where() + "empty field; expected a number");
       const std::optional<double> value = parse_number(fields[i]);

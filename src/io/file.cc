@@ -17,11 +17,26 @@
 namespace ctid::io {
 namespace fs = std::filesystem;
 
+namespace {
+// The most read_text_file takes from a pipe or terminal, whose size is not known up front.
+constexpr size_t kMaxStreamBytes = size_t{1} << 30;
+}  // namespace
+
 std::string read_text_file(const fs::path& path) {
   std::error_code ec;
   const auto status = fs::status(path, ec);
   require(fs::exists(status), path.string(), ": no such file");
   require(!fs::is_directory(status), path.string(), ": is a directory, not a file");
+  // A device other than a terminal (/dev/zero, /dev/urandom, a disk) never ends or is not a
+  // document: reading it whole grew the string until memory ran out. Pipes and terminals
+  // (`ctid fit /dev/stdin`) are read as streams, at most kMaxStreamBytes.
+  if (fs::is_character_file(status) || fs::is_block_file(status)) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NOCTTY | O_NONBLOCK);
+    const bool terminal = fd >= 0 && ::isatty(fd) == 1;
+    if (fd >= 0) ::close(fd);
+    require(terminal, path.string(),
+            ": is a device, not a file (give a file, a pipe or a terminal)");
+  }
   std::ifstream in(path, std::ios::binary);
   require(in.good(), path.string(), ": cannot open for reading (", std::strerror(errno), ")");
   // Read in blocks straight into the string (a regular file's size reserved up front):
@@ -32,8 +47,13 @@ std::string read_text_file(const fs::path& path) {
     if (!ec) content.reserve(static_cast<size_t>(size));
   }
   std::array<char, 1 << 16> block;
+  const bool stream = !fs::is_regular_file(status);
   while (in.read(block.data(), block.size()) || in.gcount() > 0) {
     content.append(block.data(), static_cast<size_t>(in.gcount()));
+    require(!stream || content.size() <= kMaxStreamBytes, path.string(), ": more than ",
+            kMaxStreamBytes >> 20,
+            " MiB from a pipe or terminal; ctid reads at most that from a stream (save it to "
+            "a file)");
   }
   if (in.bad()) throw IoError(path.string() + ": read failed");
   return content;

@@ -160,7 +160,14 @@ std::string JsonObject::field_path(std::string_view key) const {
 }
 
 void JsonObject::fail(std::string_view key, std::string_view message) const {
-  throw InvalidArgument(internal::concat(source_, ": ", field_path(key), ": ", message));
+  // A JSON string may hold "\u0000": a NUL byte in the message would end what() there
+  // (the message was cut mid-word), so it is written \x00 as the frame writes other control
+  // bytes.
+  std::string text = internal::concat(source_, ": ", field_path(key), ": ", message);
+  for (size_t at = text.find('\0'); at != std::string::npos; at = text.find('\0', at)) {
+    text.replace(at, 1, "\\x00");
+  }
+  throw InvalidArgument(text);
 }
 
 bool JsonObject::has(std::string_view key) const {

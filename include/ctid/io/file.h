@@ -24,7 +24,9 @@ class IoError : public std::runtime_error {
 enum class Overwrite { no, yes };
 
 /// The whole file as text. Throws InvalidArgument if it does not exist or cannot be opened
-/// (the message names the path and the reason).
+/// (the message names the path and the reason), if it is a device other than a terminal
+/// (/dev/zero would be read until memory ran out), or if a pipe or terminal gives more than
+/// 1 GiB.
 std::string read_text_file(const std::filesystem::path& path);
 
 /// Writes `content` to `path` through a temporary file in the same directory. With
