@@ -979,7 +979,7 @@ Command add_batch_command(CLI::App& parent) {
       ->check(CLI::ExistingFile);
   app->add_option("--out,-o", f.out, "Folder for the results (created if missing)")->required();
   app->add_option("--jobs,-j", f.jobs, "Records fitted at once (0: every core)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   app->add_flag("--retry-failed", f.retry_failed, "Run again the records that failed before");
   app->add_flag("--force", f.force, "Run every record again and replace its result");

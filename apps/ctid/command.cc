@@ -174,16 +174,32 @@ CLI::Validator seed_validator() {
       "SEED");
 }
 
-CLI::Validator positive_number() {
+namespace {
+
+// A CLI11 check that the whole text is a finite number `accept` takes; otherwise "'TEXT' is not
+// WHAT".
+CLI::Validator number_check(const char* name, bool (*accept)(double), const char* what) {
   return CLI::Validator(
-      [](std::string& text) -> std::string {
+      [accept, what](std::string& text) -> std::string {
         const std::optional<double> value = parse_number<double>(text);
-        if (!value || !std::isfinite(*value) || *value <= 0.0) {
-          return "'" + text + "' is not a positive number";
+        if (!value || !std::isfinite(*value) || !accept(*value)) {
+          return "'" + text + "' is not " + what;
         }
         return "";
       },
-      "POSITIVE");
+      name);
+}
+
+}  // namespace
+
+CLI::Validator positive_number() {
+  return number_check(
+      "POSITIVE", [](double v) { return v > 0.0; }, "a positive number");
+}
+
+CLI::Validator non_negative_number() {
+  return number_check(
+      "NONNEGATIVE", [](double v) { return v >= 0.0; }, "a number >= 0");
 }
 
 }  // namespace ctid::cli

@@ -94,6 +94,9 @@ CLI::Validator seed_validator();
 /// A CLI11 check for flags that take a positive finite number: "'-1' is not a positive
 /// number" (CLI::PositiveNumber printed its range, up to DBL_MAX written out in 309 digits).
 CLI::Validator positive_number();
+/// The same for flags that take a number >= 0: "'-1' is not a number >= 0"
+/// (CLI::NonNegativeNumber printed the same range).
+CLI::Validator non_negative_number();
 
 }  // namespace ctid::cli
 

@@ -556,13 +556,13 @@ Command add_fit_command(CLI::App& parent) {
       ->check(CLI::IsMember({"unfactored", "additive"}))
       ->group("Structure");
   app->add_option("--poles", f.poles, "Unfactored: poles n (deg A), besides integrators")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->group("Structure");
   app->add_option("--zeros", f.zeros, "Unfactored: zeros m (deg B)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->group("Structure");
   app->add_option("--integrators", f.integrators, "Unfactored: poles at the origin l")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->group("Structure");
   app->add_option("--submodel", f.submodels,
                   "Additive: one submodel N,M[,L] (poles, zeros, integrators); repeat (any "
@@ -576,13 +576,13 @@ Command add_fit_command(CLI::App& parent) {
       ->group("Structure");
   app->add_option("--delay", f.delay, "Known input delay in samples")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->group("Structure");
   app->add_option("--input-delays", f.input_delays,
                   "Several inputs: the known delay of each input in samples, D1,D2,... (one per "
                   "--input-columns entry; fractions allowed)")
       ->delimiter(',')
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->group("Structure");
   app->add_flag("--rank-one", f.rank_one,
                 "Several inputs and outputs: restrict every mode's residues to one shape times "

@@ -104,6 +104,9 @@ std::filesystem::path require_python_package(const std::string& flag) {
 
 void plot(const std::filesystem::path& package_dir, const std::vector<PlotJob>& jobs) {
   if (jobs.empty()) return;
+  for (const PlotJob& job : jobs) {
+    if (job.output.has_parent_path()) create_output_directory(job.output.parent_path(), "--plot");
+  }
   const TemporaryDirectory status_dir;
   std::string command;
   for (std::size_t i = 0; i < jobs.size(); ++i) {
@@ -191,6 +194,21 @@ void prepare_plot_directory(const std::filesystem::path& dir,
       }
     }
   }
+  // Nothing is created yet (a refused input must leave no folder behind); the nearest folder
+  // that exists must be one the folder can be made in.
+  std::filesystem::path existing = std::filesystem::absolute(dir, error);
+  while (!existing.empty() && !std::filesystem::exists(existing, error)) {
+    if (existing == existing.parent_path()) break;
+    existing = existing.parent_path();
+  }
+  if (!std::filesystem::is_directory(existing, error) || ::access(existing.c_str(), W_OK) != 0) {
+    throw InvalidArgument(flag + " " + dir.string() + ": cannot create the directory (" +
+                          existing.string() + " is not a writable folder)");
+  }
+}
+
+void create_output_directory(const std::filesystem::path& dir, const std::string& flag) {
+  std::error_code error;
   std::filesystem::create_directories(dir, error);
   if (error) {
     throw InvalidArgument(flag + " " + dir.string() + ": cannot create the directory (" +

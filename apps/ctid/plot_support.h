@@ -73,11 +73,16 @@ class TemporaryDirectory {
   std::filesystem::path path_;
 };
 
-/// Checks an output folder (`flag` DIR, e.g. --plot) before any work: creates DIR if missing,
-/// and refuses (InvalidArgument) to replace any of `figures` (file names) there unless `force`.
+/// Checks an output folder (`flag` DIR, e.g. --plot) before any work: refuses (InvalidArgument)
+/// a DIR that is not a folder or cannot be made, and to replace any of `figures` (file names)
+/// there unless `force`. Creates nothing: plot() creates the figures' folders, and a command
+/// that writes other files there calls create_output_directory first.
 void prepare_plot_directory(const std::filesystem::path& dir,
                             const std::vector<std::string>& figures, bool force,
                             const std::string& flag = "--plot");
+
+/// Creates DIR (and its parents) if missing; InvalidArgument naming `flag` if it cannot.
+void create_output_directory(const std::filesystem::path& dir, const std::string& flag);
 
 /// The figure files of a model judged on data: bode.png, validation.png, residuals.png and,
 /// with `modes`, modes.png.

@@ -77,6 +77,19 @@ StudyOptions options_from_flags(const StudyFlags& f) {
   for (const std::string& name : f.estimators) {
     options.estimators.push_back(estimator_from_string(name));
   }
+  // The limits in the flags' words before the options' own check (paper_study.h).
+  if (options.max_samples > kMaxStudySamples) {
+    usage_error("--max-samples " + std::to_string(options.max_samples) +
+                " is more than a study's runs may have (" + std::to_string(kMaxStudySamples) +
+                " samples)");
+  }
+  const long long cases = static_cast<long long>(options.runs) * options.sizes;
+  if (cases > kMaxStudyCases) {
+    usage_error("--runs " + std::to_string(options.runs) + " x --sizes " +
+                std::to_string(options.sizes) + " = " + std::to_string(cases) +
+                " cases; a study runs at most " + std::to_string(kMaxStudyCases) +
+                " (split it over --seed values or sample ranges)");
+  }
   options.validate();
   return options;
 }
@@ -189,6 +202,7 @@ void run_study_command(const StudyFlags& f) {
       usage_error("--size-index and --run-index replay one run: give both");
     }
     const std::vector<StudyRecord> records = run_study_case(options, f.size_index, f.run_index);
+    create_output_directory(folder, "--output");
     write_table(folder / "runs.csv",
                 [&](std::ostream& out) { write_records_csv(records, setup.parameter_names, out); });
     if (!f.quiet) write_records_csv(records, setup.parameter_names, std::cout);
@@ -208,6 +222,7 @@ void run_study_command(const StudyFlags& f) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
+  create_output_directory(folder, "--output");
   write_table(folder / "runs.csv", [&](std::ostream& out) { write_records_csv(result, out); });
   write_table(folder / "mse.csv", [&](std::ostream& out) { write_mse_csv(result, out); });
   write_table(folder / "trends.csv", [&](std::ostream& out) { write_trends_csv(result, out); });
@@ -264,12 +279,12 @@ Command add_study_command(CLI::App& parent) {
       ->check(CLI::Range(1, 1000000000));
   app->add_option("--threads,-j", f.threads, "Worker threads (0: every core)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   app->add_option("--seed", f.seed, "Study seed")->check(seed_validator())->capture_default_str();
   app->add_option("--size-index", f.size_index, "Replay one run: the sample-size index j")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   app->add_option("--run-index", f.run_index, "Replay one run: the run index r")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   app->add_option("--max-iterations", f.max_iterations, "Estimator iterations (paper: 100)")
       ->check(CLI::Range(1, 1000000000));
   app->add_option("--tolerance", f.tolerance,

@@ -261,13 +261,13 @@ Command add_track_command(CLI::App& parent) {
       ->check(CLI::IsMember({"unfactored", "additive"}))
       ->group("Structure");
   app->add_option("--poles", f.poles, "Unfactored: poles n (deg A), besides integrators")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->group("Structure");
   app->add_option("--zeros", f.zeros, "Unfactored: zeros m (deg B)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->group("Structure");
   app->add_option("--integrators", f.integrators, "Unfactored: poles at the origin l")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->group("Structure");
   app->add_option("--submodel", f.submodels,
                   "Additive: one submodel N,M[,L] (poles, zeros, integrators); repeat")
@@ -278,7 +278,7 @@ Command add_track_command(CLI::App& parent) {
       ->group("Structure");
   app->add_option("--delay", f.delay, "Known input delay in samples")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->group("Structure");
   app->add_option("--controller,-c", f.controller,
                   "Discrete controller JSON (discrete_transfer_function in q): closed loop")

@@ -28,8 +28,15 @@ ModelStructure ModelStructure::additive(std::vector<SubmodelOrder> orders) {
 
 ModelStructure ModelStructure::modes(int count) {
   require(count >= 1, "ModelStructure::modes: count is ", count, "; it must be >= 1");
+  require(count <= kMaxSubmodels, "ModelStructure::modes: count is ", count,
+          "; a structure has at most ", kMaxSubmodels, " submodels");
   return {ModelKind::additive,
           std::vector<SubmodelOrder>(static_cast<std::size_t>(count), SubmodelOrder{2, 0, 0})};
+}
+
+void ModelStructure::check_size(const std::string& path) const {
+  require(orders.size() <= static_cast<std::size_t>(kMaxSubmodels), path, ".orders has ",
+          orders.size(), " entries; a structure has at most ", kMaxSubmodels, " submodels");
 }
 
 void ModelStructure::check_relations(const std::string& path) const {
@@ -167,6 +174,25 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   require(!options.relocate_modes || records.size() == 1,
           "IdentificationOptions.relocate_modes is true but ", records.size(),
           " records are given; mode relocation works on one record");
+  // What needs the records, checked before any work: the structure's parameters and the
+  // scanned delays against the data (the estimator's own, finer check comes later).
+  int shortest = records.front().size();
+  long long total_samples = 0;
+  for (const SampledData& record : records) {
+    shortest = std::min(shortest, record.size());
+    total_samples += record.size();
+  }
+  long long parameters = 0;
+  for (const SubmodelOrder& order : structure.orders) {
+    parameters += static_cast<long long>(order.n) + order.m + 1;
+  }
+  require(total_samples >= 3 * parameters, "identify: ", total_samples,
+          " samples are too few for the structure's ", parameters,
+          " parameters; at least 3 per parameter are needed (a lower order or fewer modes)");
+  require(!options.delay_scan || options.delay_scan->max <= shortest / 2,
+          "IdentificationOptions.delay_scan.max is ",
+          options.delay_scan ? options.delay_scan->max : 0, " samples; the shortest record has ",
+          shortest, " samples and a scanned delay may be at most half of it (", shortest / 2, ")");
   const bool closed_loop = options.controller.has_value();
   const RefinedIvEstimator estimator = choose_estimator(structure, closed_loop);
   const std::vector<SubmodelOrder>& orders = structure.orders;

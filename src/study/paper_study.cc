@@ -118,6 +118,12 @@ StudyOptions StudyOptions::paper(StudyKind kind) {
 void StudyOptions::check_relations(const std::string& path) const {
   require(max_samples >= min_samples, path, ".max_samples is ", max_samples,
           "; it must be >= min_samples (", min_samples, ")");
+  require(max_samples <= kMaxStudySamples, path, ".max_samples is ", max_samples,
+          "; a study's runs have at most ", kMaxStudySamples, " samples");
+  const long long cases = static_cast<long long>(runs) * sizes;
+  require(cases <= kMaxStudyCases, path, ".runs x ", path, ".sizes is ", runs, " x ", sizes, " = ",
+          cases, " cases; a study runs at most ", kMaxStudyCases,
+          " (split it over seeds or sample ranges)");
   for (std::size_t i = 0; i < estimators.size(); ++i) {
     const StudyEstimator e = estimators[i];
     if (kind == StudyKind::open_loop) {

@@ -432,23 +432,15 @@ std::vector<Case> catalogue() {
   add({.name = "FitTwentySixMillionPoles",
        .files = {d},
        .args = fit({"d.csv", "--poles", "26000000", "--zeros", "0"}),
-       .message = {"too few for 26000001 parameters"}});
+       .message = {"too few for the structure's 26000001 parameters"}});
   add({.name = "FitThirteenMillionModes",
        .files = {d},
        .args = fit({"d.csv", "--modes", "13000000"}),
-       .message = {"too few"},
-       .known_failure = "ctid fit --modes 13000000 on 300 samples works 34 s (Release) before "
-                        "it says the record is too short; the sample count should be checked "
-                        "before the structure is built (apps/ctid/fit_command.cc or "
-                        "src/refined_iv, both edited elsewhere)"});
+       .message = {"count is 13000000; a structure has at most 1000 submodels"}});
   add({.name = "FitDelayScanBeyondTheRecord",
        .files = {d},
        .args = fit1({"--delay-scan", "0:100000", "-q"}),
-       .message = {"--delay-scan"},
-       .known_failure = "ctid fit --delay-scan 0:100000 on 300 samples runs all 100001 fits and "
-                        "prints them (exit 0) instead of refusing delays beyond the record; "
-                        "the check belongs in apps/ctid/fit_command.cc or the library's "
-                        "delay scan, both being edited elsewhere"});
+       .message = {"delay_scan.max is 100000 samples", "at most half of it (150)"}});
   add({.name = "FitDelayScanReversed",
        .files = {d},
        .args = fit1({"--delay-scan", "5:2"}),
@@ -533,11 +525,7 @@ std::vector<Case> catalogue() {
   add({.name = "FitNegativePoles",
        .files = {d},
        .args = fit({"d.csv", "--poles", "-1", "--zeros", "0"}),
-       .message = {"--poles", "'-1'"},
-       .known_failure = "fit --poles -1 is refused with CLI::NonNegativeNumber's 'Value -1 not in "
-                        "range 0.000000 to 1797693...' (DBL_MAX in 309 digits); "
-                        "apps/ctid/fit_command.cc, edited elsewhere, can use the positive_number() "
-                        "style of check of command.h"});
+       .message = {"--poles", "'-1'"}});
   add({.name = "FitTypoedFlag",
        .files = {d},
        .args = fit({"d.csv", "--poels", "1", "--zeros", "0"}),
@@ -677,10 +665,7 @@ std::vector<Case> catalogue() {
   add({.name = "FitPlotWithBadData",
        .files = {{"d.csv", "t,u,y\n0,1,x\n"}},
        .args = fit1({"--plot", "figures"}),
-       .message = {"malformed number 'x'"},
-       .known_failure = "prepare_plot_directory (apps/ctid/plot_support.cc, edited elsewhere) "
-                        "creates the --plot folder before the inputs are read, so a refused "
-                        "input leaves an empty folder behind"});
+       .message = {"malformed number 'x'"}});
 
   // ---- ctid validate -----------------------------------------------------------------
   add({.name = "ValidateReport",
@@ -913,18 +898,11 @@ std::vector<Case> catalogue() {
        .message = {"--runs"}});
   add({.name = "StudyBillionRunsAndSizes",
        .args = {"study", "open-loop", "--runs", "1000000000", "--sizes", "1000000000", "-o", "st"},
-       .message = {"--runs"},
-       .known_failure = "ctid study --runs 1000000000 --sizes 1000000000 ends with exit 1, "
-                        "'internal error: cannot create std::vector larger than max_size()', "
-                        "instead of refusing the size up front; apps/ctid/study_command.cc is "
-                        "being edited elsewhere"});
+       .message = {"--runs 1000000000 x --sizes 1000000000", "at most 10000000"}});
   add({.name = "StudyBillionSamples",
        .args = {"study", "open-loop", "--runs", "1", "--sizes", "1", "--min-samples", "1000000000",
                 "--max-samples", "1000000000", "-o", "st"},
-       .message = {"--max-samples"},
-       .known_failure = "ctid study with --min-samples = --max-samples = 1e9 runs out of time "
-                        "or memory instead of refusing the size up front; "
-                        "apps/ctid/study_command.cc is being edited elsewhere"});
+       .message = {"--max-samples 1000000000", "10000000 samples"}});
   add({.name = "StudyUnknownKind",
        .args = {"study", "sideways", "-o", "st"},
        .message = {"sideways not in {open-loop,closed-loop}"}});

@@ -40,6 +40,9 @@ constexpr std::span<const Enumerator<ModelKind>> enumerators(ModelKind) {
   return model_kind_enumerators;
 }
 
+/// The most submodels (modes) a structure may have.
+inline constexpr int kMaxSubmodels = 1000;
+
 /// The model to estimate: its kind and the orders {n, m, l} of its one (unfactored) or K
 /// (additive, in any order) submodels.
 struct ModelStructure {
@@ -66,9 +69,15 @@ struct ModelStructure {
   }
   /// Unfactored: exactly one order; additive: at least one.
   void check_relations(const std::string& path) const;
+  /// At most kMaxSubmodels orders (checked first: a huge list would make the per-order checks
+  /// themselves the unbounded work).
+  void check_size(const std::string& path = std::string(type_name)) const;
   /// Throws InvalidArgument naming the bad field (the orders themselves are checked by the
   /// estimator, which knows the data).
-  void validate() const { validate_fields(*this); }
+  void validate() const {
+    check_size();
+    validate_fields(*this);
+  }
 };
 
 /// An inclusive range of whole-sample input delays to scan.

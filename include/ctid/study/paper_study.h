@@ -61,14 +61,19 @@ constexpr std::span<const Enumerator<StudyEstimator>> enumerators(StudyEstimator
 std::string to_string(StudyKind kind);
 std::string to_string(StudyEstimator estimator);
 
+/// The largest study: runs x sizes cases, and samples per run (a run's record, its simulation
+/// and its estimators' regressors are held at once).
+inline constexpr long long kMaxStudyCases = 10'000'000;
+inline constexpr int kMaxStudySamples = 10'000'000;
+
 struct StudyOptions {
   StudyKind kind = StudyKind::open_loop;
-  /// Monte Carlo runs per sample size (paper: 300). >= 1.
+  /// Monte Carlo runs per sample size (paper: 300). >= 1; runs x sizes <= kMaxStudyCases.
   int runs = 300;
   /// Number of log-spaced sample sizes (paper: 30 open loop, 50 closed loop). >= 1.
   int sizes = 30;
-  /// Smallest and largest N (paper: 2000 and 100000; 500 and 123036). 1 <= min <= max, and
-  /// min large enough for the parameter count (>= 50).
+  /// Smallest and largest N (paper: 2000 and 100000; 500 and 123036). 1 <= min <= max <=
+  /// kMaxStudySamples, and min large enough for the parameter count (>= 50).
   int min_samples = 2000;
   int max_samples = 100000;
   std::uint64_t seed = 1;
