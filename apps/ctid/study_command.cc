@@ -14,7 +14,6 @@
 #include <iostream>
 #include <limits>
 #include <memory>
-#include <optional>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -182,15 +181,7 @@ void run_study_command(const StudyFlags& f) {
   // silently.
   std::filesystem::path package;
   if (draw) package = require_plotting();
-  if (dask) {
-    const std::optional<std::filesystem::path> found = find_python_package();
-    if (!found) {
-      throw ComputationError(
-          "--scheduler needs the ctid Python package (build with -DCTID_BUILD_PYTHON=ON, or set "
-          "CTID_PYTHONPATH to the folder holding ctid/)");
-    }
-    package = *found;
-  }
+  if (dask) package = require_python_package("--scheduler");
   std::vector<std::string> files{"runs.csv"};
   if (!replay) files.insert(files.end(), {"mse.csv", "trends.csv", "summary.json"});
   if (draw) files.emplace_back("mse.png");
