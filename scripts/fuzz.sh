@@ -8,7 +8,8 @@
 #                                          to build-fuzz/crashes/NAME; prints executions and coverage
 # Every command builds first. Exits non-zero if a harness crashed (or a build failed).
 # Environment: CTID_JOBS (harnesses run at once, default nproc), CTID_FUZZ_MAX_LEN (bytes,
-# default 1048576).
+# default 1048576), CTID_FUZZ_CPU=1 (run: SECONDS are the harness's CPU time, not wall time, so
+# a run on a loaded machine at low priority still fuzzes for SECONDS).
 set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -65,11 +66,29 @@ dictionary() {
 run_one() {
   local name=$1 seconds=$2
   mkdir -p "$out/corpus/$name" "$out/crashes/$name"
-  local status=0
-  "$out/fuzz_$name" -max_total_time="$seconds" -max_len="$max_len" -rss_limit_mb=4096 \
-    -timeout=60 -print_final_stats=1 $(dictionary "$name") \
+  local status=0 wall=$seconds interrupted=0
+  [[ ${CTID_FUZZ_CPU:-0} == 1 ]] && wall=0 # no wall limit: the watchdog below stops it
+  "$out/fuzz_$name" -max_total_time="$wall" -max_len="$max_len" -rss_limit_mb=4096 \
+    -timeout=60 -print_final_stats=1 -interrupted_exitcode=72 $(dictionary "$name") \
     -artifact_prefix="$out/crashes/$name/" "$out/corpus/$name" "fuzz/corpus/$name" \
-    >"$out/logs/run_$name.log" 2>&1 || status=$?
+    >"$out/logs/run_$name.log" 2>&1 &
+  local pid=$!
+  if [[ ${CTID_FUZZ_CPU:-0} == 1 ]]; then
+    # utime + stime (fields 14 and 15 of /proc/PID/stat, in clock ticks) against the budget;
+    # SIGINT makes libFuzzer print its final statistics and exit.
+    local ticks budget
+    budget=$((seconds * $(getconf CLK_TCK)))
+    while kill -0 "$pid" 2>/dev/null; do
+      ticks=$(awk '{print $14 + $15}' "/proc/$pid/stat" 2>/dev/null || echo 0)
+      if ((ticks >= budget)); then
+        kill -INT "$pid" 2>/dev/null && interrupted=1
+        break
+      fi
+      sleep 5
+    done
+  fi
+  wait "$pid" || status=$?
+  ((interrupted && status == 72)) && status=0 # 72: libFuzzer stopped by our SIGINT
   local execs cov
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$out/logs/run_$name.log" | grep -o '[0-9]*$' || true)
   cov=$(grep -o 'cov: [0-9]*' "$out/logs/run_$name.log" | tail -1 | grep -o '[0-9]*' || true)
@@ -79,7 +98,7 @@ run_one() {
     grep -m3 -E 'ERROR|SUMMARY|runtime error|deadly signal' "$out/logs/run_$name.log" >&2 || true
     return 1
   fi
-  echo "run $name: ${seconds} s, ${execs:-?} executions, coverage ${cov:-?} edges, corpus $(ls "$out/corpus/$name" | wc -l) inputs"
+  echo "run $name: ${seconds} s$([[ ${CTID_FUZZ_CPU:-0} == 1 ]] && echo ' CPU'), ${execs:-?} executions, coverage ${cov:-?} edges, corpus $(ls "$out/corpus/$name" | wc -l) inputs"
 }
 
 # Runs "$@" for every harness name in $names, $jobs at a time; fails if any failed.
