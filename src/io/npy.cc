@@ -233,7 +233,19 @@ double element(const unsigned char* p, const Dtype& dtype) {
 
 }  // namespace
 
-NpyArray parse_npy(std::string_view bytes, const std::string& source) {
+namespace {
+
+// What the preamble and header say, checked against the number of bytes that follow.
+struct Layout {
+  std::string descr;
+  int dimensions = 2;
+  Dtype dtype;
+  std::uint64_t rows = 0;
+  std::uint64_t columns = 0;
+  const unsigned char* data = nullptr;  // the first element
+};
+
+Layout layout_of(std::string_view bytes, const std::string& source) {
   constexpr std::string_view kMagic = "\x93NUMPY";
   require(bytes.substr(0, kMagic.size()) == kMagic, source,
           ": not a .npy file (it does not start with the magic string \\x93NUMPY)");
@@ -253,7 +265,8 @@ NpyArray parse_npy(std::string_view bytes, const std::string& source) {
           ": truncated .npy file (the header is ", header_length, " bytes but only ",
           bytes.size() - header_start, " follow the preamble)");
   const Header header = parse_header(bytes.substr(header_start, header_length), source);
-  const Dtype dtype = parse_dtype(header.descr, source);
+  Layout layout;
+  layout.dtype = parse_dtype(header.descr, source);
   require(!header.fortran_order || header.shape.size() < 2, source,
           ": the array is in Fortran order (column-major); ctid reads C order: save "
           "np.ascontiguousarray(a)");
@@ -270,45 +283,81 @@ NpyArray parse_npy(std::string_view bytes, const std::string& source) {
   require(rows < (std::uint64_t{1} << 40) && columns < (std::uint64_t{1} << 20) &&
               rows * columns < (std::uint64_t{1} << 40),
           source, ": the array's shape ", rows, " x ", columns, " is too large");
-  const std::uint64_t count = rows * columns;
   const size_t data_start = header_start + header_length;
-  const std::uint64_t expected = count * dtype.size;
+  const std::uint64_t expected = rows * columns * layout.dtype.size;
   const std::uint64_t present = bytes.size() - data_start;
   require(present >= expected, source, ": truncated .npy file (the shape ", rows, " x ", columns,
           " of ", header.descr, " needs ", expected, " data bytes but only ", present,
           " follow the header)");
   require(present == expected, source, ": ", present - expected,
           " bytes follow the array's data; the file is not one .npy array");
+  layout.descr = header.descr;
+  layout.dimensions = static_cast<int>(header.shape.size());
+  layout.rows = rows;
+  layout.columns = columns;
+  layout.data = data + data_start;
+  return layout;
+}
 
+// Calls set(row, column, value) for every element, in file (row-major) order, then checks
+// that every value is finite (naming the first one that is not).
+template <class Set>
+void decode(const Layout& layout, const std::string& source, Set&& set) {
+  const auto rows = static_cast<Eigen::Index>(layout.rows);
+  const auto columns = static_cast<Eigen::Index>(layout.columns);
+  const unsigned char* p = layout.data;
+  const bool native = layout.dtype.kind == Kind::floating && layout.dtype.size == 8 &&
+                      std::endian::native == std::endian::little;
+  bool finite = true;
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    for (Eigen::Index c = 0; c < columns; ++c, p += layout.dtype.size) {
+      double value = 0.0;
+      if (native) {
+        std::memcpy(&value, p, sizeof value);  // np.save of float64 on a little-endian host
+      } else {
+        value = element(p, layout.dtype);
+      }
+      finite = finite && std::isfinite(value);
+      set(r, c, value);
+    }
+  }
+  if (finite) return;
+  p = layout.data;
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    for (Eigen::Index c = 0; c < columns; ++c, p += layout.dtype.size) {
+      const double value = element(p, layout.dtype);
+      require(std::isfinite(value), source, ": row ", r, " (0-based), column '", c, "': value ",
+              value, " is not finite; every value must be a finite number");
+    }
+  }
+}
+
+}  // namespace
+
+NpyArray parse_npy(std::string_view bytes, const std::string& source) {
+  const Layout layout = layout_of(bytes, source);
   NpyArray array;
-  array.dtype = header.descr;
-  array.dimensions = static_cast<int>(header.shape.size());
-  array.values.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(columns));
-  const unsigned char* p = data + data_start;
-  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  if (dtype.kind == Kind::floating && dtype.size == 8 &&
-      std::endian::native == std::endian::little) {
-    // The common case (np.save of float64 on a little-endian host) is one copy.
-    RowMajor copy(array.values.rows(), array.values.cols());
-    std::memcpy(copy.data(), p, static_cast<size_t>(expected));
-    array.values = copy;
-  } else {
-    for (Eigen::Index r = 0; r < array.values.rows(); ++r) {
-      for (Eigen::Index c = 0; c < array.values.cols(); ++c, p += dtype.size) {
-        array.values(r, c) = element(p, dtype);
-      }
-    }
-  }
-  if (!array.values.allFinite()) {
-    for (Eigen::Index r = 0; r < array.values.rows(); ++r) {
-      for (Eigen::Index c = 0; c < array.values.cols(); ++c) {
-        require(std::isfinite(array.values(r, c)), source, ": row ", r, " (0-based), column '", c,
-                "': value ", array.values(r, c),
-                " is not finite; every value must be a finite number");
-      }
-    }
-  }
+  array.dtype = layout.descr;
+  array.dimensions = layout.dimensions;
+  array.values.resize(static_cast<Eigen::Index>(layout.rows),
+                      static_cast<Eigen::Index>(layout.columns));
+  decode(layout, source,
+         [&](Eigen::Index r, Eigen::Index c, double value) { array.values(r, c) = value; });
   return array;
+}
+
+CsvTable parse_npy_table(std::string_view bytes, const std::string& source) {
+  const Layout layout = layout_of(bytes, source);
+  CsvTable table;
+  table.source = source;
+  for (std::uint64_t c = 0; c < layout.columns; ++c) {
+    table.names.push_back(std::to_string(c));
+    table.columns.emplace_back(static_cast<Eigen::Index>(layout.rows));
+  }
+  decode(layout, source, [&](Eigen::Index r, Eigen::Index c, double value) {
+    table.columns[static_cast<size_t>(c)](r) = value;
+  });
+  return table;
 }
 
 NpyArray read_npy(const std::filesystem::path& path) {
@@ -332,7 +381,7 @@ bool is_npy_path(const std::filesystem::path& path) {
 }
 
 CsvTable read_table(const std::filesystem::path& path) {
-  if (is_npy_path(path)) return npy_table(read_npy(path), path.string());
+  if (is_npy_path(path)) return parse_npy_table(read_text_file(path), path.string());
   return read_csv(path);
 }
 

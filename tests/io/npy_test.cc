@@ -183,6 +183,28 @@ TEST(Npy, NonFiniteValueNamesRowAndColumn) {
             "finite number");
 }
 
+TEST(Npy, DirectTableEqualsTheArraysTableAndRefusesAlike) {
+  for (const auto& [descr, bytes] :
+       {std::pair{std::string("<f8"), raw(std::vector<double>{0.0, 1.5, -2.0, 0.05, 2.5, 7.0})},
+        std::pair{std::string("<i2"), raw(std::vector<std::int16_t>{1, -2, 3, -4, 5, -6})}}) {
+    const std::string file = npy_bytes(dict(descr, "(3, 2)"), bytes);
+    const CsvTable direct = parse_npy_table(file, "d.npy");
+    const CsvTable table = npy_table(parse_npy(file, "d.npy"), "d.npy");
+    EXPECT_EQ(direct.names, table.names) << descr;
+    ASSERT_EQ(direct.columns.size(), 2U) << descr;
+    EXPECT_EQ(direct.columns, table.columns) << descr;
+    EXPECT_EQ(direct.source, "d.npy");
+  }
+  const std::vector<double> values = {0.0, 1.0, 0.1, std::numeric_limits<double>::infinity()};
+  const std::string bad = npy_bytes(dict("<f8", "(2, 2)"), raw(values));
+  try {
+    parse_npy_table(bad, "d.npy");
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_EQ(std::string(e.what()), parse_error(bad));
+  }
+}
+
 TEST(Npy, TableColumnsAreNamedByIndexAndFeedTheRecordReaders) {
   testing::TestDirectory dir;
   const std::vector<double> values = {0.0, 1.0, 2.0, 0.5, 3.0, 4.0, 1.0, 5.0, 6.0};

@@ -37,6 +37,9 @@ NpyArray read_npy(const std::filesystem::path& path);
 
 /// The array as a table whose columns are named "0", "1", ... (no declarations).
 CsvTable npy_table(const NpyArray& array, const std::string& source);
+/// parse_npy straight into a table: npy_table(parse_npy(bytes, source), source) without the
+/// intermediate array (a long record is held once, not twice).
+CsvTable parse_npy_table(std::string_view bytes, const std::string& source);
 
 /// Whether `path` names a .npy file (by its extension, in any case).
 bool is_npy_path(const std::filesystem::path& path);
