@@ -1,6 +1,7 @@
 // Sandwich covariance of IV estimates with an AR noise model, and delta-method modal errors.
 #include "ctid/refined_iv/covariance.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -61,6 +62,44 @@ Eigen::MatrixXd adjoint_ar_filter(const Eigen::MatrixXd& x, const Autoregressive
   return g;
 }
 
+namespace {
+
+// sum_s g_s g_s' for g = adjoint_ar_filter(x * diag(1 / scales), ar), without forming g:
+// the backward recursion runs over blocks of kBlock samples (newest first), each block's
+// outer products are added by one product, and the `order` newest values of g below the
+// block carry into the next; memory O(p (kBlock + order)), not O(p N).
+Eigen::MatrixXd adjoint_ar_outer_sum(const Eigen::MatrixXd& x, const Eigen::VectorXd& scales,
+                                     const AutoregressiveModel& ar) {
+  constexpr Eigen::Index kBlock = 1024;
+  const Eigen::Index n = x.rows();
+  const Eigen::Index p = x.cols();
+  const Eigen::Index order = ar.coefficients.size() - 1;
+  const Eigen::VectorXd inverse = scales.cwiseInverse();
+  Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(p, p);
+  Eigen::MatrixXd g(p, kBlock);
+  Eigen::MatrixXd carry = Eigen::MatrixXd::Zero(p, std::max<Eigen::Index>(order, 1));
+  for (Eigen::Index end = n; end > 0;) {
+    const Eigen::Index start = std::max<Eigen::Index>(0, end - kBlock);
+    const Eigen::Index length = end - start;
+    for (Eigen::Index i = length - 1; i >= 0; --i) {
+      g.col(i) = x.row(start + i).transpose().cwiseProduct(inverse);
+      for (Eigen::Index j = 1; j <= order && start + i + j < n; ++j) {
+        if (i + j < length) {
+          g.col(i) -= ar.coefficients(j) * g.col(i + j);
+        } else {
+          g.col(i) -= ar.coefficients(j) * carry.col(i + j - length);
+        }
+      }
+    }
+    sum.noalias() += g.leftCols(length) * g.leftCols(length).transpose();
+    for (Eigen::Index c = 0; c < std::min(order, length); ++c) carry.col(c) = g.col(c);
+    end = start;
+  }
+  return sum;
+}
+
+}  // namespace
+
 Eigen::MatrixXd instrumental_variable_covariance(const Eigen::MatrixXd& psi,
                                                  const Eigen::VectorXd& residual,
                                                  int parameter_count, NoiseAssumption noise,
@@ -70,10 +109,12 @@ Eigen::MatrixXd instrumental_variable_covariance(const Eigen::MatrixXd& psi,
           " samples, psi has ", n);
   require(n > parameter_count, "instrumental_variable_covariance: ", n, " samples are too few for ",
           parameter_count, " parameters");
-  // Scale columns to unit norm so that the inverse is formed on a well-conditioned matrix.
+  // Columns scaled to unit norm so that the inverse is formed on a well-conditioned matrix;
+  // the scaling is applied to the p x p products, so no scaled copy of psi is made (a long
+  // record's psi is the largest thing the estimator holds).
   const Eigen::VectorXd s = internal::column_scales(psi);
-  const Eigen::MatrixXd scaled = psi * s.cwiseInverse().asDiagonal();
-  const Eigen::MatrixXd r = scaled.transpose() * scaled;
+  const Eigen::MatrixXd r =
+      s.cwiseInverse().asDiagonal() * (psi.transpose() * psi) * s.cwiseInverse().asDiagonal();
   const Eigen::MatrixXd r_inv = r.completeOrthogonalDecomposition().pseudoInverse();
   Eigen::MatrixXd middle_inv;
   if (noise == NoiseAssumption::white) {
@@ -83,8 +124,7 @@ Eigen::MatrixXd instrumental_variable_covariance(const Eigen::MatrixXd& psi,
     const AutoregressiveModel ar = fit_autoregressive(residual, max_ar_order);
     const double e2 =
         ar.innovation_variance * static_cast<double>(n) / static_cast<double>(n - parameter_count);
-    const Eigen::MatrixXd g = adjoint_ar_filter(scaled, ar);
-    const Eigen::MatrixXd q = e2 * (g * g.transpose());
+    const Eigen::MatrixXd q = e2 * adjoint_ar_outer_sum(psi, s, ar);
     middle_inv = r_inv * q * r_inv;
   }
   return s.cwiseInverse().asDiagonal() * middle_inv * s.cwiseInverse().asDiagonal();
