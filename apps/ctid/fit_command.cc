@@ -54,6 +54,7 @@ struct FitFlags {
   std::string controller;
   std::string initial;
   std::string start = "auto";
+  int start_screening = RefinedIvOptions{}.start_screening_samples;
   int max_iterations = RefinedIvOptions{}.max_iterations;
   double tolerance = RefinedIvOptions{}.tolerance;
   std::string interpolation = "foh";
@@ -191,6 +192,7 @@ IdentificationOptions identification_options(const FitFlags& f) {
   if (!f.initial.empty() && f.start != "auto") {
     usage_error("give --start or --initial, not both");
   }
+  refined.start_screening_samples = f.start_screening;
   if (f.start == "lssvf") {
     refined.start = StartMethod::lssvf;
   } else if (f.start == "frf") {
@@ -609,6 +611,13 @@ Command add_fit_command(CLI::App& parent) {
   app->add_option("--start", f.start,
                   "Start: auto (LSSVF grid and FRF peaks, best output error), lssvf, frf, or a "
                   "model/result JSON")
+      ->capture_default_str()
+      ->group("Iteration");
+  app->add_option("--start-screening", f.start_screening,
+                  "A record longer than this many samples finds the automatic start on its "
+                  "first max(this, N/32) samples, then fits the whole record; 0: the whole "
+                  "record")
+      ->check(non_negative_number())
       ->capture_default_str()
       ->group("Iteration");
   app->add_option("--initial", f.initial, "Starting model or result JSON (same as --start FILE)")

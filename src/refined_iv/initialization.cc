@@ -140,9 +140,28 @@ double output_error(const AdditiveModel& model, const SampledData& data) {
 
 }  // namespace
 
-TransferFunction initial_transfer_function(const SampledData& data, const SubmodelOrder& order,
+int InitializationOptions::screening_length(int samples) const {
+  if (screening_samples == 0 || samples <= screening_samples) return samples;
+  return std::min(samples, std::max({screening_samples, samples / kScreeningFraction, 100}));
+}
+
+namespace {
+
+// The piece of `record` the candidates are screened on (screening_length); none: the whole.
+std::optional<SampledData> screening_piece(const SampledData& record,
+                                           const InitializationOptions& options) {
+  const int length = options.screening_length(record.size());
+  if (length >= record.size()) return std::nullopt;
+  return record.segment(0, length);
+}
+
+}  // namespace
+
+TransferFunction initial_transfer_function(const SampledData& record, const SubmodelOrder& order,
                                            const InitializationOptions& options) {
   options.validate();
+  const std::optional<SampledData> piece = screening_piece(record, options);
+  const SampledData& data = piece ? *piece : record;
   const double h = data.sample_time();
   const DiscreteTransferFunction* controller = options.controller ? &*options.controller : nullptr;
   if (controller != nullptr) {
@@ -381,11 +400,14 @@ AdditiveModel group_into_submodels(const TransferFunction& g,
   return AdditiveModel::from_parameters(orders, beta, input_delay * h);
 }
 
-AdditiveModel initial_additive_model(const SampledData& data,
+AdditiveModel initial_additive_model(const SampledData& record,
                                      const std::vector<SubmodelOrder>& orders,
                                      const InitializationOptions& options) {
   const SubmodelOrder total = unfactored_order(orders);
-  const TransferFunction g = initial_transfer_function(data, total, options);
+  const TransferFunction g = initial_transfer_function(record, total, options);
+  // The numerators on the same piece the start was screened on.
+  const std::optional<SampledData> piece = screening_piece(record, options);
+  const SampledData& data = piece ? *piece : record;
   if (!options.controller) return group_into_submodels(g, orders, data, options.input_delay);
   // Closed loop: the numerators are fitted to g's own response to u rather than to y, so the
   // grouped model stays the stabilised start g (refitting them to y would bring back the

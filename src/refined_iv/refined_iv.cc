@@ -839,6 +839,7 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     InitializationOptions init;
     init.input_delay = delay_of(longest_index);
     init.method = options.start;
+    init.screening_samples = options.start_screening_samples;
     // Closed loop: only starts the controller stabilises (decision 0011); an open-loop start
     // it does not stabilise would stop the iteration before its first step.
     if (closed_loop) init.controller = *problem.controller;

@@ -107,5 +107,54 @@ TEST(AutomaticStart, ReachesTheExactLightlyDampedModelFromTheDataAlone) {
   }
 }
 
+TEST(AutomaticStart, ScreeningLengthIsTheFirstPartOfALongRecord) {
+  InitializationOptions options;
+  EXPECT_EQ(options.screening_length(10000), 10000);      // not longer: the whole record
+  EXPECT_EQ(options.screening_length(10001), 10000);      // the first screening_samples
+  EXPECT_EQ(options.screening_length(10000000), 312500);  // at least N / 32
+  options.screening_samples = 0;
+  EXPECT_EQ(options.screening_length(10000000), 10000000);  // 0: always the whole record
+  options.screening_samples = 1;
+  EXPECT_EQ(options.screening_length(1000), 100);  // never fewer than 100 samples
+  options.screening_samples = -1;
+  EXPECT_THAT([&] { options.validate(); },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("screening_samples")));
+}
+
+TEST(AutomaticStart, ScreenedOnAPieceTheFitReachesTheWholeRecordsStationaryPoint) {
+  // Two modes and output noise, 24 000 samples: the start screened on the first 4 000 is not
+  // the one found on the whole record, but the fit it starts ends where the whole record's
+  // start leads (the screening chooses the basin; the fit uses every sample).
+  Eigen::VectorXd beta(6);
+  beta << mode(2.0, 0.02, 1.0), mode(7.0, 0.01, 0.2);
+  const AdditiveModel truth =
+      AdditiveModel::from_parameters(std::vector<SubmodelOrder>(2, SubmodelOrder{2, 0, 0}), beta);
+  const int n = 24000;
+  const Eigen::VectorXd u = white_noise(n, 1.0, 21);
+  const SampledData data(kH, u, simulate(truth, u, kH) + white_noise(n, 0.05, 22));
+  const std::vector<SubmodelOrder> orders(2, SubmodelOrder{2, 0, 0});
+  std::vector<Eigen::VectorXd> starts;
+  std::vector<Eigen::VectorXd> fits;
+  for (const int screening : {4000, 0}) {
+    InitializationOptions init;
+    init.screening_samples = screening;
+    starts.push_back(initial_additive_model(data, orders, init).parameters());
+    IdentificationOptions options;
+    options.refined_iv.start_screening_samples = screening;
+    options.refined_iv.compute_covariance = false;
+    const IdentificationResult r = identify(data, ModelStructure::modes(2), options);
+    ASSERT_TRUE(r.estimate.converged()) << screening << ": " << r.estimate.brief_report();
+    Eigen::VectorXd theta = r.estimate.parameters;
+    if (theta(1) < theta(4)) {  // slower mode first, whatever order the start gave
+      theta.head(3).swap(theta.tail(3));
+    }
+    fits.push_back(theta);
+  }
+  EXPECT_GT((starts[0] - starts[1]).norm(), 1e-6 * starts[1].norm());
+  for (Eigen::Index k = 0; k < 6; ++k) {
+    EXPECT_NEAR(fits[0](k), fits[1](k), 1e-8 * std::abs(fits[1](k))) << "parameter " << k;
+  }
+}
+
 }  // namespace
 }  // namespace ctid

@@ -30,6 +30,11 @@ struct InitializationOptions {
   /// SRIVC iterations refining each start, and CLSRIVC iterations in closed loop (0: the
   /// starts as they are).
   int refinement_iterations = 20;
+  /// Records longer than this screen the candidates on a piece of themselves: their first
+  /// max(screening_samples, N / kScreeningFraction) samples, so the start costs about what a
+  /// fit costs however long the record (issue 14). The refined IV fit it starts then runs on
+  /// the whole record. 0: always the whole record.
+  int screening_samples = 10000;
   /// Input delay in samples.
   int input_delay = 0;
   /// Which candidates are tried: auto (all), lssvf or frf.
@@ -43,6 +48,11 @@ struct InitializationOptions {
 
   /// Most halvings of a candidate's gain while the controller does not stabilise it.
   static constexpr int kStartGainHalvings = 20;
+  /// The screening piece is at least this fraction 1/kScreeningFraction of the record.
+  static constexpr int kScreeningFraction = 32;
+
+  /// The number of samples the candidates are screened on, for a record of `samples`.
+  int screening_length(int samples) const;
 
   static constexpr std::string_view type_name = "InitializationOptions";
   static constexpr auto fields() {
@@ -52,6 +62,9 @@ struct InitializationOptions {
               "SVF bandwidths to try [rad/s]; empty: a factor-2 grid up to pi/h."),
         field("refinement_iterations", &O::refinement_iterations, AtLeast{0},
               "SRIVC iterations refining each LSSVF start (0: LSSVF only)."),
+        field("screening_samples", &O::screening_samples, AtLeast{0},
+              "Longer records screen the starts on their first max(this, N/32) samples; 0: "
+              "the whole record."),
         field("input_delay", &O::input_delay, AtLeast{0}, "Input delay [samples]."),
         field("method", &O::method, "Candidates tried: auto (all), lssvf or frf."),
         field("controller", &O::controller,

@@ -77,6 +77,10 @@ struct RefinedIvOptions {
   std::optional<AdditiveModel> initial_model;
   /// How the start is found from the data when initial_model is none.
   StartMethod start = StartMethod::automatic;
+  /// Records longer than this find the start on a piece of themselves, their first
+  /// max(start_screening_samples, N / 32) samples (InitializationOptions::screening_samples);
+  /// 0: on the whole record.
+  int start_screening_samples = 10000;
   /// Interpolation of the measured output between samples before filtering.
   Hold output_interpolation = Hold::first_order_hold;
   /// Known input delay in whole samples (>= 0); the model's input_delay is set to
@@ -127,6 +131,9 @@ struct RefinedIvOptions {
         field("initial_model", &O::initial_model,
               "Starting AdditiveModel, or none: found from the data."),
         field("start", &O::start, "How the start is found from the data without initial_model."),
+        field("start_screening_samples", &O::start_screening_samples, AtLeast{0},
+              "Longer records find the start on their first max(this, N/32) samples; 0: the "
+              "whole record."),
         field("output_interpolation", &O::output_interpolation,
               "How the measured output is continued between samples before filtering."),
         field("input_delay", &O::input_delay, AtLeast{0}, "Known input delay [samples]."),
