@@ -620,5 +620,92 @@ TEST(MimoSrivc, BadInputGetsOneClearMessage) {
               ThrowsMessage<InvalidArgument>(HasSubstr("input 2: the delay is -1 s")));
 }
 
+// Initial conditions (MimoRefinedIvOptions::initial_conditions, docs/decisions/0010 and 0026):
+// `truth` driven by `u`, the record cut at sample `cut`, where every mode is in motion.
+MimoData cut_record(const MimoAdditiveModel& truth, const Eigen::MatrixXd& u, int cut) {
+  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(u.rows(), truth.outputs());
+  for (int j = 0; j < truth.outputs(); ++j) {
+    for (int k = 0; k < truth.inputs(); ++k)
+      y.col(j) += simulate(truth.channel(j, k), u.col(k), kH);
+  }
+  const Eigen::Index rest = u.rows() - cut;
+  return MimoData(kH, u.bottomRows(rest), y.bottomRows(rest));
+}
+
+TEST(MimoSrivc, RecordCutAfterAStepIsExactWithEstimatedInitialConditionsAndBiasedWithout) {
+  const MimoAdditiveModel truth = four_mode_beam(2, 4, 23);
+  const int cut = 300;
+  Eigen::MatrixXd u(2300, 2);
+  for (int k = 0; k < 2; ++k) u.col(k) = white_noise(2300, 1.0, 41 + k);
+  u.col(0).head(cut).setConstant(1.0);
+  u.col(1).head(cut).setConstant(-0.5);
+  const MimoData data = cut_record(truth, u, cut);
+  MimoRefinedIvOptions options;
+  options.initial_conditions = InitialConditions::estimate;
+  const MimoEstimationResult r = mimo_srivc(data, four_modes(), options, perturbed(truth, 0.05, 3));
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_LT(largest_relative_error(*r.model, truth), 1e-9);
+  EXPECT_GT(r.fit_percent.minCoeff(), 99.99999);
+  EXPECT_TRUE(r.verdict.usable) << r.verdict.summary();
+  // Per output, the four modes' free responses and first derivatives; the covariance is the
+  // model's block only (8 a's, 4 outputs x 4 modes x 2 inputs numerators).
+  EXPECT_EQ(r.initial_conditions.rows(), 8);
+  EXPECT_EQ(r.initial_conditions.cols(), 4);
+  EXPECT_GT(r.initial_conditions.cwiseAbs().maxCoeff(), 1e-3);
+  EXPECT_EQ(r.covariance.rows(), 8 + 4 * 8);
+  const MimoEstimationResult from_data = mimo_srivc(data, four_modes(), options);
+  ASSERT_TRUE(from_data.converged()) << from_data.message;
+  EXPECT_LT(largest_relative_error(*from_data.model, truth), 1e-9);
+
+  options.initial_conditions = InitialConditions::zero;
+  const MimoEstimationResult z = mimo_srivc(data, four_modes(), options, perturbed(truth, 0.05, 3));
+  EXPECT_GT(largest_relative_error(*z.model, truth), 1e-4);
+  EXPECT_EQ(z.initial_conditions.size(), 0);
+}
+
+TEST(MimoSrivc, SteadyStatePeriodIsExactWithEstimatedInitialConditions) {
+  // One period of a periodic response after four: in steady state, not at rest. Rank-one
+  // residues keep their exact fit.
+  const MimoAdditiveModel truth = four_mode_beam(1, 3, 5);
+  const int period = 1000;
+  const Eigen::MatrixXd u = repeat_periodic(white_noise(period, 1.0, 7), 5);
+  const MimoData data = cut_record(truth, u, 4 * period);
+  MimoRefinedIvOptions options;
+  options.initial_conditions = InitialConditions::estimate;
+  options.rank_one_residues = true;
+  const MimoEstimationResult r = mimo_srivc(data, four_modes(), options, perturbed(truth, 0.05, 9));
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_LT(largest_relative_error(*r.model, truth), 1e-9);
+  options.initial_conditions = InitialConditions::zero;
+  const MimoEstimationResult z = mimo_srivc(data, four_modes(), options, perturbed(truth, 0.05, 9));
+  EXPECT_GT(largest_relative_error(*z.model, truth), 1e-4);
+}
+
+TEST(MimoSrivc, OneChannelWithInitialConditionsIsTheAdditiveEstimator) {
+  const MimoAdditiveModel truth = four_mode_beam(1, 1, 3);
+  Eigen::MatrixXd u(2300, 1);
+  u.col(0) = white_noise(2300, 1.0, 43);
+  u.col(0).head(300).setConstant(1.0);
+  const MimoData data = cut_record(truth, u, 300);
+  MimoRefinedIvOptions options;
+  options.initial_conditions = InitialConditions::estimate;
+  const MimoAdditiveModel start = perturbed(truth, 0.05, 4);
+  const MimoEstimationResult r = mimo_srivc(data, four_modes(), options, start);
+  RefinedIvOptions siso;
+  siso.initial_conditions = InitialConditions::estimate;
+  siso.initial_model = start.channel(0, 0);
+  const EstimationResult e = additive_srivc(data.channel(0, 0), four_modes(), siso);
+  ASSERT_TRUE(r.model.has_value());
+  EXPECT_EQ(r.initial_conditions.size(), e.initial_conditions.size());
+  EXPECT_TRUE(Eigen::VectorXd(r.initial_conditions.reshaped()) == e.initial_conditions);
+  // The shared-pole engine on the single channel reaches the same fixed point.
+  options.siso_engine = false;
+  const MimoEstimationResult shared = mimo_srivc(data, four_modes(), options, start);
+  ASSERT_TRUE(shared.converged()) << shared.message;
+  EXPECT_LT(largest_relative_error(*shared.model, truth), 1e-9);
+  EXPECT_LT((shared.initial_conditions - r.initial_conditions).norm(),
+            1e-7 * r.initial_conditions.norm());
+}
+
 }  // namespace
 }  // namespace ctid
