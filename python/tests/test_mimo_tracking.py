@@ -165,3 +165,26 @@ def test_the_summary_in_docs_tracking_md_is_what_ctid_track_prints(tracked):
         if line.startswith("wrote "):
             continue
         assert line in documented, f"docs/tracking.md should show: {line}"
+
+
+def test_the_documented_coverage_is_measured(tracked):
+    _, _, document = tracked
+    windows = document["windows"]
+    track_a = max(windows[0]["modes"], key=lambda m: mac(shape(m), SHAPE_A))["track"]
+    rows = {"natural frequency": ([], []), "damping ratio": ([], [])}
+    for k, window in enumerate(windows):
+        for mode in window["modes"]:
+            is_a = mode["track"] == track_a
+            truths = {"natural frequency": frequencies(k)[0 if is_a else 1],
+                      "damping ratio": ZETA_A if is_a else ZETA_B}
+            for name, key in (("natural frequency", "natural_frequency"),
+                              ("damping ratio", "damping_ratio")):
+                rows[name][0].append(abs(mode[key] - truths[name]) / mode[key + "_se"])
+                rows[name][1].append(mode[key + "_se"] / truths[name])
+    documented = (ROOT / "docs" / "tracking.md").read_text()
+    for name, (z, relative_se) in rows.items():
+        z = np.array(z)
+        within = " | ".join(f"{np.mean(z <= k):.0%}".replace("%", " %") for k in (1, 2, 3))
+        median = f"{np.median(relative_se):.1e}".replace("e-0", "e-")
+        row = f"| {name} | {within} | {np.max(z):.2f} | {median} |"
+        assert row in documented, f"docs/tracking.md's row is now: {row}"
