@@ -300,9 +300,6 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   if (f.start != "auto" && !std::filesystem::is_regular_file(f.start)) {
     usage_error("--start is '" + f.start + "': neither auto nor a model or result file");
   }
-  if (f.initial_conditions != "zero") {
-    usage_error("--initial-conditions estimate is not available with several inputs/outputs yet");
-  }
   std::filesystem::path package;
   if (!f.plot.empty()) {
     package = require_plotting();
@@ -318,6 +315,8 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   options.direct_term = f.direct_term;
   options.input_delays = f.input_delays;
   options.rank_one_residues = f.rank_one;
+  options.initial_conditions =
+      f.initial_conditions == "estimate" ? InitialConditions::estimate : InitialConditions::zero;
   options.validate();
   const std::string start_file = f.initial.empty() ? (f.start == "auto" ? "" : f.start) : f.initial;
   const std::string start_flag = f.initial.empty() ? "--start" : "--initial";

@@ -3,13 +3,16 @@
 // warm start from the previous window's model, the modes matched into tracks. Writes the whole
 // result as JSON (io/tracking_json.h), the per-window table as CSV and the tracking figure, and
 // prints one line per track.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "command.h"
@@ -53,6 +56,8 @@ struct TrackFlags {
   bool no_warm_start = false;
   double max_frequency_jump = TrackingOptions{}.max_frequency_jump;
   double damping_weight = TrackingOptions{}.damping_weight;
+  double mac_weight = MimoTrackingOptions{}.mac_weight;
+  double min_mac = MimoTrackingOptions{}.min_mac;
 
   std::string output;
   std::string table;
@@ -108,29 +113,43 @@ std::string window_list(const std::vector<int>& windows, std::size_t shown = 10)
   return text;
 }
 
-void print_summary(std::ostream& out, const TrackingResult& r, const SampledData& data,
-                   const std::string& file) {
+// The summary of either result (a MimoTrackingResult's tracks add their smallest MAC).
+template <class Result, class Data>
+void print_summary(std::ostream& out, const Result& r, const Data& data, const std::string& file) {
   const double h = data.sample_time();
   out << "ctid track: " << r.windows.size() << " windows of " << format_number(r.window_samples * h)
       << " s (" << r.window_samples << " samples, step " << r.step_samples << ") on " << file
-      << " (N = " << data.size() << ", h = " << format_number(h) << " s)\n";
+      << " (N = " << data.size() << ", h = " << format_number(h) << " s";
+  if constexpr (std::is_same_v<Result, MimoTrackingResult>) {
+    out << ", " << data.output_count() << " outputs, " << data.input_count()
+        << (data.input_count() == 1 ? " input" : " inputs");
+  }
+  out << ")\n";
   int warm = 0;
-  for (const TrackingWindow& w : r.windows) warm += w.start == WindowStart::previous_window;
+  for (const auto& w : r.windows) warm += w.start == WindowStart::previous_window;
   out << "usable windows: " << r.usable_windows << " of " << r.windows.size()
       << "; warm starts: " << warm << "\n";
   for (std::size_t t = 0; t < r.tracks.size(); ++t) {
-    const ModeTrack& track = r.tracks[t];
+    const auto& track = r.tracks[t];
     out << "track " << t + 1
         << ": mean f_n = " << format_significant(track.mean_natural_frequency / kTwoPi, 6)
         << " Hz, drift " << format_brief(track.frequency_drift / kTwoPi) << " Hz ("
         << format_brief(100.0 * track.frequency_drift / track.mean_natural_frequency)
-        << " %), matched in " << track.windows_matched << " of " << r.windows.size()
-        << " windows\n";
+        << " %), matched in " << track.windows_matched << " of " << r.windows.size() << " windows";
+    if constexpr (std::is_same_v<Result, MimoTrackingResult>) {
+      double smallest = std::numeric_limits<double>::infinity();
+      for (double mac : track.mac) {
+        if (std::isfinite(mac)) smallest = std::min(smallest, mac);
+      }
+      if (std::isfinite(smallest)) out << ", smallest MAC " << format_significant(smallest, 4);
+    }
+    out << "\n";
   }
 }
 
 // The warning about windows without a usable model (empty when every window is usable).
-std::string unusable_warning(const TrackingResult& r) {
+template <class Result>
+std::string unusable_warning(const Result& r) {
   std::vector<int> unusable;
   for (std::size_t w = 0; w < r.windows.size(); ++w) {
     if (!r.windows[w].verdict.usable) unusable.push_back(static_cast<int>(w) + 1);
@@ -143,8 +162,8 @@ std::string unusable_warning(const TrackingResult& r) {
       r.windows[static_cast<std::size_t>(unusable.front() - 1)].verdict.summary());
 }
 
-ExitStatus run_track(const TrackFlags& f, const CLI::App& app) {
-  const ModelStructure structure = model_structure(f, app);
+// The checks of the windows and of the output paths both paths share.
+void check_windows_and_outputs(const TrackFlags& f) {
   if (f.step && !(*f.step > 0.0)) {
     usage_error("--step is " + format_number(*f.step) + " s; it must be > 0");
   }
@@ -168,6 +187,112 @@ ExitStatus run_track(const TrackFlags& f, const CLI::App& app) {
   if (!f.table.empty() && !force && std::filesystem::exists(f.table)) {
     usage_error("--table " + f.table + " exists; pass --force to replace it");
   }
+}
+
+// Writes the document, the table and the figure, and prints the summary; the exit status.
+template <class Result, class Data>
+ExitStatus report(const TrackFlags& f, const CLI::App& app, const Result& result, const Data& data,
+                  nlohmann::json document, const std::filesystem::path& package) {
+  const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
+  if (!f.output.empty()) io::write_json(f.output, document, overwrite);
+  if (!f.table.empty()) io::write_tracking_table(f.table, result, overwrite);
+
+  const std::string warning = unusable_warning(result);
+  if (!f.quiet) {
+    if (!warning.empty()) std::cout << warning << "\n";
+    print_summary(std::cout, result, data, f.data.file);
+    if (f.data.preprocessing_asked(app)) {
+      std::cout << "preprocessing: " << f.data.preprocessing.summary() << "\n";
+    }
+    if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
+    if (!f.table.empty()) std::cout << "wrote " << f.table << "\n";
+  } else if (!warning.empty()) {
+    std::cerr << "ctid track: " << warning << "\n";
+  }
+  if (!f.plot.empty() && !result.tracks.empty()) {
+    const TemporaryDirectory work;
+    io::write_json(work.path() / "tracking.json", document);
+    const std::filesystem::path figure = std::filesystem::path(f.plot) / "tracking.png";
+    plot(package, {{"tracking", work.path() / "tracking.json", figure,
+                    "ctid track: " + std::filesystem::path(f.data.file).filename().string()}});
+    if (!f.quiet) std::cout << "wrote " << figure.string() << "\n";
+  }
+  return result.usable_windows == 0 ? kExitNoUsableModel : kExitOk;
+}
+
+// Several outputs (--input-columns / --output-columns): track_mimo_modes, shared poles and
+// matching by mode shape as well (docs/decisions/0026-mimo-tracking.md).
+ExitStatus run_mimo_track(const TrackFlags& f, const CLI::App& app) {
+  ModelStructure structure = model_structure(f, app);
+  // --modes K: first-degree numerators, as ctid fit gives every mode of several channels.
+  if (app.count("--modes") > 0) {
+    structure = ModelStructure::additive(
+        std::vector<SubmodelOrder>(static_cast<std::size_t>(f.modes), SubmodelOrder{2, 1, 0}));
+  }
+  if (!structure.is_additive()) {
+    usage_error(
+        "with --input-columns / --output-columns give the modes (--modes K or --submodel N,M "
+        "repeated); an unfactored model has no shared modes");
+  }
+  for (const char* flag : {"--controller", "--delay"}) {
+    if (app.count(flag) > 0) {
+      usage_error(std::string(flag) +
+                  " is not available with --input-columns / --output-columns (the shared-pole "
+                  "estimator is open loop, without input delays here)");
+    }
+  }
+  if (f.start != "auto") {
+    usage_error("--start " + f.start +
+                " is for one input and output; with --input-columns / --output-columns every "
+                "window without a warm start starts automatically");
+  }
+  check_windows_and_outputs(f);
+  std::filesystem::path package;
+  if (!f.plot.empty()) {
+    package = require_plotting();
+    prepare_plot_directory(f.plot, {"tracking.png"}, f.force);
+  }
+  MimoTrackingOptions options;
+  options.window = f.window;
+  options.step = f.step;
+  options.warm_start = !f.no_warm_start;
+  options.max_frequency_jump = f.max_frequency_jump;
+  options.damping_weight = f.damping_weight;
+  options.mac_weight = f.mac_weight;
+  options.min_mac = f.min_mac;
+  options.refined_iv.max_iterations = f.max_iterations;
+  options.refined_iv.tolerance = f.tolerance;
+  options.refined_iv.output_interpolation =
+      f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
+  options.refined_iv.noise =
+      f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
+  options.refined_iv.initial_conditions =
+      f.initial_conditions == "zero" ? InitialConditions::zero : InitialConditions::estimate;
+  options.validate();
+  const MimoData data = f.data.load_mimo(app);
+
+  Progress progress("ctid track", f.quiet);
+  const MimoTrackingResult result =
+      track_mimo_modes(data, structure.orders, options, progress.callback("window"));
+  progress.clear();
+
+  nlohmann::json document = io::to_json(result);
+  document["data"] = {{"file", f.data.file},
+                      {"samples", data.size()},
+                      {"sample_time", data.sample_time()},
+                      {"start_time", data.start_time()},
+                      {"inputs", data.input_names()},
+                      {"outputs", data.output_names()}};
+  document["structure"] = io::fields_to_json(structure);
+  document["options"] = io::fields_to_json(options);
+  return report(f, app, result, data, std::move(document), package);
+}
+
+ExitStatus run_track(const TrackFlags& f, const CLI::App& app) {
+  if (f.data.mimo_asked(app)) return run_mimo_track(f, app);
+  const ModelStructure structure = model_structure(f, app);
+  check_windows_and_outputs(f);
+  const bool force = f.force;
   std::filesystem::path package;
   if (!f.plot.empty()) {
     package = require_plotting();
@@ -199,31 +324,7 @@ ExitStatus run_track(const TrackFlags& f, const CLI::App& app) {
                       {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
   document["structure"] = io::fields_to_json(structure);
   document["options"] = io::fields_to_json(options);
-  const io::Overwrite overwrite = force ? io::Overwrite::yes : io::Overwrite::no;
-  if (!f.output.empty()) io::write_json(f.output, document, overwrite);
-  if (!f.table.empty()) io::write_tracking_table(f.table, result, overwrite);
-
-  const std::string warning = unusable_warning(result);
-  if (!f.quiet) {
-    if (!warning.empty()) std::cout << warning << "\n";
-    print_summary(std::cout, result, data, f.data.file);
-    if (f.data.preprocessing_asked(app)) {
-      std::cout << "preprocessing: " << f.data.preprocessing.summary() << "\n";
-    }
-    if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
-    if (!f.table.empty()) std::cout << "wrote " << f.table << "\n";
-  } else if (!warning.empty()) {
-    std::cerr << "ctid track: " << warning << "\n";
-  }
-  if (!f.plot.empty() && !result.tracks.empty()) {
-    const TemporaryDirectory work;
-    io::write_json(work.path() / "tracking.json", document);
-    const std::filesystem::path figure = std::filesystem::path(f.plot) / "tracking.png";
-    plot(package, {{"tracking", work.path() / "tracking.json", figure,
-                    "ctid track: " + std::filesystem::path(f.data.file).filename().string()}});
-    if (!f.quiet) std::cout << "wrote " << figure.string() << "\n";
-  }
-  return result.usable_windows == 0 ? kExitNoUsableModel : kExitOk;
+  return report(f, app, result, data, std::move(document), package);
 }
 
 Command add_track_command(CLI::App& parent) {
@@ -231,13 +332,18 @@ Command add_track_command(CLI::App& parent) {
   TrackFlags& f = *flags;
   CLI::App* app = parent.add_subcommand(
       "track",
-      "Follow the modes of one channel through time: fit consecutive windows (each started from "
-      "the previous window's model) and match their modes into tracks.");
+      "Follow the modes of one channel, or of several outputs with shared poles, through time: "
+      "fit consecutive windows (each started from the previous window's model) and match their "
+      "modes into tracks.");
   app->footer(
       "Windows: --window SECONDS long, starting every --step SECONDS (default: the window, "
       "adjacent windows), both rounded to whole samples; at least 2 windows must fit the "
       "record. Each window's initial state is estimated by default (--initial-conditions).\n"
       "Structure: as ctid fit (--modes K, --submodel N,M[,L] repeated, or --poles N --zeros M).\n"
+      "Several outputs: --output-columns (and --input-columns) fit every window with the "
+      "shared-pole estimator (--modes K gives each mode a first-degree numerator, as ctid fit) "
+      "and add 1 - MAC of the mode shapes to the matching cost (--mac-weight), pairing a mode "
+      "with a track only if their MAC is at least --min-mac; the table gets a mac column.\n"
       "Matching: a window's modes join the tracks by the least total cost |w - w_t|/w_t + "
       "--damping-weight |zeta - zeta_t| among the assignments with the most pairs; a mode more "
       "than --max-frequency-jump (relative) from every track starts a new one. Modes of windows "
@@ -249,6 +355,7 @@ Command add_track_command(CLI::App& parent) {
       "WARNING line says why), 2 bad usage or input, 1 other error.");
 
   f.data.add_to(*app, "data", true);
+  f.data.add_mimo_columns(*app);
   app->add_option("--window", f.window, "Window length in seconds")->required()->group("Windows");
   app->add_option("--step", f.step,
                   "Seconds between window starts (default: the window length; smaller "
@@ -322,6 +429,14 @@ Command add_track_command(CLI::App& parent) {
       ->group("Matching");
   app->add_option("--damping-weight", f.damping_weight,
                   "Weight of the damping-ratio difference in the matching cost")
+      ->capture_default_str()
+      ->group("Matching");
+  app->add_option("--mac-weight", f.mac_weight,
+                  "Several outputs: weight of 1 - MAC of the mode shapes in the matching cost")
+      ->capture_default_str()
+      ->group("Matching");
+  app->add_option("--min-mac", f.min_mac,
+                  "Several outputs: smallest MAC of a mode and the track it joins (0..1)")
       ->capture_default_str()
       ->group("Matching");
 

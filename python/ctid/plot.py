@@ -20,6 +20,8 @@ tables):
     mimo_estimation_result (fit --input-columns -o), frf_matrix_fit_result (fit-frf -o)
                                       mode_shapes, mac, frf_matrix_overlay (with --frf)
     mode_tracking_result (ctid track -o) tracking (frequency and damping against time)
+    mimo_mode_tracking_result (ctid track --output-columns -o)
+                                      tracking
 
 --frf gives the measured FRF drawn under the model: bode and modes take an frf document or the
 CSV of `ctid frf -o X.csv`, frf_matrix_overlay a mimo_frf document, the CSV table of
@@ -93,6 +95,7 @@ DOCUMENT_KINDS = {
     "mimo_estimation_result": MIMO_KINDS,
     "frf_matrix_fit_result": MIMO_KINDS,
     "mode_tracking_result": ("tracking",),
+    "mimo_mode_tracking_result": ("tracking",),
 }
 
 
@@ -316,7 +319,7 @@ def _tracking_figure(path, output, title, unit):
         raise InputError(f"{path}: tracking draws a mode_tracking_result document "
                          "(ctid track -o)")
     document = _read_json(path)
-    if document.get("type") != "mode_tracking_result":
+    if document.get("type") not in ("mode_tracking_result", "mimo_mode_tracking_result"):
         raise InputError(f"{path}: not a mode_tracking_result document "
                          f"(type {document.get('type')!r})")
     for name in ("windows", "tracks"):

@@ -237,6 +237,44 @@ void bind_mode_tracking(py::module_& m) {
       },
       py::arg("tracks"), py::arg("modes"), py::arg("options") = py::none(),
       "The track of each mode (-1: none) under the matching of track_modes.");
+
+  // Several outputs: shared-pole windows, matching by frequency, damping and MAC.
+  bind_options<MimoTrackingOptions>(
+      m,
+      "Options of track_mimo_modes: window and step [s], mimo_srivc options, matching gates "
+      "and the MAC term.");
+  bind_result<MimoTrackingWindow>(
+      m, "One window of track_mimo_modes: its fit, its modes (with shapes) and their MAC.")
+      .def("converged", &MimoTrackingWindow::converged, "termination == converged.")
+      .def("brief_report", &MimoTrackingWindow::brief_report,
+           "One line: termination, iterations and, unless converged, why.");
+  bind_result<MimoModeTrack>(
+      m, "A mode followed across windows of several outputs, with the MAC of each window.");
+  bind_result<MimoTrackingResult>(
+      m, "Every window of track_mimo_modes and the tracks of their modes.");
+  m.def(
+      "track_mimo_modes",
+      [](const MimoData& data, const std::vector<SubmodelOrder>& orders,
+         const std::optional<MimoTrackingOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<MimoTrackingOptions>("track_mimo_modes", options, kwargs);
+        py::gil_scoped_release release;
+        return track_mimo_modes(data, orders, o);
+      },
+      py::arg("data"), py::arg("orders"), py::arg("options") = py::none(),
+      "Fit the shared-pole submodels `orders` to consecutive windows of a record of several "
+      "outputs (each started from the previous window's model, initial state estimated) and "
+      "match their modes into tracks by frequency, damping and MAC, as `ctid track` with "
+      "several --output-columns does. Options are one MimoTrackingOptions or its fields as "
+      "keywords (window [s] is required).");
+  m.def(
+      "assign_mimo_modes",
+      [](const std::vector<MimoMode>& tracks, const std::vector<MimoMode>& modes,
+         const std::optional<MimoTrackingOptions>& options, const py::kwargs& kwargs) {
+        return assign_mimo_modes(
+            tracks, modes, options_from<MimoTrackingOptions>("assign_mimo_modes", options, kwargs));
+      },
+      py::arg("tracks"), py::arg("modes"), py::arg("options") = py::none(),
+      "The track of each mode (-1: none) under the matching of track_mimo_modes.");
 }
 // --- end of mode tracking ----------------------------------------------------------------------
 

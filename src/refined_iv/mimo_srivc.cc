@@ -77,11 +77,47 @@ FilterRealization input_bank(const Layout& layout, const std::vector<Polynomial>
       a[static_cast<size_t>(i)]);
 }
 
-// p^r / (p^l_i A_i) u_k for every submodel, input and r <= m_i (N x u_count), exact for the
-// input hold.
+// Submodel i's free responses at the denominator a_i (layout.free_count > 0): `basis`, those
+// of 1/(p^l_i A_i) from each unit initial state (N x s_i, s_i = n_i + l_i), and, when asked,
+// `filtered[q - 1]` = p^q / A_i of them (q = 1..n_i), exact at the samples by one homogeneous
+// recursion of the chain the SISO estimators use (internal::free_response_chain).
+struct FreeResponses {
+  Eigen::MatrixXd basis;
+  std::vector<Eigen::MatrixXd> filtered;
+};
+
+FreeResponses free_responses(const Layout& layout, const MimoData& data, const Polynomial& a, int i,
+                             bool with_filtered) {
+  const int s = layout.states(i);
+  const int n = layout.orders[static_cast<size_t>(i)].n;
+  const internal::FreeResponseChain chain = internal::free_response_chain(
+      a, layout.orders[static_cast<size_t>(i)].integrators, data.sample_time());
+  Eigen::MatrixXd state = Eigen::MatrixXd::Zero(chain.phi.rows(), s);
+  state.topRows(s).setIdentity();
+  FreeResponses f;
+  f.basis.resize(data.size(), s);
+  if (with_filtered) f.filtered.assign(static_cast<size_t>(n), Eigen::MatrixXd(data.size(), s));
+  Eigen::MatrixXd next(state.rows(), s);
+  for (int k = 0; k < data.size(); ++k) {
+    f.basis.row(k).noalias() = chain.c0 * state;
+    for (int q = 0; q < n && with_filtered; ++q) {
+      f.filtered[static_cast<size_t>(q)].row(k).noalias() = chain.ck.row(q) * state;
+    }
+    next.noalias() = chain.phi * state;
+    state.swap(next);
+  }
+  return f;
+}
+
+// p^r / (p^l_i A_i) u_k for every submodel, input and r <= m_i, then D's columns and the
+// free-response columns (N x u_count), exact for the input hold.
 Eigen::MatrixXd numerator_regressors(const Layout& layout, const MimoData& data,
                                      const std::vector<Polynomial>& a) {
   Eigen::MatrixXd u(data.size(), layout.u_count);
+  for (int i = 0; i < layout.size() && layout.free_count > 0; ++i) {
+    u.middleCols(layout.free_at[static_cast<size_t>(i)], layout.states(i)) =
+        free_responses(layout, data, a[static_cast<size_t>(i)], i, false).basis;
+  }
   for (int i = 0; i < layout.size(); ++i) {
     const FilterRealization bank = input_bank(layout, a, i);
     const int m = layout.orders[static_cast<size_t>(i)].m;
@@ -113,12 +149,34 @@ std::vector<Polynomial> denominators(const MimoAdditiveModel& model) {
   return a;
 }
 
-// Submodel i's sampled output at every output channel (N x outputs).
-Eigen::MatrixXd submodel_outputs(const Layout& layout, const Eigen::MatrixXd& u,
-                                 const MimoAdditiveModel& model, int i) {
+// An iterate: the model and, with free responses (layout.free_count > 0), the coefficients of
+// every output's free-response columns (free_count x outputs; 0 x outputs without).
+struct Iterate {
+  MimoAdditiveModel model;
+  Eigen::MatrixXd free;
+};
+
+// Rows of submodel i's coefficients in Iterate::free.
+int free_row(const Layout& layout, int i) {
+  return layout.free_at[static_cast<size_t>(i)] - layout.model_columns();
+}
+
+Iterate at_rest(const Layout& layout, MimoAdditiveModel model) {
+  return {std::move(model), Eigen::MatrixXd::Zero(layout.free_count, layout.outputs)};
+}
+
+// Submodel i's sampled output at every output channel (N x outputs), its free response
+// included.
+Eigen::MatrixXd submodel_outputs(const Layout& layout, const Eigen::MatrixXd& u, const Iterate& x,
+                                 int i) {
   const int m = layout.orders[static_cast<size_t>(i)].m;
-  return u.middleCols(layout.u_at[static_cast<size_t>(i)], layout.inputs * (m + 1)) *
-         numerator_block(layout, model, i);
+  Eigen::MatrixXd out = u.middleCols(layout.u_at[static_cast<size_t>(i)], layout.inputs * (m + 1)) *
+                        numerator_block(layout, x.model, i);
+  if (layout.free_count > 0) {
+    out += u.middleCols(layout.free_at[static_cast<size_t>(i)], layout.states(i)) *
+           x.free.middleRows(free_row(layout, i), layout.states(i));
+  }
+  return out;
 }
 
 // The direct term's contribution D u at every output (N x outputs).
@@ -129,10 +187,9 @@ Eigen::MatrixXd direct_outputs(const Layout& layout, const Eigen::MatrixXd& u,
 }
 
 // The whole model's sampled output (N x outputs).
-Eigen::MatrixXd model_outputs(const Layout& layout, const Eigen::MatrixXd& u,
-                              const MimoAdditiveModel& model) {
-  Eigen::MatrixXd fitted = direct_outputs(layout, u, model);
-  for (int i = 0; i < layout.size(); ++i) fitted += submodel_outputs(layout, u, model, i);
+Eigen::MatrixXd model_outputs(const Layout& layout, const Eigen::MatrixXd& u, const Iterate& x) {
+  Eigen::MatrixXd fitted = direct_outputs(layout, u, x.model);
+  for (int i = 0; i < layout.size(); ++i) fitted += submodel_outputs(layout, u, x, i);
   return fitted;
 }
 
@@ -160,11 +217,18 @@ MimoAdditiveModel model_from_columns(const Layout& layout, const std::vector<Pol
   return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels), direct);
 }
 
-MimoAdditiveModel fit_numerators(const Layout& layout, const MimoData& data,
-                                 const std::vector<Polynomial>& a) {
+// The iterate of denominators `a` whose numerators, D and free responses are the
+// coefficients `b` of every column (u_count x outputs).
+Iterate iterate_from_columns(const Layout& layout, const std::vector<Polynomial>& a,
+                             const Eigen::MatrixXd& b) {
+  return {model_from_columns(layout, a, b), b.bottomRows(layout.free_count)};
+}
+
+Iterate fit_numerators(const Layout& layout, const MimoData& data,
+                       const std::vector<Polynomial>& a) {
   const Eigen::MatrixXd u = numerator_regressors(layout, data, a);
   const Eigen::VectorXd s = internal::column_scales(u);
-  return model_from_columns(
+  return iterate_from_columns(
       layout, a,
       s.cwiseInverse().asDiagonal() *
           (u * s.cwiseInverse().asDiagonal()).colPivHouseholderQr().solve(data.outputs()));
@@ -189,10 +253,9 @@ ScaledQr scaled_thin_qr(const Eigen::MatrixXd& u) {
 
 // Sum over the outputs of the mean squared output error relative to the output's mean square:
 // how the start's candidates are compared (every channel counts alike).
-double relative_output_error(const Layout& layout, const MimoData& data,
-                             const MimoAdditiveModel& model) {
+double relative_output_error(const Layout& layout, const MimoData& data, const Iterate& x) {
   const Eigen::MatrixXd fitted =
-      model_outputs(layout, numerator_regressors(layout, data, denominators(model)), model);
+      model_outputs(layout, numerator_regressors(layout, data, denominators(x.model)), x);
   double total = 0.0;
   for (int j = 0; j < layout.outputs; ++j) {
     total += (data.outputs().col(j) - fitted.col(j)).squaredNorm() /
@@ -275,7 +338,7 @@ std::optional<std::vector<Polynomial>> common_denominator_start(const Layout& la
 }
 
 struct Step {
-  std::optional<MimoAdditiveModel> model;
+  std::optional<Iterate> model;
   std::string failure;  // why the step could not be taken (empty if it was)
   Termination kind = Termination::singular_equations;  // of a failure
   double reciprocal_condition = std::numeric_limits<double>::quiet_NaN();
@@ -303,22 +366,33 @@ class InstrumentSources {
               filtered_input(layout, chain, data, k).middleCols(1, o.n));
         }
       }
+      if (layout.free_count > 0) {
+        free_[static_cast<size_t>(i)] =
+            free_responses(layout, data, a[static_cast<size_t>(i)], i, true).filtered;
+      }
     }
   }
 
-  // psi (N x a_count) = output j's denominator instrument at `model`.
-  void denominator_instrument(const MimoAdditiveModel& model, int j, Eigen::MatrixXd& psi) const {
+  // psi (N x a_count) = output j's denominator instrument at `x`: with free responses, minus
+  // p^q / A_i of submodel i's current free response as well (docs/decisions/0010), so that it
+  // stays the gradient of the output error.
+  void denominator_instrument(const Iterate& x, int j, Eigen::MatrixXd& psi) const {
     for (int i = 0; i < layout_.size(); ++i) {
       const SubmodelOrder& o = layout_.orders[static_cast<size_t>(i)];
       if (o.n == 0) continue;
       auto instrument = psi.middleCols(layout_.a_at[static_cast<size_t>(i)], o.n);
       instrument.setZero();
       for (int k = 0; k < layout_.inputs; ++k) {
-        const Polynomial& b = model.numerator(i, j, k);
+        const Polynomial& b = x.model.numerator(i, j, k);
         for (int r = 0; r <= std::min(o.m, b.degree()); ++r) {
           instrument -=
               b[r] * sources_[static_cast<size_t>(i)][static_cast<size_t>(r * layout_.inputs + k)];
         }
+      }
+      if (layout_.free_count == 0) continue;
+      const Eigen::VectorXd c = x.free.block(free_row(layout_, i), j, layout_.states(i), 1);
+      for (int q = 0; q < o.n; ++q) {
+        instrument.col(q) -= free_[static_cast<size_t>(i)][static_cast<size_t>(q)] * c;
       }
     }
   }
@@ -326,21 +400,24 @@ class InstrumentSources {
  private:
   const Layout& layout_;
   std::vector<std::vector<Eigen::MatrixXd>> sources_;
+  std::vector<std::vector<Eigen::MatrixXd>> free_ =
+      std::vector<std::vector<Eigen::MatrixXd>>(static_cast<size_t>(layout_.size()));
 };
 
-// One step of the shared-pole iteration from `model` (see mimo_srivc.h).
-Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel& model,
+// One step of the shared-pole iteration from `x` (see mimo_srivc.h).
+Step iterate(const Layout& layout, const MimoData& data, const Iterate& x,
              Hold output_interpolation) {
   const int n = data.size();
   const int outputs = layout.outputs;
   const int submodels = layout.size();
+  const MimoAdditiveModel& model = x.model;
   const std::vector<Polynomial> a = denominators(model);
   const Eigen::MatrixXd u = numerator_regressors(layout, data, a);
   std::vector<Eigen::MatrixXd> parts;
   const Eigen::MatrixXd direct = direct_outputs(layout, u, model);
   Eigen::MatrixXd total = direct;
   for (int i = 0; i < submodels; ++i) {
-    parts.push_back(submodel_outputs(layout, u, model, i));
+    parts.push_back(submodel_outputs(layout, u, x, i));
     total += parts.back();
   }
 
@@ -389,7 +466,7 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
       upsilon.col(i) = fy.col(0);
       phi.middleCols(layout.a_at[static_cast<size_t>(i)], n_i) = -fy.middleCols(1, n_i);
     }
-    sources.denominator_instrument(model, j, psi);
+    sources.denominator_instrument(x, j, psi);
     // The direct term's own residual, unfiltered (its denominator is 1).
     if (layout.direct)
       upsilon.col(submodels) = data.outputs().col(j) - total.col(j) + direct.col(j);
@@ -451,6 +528,7 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
   }
   Eigen::MatrixXd next_direct;
   if (layout.direct) next_direct.resize(outputs, layout.inputs);
+  Eigen::MatrixXd next_free(layout.free_count, outputs);
   for (int j = 0; j < outputs; ++j) {
     const Eigen::MatrixXd beta =
         u_scale.cwiseInverse().asDiagonal() *
@@ -467,20 +545,31 @@ Step iterate(const Layout& layout, const MimoData& data, const MimoAdditiveModel
     if (layout.direct) {
       next_direct.row(j) = beta.block(layout.d_at, submodels, layout.inputs, 1).transpose();
     }
+    // Each submodel's free response from its own column, like its numerators.
+    for (int i = 0; i < submodels && layout.free_count > 0; ++i) {
+      next_free.block(free_row(layout, i), j, layout.states(i), 1) =
+          beta.block(layout.free_at[static_cast<size_t>(i)], i, layout.states(i), 1);
+    }
   }
   // (The denominators were checked above.)
-  bool finite = next_direct.allFinite();
+  bool finite = next_direct.allFinite() && next_free.allFinite();
   for (const MimoSubmodel& s : next) {
     for (const Polynomial& b : s.b) finite = finite && b.coefficients().allFinite();
   }
   if (!finite) return {std::nullopt, "an iterate is not finite", Termination::non_finite};
-  return {MimoAdditiveModel(layout.inputs, layout.outputs, std::move(next), next_direct),
+  return {Iterate{MimoAdditiveModel(layout.inputs, layout.outputs, std::move(next), next_direct),
+                  std::move(next_free)},
           {},
           Termination::converged,
           rcond};
 }
 
 // The model a fraction w of the way from x to y, parameter by parameter.
+MimoAdditiveModel blend(const Layout& layout, const MimoAdditiveModel& x,
+                        const MimoAdditiveModel& y, double w);
+Iterate blend(const Layout& layout, const Iterate& x, const Iterate& y, double w) {
+  return {blend(layout, x.model, y.model, w), (1.0 - w) * x.free + w * y.free};
+}
 MimoAdditiveModel blend(const Layout& layout, const MimoAdditiveModel& x,
                         const MimoAdditiveModel& y, double w) {
   std::vector<MimoSubmodel> submodels;
@@ -497,7 +586,7 @@ MimoAdditiveModel blend(const Layout& layout, const MimoAdditiveModel& x,
 // How a run of the iteration ended: the model to return (the fixed point when it converged,
 // else the iterate with the lowest output error, relative_output_error), and its account.
 struct Iterations {
-  MimoAdditiveModel model;
+  Iterate model;
   double cost = 0.0;  // relative_output_error of `model`
   Termination termination = Termination::not_run;
   std::string message;
@@ -507,12 +596,12 @@ struct Iterations {
   bool start_returned = false;  // not converged, and no iterate fitted better than the start
 };
 
-Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditiveModel model,
+Iterations run_iterations(const Layout& layout, const MimoData& data, Iterate model,
                           int max_iterations, double tolerance, Hold output_interpolation) {
   double cost = relative_output_error(layout, data, model);
   Iterations result{
       model, cost, Termination::not_run, {}, 0, 0, std::numeric_limits<double>::quiet_NaN()};
-  MimoAdditiveModel& best = result.model;
+  Iterate& best = result.model;
   double& best_cost = result.cost;
   int best_iteration = 0;
   // Step control. (1) A step to an iterate whose equations cannot be formed or solved is
@@ -532,7 +621,7 @@ Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditi
   constexpr int kStallIterations = 10;
   double smallest_change = std::numeric_limits<double>::infinity();
   int smallest_at = 0;
-  std::optional<MimoAdditiveModel> accepted;
+  std::optional<Iterate> accepted;
   Eigen::VectorXd last_step;
   for (int iteration = 1; iteration <= max_iterations; ++iteration) {
     Step step = iterate(layout, data, model, output_interpolation);
@@ -549,8 +638,8 @@ Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditi
       break;
     }
     result.iterations = iteration;
-    const Eigen::VectorXd here = flatten(layout, model);
-    const Eigen::VectorXd full_step = flatten(layout, *step.model) - here;
+    const Eigen::VectorXd here = flatten(layout, model.model);
+    const Eigen::VectorXd full_step = flatten(layout, step.model->model) - here;
     const double change = full_step.norm() / here.norm();
     if (change < smallest_change) {
       smallest_change = change;
@@ -575,7 +664,7 @@ Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditi
       relaxation *= 0.5;
     }
     last_step = full_step;
-    MimoAdditiveModel next =
+    Iterate next =
         relaxation < 1.0 ? blend(layout, model, *step.model, relaxation) : std::move(*step.model);
     double next_cost = relative_output_error(layout, data, next);
     for (int halvings = 0; halvings < kMaxHalvings && !(next_cost <= 2.0 * cost); ++halvings) {
@@ -664,14 +753,14 @@ int fine_segment_length(int samples) {
 }
 constexpr int kRefinementIterations = 5;
 
-MimoAdditiveModel automatic_start(const Layout& layout, const MimoData& data, Hold interpolation) {
-  std::vector<std::pair<double, MimoAdditiveModel>> candidates;
+Iterate automatic_start(const Layout& layout, const MimoData& data, Hold interpolation) {
+  std::vector<std::pair<double, Iterate>> candidates;
   const double nyquist = M_PI / data.sample_time();
   for (double lambda = nyquist / 128.0; lambda <= nyquist * 1.0001; lambda *= 2.0) {
     const std::optional<std::vector<Polynomial>> a =
         common_denominator_start(layout, data, lambda, interpolation);
     if (!a) continue;
-    MimoAdditiveModel candidate = fit_numerators(layout, data, *a);
+    Iterate candidate = fit_numerators(layout, data, *a);
     const double cost = relative_output_error(layout, data, candidate);
     if (std::isfinite(cost)) candidates.emplace_back(cost, std::move(candidate));
   }
@@ -690,7 +779,7 @@ MimoAdditiveModel automatic_start(const Layout& layout, const MimoData& data, Ho
     try {
       const std::optional<std::vector<Polynomial>> a = frf_peak_denominators(layout, data, length);
       if (a) {
-        MimoAdditiveModel candidate = fit_numerators(layout, data, *a);
+        Iterate candidate = fit_numerators(layout, data, *a);
         const double cost = relative_output_error(layout, data, candidate);
         if (std::isfinite(cost)) candidates.emplace_back(cost, std::move(candidate));
       }
@@ -713,10 +802,10 @@ MimoAdditiveModel automatic_start(const Layout& layout, const MimoData& data, Ho
 // Sandwich covariance R^-1 Q R^-1 of the estimate: output j's gradient is [psi_j, 0.., U (in
 // j's numerator slot), 0..], R the sum of their products and Q that of the AR-whitened
 // gradients (adjoint_ar_filter) weighted by the outputs' innovation covariance (below).
-Eigen::MatrixXd mimo_covariance(const Layout& layout, const MimoData& data,
-                                const MimoAdditiveModel& model, const Eigen::MatrixXd& u,
-                                const Eigen::MatrixXd& residuals, NoiseAssumption noise,
-                                int max_ar_order) {
+Eigen::MatrixXd mimo_covariance(const Layout& layout, const MimoData& data, const Iterate& x,
+                                const Eigen::MatrixXd& u, const Eigen::MatrixXd& residuals,
+                                NoiseAssumption noise, int max_ar_order) {
+  const MimoAdditiveModel& model = x.model;
   const int n = data.size();
   const int pa = layout.a_count;
   const int pu = layout.u_count;
@@ -725,7 +814,7 @@ Eigen::MatrixXd mimo_covariance(const Layout& layout, const MimoData& data,
   std::vector<Eigen::MatrixXd> psi(static_cast<size_t>(layout.outputs), Eigen::MatrixXd(n, pa));
   Eigen::VectorXd s_a = Eigen::VectorXd::Zero(pa);
   for (int j = 0; j < layout.outputs; ++j) {
-    sources.denominator_instrument(model, j, psi[static_cast<size_t>(j)]);
+    sources.denominator_instrument(x, j, psi[static_cast<size_t>(j)]);
     s_a += psi[static_cast<size_t>(j)].colwise().squaredNorm().transpose();
   }
   for (Eigen::Index c = 0; c < pa; ++c) s_a(c) = s_a(c) > 0.0 ? std::sqrt(s_a(c)) : 1.0;
@@ -933,20 +1022,33 @@ std::vector<MimoMode> modes_of(const Layout& layout, const MimoAdditiveModel& mo
 
 // Submodels of equal orders listed from the slowest up (by the geometric mean of their pole
 // magnitudes, a_n^(-1/n)), so that the order in which the start found them does not show.
-MimoAdditiveModel slowest_first(const Layout& layout, MimoAdditiveModel model) {
+// Free responses move with their submodels.
+Iterate slowest_first(const Layout& layout, Iterate x) {
   for (const SubmodelOrder& o : layout.orders) {
-    if (o.n != layout.orders[0].n || o.m != layout.orders[0].m || o.integrators > 0) return model;
+    if (o.n != layout.orders[0].n || o.m != layout.orders[0].m || o.integrators > 0) return x;
   }
-  std::vector<MimoSubmodel> submodels = model.submodels();
-  const auto speed = [](const MimoSubmodel& s) {
-    return std::pow(std::abs(s.a[s.a.degree()]), -1.0 / s.a.degree());
+  const MimoAdditiveModel& model = x.model;
+  std::vector<int> order(static_cast<size_t>(model.size()));
+  for (int i = 0; i < model.size(); ++i) order[static_cast<size_t>(i)] = i;
+  const auto speed = [&](int i) {
+    const Polynomial& a = model[i].a;
+    return std::pow(std::abs(a[a.degree()]), -1.0 / a.degree());
   };
-  std::stable_sort(
-      submodels.begin(), submodels.end(),
-      [&](const MimoSubmodel& x, const MimoSubmodel& y) { return speed(x) < speed(y); });
-  return MimoAdditiveModel(model.inputs(), model.outputs(), std::move(submodels),
-                           model.has_direct_term() ? model.direct() : Eigen::MatrixXd(),
-                           model.input_delays());
+  std::stable_sort(order.begin(), order.end(), [&](int i, int k) { return speed(i) < speed(k); });
+  std::vector<MimoSubmodel> submodels;
+  Eigen::MatrixXd free(x.free.rows(), x.free.cols());
+  for (int i = 0; i < model.size(); ++i) {
+    const int from = order[static_cast<size_t>(i)];
+    submodels.push_back(model[from]);
+    if (layout.free_count > 0) {
+      free.middleRows(free_row(layout, i), layout.states(i)) =
+          x.free.middleRows(free_row(layout, from), layout.states(from));
+    }
+  }
+  return {MimoAdditiveModel(model.inputs(), model.outputs(), std::move(submodels),
+                            model.has_direct_term() ? model.direct() : Eigen::MatrixXd(),
+                            model.input_delays()),
+          std::move(free)};
 }
 
 void check_orders(const std::vector<SubmodelOrder>& orders, const MimoData& data, bool direct) {
@@ -1023,6 +1125,7 @@ MimoEstimationResult siso_result(const Layout& layout, const MimoData& data,
   siso.noise = options.noise;
   siso.noise_model_max_order = options.noise_model_max_order;
   siso.compute_covariance = options.compute_covariance;
+  siso.initial_conditions = options.initial_conditions;
   if (!options.input_delays.empty()) {
     const DelaySplit delay =
         split_delay(options.input_delays.front() * data.sample_time(), data.sample_time());
@@ -1061,6 +1164,7 @@ MimoEstimationResult siso_result(const Layout& layout, const MimoData& data,
     }
   }
   result.modes = modes_of(layout, *result.model, result.covariance);
+  if (r.initial_conditions.size() > 0) result.initial_conditions = r.initial_conditions;
   return result;
 }
 
@@ -1075,13 +1179,14 @@ MimoEstimationResult siso_result(const Layout& layout, const MimoData& data,
 // other modes, D) stays general and is refitted with the shapes. One thin QR of the columns
 // turns every step into a problem of their number, whatever the record's length.
 struct RankOneFit {
-  MimoAdditiveModel model;
+  Iterate model;
   int iterations = 0;
   int modes = 0;
 };
 
-RankOneFit rank_one_residues(const Layout& layout, const MimoData& data,
-                             const MimoAdditiveModel& general) {
+// Free-response columns stay general too.
+RankOneFit rank_one_residues(const Layout& layout, const MimoData& data, const Iterate& start) {
+  const MimoAdditiveModel& general = start.model;
   struct Mode {
     int submodel;
     bool complex;  // m_i = 1
@@ -1110,7 +1215,7 @@ RankOneFit rank_one_residues(const Layout& layout, const MimoData& data,
   for (int c = 0; c < layout.u_count; ++c) {
     if (!in_mode[static_cast<size_t>(c)]) others.push_back(c);
   }
-  if (modes.empty()) return {general, 0, 0};
+  if (modes.empty()) return {start, 0, 0};
   const int n_modes = static_cast<int>(modes.size());
   const int n_other = static_cast<int>(others.size());
   const int p_all = p + n_other;
@@ -1268,19 +1373,68 @@ RankOneFit rank_one_residues(const Layout& layout, const MimoData& data,
       }
     }
   }
-  return {model_from_columns(layout, denominators(general), b)
-              .with_input_delays(general.input_delays()),
-          iteration, n_modes};
+  return {{model_from_columns(layout, denominators(general), b)
+               .with_input_delays(general.input_delays()),
+           b.bottomRows(layout.free_count)},
+          iteration,
+          n_modes};
+}
+
+// The layout without free responses: that of the model's parameters and the covariance.
+Layout model_layout(const Layout& layout) {
+  Layout plain(layout.orders, layout.inputs, layout.outputs, layout.direct);
+  plain.input_fractions = layout.input_fractions;
+  return plain;
+}
+
+// The model's block of the joint covariance of the parameters and the free responses' coefficients
+// (docs/decisions/0010): the free responses' uncertainty is accounted for, their entries dropped.
+Eigen::MatrixXd model_block(const Layout& layout, const Eigen::MatrixXd& joint) {
+  if (layout.free_count == 0) return joint;
+  std::vector<Eigen::Index> keep;
+  for (int c = 0; c < layout.a_count; ++c) keep.push_back(c);
+  for (int j = 0; j < layout.outputs; ++j) {
+    for (int c = 0; c < layout.model_columns(); ++c) keep.push_back(layout.b_index(j, c));
+  }
+  const auto p = static_cast<Eigen::Index>(keep.size());
+  Eigen::MatrixXd block(p, p);
+  for (Eigen::Index x = 0; x < p; ++x) {
+    for (Eigen::Index y = 0; y < p; ++y) {
+      block(x, y) = joint(keep[static_cast<size_t>(x)], keep[static_cast<size_t>(y)]);
+    }
+  }
+  return block;
+}
+
+// Realisation-free form of the free responses (MimoEstimationResult::initial_conditions): per
+// output (column), per submodel, its free response and first n_i + l_i - 1 derivatives at the
+// first sample, c0 A^k x0 of 1/(p^l_i A_i), as the SISO estimators report them.
+Eigen::MatrixXd free_response_values(const Layout& layout, const Iterate& x) {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(layout.free_count, layout.outputs);
+  for (int i = 0; i < layout.size(); ++i) {
+    const FilterRealization bank = input_bank(layout, denominators(x.model), i);
+    const int s = layout.states(i);
+    if (bank.order() != s) continue;
+    for (int j = 0; j < layout.outputs; ++j) {
+      Eigen::VectorXd state = x.free.block(free_row(layout, i), j, s, 1);
+      for (int k = 0; k < s; ++k) {
+        out(free_row(layout, i) + k, j) = bank.c.row(0).dot(state);
+        state = bank.a * state;
+      }
+    }
+  }
+  return out;
 }
 
 MimoEstimationResult estimate(const Layout& layout, const MimoData& data,
                               const MimoRefinedIvOptions& options,
                               const std::optional<MimoAdditiveModel>& initial_model,
                               const Eigen::VectorXd& input_delays) {
-  MimoAdditiveModel model = [&] {
+  // A given start has no free responses yet: the first step estimates them.
+  Iterate model = [&] {
     if (initial_model) {
       internal::check_initial_model(layout, *initial_model, "mimo_srivc", "the data");
-      return *initial_model;
+      return at_rest(layout, *initial_model);
     }
     return automatic_start(layout, data, options.output_interpolation);
   }();
@@ -1304,7 +1458,7 @@ MimoEstimationResult estimate(const Layout& layout, const MimoData& data,
     model = std::move(one.model);
   }
 
-  const Eigen::MatrixXd u = numerator_regressors(layout, data, denominators(model));
+  const Eigen::MatrixXd u = numerator_regressors(layout, data, denominators(model.model));
   const Eigen::MatrixXd fitted = model_outputs(layout, u, model);
   result.mean_squared_errors = (data.outputs() - fitted).colwise().squaredNorm().transpose() /
                                static_cast<double>(data.size());
@@ -1316,7 +1470,7 @@ MimoEstimationResult estimate(const Layout& layout, const MimoData& data,
   // The verdict: finite, stable, every output's fit not negative, the denominators'
   // equations well conditioned at the last step.
   std::vector<std::complex<double>> poles;
-  for (const MimoSubmodel& sub : model.submodels()) {
+  for (const MimoSubmodel& sub : model.model.submodels()) {
     const Eigen::VectorXcd r = sub.a.roots();
     poles.insert(poles.end(), r.data(), r.data() + r.size());
   }
@@ -1337,17 +1491,19 @@ MimoEstimationResult estimate(const Layout& layout, const MimoData& data,
                         {verdict_advice::better_start, verdict_advice::lower_order});
   }
   if (options.compute_covariance) {
-    result.covariance = mimo_covariance(layout, data, model, u, data.outputs() - fitted,
-                                        options.noise, options.noise_model_max_order);
+    result.covariance =
+        model_block(layout, mimo_covariance(layout, data, model, u, data.outputs() - fitted,
+                                            options.noise, options.noise_model_max_order));
   }
-  result.modes = modes_of(layout, model, result.covariance);
+  result.modes = modes_of(model_layout(layout), model.model, result.covariance);
   for (const MimoMode& mode : result.modes) {
     const std::string name = internal::concat("mode ", mode.submodel + 1);
     check_standard_errors(result.verdict, {name + " natural frequency", name + " damping ratio"},
                           Eigen::Vector2d(mode.natural_frequency, mode.damping_ratio),
                           Eigen::Vector2d(mode.natural_frequency_se, mode.damping_ratio_se));
   }
-  result.model = model.with_input_delays(input_delays);
+  result.model = model.model.with_input_delays(input_delays);
+  if (layout.free_count > 0) result.initial_conditions = free_response_values(layout, model);
   return result;
 }
 
@@ -1407,6 +1563,7 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
   }
   // Known input delays: whole samples shifted into the record once, the fractions left to the
   // filters (layout.input_fractions); every step below runs on the shifted record.
+  if (options.initial_conditions == InitialConditions::estimate) layout.add_free_responses();
   const DelayedInputs delayed = delay_inputs(layout, data, options.input_delays);
   const MimoData& record = delayed.data ? *delayed.data : data;
   return estimate(layout, record, options, initial_model, delayed.seconds);

@@ -30,13 +30,20 @@ struct Score {
 
 // The matching cost of a mode and a track's last value, or none beyond the gate.
 std::optional<double> pair_cost(const ModalParameters& track, const ModalParameters& mode,
-                                const TrackingOptions& options) {
+                                double max_frequency_jump, double damping_weight) {
   const double w = track.natural_frequency;
   if (!(w > 0.0) || !std::isfinite(mode.natural_frequency)) return std::nullopt;
   const double jump = std::abs(mode.natural_frequency - w) / w;
-  if (!(jump <= options.max_frequency_jump)) return std::nullopt;
+  if (!(jump <= max_frequency_jump)) return std::nullopt;
   const double damping = std::abs(mode.damping_ratio - track.damping_ratio);
-  return jump + options.damping_weight * (std::isfinite(damping) ? damping : 0.0);
+  return jump + damping_weight * (std::isfinite(damping) ? damping : 0.0);
+}
+
+ModalParameters modal_value(const MimoMode& mode) {
+  ModalParameters v;
+  v.natural_frequency = mode.natural_frequency;
+  v.damping_ratio = mode.damping_ratio;
+  return v;
 }
 
 std::vector<int> assign_exact(const std::vector<std::vector<std::optional<double>>>& cost,
@@ -117,6 +124,42 @@ ModeTrack empty_track(int windows) {
   return track;
 }
 
+// Where window w of `layout` lies in a record starting at t0 with sample time h.
+template <class Window>
+void place_window(Window& window, const WindowLayout& layout, int w, double t0, double h) {
+  window.first_sample = w * layout.step_samples;
+  window.samples = layout.window_samples;
+  window.start_time = t0 + window.first_sample * h;
+  window.end_time = window.start_time + (layout.window_samples - 1) * h;
+  window.centre_time = 0.5 * (window.start_time + window.end_time);
+}
+
+// A refused window: not run, not usable, the estimator's reason.
+template <class Window>
+void refuse_window(Window& window, const InvalidArgument& e) {
+  window.termination = Termination::not_run;
+  window.message = e.what();
+  window.verdict.fail(internal::concat("the estimator refused the window: ", e.what()), {});
+}
+
+// Matched-window count, mean and drift of a track's natural frequencies.
+void summarise(ModeTrack& track) {
+  double sum = 0.0;
+  double first = kNaN;
+  double latest = kNaN;
+  for (double value : track.natural_frequency) {
+    if (std::isnan(value)) continue;
+    ++track.windows_matched;
+    sum += value;
+    if (std::isnan(first)) first = value;
+    latest = value;
+  }
+  if (track.windows_matched > 0) {
+    track.mean_natural_frequency = sum / track.windows_matched;
+    track.frequency_drift = latest - first;
+  }
+}
+
 void fill_window(TrackingWindow& window, const EstimationResult& estimate) {
   window.termination = estimate.termination;
   window.message = estimate.message;
@@ -130,48 +173,88 @@ void fill_window(TrackingWindow& window, const EstimationResult& estimate) {
 
 }  // namespace
 
-WindowLayout window_layout(const TrackingOptions& options, int samples, double sample_time) {
+namespace {
+
+// window_layout() of either options (`who`: their type's name, for the messages).
+template <class Options>
+WindowLayout layout_windows(const Options& options, int samples, double sample_time,
+                            std::string_view who) {
   options.validate();
   const double record = samples * sample_time;
-  require(options.window > 0.0,
-          "TrackingOptions.window is 0; give the window length in seconds (> 0)");
+  require(options.window > 0.0, who, ".window is 0; give the window length in seconds (> 0)");
   WindowLayout layout;
   const double window_samples = std::round(options.window / sample_time);
-  require(window_samples <= samples, "TrackingOptions.window is ", format_number(options.window),
-          " s (", format_number(window_samples), " samples); the record has ", samples,
-          " samples (", format_number(record), " s), so the window must not be longer");
-  require(window_samples >= 2, "TrackingOptions.window is ", format_number(options.window),
+  require(window_samples <= samples, who, ".window is ", format_number(options.window), " s (",
+          format_number(window_samples), " samples); the record has ", samples, " samples (",
+          format_number(record), " s), so the window must not be longer");
+  require(window_samples >= 2, who, ".window is ", format_number(options.window),
           " s, less than 2 samples of ", format_number(sample_time), " s");
   layout.window_samples = static_cast<int>(window_samples);
   const double step = options.step.value_or(options.window);
   const double step_samples = options.step ? std::round(step / sample_time) : window_samples;
-  require(step_samples >= 1, "TrackingOptions.step is ", format_number(step),
-          " s, less than half a sample (", format_number(sample_time), " s)");
+  require(step_samples >= 1, who, ".step is ", format_number(step), " s, less than half a sample (",
+          format_number(sample_time), " s)");
   layout.step_samples = static_cast<int>(std::min<double>(step_samples, samples));
   layout.count = 1 + (samples - layout.window_samples) / layout.step_samples;
-  require(layout.count >= 2, "TrackingOptions: a window of ", layout.window_samples,
-          " samples moved by ", layout.step_samples, " samples fits ", layout.count,
-          " time in a record of ", samples,
+  require(layout.count >= 2, who, ": a window of ", layout.window_samples, " samples moved by ",
+          layout.step_samples, " samples fits ", layout.count, " time in a record of ", samples,
           " samples; tracking needs at least 2 windows (a shorter window or step)");
   return layout;
 }
 
+}  // namespace
+
+WindowLayout window_layout(const TrackingOptions& options, int samples, double sample_time) {
+  return layout_windows(options, samples, sample_time, TrackingOptions::type_name);
+}
+
+namespace {
+
+// The assignment of assign_modes() for the costs of every track (rows) and mode (columns).
+std::vector<int> assign_by_cost(const std::vector<std::vector<std::optional<double>>>& cost,
+                                int mode_count) {
+  const int track_count = static_cast<int>(cost.size());
+  if (track_count == 0 || mode_count == 0) {
+    return std::vector<int>(static_cast<std::size_t>(mode_count), -1);
+  }
+  return mode_count <= kExactModes ? assign_exact(cost, track_count, mode_count)
+                                   : assign_greedy(cost, track_count, mode_count);
+}
+
+}  // namespace
+
 std::vector<int> assign_modes(const std::vector<ModalParameters>& tracks,
                               const std::vector<ModalParameters>& modes,
                               const TrackingOptions& options) {
-  const int track_count = static_cast<int>(tracks.size());
-  const int mode_count = static_cast<int>(modes.size());
-  if (track_count == 0 || mode_count == 0) {
-    return std::vector<int>(modes.size(), -1);
-  }
   std::vector<std::vector<std::optional<double>>> cost(
       tracks.size(), std::vector<std::optional<double>>(modes.size()));
   for (std::size_t t = 0; t < tracks.size(); ++t) {
     for (std::size_t k = 0; k < modes.size(); ++k)
-      cost[t][k] = pair_cost(tracks[t], modes[k], options);
+      cost[t][k] =
+          pair_cost(tracks[t], modes[k], options.max_frequency_jump, options.damping_weight);
   }
-  return mode_count <= kExactModes ? assign_exact(cost, track_count, mode_count)
-                                   : assign_greedy(cost, track_count, mode_count);
+  return assign_by_cost(cost, static_cast<int>(modes.size()));
+}
+
+std::vector<int> assign_mimo_modes(const std::vector<MimoMode>& tracks,
+                                   const std::vector<MimoMode>& modes,
+                                   const MimoTrackingOptions& options) {
+  options.validate();
+  std::vector<std::vector<std::optional<double>>> cost(
+      tracks.size(), std::vector<std::optional<double>>(modes.size()));
+  for (std::size_t t = 0; t < tracks.size(); ++t) {
+    for (std::size_t k = 0; k < modes.size(); ++k) {
+      require(modes[k].shape.size() == tracks[t].shape.size(), "assign_mimo_modes: mode ", k + 1,
+              " has a shape of ", modes[k].shape.size(), " outputs; track ", t + 1, "'s has ",
+              tracks[t].shape.size());
+      const double mac = modal_assurance(tracks[t].shape, modes[k].shape);
+      if (!(mac >= options.min_mac)) continue;
+      const std::optional<double> c = pair_cost(modal_value(tracks[t]), modal_value(modes[k]),
+                                                options.max_frequency_jump, options.damping_weight);
+      if (c) cost[t][k] = *c + options.mac_weight * (1.0 - mac);
+    }
+  }
+  return assign_by_cost(cost, static_cast<int>(modes.size()));
 }
 
 TrackingResult track_modes(const SampledData& data, const ModelStructure& structure,
@@ -192,11 +275,7 @@ TrackingResult track_modes(const SampledData& data, const ModelStructure& struct
   std::optional<std::string> first_refusal;  // the first window the estimator refused
   for (int w = 0; w < layout.count; ++w) {
     TrackingWindow window;
-    window.first_sample = w * layout.step_samples;
-    window.samples = layout.window_samples;
-    window.start_time = data.start_time() + window.first_sample * h;
-    window.end_time = window.start_time + (layout.window_samples - 1) * h;
-    window.centre_time = 0.5 * (window.start_time + window.end_time);
+    place_window(window, layout, w, data.start_time(), h);
     const SampledData piece = data.segment(window.first_sample, layout.window_samples);
 
     IdentificationOptions cold = options.identification;
@@ -221,9 +300,7 @@ TrackingResult track_modes(const SampledData& data, const ModelStructure& struct
     } catch (const InvalidArgument& e) {
       if (!first_refusal) first_refusal = e.what();
       estimate.reset();
-      window.termination = Termination::not_run;
-      window.message = e.what();
-      window.verdict.fail(internal::concat("the estimator refused the window: ", e.what()), {});
+      refuse_window(window, e);
     }
     if (!estimate) {
       previous_usable = false;
@@ -265,22 +342,97 @@ TrackingResult track_modes(const SampledData& data, const ModelStructure& struct
     // Every window refused alike: bad input for this record, not an outcome.
     throw InvalidArgument(internal::concat("every window was refused; window 1: ", *first_refusal));
   }
-  for (ModeTrack& track : result.tracks) {
-    double sum = 0.0;
-    double first = kNaN;
-    double latest = kNaN;
-    for (double value : track.natural_frequency) {
-      if (std::isnan(value)) continue;
-      ++track.windows_matched;
-      sum += value;
-      if (std::isnan(first)) first = value;
-      latest = value;
+  for (ModeTrack& track : result.tracks) summarise(track);
+  return result;
+}
+
+MimoTrackingResult track_mimo_modes(const MimoData& data, const std::vector<SubmodelOrder>& orders,
+                                    const MimoTrackingOptions& options,
+                                    const std::function<void(int, int)>& progress) {
+  const WindowLayout layout =
+      layout_windows(options, data.size(), data.sample_time(), MimoTrackingOptions::type_name);
+  options.refined_iv.validate();
+
+  MimoTrackingResult result;
+  result.sample_time = data.sample_time();
+  result.window_samples = layout.window_samples;
+  result.step_samples = layout.step_samples;
+  result.output_names = data.output_names();
+  std::vector<MimoMode> last;  // each track's last matched mode
+  const double h = data.sample_time();
+  bool previous_usable = false;
+  bool ran = false;
+  std::optional<std::string> first_refusal;
+  for (int w = 0; w < layout.count; ++w) {
+    MimoTrackingWindow window;
+    place_window(window, layout, w, data.start_time(), h);
+    const MimoData piece = data.segment(window.first_sample, layout.window_samples);
+    std::optional<MimoEstimationResult> estimate;
+    try {
+      if (w > 0 && options.warm_start && previous_usable) {
+        window.start = WindowStart::previous_window;
+        estimate = mimo_srivc(piece, orders, options.refined_iv, result.windows.back().model);
+        if (!estimate->verdict.usable && options.retry_unusable) {
+          window.start = WindowStart::retried;
+          estimate = mimo_srivc(piece, orders, options.refined_iv, options.initial_model);
+        }
+      } else {
+        window.start =
+            w > 0 && options.warm_start ? WindowStart::after_unusable : WindowStart::automatic;
+        estimate = mimo_srivc(piece, orders, options.refined_iv, options.initial_model);
+      }
+    } catch (const InvalidArgument& e) {
+      if (!first_refusal) first_refusal = e.what();
+      estimate.reset();
+      refuse_window(window, e);
     }
-    if (track.windows_matched > 0) {
-      track.mean_natural_frequency = sum / track.windows_matched;
-      track.frequency_drift = latest - first;
+    previous_usable = estimate && estimate->verdict.usable && estimate->model;
+    if (estimate) {
+      ran = true;
+      window.termination = estimate->termination;
+      window.message = estimate->message;
+      window.iterations = estimate->iterations;
+      window.verdict = estimate->verdict;
+      window.fit_percent = estimate->fit_percent;
+      window.model = estimate->model;
+      window.modes = estimate->modes;
+      window.tracks.assign(window.modes.size(), -1);
+      window.mac.assign(window.modes.size(), kNaN);
     }
+    if (previous_usable) {
+      ++result.usable_windows;
+      window.tracks = assign_mimo_modes(last, window.modes, options);
+      for (std::size_t k = 0; k < window.modes.size(); ++k) {
+        const MimoMode& m = window.modes[k];
+        if (window.tracks[k] < 0) {
+          window.tracks[k] = static_cast<int>(result.tracks.size());
+          MimoModeTrack track;
+          static_cast<ModeTrack&>(track) = empty_track(layout.count);
+          track.mac.assign(static_cast<std::size_t>(layout.count), kNaN);
+          result.tracks.push_back(std::move(track));
+          last.push_back(m);
+        } else {
+          window.mac[k] =
+              modal_assurance(last[static_cast<std::size_t>(window.tracks[k])].shape, m.shape);
+        }
+        const auto t = static_cast<std::size_t>(window.tracks[k]);
+        const auto ws = static_cast<std::size_t>(w);
+        MimoModeTrack& track = result.tracks[t];
+        track.natural_frequency[ws] = m.natural_frequency;
+        track.natural_frequency_se[ws] = m.natural_frequency_se;
+        track.damping_ratio[ws] = m.damping_ratio;
+        track.damping_ratio_se[ws] = m.damping_ratio_se;
+        track.mac[ws] = window.mac[k];
+        last[t] = m;
+      }
+    }
+    result.windows.push_back(std::move(window));
+    if (progress) progress(w + 1, layout.count);
   }
+  if (!ran) {
+    throw InvalidArgument(internal::concat("every window was refused; window 1: ", *first_refusal));
+  }
+  for (MimoModeTrack& track : result.tracks) summarise(track);
   return result;
 }
 

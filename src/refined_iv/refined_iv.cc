@@ -108,6 +108,28 @@ Eigen::VectorXd numerator_of(const Layout& layout, const Eigen::VectorXd& beta, 
   return beta.segment(layout.offset[static_cast<size_t>(i)] + o.n, o.m + 1);
 }
 
+}  // namespace
+
+FreeResponseChain free_response_chain(const Polynomial& a, int integrators, double h) {
+  const FilterRealization bank = derivative_filters(Polynomial::monomial(integrators) * a);
+  const int n = a.degree();
+  FilterRealization chain = bank;
+  if (n > 0) {
+    Eigen::VectorXd first = Eigen::VectorXd::Zero(bank.outputs());
+    first(0) = 1.0;
+    chain = cascade(bank, first, derivative_filters(a));
+  }
+  const int states = chain.order();
+  FreeResponseChain out;
+  out.phi = discretize_zoh(chain.a, chain.b, h).phi;
+  out.c0 = Eigen::RowVectorXd::Zero(states);
+  out.c0.head(bank.order()) = bank.c.row(0);
+  out.ck = n > 0 ? Eigen::MatrixXd(chain.c.middleRows(1, n)) : Eigen::MatrixXd(0, states);
+  return out;
+}
+
+namespace {
+
 // Realisation of B/(p^l A): the bank of 1/(p^l A) with the outputs combined by b.
 FilterRealization submodel_realization(const Polynomial& a, const Eigen::VectorXd& b, int l) {
   const FilterRealization bank = derivative_filters(Polynomial::monomial(l) * a);
@@ -348,24 +370,18 @@ SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& be
   }
   if (layout.free_responses()) {
     const int s = layout.states(i);
-    FilterRealization chain = bank;
-    if (o.n > 0) {
-      Eigen::VectorXd first = Eigen::VectorXd::Zero(bank.outputs());
-      first(0) = 1.0;
-      chain = cascade(bank, first, derivative_filters(a));
-    }
-    const int states = chain.order();
+    FreeResponseChain chain = free_response_chain(a, o.integrators, h);
+    const int states = static_cast<int>(chain.phi.rows());
     const int given = std::min(s, s1);  // s1 < s only if the iterate lost its leading a_in
     FreeResponse& r = f.free.emplace();
-    r.phi = discretize_zoh(chain.a, chain.b, h).phi;
+    r.phi = std::move(chain.phi);
     r.state = Eigen::MatrixXd::Zero(states, s + 1);
     r.state.topLeftCorner(given, given).setIdentity();
     r.state.block(0, s, given, 1) =
         initial_states.segment(layout.free_at(record, i) - layout.parameters, given);
     r.next.resize(states, s + 1);
-    r.c0 = Eigen::RowVectorXd::Zero(states);
-    r.c0.head(s1) = bank.c.row(0);
-    r.ck = o.n > 0 ? Eigen::MatrixXd(chain.c.middleRows(1, o.n)) : Eigen::MatrixXd(0, states);
+    r.c0 = std::move(chain.c0);
+    r.ck = std::move(chain.ck);
     r.basis.resize(kBlock, s);
     r.value.resize(kBlock);
     r.filtered.resize(kBlock, o.n);

@@ -6,9 +6,16 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "cli/run_ctid.h"
+#include "ctid/core/mimo_data.h"
+#include "ctid/core/mimo_model.h"
 #include "ctid/io/json.h"
+#include "ctid/io/mimo_data_csv.h"
+#include "ctid/simulation/excitation.h"
+#include "ctid/simulation/simulate.h"
+#include "support/mimo_systems.h"
 
 namespace ctid::cli {
 namespace {
@@ -113,6 +120,72 @@ TEST_F(TrackCommand, RefusesBadWindowsWithOneLine) {
   expect_bad_input(
       ctid({"track", "d.csv", "--window", "30", "--modes", "1", "--max-frequency-jump", "0"}),
       "TrackingOptions.max_frequency_jump is 0; it must be finite and > 0");
+}
+
+// Several outputs (--input-columns / --output-columns, docs/decisions/0026): two modes of
+// three sensors under two forces, noise-free, 3000 samples of h = 0.05 s.
+class TrackMimoCommand : public testing::CliTest {
+ protected:
+  void SetUp() override {
+    CliTest::SetUp();
+    const MimoAdditiveModel g = ctid::testing::two_mode_structure();
+    Eigen::MatrixXd u(3000, 2);
+    for (int k = 0; k < 2; ++k) u.col(k) = white_noise(3000, 1.0, 7 + k);
+    Eigen::MatrixXd y = Eigen::MatrixXd::Zero(3000, 3);
+    for (int j = 0; j < 3; ++j) {
+      for (int k = 0; k < 2; ++k) y.col(j) += simulate(g.channel(j, k), u.col(k), 0.05);
+    }
+    io::write_mimo_data(path("m.csv"),
+                        MimoData(0.05, u, y).with_names({"f1", "f2"}, {"a1", "a2", "a3"}));
+  }
+};
+
+TEST_F(TrackMimoCommand, FollowsTheSharedModesWithTheirMac) {
+  const auto r =
+      ctid({"track", "m.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a3", "--window",
+            "50", "--submodel", "2,0", "--submodel", "2,0", "-o", "t.json", "--table", "t.csv"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("ctid track: 3 windows of 50 s (1000 samples, step 1000) on m.csv "
+                               "(N = 3000, h = 0.05 s, 3 outputs, 2 inputs)"));
+  EXPECT_THAT(r.out, HasSubstr("usable windows: 3 of 3; warm starts: 2"));
+  EXPECT_THAT(r.out, HasSubstr("matched in 3 of 3 windows, smallest MAC "));
+  const nlohmann::json j = io::read_json(path("t.json"));
+  EXPECT_EQ(j.at("type"), "mimo_mode_tracking_result");
+  ASSERT_EQ(j.at("tracks").size(), 2U);
+  // Noise-free and mid-motion after window 1: exact with the initial state estimated.
+  const double w[2] = {1.4, 4.0};
+  for (int t = 0; t < 2; ++t) {
+    const auto& track = j.at("tracks")[static_cast<std::size_t>(t)];
+    for (const auto& value : track.at("natural_frequency")) {
+      EXPECT_NEAR(value.get<double>(), w[t], 1e-7 * w[t]);
+    }
+    EXPECT_NEAR(track.at("mac")[2].get<double>(), 1.0, 1e-9);
+  }
+  EXPECT_EQ(j.at("options").at("refined_iv").at("initial_conditions"), "estimate");
+  const std::string table = testing::slurp(path("t.csv"));
+  EXPECT_THAT(table, StartsWith("window,t_start,t_centre,t_end,track,frequency_hz,frequency_se_hz,"
+                                "damping,damping_se,mac,usable\n"));
+  EXPECT_EQ(testing::line_count(table), 7);  // header + 3 windows x 2 tracks
+}
+
+TEST_F(TrackMimoCommand, RefusesWhatSeveralOutputsCannotDoWithOneLine) {
+  const std::vector<std::string> base{
+      "track", "m.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a3", "--window", "50"};
+  const auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = base;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return ctid(args);
+  };
+  expect_bad_input(with({"--poles", "4", "--zeros", "1"}),
+                   "an unfactored model has no shared modes");
+  expect_bad_input(with({"--modes", "2", "--delay", "1"}),
+                   "--delay is not available with --input-columns / --output-columns");
+  expect_bad_input(with({"--modes", "2", "--start", "lssvf"}),
+                   "--start lssvf is for one input and output");
+  expect_bad_input(with({"--modes", "2", "--min-mac", "1.5"}), "min_mac");
+  expect_bad_input(ctid({"track", "m.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a3",
+                         "--window", "500", "--modes", "2"}),
+                   "the window must not be longer");
 }
 
 }  // namespace

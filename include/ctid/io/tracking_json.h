@@ -15,6 +15,8 @@ namespace ctid::io {
 
 /// The "type" of a mode tracking document.
 inline constexpr const char* kModeTrackingResultType = "mode_tracking_result";
+/// The "type" of a mode tracking document of several outputs (track_mimo_modes).
+inline constexpr const char* kMimoModeTrackingResultType = "mimo_mode_tracking_result";
 
 /// The result as one JSON object with "type": "mode_tracking_result" and "version": 1: the
 /// fields of TrackingResult, each window's modes flat as in an estimation_result
@@ -31,6 +33,18 @@ std::string tracking_table_csv(const TrackingResult& result);
 
 /// Writes tracking_table_csv() to `path` (through a temporary moved into place).
 void write_tracking_table(const std::filesystem::path& path, const TrackingResult& result,
+                          Overwrite overwrite = Overwrite::no);
+
+/// A MimoTrackingResult as one JSON object with "type": "mimo_mode_tracking_result" and
+/// "version": 1: its fields (every window's MimoMode with its shape), each window's mode with
+/// "track", "mac" and natural_frequency_hz / natural_frequency_se_hz beside, and each track's
+/// per-window arrays in Hz as in to_json(const TrackingResult&).
+nlohmann::json to_json(const MimoTrackingResult& result);
+
+/// The table of tracking_table_csv() with a column mac (the MAC of the track's mode with its
+/// previous shape; empty in the window where the track starts) before usable.
+std::string tracking_table_csv(const MimoTrackingResult& result);
+void write_tracking_table(const std::filesystem::path& path, const MimoTrackingResult& result,
                           Overwrite overwrite = Overwrite::no);
 
 }  // namespace ctid::io

@@ -57,6 +57,11 @@ struct MimoRefinedIvOptions {
   /// alternating least squares. Standard errors stay those of the general residues
   /// (docs/decisions/0018).
   bool rank_one_residues = false;
+  /// State at the first sample, as RefinedIvOptions::initial_conditions: `estimate` adds the
+  /// free response of every submodel at every output (n_i + l_i coefficients each, the same
+  /// columns for every output) to the regressor and the instrument, so that records which
+  /// start mid-motion are not biased (docs/decisions/0010, 0026).
+  InitialConditions initial_conditions = InitialConditions::zero;
 
   static constexpr std::string_view type_name = "MimoRefinedIvOptions";
   static constexpr auto fields() {
@@ -79,6 +84,8 @@ struct MimoRefinedIvOptions {
               "Known delay of every input [samples, may be fractional]; empty: none."),
         field("rank_one_residues", &O::rank_one_residues,
               "Restrict every mode's residue matrix to rank one (shape x participation)."),
+        field("initial_conditions", &O::initial_conditions,
+              "State at the first sample: zero, or each output's free responses estimated."),
     };
   }
   void validate() const { validate_fields(*this); }
@@ -155,6 +162,10 @@ struct MimoEstimationResult {
   Eigen::MatrixXd covariance;
   /// Every second-order submodel as a mode, in submodel order.
   std::vector<MimoMode> modes;
+  /// MimoRefinedIvOptions::initial_conditions = estimate: per output (column), per submodel,
+  /// the value and first n_i + l_i - 1 derivatives at the first sample of its estimated free
+  /// response; empty otherwise.
+  Eigen::MatrixXd initial_conditions;
   bool converged() const { return termination == Termination::converged; }
 
   static constexpr std::string_view type_name = "MimoEstimationResult";
@@ -174,6 +185,8 @@ struct MimoEstimationResult {
         field("covariance", &S::covariance,
               "Covariance of [a of every submodel; per output its numerators and D]."),
         field("modes", &S::modes, "MimoMode of every second-order submodel."),
+        field("initial_conditions", &S::initial_conditions,
+              "Per output, per submodel: estimated free response and derivatives at t_0."),
     };
   }
 };

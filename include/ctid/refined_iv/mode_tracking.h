@@ -16,11 +16,14 @@
 
 #include "ctid/core/additive_model.h"
 #include "ctid/core/fields.h"
+#include "ctid/core/mimo_data.h"
+#include "ctid/core/mimo_model.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/verdict.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/identification.h"
+#include "ctid/refined_iv/mimo_srivc.h"
 
 namespace ctid {
 
@@ -218,5 +221,172 @@ std::vector<int> assign_modes(const std::vector<ModalParameters>& tracks,
 TrackingResult track_modes(const SampledData& data, const ModelStructure& structure,
                            const TrackingOptions& options,
                            const std::function<void(int, int)>& progress = {});
+
+// --- Several outputs: shared-pole fits and matching by mode shape (docs/decisions/0026) ---------
+
+/// The refined IV options of a tracking window: those of mimo_srivc with the initial state
+/// estimated (windows cut from a running record start mid-motion).
+inline MimoRefinedIvOptions mimo_tracking_refined_iv() {
+  MimoRefinedIvOptions options;
+  options.initial_conditions = InitialConditions::estimate;
+  return options;
+}
+
+struct MimoTrackingOptions {
+  /// Length of every window [s], rounded to whole samples; 0 (the default) means not set, and
+  /// track_modes() refuses it.
+  double window = 0.0;
+  /// Distance between the starts of consecutive windows [s], rounded to whole samples (at
+  /// least one); none: the window length.
+  std::optional<double> step;
+  /// Options of mimo_srivc for every window; by default with initial_conditions = estimate.
+  MimoRefinedIvOptions refined_iv = mimo_tracking_refined_iv();
+  /// Start of the first window (and of every window whose warm start is not available); none:
+  /// mimo_srivc's automatic start.
+  std::optional<MimoAdditiveModel> initial_model;
+  /// Start window k > 1 from window k - 1's model (when that fit was usable).
+  bool warm_start = true;
+  /// A warm-started fit that is not usable is fitted again from the automatic start.
+  bool retry_unusable = true;
+  /// Frequency gate: a mode joins a track only if their natural frequencies differ by at most
+  /// this fraction of the track's.
+  double max_frequency_jump = 0.1;
+  /// Weight of the damping-ratio difference in the matching cost.
+  double damping_weight = 1.0;
+  /// Weight of 1 - MAC (the modal assurance criterion of the mode's shape and the track's last
+  /// shape) in the matching cost |w - w_t| / w_t + damping_weight |zeta - zeta_t|
+  /// + mac_weight (1 - MAC).
+  double mac_weight = 1.0;
+  /// Shape gate: a mode joins a track only if their MAC is at least this.
+  double min_mac = 0.5;
+
+  static constexpr std::string_view type_name = "MimoTrackingOptions";
+  static constexpr auto fields() {
+    using O = MimoTrackingOptions;
+    return std::tuple{
+        field("window", &O::window, Finite{AtLeast{0.0}},
+              "Window length [s], rounded to whole samples; 0: not set (refused)."),
+        field("step", &O::step, Finite{GreaterThan{0.0}},
+              "Step between window starts [s], rounded to whole samples; none: the window."),
+        field("refined_iv", &O::refined_iv,
+              "MimoRefinedIvOptions of every window (initial conditions estimated by default)."),
+        field("initial_model", &O::initial_model,
+              "Start of the first window; none: the automatic start."),
+        field("warm_start", &O::warm_start,
+              "Start each window from the previous window's model when that fit was usable."),
+        field("retry_unusable", &O::retry_unusable,
+              "Refit a warm-started window that is not usable from the automatic start."),
+        field("max_frequency_jump", &O::max_frequency_jump, Finite{GreaterThan{0.0}},
+              "Largest relative frequency difference of a mode and the track it joins."),
+        field("damping_weight", &O::damping_weight, Finite{AtLeast{0.0}},
+              "Weight of the damping-ratio difference in the matching cost."),
+        field("mac_weight", &O::mac_weight, Finite{AtLeast{0.0}},
+              "Weight of 1 - MAC in the matching cost."),
+        field("min_mac", &O::min_mac, Between{0.0, 1.0, true, true},
+              "Smallest MAC of a mode's shape and the shape of the track it joins."),
+    };
+  }
+  void validate() const { validate_fields(*this); }
+};
+
+/// One window of track_mimo_modes(): as TrackingWindow, with the shared-pole fit's modes (and
+/// their shapes) and the MAC of each mode with the last shape of the track it joined.
+struct MimoTrackingWindow : Outcome {
+  int first_sample = 0;
+  int samples = 0;
+  double start_time = 0.0;
+  double end_time = 0.0;
+  double centre_time = 0.0;
+  WindowStart start = WindowStart::automatic;
+  Verdict verdict;
+  Eigen::VectorXd fit_percent;  ///< per output [%]
+  std::optional<MimoAdditiveModel> model;
+  std::vector<MimoMode> modes;  ///< every second-order mode of the fit (rad/s)
+  std::vector<int> tracks;      ///< track of each mode; -1 for those of an unusable window
+  /// MAC of each mode's shape with its track's last shape; NaN for a mode that starts a track
+  /// or is not matched.
+  std::vector<double> mac;
+
+  static constexpr std::string_view type_name = "MimoTrackingWindow";
+  static constexpr auto fields() {
+    using W = MimoTrackingWindow;
+    return join_fields(
+        Outcome::fields(),
+        std::tuple{
+            field("first_sample", &W::first_sample, "Index of its first sample in the record."),
+            field("samples", &W::samples, "Samples in the window."),
+            field("start_time", &W::start_time, "Time of its first sample [s]."),
+            field("end_time", &W::end_time, "Time of its last sample [s]."),
+            field("centre_time", &W::centre_time, "(start_time + end_time) / 2 [s]."),
+            field("start", &W::start, "Where the fit started."),
+            field("verdict", &W::verdict, "The fit's quality verdict."),
+            field("fit_percent", &W::fit_percent, "Per output, the output-error fit [%]."),
+            field("model", &W::model, "The fitted MimoAdditiveModel, or none."),
+            field("modes", &W::modes, "MimoMode of every second-order mode (rad/s)."),
+            field("tracks", &W::tracks,
+                  "Track of each mode; -1 for the modes of an unusable window."),
+            field("mac", &W::mac,
+                  "MAC of each mode with its track's last shape; NaN where it starts a track."),
+        });
+  }
+};
+
+/// A mode followed across windows of several outputs: ModeTrack's series and the MAC of each
+/// window's shape with the track's previous one (NaN where not matched or first matched).
+struct MimoModeTrack : ModeTrack {
+  std::vector<double> mac;
+
+  static constexpr std::string_view type_name = "MimoModeTrack";
+  static constexpr auto fields() {
+    using T = MimoModeTrack;
+    return join_fields(
+        ModeTrack::fields(),
+        std::tuple{field("mac", &T::mac, "Per window, MAC with the track's previous shape.")});
+  }
+};
+
+struct MimoTrackingResult {
+  double sample_time = 0.0;
+  int window_samples = 0;
+  int step_samples = 0;
+  std::vector<std::string> output_names;  ///< the outputs the shapes run over
+  std::vector<MimoTrackingWindow> windows;
+  std::vector<MimoModeTrack> tracks;
+  int usable_windows = 0;
+
+  static constexpr std::string_view type_name = "MimoTrackingResult";
+  static constexpr auto fields() {
+    using R = MimoTrackingResult;
+    return std::tuple{
+        field("sample_time", &R::sample_time, "Sample time of the record [s]."),
+        field("window_samples", &R::window_samples, "Samples per window."),
+        field("step_samples", &R::step_samples, "Samples between window starts."),
+        field("output_names", &R::output_names, "Names of the outputs of the mode shapes."),
+        field("windows", &R::windows, "MimoTrackingWindow of every window, in time order."),
+        field("tracks", &R::tracks, "MimoModeTrack of every mode followed across windows."),
+        field("usable_windows", &R::usable_windows, "Windows whose fit passed the verdict."),
+    };
+  }
+};
+
+/// The optimal assignment of assign_modes() with the mode shapes as well: a pair is allowed
+/// only if the relative frequency difference is at most options.max_frequency_jump and the MAC
+/// of the shapes at least options.min_mac; its cost is |w - w_t| / w_t + damping_weight
+/// |zeta - zeta_t| + mac_weight (1 - MAC). Returns the track of each mode, -1 where none.
+/// Throws InvalidArgument for shapes of different lengths.
+std::vector<int> assign_mimo_modes(const std::vector<MimoMode>& tracks,
+                                   const std::vector<MimoMode>& modes,
+                                   const MimoTrackingOptions& options);
+
+/// track_modes() for a record of several outputs: consecutive windows fitted by mimo_srivc
+/// with the submodels `orders` (shared poles; by default with each window's initial state
+/// estimated), each window after the first started from the previous window's model when that fit
+/// was usable and from the automatic start otherwise, and the modes of the usable windows matched
+/// into tracks by frequency, damping and mode shape (assign_mimo_modes against each track's last
+/// mode). Throws InvalidArgument for bad options or windows (before any fit) and when mimo_srivc
+/// refuses every window; a window refused for its own data is kept as not usable.
+MimoTrackingResult track_mimo_modes(const MimoData& data, const std::vector<SubmodelOrder>& orders,
+                                    const MimoTrackingOptions& options,
+                                    const std::function<void(int, int)>& progress = {});
 
 }  // namespace ctid

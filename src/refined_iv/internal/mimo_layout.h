@@ -28,6 +28,11 @@ struct MimoLayout {
   // Time domain only: the fraction of a sample by which each input is delayed after its whole
   // samples were shifted into the record (mimo_srivc's input_delays); empty: none.
   std::vector<double> input_fractions;
+  // Time domain only (InitialConditions::estimate): every submodel's n_i + l_i free-response
+  // columns, appended after the numerators and D; the same columns for every output, each
+  // output with its own coefficients. free_at[i] is submodel i's first; u_count counts them.
+  std::vector<int> free_at;
+  int free_count = 0;
 
   MimoLayout(std::vector<SubmodelOrder> o, int n_u, int n_y, bool with_direct)
       : orders(std::move(o)), inputs(n_u), outputs(n_y), direct(with_direct) {
@@ -39,6 +44,19 @@ struct MimoLayout {
     }
     d_at = u_count;
     if (direct) u_count += inputs;
+  }
+  /// Appends the free-response columns (see free_at).
+  void add_free_responses() {
+    for (const SubmodelOrder& s : orders) {
+      free_at.push_back(u_count);
+      u_count += s.n + s.integrators;
+      free_count += s.n + s.integrators;
+    }
+  }
+  /// Columns of one output that belong to the model (numerators and D, not free responses).
+  int model_columns() const { return u_count - free_count; }
+  int states(int i) const {
+    return orders[static_cast<std::size_t>(i)].n + orders[static_cast<std::size_t>(i)].integrators;
   }
   int size() const { return static_cast<int>(orders.size()); }
   /// Right-hand sides of (29): one per submodel, and one for the direct term.

@@ -28,6 +28,18 @@ struct RefinedIvProblem {
 
 EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIvOptions& options);
 
+/// The homogeneous chain 1/(p^l A) -> p^k/A (k = 1..n) behind a submodel's free responses
+/// (InitialConditions::estimate, docs/decisions/0010): the transition matrix phi of one sample,
+/// the row c0 reading 1/(p^l A) from the chain's state and the rows ck reading p^k/A of it. The
+/// free response of 1/(p^l A) from its state x0 (the second stage at rest) at sample k is
+/// c0 phi^k [x0; 0], and ck phi^k [x0; 0] its filtered p^k/A, exact at the samples.
+struct FreeResponseChain {
+  Eigen::MatrixXd phi;
+  Eigen::RowVectorXd c0;
+  Eigen::MatrixXd ck;
+};
+FreeResponseChain free_response_chain(const Polynomial& a, int integrators, double h);
+
 /// Parameters of `model` laid out for `orders` (b padded with zeros up to m_i); throws
 /// InvalidArgument if the structure does not fit.
 Eigen::VectorXd parameters_for_orders(const AdditiveModel& model,
