@@ -323,7 +323,12 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
                                  " values but the data have ", data.input_count(), " inputs (",
                                  listed(data.input_names()), "): give one delay per input"));
   }
-  const MimoEstimationResult result = mimo_srivc(data, structure.orders, options, start);
+  // A long record of many outputs iterates for tens of seconds: the iterations as a progress
+  // line (of at most --max-iterations; a converging fit stops before the total).
+  Progress progress("ctid fit", f.quiet);
+  const MimoEstimationResult result =
+      mimo_srivc(data, structure.orders, options, start, progress.callback("mimo_srivc iteration"));
+  progress.clear();
 
   nlohmann::json document = io::to_json(result);
   document["data"] = {

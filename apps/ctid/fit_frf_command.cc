@@ -25,6 +25,7 @@
 #include "ctid/io/report_json.h"
 #include "ctid/refined_iv/frf_matrix_fit.h"
 #include "plot_support.h"
+#include "progress.h"
 
 namespace ctid::cli {
 namespace {
@@ -126,7 +127,12 @@ ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
   const MimoFrf frf = io::read_mimo_frf(f.file);
   std::optional<MimoAdditiveModel> start;
   if (!f.initial.empty()) start = initial_model(f.initial);
-  const FrfMatrixFitResult result = frf_matrix_fit(frf, orders, options, start);
+  // Vector fitting and Levenberg-Marquardt on a large FRF matrix take seconds: one progress
+  // line counts both (against the most they may run; a converging fit stops sooner).
+  Progress progress("ctid fit-frf", f.quiet);
+  const FrfMatrixFitResult result =
+      frf_matrix_fit(frf, orders, options, start, progress.callback("step"));
+  progress.clear();
 
   nlohmann::json document = io::to_json(result);
   document["data"] = {{"file", f.file},

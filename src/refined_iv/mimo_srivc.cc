@@ -508,7 +508,8 @@ struct Iterations {
 };
 
 Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditiveModel model,
-                          int max_iterations, double tolerance, Hold output_interpolation) {
+                          int max_iterations, double tolerance, Hold output_interpolation,
+                          const std::function<void(int, int)>& progress = {}) {
   double cost = relative_output_error(layout, data, model);
   Iterations result{
       model, cost, Termination::not_run, {}, 0, 0, std::numeric_limits<double>::quiet_NaN()};
@@ -535,6 +536,7 @@ Iterations run_iterations(const Layout& layout, const MimoData& data, MimoAdditi
   std::optional<MimoAdditiveModel> accepted;
   Eigen::VectorXd last_step;
   for (int iteration = 1; iteration <= max_iterations; ++iteration) {
+    if (progress) progress(iteration, max_iterations);
     Step step = iterate(layout, data, model, output_interpolation);
     for (int halvings = 0; !step.model && accepted && halvings < kMaxHalvings; ++halvings) {
       ++result.step_halvings;
@@ -1276,7 +1278,8 @@ RankOneFit rank_one_residues(const Layout& layout, const MimoData& data,
 MimoEstimationResult estimate(const Layout& layout, const MimoData& data,
                               const MimoRefinedIvOptions& options,
                               const std::optional<MimoAdditiveModel>& initial_model,
-                              const Eigen::VectorXd& input_delays) {
+                              const Eigen::VectorXd& input_delays,
+                              const std::function<void(int, int)>& progress) {
   MimoAdditiveModel model = [&] {
     if (initial_model) {
       internal::check_initial_model(layout, *initial_model, "mimo_srivc", "the data");
@@ -1287,7 +1290,7 @@ MimoEstimationResult estimate(const Layout& layout, const MimoData& data,
 
   MimoEstimationResult result;
   Iterations run = run_iterations(layout, data, std::move(model), options.max_iterations,
-                                  options.tolerance, options.output_interpolation);
+                                  options.tolerance, options.output_interpolation, progress);
   result.termination = run.termination;
   result.message = std::move(run.message);
   result.iterations = run.iterations;
@@ -1386,7 +1389,8 @@ DelayedInputs delay_inputs(Layout& layout, const MimoData& data,
 
 MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<SubmodelOrder>& orders,
                                 const MimoRefinedIvOptions& options,
-                                const std::optional<MimoAdditiveModel>& initial_model) {
+                                const std::optional<MimoAdditiveModel>& initial_model,
+                                const std::function<void(int, int)>& progress) {
   options.validate();
   check_orders(orders, data, options.direct_term);
   require(options.input_delays.empty() ||
@@ -1409,7 +1413,7 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
   // filters (layout.input_fractions); every step below runs on the shifted record.
   const DelayedInputs delayed = delay_inputs(layout, data, options.input_delays);
   const MimoData& record = delayed.data ? *delayed.data : data;
-  return estimate(layout, record, options, initial_model, delayed.seconds);
+  return estimate(layout, record, options, initial_model, delayed.seconds, progress);
 }
 
 }  // namespace ctid
