@@ -14,10 +14,15 @@ namespace ctid {
 
 namespace {
 
+// "1", "s", "s^k": the term whose coefficient a message names.
+std::string power_of_s(Eigen::Index k) {
+  return k == 0 ? "1" : k == 1 ? "s" : "s^" + std::to_string(k);
+}
+
 void require_finite(const Eigen::VectorXd& c) {
   for (Eigen::Index k = 0; k < c.size(); ++k) {
-    require(std::isfinite(c(k)), "polynomial coefficient ", k, " (of s^", k, ") is ", c(k),
-            "; coefficients must be finite");
+    require(std::isfinite(c(k)), "polynomial coefficient ", k, " (of ", power_of_s(k), ") is ",
+            c(k), "; coefficients must be finite");
   }
 }
 
@@ -40,8 +45,8 @@ Polynomial::Polynomial(Eigen::VectorXd ascending) : coefficients_(std::move(asce
     return;
   }
   if (coefficients_.size() > 0) {
-    require(coefficients_(coefficients_.size() - 1) != 0.0, "polynomial leading coefficient (of s^",
-            coefficients_.size() - 1,
+    require(coefficients_(coefficients_.size() - 1) != 0.0, "polynomial leading coefficient (of ",
+            power_of_s(coefficients_.size() - 1),
             ") is zero; drop leading zeros explicitly with Polynomial::trimmed");
   }
 }
