@@ -148,6 +148,7 @@ void bind_core(py::module_& m) {
       .def("n", &Submodel::n, "deg A.")
       .def("m", &Submodel::m, "deg B.")
       .def("parameter_count", &Submodel::parameter_count, "n + m + 1.")
+      .def("__repr__", &Submodel::to_string)
       .def("is_biproper", &Submodel::is_biproper, "m == n + l.")
       .def("to_transfer_function", &Submodel::to_transfer_function, "B/(p^l A).");
 
