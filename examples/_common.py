@@ -1,5 +1,6 @@
 """Shared plumbing of the real-data examples: find the repository and the built ctid
-package, read the shipped CSV files, choose the output folder, write the numeric summary.
+package, name the shipped CSV files, choose the output folder, write the numeric summary.
+The records are read with ctid.read_csv, the rules `ctid fit FILE` applies to the same file.
 
 The examples import ctid from the build tree (build/python, or $CTID_BUILD_DIR/python) so
 that they run straight after ``scripts/demo.sh`` without installing anything.
@@ -28,14 +29,9 @@ def import_ctid():
     return ctid
 
 
-def read_csv(relative_path):
-    """(column names, float array) of a CSV under data/ with one header line."""
-    import numpy as np
-
-    path = os.path.join(DATA, relative_path)
-    with open(path) as f:
-        names = f.readline().strip().split(",")
-    return names, np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+def data_file(relative_path):
+    """The path of a shipped file under data/."""
+    return os.path.join(DATA, relative_path)
 
 
 def arguments(name, description):

@@ -32,10 +32,9 @@ def main():
     ctid = _common.import_ctid()
     import matplotlib.pyplot as plt
 
-    names, table = _common.read_csv("contsid_canning_river/canning.csv")
-    u = table[:, names.index("u_effective_rainfall")]
-    y = table[:, names.index("y_flow")]
-    h = 1.0
+    record = ctid.read_csv(_common.data_file("contsid_canning_river/canning.csv"), time="t_day",
+                           input="u_effective_rainfall", output="y_flow")
+    u, y, h = record.input, record.output, record.sample_time  # h = 1 day
     n = ESTIMATION_DAYS
     estimation = ctid.SampledData(h, u[:n], y[:n])
 

@@ -33,9 +33,8 @@ STRUCTURES = [(1, 0), (2, 1), (3, 1), (4, 1)]
 
 
 def load(ctid):
-    names, table = _common.read_csv("contsid_crane/crane.csv")
-    return ctid.SampledData.from_time_stamps(table[:, 0], table[:, names.index("u_motor_voltage")],
-                                             table[:, names.index("y2_load_angle")])
+    return ctid.read_csv(_common.data_file("contsid_crane/crane.csv"), time="t_s",
+                         input="u_motor_voltage", output="y2_load_angle")
 
 
 def describe(structure):

@@ -29,9 +29,9 @@ MAX_DELAY = 10
 
 
 def load(ctid):
-    names, table = _common.read_csv("daisy_dryer_ljung/dryer.csv")
-    return ctid.SampledData.from_time_stamps(table[:, 0], table[:, names.index("u_heater_voltage")],
-                                             table[:, names.index("y_outlet_temperature")])
+    return ctid.read_csv(_common.data_file("daisy_dryer_ljung/dryer.csv"),
+                         time="t_s_assumed_0.08", input="u_heater_voltage",
+                         output="y_outlet_temperature")
 
 
 def parts(data, detrend):

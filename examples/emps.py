@@ -58,11 +58,12 @@ def main():
     ctid = _common.import_ctid()
     import matplotlib.pyplot as plt
 
-    names, table = _common.read_csv("emps/emps.csv")
-    h = float(np.round(np.mean(np.diff(table[:, 0])), 9))
-    qg = table[:, names.index("qg_ref_pos_m")]
-    qm = table[:, names.index("qm_meas_pos_m")]
-    vir = table[:, names.index("vir_control_V")]
+    # The logged stamps jitter by up to 3e-8 s around the controller's 1 kHz clock, more than
+    # their 12 printed digits allow: the sample time is the clock's, as `ctid fit --sample-time`.
+    record = ctid.read_csv(_common.data_file("emps/emps.csv"), time="t_s", input="vir_control_V",
+                           output="qm_meas_pos_m", reference="qg_ref_pos_m", sample_time=1e-3)
+    h = record.sample_time
+    qg, qm, vir = record.reference, record.output, record.input
     velocity = np.gradient(qm, h)
     u_eff = vir - (COULOMB * np.sign(velocity) + OFFSET) / GTAU
 

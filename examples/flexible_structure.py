@@ -31,11 +31,10 @@ MAX_MODE_HZ = 200.0
 SCAN_MODES = 4
 
 
-def load():
-    names, table = _common.read_csv("daisy_flexible_structure/flexible_structure.csv")
-    h = float(np.mean(np.diff(table[:, 0])))
-    u = table[:, names.index(f"u{SHAKER}_force")]
-    y = table[:, names.index(f"y{SENSOR}_acc")]
+def load(ctid):
+    record = ctid.read_csv(_common.data_file("daisy_flexible_structure/flexible_structure.csv"),
+                           time="t_s", input=f"u{SHAKER}_force", output=f"y{SENSOR}_acc")
+    h, u, y = record.sample_time, record.input, record.output
     u, y = u - u.mean(), y - y.mean()
     # The same zero-phase filter on both signals leaves the force-to-acceleration relation
     # unchanged in the pass band; decimating by 2 then puts the band near Nyquist.
@@ -64,7 +63,7 @@ def starting_model(ctid, data, frf):
 def main():
     args = _common.arguments("flexible_structure", __doc__.splitlines()[0])
     ctid = _common.import_ctid()
-    h, u, y = load()
+    h, u, y = load(ctid)
     data = ctid.SampledData(h, u, y)
     frf = ctid.welch_frf(data, segment_length=1024, overlap=0.5)
     orders, start, peaks = starting_model(ctid, data, frf)

@@ -13,8 +13,6 @@ residuals.png and summary.json; discussed in docs/examples/pt326.md.
 import os
 import sys
 
-import numpy as np
-
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _common  # noqa: E402
 
@@ -22,10 +20,8 @@ MAX_DELAY = 10
 
 
 def load(ctid, which):
-    names, table = _common.read_csv(f"contsid_aerothermal_pt326/pt326_{which}.csv")
-    h = float(np.round(np.mean(np.diff(table[:, 0])), 9))
-    return ctid.SampledData(h, table[:, names.index("u_heater_voltage")],
-                            table[:, names.index("y_outlet_temperature")])
+    return ctid.read_csv(_common.data_file(f"contsid_aerothermal_pt326/pt326_{which}.csv"),
+                         time="t_s", input="u_heater_voltage", output="y_outlet_temperature")
 
 
 def main():

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/io/file.h"
 
 namespace ctid::cli {
@@ -200,6 +201,12 @@ CLI::Validator positive_number() {
 CLI::Validator non_negative_number() {
   return number_check(
       "NONNEGATIVE", [](double v) { return v >= 0.0; }, "a number >= 0");
+}
+
+std::string plus_minus(double value, double error) {
+  std::string text = format_brief(value);
+  if (std::isfinite(error)) text += " ± " + format_brief(error);
+  return text;
 }
 
 }  // namespace ctid::cli

@@ -91,6 +91,10 @@ std::optional<T> parse_number(const std::string& text) {
 /// would otherwise wrap "-1" and clamp larger values silently).
 CLI::Validator seed_validator();
 
+/// "1.41629 ± 0.00295" (format_brief); the value alone when the error is not finite (no
+/// covariance), so "± one standard error" never prints a "± nan".
+std::string plus_minus(double value, double error);
+
 /// A CLI11 check for flags that take a positive finite number: "'-1' is not a positive
 /// number" (CLI::PositiveNumber printed its range, up to DBL_MAX written out in 309 digits).
 CLI::Validator positive_number();

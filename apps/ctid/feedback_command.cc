@@ -13,6 +13,7 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/delayed_feedback/identification.h"
 #include "ctid/io/feedback_result_json.h"
 #include "ctid/io/sampled_data_csv.h"
@@ -47,7 +48,7 @@ void run_feedback(const FeedbackFlags& f) {
   const bool scan = !f.delay_scan.empty();
   if (scan == !std::isnan(f.delay)) usage_error("give one of --delay D or --delay-scan MIN:MAX");
   if (!scan && !(f.delay >= 0.0))
-    usage_error("--delay must be >= 0, got " + std::to_string(f.delay));
+    usage_error("--delay must be >= 0, got " + format_number(f.delay));
   const std::filesystem::path output(f.output);
 
   io::CsvColumns columns;

@@ -96,12 +96,6 @@ DelayInterval parse_delay_interval(const std::string& text) {
   return DelayInterval{*min, *max};
 }
 
-std::string plus_minus(double value, double error) {
-  std::string text = format_brief(value);
-  if (std::isfinite(error)) text += " ± " + format_brief(error);
-  return text;
-}
-
 void print_summary(std::ostream& out, const EstimationResult& r, const std::string& estimator,
                    const SampledData& data, int samples, const std::string& file,
                    const std::string& preprocessing) {
@@ -122,13 +116,12 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
         << format_number(r.model.input_delay()) << " s)\n";
   }
   for (int i = 0; i < r.model.size(); ++i) {
-    const Submodel& s = r.model[i];
-    out << "submodel " << i + 1 << ": (" << s.b.to_string("p") << ") / (";
-    if (s.integrators > 0) out << "p^" << s.integrators << " ";
-    out << s.a.to_string("p") << ")\n";
+    out << "submodel " << i + 1 << ": " << r.model[i].to_string() << "\n";
   }
   if (!r.modes.empty()) {
-    out << "modes (± one standard error):\n";
+    // Without a covariance there is no standard error to announce.
+    const bool errors = std::isfinite(r.modes.front().standard_error.natural_frequency);
+    out << (errors ? "modes (± one standard error):\n" : "modes:\n");
     for (const ModalEstimate& m : r.modes) {
       const double two_pi = 2.0 * std::numbers::pi;
       out << "  submodel " << m.submodel + 1
@@ -331,7 +324,12 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
                                  " values but the data have ", data.input_count(), " inputs (",
                                  listed(data.input_names()), "): give one delay per input"));
   }
-  const MimoEstimationResult result = mimo_srivc(data, structure.orders, options, start);
+  // A long record of many outputs iterates for tens of seconds: the iterations as a progress
+  // line (of at most --max-iterations; a converging fit stops before the total).
+  Progress progress("ctid fit", f.quiet);
+  const MimoEstimationResult result =
+      mimo_srivc(data, structure.orders, options, start, progress.callback("mimo_srivc iteration"));
+  progress.clear();
 
   nlohmann::json document = io::to_json(result);
   document["data"] = {
@@ -366,16 +364,15 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
       std::cout << "\n";
     }
     for (const MimoMode& m : result.modes) {
-      std::cout << "  mode " << m.submodel + 1
-                << ": f_n = " << format_significant(m.natural_frequency / (2.0 * M_PI), 7) << " +- "
-                << format_brief(m.natural_frequency_se / (2.0 * M_PI))
-                << " Hz, zeta = " << format_significant(m.damping_ratio, 4) << " +- "
-                << format_brief(m.damping_ratio_se) << ", rank-one share "
-                << format_significant(m.rank_one_share, 3) << "\n";
+      std::cout << "  mode " << m.submodel + 1 << ": f_n = "
+                << plus_minus(m.natural_frequency / (2.0 * M_PI),
+                              m.natural_frequency_se / (2.0 * M_PI))
+                << " Hz, zeta = " << plus_minus(m.damping_ratio, m.damping_ratio_se)
+                << ", rank-one share " << format_brief(m.rank_one_share) << "\n";
     }
     for (int j = 0; j < data.output_count(); ++j) {
       std::cout << "  fit " << data.output_names()[static_cast<size_t>(j)] << ": "
-                << format_significant(result.fit_percent(j), 4) << " %\n";
+                << format_brief(result.fit_percent(j)) << " %\n";
     }
   } else if (!result.verdict.usable) {
     std::cerr << "ctid fit: WARNING: " << result.verdict.summary() << "\n";

@@ -25,6 +25,7 @@
 #include "ctid/io/report_json.h"
 #include "ctid/refined_iv/frf_matrix_fit.h"
 #include "plot_support.h"
+#include "progress.h"
 
 namespace ctid::cli {
 namespace {
@@ -126,7 +127,12 @@ ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
   const MimoFrf frf = io::read_mimo_frf(f.file);
   std::optional<MimoAdditiveModel> start;
   if (!f.initial.empty()) start = initial_model(f.initial);
-  const FrfMatrixFitResult result = frf_matrix_fit(frf, orders, options, start);
+  // Vector fitting and Levenberg-Marquardt on a large FRF matrix take seconds: one progress
+  // line counts both (against the most they may run; a converging fit stops sooner).
+  Progress progress("ctid fit-frf", f.quiet);
+  const FrfMatrixFitResult result =
+      frf_matrix_fit(frf, orders, options, start, progress.callback("step"));
+  progress.clear();
 
   nlohmann::json document = io::to_json(result);
   document["data"] = {{"file", f.file},
@@ -143,19 +149,19 @@ ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
               << f.file << ": " << result.lines << " lines fitted";
     if (result.lines > 0 && !f.band.empty()) std::cout << " (band " << f.band << " Hz)";
     std::cout << ", " << frf.input_count() << " inputs x " << frf.output_count() << " outputs\n";
-    std::cout << "modes (+- one standard error):\n";
+    const bool errors =
+        !result.modes.empty() && std::isfinite(result.modes.front().natural_frequency_se);
+    std::cout << (errors ? "modes (± one standard error):\n" : "modes:\n");
     for (const MimoMode& m : result.modes) {
       std::cout << "  mode " << m.submodel + 1
-                << ": f_n = " << format_significant(m.natural_frequency * hz, 7) << " +- "
-                << format_brief(m.natural_frequency_se * hz)
-                << " Hz, zeta = " << format_significant(m.damping_ratio, 4) << " +- "
-                << format_brief(m.damping_ratio_se) << ", rank-one share "
-                << format_significant(m.rank_one_share, 3) << "\n";
+                << ": f_n = " << plus_minus(m.natural_frequency * hz, m.natural_frequency_se * hz)
+                << " Hz, zeta = " << plus_minus(m.damping_ratio, m.damping_ratio_se)
+                << ", rank-one share " << format_brief(m.rank_one_share) << "\n";
     }
     for (int j = 0; j < frf.output_count(); ++j) {
       std::cout << "  fit " << frf.output_names[static_cast<std::size_t>(j)] << ":";
       for (int k = 0; k < frf.input_count(); ++k) {
-        std::cout << " " << format_significant(result.fit_percent(j, k), 4) << " % ("
+        std::cout << " " << format_brief(result.fit_percent(j, k)) << " % ("
                   << frf.input_names[static_cast<std::size_t>(k)] << ")";
       }
       std::cout << "\n";

@@ -4,7 +4,6 @@
 // one by the stated rule, and writes the scan with its stabilisation diagram as JSON.
 #include <cmath>
 #include <filesystem>
-#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -78,9 +77,7 @@ std::string describe(const ModelStructure& s) {
 
 std::string fixed(double x, int decimals) {
   if (!std::isfinite(x)) return "-";
-  std::ostringstream out;
-  out << std::fixed << std::setprecision(decimals) << x;
-  return out.str();
+  return format_fixed(x, decimals);
 }
 
 void print_table(std::ostream& out, const StructureScanResult& r, const std::string& file) {

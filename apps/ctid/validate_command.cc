@@ -13,7 +13,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -105,11 +104,7 @@ void print_statistics(const ValidationReport& report) {
             << (report.residual_uncorrelated_with_input() ? "uncorrelated" : "correlated") << "\n";
 }
 
-std::string percent(double fit) {
-  std::ostringstream text;
-  text << std::fixed << std::setprecision(2) << fit << " %";
-  return text.str();
-}
+std::string percent(double fit) { return format_fixed(fit, 2) + " %"; }
 
 std::string padded(const std::string& text, std::size_t width) {
   return text.size() >= width ? text + " " : text + std::string(width - text.size(), ' ');

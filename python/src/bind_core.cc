@@ -7,6 +7,7 @@
 #include "ctid/core/additive_model.h"
 #include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/core/hold.h"
 #include "ctid/core/mimo_data.h"
 #include "ctid/core/mimo_model.h"
@@ -52,7 +53,7 @@ void bind_core(py::module_& m) {
       .def(py::self == py::self)
       .def("to_string", &Polynomial::to_string, py::arg("variable") = "s",
            "Human-readable form, highest power first.")
-      .def("__repr__", [](const Polynomial& p) { return "Polynomial(" + p.to_string("x") + ")"; });
+      .def("__repr__", [](const Polynomial& p) { return "Polynomial(" + p.to_string() + ")"; });
   py::implicitly_convertible<py::list, Polynomial>();
   py::implicitly_convertible<py::array, Polynomial>();
 
@@ -147,6 +148,7 @@ void bind_core(py::module_& m) {
       .def("n", &Submodel::n, "deg A.")
       .def("m", &Submodel::m, "deg B.")
       .def("parameter_count", &Submodel::parameter_count, "n + m + 1.")
+      .def("__repr__", &Submodel::to_string)
       .def("is_biproper", &Submodel::is_biproper, "m == n + l.")
       .def("to_transfer_function", &Submodel::to_transfer_function, "B/(p^l A).");
 
@@ -162,9 +164,9 @@ void bind_core(py::module_& m) {
       .def_readwrite("damping_ratio", &ModalParameters::damping_ratio, "zeta.")
       .def_readwrite("gain", &ModalParameters::gain, "B(0).")
       .def("__repr__", [](const ModalParameters& p) {
-        return "ModalParameters(natural_frequency=" + std::to_string(p.natural_frequency) +
-               ", damping_ratio=" + std::to_string(p.damping_ratio) +
-               ", gain=" + std::to_string(p.gain) + ")";
+        return "ModalParameters(natural_frequency=" + format_brief(p.natural_frequency) +
+               ", damping_ratio=" + format_brief(p.damping_ratio) +
+               ", gain=" + format_brief(p.gain) + ")";
       });
 
   py::class_<SubmodelOrder>(m, "SubmodelOrder",
@@ -333,9 +335,9 @@ void bind_core(py::module_& m) {
       .def("channel", &MimoData::channel, py::arg("input"), py::arg("output"),
            "Input `input`, output `output` (0-based) as a SISO SampledData.")
       .def("__repr__", [](const MimoData& d) {
-        return ::ctid::internal::concat("MimoData(", d.size(), " samples, h=", d.sample_time(),
-                                        ", inputs=[", join(d.input_names()), "], outputs=[",
-                                        join(d.output_names()), "])");
+        return ::ctid::internal::concat(
+            "MimoData(", d.size(), " samples, h=", format_number(d.sample_time()), ", inputs=[",
+            join(d.input_names()), "], outputs=[", join(d.output_names()), "])");
       });
 
   bind_enum<Detrend>(m, "Detrend", "What preprocess removes from each signal.");

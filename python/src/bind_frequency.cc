@@ -1,6 +1,7 @@
 // Python bindings of the frequency layer: parametric frequency responses on a grid and the
 // nonparametric FRFs (periodic averaging, Welch H1 with coherence) with resonance peaks.
 #include "common.h"
+#include "ctid/core/format.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/frequency/mimo_frf.h"
 #include "ctid/frequency/peaks.h"
@@ -171,8 +172,8 @@ void bind_frequency(py::module_& m) {
                     "rad/s, by parabolic interpolation of log power.")
       .def_readonly("ratio", &PeriodogramPeak::ratio, "Periodogram over its local floor.")
       .def("__repr__", [](const PeriodogramPeak& p) {
-        return "PeriodogramPeak(frequency=" + std::to_string(p.frequency) +
-               ", ratio=" + std::to_string(p.ratio) + ")";
+        return "PeriodogramPeak(frequency=" + format_brief(p.frequency) +
+               ", ratio=" + format_brief(p.ratio) + ")";
       });
   bind_options<PeriodogramPeakOptions>(m, "Options of periodogram_peaks.");
   m.def(

@@ -182,7 +182,7 @@ def test_records_out_of_order_are_refused(serial):
     options, expected = serial
     records = list(expected.records)
     records[0], records[1] = records[1], records[0]
-    with pytest.raises(ctid.InvalidArgument, match="record 0"):
+    with pytest.raises(ctid.InvalidArgument, match=r"records\[0\]"):
         ctid.study_result_from_records(options, records)
     with pytest.raises(ctid.InvalidArgument, match="records"):
         ctid.study_result_from_records(options, records[:-1])

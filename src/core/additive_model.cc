@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 
 namespace ctid {
 
@@ -21,14 +22,14 @@ void validate_submodels(const std::vector<Submodel>& submodels,
   for (size_t i = 0; i < submodels.size(); ++i) {
     const Submodel& s = submodels[i];
     const SubmodelOrder& o = orders[i];
-    require(!s.a.is_zero() && s.a[0] == 1.0, "submodel ", i,
-            ": denominator A must be anti-monic (A(0) = 1); got A = ", s.a.to_string("p"));
-    require(s.integrators >= 0, "submodel ", i, ": integrators is ", s.integrators,
+    require(!s.a.is_zero() && s.a[0] == 1.0, "submodel ", i + 1,
+            ": denominator A must be anti-monic (A(0) = 1); got A = ", s.a.to_string());
+    require(s.integrators >= 0, "submodel ", i + 1, ": integrators is ", s.integrators,
             "; it must be >= 0");
-    require(o.n >= 1 || s.integrators > 0, "submodel ", i,
+    require(o.n >= 1 || s.integrators > 0, "submodel ", i + 1,
             ": denominator order n is 0 and there are no integrators; a submodel needs poles");
-    require(o.m >= 0, "submodel ", i, ": numerator order m is ", o.m, "; it must be >= 0");
-    require(o.m <= o.n + s.integrators, "submodel ", i, ": numerator order m = ", o.m,
+    require(o.m >= 0, "submodel ", i + 1, ": numerator order m is ", o.m, "; it must be >= 0");
+    require(o.m <= o.n + s.integrators, "submodel ", i + 1, ": numerator order m = ", o.m,
             " exceeds the denominator order ", o.n + s.integrators, " (the model must be proper)");
     if (o.m == o.n + s.integrators) ++biproper;
     if (s.integrators > 0) ++with_integrators;
@@ -55,7 +56,7 @@ TransferFunction Submodel::to_transfer_function() const {
 AdditiveModel::AdditiveModel(std::vector<Submodel> submodels, double input_delay)
     : submodels_(std::move(submodels)), orders_(orders_of(submodels_)), input_delay_(input_delay) {
   for (size_t i = 0; i < submodels_.size(); ++i) {
-    require(!submodels_[i].b.is_zero(), "submodel ", i, ": numerator B is zero");
+    require(!submodels_[i].b.is_zero(), "submodel ", i + 1, ": numerator B is zero");
   }
   validate_submodels(submodels_, orders_);
   require(std::isfinite(input_delay_) && input_delay_ >= 0.0, "input delay is ", input_delay_,
@@ -252,17 +253,22 @@ std::optional<ModalParameters> AdditiveModel::modal_parameters(int i) const {
   return modal;
 }
 
+std::string Submodel::to_string() const {
+  std::string text = "(" + b.to_string() + ") / ";
+  if (integrators == 0) return text + "(" + a.to_string() + ")";
+  const std::string origin = integrators == 1 ? "s" : "s^" + std::to_string(integrators);
+  if (a.degree() == 0 && a[0] == 1.0) return text + origin;
+  return text + "(" + origin + " (" + a.to_string() + "))";
+}
+
 std::string AdditiveModel::to_string() const {
-  std::ostringstream out;
+  std::string text;
   for (size_t i = 0; i < submodels_.size(); ++i) {
-    const Submodel& s = submodels_[i];
-    if (i > 0) out << " + ";
-    out << "(" << s.b.to_string("p") << ") / (";
-    if (s.integrators > 0) out << "p^" << s.integrators << " ";
-    out << "(" << s.a.to_string("p") << "))";
+    if (i > 0) text += " + ";
+    text += submodels_[i].to_string();
   }
-  if (input_delay_ != 0.0) out << ", input delay " << input_delay_ << " s";
-  return out.str();
+  if (input_delay_ != 0.0) text += ", input delay " + format_brief(input_delay_) + " s";
+  return text;
 }
 
 }  // namespace ctid

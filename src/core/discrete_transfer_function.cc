@@ -4,6 +4,7 @@
 
 #include "ctid/core/controllable_form.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 
 namespace ctid {
 
@@ -66,7 +67,7 @@ Eigen::VectorXd DiscreteTransferFunction::filter(const Eigen::VectorXd& x) const
 
 std::string DiscreteTransferFunction::to_string() const {
   return "(" + numerator_.to_string("q") + ") / (" + denominator_.to_string("q") +
-         "), h = " + std::to_string(sample_time_) + " s";
+         "), h = " + format_number(sample_time_) + " s";
 }
 
 }  // namespace ctid

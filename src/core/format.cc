@@ -20,6 +20,14 @@ std::string format_number(double x) { return format_significant(x, 12); }
 
 std::string format_brief(double x) { return format_significant(x, 6); }
 
+std::string format_fixed(double x, int decimals) {
+  require(decimals >= 0 && decimals <= 17, "format_fixed: decimals is ", decimals,
+          "; it must be in [0, 17]");
+  char buffer[360];  // 309 digits of DBL_MAX, the sign, the point and 17 decimals
+  const int length = std::snprintf(buffer, sizeof buffer, "%.*f", decimals, x);
+  return std::string(buffer, static_cast<std::size_t>(length));
+}
+
 std::string format_round_trip(double x) {
   char buffer[40];
   const auto [end, error] = std::to_chars(buffer, buffer + sizeof buffer, x);

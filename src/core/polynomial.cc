@@ -8,15 +8,21 @@
 
 #include "core/internal/balance.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 
 namespace ctid {
 
 namespace {
 
+// "1", "s", "s^k": the term whose coefficient a message names.
+std::string power_of_s(Eigen::Index k) {
+  return k == 0 ? "1" : k == 1 ? "s" : "s^" + std::to_string(k);
+}
+
 void require_finite(const Eigen::VectorXd& c) {
   for (Eigen::Index k = 0; k < c.size(); ++k) {
-    require(std::isfinite(c(k)), "polynomial coefficient ", k, " (of x^", k, ") is ", c(k),
-            "; coefficients must be finite");
+    require(std::isfinite(c(k)), "polynomial coefficient ", k, " (of ", power_of_s(k), ") is ",
+            c(k), "; coefficients must be finite");
   }
 }
 
@@ -39,8 +45,8 @@ Polynomial::Polynomial(Eigen::VectorXd ascending) : coefficients_(std::move(asce
     return;
   }
   if (coefficients_.size() > 0) {
-    require(coefficients_(coefficients_.size() - 1) != 0.0, "polynomial leading coefficient (of x^",
-            coefficients_.size() - 1,
+    require(coefficients_(coefficients_.size() - 1) != 0.0, "polynomial leading coefficient (of ",
+            power_of_s(coefficients_.size() - 1),
             ") is zero; drop leading zeros explicitly with Polynomial::trimmed");
   }
 }
@@ -125,7 +131,7 @@ Eigen::VectorXcd Polynomial::roots() const {
   internal::balance_in_place(companion);
   Eigen::EigenSolver<Eigen::MatrixXd> solver(companion, /*computeEigenvectors=*/false);
   if (solver.info() != Eigen::Success) {
-    throw ComputationError("polynomial root finding failed to converge for " + to_string("x"));
+    throw ComputationError("polynomial root finding failed to converge for " + to_string());
   }
   result.tail(m) = solver.eigenvalues();
   return result;
@@ -144,7 +150,7 @@ Polynomial Polynomial::monic() const {
 }
 
 Polynomial Polynomial::anti_monic() const {
-  require(!is_zero() && coefficients_(0) != 0.0, "polynomial ", to_string("x"),
+  require(!is_zero() && coefficients_(0) != 0.0, "polynomial ", to_string(),
           " has a zero constant coefficient and cannot be made anti-monic");
   return Polynomial(Eigen::VectorXd(coefficients_ / coefficients_(0)));
 }
@@ -192,7 +198,6 @@ bool operator==(const Polynomial& a, const Polynomial& b) {
 std::string Polynomial::to_string(const std::string& variable) const {
   if (is_zero()) return "0";
   std::ostringstream out;
-  out.precision(6);
   bool first = true;
   for (int k = degree(); k >= 0; --k) {
     const double c = coefficients_(k);
@@ -201,10 +206,12 @@ std::string Polynomial::to_string(const std::string& variable) const {
       out << (c < 0 ? " - " : " + ");
     else if (c < 0)
       out << "-";
-    const double magnitude = std::abs(c);
-    if (k == 0 || magnitude != 1.0) out << magnitude;
+    // A coefficient that prints as 1 is left out of its term ("s^2", not "1 s^2").
+    const std::string magnitude = format_brief(std::abs(c));
+    const bool shown = k == 0 || magnitude != "1";
+    if (shown) out << magnitude;
     if (k > 0) {
-      if (magnitude != 1.0) out << " ";
+      if (shown) out << " ";
       out << variable;
       if (k > 1) out << "^" << k;
     }

@@ -7,6 +7,7 @@
 
 #include "core/internal/balance.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 
 namespace ctid {
 
@@ -133,7 +134,7 @@ TransferFunction TransferFunction::from_state_space(const StateSpace& model) {
 
 std::string TransferFunction::to_string() const {
   std::string text = "(" + numerator_.to_string("s") + ") / (" + denominator_.to_string("s") + ")";
-  if (input_delay_ != 0.0) text += " * exp(-" + std::to_string(input_delay_) + " s)";
+  if (input_delay_ != 0.0) text += " * exp(-" + format_brief(input_delay_) + " s)";
   return text;
 }
 

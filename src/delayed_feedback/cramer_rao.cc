@@ -9,6 +9,7 @@
 #include <Eigen/SVD>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/delayed_feedback/loop_parameters.h"
 #include "delayed_feedback/internal/loop_simulation.h"
 
@@ -51,10 +52,10 @@ SeparabilityReport report_from_jacobian(const Eigen::MatrixXd& jac, const Eigen:
   r.message = r.separable
                   ? "F and H are separable from this experiment: the largest relative standard "
                     "deviation is " +
-                        std::to_string(worst)
+                        format_brief(worst)
                   : "F and H are NOT reliably separable from this experiment: the largest "
                     "relative standard deviation is " +
-                        std::to_string(worst) + " (threshold " + std::to_string(threshold) +
+                        format_brief(worst) + " (threshold " + format_brief(threshold) +
                         "); any estimate reflects the prior or the start";
   return r;
 }

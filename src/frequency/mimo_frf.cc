@@ -200,16 +200,16 @@ MimoFrf periodic_frf(const std::vector<MimoData>& experiments, const PeriodicFrf
           " inputs; the FRF matrix needs at least one experiment per input");
   for (int e = 0; e < n_e; ++e) {
     const MimoData& x = experiments[static_cast<std::size_t>(e)];
-    require(x.input_count() == n_u && x.output_count() == n_y, "periodic_frf: experiment ", e,
+    require(x.input_count() == n_u && x.output_count() == n_y, "periodic_frf: experiment ", e + 1,
             " has ", x.input_count(), " inputs and ", x.output_count(),
-            " outputs but experiment 0 has ", n_u, " and ", n_y);
+            " outputs but experiment 1 has ", n_u, " and ", n_y);
     require(std::abs(x.sample_time() - first.sample_time()) <= 1e-9 * first.sample_time(),
-            "periodic_frf: experiment ", e, " has sample time ", x.sample_time(),
-            " s but experiment 0 has ", first.sample_time(), " s");
-    require(x.size() % n == 0, "periodic_frf: experiment ", e, ": the record length ", x.size(),
+            "periodic_frf: experiment ", e + 1, " has sample time ", x.sample_time(),
+            " s but experiment 1 has ", first.sample_time(), " s");
+    require(x.size() % n == 0, "periodic_frf: experiment ", e + 1, ": the record length ", x.size(),
             " is not a multiple of period_length ", n);
-    require(x.size() == first.size(), "periodic_frf: experiment ", e, " has ", x.size(),
-            " samples but experiment 0 has ", first.size(), "; give each the same periods");
+    require(x.size() == first.size(), "periodic_frf: experiment ", e + 1, " has ", x.size(),
+            " samples but experiment 1 has ", first.size(), "; give each the same periods");
   }
   const int total = first.size();
   const int periods = total / n - options.transient_periods;

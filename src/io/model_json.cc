@@ -119,7 +119,7 @@ MimoAdditiveModel read_mimo_additive_model(const JsonObject& object) {
     direct.resize(outputs, inputs);
     for (size_t j = 0; j < rows.size(); ++j) {
       if (rows[j].size() != inputs) {
-        object.fail("direct", internal::concat("row ", j, " has ", rows[j].size(),
+        object.fail("direct", internal::concat("[", j, "] has ", rows[j].size(),
                                                " entries; it needs one per input (", inputs, ")"));
       }
       direct.row(static_cast<Eigen::Index>(j)) = rows[j].transpose();

@@ -91,13 +91,13 @@ Eigen::MatrixXd covariance_field(const nlohmann::json& value, const std::string&
   Eigen::MatrixXd c(size, size);
   for (Eigen::Index i = 0; i < size; ++i) {
     const nlohmann::json& row = value[static_cast<size_t>(i)];
-    require(row.is_array() && static_cast<Eigen::Index>(row.size()) == size, where, "row ", i,
-            " must be an array of ", size, " numbers");
+    require(row.is_array() && static_cast<Eigen::Index>(row.size()) == size, where, "[", i,
+            "] must be an array of ", size, " numbers");
     for (Eigen::Index j = 0; j < size; ++j) {
       const nlohmann::json& x = row[static_cast<size_t>(j)];
       // A covariance with unknown entries is as good as none.
       if (x.is_null()) return {};
-      require(x.is_number(), where, "row ", i, " entry ", j, " is not a number");
+      require(x.is_number(), where, "[", i, "][", j, "] is not a number");
       c(i, j) = x.get<double>();
     }
   }

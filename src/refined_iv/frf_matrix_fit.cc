@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <functional>
 #include <limits>
 #include <utility>
 
@@ -297,7 +298,9 @@ struct Start {
   bool converged = false;
 };
 
-Start vector_fitting(const Problem& p, int count, int max_iterations) {
+// `progress(k)` is called as relocation k starts.
+Start vector_fitting(const Problem& p, int count, int max_iterations,
+                     const std::function<void(int)>& progress) {
   Eigen::VectorXd channel_weights(p.h.cols());
   for (Eigen::Index c = 0; c < p.h.cols(); ++c) {
     const double size = p.weight.col(c).cwiseProduct(p.h.col(c).cwiseAbs()).norm();
@@ -305,6 +308,7 @@ Start vector_fitting(const Problem& p, int count, int max_iterations) {
   }
   Start start{initial_poles(p, count), 0, false};
   while (start.iterations < max_iterations) {
+    progress(start.iterations + 1);
     const std::optional<Poles> next = relocate(p, start.poles, channel_weights);
     if (!next) break;
     ++start.iterations;
@@ -513,8 +517,10 @@ struct Refined {
   std::string message;
 };
 
+// `progress(k)` is called as iteration k starts.
 Refined levenberg_marquardt(const Layout& layout, const Problem& p, Parameters theta,
-                            int max_iterations, double tolerance) {
+                            int max_iterations, double tolerance,
+                            const std::function<void(int)>& progress) {
   Refined run;
   Eigen::MatrixXcd e = residuals(layout, p, theta);
   double cost = cost_of(e);
@@ -527,6 +533,7 @@ Refined levenberg_marquardt(const Layout& layout, const Problem& p, Parameters t
       break;
     }
     ++run.iterations;
+    progress(run.iterations);
     const Normal n = normal_equations(layout, p, theta, e);
     bool accepted = false;
     while (!accepted && lambda < 1e12) {
@@ -820,7 +827,8 @@ std::vector<Eigen::MatrixXcd> mimo_frequency_response(const MimoAdditiveModel& m
 
 FrfMatrixFitResult frf_matrix_fit(const MimoFrf& frf, const std::vector<SubmodelOrder>& orders,
                                   const FrfMatrixFitOptions& options,
-                                  const std::optional<MimoAdditiveModel>& initial_model) {
+                                  const std::optional<MimoAdditiveModel>& initial_model,
+                                  const std::function<void(int, int)>& progress) {
   options.validate();
   check_orders(orders, options.direct_term);
   check_frf(frf, options);
@@ -836,6 +844,15 @@ FrfMatrixFitResult frf_matrix_fit(const MimoFrf& frf, const std::vector<Submodel
 
   FrfMatrixFitResult result;
   result.lines = p.lines();
+  // One count over the vector-fitting relocations (when there is no start) and the
+  // Levenberg-Marquardt iterations, against the most each may run.
+  const int relocations = initial_model ? 0 : options.start_iterations;
+  const int total = relocations + options.max_iterations;
+  const auto report = [&](int offset) {
+    return std::function<void(int)>([&progress, offset, total](int k) {
+      if (progress) progress(offset + k, total);
+    });
+  };
   Parameters theta;
   if (initial_model) {
     internal::check_initial_model(layout, *initial_model, "frf_matrix_fit", "the FRF");
@@ -843,14 +860,14 @@ FrfMatrixFitResult frf_matrix_fit(const MimoFrf& frf, const std::vector<Submodel
       theta.a.push_back((*initial_model)[i].a.coefficients());
     }
   } else {
-    const Start start = vector_fitting(p, layout.a_count, options.start_iterations);
+    const Start start = vector_fitting(p, layout.a_count, options.start_iterations, report(0));
     result.start_iterations = start.iterations;
     theta.a = group_poles(layout, start.poles);
   }
   theta.u = fit_numerators(layout, p, theta.a);
 
-  Refined run =
-      levenberg_marquardt(layout, p, std::move(theta), options.max_iterations, options.tolerance);
+  Refined run = levenberg_marquardt(layout, p, std::move(theta), options.max_iterations,
+                                    options.tolerance, report(relocations));
   result.termination = run.termination;
   result.message = run.message;
   result.iterations = run.iterations;

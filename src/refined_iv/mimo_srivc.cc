@@ -597,7 +597,8 @@ struct Iterations {
 };
 
 Iterations run_iterations(const Layout& layout, const MimoData& data, Iterate model,
-                          int max_iterations, double tolerance, Hold output_interpolation) {
+                          int max_iterations, double tolerance, Hold output_interpolation,
+                          const std::function<void(int, int)>& progress = {}) {
   double cost = relative_output_error(layout, data, model);
   Iterations result{
       model, cost, Termination::not_run, {}, 0, 0, std::numeric_limits<double>::quiet_NaN()};
@@ -624,6 +625,7 @@ Iterations run_iterations(const Layout& layout, const MimoData& data, Iterate mo
   std::optional<Iterate> accepted;
   Eigen::VectorXd last_step;
   for (int iteration = 1; iteration <= max_iterations; ++iteration) {
+    if (progress) progress(iteration, max_iterations);
     Step step = iterate(layout, data, model, output_interpolation);
     for (int halvings = 0; !step.model && accepted && halvings < kMaxHalvings; ++halvings) {
       ++result.step_halvings;
@@ -1429,7 +1431,8 @@ Eigen::MatrixXd free_response_values(const Layout& layout, const Iterate& x) {
 MimoEstimationResult estimate(const Layout& layout, const MimoData& data,
                               const MimoRefinedIvOptions& options,
                               const std::optional<MimoAdditiveModel>& initial_model,
-                              const Eigen::VectorXd& input_delays) {
+                              const Eigen::VectorXd& input_delays,
+                              const std::function<void(int, int)>& progress) {
   // A given start has no free responses yet: the first step estimates them.
   Iterate model = [&] {
     if (initial_model) {
@@ -1441,7 +1444,7 @@ MimoEstimationResult estimate(const Layout& layout, const MimoData& data,
 
   MimoEstimationResult result;
   Iterations run = run_iterations(layout, data, std::move(model), options.max_iterations,
-                                  options.tolerance, options.output_interpolation);
+                                  options.tolerance, options.output_interpolation, progress);
   result.termination = run.termination;
   result.message = std::move(run.message);
   result.iterations = run.iterations;
@@ -1542,7 +1545,8 @@ DelayedInputs delay_inputs(Layout& layout, const MimoData& data,
 
 MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<SubmodelOrder>& orders,
                                 const MimoRefinedIvOptions& options,
-                                const std::optional<MimoAdditiveModel>& initial_model) {
+                                const std::optional<MimoAdditiveModel>& initial_model,
+                                const std::function<void(int, int)>& progress) {
   options.validate();
   check_orders(orders, data, options.direct_term);
   require(options.input_delays.empty() ||
@@ -1566,7 +1570,7 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
   if (options.initial_conditions == InitialConditions::estimate) layout.add_free_responses();
   const DelayedInputs delayed = delay_inputs(layout, data, options.input_delays);
   const MimoData& record = delayed.data ? *delayed.data : data;
-  return estimate(layout, record, options, initial_model, delayed.seconds);
+  return estimate(layout, record, options, initial_model, delayed.seconds, progress);
 }
 
 }  // namespace ctid

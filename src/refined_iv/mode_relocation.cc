@@ -304,15 +304,15 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
   }
   out.projected_mean_squared_error = projected_mse(out.estimate, orders, data);
   std::ostringstream message;
-  message.precision(6);
   message << out.relocations << " relocation(s) kept of " << out.trials.size() << " tried in "
-          << out.rounds << " round(s); mean squared output error " << out.initial_mean_squared_error
-          << " -> " << out.estimate.mean_squared_error
-          << " (numerators re-fitted: " << out.initial_projected_mean_squared_error << " -> "
-          << out.projected_mean_squared_error << ")";
+          << out.rounds << " round(s); mean squared output error "
+          << format_brief(out.initial_mean_squared_error) << " -> "
+          << format_brief(out.estimate.mean_squared_error)
+          << " (numerators re-fitted: " << format_brief(out.initial_projected_mean_squared_error)
+          << " -> " << format_brief(out.projected_mean_squared_error) << ")";
   for (const RelocationTrial& t : out.trials) {
     if (t.accepted) {
-      message << "; submodel " << t.submodel << " moved from "
+      message << "; submodel " << t.submodel + 1 << " moved from "
               << format_brief(t.moved_from / (2.0 * M_PI)) << " Hz to "
               << format_brief(t.start_frequency / (2.0 * M_PI)) << " Hz";
     }

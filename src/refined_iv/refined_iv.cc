@@ -701,8 +701,8 @@ Eigen::VectorXd parameters_for_orders(const AdditiveModel& model,
   for (int i = 0; i < model.size(); ++i) {
     const Submodel& s = model[i];
     const SubmodelOrder& o = orders[static_cast<size_t>(i)];
-    require(s.n() == o.n && s.integrators == o.integrators && s.m() <= o.m, "initial submodel ", i,
-            " has n = ", s.n(), ", m = ", s.m(), ", integrators = ", s.integrators,
+    require(s.n() == o.n && s.integrators == o.integrators && s.m() <= o.m, "initial submodel ",
+            i + 1, " has n = ", s.n(), ", m = ", s.m(), ", integrators = ", s.integrators,
             "; the structure asks for n = ", o.n, ", m <= ", o.m,
             ", integrators = ", o.integrators);
     const int off = layout.offset[static_cast<size_t>(i)];
@@ -765,12 +765,12 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     int integrating = 0;
     for (size_t i = 0; i < layout.orders.size(); ++i) {
       const SubmodelOrder& o = layout.orders[i];
-      require(o.n >= 0 && o.m >= 0 && o.integrators >= 0, name, ": submodel ", i,
+      require(o.n >= 0 && o.m >= 0 && o.integrators >= 0, name, ": submodel ", i + 1,
               " has a negative order (n = ", o.n, ", m = ", o.m, ", integrators = ", o.integrators,
               ")");
-      require(o.n + o.integrators >= 1, name, ": submodel ", i,
+      require(o.n + o.integrators >= 1, name, ": submodel ", i + 1,
               " has no poles (n = 0 and no integrators)");
-      require(o.m <= o.n + o.integrators, name, ": submodel ", i, " has m = ", o.m,
+      require(o.m <= o.n + o.integrators, name, ": submodel ", i + 1, " has m = ", o.m,
               " > n + integrators = ", o.n + o.integrators, " (improper)");
       if (o.m == o.n + o.integrators) ++biproper;
       if (o.integrators > 0) ++integrating;

@@ -353,7 +353,7 @@ StudyResult study_result_from_records(const StudyOptions& options,
     const StudyRecord& record = records[k];
     require(record.size_index == size_index && record.run_index == run_index &&
                 record.estimator == estimator,
-            "study_result_from_records: record ", k, " is (size ", record.size_index, ", run ",
+            "study_result_from_records: records[", k, "] is (size ", record.size_index, ", run ",
             record.run_index, ", ", to_string(record.estimator),
             "); the study's order needs (size ", size_index, ", run ", run_index, ", ",
             to_string(estimator), ") there");

@@ -13,6 +13,7 @@
 //     space): a run that needs more memory than that ends with std::bad_alloc, and fails;
 //   - checks the exit status; for a failure (status 1 or 2), that stderr is exactly one line
 //     starting "ctid <command>: error: " holding every expected fragment and stdout is empty;
+//   - checks stderr against the output convention (cli/output_conventions.h);
 //   - checks that every entry that existed before is unchanged (bytes, link target,
 //     permissions) and that no entry appeared but the case's expected outputs, which must
 //     exist (so no temporary *.tmp-PID-N file and no half-written output is left behind).
@@ -45,6 +46,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "cli/output_conventions.h"
 #include "cli/run_ctid.h"
 
 #if defined(__has_feature)
@@ -1139,6 +1141,11 @@ TEST_P(Catalogue, Case) {
       EXPECT_THAT(r.err, ::testing::HasSubstr(fragment));
     }
     EXPECT_EQ(r.out, "") << "a refused run printed to stdout";
+  }
+  // Every message follows the output convention (docs/conventions.md, "What ctid prints");
+  // stdout may be a data file written to /dev/stdout, every digit kept.
+  for (const std::string& violation : testing::convention_violations(r.err)) {
+    ADD_FAILURE() << violation;
   }
   if (!k.stdout_starts.empty()) {
     EXPECT_THAT(r.out, ::testing::StartsWith(k.stdout_starts));

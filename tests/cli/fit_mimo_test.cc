@@ -59,7 +59,7 @@ TEST_F(FitMimoCommand, SharedModesFromNoiseFreeData) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("mimo_srivc: converged"));
   EXPECT_THAT(r.out, HasSubstr("2 inputs x 3 outputs"));
-  EXPECT_THAT(r.out, HasSubstr("mode 1: f_n = 0.2228169"));  // 1.4 / (2 pi) Hz
+  EXPECT_THAT(r.out, HasSubstr("mode 1: f_n = 0.222817"));  // 1.4 / (2 pi) Hz
   EXPECT_THAT(r.out, HasSubstr("fit a3: 100 %"));
   const nlohmann::json j = io::read_json(path("r.json"));
   EXPECT_EQ(j.at("type"), "mimo_estimation_result");

@@ -11,7 +11,14 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "cli/run_ctid.h"
+#include "ctid/core/mimo_data.h"
+#include "ctid/io/mimo_data_csv.h"
+#include "ctid/simulation/excitation.h"
+#include "ctid/simulation/simulate.h"
+#include "support/mimo_systems.h"
 
 namespace ctid::cli {
 namespace {
@@ -135,6 +142,80 @@ TEST_F(CliProgressTest, StructureScanShowsProgressOnATerminal) {
   EXPECT_THAT(r.out, HasSubstr("ctid structure: structure 2/2 (100 %)"));
   const auto piped = ctid({"structure", "d.csv", "--poles", "1:2"});
   EXPECT_THAT(piped.err, Not(HasSubstr("ctid structure: structure")));
+}
+
+// Several outputs: mimo_srivc's iterations as the line ("iteration 1/40"), of at most
+// --max-iterations; blanked before the summary; nothing in a pipe. Then fit-frf on the
+// record's FRF matrix: its steps.
+TEST_F(CliProgressTest, MimoFitShowsItsIterationsOnATerminalOnly) {
+  const MimoAdditiveModel g = ctid::testing::two_mode_structure();
+  constexpr double kStep = 0.05;
+  Eigen::MatrixXd u(1000, 2);
+  for (int k = 0; k < 2; ++k) u.col(k) = white_noise(1000, 1.0, 11 + k);
+  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(1000, 3);
+  for (int j = 0; j < 3; ++j) {
+    for (int k = 0; k < 2; ++k) y.col(j) += simulate(g.channel(j, k), u.col(k), kStep);
+  }
+  io::write_mimo_data(path("m.csv"),
+                      MimoData(kStep, u, y).with_names({"f1", "f2"}, {"a1", "a2", "a3"}));
+  const ScopedEnvironment now("CTID_PROGRESS_AFTER", "0");
+  const std::vector<std::string> fit{
+      "fit",     "m.csv", "--input-columns",  "f1,f2", "--output-columns", "a1:a3",
+      "--modes", "2",     "--max-iterations", "40"};
+  const auto terminal = ctid_on_terminal(fit);
+  EXPECT_EQ(terminal.status, 0) << terminal.out;
+  const auto first = terminal.out.find("\rctid fit: mimo_srivc iteration 1/40 (2 %)");
+  ASSERT_NE(first, std::string::npos) << terminal.out;
+  const auto summary = terminal.out.find("mimo_srivc: converged");
+  ASSERT_NE(summary, std::string::npos) << terminal.out;
+  const auto blanked = terminal.out.rfind("\r     ", summary);
+  ASSERT_NE(blanked, std::string::npos) << terminal.out;
+  EXPECT_LT(first, blanked) << terminal.out;
+
+  const auto piped = ctid(fit);
+  EXPECT_EQ(piped.status, 0) << piped.err;
+  EXPECT_THAT(piped.out, HasSubstr("mimo_srivc: converged"));
+  EXPECT_THAT(piped.err, Not(HasSubstr("iteration")));
+  EXPECT_THAT(piped.err, Not(HasSubstr("\r")));
+
+  // Its FRF matrix fitted by fit-frf: the vector-fitting relocations and the iterations.
+  const auto frf = ctid({"frf", "m.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a3",
+                         "-o", "h.csv", "-q"});
+  ASSERT_EQ(frf.status, 0) << frf.err;
+  const std::vector<std::string> fit_frf{"fit-frf", "h.csv", "--modes", "2"};
+  const auto frf_terminal = ctid_on_terminal(fit_frf);
+  // Ran (0), or ran and judged the modes of this short record's coarse FRF unusable (3).
+  EXPECT_TRUE(frf_terminal.status == 0 || frf_terminal.status == 3) << frf_terminal.out;
+  EXPECT_THAT(frf_terminal.out, HasSubstr("\rctid fit-frf: step 1/"));
+  const auto frf_piped = ctid(fit_frf);
+  EXPECT_EQ(frf_piped.status, frf_terminal.status) << frf_piped.err;
+  EXPECT_THAT(frf_piped.err, Not(HasSubstr("step")));
+}
+
+TEST_F(CliProgressTest, StudyCountsItsCasesOnATerminal) {
+  const ScopedEnvironment now("CTID_PROGRESS_AFTER", "0");
+  // 2 sizes x 2 runs x 1 estimator of Section 6.2.
+  const std::vector<std::string> study{
+      "study",         "closed-loop", "-o",           "s",     "--runs",   "2", "--sizes", "2",
+      "--max-samples", "700",         "--estimators", "srivc", "--no-plot"};
+  const auto r = ctid_on_terminal(study);
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("ctid study: case 4/4 (100 %)"));
+  std::vector<std::string> again = study;
+  again[3] = "s2";
+  const auto piped = ctid(again);
+  EXPECT_EQ(piped.status, 0) << piped.err;
+  EXPECT_THAT(piped.err, Not(HasSubstr("ctid study: case")));
+}
+
+TEST_F(CliProgressTest, TrackCountsItsWindowsOnATerminal) {
+  const ScopedEnvironment now("CTID_PROGRESS_AFTER", "0");
+  // d.csv holds 40 s: four windows of 10 s.
+  const auto r =
+      ctid_on_terminal({"track", "d.csv", "--window", "10", "--poles", "1", "--zeros", "0"});
+  EXPECT_THAT(r.out, HasSubstr("ctid track: window 4/4 (100 %)")) << r.out;
+  const auto piped = ctid({"track", "d.csv", "--window", "10", "--poles", "1", "--zeros", "0"});
+  EXPECT_THAT(piped.err, Not(HasSubstr("ctid track: window")));
 }
 
 }  // namespace

@@ -105,7 +105,7 @@ def flexible_structure(s, out):
     import flexible_structure as example
 
     # Independent nonparametric reference: SciPy's Welch H1 estimate and its peaks.
-    h, u, y = example.load()
+    h, u, y = example.load(example._common.import_ctid())  # the record as ctid.read_csv reads it
     f, puu = signal.welch(u, fs=1 / h, nperseg=1024)
     _, puy = signal.csd(u, y, fs=1 / h, nperseg=1024)
     mag = np.abs(puy / puu)

@@ -409,7 +409,7 @@ TEST(MimoPeriodicFrf, BadExperimentsAreRefusedWithOneMessage) {
   EXPECT_THAT(error_of([&] {
                 periodic_frf(std::vector<MimoData>{two, three_outputs}, options);
               }),
-              HasSubstr("experiment 1 has 2 inputs and 3 outputs but experiment 0 has 2 and 2"));
+              HasSubstr("experiment 2 has 2 inputs and 3 outputs but experiment 1 has 2 and 2"));
   EXPECT_THAT(error_of([&] { periodic_frf(two, options, 3); }),
               HasSubstr("do not split into 3 experiments"));
 }

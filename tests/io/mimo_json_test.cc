@@ -91,7 +91,7 @@ TEST(MimoJson, MalformedModelsNameTheField) {
   j = io::to_json(two_by_three(true));
   j["direct"][2] = nlohmann::json::array({1.0});
   EXPECT_THAT([&] { io::mimo_additive_model_from_json(j, "m.json"); },
-              ThrowsMessage<InvalidArgument>(HasSubstr("direct: row 2 has 1 entries")));
+              ThrowsMessage<InvalidArgument>(HasSubstr("direct: [2] has 1 entries")));
   j = io::to_json(two_by_three(false));
   j["submodels"][0]["denominator_ascending"] = nlohmann::json::array({2.0, 1.0});
   EXPECT_THAT([&] { io::mimo_additive_model_from_json(j, "m.json"); },

@@ -30,6 +30,9 @@ struct Submodel {
   int parameter_count() const { return n() + m() + 1; }
   bool is_biproper() const { return m() == n() + integrators; }
   TransferFunction to_transfer_function() const;
+  /// B_i over p^l_i A_i in the printed form of docs/conventions.md: "(3.03) / (0.5 s^2 + 0.25 s +
+  /// 1)", with integrators "(2) / (s (0.1 s + 1))" or "(2) / s^2" (no poles besides the origin).
+  std::string to_string() const;
 };
 
 /// Modal parameters of a second-order submodel B(p)/(1 + a1 p + a2 p^2):
@@ -110,6 +113,7 @@ class AdditiveModel {
   /// integrators; std::nullopt otherwise.
   std::optional<ModalParameters> modal_parameters(int i) const;
 
+  /// The submodels' to_string() joined by " + ", then ", input delay 0.1 s" if there is one.
   std::string to_string() const;
 
  private:

@@ -7,7 +7,10 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
+
+#include "ctid/core/format.h"
 
 namespace ctid {
 
@@ -25,11 +28,23 @@ class ComputationError : public std::runtime_error {
 };
 
 namespace internal {
+/// A part of a message: a floating-point number as the shortest text that reads back as the
+/// same value ("0.1", not "0.10000000000000001"; docs/conventions.md), anything else as is.
+template <typename Part>
+decltype(auto) message_part(Part&& part) {
+  if constexpr (std::is_floating_point_v<std::remove_cvref_t<Part>>) {
+    return format_round_trip(static_cast<double>(part));
+  } else {
+    return std::forward<Part>(part);
+  }
+}
+
+/// The text of `parts` streamed one after the other; numbers as message_part writes them.
 template <typename... Parts>
 std::string concat(Parts&&... parts) {
   std::ostringstream out;
-  out.precision(17);
-  (out << ... << std::forward<Parts>(parts));
+  out.precision(17);  // what still streams doubles itself (Eigen vectors) keeps every digit
+  (out << ... << message_part(std::forward<Parts>(parts)));
   return out.str();
 }
 }  // namespace internal

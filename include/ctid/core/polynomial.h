@@ -65,7 +65,9 @@ class Polynomial {
   /// Exact equality of coefficients.
   friend bool operator==(const Polynomial& a, const Polynomial& b);
 
-  /// Human-readable, e.g. "2 s^2 + 0.5 s + 1" (highest power first for reading).
+  /// The printed form of every polynomial ctid shows a person (docs/conventions.md): highest
+  /// power first, coefficients to 6 significant digits (format_brief), in `variable` ("s" for
+  /// continuous time, "q" for the shift operator), e.g. "2 s^2 + 0.5 s + 1".
   std::string to_string(const std::string& variable = "s") const;
 
  private:

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -137,10 +138,13 @@ struct FrfMatrixFitResult {
 /// `initial_model` (same orders and size) or, without one, from vector fitting. Throws
 /// InvalidArgument for bad options, orders, start or FRF (sizes that do not match, values that
 /// are not finite, frequencies not increasing, too few lines for the parameters); the outcome
-/// of the iteration is in the result.
+/// of the iteration is in the result. `progress`, if given, is called with (k, total) as step k
+/// starts, counting the vector-fitting relocations (without a start) and then the
+/// Levenberg-Marquardt iterations against the most both may run.
 FrfMatrixFitResult frf_matrix_fit(const MimoFrf& frf, const std::vector<SubmodelOrder>& orders,
                                   const FrfMatrixFitOptions& options = {},
-                                  const std::optional<MimoAdditiveModel>& initial_model = {});
+                                  const std::optional<MimoAdditiveModel>& initial_model = {},
+                                  const std::function<void(int, int)>& progress = {});
 
 /// The response of `model` at the frequencies w (rad/s), one n_y x n_u matrix per frequency.
 std::vector<Eigen::MatrixXcd> mimo_frequency_response(const MimoAdditiveModel& model,

@@ -9,6 +9,7 @@
 // equations of (29) exactly. See docs/decisions/0018-mimo-shared-poles.md.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -197,8 +198,11 @@ struct MimoEstimationResult {
 /// at a grid of state-variable-filter bandwidths (poles grouped into the submodels, numerators
 /// by least squares). Throws InvalidArgument for bad options,
 /// orders, start or too few samples; the outcome of the iteration is in the result.
+/// `progress`, if given, is called with (iteration, options.max_iterations) as each iteration
+/// of (29) starts (not on the single-channel SISO path), for a progress line.
 MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<SubmodelOrder>& orders,
                                 const MimoRefinedIvOptions& options = {},
-                                const std::optional<MimoAdditiveModel>& initial_model = {});
+                                const std::optional<MimoAdditiveModel>& initial_model = {},
+                                const std::function<void(int, int)>& progress = {});
 
 }  // namespace ctid
