@@ -76,7 +76,7 @@ double filter_pass_seconds(const Setup& setup) {
   for (int i = 0; i < setup.truth.size(); ++i) {
     const ctid::FilterRealization bank = ctid::derivative_filters(setup.truth[i].a);
     Eigen::VectorXd b = Eigen::VectorXd::Zero(bank.outputs());
-    b.head(setup.truth[i].b.size()) = setup.truth[i].b.coefficients();
+    b.head(setup.truth[i].b.coefficients().size()) = setup.truth[i].b.coefficients();
     const ctid::SampledFilter source(ctid::cascade(bank, b, bank), data.sample_time(),
                                      ctid::Hold::zero_order_hold);
     const ctid::SampledFilter output(bank, data.sample_time(), ctid::Hold::first_order_hold);
