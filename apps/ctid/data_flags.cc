@@ -132,110 +132,118 @@ bool DataFlags::preprocessing_asked(const CLI::App& app) const {
 
 SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
                                  bool need_reference) const {
-  const io::CsvTable table = io::read_table(path);
-  const bool reference_flag = app.get_option_no_throw("--reference-column") != nullptr &&
-                              app.count("--reference-column") > 0;
-  std::optional<Eigen::VectorXd> reference;
-  std::string reference_name;
-  if (need_reference) {
-    reference_name = reference_column.empty() ? "r" : reference_column;
-    if (!table.has_column(reference_name)) {
-      usage_error(internal::concat("closed loop (--controller) needs the reference r, but ", path,
-                                   " has no column '", reference_name, "' (columns: ",
-                                   column_list(table), "); name it with --reference-column"));
-    }
-    reference = table.column(reference_name);
-  } else if (reference_flag) {
-    usage_error("--reference-column has no effect without --controller (open loop)");
-  }
-  const Eigen::VectorXd& u = table.column(input_column);
-  const Eigen::VectorXd& y = table.column(output_column);
-  const bool time_flag = app.count("--time-column") > 0;
-  const bool h_flag = app.count("--sample-time") > 0;
-  const std::optional<Hold> declared = io::declared_input_hold(table);
-  const std::optional<Hold> flagged = parse_hold(input_hold);
-  if (declared && flagged && *declared != *flagged) {
-    usage_error(internal::concat("--input-hold ", input_hold, " contradicts ", path, ":",
-                                 table.declaration("input_hold")->line,
-                                 ", which declares input_hold: ", hold_flag_name(*declared)));
-  }
-  const Hold hold = flagged.value_or(declared.value_or(Hold::zero_order_hold));
-  const bool resample_flag = app.count("--resample") > 0;
-  if (resample_flag && h_flag) usage_error("give --resample or --sample-time, not both");
-  if (resample_flag && !table.has_column(time_column)) {
-    usage_error(internal::concat(
-        "--resample needs the time stamps, but ", path, " has no time column '", time_column,
-        "' (columns: ", column_list(table), "); name it with --time-column"));
-  }
-
-  std::optional<SampledData> read;
-  if (resample_flag) {
-    const Eigen::VectorXd& stamps = table.column(time_column);
-    try {
-      read.emplace(ctid::resample(stamps, u, y, reference, resample, hold));
-    } catch (const InvalidArgument& e) {
-      throw InvalidArgument(path + ": " + e.what());
-    }
-    std::cerr << "note: " << path << ": " << stamps.size()
-              << " time stamps resampled onto h = " << format_number(resample) << " s ("
-              << read->size() << " samples)\n";
-  } else if (table.has_column(time_column)) {
-    const Eigen::VectorXd& stamps = table.column(time_column);
-    if (h_flag) {
-      // -T wins; the stamps give the start time, and a disagreement is noted, not refused.
-      try {
-        const TimeStampCheck check = check_time_stamps(stamps);
-        const double drift = std::abs(sample_time - check.step) * (stamps.size() - 1);
-        if (check.worst_sample) {
-          std::cerr << "note: the time column '" << time_column << "' of " << path
-                    << " is not uniform (sample " << *check.worst_sample << " is "
-                    << format_brief(check.deviation) << " s off its grid); --sample-time "
-                    << format_number(sample_time) << " s is used\n";
-        } else if (drift > check.tolerance) {
-          std::cerr << "note: --sample-time " << format_number(sample_time)
-                    << " s overrides the time column '" << time_column << "' of " << path
-                    << " (step " << format_number(check.step) << " s)\n";
-        }
-      } catch (const InvalidArgument& e) {
-        std::cerr << "note: the time column '" << time_column << "' of " << path << ": " << e.what()
-                  << "; --sample-time " << format_number(sample_time) << " s is used\n";
+  // The table lives only while the record is made from it, so a long record is not held
+  // twice while it is preprocessed.
+  Hold hold = Hold::zero_order_hold;
+  SampledData record = [&] {
+    const io::CsvTable table = io::read_table(path);
+    const bool reference_flag = app.get_option_no_throw("--reference-column") != nullptr &&
+                                app.count("--reference-column") > 0;
+    std::optional<Eigen::VectorXd> reference;
+    std::string reference_name;
+    if (need_reference) {
+      reference_name = reference_column.empty() ? "r" : reference_column;
+      if (!table.has_column(reference_name)) {
+        usage_error(internal::concat("closed loop (--controller) needs the reference r, but ", path,
+                                     " has no column '", reference_name, "' (columns: ",
+                                     column_list(table), "); name it with --reference-column"));
       }
+      reference = table.column(reference_name);
+    } else if (reference_flag) {
+      usage_error("--reference-column has no effect without --controller (open loop)");
+    }
+    const Eigen::VectorXd& u = table.column(input_column);
+    const Eigen::VectorXd& y = table.column(output_column);
+    const bool time_flag = app.count("--time-column") > 0;
+    const bool h_flag = app.count("--sample-time") > 0;
+    const std::optional<Hold> declared = io::declared_input_hold(table);
+    const std::optional<Hold> flagged = parse_hold(input_hold);
+    if (declared && flagged && *declared != *flagged) {
+      usage_error(internal::concat("--input-hold ", input_hold, " contradicts ", path, ":",
+                                   table.declaration("input_hold")->line,
+                                   ", which declares input_hold: ", hold_flag_name(*declared)));
+    }
+    hold = flagged.value_or(declared.value_or(Hold::zero_order_hold));
+    const bool resample_flag = app.count("--resample") > 0;
+    if (resample_flag && h_flag) usage_error("give --resample or --sample-time, not both");
+    if (resample_flag && !table.has_column(time_column)) {
+      usage_error(internal::concat(
+          "--resample needs the time stamps, but ", path, " has no time column '", time_column,
+          "' (columns: ", column_list(table), "); name it with --time-column"));
+    }
+
+    std::optional<SampledData> read;
+    if (resample_flag) {
+      const Eigen::VectorXd& stamps = table.column(time_column);
       try {
-        read.emplace(sample_time, u, y, reference, stamps(0));
+        read.emplace(ctid::resample(stamps, u, y, reference, resample, hold));
       } catch (const InvalidArgument& e) {
         throw InvalidArgument(path + ": " + e.what());
       }
+      std::cerr << "note: " << path << ": " << stamps.size()
+                << " time stamps resampled onto h = " << format_number(resample) << " s ("
+                << read->size() << " samples)\n";
+    } else if (table.has_column(time_column)) {
+      const Eigen::VectorXd& stamps = table.column(time_column);
+      if (h_flag) {
+        // -T wins; the stamps give the start time, and a disagreement is noted, not refused.
+        try {
+          const TimeStampCheck check = check_time_stamps(stamps);
+          const double drift = std::abs(sample_time - check.step) * (stamps.size() - 1);
+          if (check.worst_sample) {
+            std::cerr << "note: the time column '" << time_column << "' of " << path
+                      << " is not uniform (sample " << *check.worst_sample << " is "
+                      << format_brief(check.deviation) << " s off its grid); --sample-time "
+                      << format_number(sample_time) << " s is used\n";
+          } else if (drift > check.tolerance) {
+            std::cerr << "note: --sample-time " << format_number(sample_time)
+                      << " s overrides the time column '" << time_column << "' of " << path
+                      << " (step " << format_number(check.step) << " s)\n";
+          }
+        } catch (const InvalidArgument& e) {
+          std::cerr << "note: the time column '" << time_column << "' of " << path << ": "
+                    << e.what() << "; --sample-time " << format_number(sample_time)
+                    << " s is used\n";
+        }
+        try {
+          read.emplace(sample_time, u, y, reference, stamps(0));
+        } catch (const InvalidArgument& e) {
+          throw InvalidArgument(path + ": " + e.what());
+        }
+      } else {
+        io::CsvColumns columns;
+        columns.time = time_column;
+        columns.input = input_column;
+        columns.output = output_column;
+        columns.reference = reference_name;
+        try {
+          read.emplace(io::sampled_data_from_table(table, columns));
+        } catch (const InvalidArgument& e) {
+          throw InvalidArgument(std::string(e.what()) +
+                                "; --sample-time (-T) overrides the time column, and --resample H "
+                                "moves irregular stamps onto a grid of step H");
+        }
+      }
     } else {
-      io::CsvColumns columns;
-      columns.time = time_column;
-      columns.input = input_column;
-      columns.output = output_column;
-      columns.reference = reference_name;
+      if (time_flag) table.column(time_column);  // throws, naming the columns present
+      if (!h_flag) {
+        usage_error(internal::concat(path, " has no time column '", time_column,
+                                     "'; give --sample-time (or --time-column)"));
+      }
       try {
-        read.emplace(io::sampled_data_from_table(table, columns));
+        read.emplace(sample_time, u, y, reference);
       } catch (const InvalidArgument& e) {
-        throw InvalidArgument(std::string(e.what()) +
-                              "; --sample-time (-T) overrides the time column, and --resample H "
-                              "moves irregular stamps onto a grid of step H");
+        throw InvalidArgument(path + ": " + e.what());
       }
     }
-  } else {
-    if (time_flag) table.column(time_column);  // throws, naming the columns present
-    if (!h_flag) {
-      usage_error(internal::concat(path, " has no time column '", time_column,
-                                   "'; give --sample-time (or --time-column)"));
-    }
-    try {
-      read.emplace(sample_time, u, y, reference);
-    } catch (const InvalidArgument& e) {
-      throw InvalidArgument(path + ": " + e.what());
-    }
-  }
+
+    return std::move(*read);
+  }();
 
   const PreprocessingOptions options = preprocessing_options();
   PreprocessedData result = [&] {
     try {
-      return preprocess(read->with_input_hold(hold), options);
+      return preprocess(std::move(record).with_input_hold(hold), options);
     } catch (const InvalidArgument& e) {
       throw InvalidArgument(path + ": " + e.what());
     }

@@ -280,8 +280,10 @@ void bind_core(py::module_& m) {
           "r_k or None.")
       .def_property_readonly("input_hold", &SampledData::input_hold,
                              "How the input is continued between samples (Hold).")
-      .def("with_input_hold", &SampledData::with_input_hold, py::arg("hold"),
-           "The same record with its input continued by `hold`.")
+      .def(
+          "with_input_hold",
+          [](const SampledData& data, Hold hold) { return data.with_input_hold(hold); },
+          py::arg("hold"), "The same record with its input continued by `hold`.")
       .def("segment", &SampledData::segment, py::arg("begin"), py::arg("count"),
            "Samples [begin, begin + count) (the input hold is kept).")
       .def(

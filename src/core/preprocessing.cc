@@ -201,7 +201,7 @@ PreprocessedData preprocess(const SampledData& data, const PreprocessingOptions&
   const double new_h = h * options.decimate;
   const double start = data.start_time() + record.first_row * h;
   SampledData out(new_h, std::move(u), std::move(y), std::move(r), start);
-  SampledData held = out.with_input_hold(data.input_hold());
+  SampledData held = std::move(out).with_input_hold(data.input_hold());
   record.samples = held.size();
   record.sample_time = new_h;
   return PreprocessedData{std::move(held), std::move(record)};

@@ -138,10 +138,15 @@ SampledData SampledData::segment(int begin, int count) const {
   return out;
 }
 
-SampledData SampledData::with_input_hold(Hold hold) const {
+SampledData SampledData::with_input_hold(Hold hold) const& {
   SampledData out = *this;
   out.input_hold_ = hold;
   return out;
+}
+
+SampledData SampledData::with_input_hold(Hold hold) && {
+  input_hold_ = hold;
+  return std::move(*this);
 }
 
 }  // namespace ctid

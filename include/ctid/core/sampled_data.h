@@ -38,8 +38,10 @@ class SampledData {
   /// first-order hold for multisine and band-limited experiments whose input is not held).
   /// Every estimator, simulator and validation that reads this record's input uses it.
   Hold input_hold() const { return input_hold_; }
-  /// The same record with its input continued by `hold`.
-  SampledData with_input_hold(Hold hold) const;
+  /// The same record with its input continued by `hold` (a temporary is moved, not copied:
+  /// a long record is not held twice).
+  SampledData with_input_hold(Hold hold) const&;
+  SampledData with_input_hold(Hold hold) &&;
 
   /// Samples [begin, begin + count) (the input hold is kept).
   SampledData segment(int begin, int count) const;
