@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Issue 14's long-record target in one run: `ctid fit` of two modes from the automatic start
-on a record of N samples (default 1e7), as a whole process, with its wall time and peak memory.
+"""Issue 14's long-record targets in one run: `ctid fit` of two modes from the automatic start,
+and `ctid frf` (Welch), on a record of N samples (default 1e7), each as a whole process, with
+its wall time and peak memory.
 
 The record: two modes 1/(1 + 0.0318 p + 0.00253 p^2) (19.9 rad/s, zeta 0.32) and
 0.2/(1 + 0.0064 p + 0.000101 p^2) (99.5 rad/s, zeta 0.32) in parallel, driven by a PRBS held
@@ -36,14 +37,14 @@ def record(ctid, n, h=0.0005):
     return np.column_stack([h * np.arange(n), u, y])
 
 
-def timed_fit(cli, path, folder):
+def timed(cli, command, path, folder, *flags):
     out = folder / "r.json"
-    done = subprocess.run(["/usr/bin/time", "-f", "%e %U %S %M", str(cli), "fit", str(path),
+    done = subprocess.run(["/usr/bin/time", "-f", "%e %U %S %M", str(cli), command, str(path),
                            "--time-column", "0", "--input-column", "1", "--output-column", "2",
-                           "--modes", "2", "-q", "--force", "-o", str(out)],
+                           *flags, "-q", "--force", "-o", str(out)],
                           capture_output=True, text=True)
     if done.returncode != 0:
-        sys.exit(f"ctid fit failed ({done.returncode}):\n{done.stderr}")
+        sys.exit(f"ctid {command} failed ({done.returncode}):\n{done.stderr}")
     wall, user, system, kilobytes = done.stderr.strip().splitlines()[-1].split()
     return (float(wall), float(user) + float(system), float(kilobytes) / 1024,
             json.loads(out.read_text()))
@@ -61,19 +62,21 @@ def main():
     sys.path.insert(0, str(build / "python"))
     import ctid  # noqa: E402
 
-    print(f"{'N':>10} {'wall s':>8} {'CPU s':>6} {'peak MiB':>9} {'bytes/sample':>13} {'iterations':>10}  modes "
+    print(f"{'ctid':<5} {'N':>10} {'wall s':>8} {'CPU s':>6} {'peak MiB':>9} {'bytes/sample':>13} {'iterations':>10}  modes "
           "(rad/s, zeta)")
     with tempfile.TemporaryDirectory(prefix="ctid_long_") as folder:
         folder = pathlib.Path(folder)
         for n in (args.samples // 10, args.samples):
             path = folder / "d.npy"
             np.save(path, record(ctid, n))
-            wall, cpu, mib, result = timed_fit(cli, path, folder)
+            wall, cpu, mib, _ = timed(cli, "frf", path, folder)
+            print(f"{'frf':<5} {n:>10} {wall:8.2f} {cpu:6.2f} {mib:9.0f} {mib * 2**20 / n:13.0f}")
+            wall, cpu, mib, result = timed(cli, "fit", path, folder, "--modes", "2")
             modes = sorted((m["natural_frequency"], m["damping_ratio"]) for m in result["modes"])
             truth = sorted((1 / math.sqrt(a[2]), a[1] / (2 * math.sqrt(a[2]))) for a, _ in TRUTH)
             found = all(abs(w - wt) <= 0.01 * wt and abs(z - zt) <= 0.01 * zt
                         for (w, z), (wt, zt) in zip(modes, truth))
-            print(f"{n:>10} {wall:8.2f} {cpu:6.2f} {mib:9.0f} {mib * 2**20 / n:13.0f} "
+            print(f"{'fit':<5} {n:>10} {wall:8.2f} {cpu:6.2f} {mib:9.0f} {mib * 2**20 / n:13.0f} "
                   f"{result['iterations']:>10}  " +
                   ", ".join(f"({w:.2f}, {z:.4f})" for w, z in modes))
             if not found:
