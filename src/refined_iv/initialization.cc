@@ -155,13 +155,9 @@ std::optional<SampledData> screening_piece(const SampledData& record,
   return record.segment(0, length);
 }
 
-}  // namespace
-
-TransferFunction initial_transfer_function(const SampledData& record, const SubmodelOrder& order,
-                                           const InitializationOptions& options) {
-  options.validate();
-  const std::optional<SampledData> piece = screening_piece(record, options);
-  const SampledData& data = piece ? *piece : record;
+// initial_transfer_function on `data`, the piece already chosen (options validated).
+TransferFunction screened_transfer_function(const SampledData& data, const SubmodelOrder& order,
+                                            const InitializationOptions& options) {
   const double h = data.sample_time();
   const DiscreteTransferFunction* controller = options.controller ? &*options.controller : nullptr;
   if (controller != nullptr) {
@@ -293,6 +289,15 @@ TransferFunction initial_transfer_function(const SampledData& record, const Subm
   return *best;
 }
 
+}  // namespace
+
+TransferFunction initial_transfer_function(const SampledData& record, const SubmodelOrder& order,
+                                           const InitializationOptions& options) {
+  options.validate();
+  const std::optional<SampledData> piece = screening_piece(record, options);
+  return screened_transfer_function(piece ? *piece : record, order, options);
+}
+
 AdditiveModel group_into_submodels(const TransferFunction& g,
                                    const std::vector<SubmodelOrder>& orders,
                                    const SampledData& data, int input_delay) {
@@ -403,11 +408,12 @@ AdditiveModel group_into_submodels(const TransferFunction& g,
 AdditiveModel initial_additive_model(const SampledData& record,
                                      const std::vector<SubmodelOrder>& orders,
                                      const InitializationOptions& options) {
+  options.validate();
   const SubmodelOrder total = unfactored_order(orders);
-  const TransferFunction g = initial_transfer_function(record, total, options);
-  // The numerators on the same piece the start was screened on.
+  // The start is screened, and the numerators are fitted, on the same piece.
   const std::optional<SampledData> piece = screening_piece(record, options);
   const SampledData& data = piece ? *piece : record;
+  const TransferFunction g = screened_transfer_function(data, total, options);
   if (!options.controller) return group_into_submodels(g, orders, data, options.input_delay);
   // Closed loop: the numerators are fitted to g's own response to u rather than to y, so the
   // grouped model stays the stabilised start g (refitting them to y would bring back the

@@ -30,7 +30,7 @@ struct MimoLayout {
   std::vector<double> input_fractions;
   // Time domain only (InitialConditions::estimate): every submodel's n_i + l_i free-response
   // columns, appended after the numerators and D; the same columns for every output, each
-  // output with its own coefficients. free_at[i] is submodel i's first; u_count counts them.
+  // output with its own coefficients. free_at[i] is submodel i's first; free_count counts them.
   std::vector<int> free_at;
   int free_count = 0;
 
