@@ -92,6 +92,11 @@ run_one() {
   local execs cov
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$out/logs/run_$name.log" | grep -o '[0-9]*$' || true)
   cov=$(grep -o 'cov: [0-9]*' "$out/logs/run_$name.log" | tail -1 | grep -o '[0-9]*' || true)
+  if ((status == 72)); then # stopped by a SIGINT from elsewhere before its time was up
+    echo "fuzz.sh: fuzz_$name interrupted after ${execs:-?} executions (no crash);" \
+      "log $out/logs/run_$name.log" >&2
+    return 1
+  fi
   if ((status != 0)); then
     echo "fuzz.sh: fuzz_$name CRASHED after ${execs:-?} executions; input in $out/crashes/$name/," \
       "log $out/logs/run_$name.log" >&2
