@@ -9,7 +9,8 @@ for 5 samples, h = 0.5 ms, white output noise of standard deviation 0.05; writte
 float64 .npy file (t, u, y columns), the binary input meant for long records (decision 0022).
 The fit must find both modes within 1 % of the truth. Wall time and peak resident memory
 (and user + system CPU time) come from /usr/bin/time; a second line gives the same for --samples / 10 so the growth per
-sample shows. Usage:
+sample shows, and a `fit4` line fits four modes to the shorter record (memory per sample must
+not grow with the order). Usage:
 
     /usr/bin/python3 benchmarks/long_record.py [--build build] [--samples 10000000]
 """
@@ -81,6 +82,12 @@ def main():
                   ", ".join(f"({w:.2f}, {z:.4f})" for w, z in modes))
             if not found:
                 sys.exit(f"the fit missed the modes {truth}")
+            if n == args.samples // 10:
+                # Memory per sample must not grow with the model order: four modes (two of
+                # them spurious) on the same record.
+                wall, cpu, mib, result = timed(cli, "fit", path, folder, "--modes", "4")
+                print(f"{'fit4':<5} {n:>10} {wall:8.2f} {cpu:6.2f} {mib:9.0f} "
+                      f"{mib * 2**20 / n:13.0f} {result['iterations']:>10}")
 
 
 if __name__ == "__main__":

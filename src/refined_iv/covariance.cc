@@ -8,7 +8,7 @@
 #include <Eigen/Dense>
 
 #include "ctid/core/error.h"
-#include "refined_iv/internal/scaled_least_squares.h"
+#include "refined_iv/internal/covariance_sums.h"
 
 namespace ctid {
 
@@ -62,59 +62,61 @@ Eigen::MatrixXd adjoint_ar_filter(const Eigen::MatrixXd& x, const Autoregressive
   return g;
 }
 
-namespace {
+namespace internal {
 
-// sum_s g_s g_s' for g = adjoint_ar_filter(x * diag(1 / scales), ar), without forming g:
-// the backward recursion runs over blocks of kBlock samples (newest first), each block's
-// outer products are added by one product, and the `order` newest values of g below the
-// block carry into the next; memory O(p (kBlock + order)), not O(p N).
-Eigen::MatrixXd adjoint_ar_outer_sum(const Eigen::MatrixXd& x, const Eigen::VectorXd& scales,
-                                     const AutoregressiveModel& ar) {
+AdjointArOuterSum::AdjointArOuterSum(const AutoregressiveModel& ar, const Eigen::VectorXd& scales)
+    : alpha_(ar.coefficients.tail(ar.coefficients.size() - 1)),
+      inverse_(scales.cwiseInverse()),
+      sum_(Eigen::MatrixXd::Zero(scales.size(), scales.size())),
+      carry_(scales.size(), std::max<Eigen::Index>(alpha_.size(), 1)) {}
+
+void AdjointArOuterSum::add_earlier(const Eigen::Ref<const Eigen::MatrixXd>& rows) {
   constexpr Eigen::Index kBlock = 1024;
-  const Eigen::Index n = x.rows();
-  const Eigen::Index p = x.cols();
-  const Eigen::Index order = ar.coefficients.size() - 1;
-  const Eigen::VectorXd inverse = scales.cwiseInverse();
-  Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(p, p);
-  Eigen::MatrixXd g(p, kBlock);
-  Eigen::MatrixXd carry = Eigen::MatrixXd::Zero(p, std::max<Eigen::Index>(order, 1));
-  for (Eigen::Index end = n; end > 0;) {
+  const Eigen::Index order = alpha_.size();
+  if (g_.cols() == 0) g_.resize(inverse_.size(), kBlock);
+  for (Eigen::Index end = rows.rows(); end > 0;) {
     const Eigen::Index start = std::max<Eigen::Index>(0, end - kBlock);
     const Eigen::Index length = end - start;
+    // Newest first within the block; g_{s+j} is in this block or, past its end, in the carry
+    // (while there is a newer row at all).
     for (Eigen::Index i = length - 1; i >= 0; --i) {
-      g.col(i) = x.row(start + i).transpose().cwiseProduct(inverse);
-      for (Eigen::Index j = 1; j <= order && start + i + j < n; ++j) {
+      g_.col(i) = rows.row(start + i).transpose().cwiseProduct(inverse_);
+      for (Eigen::Index j = 1; j <= order; ++j) {
         if (i + j < length) {
-          g.col(i) -= ar.coefficients(j) * g.col(i + j);
+          g_.col(i) -= alpha_(j - 1) * g_.col(i + j);
+        } else if (i + j - length < carried_) {
+          g_.col(i) -= alpha_(j - 1) * carry_.col(i + j - length);
         } else {
-          g.col(i) -= ar.coefficients(j) * carry.col(i + j - length);
+          break;
         }
       }
     }
-    sum.noalias() += g.leftCols(length) * g.leftCols(length).transpose();
-    for (Eigen::Index c = 0; c < std::min(order, length); ++c) carry.col(c) = g.col(c);
+    sum_.noalias() += g_.leftCols(length) * g_.leftCols(length).transpose();
+    // The carry becomes the oldest `order` values: this block's, then the older carry's.
+    const Eigen::Index from_block = std::min(order, length);
+    const Eigen::Index kept = std::min(order - from_block, carried_);
+    if (kept > 0) carry_.middleCols(from_block, kept) = carry_.leftCols(kept).eval();
+    carry_.leftCols(from_block) = g_.leftCols(from_block);
+    carried_ = from_block + kept;
     end = start;
   }
-  return sum;
 }
 
-}  // namespace
-
-Eigen::MatrixXd instrumental_variable_covariance(const Eigen::MatrixXd& psi,
-                                                 const Eigen::VectorXd& residual,
-                                                 int parameter_count, NoiseAssumption noise,
-                                                 int max_ar_order) {
-  const Eigen::Index n = psi.rows();
-  require(residual.size() == n, "instrumental_variable_covariance: residual has ", residual.size(),
-          " samples, psi has ", n);
+Eigen::MatrixXd covariance_from_gram(
+    const Eigen::MatrixXd& gram, const Eigen::VectorXd& residual, int parameter_count,
+    NoiseAssumption noise, int max_ar_order,
+    const std::function<Eigen::MatrixXd(const AutoregressiveModel& ar,
+                                        const Eigen::VectorXd& scales)>& adjoint_outer_sum) {
+  const Eigen::Index n = residual.size();
   require(n > parameter_count, "instrumental_variable_covariance: ", n, " samples are too few for ",
           parameter_count, " parameters");
-  // Columns scaled to unit norm so that the inverse is formed on a well-conditioned matrix;
-  // the scaling is applied to the p x p products, so no scaled copy of psi is made (a long
-  // record's psi is the largest thing the estimator holds).
-  const Eigen::VectorXd s = internal::column_scales(psi);
-  const Eigen::MatrixXd r =
-      s.cwiseInverse().asDiagonal() * (psi.transpose() * psi) * s.cwiseInverse().asDiagonal();
+  // Columns scaled to unit norm (column_scales' rule) so that the inverse is formed on a
+  // well-conditioned matrix; the scaling is applied to the q x q products.
+  Eigen::VectorXd s = gram.diagonal().cwiseSqrt();
+  for (Eigen::Index j = 0; j < s.size(); ++j) {
+    if (!(s(j) > 0.0)) s(j) = 1.0;
+  }
+  const Eigen::MatrixXd r = s.cwiseInverse().asDiagonal() * gram * s.cwiseInverse().asDiagonal();
   const Eigen::MatrixXd r_inv = r.completeOrthogonalDecomposition().pseudoInverse();
   Eigen::MatrixXd middle_inv;
   if (noise == NoiseAssumption::white) {
@@ -124,10 +126,27 @@ Eigen::MatrixXd instrumental_variable_covariance(const Eigen::MatrixXd& psi,
     const AutoregressiveModel ar = fit_autoregressive(residual, max_ar_order);
     const double e2 =
         ar.innovation_variance * static_cast<double>(n) / static_cast<double>(n - parameter_count);
-    const Eigen::MatrixXd q = e2 * adjoint_ar_outer_sum(psi, s, ar);
+    const Eigen::MatrixXd q = e2 * adjoint_outer_sum(ar, s);
     middle_inv = r_inv * q * r_inv;
   }
   return s.cwiseInverse().asDiagonal() * middle_inv * s.cwiseInverse().asDiagonal();
+}
+
+}  // namespace internal
+
+Eigen::MatrixXd instrumental_variable_covariance(const Eigen::MatrixXd& psi,
+                                                 const Eigen::VectorXd& residual,
+                                                 int parameter_count, NoiseAssumption noise,
+                                                 int max_ar_order) {
+  require(residual.size() == psi.rows(), "instrumental_variable_covariance: residual has ",
+          residual.size(), " samples, psi has ", psi.rows());
+  return internal::covariance_from_gram(
+      psi.transpose() * psi, residual, parameter_count, noise, max_ar_order,
+      [&](const AutoregressiveModel& ar, const Eigen::VectorXd& scales) {
+        internal::AdjointArOuterSum sum(ar, scales);
+        sum.add_earlier(psi);
+        return sum.sum();
+      });
 }
 
 namespace {

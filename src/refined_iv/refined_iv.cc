@@ -21,6 +21,7 @@
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/initialization.h"
 #include "ctid/simulation/discretization.h"
+#include "refined_iv/internal/covariance_sums.h"
 #include "refined_iv/internal/refined_iv_engine.h"
 
 namespace ctid {
@@ -400,100 +401,183 @@ struct RecordSignals {
   Eigen::Index offset = 0;
 };
 
+// One record's filters at beta, from rest; the workspace's free-response columns of the other
+// records are cleared (they are zero on this record's rows).
+std::vector<SubmodelFilters> record_filters(const Layout& layout, const Eigen::VectorXd& beta,
+                                            const Eigen::VectorXd& initial_states, int record,
+                                            double h, Hold output_interpolation, bool closed_loop,
+                                            bool need_instrument, bool need_regressor,
+                                            Workspace& w) {
+  std::vector<SubmodelFilters> filters;
+  filters.reserve(static_cast<size_t>(layout.size()));
+  for (int i = 0; i < layout.size(); ++i) {
+    filters.push_back(submodel_filters(layout, beta, initial_states, record, i, h,
+                                       output_interpolation, closed_loop, need_instrument,
+                                       need_regressor));
+  }
+  if (layout.free_responses()) {
+    const int free = layout.augmented - layout.parameters;
+    w.instrument.rightCols(free).setZero();
+    w.regressor.rightCols(free).setZero();
+  }
+  return filters;
+}
+
+// Where a record's filters are between two blocks: enough to run them on from there.
+struct FilterCheckpoint {
+  std::vector<SampledFilter::Stream> source;
+  std::vector<SampledFilter::Stream> input;
+  std::vector<SampledFilter::Stream> output;
+  std::vector<Eigen::MatrixXd> free;
+};
+
+FilterCheckpoint checkpoint(const std::vector<SubmodelFilters>& filters) {
+  FilterCheckpoint c;
+  for (const SubmodelFilters& f : filters) {
+    c.source.push_back(f.source_stream);
+    c.input.push_back(f.input_stream);
+    c.output.push_back(f.output_stream);
+    c.free.push_back(f.free ? f.free->state : Eigen::MatrixXd());
+  }
+  return c;
+}
+
+void restore(std::vector<SubmodelFilters>& filters, const FilterCheckpoint& c) {
+  for (size_t i = 0; i < filters.size(); ++i) {
+    filters[i].source_stream = c.source[i];
+    filters[i].input_stream = c.input[i];
+    filters[i].output_stream = c.output[i];
+    if (filters[i].free) filters[i].free->state = c.free[i];
+  }
+}
+
+// Rows [k0, k0 + len) of one record through its filters, which continue from row k0: the
+// instrument and regressor rows, the submodel outputs and their sum and, with the regressor,
+// the filtered residual outputs (22).
+void filter_block(const Layout& layout, int record, const RecordSignals& signals,
+                  const Eigen::VectorXd* source, Eigen::Index k0, Eigen::Index len,
+                  bool need_instrument, bool need_regressor, std::vector<SubmodelFilters>& filters,
+                  Workspace& w) {
+  const Eigen::VectorXd& u = signals.u;
+  const Eigen::VectorXd& y = *signals.y;
+  const int k_count = layout.size();
+  const bool closed_loop = source != nullptr;
+  for (int i = 0; i < k_count; ++i) {
+    const auto at = static_cast<size_t>(i);
+    const SubmodelOrder& o = layout.orders[at];
+    const int off = layout.offset[at];
+    SubmodelFilters& f = filters[at];
+    if (f.source) {
+      Eigen::MatrixXd& out = w.source_out[at];
+      out.resize(len, f.source->outputs());
+      f.source->run((closed_loop ? *source : u).segment(k0, len), f.source_stream, out);
+      w.instrument.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+      if (o.n > 0) w.instrument.block(0, off, len, o.n) = -out.middleCols(o.m + 1, o.n);
+      if (!closed_loop) {
+        w.outputs.col(i).head(len) = out.col(o.m + o.n + 1);
+        if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+      }
+    }
+    if (f.input) {
+      Eigen::MatrixXd& out = w.input_out[at];
+      out.resize(len, f.input->outputs());
+      f.input->run(u.segment(k0, len), f.input_stream, out);
+      w.outputs.col(i).head(len) = out.col(o.m + 1);
+      if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+    }
+    if (f.free) {
+      FreeResponse& r = *f.free;
+      const int s = layout.states(i);
+      for (Eigen::Index k = 0; k < len; ++k) {
+        r.basis.row(k).noalias() = r.c0 * r.state.leftCols(s);
+        r.value(k) = r.c0.dot(r.state.col(s));
+        if (o.n > 0) r.filtered.row(k).noalias() = (r.ck * r.state.col(s)).transpose();
+        r.next.noalias() = r.phi * r.state;
+        r.state.swap(r.next);
+      }
+      const int free_off = layout.free_at(record, i);
+      w.outputs.col(i).head(len) += r.value.head(len);
+      if (need_instrument) {
+        w.instrument.block(0, free_off, len, s) = r.basis.topRows(len);
+        if (!closed_loop && o.n > 0) {
+          w.instrument.block(0, off, len, o.n) -= r.filtered.topRows(len);
+        }
+      }
+      if (need_regressor) w.regressor.block(0, free_off, len, s) = r.basis.topRows(len);
+    }
+  }
+  w.total.head(len) = w.outputs.topRows(len).rowwise().sum();
+  if (need_regressor) {
+    for (int i = 0; i < k_count; ++i) {
+      const auto at = static_cast<size_t>(i);
+      const SubmodelOrder& o = layout.orders[at];
+      const int off = layout.offset[at];
+      SubmodelFilters& f = filters[at];
+      w.residual_output.head(len) =
+          y.segment(k0, len) - w.total.head(len) + w.outputs.col(i).head(len);  // (23)
+      if (f.output) {
+        Eigen::MatrixXd& out = w.output_out[at];
+        out.resize(len, f.output->outputs());
+        f.output->run(w.residual_output.head(len), f.output_stream, out);
+        w.filtered.col(i).head(len) = out.col(0);                       // (22)
+        w.regressor.block(0, off, len, o.n) = -out.middleCols(1, o.n);  // (24)
+      } else {
+        w.filtered.col(i).head(len) = w.residual_output.head(len);
+      }
+    }
+  }
+}
+
+// Rows of a record between two checkpoints of the instrument pass.
+constexpr Eigen::Index kSegment = 16 * kBlock;
+
+// The instrument's share of the covariance, streamed so that the N x q instrument psi is
+// never stored: its Gram matrix psi' psi and, for the coloured-noise sandwich, each record's
+// filter states every kSegment rows, from which psi is formed again segment by segment, newest
+// first (adjoint_instrument_sum). psi is the stacked instrument at beta with `extra` (the
+// delay's column, stacked like the residual) appended when it is estimated.
+struct InstrumentPass {
+  const Eigen::VectorXd* extra = nullptr;
+  bool keep_checkpoints = false;
+  Eigen::MatrixXd* stored = nullptr;  // psi itself (RefinedIvProblem::stored_instrument_covariance)
+  Eigen::MatrixXd gram;               // q x q
+  std::vector<std::vector<FilterCheckpoint>> saved;  // [record][segment]
+  Eigen::MatrixXd rows;                              // kBlock x q
+
+  int columns(const Layout& layout) const { return layout.augmented + (extra != nullptr ? 1 : 0); }
+
+  // psi's rows [k0, k0 + len) of the record starting at `first`, from the workspace.
+  const Eigen::MatrixXd& block(const Layout& layout, const Workspace& w, Eigen::Index first,
+                               Eigen::Index k0, Eigen::Index len) {
+    rows.resize(kBlock, columns(layout));
+    rows.topLeftCorner(len, layout.augmented) = w.instrument.topRows(len);
+    if (extra != nullptr) rows.col(layout.augmented).head(len) = extra->segment(first + k0, len);
+    return rows;
+  }
+};
+
 // evaluate() on one record: its filters from rest, its free responses, its rows of the
 // stacked residual and instrument; the sums are added to.
 void evaluate_record(const Layout& layout, const Eigen::VectorXd& beta,
                      const Eigen::VectorXd& initial_states, int record,
                      const RecordSignals& signals, const Eigen::VectorXd* source, double h,
                      Hold output_interpolation, Workspace& w, Moments* moments,
-                     Eigen::VectorXd* residual, Eigen::MatrixXd* psi, double* sse) {
-  const Eigen::VectorXd& u = signals.u;
+                     Eigen::VectorXd* residual, InstrumentPass* instrument, double* sse) {
   const Eigen::VectorXd& y = *signals.y;
-  const Eigen::Index n = u.size();
+  const Eigen::Index n = signals.u.size();
   const Eigen::Index first = signals.offset;
-  const int k_count = layout.size();
-  const bool closed_loop = source != nullptr;
-  const bool need_instrument = moments != nullptr || psi != nullptr;
+  const bool need_instrument = moments != nullptr || instrument != nullptr;
   const bool need_regressor = moments != nullptr;
-  std::vector<SubmodelFilters> filters;
-  filters.reserve(static_cast<size_t>(k_count));
-  for (int i = 0; i < k_count; ++i) {
-    filters.push_back(submodel_filters(layout, beta, initial_states, record, i, h,
-                                       output_interpolation, closed_loop, need_instrument,
-                                       need_regressor));
-  }
-  if (layout.free_responses()) {
-    // The other records' free-response columns are zero on this record's rows.
-    const int free = layout.augmented - layout.parameters;
-    w.instrument.rightCols(free).setZero();
-    w.regressor.rightCols(free).setZero();
-  }
+  std::vector<SubmodelFilters> filters =
+      record_filters(layout, beta, initial_states, record, h, output_interpolation,
+                     source != nullptr, need_instrument, need_regressor, w);
   for (Eigen::Index k0 = 0; k0 < n; k0 += kBlock) {
     const Eigen::Index len = std::min(kBlock, n - k0);
-    for (int i = 0; i < k_count; ++i) {
-      const auto at = static_cast<size_t>(i);
-      const SubmodelOrder& o = layout.orders[at];
-      const int off = layout.offset[at];
-      SubmodelFilters& f = filters[at];
-      if (f.source) {
-        Eigen::MatrixXd& out = w.source_out[at];
-        out.resize(len, f.source->outputs());
-        f.source->run((closed_loop ? *source : u).segment(k0, len), f.source_stream, out);
-        w.instrument.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
-        if (o.n > 0) w.instrument.block(0, off, len, o.n) = -out.middleCols(o.m + 1, o.n);
-        if (!closed_loop) {
-          w.outputs.col(i).head(len) = out.col(o.m + o.n + 1);
-          if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
-        }
-      }
-      if (f.input) {
-        Eigen::MatrixXd& out = w.input_out[at];
-        out.resize(len, f.input->outputs());
-        f.input->run(u.segment(k0, len), f.input_stream, out);
-        w.outputs.col(i).head(len) = out.col(o.m + 1);
-        if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
-      }
-      if (f.free) {
-        FreeResponse& r = *f.free;
-        const int s = layout.states(i);
-        for (Eigen::Index k = 0; k < len; ++k) {
-          r.basis.row(k).noalias() = r.c0 * r.state.leftCols(s);
-          r.value(k) = r.c0.dot(r.state.col(s));
-          if (o.n > 0) r.filtered.row(k).noalias() = (r.ck * r.state.col(s)).transpose();
-          r.next.noalias() = r.phi * r.state;
-          r.state.swap(r.next);
-        }
-        const int free_off = layout.free_at(record, i);
-        w.outputs.col(i).head(len) += r.value.head(len);
-        if (need_instrument) {
-          w.instrument.block(0, free_off, len, s) = r.basis.topRows(len);
-          if (!closed_loop && o.n > 0) {
-            w.instrument.block(0, off, len, o.n) -= r.filtered.topRows(len);
-          }
-        }
-        if (need_regressor) w.regressor.block(0, free_off, len, s) = r.basis.topRows(len);
-      }
+    if (instrument != nullptr && instrument->keep_checkpoints && k0 % kSegment == 0) {
+      instrument->saved[static_cast<size_t>(record)].push_back(checkpoint(filters));
     }
-    w.total.head(len) = w.outputs.topRows(len).rowwise().sum();
-    if (need_regressor) {
-      for (int i = 0; i < k_count; ++i) {
-        const auto at = static_cast<size_t>(i);
-        const SubmodelOrder& o = layout.orders[at];
-        const int off = layout.offset[at];
-        SubmodelFilters& f = filters[at];
-        w.residual_output.head(len) =
-            y.segment(k0, len) - w.total.head(len) + w.outputs.col(i).head(len);  // (23)
-        if (f.output) {
-          Eigen::MatrixXd& out = w.output_out[at];
-          out.resize(len, f.output->outputs());
-          f.output->run(w.residual_output.head(len), f.output_stream, out);
-          w.filtered.col(i).head(len) = out.col(0);                       // (22)
-          w.regressor.block(0, off, len, o.n) = -out.middleCols(1, o.n);  // (24)
-        } else {
-          w.filtered.col(i).head(len) = w.residual_output.head(len);
-        }
-      }
-    }
+    filter_block(layout, record, signals, source, k0, len, need_instrument, need_regressor, filters,
+                 w);
     if (moments != nullptr) {
       const auto z = w.instrument.topRows(len);
       const auto phi = w.regressor.topRows(len);
@@ -506,20 +590,25 @@ void evaluate_record(const Layout& layout, const Eigen::VectorXd& beta,
       residual->segment(first + k0, len) = y.segment(k0, len) - w.total.head(len);
     }
     if (sse != nullptr) *sse += (y.segment(k0, len) - w.total.head(len)).squaredNorm();
-    if (psi != nullptr) psi->middleRows(first + k0, len) = w.instrument.topRows(len);
+    if (instrument != nullptr) {
+      const auto z = instrument->block(layout, w, first, k0, len).topRows(len);
+      instrument->gram.noalias() += z.transpose() * z;
+      if (instrument->stored != nullptr) instrument->stored->middleRows(first + k0, len) = z;
+    }
   }
 }
 
 // One pass over the records at beta (instrument source: u in open loop, S_uo r when
 // `with_source`); each record's filters start at rest at its first sample and its free
 // responses have their own coefficients. With `moments`: the sums of eq. (29) over all
-// records; with `residual`: y - sum_i G_i u, records stacked; with `psi`: the stacked N x p
-// instrument (for the covariance); with `sse`: the sum of squared output errors
+// records; with `residual`: y - sum_i G_i u, records stacked; with `instrument`: the
+// instrument's sums for the covariance (InstrumentPass); with `sse`: the sum of squared output
+// errors
 // ||y - sum_i G_i u||^2 (the model output is formed on every pass anyway).
 void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
               const Eigen::VectorXd& initial_states, const std::vector<RecordSignals>& records,
               bool with_source, double h, Hold output_interpolation, Workspace& w, Moments* moments,
-              Eigen::VectorXd* residual, Eigen::MatrixXd* psi, double* sse = nullptr) {
+              Eigen::VectorXd* residual, InstrumentPass* instrument, double* sse = nullptr) {
   Eigen::Index n = 0;
   for (const RecordSignals& record : records) n += record.u.size();
   const int k_count = layout.size();
@@ -537,7 +626,10 @@ void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
         moments->pp = Eigen::VectorXd::Constant(p, nan);
       }
       if (residual != nullptr) *residual = Eigen::VectorXd::Constant(n, nan);
-      if (psi != nullptr) *psi = Eigen::MatrixXd::Constant(n, p, nan);
+      if (instrument != nullptr) {
+        const int q = instrument->columns(layout);
+        instrument->gram = Eigen::MatrixXd::Constant(q, q, nan);
+      }
       if (sse != nullptr) *sse = nan;
       return;
     }
@@ -549,14 +641,54 @@ void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
     moments->pp = Eigen::VectorXd::Zero(p);
   }
   if (residual != nullptr) residual->resize(n);
-  if (psi != nullptr) psi->resize(n, p);
+  if (instrument != nullptr) {
+    const int q = instrument->columns(layout);
+    instrument->gram = Eigen::MatrixXd::Zero(q, q);
+    instrument->saved.assign(records.size(), {});
+    if (instrument->stored != nullptr) instrument->stored->resize(n, q);
+  }
   if (sse != nullptr) *sse = 0.0;
   for (int record = 0; record < static_cast<int>(records.size()); ++record) {
     const RecordSignals& signals = records[static_cast<size_t>(record)];
     evaluate_record(layout, beta, initial_states, record, signals,
                     with_source ? &*signals.source : nullptr, h, output_interpolation, w, moments,
-                    residual, psi, sse);
+                    residual, instrument, sse);
   }
+}
+
+// The coloured-noise middle factor's sum (AdjointArOuterSum) over the instrument of an
+// InstrumentPass that kept its checkpoints: records and their segments newest first, each
+// segment's rows formed again from its checkpoint, so only kSegment rows of psi are held.
+Eigen::MatrixXd adjoint_instrument_sum(const Layout& layout, const Eigen::VectorXd& beta,
+                                       const Eigen::VectorXd& initial_states,
+                                       const std::vector<RecordSignals>& records, bool with_source,
+                                       double h, Hold output_interpolation, Workspace& w,
+                                       InstrumentPass& pass, const AutoregressiveModel& ar,
+                                       const Eigen::VectorXd& scales) {
+  AdjointArOuterSum sum(ar, scales);
+  Eigen::MatrixXd segment(kSegment, pass.columns(layout));
+  for (int record = static_cast<int>(records.size()) - 1; record >= 0; --record) {
+    const RecordSignals& signals = records[static_cast<size_t>(record)];
+    const Eigen::VectorXd* source = with_source ? &*signals.source : nullptr;
+    const Eigen::Index n = signals.u.size();
+    std::vector<SubmodelFilters> filters =
+        record_filters(layout, beta, initial_states, record, h, output_interpolation,
+                       source != nullptr, true, false, w);
+    const std::vector<FilterCheckpoint>& saved = pass.saved[static_cast<size_t>(record)];
+    for (auto s = static_cast<Eigen::Index>(saved.size()) - 1; s >= 0; --s) {
+      restore(filters, saved[static_cast<size_t>(s)]);
+      const Eigen::Index start = s * kSegment;
+      const Eigen::Index length = std::min(kSegment, n - start);
+      for (Eigen::Index k0 = start; k0 < start + length; k0 += kBlock) {
+        const Eigen::Index len = std::min(kBlock, n - k0);
+        filter_block(layout, record, signals, source, k0, len, true, false, filters, w);
+        segment.middleRows(k0 - start, len) =
+            pass.block(layout, w, signals.offset, k0, len).topRows(len);
+      }
+      sum.add_earlier(segment.topRows(length));
+    }
+  }
+  return sum.sum();
 }
 
 // The free-response coefficients of every submodel in every record from the submodel's own
@@ -1055,7 +1187,6 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   }
 
   Eigen::VectorXd residual;
-  Eigen::MatrixXd psi;
   double sse = 0.0;
   bool returned_start = false;
   if (!result.converged() && best_beta.size() > 0) {
@@ -1102,8 +1233,39 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
       states_at = beta;
     }
   }
+  // The delay's column of the instrument: the sensitivity of the noise-free model output to
+  // tau, as the other columns are theirs to the parameters (a central difference within the
+  // sample interval, where the held input makes the output smooth in tau).
+  Eigen::VectorXd delay_column;
+  const bool delay_column_used =
+      options.compute_covariance && options.delay_estimated && beta.allFinite();
+  if (delay_column_used) {
+    const Hold hold = closed_loop ? Hold::zero_order_hold : layout.input_hold;
+    const double step = 1e-4;
+    const double f = layout.delay_fraction;
+    const double up = f + step < 1.0 ? step : 0.0;
+    const double down = f - step >= 0.0 ? step : 0.0;
+    auto output_at = [&](double shift) {
+      Eigen::VectorXd out(n_samples);
+      for (size_t r = 0; r < records.size(); ++r) {
+        const Eigen::VectorXd& driven =
+            closed_loop ? signals[r].undelayed_source : records[r]->input();
+        const double own = (delay_of(r) - delay) * h;
+        out.segment(signals[r].offset, records[r]->size()) =
+            model_output(result.model.with_input_delay(tau + own + shift * h), driven, h, hold);
+      }
+      return out;
+    };
+    delay_column = (output_at(up) - output_at(-down)) / ((up + down) * h);
+  }
+  InstrumentPass instrument;
+  instrument.extra = delay_column_used ? &delay_column : nullptr;
+  instrument.keep_checkpoints =
+      options.noise != NoiseAssumption::white && !problem.stored_instrument_covariance;
+  Eigen::MatrixXd stored_psi;
+  if (problem.stored_instrument_covariance) instrument.stored = &stored_psi;
   evaluate(layout, beta, initial_states, signals, source, h, options.output_interpolation,
-           workspace, nullptr, &residual, options.compute_covariance ? &psi : nullptr);
+           workspace, nullptr, &residual, options.compute_covariance ? &instrument : nullptr);
   sse = residual.squaredNorm();
   result.mean_squared_error = sse / n_samples;
   result.noise_variance = sse / std::max(n_samples - unknowns, 1);
@@ -1118,38 +1280,24 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
                                                      : std::numeric_limits<double>::quiet_NaN();
   }
 
-  if (options.compute_covariance && psi.allFinite() && residual.allFinite()) {
+  if (options.compute_covariance && instrument.gram.allFinite() && residual.allFinite()) {
     // With free responses the joint covariance of beta and their coefficients; its beta
     // block is the covariance of beta with the nuisance coefficients estimated alongside.
-    int joint_unknowns = unknowns;
-    if (options.delay_estimated) {
-      // The delay's column: the sensitivity of the noise-free model output to tau, as the
-      // other columns of psi are theirs to the parameters (a central difference within the
-      // sample interval, where the held input makes the output smooth in tau).
-      const Hold hold = closed_loop ? Hold::zero_order_hold : layout.input_hold;
-      const double step = 1e-4;
-      const double f = layout.delay_fraction;
-      const double up = f + step < 1.0 ? step : 0.0;
-      const double down = f - step >= 0.0 ? step : 0.0;
-      auto output_at = [&](double shift) {
-        Eigen::VectorXd out(n_samples);
-        for (size_t r = 0; r < records.size(); ++r) {
-          const Eigen::VectorXd& driven =
-              closed_loop ? signals[r].undelayed_source : records[r]->input();
-          const double own = (delay_of(r) - delay) * h;
-          out.segment(signals[r].offset, records[r]->size()) =
-              model_output(result.model.with_input_delay(tau + own + shift * h), driven, h, hold);
-        }
-        return out;
-      };
-      psi.conservativeResize(Eigen::NoChange, unknowns + 1);
-      psi.col(unknowns) = (output_at(up) - output_at(-down)) / ((up + down) * h);
-      joint_unknowns = unknowns + 1;
-    }
-    const Eigen::MatrixXd joint = instrumental_variable_covariance(
-        psi, residual, joint_unknowns, options.noise, options.noise_model_max_order);
+    const int joint_unknowns = unknowns + (delay_column_used ? 1 : 0);
+    const Eigen::MatrixXd joint =
+        problem.stored_instrument_covariance
+            ? instrumental_variable_covariance(stored_psi, residual, joint_unknowns, options.noise,
+                                               options.noise_model_max_order)
+            : covariance_from_gram(
+                  instrument.gram, residual, joint_unknowns, options.noise,
+                  options.noise_model_max_order,
+                  [&](const AutoregressiveModel& ar, const Eigen::VectorXd& scales) {
+                    return adjoint_instrument_sum(layout, beta, initial_states, signals, source, h,
+                                                  options.output_interpolation, workspace,
+                                                  instrument, ar, scales);
+                  });
     result.covariance = joint.topLeftCorner(p, p);
-    if (options.delay_estimated) {
+    if (delay_column_used) {
       result.delay_standard_error = std::sqrt(std::max(joint(unknowns, unknowns), 0.0));
     }
     result.standard_errors = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();

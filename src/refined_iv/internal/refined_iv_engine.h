@@ -24,6 +24,9 @@ struct RefinedIvProblem {
   /// One unfactored model whose additive view comes from partial fractions.
   bool unfactored = false;
   const char* name = "estimator";
+  /// The covariance from the whole N x p instrument held in memory, as before it was streamed
+  /// (issue 14): the reference the streamed sums are tested against, not for estimation.
+  bool stored_instrument_covariance = false;
 };
 
 EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIvOptions& options);
