@@ -16,6 +16,7 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/core/fields.h"
 #include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/io/documents.h"
@@ -159,7 +160,7 @@ Hold output_interpolation(const FitFlags& f) {
   return f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
 }
 NoiseAssumption noise_assumption(const FitFlags& f) {
-  return f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
+  return enum_from_name<NoiseAssumption>(f.noise).value();
 }
 
 // The flags as IdentificationOptions (the controller and --initial read from their files).
@@ -174,8 +175,7 @@ IdentificationOptions identification_options(const FitFlags& f) {
   refined.tolerance = f.tolerance;
   refined.output_interpolation = output_interpolation(f);
   refined.noise = noise_assumption(f);
-  refined.initial_conditions =
-      f.initial_conditions == "estimate" ? InitialConditions::estimate : InitialConditions::zero;
+  refined.initial_conditions = enum_from_name<InitialConditions>(f.initial_conditions).value();
   refined.record_history = f.history;
   refined.input_delay = f.delay;
   if (!f.record_delays.empty()) {
@@ -308,8 +308,7 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   options.direct_term = f.direct_term;
   options.input_delays = f.input_delays;
   options.rank_one_residues = f.rank_one;
-  options.initial_conditions =
-      f.initial_conditions == "estimate" ? InitialConditions::estimate : InitialConditions::zero;
+  options.initial_conditions = enum_from_name<InitialConditions>(f.initial_conditions).value();
   options.validate();
   const std::string start_file = f.initial.empty() ? (f.start == "auto" ? "" : f.start) : f.initial;
   const std::string start_flag = f.initial.empty() ? "--start" : "--initial";

@@ -13,6 +13,7 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/core/fields.h"
 #include "ctid/core/format.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
@@ -166,7 +167,7 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
     options.identification.delay_scan = DelayRange{d_low, d_high};
   }
   options.identification.refined_iv.initial_conditions =
-      f.initial_conditions == "estimate" ? InitialConditions::estimate : InitialConditions::zero;
+      enum_from_name<InitialConditions>(f.initial_conditions).value();
   options.validate();
   const SampledData data = f.data.load(app, !f.controller.empty());
   Progress progress("ctid structure", f.quiet);

@@ -17,6 +17,7 @@
 
 #include "command.h"
 #include "ctid/core/error.h"
+#include "ctid/core/fields.h"
 #include "ctid/core/format.h"
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
@@ -85,9 +86,8 @@ TrackingOptions tracking_options(const TrackFlags& f) {
   refined.tolerance = f.tolerance;
   refined.output_interpolation =
       f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
-  refined.noise = f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
-  refined.initial_conditions =
-      f.initial_conditions == "zero" ? InitialConditions::zero : InitialConditions::estimate;
+  refined.noise = enum_from_name<NoiseAssumption>(f.noise).value();
+  refined.initial_conditions = enum_from_name<InitialConditions>(f.initial_conditions).value();
   if (f.start == "lssvf") {
     refined.start = StartMethod::lssvf;
   } else if (f.start == "frf") {
@@ -264,10 +264,9 @@ ExitStatus run_mimo_track(const TrackFlags& f, const CLI::App& app) {
   options.refined_iv.tolerance = f.tolerance;
   options.refined_iv.output_interpolation =
       f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
-  options.refined_iv.noise =
-      f.noise == "white" ? NoiseAssumption::white : NoiseAssumption::coloured;
+  options.refined_iv.noise = enum_from_name<NoiseAssumption>(f.noise).value();
   options.refined_iv.initial_conditions =
-      f.initial_conditions == "zero" ? InitialConditions::zero : InitialConditions::estimate;
+      enum_from_name<InitialConditions>(f.initial_conditions).value();
   options.validate();
   const MimoData data = f.data.load_mimo(app);
 
