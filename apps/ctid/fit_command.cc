@@ -201,6 +201,31 @@ IdentificationOptions identification_options(const FitFlags& f) {
   return options;
 }
 
+// A start file (--start FILE / --initial) whose poles the structure cannot hold, refused
+// naming the file before the data is read: the estimator would otherwise stop with a message
+// about its own conversion of the start.
+void check_start_poles(const AdditiveModel& start, const ModelStructure& structure,
+                       const FitFlags& f) {
+  int poles = 0;
+  int origin = 0;
+  for (int i = 0; i < start.size(); ++i) {
+    poles += start[i].n();
+    origin += start[i].integrators;
+  }
+  int wanted = 0;
+  int wanted_origin = 0;
+  for (const SubmodelOrder& o : structure.orders) {
+    wanted += o.n;
+    wanted_origin += o.integrators;
+  }
+  if (poles == wanted && origin == wanted_origin) return;
+  const bool initial = !f.initial.empty();
+  usage_error(internal::concat(
+      initial ? f.initial : f.start, " (", initial ? "--initial" : "--start", "): the start has ",
+      poles, " poles and ", origin, " at the origin; the structure asks for ", wanted, " and ",
+      wanted_origin, "; give a start of the structure's order"));
+}
+
 // A start for several inputs and outputs (--initial / --start FILE): a mimo_additive_model
 // document or the model of a mimo_estimation_result, checked against the structure flags
 // (submodels, their poles and zeros, the direct term); the channels are checked against the
@@ -418,6 +443,9 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   }
 
   const IdentificationOptions options = identification_options(f);
+  if (options.refined_iv.initial_model) {
+    check_start_poles(*options.refined_iv.initial_model, structure, f);
+  }
   validate_identification(structure, options);  // before the data is read
   const std::optional<DiscreteTransferFunction>& controller = options.controller;
   if (!f.record_delays.empty() &&

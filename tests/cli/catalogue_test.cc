@@ -476,7 +476,8 @@ std::vector<Case> catalogue() {
                  {"two.json", R"({"type": "transfer_function", "numerator_ascending": [1.0],)"
                               R"( "denominator_ascending": [1.0, 1.0, 1.0]})"}},
        .args = fit1({"--start", "two.json"}),
-       .message = {"2 non-zero poles", "the structure asks for n = 1"}});
+       .message = {"two.json (--start): the start has 2 poles and 0 at the origin",
+                   "the structure asks for 1 and 0"}});
   // Finding 3.
   add({.name = "FitOutputIsItsData",
        .files = {d},

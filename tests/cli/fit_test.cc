@@ -379,6 +379,20 @@ TEST_F(FitCommand, FittedModelIsReadBySimulateAndAnInitialModelIsAccepted) {
   EXPECT_LE(read("r2.json").at("iterations").get<int>(), 5);
 }
 
+TEST_F(FitCommand, AStartOfAnotherOrderIsRefusedNamingItsFile) {
+  section_6_1_data();
+  ASSERT_EQ(ctid({"fit", "d.csv", "--modes", "4", "-o", "r.json", "-q"}).status, 0);
+  for (const char* flag : {"--initial", "--start"}) {
+    expect_bad_input(ctid({"fit", "d.csv", "--modes", "3", flag, "r.json", "-q"}),
+                     std::string("r.json (") + flag +
+                         "): the start has 8 poles and 0 at the origin; the structure asks for 6 "
+                         "and 0");
+  }
+  expect_bad_input(ctid({"fit", "d.csv", "--poles", "6", "--zeros", "4", "--start", "r.json"}),
+                   "the structure asks for 6 and 0");
+  EXPECT_FALSE(std::filesystem::exists(path("r2.json")));
+}
+
 // Three modes, h = 1/512 s: strong at 2 Hz, moderate at 9 Hz, weak and very lightly damped
 // at 31.3 Hz (the beam of Section 7 in small); the start puts the weak mode at 20 Hz.
 std::string three_modes(double weak_hz) {
