@@ -54,16 +54,13 @@ void warn_large_mean(const Eigen::VectorXd& x, const char* name, double ratio,
                      std::vector<std::string>& warnings) {
   const double mean = x.mean();
   const double sd = std::sqrt((x.array() - mean).square().mean());
-  if (std::abs(mean) > ratio * sd) {
-    std::ostringstream out;
-    out << name << " mean " << format_brief(mean) << " is ";
-    if (sd > 0.0) {
-      out << format_significant(std::abs(mean) / sd, 2) << " x its standard deviation";
-    } else {
-      out << "its constant value";
-    }
-    out << "; consider removing it (detrend mean)";
-    warnings.push_back(out.str());
+  // A constant signal is not warned about: removing its mean leaves nothing, and the command
+  // that needs it to vary refuses it with one error that says so.
+  if (sd > 0.0 && std::abs(mean) > ratio * sd) {
+    warnings.push_back(internal::concat(name, " mean ", format_brief(mean), " is ",
+                                        format_significant(std::abs(mean) / sd, 2),
+                                        " x its standard deviation; consider removing it "
+                                        "(detrend mean)"));
   }
 }
 

@@ -198,7 +198,7 @@ TEST_F(ReliabilityTest, FrfOfAConstantInputIsRefused) {
             std::to_string(k % 5) + "\n";
   }
   write("flat.csv", text);
-  // (The data check's warning about the input's mean comes first; the error is the last line.)
+  // One line: no warning about the constant column's mean before the error.
   for (const std::vector<std::string>& args :
        {std::vector<std::string>{"frf", "flat.csv", "-o", "f.csv"},
         std::vector<std::string>{"frf", "flat.csv", "--input-columns", "u2,u", "--output-columns",
@@ -207,6 +207,7 @@ TEST_F(ReliabilityTest, FrfOfAConstantInputIsRefused) {
     EXPECT_EQ(r.status, 2) << r.err;
     EXPECT_THAT(r.err, HasSubstr("ctid frf: error: flat.csv: input column 'u' is 1 at every "
                                  "sample; an FRF needs an input that varies"));
+    EXPECT_EQ(testing::line_count(r.err), 1) << r.err;
   }
   EXPECT_FALSE(std::filesystem::exists(path("f.csv")));
 }

@@ -33,6 +33,16 @@ TEST(Preprocessing, NothingAskedKeepsTheRecordAndWarnsAboutLargeMeans) {
   EXPECT_THAT(p.record.warnings[0], HasSubstr("consider removing it (detrend mean)"));
 }
 
+TEST(Preprocessing, AConstantSignalGetsNoAdviceToRemoveItsMean) {
+  // Removing the mean of a constant input leaves zeros; whatever needs the input to vary
+  // refuses it with its own error, so the warning would only come first and mislead.
+  const SampledData ramp = ramp_record(200, 0.1);
+  const SampledData data(0.1, Eigen::VectorXd::Constant(200, 3.0), ramp.output());
+  const PreprocessedData p = preprocess(data);
+  ASSERT_EQ(p.record.warnings.size(), 1u);
+  EXPECT_THAT(p.record.warnings[0], HasSubstr("output mean"));
+}
+
 TEST(Preprocessing, MeanAndLinearTrendsAreRemovedAndRecorded) {
   const SampledData data = ramp_record(400, 0.1);
   PreprocessingOptions options;
