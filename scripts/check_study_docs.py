@@ -25,7 +25,8 @@ standard errors (1e-3-1e-2 of the parameters), i.e. far below anything the doc q
 mse.csv tolerances follow from it: bias moves by at most RTOL |true value|, MSE by at most
 2 RTOL |true value| sqrt(MSE) (Cauchy-Schwarz on the mean of 2 e de), predicted MSE (a mean of
 squared standard errors) by 2 RTOL of itself. trends.csv is printed with 6 significant digits,
-so its values may differ by 1.5 units in the sixth digit.
+so its values may differ by 1.5 units in the sixth digit plus what the MSE tolerance allows
+(slope: a weighted sum of log MSE; ratios: two geometric means of MSE).
 
 --write regenerates the committed files from the current code instead of comparing (only
 files in docs/results/<study>/: mse.csv, trends.csv, mse.png, runs-sample.csv);
@@ -169,13 +170,10 @@ def check_trends_file(study, name):
     return errors
 
 
-def printed_close(printed, value, digits=6):
+def printed_close(printed, value):
     """True if `printed` (6 significant digits) and `value` differ by <= 1.5 units of its
     last digit."""
-    if printed == value:
-        return True
-    unit = 10.0 ** (math.floor(math.log10(abs(printed))) - (digits - 1)) if printed else 1e-300
-    return abs(printed - value) <= 1.5 * unit
+    return abs(printed - value) <= print_unit(printed)
 
 
 # --------------------------------------------------------------------------- doc numbers
@@ -296,8 +294,14 @@ def _prose_claims():
          lambda s: [len(s.sizes()), s.runs_per_size()]),
         ("## Results (reduced", "open-loop", "`--sizes {} --runs {}` ({} runs per estimator",
          lambda s: [len(s.sizes()), s.runs_per_size(), s.runs("srivc")]),
-        ("## Results (reduced", "open-loop", "An MSE from {} runs is known to about ±{} %",
-         lambda s: [s.runs_per_size(), 100 * math.sqrt(2 / s.runs_per_size())]),
+        ("## Results (reduced", "open-loop",
+         "An MSE from {} runs is known to about ±{} % (√(2/{}), the relative standard deviation "
+         "of a mean of {} squared",
+         lambda s: [s.runs_per_size(), 100 * math.sqrt(2 / s.runs_per_size())]
+         + [s.runs_per_size()] * 2),
+        ("## Results (reduced", "open-loop",
+         "uncertainty exp(s/√{}), s the standard deviation of the {} per-size log ratios",
+         lambda s: [len(s.sizes())] * 2),
         ("## Results (reduced", "open-loop", "geometric means over the {} sizes",
          lambda s: [len(s.sizes())]),
         ("### 6.1, open loop", "open-loop", "(log-log slopes {} to {};",
@@ -493,66 +497,86 @@ def unchecked_numbers(doc=DOC, results=RESULTS):
 
 # --------------------------------------------------------------------------- reruns
 
-def mse_tolerance(column, committed):
-    true = abs(float(committed["true_value"]))
+MSE_KEYS = ("estimator", "size_index", "parameter")
+TRENDS_KEYS = ("estimator", "parameter")
+RUNS_KEYS = ("estimator", "size_index", "run_index")
+RUNS_EXACT = ("estimator", "size_index", "run_index", "N", "seed", "termination",
+              "iterations", "valid", "error")
+
+
+def mse_tolerance(column, row):
+    """Allowed |change| of an mse.csv value (None: compare exactly)."""
+    true = abs(float(row["true_value"]))
     if column == "bias":
         return RTOL * true
     if column == "mse":
-        return 2 * RTOL * true * math.sqrt(float(committed["mse"])) * (1 + 1e-6)
-    return 2 * RTOL * abs(float(committed[column]))  # predicted_mse
+        return 2 * RTOL * true * math.sqrt(float(row["mse"])) * (1 + 1e-9)
+    if column == "predicted_mse":
+        return 2 * RTOL * abs(float(row["predicted_mse"]))
+    return None
 
 
-MSE_CSV = {"keys": ("estimator", "size_index", "parameter"),
-           "floats": {c: mse_tolerance for c in ("mse", "bias", "predicted_mse")}}
-TRENDS_CSV = {"keys": ("estimator", "parameter"),
-              "floats": {c: "printed" for c in ("slope", "mse_over_prediction",
-                                                "mse_over_srivc", "n_mse_at_largest_N")}}
-RUNS_CSV = {"keys": ("estimator", "size_index", "run_index"),
-            "floats": "estimates"}
+def runs_tolerance(column, row):
+    """Allowed |change| of a runs.csv value: estimates and standard errors RTOL of their
+    size, the rest exactly."""
+    return None if column in RUNS_EXACT else RTOL * abs(float(row[column]))
 
 
-def row_float_tolerance(spec, column, committed):
-    floats = spec["floats"]
-    if floats == "estimates":  # runs.csv: every parameter and se_ column
-        return RTOL * abs(float(committed[column]))
-    return floats[column](column, committed)
+def print_unit(value, digits=6):
+    """1.5 units in the last of `digits` significant digits of `value`."""
+    return 1.5 * 10.0 ** (math.floor(math.log10(abs(value))) - (digits - 1)) if value else 0.0
 
 
-def is_float_column(spec, column, header):
-    if spec["floats"] == "estimates":
-        return column not in ("estimator", "size_index", "run_index", "N", "seed",
-                              "termination", "iterations", "valid", "error")
-    return column in spec["floats"]
+def trends_tolerance(study):
+    """Allowed |change| of a trends.csv value: its print precision plus what the mse.csv
+    tolerances allow (log MSE moves by at most r = max relative MSE tolerance)."""
+    def relative(estimator, parameter):
+        return max(mse_tolerance("mse", row) / float(row["mse"]) for row in study.mse_rows
+                   if row["parameter"] == parameter and row["estimator"] in (estimator, "srivc"))
+
+    log_n = np.log(study.sizes())
+    weights = (log_n - log_n.mean()) / ((log_n - log_n.mean()) ** 2).sum()
+
+    def tolerance(column, row):
+        if column in TRENDS_KEYS:
+            return None
+        value, r = float(row[column]), relative(row["estimator"], row["parameter"])
+        spread = {"slope": r * np.abs(weights).sum(),  # a weighted sum of log MSE
+                  "mse_over_prediction": abs(value) * (r + 2 * RTOL) * 1.01,
+                  "mse_over_srivc": abs(value) * 2 * r * 1.01,
+                  "n_mse_at_largest_N": abs(value) * r * 1.01}[column]
+        return print_unit(value) + spread
+
+    return tolerance
 
 
-def compare_rows(label, committed, current, spec):
-    """Mismatches between two CSV row lists (same key set, equal integers/text, floats
-    within their tolerance)."""
-    keyed = lambda rows: {tuple(r[k] for k in spec["keys"]): r for r in rows}
-    old, new = keyed(committed), keyed(current)
+def compare_rows(label, committed, current, keys, tolerance):
+    """Mismatches between two CSV row lists: the same rows (by `keys`), and in each column
+    the same text, or for floats |difference| <= tolerance(column, committed row)."""
+    old = {tuple(r[k] for k in keys): r for r in committed}
+    new = {tuple(r[k] for k in keys): r for r in current}
     errors = [f"{label}: row {k} only in the committed file" for k in old if k not in new]
     errors += [f"{label}: row {k} only in the current run" for k in new if k not in old]
     for key in old.keys() & new.keys():
         a, b = old[key], new[key]
         for column in a:
+            tol = tolerance(column, a)
             if column not in b:
                 errors.append(f"{label}: column {column} missing in the current run")
-            elif not is_float_column(spec, column, a):
+            elif tol is None:
                 if a[column] != b[column]:
                     errors.append(f"{label} {key} {column}: committed {a[column]}, "
                                   f"current {b[column]}")
-            elif spec["floats"] != "estimates" and spec["floats"][column] == "printed":
-                if not printed_close(float(a[column]), float(b[column])):
-                    errors.append(f"{label} {key} {column}: committed {a[column]}, current "
-                                  f"{b[column]} (more than 1.5 units in the 6th digit)")
-            else:
-                x, y = float(a[column]), float(b[column])
-                tol = row_float_tolerance(spec, column, a)
-                if not abs(x - y) <= tol:
-                    errors.append(f"{label} {key} {column}: committed {a[column]}, current "
-                                  f"{b[column]} (|difference| {abs(x - y):.3g} > tolerance "
-                                  f"{tol:.3g})")
+            elif not float_close(float(a[column]), float(b[column]), tol):
+                errors.append(f"{label} {key} {column}: committed {a[column]}, current "
+                              f"{b[column]} (|difference| "
+                              f"{abs(float(a[column]) - float(b[column])):.3g} > tolerance "
+                              f"{tol:.3g})")
     return sorted(errors)
+
+
+def float_close(x, y, tolerance):
+    return abs(x - y) <= tolerance or (math.isnan(x) and math.isnan(y))
 
 
 def ctid_binary():
@@ -594,7 +618,8 @@ def replay_sample(ctid, name, results, folder, workers=2):
     with concurrent.futures.ThreadPoolExecutor(workers) as pool:
         replays = pool.map(lambda c: replay(ctid, name, c[0], c[1], folder), cases)
         current = [row for rows in replays for row in rows]
-    return compare_rows(f"{name}/runs-sample.csv", committed, current, RUNS_CSV)
+    return compare_rows(f"{name}/runs-sample.csv", committed, current, RUNS_KEYS,
+                        runs_tolerance)
 
 
 def compare_study(name, results, folder):
@@ -602,13 +627,15 @@ def compare_study(name, results, folder):
     the committed ones."""
     committed, current = pathlib.Path(results) / name, pathlib.Path(folder)
     errors = compare_rows(f"{name}/mse.csv", read_csv(committed / "mse.csv"),
-                          read_csv(current / "mse.csv"), MSE_CSV)
+                          read_csv(current / "mse.csv"), MSE_KEYS, mse_tolerance)
     errors += compare_rows(f"{name}/trends.csv", read_csv(committed / "trends.csv"),
-                           read_csv(current / "trends.csv"), TRENDS_CSV)
+                           read_csv(current / "trends.csv"), TRENDS_KEYS,
+                           trends_tolerance(Study(committed)))
     if STUDIES[name][2]:
         errors += compare_rows(f"{name}/runs-sample.csv",
                                read_csv(committed / "runs-sample.csv"),
-                               sample_rows(read_csv(current / "runs.csv")), RUNS_CSV)
+                               sample_rows(read_csv(current / "runs.csv")), RUNS_KEYS,
+                               runs_tolerance)
     return errors
 
 
