@@ -200,6 +200,19 @@ def check_trends_file(study, name):
     return errors
 
 
+def check_sample_file(study, name):
+    """runs-sample.csv holds the runs SAMPLE_RUNS at every size index, for every estimator."""
+    wanted = {(e, str(j), str(r)) for e in study.estimators
+              for j in range(len(study.sizes())) for r in SAMPLE_RUNS}
+    held = [tuple(row[k] for k in RUNS_KEYS)
+            for row in read_csv(study.folder / "runs-sample.csv")]
+    if sorted(held) != sorted(wanted):
+        missing = sorted(wanted - set(held))[:3]
+        return [f"{name}/runs-sample.csv: {len(held)} rows, not one per estimator, size index "
+                f"and run {SAMPLE_RUNS} ({len(wanted)}); missing e.g. {missing}"]
+    return []
+
+
 def printed_close(printed, value):
     """True if `printed` (6 significant digits) and `value` differ by <= 1.5 units of its
     last digit."""
@@ -282,6 +295,8 @@ def _prose_claims():
          lambda s: [len(s.sizes()), s.sizes()[0], s.sizes()[-1], s.runs_per_size()]),
         ("## Section 6.1", "open-loop-full", "{} sizes log-spaced from {} to {}, {} runs each",
          lambda s: [len(s.sizes()), s.sizes()[0], s.sizes()[-1], s.runs_per_size()]),
+        ("## Section 6.1", "open-loop-full", "the rows of `runs.csv` for runs {} and {} at every",
+         lambda s: list(SAMPLE_RUNS)),
         ("## Section 6.1", "open-loop-full", "additive estimator, {} estimates each",
          lambda s: [s.runs("srivc")]),
         ("## Section 6.1", "open-loop-full", "geometric means over the {} sizes",
@@ -509,8 +524,10 @@ def check_docs(doc=DOC, results=RESULTS, covered=None):
     studies = load_studies(results)
     secs = sections(pathlib.Path(doc).read_text())
     errors = []
-    for name in STUDIES:
+    for name, (_, _, paper_size) in STUDIES.items():
         errors += check_trends_file(studies[name], name)
+        if paper_size:
+            errors += check_sample_file(studies[name], name)
     for check in (check_tables, check_prose):
         try:
             errors += check(secs, studies, covered)

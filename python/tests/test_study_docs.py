@@ -158,3 +158,13 @@ def test_write_touches_only_the_result_files(cli, tmp_path):
             if (check.RESULTS / name / file).exists():
                 assert (results / name / file).read_bytes() == \
                     (check.RESULTS / name / file).read_bytes()
+
+
+def test_a_sample_missing_a_run_is_reported(tmp_path):
+    results = tmp_path / "results"
+    shutil.copytree(check.RESULTS, results)
+    rows = rewrite_csv(results / "closed-loop-full" / "runs-sample.csv", lambda rows: rows.pop())
+    errors = check.check_docs(results=results)
+    assert len(errors) == 1, errors
+    assert errors[0].startswith("closed-loop-full/runs-sample.csv:")
+    assert f"{len(rows)} rows" in errors[0]
