@@ -729,14 +729,19 @@ def write_results(ctid, full=False, outputs=None, results=RESULTS):
                 source = run_study(ctid, name, f"{tmp}/{name}")
             else:
                 continue
+            # Everything is made in tmp first, so a failure leaves docs/results untouched.
+            staged = pathlib.Path(tmp) / f"{name}-staged"
+            staged.mkdir()
+            for file in ("mse.csv", "trends.csv"):
+                shutil.copyfile(source / file, staged / file)
+            if paper_size:
+                write_sample(source / "runs.csv", staged / "runs-sample.csv")
+            subprocess.run([sys.executable, "-m", "ctid.plot", "mse", str(staged / "mse.csv"),
+                            str(staged / "mse.png")], check=True)
             target = pathlib.Path(results) / name
             target.mkdir(parents=True, exist_ok=True)
-            for file in ("mse.csv", "trends.csv"):
-                shutil.copyfile(source / file, target / file)
-            if paper_size:
-                write_sample(source / "runs.csv", target / "runs-sample.csv")
-            subprocess.run([sys.executable, "-m", "ctid.plot", "mse", str(target / "mse.csv"),
-                            str(target / "mse.png")], check=True)
+            for file in staged.iterdir():
+                shutil.copyfile(file, target / file.name)
             written.append(name)
     return written
 
