@@ -346,9 +346,18 @@ std::string format_uff58(const MimoFrf& frf) {
       out += "         0    0    0    0 NONE                 NONE                \n";
       for (Eigen::Index l = 0; l < n; ++l) {
         const std::complex<double> h = frf.response[static_cast<size_t>(l)](j, k);
-        std::snprintf(buffer, sizeof buffer, "%13.5E%20.12E%20.12E\n",
-                      frf.frequencies(l) / (2.0 * std::numbers::pi), h.real(), h.imag());
+        std::snprintf(buffer, sizeof buffer, "%13.5E",
+                      frf.frequencies(l) / (2.0 * std::numbers::pi));
         out += buffer;
+        for (const double part : {h.real(), h.imag()}) {
+          // 12 decimals fill the 20-character field when the exponent has three digits
+          // (|x| < 1e-99 or >= 1e100): one decimal fewer keeps the blank that separates the
+          // value from the one before it (the reader splits on blanks).
+          std::snprintf(buffer, sizeof buffer, "%20.12E", part);
+          if (buffer[0] != ' ') std::snprintf(buffer, sizeof buffer, "%20.11E", part);
+          out += buffer;
+        }
+        out += "\n";
       }
       out += "    -1\n";
     }

@@ -105,6 +105,22 @@ TEST(Uff58, RoundTripKeepsNamesAndValues) {
   }
 }
 
+TEST(Uff58, ValuesWithThreeDigitExponentsAreReadBack) {
+  // fuzz/regressions/uff58/three_digit_exponent.uff: -2.75e-103 written as E20.12 filled its
+  // field and ran into the value before it, so ctid refused its own file.
+  MimoFrf frf = random_frf(3, false);
+  frf.response[1](0, 0) = {2.802054509246e-3, -2.754250179950e-103};
+  frf.response[2](0, 0) = {-1.5e250, 3.25e-300};
+  const MimoFrf back = io::parse_uff58(io::format_uff58(frf), "f.uff");
+  for (size_t l = 0; l < frf.response.size(); ++l) {
+    EXPECT_LT((back.response[l] - frf.response[l]).cwiseAbs().maxCoeff(),
+              1e-10 * frf.response[l].cwiseAbs().maxCoeff())
+        << "line " << l;
+  }
+  EXPECT_NEAR(back.response[1](0, 0).imag() / -2.754250179950e-103, 1.0, 1e-10);
+  EXPECT_NEAR(back.response[2](0, 0).imag() / 3.25e-300, 1.0, 1e-10);
+}
+
 // One record in the layout of the format's documentation, with fields to replace.
 std::string record(const std::string& type = "4", const std::string& ordinate = "5",
                    const std::string& response = "1", const std::string& reference = "2",
