@@ -9,6 +9,7 @@
 
 #include "ctid/core/error.h"
 #include "refined_iv/internal/covariance_sums.h"
+#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
 
@@ -112,10 +113,7 @@ Eigen::MatrixXd covariance_from_gram(
           parameter_count, " parameters");
   // Columns scaled to unit norm (column_scales' rule) so that the inverse is formed on a
   // well-conditioned matrix; the scaling is applied to the q x q products.
-  Eigen::VectorXd s = gram.diagonal().cwiseSqrt();
-  for (Eigen::Index j = 0; j < s.size(); ++j) {
-    if (!(s(j) > 0.0)) s(j) = 1.0;
-  }
+  const Eigen::VectorXd s = scales_from_squared_norms(gram.diagonal());
   const Eigen::MatrixXd r = s.cwiseInverse().asDiagonal() * gram * s.cwiseInverse().asDiagonal();
   const Eigen::MatrixXd r_inv = r.completeOrthogonalDecomposition().pseudoInverse();
   Eigen::MatrixXd middle_inv;

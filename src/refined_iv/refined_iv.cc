@@ -542,17 +542,16 @@ struct InstrumentPass {
   Eigen::MatrixXd* stored = nullptr;  // psi itself (RefinedIvProblem::stored_instrument_covariance)
   Eigen::MatrixXd gram;               // q x q
   std::vector<std::vector<FilterCheckpoint>> saved;  // [record][segment]
-  Eigen::MatrixXd rows;                              // kBlock x q
+  Eigen::MatrixXd rows;                              // kBlock x q, the pass's block of psi
 
   int columns(const Layout& layout) const { return layout.augmented + (extra != nullptr ? 1 : 0); }
 
-  // psi's rows [k0, k0 + len) of the record starting at `first`, from the workspace.
-  const Eigen::MatrixXd& block(const Layout& layout, const Workspace& w, Eigen::Index first,
-                               Eigen::Index k0, Eigen::Index len) {
-    rows.resize(kBlock, columns(layout));
-    rows.topLeftCorner(len, layout.augmented) = w.instrument.topRows(len);
-    if (extra != nullptr) rows.col(layout.augmented).head(len) = extra->segment(first + k0, len);
-    return rows;
+  // psi's rows [k0, k0 + len) of the record starting at `first`, from the workspace, into `to`
+  // (len x q).
+  void copy_rows(const Layout& layout, const Workspace& w, Eigen::Index first, Eigen::Index k0,
+                 Eigen::Index len, Eigen::Ref<Eigen::MatrixXd> to) const {
+    to.leftCols(layout.augmented) = w.instrument.topRows(len);
+    if (extra != nullptr) to.col(layout.augmented) = extra->segment(first + k0, len);
   }
 };
 
@@ -591,7 +590,8 @@ void evaluate_record(const Layout& layout, const Eigen::VectorXd& beta,
     }
     if (sse != nullptr) *sse += (y.segment(k0, len) - w.total.head(len)).squaredNorm();
     if (instrument != nullptr) {
-      const auto z = instrument->block(layout, w, first, k0, len).topRows(len);
+      auto z = instrument->rows.topRows(len);
+      instrument->copy_rows(layout, w, first, k0, len, z);
       instrument->gram.noalias() += z.transpose() * z;
       if (instrument->stored != nullptr) instrument->stored->middleRows(first + k0, len) = z;
     }
@@ -644,6 +644,7 @@ void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
   if (instrument != nullptr) {
     const int q = instrument->columns(layout);
     instrument->gram = Eigen::MatrixXd::Zero(q, q);
+    instrument->rows.resize(kBlock, q);
     instrument->saved.assign(records.size(), {});
     if (instrument->stored != nullptr) instrument->stored->resize(n, q);
   }
@@ -663,7 +664,7 @@ Eigen::MatrixXd adjoint_instrument_sum(const Layout& layout, const Eigen::Vector
                                        const Eigen::VectorXd& initial_states,
                                        const std::vector<RecordSignals>& records, bool with_source,
                                        double h, Hold output_interpolation, Workspace& w,
-                                       InstrumentPass& pass, const AutoregressiveModel& ar,
+                                       const InstrumentPass& pass, const AutoregressiveModel& ar,
                                        const Eigen::VectorXd& scales) {
   AdjointArOuterSum sum(ar, scales);
   Eigen::MatrixXd segment(kSegment, pass.columns(layout));
@@ -682,8 +683,7 @@ Eigen::MatrixXd adjoint_instrument_sum(const Layout& layout, const Eigen::Vector
       for (Eigen::Index k0 = start; k0 < start + length; k0 += kBlock) {
         const Eigen::Index len = std::min(kBlock, n - k0);
         filter_block(layout, record, signals, source, k0, len, true, false, filters, w);
-        segment.middleRows(k0 - start, len) =
-            pass.block(layout, w, signals.offset, k0, len).topRows(len);
+        pass.copy_rows(layout, w, signals.offset, k0, len, segment.middleRows(k0 - start, len));
       }
       sum.add_earlier(segment.topRows(length));
     }

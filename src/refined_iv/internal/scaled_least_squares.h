@@ -8,14 +8,21 @@
 
 namespace ctid::internal {
 
-/// The Euclidean norm of each column of x, with 1 for a column whose norm is not positive
-/// (or NaN), so that dividing by it is always defined.
-inline Eigen::VectorXd column_scales(const Eigen::MatrixXd& x) {
-  Eigen::VectorXd s = x.colwise().norm().transpose();
+/// The square roots of squared column norms, with 1 where the norm is not positive (or NaN),
+/// so that dividing by it is always defined: column_scales from sums already formed (the
+/// diagonal of x' x, when x is streamed and never held).
+inline Eigen::VectorXd scales_from_squared_norms(const Eigen::VectorXd& squares) {
+  Eigen::VectorXd s = squares.cwiseSqrt();
   for (Eigen::Index j = 0; j < s.size(); ++j) {
     if (!(s(j) > 0.0)) s(j) = 1.0;
   }
   return s;
+}
+
+/// The Euclidean norm of each column of x, with 1 for a column whose norm is not positive
+/// (or NaN), so that dividing by it is always defined.
+inline Eigen::VectorXd column_scales(const Eigen::MatrixXd& x) {
+  return scales_from_squared_norms(x.colwise().squaredNorm().transpose());
 }
 
 struct ScaledLeastSquares {
