@@ -89,6 +89,10 @@ std::string function_type_name(long type) {
 }
 
 const char* const kDirections[] = {"X", "Y", "Z", "RX", "RY", "RZ"};
+// Record 6 holds each node in an I10 field: -999999999 to 9999999999.
+constexpr std::size_t kNodeDigits = 10;
+constexpr long kLargestNode = 9'999'999'999;
+constexpr long kSmallestNode = -999'999'999;
 
 std::string channel_name(long node, long direction) {
   if (direction == 0) return std::to_string(node);
@@ -105,7 +109,8 @@ struct Channel {
 std::optional<Channel> channel_of(const std::string& name) {
   std::size_t digits = 0;
   while (digits < name.size() && name[digits] >= '0' && name[digits] <= '9') ++digits;
-  if (digits == 0 || digits > 18) return std::nullopt;
+  // A node fills an I10 field of record 6: at most 10 digits, or the writer's line shifts.
+  if (digits == 0 || digits > kNodeDigits) return std::nullopt;
   Channel c{std::stol(name.substr(0, digits)), 0};
   if (digits == name.size()) return c;
   const char sign = name[digits];
@@ -158,6 +163,11 @@ Record parse_record(const std::vector<std::string>& body, int first, const std::
   }
   require(*type == 4, where, ": function type ", *type, " (", function_type_name(*type),
           ") is not an FRF; only function type 4 (frequency response function) is read");
+  for (long node : {*response_node, *reference_node}) {
+    require(node >= kSmallestNode && node <= kLargestNode, where, ", record 6: node ", node,
+            " does not fit the 10 columns of its field (", kSmallestNode, " to ", kLargestNode,
+            ")");
+  }
   for (long d : {*response_direction, *reference_direction}) {
     require(std::abs(d) <= 6, where, ", record 6: direction ", d,
             " is not one of 0 (scalar), +-1..+-3 (X, Y, Z) or +-4..+-6 (RX, RY, RZ)");

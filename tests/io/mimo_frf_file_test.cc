@@ -121,6 +121,20 @@ TEST(Uff58, ValuesWithThreeDigitExponentsAreReadBack) {
   EXPECT_NEAR(back.response[2](0, 0).imag() / 3.25e-300, 1.0, 1e-10);
 }
 
+TEST(Uff58, ChannelNamesWhoseNodeDoesNotFitItsFieldAreNumberedInstead) {
+  // fuzz/regressions/uff58/wide_node.uff: a 16-digit node was written into the I10 field of
+  // record 6, shifting its direction, so ctid refused its own file. Such a node is refused
+  // on reading, and a channel name with one is written with the channel's own number.
+  MimoFrf frf = random_frf(3, false);
+  frf.output_names[0] = "2004100310041001+X";
+  frf.input_names[0] = "9999999999-RZ";
+  const MimoFrf back = io::parse_uff58(io::format_uff58(frf), "f.uff");
+  EXPECT_EQ(back.output_names[0], "1");
+  EXPECT_EQ(back.input_names[0], "9999999999-RZ");
+  EXPECT_LT((back.response[0] - frf.response[0]).cwiseAbs().maxCoeff(),
+            1e-10 * frf.response[0].cwiseAbs().maxCoeff());
+}
+
 // One record in the layout of the format's documentation, with fields to replace.
 std::string record(const std::string& type = "4", const std::string& ordinate = "5",
                    const std::string& response = "1", const std::string& reference = "2",
@@ -166,6 +180,11 @@ TEST(Uff58, MalformedFilesGetOneClearMessage) {
   fails("    -1\n    58\nid\n", "dataset 58 is not closed");
   fails("    -1\n    58\nid\nNONE\n    -1\n", "a dataset 58 has 11 header records");
   fails("junk\n", "f.uff:1: 'junk' is outside any dataset");
+  // A node of more than 10 digits, readable from blank-separated fields only.
+  std::string wide = record();
+  const std::size_t r6 = wide.find("NONE\nNONE\nNONE\nNONE\n") + 20;
+  wide.replace(r6, wide.find('\n', r6) - r6, "    4 1 1 0 NONE 1 3 NONE 2004100310041001 0");
+  fails(wide, "node 2004100310041001 does not fit the 10 columns of its field");
   std::string bad = record();
   bad.replace(bad.find("-4.00000E+00"), 12, "-4.0000XE+00");
   fails(bad, "'-4.0000XE+00' is not a finite number");
