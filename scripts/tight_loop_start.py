@@ -6,7 +6,8 @@ N = 4000, white reference; the records of tests/refined_iv/closed_loop_start_tes
 For each seed, the additive CLSRIVC and the unfactored CLSRIVC (4 poles, 2 zeros) are fitted
 from the data alone (the automatic start) and from the true system, and the additive one also
 from the partial-fraction split of the unfactored fit from the data. Each end is classed
-against the truth start's end: `same` (converged, parameters within --match relative), `lower`
+against the truth start's end: `same` (converged, the same transfer function within --match
+relative, whatever the order of the submodels), `lower`
 or `higher` output error (mean squared y - G u). A `lower` end is a stationary point the truth
 start does not reach and that fits the record better: the record has several, and the truth's
 is not singled out by the estimator's own criterion. Usage:
@@ -30,7 +31,7 @@ def loop_record(ctid, truth, controller, seed):
                                                  ctid.Polynomial([-0.85, 1.0]), H)
     r = ctid.white_noise(SAMPLES, 1.0, seed)
     v = ctid.colored_noise(noise_filter, SAMPLES, 0.04, 1000 + seed)
-    loop = ctid.simulate_closed_loop(truth.to_transfer_function(), controller, r, v)
+    loop = ctid.simulate_closed_loop(truth, controller, r, v)  # as the C++ test simulates it
     return ctid.SampledData(H, loop.input, loop.output, r)
 
 
@@ -42,10 +43,16 @@ def options(ctid, start=None):
     return o
 
 
+def coefficients(fit):
+    """The transfer function's coefficients: the same model, whatever its submodels' order."""
+    g = fit.transfer_function
+    return np.concatenate([g.numerator.coefficients, g.denominator.coefficients])
+
+
 def classify(fit, reference, match):
     if (fit.converged() and reference.converged() and
-            np.linalg.norm(fit.parameters - reference.parameters) <=
-            match * np.linalg.norm(reference.parameters)):
+            np.linalg.norm(coefficients(fit) - coefficients(reference)) <=
+            match * np.linalg.norm(coefficients(reference))):
         return "same"
     return "lower" if fit.mean_squared_error < reference.mean_squared_error else "higher"
 

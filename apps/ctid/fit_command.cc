@@ -137,6 +137,9 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
   out << "fit: " << format_brief(r.fit_percent) << " %, noise variance "
       << format_brief(r.noise_variance) << ", Lemma 4.4 norm " << format_brief(r.off_diagonal_norm)
       << "\n";
+  if (!std::isnan(r.closed_loop_fit_percent)) {
+    out << "closed-loop fit from r: " << format_brief(r.closed_loop_fit_percent) << " %\n";
+  }
   if (r.unstable_reflections > 0 || r.sensitivity_fallbacks > 0) {
     out << "unstable iterates reflected: " << r.unstable_reflections
         << ", S_uo fallbacks: " << r.sensitivity_fallbacks << "\n";

@@ -24,8 +24,9 @@ def test_automatic_start_reaches_the_true_starts_stationary_point():
     campaign = load("start_campaign")
     runs = [(n, modes, seed) for n, seeds in ((2000, 3), (10000, 1))
             for modes in range(1, 7) for seed in range(seeds)]
-    same = sum(campaign.same_point(ctid, modes, seed, n) for n, modes, seed in runs)
-    assert same >= math.ceil(0.95 * len(runs)), f"{same} of {len(runs)}"
+    ends = [campaign.same_point(ctid, modes, seed, n) for n, modes, seed in runs]
+    assert None not in ends  # in open loop every fit from the truth is usable here
+    assert sum(ends) >= math.ceil(0.95 * len(runs)), f"{sum(ends)} of {len(runs)}"
 
 
 def test_closed_loop_start_reaches_the_true_starts_stationary_point():
@@ -34,6 +35,9 @@ def test_closed_loop_start_reaches_the_true_starts_stationary_point():
     (the campaign's full run, 20 seeds per K at 2 and 6 dB, reaches 235-236 of 240)."""
     campaign = load("start_campaign")
     runs = [(modes, seed) for modes in range(1, 7) for seed in range(10, 14)]
-    same = sum(campaign.same_point(ctid, modes, seed, 2000, snr=20.0, closed_loop=3.0)
-               for modes, seed in runs)
-    assert same >= math.ceil(0.95 * len(runs)), f"{same} of {len(runs)}"
+    ends = [campaign.same_point(ctid, modes, seed, 2000, snr=20.0, closed_loop=3.0)
+            for modes, seed in runs]
+    # A run whose fit from the truth is itself not usable (decision 0028) is set aside.
+    counted = [end for end in ends if end is not None]
+    assert len(counted) >= 20, f"{len(runs) - len(counted)} of {len(runs)} runs set aside"
+    assert sum(counted) >= math.ceil(0.95 * len(counted)), f"{sum(counted)} of {len(counted)}"

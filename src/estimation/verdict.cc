@@ -54,6 +54,15 @@ void check_fit(Verdict& verdict, double fit_percent, double start_fit_percent) {
   }
 }
 
+void check_closed_loop_fit(Verdict& verdict, double fit_percent, double start_fit_percent) {
+  if (std::isfinite(fit_percent) && std::isfinite(start_fit_percent) && start_fit_percent > 0.0 &&
+      fit_percent < verdict_thresholds::closed_loop_fit_share * start_fit_percent) {
+    verdict.fail("the closed-loop fit from the reference " + format_brief(fit_percent) +
+                     " % is less than half the start's " + format_brief(start_fit_percent) + " %",
+                 {verdict_advice::better_start});
+  }
+}
+
 void check_stable(Verdict& verdict, const Eigen::VectorXcd& poles) {
   for (Eigen::Index j = 0; j < poles.size(); ++j) {
     if (poles(j) == std::complex<double>(0.0, 0.0)) continue;

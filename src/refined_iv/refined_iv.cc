@@ -755,7 +755,9 @@ std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums) {
 
 // The checks of estimation/verdict.h on a finished estimate (decision 0007).
 // `returned_start`: no iterate fitted better than the start, so the start was returned.
-Verdict refined_iv_verdict(const EstimationResult& r, bool returned_start) {
+// `loop_unstable`: closed loop, and the known controller does not stabilise the estimate.
+Verdict refined_iv_verdict(const EstimationResult& r, bool returned_start, bool closed_loop,
+                           bool loop_unstable) {
   Verdict verdict;
   if (r.iterations == 0 && !r.converged()) {
     verdict.fail("no step of the iteration was completed (" + to_string(r.termination) +
@@ -767,7 +769,19 @@ Verdict refined_iv_verdict(const EstimationResult& r, bool returned_start) {
                  {verdict_advice::lower_order, verdict_advice::better_start});
   }
   check_finite(verdict, r.parameters.allFinite(), "a parameter");
-  check_fit(verdict, r.fit_percent, r.start_fit_percent);
+  if (closed_loop) {
+    check_fit(verdict, r.fit_percent, std::numeric_limits<double>::quiet_NaN());
+    check_closed_loop_fit(verdict, r.closed_loop_fit_percent, r.start_closed_loop_fit_percent);
+  } else {
+    check_fit(verdict, r.fit_percent, r.start_fit_percent);
+  }
+  if (loop_unstable) {
+    // The record came from a loop that ran; a model the controller cannot hold is not it.
+    verdict.fail(
+        "the known controller does not stabilise the fitted model, so the model cannot "
+        "describe the loop that was recorded",
+        {verdict_advice::better_start, verdict_advice::lower_order});
+  }
   Eigen::VectorXcd poles(0);
   for (int i = 0; i < r.model.size(); ++i) {
     if (r.model[i].a.degree() < 1) continue;
@@ -861,7 +875,8 @@ Eigen::VectorXd unfactored_parameters(const TransferFunction& g, const SubmodelO
   return beta;
 }
 
-EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIvOptions& options) {
+EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
+                                           const RefinedIvOptions& options) {
   options.validate();
   const std::string name = problem.name;
   const std::vector<const SampledData*>& records = problem.records;
@@ -1048,6 +1063,23 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     return true;
   };
 
+  // Closed loop: the sum over the records of (y - G S_uo(G) r)^2 at b, from the S_uo r that
+  // update_source last formed for b (the model's output from the reference alone).
+  auto closed_loop_sse = [&](const Eigen::VectorXd& b) {
+    const AdditiveModel model = AdditiveModel::from_parameters(layout.orders, b, tau);
+    double sum = 0.0;
+    for (size_t r = 0; r < records.size(); ++r) {
+      const double own = (delay_of(r) - delay) * h;
+      sum += (records[r]->output() - model_output(model.with_input_delay(tau + own),
+                                                  signals[r].undelayed_source, h,
+                                                  Hold::zero_order_hold))
+                 .squaredNorm();
+    }
+    return sum;
+  };
+  double start_closed_loop_sse = std::numeric_limits<double>::quiet_NaN();
+  double closed_loop_sse_at_end = std::numeric_limits<double>::quiet_NaN();
+
   Workspace workspace(layout);
   // Free-response coefficients (initial states of each submodel's 1/(p^l A_i) realisation at
   // the current iterate), taken from the last solution of (29); empty with `zero`.
@@ -1055,7 +1087,9 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   Eigen::VectorXd states_at = beta;  // the iterate whose realisations they refer to
   result.termination = Termination::iteration_limit;
   bool stopped = false;
-  if (closed_loop && !update_source(beta)) {
+  if (closed_loop && update_source(beta)) {
+    start_closed_loop_sse = closed_loop_sse(beta);
+  } else if (closed_loop) {
     result.termination = Termination::closed_loop_unstable;
     result.message =
         options.initial_model
@@ -1219,8 +1253,14 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
   } else {
     result.additive_view = result.model;
   }
+  bool loop_unstable = false;
   if (closed_loop && result.termination != Termination::closed_loop_unstable) {
-    if (!update_source(beta)) ++result.sensitivity_fallbacks;
+    if (update_source(beta)) {
+      closed_loop_sse_at_end = closed_loop_sse(beta);
+    } else {
+      ++result.sensitivity_fallbacks;
+      loop_unstable = true;
+    }
   }
   if (layout.free_responses() && result.iterations > 0) {
     // The loop's free-response coefficients come from the solve at the previous iterate;
@@ -1278,6 +1318,11 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     result.start_fit_percent = std::isnan(start_sse) ? result.fit_percent
                                : spread > 0.0        ? 100.0 * (1.0 - std::sqrt(start_sse) / spread)
                                                      : std::numeric_limits<double>::quiet_NaN();
+    if (spread > 0.0) {
+      result.closed_loop_fit_percent = 100.0 * (1.0 - std::sqrt(closed_loop_sse_at_end) / spread);
+      result.start_closed_loop_fit_percent =
+          100.0 * (1.0 - std::sqrt(start_closed_loop_sse) / spread);
+    }
   }
 
   if (options.compute_covariance && instrument.gram.allFinite() && residual.allFinite()) {
@@ -1316,8 +1361,87 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
                               " rad/s (Assumption 4): sample faster or lower the model order");
   }
   result.checks = std::move(checks);
-  result.verdict = refined_iv_verdict(result, returned_start);
+  result.verdict = refined_iv_verdict(result, returned_start, closed_loop, loop_unstable);
   return result;
+}
+
+namespace {
+
+// The additive closed-loop estimator from the data alone (decision 0028). CLSRIVC can have
+// several stationary points on one closed-loop record, and the output error y - G u it is
+// started by leans toward -1/C_d, so one start is not enough: the additive iteration runs from
+// the additive start of each start method and from the split of the unfactored CLSRIVC fit of
+// each, and the estimate kept is the usable one with the best closed-loop fit from r (the
+// lowest closed-loop simulation error), a criterion the consistent model minimises (the noise
+// is uncorrelated with r).
+EstimationResult closed_loop_additive_from_data(const RefinedIvProblem& problem,
+                                                const RefinedIvOptions& options) {
+  std::vector<StartMethod> methods;
+  if (options.start == StartMethod::automatic) {
+    methods = {StartMethod::lssvf, StartMethod::frf};
+  } else {
+    methods = {options.start};
+  }
+  std::vector<EstimationResult> candidates;
+  for (StartMethod method : methods) {
+    RefinedIvOptions own = options;
+    own.start = method;
+    try {
+      candidates.push_back(run_refined_iv_from_start(problem, own));
+    } catch (const InvalidArgument&) {
+      // e.g. too few resonance peaks for the FRF start: the other candidates remain
+    }
+    RefinedIvProblem unfactored = problem;
+    unfactored.orders = {unfactored_order(problem.orders)};
+    unfactored.unfactored = true;
+    RefinedIvOptions quick = own;
+    quick.compute_covariance = false;
+    quick.record_history = false;
+    std::optional<AdditiveModel> whole;  // one submodel, grouped by the engine
+    try {
+      EstimationResult g = run_refined_iv_from_start(unfactored, quick);
+      if (g.parameters.allFinite() && g.iterations > 0) whole = std::move(g.model);
+    } catch (const InvalidArgument&) {
+    }
+    if (!whole) continue;
+    RefinedIvOptions split = options;
+    split.initial_model = std::move(whole);
+    try {
+      candidates.push_back(run_refined_iv_from_start(problem, split));
+    } catch (const InvalidArgument&) {
+      // the unfactored fit's poles cannot be grouped into the submodels
+    }
+  }
+  // No candidate at all: the plain run, which names what went wrong.
+  if (candidates.empty()) return run_refined_iv_from_start(problem, options);
+  // Usable first, then the higher closed-loop fit (NaN, an unstable loop, last); ties keep
+  // the earlier candidate.
+  auto better = [](const EstimationResult& a, const EstimationResult& b) {
+    if (a.verdict.usable != b.verdict.usable) return a.verdict.usable;
+    const double fa = std::isnan(a.closed_loop_fit_percent) ? -HUGE_VAL : a.closed_loop_fit_percent;
+    const double fb = std::isnan(b.closed_loop_fit_percent) ? -HUGE_VAL : b.closed_loop_fit_percent;
+    return fa > fb;
+  };
+  size_t best = 0;
+  for (size_t k = 1; k < candidates.size(); ++k) {
+    if (better(candidates[k], candidates[best])) best = k;
+  }
+  EstimationResult result = std::move(candidates[best]);
+  result.message += "; of " + std::to_string(candidates.size()) +
+                    " fits from different starts, the one with the best closed-loop fit from "
+                    "the reference was kept (usable fits first)";
+  return result;
+}
+
+}  // namespace
+
+EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIvOptions& options) {
+  if (problem.controller != nullptr && !problem.unfactored && problem.orders.size() > 1 &&
+      !options.initial_model) {
+    options.validate();
+    return closed_loop_additive_from_data(problem, options);
+  }
+  return run_refined_iv_from_start(problem, options);
 }
 
 }  // namespace internal

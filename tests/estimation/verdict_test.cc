@@ -74,6 +74,23 @@ TEST(Verdict, FitCheck) {
   EXPECT_FALSE(not_finite.usable);
 }
 
+TEST(Verdict, ClosedLoopFitCheck) {
+  Verdict good;
+  check_closed_loop_fit(good, 48.0, 44.0);
+  check_closed_loop_fit(good, 28.4, 45.3);  // a consistent fit can fit worse than a good start
+  check_closed_loop_fit(good, kNaN, 44.0);  // an unstable loop is another check's business
+  check_closed_loop_fit(good, 20.0, kNaN);  // no start known
+  check_closed_loop_fit(good, -5.0, -3.0);  // a start that explains nothing sets no bar
+  EXPECT_TRUE(good.usable);
+
+  Verdict astray;
+  check_closed_loop_fit(astray, 0.0178, 14.03);
+  EXPECT_FALSE(astray.usable);
+  EXPECT_THAT(astray.reasons.at(0), HasSubstr("closed-loop fit from the reference 0.0178 % is "
+                                              "less than half the start's 14.03 %"));
+  EXPECT_THAT(astray.advice, HasSubstr(verdict_advice::better_start));
+}
+
 TEST(Verdict, StabilityCheckIgnoresIntegrators) {
   Verdict good;
   check_stable(good, values({{-1.0, 2.0}, {-1.0, -2.0}, {0.0, 0.0}}));

@@ -53,6 +53,9 @@ inline constexpr double reciprocal_condition = 1e-12;
 /// Fit may fall below the start's by this many percentage points before it counts as worse
 /// (iterations that settle at the IV fixed point can lose a little output-error fit).
 inline constexpr double fit_tolerance_points = 1.0;
+/// Closed loop: a fit keeps at least this share of its start's closed-loop fit (decision 0028:
+/// from the true system on tight-loop records CLSRIVC keeps 0.63 or more of it).
+inline constexpr double closed_loop_fit_share = 0.5;
 }  // namespace verdict_thresholds
 
 // Advice strings shared by the checks, so the same remedy is written once.
@@ -68,6 +71,13 @@ void check_finite(Verdict& verdict, bool finite, std::string_view what);
 /// Fails when the fit is not finite, negative, or more than fit_tolerance_points below
 /// `start_fit_percent` (ignored when NaN).
 void check_fit(Verdict& verdict, double fit_percent, double start_fit_percent);
+/// Closed loop: fails when the closed-loop fit (of the model's output from the reference
+/// through the known controller) is below closed_loop_fit_share of the start's, a start with a
+/// positive closed-loop fit (ignored when either is NaN). In closed loop neither this fit nor
+/// the output-error fit with the measured input is the estimator's criterion, so a consistent
+/// estimate can fit worse than a good start; the check catches an iteration that went astray,
+/// not that (decision 0028).
+void check_closed_loop_fit(Verdict& verdict, double fit_percent, double start_fit_percent);
 /// Fails when a pole has a non-negative real part; poles exactly at the origin (integrators
 /// the structure asked for) are not counted.
 void check_stable(Verdict& verdict, const Eigen::VectorXcd& poles);

@@ -135,6 +135,13 @@ struct EstimationResult : Outcome {
   double fit_percent = 0.0;         ///< 100 (1 - ||y - y_model|| / ||y - mean(y)||)
   /// The same fit of the start the iteration began from (NaN if it could not be formed).
   double start_fit_percent = std::numeric_limits<double>::quiet_NaN();
+  /// Closed loop: 100 (1 - ||y - G S_uo(G) r|| / ||y - mean(y)||), the fit of the output the
+  /// model gives from the reference alone through the known controller, the fit that judges a
+  /// closed-loop model (decision 0028); NaN in open loop or when the controller does not
+  /// stabilise the model.
+  double closed_loop_fit_percent = std::numeric_limits<double>::quiet_NaN();
+  /// The same fit of the start (NaN in open loop or if it could not be formed).
+  double start_closed_loop_fit_percent = std::numeric_limits<double>::quiet_NaN();
   /// Reciprocal condition of the scaled instrument-regressor matrix of (29) at the last
   /// iteration (NaN if none was formed).
   double reciprocal_condition = std::numeric_limits<double>::quiet_NaN();
@@ -183,6 +190,11 @@ struct EstimationResult : Outcome {
             field("fit_percent", &S::fit_percent, "100 (1 - ||y - y_model|| / ||y - mean(y)||)."),
             field("start_fit_percent", &S::start_fit_percent,
                   "The same fit of the start (NaN if it could not be formed)."),
+            field("closed_loop_fit_percent", &S::closed_loop_fit_percent,
+                  "Closed loop: 100 (1 - ||y - G S_uo r|| / ||y - mean(y)||), the model's output "
+                  "from r through the controller; NaN in open loop or if the loop is unstable."),
+            field("start_closed_loop_fit_percent", &S::start_closed_loop_fit_percent,
+                  "The same closed-loop fit of the start (NaN in open loop or if unstable)."),
             field("reciprocal_condition", &S::reciprocal_condition,
                   "Reciprocal condition of the scaled IV matrix of (29) at the last iteration."),
             field("verdict", &S::verdict,
