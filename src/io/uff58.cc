@@ -11,6 +11,7 @@
 #include <map>
 #include <numbers>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -121,6 +122,32 @@ std::optional<Channel> channel_of(const std::string& name) {
   }
   if (c.direction == 0) return std::nullopt;
   return c;
+}
+
+// The node and direction each name is written with: its own where it is one (channel_of) and
+// not taken by an earlier name (e.g. "1" and "01"), otherwise the first node from `first` on
+// that no channel of the list uses, scalar. So every channel of a list gets its own pair and
+// the file reads back (a name "1" beside an unparsable one numbered 1 was written twice).
+std::vector<Channel> channels_of(const std::vector<std::string>& names, long first) {
+  std::vector<std::optional<Channel>> own;
+  std::set<std::pair<long, long>> used;
+  for (const std::string& name : names) {
+    std::optional<Channel> c = channel_of(name);
+    if (c && !used.insert({c->node, c->direction}).second) c.reset();
+    own.push_back(c);
+  }
+  std::vector<Channel> out;
+  long next = first;
+  for (const std::optional<Channel>& c : own) {
+    if (c) {
+      out.push_back(*c);
+      continue;
+    }
+    while (used.count({next, 0}) > 0) ++next;
+    used.insert({next, 0});
+    out.push_back({next, 0});
+  }
+  return out;
 }
 
 struct Record {
@@ -327,17 +354,15 @@ std::string format_uff58(const MimoFrf& frf) {
   const Eigen::Index n = frf.frequencies.size();
   require(static_cast<Eigen::Index>(frf.response.size()) == n,
           "format_uff58: ", frf.response.size(), " response matrices for ", n, " frequencies");
-  const auto channel = [](const std::string& name, long fallback) {
-    const std::optional<Channel> c = channel_of(name);
-    return c ? *c : Channel{fallback, 0};
-  };
+  const std::vector<Channel> responses = channels_of(frf.output_names, 1);
+  const std::vector<Channel> references = channels_of(frf.input_names, 1001);
   std::string out;
   char buffer[160];
   int id = 0;
   for (int j = 0; j < frf.output_count(); ++j) {
     for (int k = 0; k < frf.input_count(); ++k) {
-      const Channel response = channel(frf.output_names[static_cast<size_t>(j)], j + 1);
-      const Channel reference = channel(frf.input_names[static_cast<size_t>(k)], 1001 + k);
+      const Channel& response = responses[static_cast<size_t>(j)];
+      const Channel& reference = references[static_cast<size_t>(k)];
       out += "    -1\n    58\n";
       out +=
           (frf.output_names[static_cast<size_t>(j)] + "/" + frf.input_names[static_cast<size_t>(k)])

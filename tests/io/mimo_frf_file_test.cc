@@ -135,6 +135,23 @@ TEST(Uff58, ChannelNamesWhoseNodeDoesNotFitItsFieldAreNumberedInstead) {
             1e-10 * frf.response[0].cwiseAbs().maxCoeff());
 }
 
+TEST(Uff58, EveryChannelIsWrittenWithItsOwnNodeAndDirection) {
+  // fuzz/regressions/uff58/taken_node.uff: a response read as node -10 (a name that is no
+  // "<node><sign><direction>") was numbered 1 on writing, beside a response that is node 1, so
+  // ctid refused its own file ("repeats response 1"). Names that are not channels, or that
+  // name a channel an earlier name took, now get the first node no channel of the list uses.
+  MimoFrf frf = random_frf(3, false);
+  frf.output_names = {"-10+RY", "1", "01"};
+  frf.input_names = {"accelerometer", "1001"};
+  const MimoFrf back = io::parse_uff58(io::format_uff58(frf), "f.uff");
+  EXPECT_EQ(back.output_names, (std::vector<std::string>{"2", "1", "3"}));
+  EXPECT_EQ(back.input_names, (std::vector<std::string>{"1002", "1001"}));
+  for (size_t l = 0; l < frf.response.size(); ++l) {
+    EXPECT_LT((back.response[l] - frf.response[l]).cwiseAbs().maxCoeff(),
+              1e-10 * frf.response[l].cwiseAbs().maxCoeff());
+  }
+}
+
 // One record in the layout of the format's documentation, with fields to replace.
 std::string record(const std::string& type = "4", const std::string& ordinate = "5",
                    const std::string& response = "1", const std::string& reference = "2",
