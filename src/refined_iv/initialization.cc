@@ -408,12 +408,19 @@ AdditiveModel group_into_submodels(const TransferFunction& g,
 AdditiveModel initial_additive_model(const SampledData& record,
                                      const std::vector<SubmodelOrder>& orders,
                                      const InitializationOptions& options) {
+  return additive_model_from_start(
+      initial_transfer_function(record, unfactored_order(orders), options), record, orders,
+      options);
+}
+
+AdditiveModel additive_model_from_start(const TransferFunction& g, const SampledData& record,
+                                        const std::vector<SubmodelOrder>& orders,
+                                        const InitializationOptions& options) {
   options.validate();
   const SubmodelOrder total = unfactored_order(orders);
-  // The start is screened, and the numerators are fitted, on the same piece.
+  // The numerators are fitted on the piece the start was screened on.
   const std::optional<SampledData> piece = screening_piece(record, options);
   const SampledData& data = piece ? *piece : record;
-  const TransferFunction g = screened_transfer_function(data, total, options);
   if (!options.controller) return group_into_submodels(g, orders, data, options.input_delay);
   // Closed loop: the numerators are fitted to g's own response to u rather than to y, so the
   // grouped model stays the stabilised start g (refitting them to y would bring back the

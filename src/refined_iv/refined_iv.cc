@@ -876,7 +876,7 @@ Eigen::VectorXd unfactored_parameters(const TransferFunction& g, const SubmodelO
 }
 
 EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
-                                           const RefinedIvOptions& options) {
+                                           const RefinedIvOptions& options, ScreenedStart* shared) {
   options.validate();
   const std::string name = problem.name;
   const std::vector<const SampledData*>& records = problem.records;
@@ -999,6 +999,7 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
           layout.orders);
     }
   } else {
+    ScreenedStart own_start;
     InitializationOptions init;
     init.input_delay = delay_of(longest_index);
     init.method = options.start;
@@ -1006,12 +1007,18 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
     // Closed loop: only starts the controller stabilises (decision 0011); an open-loop start
     // it does not stabilise would stop the iteration before its first step.
     if (closed_loop) init.controller = *problem.controller;
+    const SubmodelOrder total =
+        layout.size() == 1 ? layout.orders[0] : unfactored_order(layout.orders);
+    if (shared == nullptr || !shared->g) {
+      TransferFunction g = initial_transfer_function(data, total, init);
+      if (shared == nullptr) shared = &own_start;
+      shared->g = std::move(g);
+    }
     if (layout.size() == 1) {
-      beta = unfactored_parameters(initial_transfer_function(data, layout.orders[0], init),
-                                   layout.orders[0]);
+      beta = unfactored_parameters(*shared->g, layout.orders[0]);
     } else {
-      beta =
-          parameters_for_orders(initial_additive_model(data, layout.orders, init), layout.orders);
+      beta = parameters_for_orders(additive_model_from_start(*shared->g, data, layout.orders, init),
+                                   layout.orders);
     }
   }
   require(beta.allFinite(), name, ": the initial model has a non-finite parameter");
@@ -1386,8 +1393,9 @@ EstimationResult closed_loop_additive_from_data(const RefinedIvProblem& problem,
   for (StartMethod method : methods) {
     RefinedIvOptions own = options;
     own.start = method;
+    ScreenedStart start;  // screened once for both fits from this method
     try {
-      candidates.push_back(run_refined_iv_from_start(problem, own));
+      candidates.push_back(run_refined_iv_from_start(problem, own, &start));
     } catch (const InvalidArgument&) {
       // e.g. too few resonance peaks for the FRF start: the other candidates remain
     }
@@ -1399,7 +1407,7 @@ EstimationResult closed_loop_additive_from_data(const RefinedIvProblem& problem,
     quick.record_history = false;
     std::optional<AdditiveModel> whole;  // one submodel, grouped by the engine
     try {
-      EstimationResult g = run_refined_iv_from_start(unfactored, quick);
+      EstimationResult g = run_refined_iv_from_start(unfactored, quick, &start);
       if (g.parameters.allFinite() && g.iterations > 0) whole = std::move(g.model);
     } catch (const InvalidArgument&) {
     }

@@ -20,6 +20,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
+#include "refined_iv/internal/refined_iv_engine.h"
 #include "support/paper_systems.h"
 
 namespace ctid {
@@ -124,6 +125,39 @@ TEST(ClosedLoopStart, EveryCandidateKeptIsStabilisedByTheController) {
   const AdditiveModel additive =
       initial_additive_model(data, testing::closed_loop_two_modes().orders(), options);
   EXPECT_LT(loop_radius(additive.to_transfer_function(), tight_controller()), 1.0);
+}
+
+// The several-start fit (decision 0028) screens each start method once for its additive and
+// its unfactored fit: the shared start gives both exactly what screening it again gives.
+TEST(ClosedLoopStart, AStartScreenedOnceGivesEveryFitWhatItsOwnScreeningGives) {
+  const SampledData data = closed_loop_data(3, 4000, 0.04);
+  const std::vector<SubmodelOrder> orders = testing::closed_loop_two_modes().orders();
+  InitializationOptions init;
+  init.controller = tight_controller();
+  const TransferFunction g = initial_transfer_function(data, unfactored_order(orders), init);
+  EXPECT_EQ(additive_model_from_start(g, data, orders, init).parameters(),
+            initial_additive_model(data, orders, init).parameters());
+
+  const DiscreteTransferFunction controller = tight_controller();
+  internal::RefinedIvProblem additive;
+  additive.records = {&data};
+  additive.orders = orders;
+  additive.controller = &controller;
+  internal::RefinedIvProblem unfactored = additive;
+  unfactored.orders = {unfactored_order(orders)};
+  unfactored.unfactored = true;
+  for (StartMethod method : {StartMethod::lssvf, StartMethod::frf}) {
+    RefinedIvOptions o = quick_options();
+    o.start = method;
+    internal::ScreenedStart shared;
+    const EstimationResult a = internal::run_refined_iv_from_start(additive, o, &shared);
+    ASSERT_TRUE(shared.g.has_value());
+    const EstimationResult u = internal::run_refined_iv_from_start(unfactored, o, &shared);
+    const EstimationResult own = internal::run_refined_iv_from_start(additive, o);
+    EXPECT_EQ(a.parameters, own.parameters);
+    EXPECT_EQ(a.iterations, own.iterations);
+    EXPECT_EQ(u.parameters, internal::run_refined_iv_from_start(unfactored, o).parameters);
+  }
 }
 
 // One estimator over kSeeds records: from the data alone it never stops at iteration 0, and it

@@ -126,4 +126,11 @@ AdditiveModel initial_additive_model(const SampledData& data,
                                      const std::vector<SubmodelOrder>& orders,
                                      const InitializationOptions& options = {});
 
+/// initial_additive_model from its unfactored start g, as initial_transfer_function(data,
+/// unfactored_order(orders), options) returned it: for callers that fit from g in more than
+/// one structure and screen it once.
+AdditiveModel additive_model_from_start(const TransferFunction& g, const SampledData& data,
+                                        const std::vector<SubmodelOrder>& orders,
+                                        const InitializationOptions& options = {});
+
 }  // namespace ctid

@@ -2,6 +2,7 @@
 // González et al. with K = 1 giving eq. (30). Private to the estimation layer.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -31,8 +32,16 @@ struct RefinedIvProblem {
 
 /// The refined IV iteration from options.initial_model or, without one, from the start
 /// initialization.h finds in the data.
+/// `shared`: the unfactored start screened from the data (initial_transfer_function), kept
+/// for another run on the same records with the same start options and total order (an
+/// additive and an unfactored fit from one start method); it is screened here, and stored,
+/// only when it holds none.
+struct ScreenedStart {
+  std::optional<TransferFunction> g;
+};
 EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
-                                           const RefinedIvOptions& options);
+                                           const RefinedIvOptions& options,
+                                           ScreenedStart* shared = nullptr);
 /// run_refined_iv_from_start, except for an additive model in closed loop without an initial
 /// model: the iteration then runs from several starts and keeps the usable estimate with the
 /// lowest closed-loop simulation error from r (decision 0028).
