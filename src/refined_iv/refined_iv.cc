@@ -1378,9 +1378,11 @@ namespace {
 // several stationary points on one closed-loop record, and the output error y - G u it is
 // started by leans toward -1/C_d, so one start is not enough: the additive iteration runs from
 // the additive start of each start method and from the split of the unfactored CLSRIVC fit of
-// each, and the estimate kept is the usable one with the best closed-loop fit from r (the
-// lowest closed-loop simulation error), a criterion the consistent model minimises (the noise
-// is uncorrelated with r).
+// each. Of the usable estimates (the verdict holds each to the loop the controller keeps
+// stable and to its closed-loop fit from r), the one kept has the best output-error fit
+// y - G u: with the noise fed back through the loop it tells the stationary points apart where
+// the closed-loop fit from r, in which r explains little of y, cannot (measured in decision
+// 0028).
 EstimationResult closed_loop_additive_from_data(const RefinedIvProblem& problem,
                                                 const RefinedIvOptions& options) {
   std::vector<StartMethod> methods;
@@ -1422,13 +1424,15 @@ EstimationResult closed_loop_additive_from_data(const RefinedIvProblem& problem,
   }
   // No candidate at all: the plain run, which names what went wrong.
   if (candidates.empty()) return run_refined_iv_from_start(problem, options);
-  // Usable first, then the higher closed-loop fit (NaN, an unstable loop, last); ties keep
-  // the earlier candidate.
+  // Usable first, by their output-error fit; if none is, the best closed-loop fit from r
+  // (NaN, a loop the controller does not hold, last). Ties keep the earlier candidate.
   auto better = [](const EstimationResult& a, const EstimationResult& b) {
     if (a.verdict.usable != b.verdict.usable) return a.verdict.usable;
-    const double fa = std::isnan(a.closed_loop_fit_percent) ? -HUGE_VAL : a.closed_loop_fit_percent;
-    const double fb = std::isnan(b.closed_loop_fit_percent) ? -HUGE_VAL : b.closed_loop_fit_percent;
-    return fa > fb;
+    auto score = [usable = a.verdict.usable](const EstimationResult& r) {
+      const double f = usable ? r.fit_percent : r.closed_loop_fit_percent;
+      return std::isnan(f) ? -HUGE_VAL : f;
+    };
+    return score(a) > score(b);
   };
   size_t best = 0;
   for (size_t k = 1; k < candidates.size(); ++k) {
@@ -1436,8 +1440,8 @@ EstimationResult closed_loop_additive_from_data(const RefinedIvProblem& problem,
   }
   EstimationResult result = std::move(candidates[best]);
   result.message += "; of " + std::to_string(candidates.size()) +
-                    " fits from different starts, the one with the best closed-loop fit from "
-                    "the reference was kept (usable fits first)";
+                    " fits from different starts, the usable one with the best output-error fit "
+                    "was kept (with none usable, the best closed-loop fit from r)";
   return result;
 }
 

@@ -200,11 +200,12 @@ int compare_with_truth_start(const char* name, const Estimate& estimate,
   return destabilising;
 }
 
-// Measured: 72 of seeds 1..80 (unfactored) and 37 of seeds 1..40 (additive, from several
-// starts since decision 0028; 31 from one) end at the true start's stationary point. The
-// others are records on which CLSRIVC has several stationary points (the open-loop start,
-// where the controller stabilises it, mostly misses too): the iteration stops at the limit or
-// at a second fixed point.
+// Measured: 72 of seeds 1..80 (unfactored) and 38 of seeds 1..40 (additive, from several
+// starts and keeping the usable fit with the best output-error fit, decision 0028; 31 from one
+// start) end at the true start's stationary point. The others are records on which CLSRIVC
+// has several stationary points (the open-loop start, where the controller stabilises it,
+// mostly misses too): the iteration stops at the limit or at a second fixed point. The
+// additive estimator misses seeds 5 and 19 of the first 20, so at most 1 in 8 (0.875).
 TEST(ClosedLoopStart, ClsrivcFromTheDataEndsWhereTheTrueStartEnds) {
   const int destabilising = compare_with_truth_start(
       "clsrivc",
@@ -228,7 +229,7 @@ TEST(ClosedLoopStart, AdditiveClsrivcFromTheDataEndsWhereTheTrueStartEnds) {
       [&](const SampledData& data, const RefinedIvOptions& o) {
         return additive_clsrivc(data, tight_controller(), orders, o);
       },
-      [&](const SampledData& data) { return initial_additive_model(data, orders); }, 0.85);
+      [&](const SampledData& data) { return initial_additive_model(data, orders); }, 0.875);
   EXPECT_GE(destabilising, kDestabilising);
 }
 

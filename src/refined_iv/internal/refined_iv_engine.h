@@ -44,7 +44,7 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
                                            ScreenedStart* shared = nullptr);
 /// run_refined_iv_from_start, except for an additive model in closed loop without an initial
 /// model: the iteration then runs from several starts and keeps the usable estimate with the
-/// lowest closed-loop simulation error from r (decision 0028).
+/// best output-error fit (decision 0028).
 EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIvOptions& options);
 
 /// The homogeneous chain 1/(p^l A) -> p^k/A (k = 1..n) behind a submodel's free responses
