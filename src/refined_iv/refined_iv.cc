@@ -1007,17 +1007,16 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
     // Closed loop: only starts the controller stabilises (decision 0011); an open-loop start
     // it does not stabilise would stop the iteration before its first step.
     if (closed_loop) init.controller = *problem.controller;
-    const SubmodelOrder total =
-        layout.size() == 1 ? layout.orders[0] : unfactored_order(layout.orders);
-    if (shared == nullptr || !shared->g) {
-      TransferFunction g = initial_transfer_function(data, total, init);
-      if (shared == nullptr) shared = &own_start;
-      shared->g = std::move(g);
+    ScreenedStart& start = shared != nullptr ? *shared : own_start;
+    if (!start.g) {
+      const SubmodelOrder total =
+          layout.size() == 1 ? layout.orders[0] : unfactored_order(layout.orders);
+      start.g = initial_transfer_function(data, total, init);
     }
     if (layout.size() == 1) {
-      beta = unfactored_parameters(*shared->g, layout.orders[0]);
+      beta = unfactored_parameters(*start.g, layout.orders[0]);
     } else {
-      beta = parameters_for_orders(additive_model_from_start(*shared->g, data, layout.orders, init),
+      beta = parameters_for_orders(additive_model_from_start(*start.g, data, layout.orders, init),
                                    layout.orders);
     }
   }

@@ -30,15 +30,16 @@ struct RefinedIvProblem {
   bool stored_instrument_covariance = false;
 };
 
-/// The refined IV iteration from options.initial_model or, without one, from the start
-/// initialization.h finds in the data.
-/// `shared`: the unfactored start screened from the data (initial_transfer_function), kept
-/// for another run on the same records with the same start options and total order (an
-/// additive and an unfactored fit from one start method); it is screened here, and stored,
-/// only when it holds none.
+/// The unfactored start screened from the data (initial_transfer_function), kept for another
+/// run on the same records with the same start options and total order (an additive and an
+/// unfactored fit from one start method).
 struct ScreenedStart {
   std::optional<TransferFunction> g;
 };
+
+/// The refined IV iteration from options.initial_model or, without one, from the start
+/// initialization.h finds in the data; `shared`, when given, is screened here and stored only
+/// when it holds no start yet.
 EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
                                            const RefinedIvOptions& options,
                                            ScreenedStart* shared = nullptr);
