@@ -179,6 +179,10 @@ SampledFilter::SampledFilter(const FilterRealization& filter, double sample_time
     phi_lo_(j) = lo;
     phi_hi_(j) = hi;
   }
+  // Even halves only: Eigen sums a product of whole packets (two doubles) term by term in
+  // column order, as the full product does, but an odd block by a tree, which rounds otherwise.
+  const int half = s / 2;
+  split_ = s % 4 == 0 && (phi_.topRightCorner(half, half).array() == 0.0).all() ? half : 0;
   c_lo_.resize(outputs());
   c_hi_.resize(outputs());
   for (int j = 0; j < outputs(); ++j) {
@@ -199,10 +203,11 @@ SampledFilter::Stream SampledFilter::start() const {
 }
 
 // S > 0 fixes the state dimension at compile time: the state lives in local arrays and the
-// dense S x S update unrolls. S == 0 is the general case, which skips the exact zeros of phi
-// column by column. Per sample: finish the step from the previous sample (the first-order
-// hold needs the current one), then read the outputs (sparse rows of C) at t_k.
-template <int S>
+// dense S x S update unrolls (H > 0: without the zero upper right block of a cascade). S == 0
+// is the general case, which skips the exact zeros of phi column by column. Per sample: finish the
+// step from the previous sample (the first-order hold needs the current one), then read the outputs
+// (sparse rows of C) at t_k.
+template <int S, int H>
 void SampledFilter::run_fixed(const Eigen::Ref<const Eigen::VectorXd>& x, Stream& stream,
                               Eigen::Ref<Eigen::MatrixXd> out, int first_output) const {
   constexpr int kLocal = S > 0 ? S : 1;
@@ -248,9 +253,18 @@ void SampledFilter::run_fixed(const Eigen::Ref<const Eigen::VectorXd>& x, Stream
       if constexpr (S > 0) {
         using Vector = Eigen::Matrix<double, kLocal, 1>;
         Eigen::Map<Vector> zv(z);
-        Eigen::Map<Vector>(next).noalias() +=
-            Eigen::Map<const Eigen::Matrix<double, kLocal, kLocal>>(phi).lazyProduct(zv);
-        zv = Eigen::Map<const Vector>(next);
+        Eigen::Map<Vector> nv(next);
+        const Eigen::Map<const Eigen::Matrix<double, kLocal, kLocal>> p(phi);
+        if constexpr (H > 0) {
+          // Rows above H see only the first H states: the same sums in the same order
+          // without the exact zeros, so the same numbers.
+          nv.template head<H>().noalias() +=
+              p.template topLeftCorner<H, H>().lazyProduct(zv.template head<H>());
+          nv.template tail<S - H>().noalias() += p.template bottomRows<S - H>().lazyProduct(zv);
+        } else {
+          nv.noalias() += p.lazyProduct(zv);
+        }
+        zv = nv;
       } else {
         for (int j = 0; j < s; ++j) {
           const double zj = z[j];
@@ -266,8 +280,8 @@ void SampledFilter::run_fixed(const Eigen::Ref<const Eigen::VectorXd>& x, Stream
     for (int j = 0; j < r; ++j) {
       const double* row = c_first + static_cast<ptrdiff_t>(j) * s;
       double acc = d[j] * now;
-      if constexpr (S > 0 && S <= 8) {
-        // Short rows: the unrolled dense dot costs less than tracking the non-zeros.
+      if constexpr (S > 0 && S <= 2) {
+        // Rows of two: the unrolled dense dot costs less than tracking the non-zeros.
         for (int i = 0; i < S; ++i) acc += row[i] * z[i];
       } else {
         for (int i = clo[j]; i < chi[j]; ++i) acc += row[i] * z[i];
@@ -295,25 +309,32 @@ void SampledFilter::run(const Eigen::Ref<const Eigen::VectorXd>& x, Stream& stre
   require(stream.state.size() == order() && stream.scratch.size() == order(),
           "SampledFilter::run: the stream has ", stream.state.size(), " states, expected ",
           order());
+  // A cascade of two equal-order filters (the refined IV instrument chain) has a zero upper
+  // right quarter; its dedicated update skips it.
+  const bool halves = split_ > 0;
   switch (order()) {
     case 1:
-      return run_fixed<1>(x, stream, out, first_output);
+      return run_fixed<1, 0>(x, stream, out, first_output);
     case 2:
-      return run_fixed<2>(x, stream, out, first_output);
+      return run_fixed<2, 0>(x, stream, out, first_output);
     case 3:
-      return run_fixed<3>(x, stream, out, first_output);
+      return run_fixed<3, 0>(x, stream, out, first_output);
     case 4:
-      return run_fixed<4>(x, stream, out, first_output);
+      return halves ? run_fixed<4, 2>(x, stream, out, first_output)
+                    : run_fixed<4, 0>(x, stream, out, first_output);
     case 6:
-      return run_fixed<6>(x, stream, out, first_output);
+      return run_fixed<6, 0>(x, stream, out, first_output);
     case 8:
-      return run_fixed<8>(x, stream, out, first_output);
+      return halves ? run_fixed<8, 4>(x, stream, out, first_output)
+                    : run_fixed<8, 0>(x, stream, out, first_output);
     case 12:
-      return run_fixed<12>(x, stream, out, first_output);
+      return halves ? run_fixed<12, 6>(x, stream, out, first_output)
+                    : run_fixed<12, 0>(x, stream, out, first_output);
     case 16:
-      return run_fixed<16>(x, stream, out, first_output);
+      return halves ? run_fixed<16, 8>(x, stream, out, first_output)
+                    : run_fixed<16, 0>(x, stream, out, first_output);
     default:
-      return run_fixed<0>(x, stream, out, first_output);
+      return run_fixed<0, 0>(x, stream, out, first_output);
   }
 }
 

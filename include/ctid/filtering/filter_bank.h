@@ -77,13 +77,16 @@ class SampledFilter {
            Eigen::Ref<Eigen::MatrixXd> out, int first_output = 0) const;
 
  private:
-  template <int S>
+  // S: the state dimension fixed at compile time (0: any). H > 0: rows [0, H) of phi have
+  // their non-zeros in columns [0, H) (a cascade's zero upper right block).
+  template <int S, int H>
   void run_fixed(const Eigen::Ref<const Eigen::VectorXd>& x, Stream& stream,
                  Eigen::Ref<Eigen::MatrixXd> out, int first_output) const;
 
   Eigen::MatrixXd phi_;     // column-major: the recursion adds phi(:, j) z_j
   Eigen::VectorXi phi_lo_;  // rows [lo, hi) of column j hold its non-zeros
   Eigen::VectorXi phi_hi_;
+  int split_ = 0;  // order / 2 when phi's upper right order/2 x order/2 block is exactly zero
   Eigen::VectorXd gamma_previous_;  // weight of x_{k-1} (non-zero only for a delay fraction)
   Eigen::VectorXd gamma0_;          // weight of x_k
   Eigen::VectorXd gamma1_;          // weight of x_{k+1} (zero for the zero-order hold)
