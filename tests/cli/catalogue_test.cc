@@ -48,15 +48,7 @@
 
 #include "cli/output_conventions.h"
 #include "cli/run_ctid.h"
-
-#if defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define CTID_CATALOGUE_ASAN 1
-#endif
-#endif
-#if defined(__SANITIZE_ADDRESS__)
-#define CTID_CATALOGUE_ASAN 1
-#endif
+#include "support/sanitizers.h"
 
 namespace ctid::cli {
 namespace {
@@ -1026,10 +1018,10 @@ Outcome run_ctid(const Case& k, const fs::path& dir, const fs::path& io) {
     ::dup2(out, 1);
     ::dup2(err, 2);
     for (const auto& [name, value] : k.env) ::setenv(name.c_str(), value.c_str(), 1);
-#ifndef CTID_CATALOGUE_ASAN
-    const rlimit limit{kAddressSpaceLimit, kAddressSpaceLimit};
-    ::setrlimit(RLIMIT_AS, &limit);
-#endif
+    if (!CTID_UNDER_SANITIZERS) {  // AddressSanitizer reserves more address space than this
+      const rlimit limit{kAddressSpaceLimit, kAddressSpaceLimit};
+      ::setrlimit(RLIMIT_AS, &limit);
+    }
     ::execv(CTID_CLI_PATH, argv.data());
     ::_exit(127);
   }

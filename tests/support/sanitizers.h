@@ -2,7 +2,9 @@
 // (a second seed, a Monte Carlo of one estimator, a scan another test also runs) skip their
 // sanitizer run with CTID_SKIP_UNDER_SANITIZERS(why); the Release ctest runs them whole. The
 // sanitizer build (scripts/test.sh step 3) is -O1 with assertions and 10-15 times slower, so
-// these few tests were most of its time.
+// these few tests were most of its time. CTID_UNDER_SANITIZERS is 1 in that build and 0 in
+// the others (a test that caps a child's address space, which AddressSanitizer reserves in
+// terabytes, reads it too).
 #pragma once
 
 #include <gtest/gtest.h>
