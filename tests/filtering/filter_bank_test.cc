@@ -107,11 +107,14 @@ TEST(FilterBank, CascadeEqualsOneBankOfTheSquaredDenominator) {
 }
 
 // The recursion of SampledFilter written out densely, every sum in index order: x_k feeds
-// next_i = (gamma0_i x_{k-1} + gamma1_i x_k) + (phi_i0 z_0 + phi_i1 z_1 + ...), and
-// out_j = d_j x_k + c_j0 z_0 + c_j1 z_1 + ....
-Eigen::MatrixXd dense_recursion(const FilterRealization& f, double h, Hold hold,
+// next_i = (gamma0_i x_{k-1} + gamma1_i x_k) + (phi_i0 z_0 + phi_i1 z_1 + ...) and
+// out_j = d_j x_k + c_j0 z_0 + c_j1 z_1 + ...; with a delay fraction the step also weighs
+// x_{k-2} (first term) and the outputs see the delayed signal at t_k instead of x_k.
+Eigen::MatrixXd dense_recursion(const FilterRealization& f, double h, Hold hold, double fraction,
                                 const Eigen::VectorXd& x) {
-  const DelayedHoldDiscretization w = discretize_delayed(f.a, f.b, h, 0.0, hold);
+  const DelayedHoldDiscretization w = discretize_delayed(f.a, f.b, h, fraction, hold);
+  const DelayedSample now = delayed_sample(fraction, hold);
+  const auto at = [&x](Eigen::Index k) { return k >= 0 ? x(k) : 0.0; };
   const int s = f.order();
   Eigen::VectorXd z = Eigen::VectorXd::Zero(s);
   Eigen::VectorXd next(s);
@@ -121,12 +124,16 @@ Eigen::MatrixXd dense_recursion(const FilterRealization& f, double h, Hold hold,
       for (int i = 0; i < s; ++i) {
         double sum = w.phi(i, 0) * z(0);
         for (int j = 1; j < s; ++j) sum = sum + w.phi(i, j) * z(j);
-        next(i) = (w.current(i, 0) * x(k - 1) + w.next(i, 0) * x(k)) + sum;
+        const double held = fraction > 0.0 ? w.previous(i, 0) * at(k - 2) +
+                                                 w.current(i, 0) * at(k - 1) + w.next(i, 0) * x(k)
+                                           : w.current(i, 0) * x(k - 1) + w.next(i, 0) * x(k);
+        next(i) = held + sum;
       }
       z = next;
     }
+    const double signal = fraction > 0.0 ? now.previous * at(k - 1) + now.current * x(k) : x(k);
     for (int j = 0; j < f.outputs(); ++j) {
-      double acc = f.d(j) * x(k);
+      double acc = f.d(j) * signal;
       for (int i = 0; i < s; ++i) acc = acc + f.c(j, i) * z(i);
       out(k, j) = acc;
     }
@@ -138,7 +145,8 @@ TEST(FilterBank, SkippingExactZerosChangesNoBit) {
   // The fixed-size kernels skip the zero upper right block of a cascade of two equal-order
   // stages and the zeros of C's rows; the refined IV results stay bit-identical only if the
   // sums left keep their order. Cascades of 4 to 16 states (split kernels; 6 is not split)
-  // and banks of even order 2 to 8 (dense update, sparse rows of C), both holds. (Eigen sums
+  // and banks of even order 2 to 8 (dense update, sparse rows of C), both holds, with and
+  // without a delay fraction. (Eigen sums
   // an odd fixed-size product by a tree, not in index order; the kernel keeps its order too.)
   std::mt19937_64 rng(17);
   std::uniform_real_distribution<double> damping(0.05, 0.6);
@@ -159,11 +167,13 @@ TEST(FilterBank, SkippingExactZerosChangesNoBit) {
     if (n % 2 == 0) filters.push_back(bank);
     for (const FilterRealization& f : filters) {
       for (Hold hold : {Hold::zero_order_hold, Hold::first_order_hold}) {
-        const Eigen::MatrixXd fast = SampledFilter(f, 0.05, hold).apply(x);
-        const Eigen::MatrixXd reference = dense_recursion(f, 0.05, hold, x);
-        EXPECT_EQ((fast - reference).cwiseAbs().maxCoeff(), 0.0)
-            << f.order() << " states, " << (hold == Hold::zero_order_hold ? "zero" : "first")
-            << "-order hold";
+        for (double fraction : {0.0, 0.3}) {
+          const Eigen::MatrixXd fast = SampledFilter(f, 0.05, hold, fraction).apply(x);
+          const Eigen::MatrixXd reference = dense_recursion(f, 0.05, hold, fraction, x);
+          EXPECT_EQ((fast - reference).cwiseAbs().maxCoeff(), 0.0)
+              << f.order() << " states, " << (hold == Hold::zero_order_hold ? "zero" : "first")
+              << "-order hold, delay fraction " << fraction;
+        }
       }
     }
   }
