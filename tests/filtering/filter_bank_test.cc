@@ -146,8 +146,8 @@ TEST(FilterBank, SkippingExactZerosChangesNoBit) {
   // stages and the zeros of C's rows; the refined IV results stay bit-identical only if the
   // sums left keep their order. Cascades of 4 to 16 states (split kernels; 6 is not split)
   // and banks of even order 2 to 8 (dense update, sparse rows of C), both holds, with and
-  // without a delay fraction. (Eigen sums
-  // an odd fixed-size product by a tree, not in index order; the kernel keeps its order too.)
+  // without a delay fraction. (Eigen sums an odd fixed-size product by a tree, not in index
+  // order; the kernel keeps that order too.)
   std::mt19937_64 rng(17);
   std::uniform_real_distribution<double> damping(0.05, 0.6);
   std::uniform_real_distribution<double> frequency(0.3, 6.0);
