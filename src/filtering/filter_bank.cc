@@ -182,7 +182,7 @@ SampledFilter::SampledFilter(const FilterRealization& filter, double sample_time
   // Even halves only: Eigen sums a product of whole packets (two doubles) term by term in
   // column order, as the full product does, but an odd block by a tree, which rounds otherwise.
   const int half = s / 2;
-  split_ = s % 4 == 0 && (phi_.topRightCorner(half, half).array() == 0.0).all() ? half : 0;
+  split_ = s % 4 == 0 && (phi_.topRightCorner(half, half).array() == 0.0).all();
   c_lo_.resize(outputs());
   c_hi_.resize(outputs());
   for (int j = 0; j < outputs(); ++j) {
@@ -354,7 +354,6 @@ void SampledFilter::run(const Eigen::Ref<const Eigen::VectorXd>& x, Stream& stre
           order());
   // A cascade of two equal-order filters (the refined IV instrument chain) has a zero upper
   // right quarter; its dedicated update skips it.
-  const bool halves = split_ > 0;
   switch (order()) {
     case 1:
       return run_fixed<1, 0>(x, stream, out, first_output);
@@ -363,18 +362,18 @@ void SampledFilter::run(const Eigen::Ref<const Eigen::VectorXd>& x, Stream& stre
     case 3:
       return run_fixed<3, 0>(x, stream, out, first_output);
     case 4:
-      return halves ? run_fixed<4, 2>(x, stream, out, first_output)
+      return split_ ? run_fixed<4, 2>(x, stream, out, first_output)
                     : run_fixed<4, 0>(x, stream, out, first_output);
     case 6:
       return run_fixed<6, 0>(x, stream, out, first_output);
     case 8:
-      return halves ? run_fixed<8, 4>(x, stream, out, first_output)
+      return split_ ? run_fixed<8, 4>(x, stream, out, first_output)
                     : run_fixed<8, 0>(x, stream, out, first_output);
     case 12:
-      return halves ? run_fixed<12, 6>(x, stream, out, first_output)
+      return split_ ? run_fixed<12, 6>(x, stream, out, first_output)
                     : run_fixed<12, 0>(x, stream, out, first_output);
     case 16:
-      return halves ? run_fixed<16, 8>(x, stream, out, first_output)
+      return split_ ? run_fixed<16, 8>(x, stream, out, first_output)
                     : run_fixed<16, 0>(x, stream, out, first_output);
     default:
       return run_fixed<0, 0>(x, stream, out, first_output);

@@ -86,7 +86,7 @@ class SampledFilter {
   Eigen::MatrixXd phi_;     // column-major: the recursion adds phi(:, j) z_j
   Eigen::VectorXi phi_lo_;  // rows [lo, hi) of column j hold its non-zeros
   Eigen::VectorXi phi_hi_;
-  int split_ = 0;  // order / 2 when phi's upper right order/2 x order/2 block is exactly zero
+  bool split_ = false;              // phi's upper right order/2 x order/2 block is exactly zero
   Eigen::VectorXd gamma_previous_;  // weight of x_{k-1} (non-zero only for a delay fraction)
   Eigen::VectorXd gamma0_;          // weight of x_k
   Eigen::VectorXd gamma1_;          // weight of x_{k+1} (zero for the zero-order hold)
