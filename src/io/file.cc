@@ -3,7 +3,9 @@
 #include <array>
 #include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <system_error>
@@ -107,6 +109,82 @@ void remove_quietly(const fs::path& path) {
   fs::remove(path, ignored);
 }
 
+// The process id in a temporary's name "<file>.tmp-<pid>-<n>", or 0 when `name` is not one
+// of `file`'s temporaries.
+pid_t temporary_owner(const std::string& name, const std::string& file) {
+  const std::string prefix = file + ".tmp-";
+  if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) return 0;
+  pid_t pid = 0;
+  std::size_t at = prefix.size();
+  for (; at < name.size() && name[at] >= '0' && name[at] <= '9'; ++at) {
+    if (pid > 100000000) return 0;
+    pid = pid * 10 + (name[at] - '0');
+  }
+  return at < name.size() && name[at] == '-' ? pid : 0;
+}
+
+// Removes from `folder` the temporaries of `file` (of every file when `file` is empty) left
+// by processes that no longer run.
+void remove_dead_temporaries_of(const fs::path& folder, const std::string& file) {
+  std::error_code ec;
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const std::size_t tmp = file.empty() ? name.rfind(".tmp-") : file.size();
+    if (tmp == std::string::npos || tmp == 0) continue;
+    const pid_t owner = temporary_owner(name, name.substr(0, tmp));
+    if (owner > 0 && owner != ::getpid() && (file.empty() || name.compare(0, tmp, file) == 0) &&
+        ::kill(owner, 0) != 0 && errno == ESRCH) {
+      remove_quietly(it->path());
+    }
+  }
+}
+
+// Removes the temporaries of `target` left by processes that no longer run (killed with -9
+// or by a power cut, so no handler removed them). A batch sweeps its folder once and tells
+// its records not to (CTID_NO_TEMPORARY_SWEEP), which keeps a large batch linear.
+void remove_dead_temporaries(const fs::path& target) {
+  if (std::getenv("CTID_NO_TEMPORARY_SWEEP") != nullptr) return;
+  const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  remove_dead_temporaries_of(parent, target.filename().string());
+}
+
+// Writes `content` to a new file and flushes it to the disk, so that the rename that follows
+// never puts an empty or partial file in the target's place after a crash.
+void write_new_file_durably(const fs::path& temporary, std::string_view content,
+                            const fs::path& path) {
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    throw IoError(path.string() + ": cannot create temporary file '" + temporary.string() + "' (" +
+                  std::strerror(errno) + ")");
+  }
+  size_t written = 0;
+  int error = 0;
+  while (written < content.size()) {
+    const ssize_t n = ::write(fd, content.data() + written, content.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      error = n < 0 ? errno : ENOSPC;
+      break;
+    }
+    written += static_cast<size_t>(n);
+  }
+  if (error == 0 && ::fsync(fd) != 0 && errno != EINVAL) error = errno;
+  if (::close(fd) != 0 && error == 0 && errno != EINTR) error = errno;
+  if (error != 0) {
+    remove_quietly(temporary);
+    throw IoError(path.string() + ": write failed (" + std::strerror(error) + ")");
+  }
+}
+
+// Flushes a folder's entries, so a rename into it survives a crash (errors ignored: some file
+// systems cannot sync a folder, and the file itself is already on the disk).
+void sync_folder(const fs::path& folder) {
+  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
 // Follows the chain of symbolic links that starts at `path` (at most 40 links, as the
 // kernel does). `through_proc` is set when a link leads into /proc: /dev/stdout and
 // /dev/fd/N name an open file descriptor of the process, a stream, whatever file is
@@ -157,6 +235,8 @@ void write_into_stream(const fs::path& path, std::string_view content) {
 
 }  // namespace
 
+void remove_dead_temporaries_in(const fs::path& folder) { remove_dead_temporaries_of(folder, ""); }
+
 void remove_pending_temporaries() noexcept {
   for (size_t i = 0; i < kTemporarySlots; ++i) {
     if (slot_state[i].load() == 2) ::unlink(slot_path[i].data());
@@ -199,22 +279,10 @@ void write_text_file(const fs::path& path, std::string_view content, Overwrite o
   require(!replacing || (existing.st_mode & 0222) != 0, path.string(),
           ": file is read-only; make it writable first to replace it");
 
+  remove_dead_temporaries(target);
   const fs::path temporary = temporary_path_for(target);
   const PendingTemporary pending(temporary);
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) {
-      throw IoError(path.string() + ": cannot create temporary file '" + temporary.string() +
-                    "' (" + std::strerror(errno) + ")");
-    }
-    out.write(content.data(), static_cast<std::streamsize>(content.size()));
-    out.flush();
-    if (!out) {
-      out.close();
-      remove_quietly(temporary);
-      throw IoError(path.string() + ": write failed (" + std::strerror(errno) + ")");
-    }
-  }
+  write_new_file_durably(temporary, content, path);
   // The replaced file keeps its permissions.
   if (replacing) ::chmod(temporary.c_str(), existing.st_mode & 07777);
 
@@ -225,6 +293,7 @@ void write_text_file(const fs::path& path, std::string_view content, Overwrite o
       throw IoError(path.string() + ": cannot move the temporary file into place (" + ec.message() +
                     ")");
     }
+    sync_folder(parent);
     return;
   }
   // A hard link fails if the target exists, so "check, then move" cannot race with another
@@ -232,6 +301,7 @@ void write_text_file(const fs::path& path, std::string_view content, Overwrite o
   fs::create_hard_link(temporary, target, ec);
   if (!ec) {
     remove_quietly(temporary);
+    sync_folder(parent);
     return;
   }
   if (ec == std::errc::file_exists) {
@@ -249,6 +319,7 @@ void write_text_file(const fs::path& path, std::string_view content, Overwrite o
     throw IoError(path.string() + ": cannot move the temporary file into place (" + ec.message() +
                   ")");
   }
+  sync_folder(parent);
 }
 
 }  // namespace ctid::io

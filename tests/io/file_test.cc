@@ -8,6 +8,7 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
@@ -95,6 +96,35 @@ TEST(WriteTextFile, NoTemporaryIsLeftBehindAndNoneIsPendingAfterwards) {
   }
   EXPECT_EQ(files, 1);
   EXPECT_EQ(read_text_file(dir / "a.csv"), "1\n");
+}
+
+// A process id that is certainly not running: a child that has exited and been reaped.
+pid_t dead_process_id() {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return child;
+}
+
+// Issue 33: temporaries of a process killed with -9 (no handler ran) are removed by the next
+// write of the same file; a live process's temporary and other files' temporaries are not.
+TEST(WriteTextFile, ADeadProcesssTemporaryIsRemovedByTheNextWrite) {
+  const testing::TestDirectory dir;
+  const std::string dead = std::to_string(dead_process_id());
+  const std::string alive = std::to_string(::getppid());
+  write_text_file(dir / ("a.json.tmp-" + dead + "-0"), "half", Overwrite::no);
+  write_text_file(dir / ("a.json.tmp-" + alive + "-3"), "busy", Overwrite::no);
+  write_text_file(dir / ("b.json.tmp-" + dead + "-1"), "other", Overwrite::no);
+  write_text_file(dir / "a.json", "{}\n", Overwrite::no);
+  EXPECT_FALSE(std::filesystem::exists(dir / ("a.json.tmp-" + dead + "-0")));
+  EXPECT_TRUE(std::filesystem::exists(dir / ("a.json.tmp-" + alive + "-3")));
+  EXPECT_TRUE(std::filesystem::exists(dir / ("b.json.tmp-" + dead + "-1")));
+  // A folder sweep (what ctid batch does once) removes every dead one and keeps the rest.
+  remove_dead_temporaries_in(dir.path());
+  EXPECT_FALSE(std::filesystem::exists(dir / ("b.json.tmp-" + dead + "-1")));
+  EXPECT_TRUE(std::filesystem::exists(dir / ("a.json.tmp-" + alive + "-3")));
+  EXPECT_EQ(read_text_file(dir / "a.json"), "{}\n");
 }
 
 }  // namespace

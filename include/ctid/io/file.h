@@ -44,11 +44,18 @@ std::string read_text_file(const std::filesystem::path& path);
 /// - a block device, a socket or anything else that is not a regular file: InvalidArgument;
 /// - a read-only regular file: InvalidArgument even with Overwrite::yes; a replaced file
 ///   keeps its permissions.
+/// The temporary is flushed to the disk (fsync) before it takes the target's name, and the
+/// folder after, so a crash leaves the old file or the new one, never a partial one; dead
+/// processes' temporaries of the same target are removed first.
 void write_text_file(const std::filesystem::path& path, std::string_view content,
                      Overwrite overwrite = Overwrite::no);
 
 /// Removes the temporary files that writes in progress have created. Async-signal-safe:
 /// meant for a SIGINT/SIGTERM handler, which then ends the process (the CLI installs one).
 void remove_pending_temporaries() noexcept;
+
+/// Removes from `folder` every temporary "<file>.tmp-<pid>-<n>" whose process no longer runs
+/// (write_text_file does so for its own target, unless CTID_NO_TEMPORARY_SWEEP is set).
+void remove_dead_temporaries_in(const std::filesystem::path& folder);
 
 }  // namespace ctid::io
