@@ -10,12 +10,15 @@
 #include <glob.h>
 #include <signal.h>
 #include <sys/prctl.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <compare>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -430,6 +433,132 @@ std::string join_path(const std::string& dir, const std::string& file) {
   return (fs::path(dir) / file).string();
 }
 
+// ---- names derived from data paths: safe and unique by construction ----
+
+// `text` as a record name: every byte check_name does not allow becomes '_', a leading '.'
+// or '-' gets a '_' before it, the batch's own names get "_record" after them, and the result
+// is at most 200 bytes.
+std::string safe_name(const std::string& text) {
+  std::string name;
+  for (const char c : text) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '.' || c == '_' || c == '-';
+    name += ok ? c : '_';
+  }
+  if (name.empty() || name.front() == '.' || name.front() == '-') name.insert(0, "_");
+  if (name.size() > 180) name.resize(180);
+  if (name == "summary" || name == "timings" || name.ends_with(".error")) name += "_record";
+  return name;
+}
+
+// The name of a record without "name": its data file's stem, or, when several records would
+// share that stem (site_a/rec.csv, site_b/rec.csv), its path without extension from the
+// folder all of those records share, '/' written '_'. A name still taken gets "-2", "-3", ...
+// so a --glob batch never stops on its names.
+std::vector<std::string> derived_names(const std::vector<RecordEntry>& entries) {
+  std::map<std::string, std::vector<std::size_t>> by_stem;
+  std::set<std::string> taken;
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    if (!entries[i].name.empty()) {
+      taken.insert(entries[i].name);
+    } else {
+      by_stem[safe_name(fs::path(entries[i].data.front()).stem().string())].push_back(i);
+    }
+  }
+  std::vector<std::string> names(entries.size());
+  for (const auto& [stem, members] : by_stem) {
+    if (members.size() == 1 && taken.count(stem) == 0) {
+      names[members.front()] = stem;
+      continue;
+    }
+    fs::path shared = fs::path(entries[members.front()].data.front()).lexically_normal();
+    shared = shared.parent_path();
+    for (const std::size_t i : members) {
+      const fs::path folder = fs::path(entries[i].data.front()).lexically_normal().parent_path();
+      while (!shared.empty() && folder.lexically_relative(shared).string().starts_with("..")) {
+        shared = shared.parent_path();
+      }
+    }
+    for (const std::size_t i : members) {
+      fs::path relative = fs::path(entries[i].data.front()).lexically_normal();
+      if (!shared.empty()) relative = relative.lexically_relative(shared);
+      relative.replace_extension();
+      std::string joined;
+      for (const fs::path& part : relative) {
+        if (part == "." || part.empty()) continue;
+        joined += (joined.empty() ? "" : "_") + part.string();
+      }
+      names[i] = safe_name(joined.empty() ? stem : joined);
+    }
+  }
+  // What is still shared (a_b.csv beside a/b.csv, a name a record chose) is numbered in order.
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    if (!entries[i].name.empty()) continue;
+    std::string name = names[i];
+    for (int k = 2; taken.count(name) > 0; ++k) name = names[i] + "-" + std::to_string(k);
+    taken.insert(name);
+    names[i] = name;
+  }
+  return names;
+}
+
+// ---- no output of the batch may be one of its inputs ----
+
+struct FileId {
+  std::uintmax_t device = 0;
+  std::uintmax_t inode = 0;
+  auto operator<=>(const FileId&) const = default;
+};
+
+std::optional<FileId> file_id(const std::string& path) {
+  struct stat info {};
+  if (::stat(path.c_str(), &info) != 0) return std::nullopt;
+  return FileId{static_cast<std::uintmax_t>(info.st_dev), static_cast<std::uintmax_t>(info.st_ino)};
+}
+
+// Refuses, before any work and whatever --force says, an output file of the batch (a record's
+// result or error document, the summary, the timings) that is the manifest, the spec, a data
+// file or a file a record's flags read. Files are compared by device and inode, so links and
+// "../" spellings are seen through; linear in the number of records.
+void check_outputs_are_not_inputs(const BatchFlags& f, const std::vector<Task>& tasks) {
+  std::map<FileId, std::string> inputs;  // what the file is, for the message
+  const auto add_input = [&](const std::string& path, const std::string& what) {
+    if (path.empty()) return;
+    if (const auto id = file_id(path)) inputs.emplace(*id, what + " '" + path + "'");
+  };
+  add_input(f.manifest, "the manifest");
+  add_input(f.spec, "the spec");
+  for (const Task& task : tasks) {
+    for (std::size_t k = 1; k < task.args.size(); ++k) {
+      const std::string& word = task.args[k];
+      if (word == "--output") {  // the record's own result, not an input
+        ++k;
+        continue;
+      }
+      const std::size_t equals = word.find('=');
+      const std::string value =
+          word.starts_with("--") && equals != std::string::npos ? word.substr(equals + 1) : word;
+      if (!value.starts_with("--")) add_input(value, task.context + ": the file");
+    }
+  }
+  const auto check = [&](const std::string& output, const std::string& what) {
+    const auto id = file_id(output);
+    if (!id) return;
+    const auto input = inputs.find(*id);
+    if (input == inputs.end()) return;
+    usage_error(what + " '" + output + "' is " + input->second +
+                "; writing it would destroy that file, so nothing was run (choose another --out "
+                "folder or another name; --force does not change this)");
+  };
+  for (const char* own : {kSummaryCsv, kSummaryJson, kTimings}) {
+    check(join_path(f.out, own), "the batch's own file");
+  }
+  for (const Task& task : tasks) {
+    check(task.output, task.context + ": the result");
+    check(task.error_output, task.context + ": the error document");
+  }
+}
+
 // The flags of every record parsed as `ctid fit` parses them (a value that is not a number,
 // not one of a flag's choices, a controller file that does not exist), so that a bad spec is
 // one usage error before anything runs rather than the same failure for every record. Each
@@ -482,9 +611,11 @@ std::vector<Task> expand(const BatchFlags& f) {
   if (entries.empty()) usage_error(f.manifest + ": the manifest has no records");
   std::vector<Task> tasks;
   std::map<std::string, std::string> names;  // name -> context of its first record
-  for (const RecordEntry& entry : entries) {
+  const std::vector<std::string> derived = derived_names(entries);
+  for (std::size_t e = 0; e < entries.size(); ++e) {
+    const RecordEntry& entry = entries[e];
     Task task;
-    task.name = entry.name.empty() ? fs::path(entry.data.front()).stem().string() : entry.name;
+    task.name = entry.name.empty() ? derived[e] : entry.name;
     check_name(task.name, entry.context);
     const auto [first, inserted] = names.emplace(task.name, entry.context);
     if (!inserted) {
@@ -508,6 +639,7 @@ std::vector<Task> expand(const BatchFlags& f) {
     tasks.push_back(std::move(task));
   }
   check_flag_values(tasks);
+  check_outputs_are_not_inputs(f, tasks);
   return tasks;
 }
 
@@ -912,6 +1044,10 @@ ExitStatus run_batch(const BatchFlags& f) {
   }
   prepare_out(f);
   check_own_files(f);
+  // Temporaries of records killed with -9 are swept once here; the records skip the sweep
+  // (one scan of OUT per record would make a large batch quadratic).
+  io::remove_dead_temporaries_in(f.out);
+  ::setenv("CTID_NO_TEMPORARY_SWEEP", "1", 1);
   if (!f.summarize) {
     std::vector<int> pending;
     for (int i = 0; i < static_cast<int>(tasks.size()); ++i) {

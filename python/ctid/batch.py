@@ -266,6 +266,14 @@ def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, 
            glob=False):
     executable = find_executable(ctid_executable)
     out_dir = os.fspath(out_dir)
+    # The same rules as `ctid batch`, said before any work: a file is not a folder, and a job
+    # count is at least 1 (issue 33).
+    if os.path.exists(out_dir) and not os.path.isdir(out_dir):
+        raise ValueError(f"out_dir {out_dir!r} is a file, not a folder; name a folder for the "
+                         "results")
+    if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
+        raise ValueError(f"jobs is {jobs!r}; give a whole number of at least 1 (or None for "
+                         "every core)")
     with tempfile.TemporaryDirectory(prefix="ctid-batch-") as scratch:
         source = _source_arguments(records, spec, scratch, glob)
         flags = (["--retry-failed"] if retry_failed else []) + (["--force"] if force else [])

@@ -209,6 +209,19 @@ def test_a_bad_manifest_is_one_clear_error(batch, tmp_path):
         ctid.batch.find_executable(tmp_path / "no-such-ctid")
 
 
+def test_a_file_as_out_dir_and_a_bad_job_count_are_clear_errors(batch, tmp_path):
+    # Issue 33: a raw FileExistsError, and jobs=-1 accepted where `ctid batch -j -1` is not.
+    a_file = tmp_path / "results"
+    a_file.write_text("keep")
+    with pytest.raises(ValueError, match="is a file, not a folder"):
+        ctid.batch.fit_many(batch["manifest"], out_dir=a_file, jobs=1)
+    assert a_file.read_text() == "keep"
+    for jobs in (-1, 0, 1.5, True):
+        with pytest.raises(ValueError, match="give a whole number of at least 1"):
+            ctid.batch.fit_many(batch["manifest"], out_dir=tmp_path / "out", jobs=jobs)
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_task_that_cannot_run_becomes_its_error_document(tmp_path):
     task = {"name": "x", "args": ["fit", "x.csv"], "output": str(tmp_path / "x.json"),
             "error_output": str(tmp_path / "x.error.json")}

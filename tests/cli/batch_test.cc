@@ -214,8 +214,9 @@ TEST_F(BatchCommand, BadManifestsExitTwoWithOneLine) {
   expect_bad_input(r, "batch", "field 'mdoes' is not a ctid fit flag");
   EXPECT_THAT(r.err, HasSubstr("did you mean 'modes'?"));
 
-  write("twice.json", R"({"spec": {"modes": 1}, "records": [{"data": "records/a1.csv"},)"
-                      R"( {"data": "records/a2.csv", "name": "a1"}]})");
+  // Names the user wrote must differ (a name derived from a path steps aside instead).
+  write("twice.json", R"({"spec": {"modes": 1}, "records": [{"data": "records/a1.csv", )"
+                      R"("name": "a1"}, {"data": "records/a2.csv", "name": "a1"}]})");
   expect_bad_input(ctid({"batch", "twice.json", "--out", "out"}), "batch",
                    "twice.json: record 2 ('a1'): the name 'a1' is taken by twice.json: record 1");
 
@@ -254,6 +255,56 @@ TEST_F(BatchCommand, NothingTheUserWroteIsReplacedWithoutForce) {
   const auto r = ctid({"batch", "records/manifest.json", "--out", "out", "--force", "-q"});
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(slurp(path("out/summary.csv")), ::testing::StartsWith("name,data,status,"));
+}
+
+// Issue 33, finding 1: `ctid batch o/m.json -o o --force` once wrote record m's result over
+// the manifest. An output that is an input is refused before any work, --force or not.
+TEST_F(BatchCommand, NoOutputIsTheManifestTheSpecOrAData) {
+  const auto refused = [&](const std::vector<std::string>& args,
+                           const std::vector<std::string>& fragments) {
+    const auto r = ctid(args);
+    expect_bad_input(r, "batch", "--force does not change this");
+    for (const std::string& fragment : fragments) EXPECT_THAT(r.err, HasSubstr(fragment));
+  };
+  fs::create_directories(path("o"));
+  write("o/m.json", R"({"spec":{"modes":1},"records":[{"name":"m","data":"../records/a1.csv"}]})");
+  const std::string manifest = slurp(path("o/m.json"));
+  refused({"batch", "o/m.json", "-o", "o", "--force"}, {"'o/m.json' is the manifest 'o/m.json'"});
+  EXPECT_EQ(slurp(path("o/m.json")), manifest);
+  EXPECT_FALSE(fs::exists(path("o/summary.csv")));
+  // The spec, reached through a link in the output folder, and a data file that would be
+  // its own record's result: both refused, and neither changed.
+  write("spec.json", R"({"modes": 1})");
+  fs::create_directories(path("p"));
+  fs::create_symlink("../spec.json", path("p/a1.json"));
+  refused({"batch", "--glob", "records/a1.csv", "--spec", "spec.json", "-o", "p"},
+          {"'p/a1.json' is the spec 'spec.json'"});
+  EXPECT_EQ(slurp(path("spec.json")), R"({"modes": 1})");
+  fs::create_directories(path("q"));
+  write("q/x.json", slurp(path("records/a1.csv")));
+  const std::string data = slurp(path("q/x.json"));
+  refused({"batch", "--glob", "q/x.json", "--spec", "spec.json", "-o", "q", "--force"},
+          {"the result 'q/x.json' is", "the file 'q/x.json'"});
+  EXPECT_EQ(slurp(path("q/x.json")), data);
+}
+
+// Issue 33, finding 5: names derived from paths are unique and safe by construction, so a
+// --glob batch of site_a/rec.csv, site_b/rec.csv and "rec 2.csv" runs every record.
+TEST_F(BatchCommand, GlobNamesAreUniqueAndSafe) {
+  for (const char* folder : {"g/siteA", "g/siteB"}) fs::create_directories(path(folder));
+  write("g/siteA/rec.csv", slurp(path("records/a1.csv")));
+  write("g/siteB/rec.csv", slurp(path("records/a2.csv")));
+  write("g/siteA/rec 2.csv", slurp(path("records/a1.csv")));
+  write("spec.json", R"({"modes": 1})");
+  const auto r = ctid({"batch", "--glob", "g/*/rec*.csv", "--spec", "spec.json", "-o", "out"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.out, "ctid batch: 3 ok, 0 no usable model, 0 failed; summary in out/summary.csv\n");
+  const auto rows = summary("out");
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows.at("siteA_rec").at("data"), "g/siteA/rec.csv");
+  EXPECT_EQ(rows.at("siteB_rec").at("data"), "g/siteB/rec.csv");
+  EXPECT_EQ(rows.at("rec_2").at("data"), "g/siteA/rec 2.csv");
+  expect_single_fit("out", "siteB_rec", {"g/siteB/rec.csv", "--modes", "1"});
 }
 
 }  // namespace
