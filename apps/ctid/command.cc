@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <iostream>
 #include <limits>
+#include <new>
 #include <system_error>
 #include <vector>
 
@@ -84,6 +85,13 @@ int run_command(const std::string& command_path, const std::function<ExitStatus(
   } catch (const ComputationError& e) {
     std::cerr << command_path << ": error: " << one_line(e.what()) << "\n";
     return kExitFailure;
+  } catch (const std::bad_alloc&) {
+    // The bounds on flags and files (docs/reliability.md) keep requests below what a machine
+    // has; what still fails is the input's size, which the user can change.
+    std::cerr << command_path
+              << ": error: not enough memory for this input (an allocation failed); use a "
+                 "shorter record, fewer channels or lower orders\n";
+    return kExitUsage;
   } catch (const std::exception& e) {
     std::cerr << command_path << ": error: internal error: " << one_line(e.what()) << "\n";
     return kExitFailure;

@@ -45,6 +45,9 @@ void run_feedback(const FeedbackFlags& f) {
   if (f.forward_order < 1 || f.feedback_order < 1)
     usage_error("--forward-order and --feedback-order must be >= 1, got " +
                 std::to_string(f.forward_order) + " and " + std::to_string(f.feedback_order));
+  if (f.scan_points < 2 || f.scan_points > 10000)
+    usage_error("--scan-points is " + std::to_string(f.scan_points) +
+                "; a delay scan takes 2 to 10000 points (each is one step-1 fit)");
   const bool scan = !f.delay_scan.empty();
   if (scan == !std::isnan(f.delay)) usage_error("give one of --delay D or --delay-scan MIN:MAX");
   if (!scan && !(f.delay >= 0.0))

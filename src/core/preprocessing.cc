@@ -131,8 +131,14 @@ PreprocessedData preprocess(const SampledData& data, const PreprocessingOptions&
     const double t0 = data.start_time();
     const double start = options.start_time.value_or(t0);
     const double end = options.end_time.value_or(t0 + n * h);
-    record.first_row = std::clamp(static_cast<int>(std::ceil((start - t0 - slack) / h)), 0, n);
-    record.end_row = std::clamp(static_cast<int>(std::ceil((end - t0 - slack) / h)), 0, n);
+    // Clamped in double before the cast: a time far outside the record (2e8 s, 1e300 s) is
+    // beyond int's range, and casting it first would be undefined.
+    const auto row_at = [&](double t) {
+      const double row = std::ceil((t - t0 - slack) / h);
+      return static_cast<int>(std::clamp(row, 0.0, static_cast<double>(n)));
+    };
+    record.first_row = row_at(start);
+    record.end_row = row_at(end);
     range = internal::concat("time ", format_number(start), ":", format_number(end), " s");
     require(record.end_row > record.first_row, range, " keeps no sample of the record from ",
             format_number(t0), " to ", format_number(t0 + (n - 1) * h), " s");
@@ -241,8 +247,11 @@ SampledData resample(const Eigen::VectorXd& time, const Eigen::VectorXd& input,
             " s) is not after the one before it (", time(k - 1), " s)");
   }
   const double t0 = time(0);
-  const Eigen::Index count =
-      static_cast<Eigen::Index>(std::floor((time(n - 1) - t0) / h * (1.0 + 1e-12))) + 1;
+  const double steps = std::floor((time(n - 1) - t0) / h * (1.0 + 1e-12)) + 1.0;
+  require(steps <= kMaxRecordSamples, "resample: a step of ", h, " s over the stamps' ",
+          time(n - 1) - t0, " s makes ", steps, " samples; ctid builds records of at most ",
+          kMaxRecordSamples, " samples (choose a longer step)");
+  const auto count = static_cast<Eigen::Index>(steps);
   require(count >= 2, "resample: the stamps span ", time(n - 1) - t0, " s, less than one step of ",
           h, " s");
   Eigen::VectorXd u(count);

@@ -137,6 +137,10 @@ std::optional<std::string> feedback_regression_problem(const SampledData& data, 
   if (feedback_order < 1)
     return internal::concat("feedback identification: feedback order m must be >= 1, got ",
                             feedback_order);
+  if (forward_order > kMaxFeedbackOrder || feedback_order > kMaxFeedbackOrder)
+    return internal::concat("feedback identification: the orders of F (", forward_order,
+                            ") and H (", feedback_order, ") must be at most ", kMaxFeedbackOrder,
+                            " (the separation of F and H grows with the product of the orders)");
   if (!(std::isfinite(delay) && delay >= 0.0))
     return internal::concat("feedback identification: delay must be finite and >= 0, got ", delay);
   const double delta = data.sample_time();

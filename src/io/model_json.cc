@@ -31,6 +31,12 @@ auto construct(const JsonObject& object, std::string_view what, Make&& make) {
 
 Polynomial polynomial_field(const JsonObject& object, std::string_view key) {
   const Eigen::VectorXd c = object.numbers(key);
+  if (c.size() > kMaxModelDegree + 1) {
+    object.fail(key, internal::concat("has ", c.size(),
+                                      " coefficients; ctid reads polynomials of "
+                                      "degree at most ",
+                                      kMaxModelDegree));
+  }
   try {
     return Polynomial(c);
   } catch (const InvalidArgument& e) {
@@ -98,7 +104,15 @@ MimoAdditiveModel read_mimo_additive_model(const JsonObject& object) {
                                   " (output by output, input by input)"));
     }
     // A numerator written with trailing zeros ([0.5, 0.0]) is the polynomial it denotes.
-    for (const Eigen::VectorXd& row : rows) submodel.b.push_back(Polynomial::trimmed(row));
+    for (const Eigen::VectorXd& row : rows) {
+      if (row.size() > kMaxModelDegree + 1) {
+        entry.fail("numerators_ascending",
+                   internal::concat("has a numerator of ", row.size(),
+                                    " coefficients; ctid reads polynomials of degree at most ",
+                                    kMaxModelDegree));
+      }
+      submodel.b.push_back(Polynomial::trimmed(row));
+    }
     const long long integrators = entry.integer_or("integrators", 0);
     if (integrators < 0 || integrators > kMaxIntegrators) {
       entry.fail("integrators", internal::concat("is ", integrators, "; it must be between 0 and ",

@@ -1,11 +1,13 @@
 #include "ctid/io/json.h"
 
+#include <filesystem>
 #include <limits>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "io/test_directory.h"
 
 namespace ctid::io {
 namespace {
@@ -135,6 +137,21 @@ TEST(JsonObject, NonFiniteNumbersBuiltInCodeAreRejected) {
     EXPECT_STREQ(e.what(), "m.json: v[1]: value is not finite");
   }
   EXPECT_THROW(o.number("x"), InvalidArgument);
+}
+
+// Issue 33: a document larger than kMaxJsonDocumentBytes is refused from its size, before it is
+// read (a sparse file: nothing is written to the disk).
+TEST(Json, ADocumentOverSixtyFourMebibytesIsRefusedBeforeReading) {
+  const testing::TestDirectory dir;
+  const std::filesystem::path big = dir / "big.json";
+  write_text_file(big, "{}", Overwrite::no);
+  std::filesystem::resize_file(big, kMaxJsonDocumentBytes + 1);
+  EXPECT_THAT([&] { read_json(big); },
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr(
+                  "big.json: 64 MiB; ctid reads JSON documents (models, controllers, specs, "
+                  "results) of at most 64 MiB")));
+  std::filesystem::resize_file(big, 2);
+  EXPECT_TRUE(read_json(big).is_object());
 }
 
 }  // namespace

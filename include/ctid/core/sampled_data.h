@@ -65,6 +65,10 @@ class SampledData {
 /// some stamp by about h/2 or more) and jitter beyond the printed precision.
 inline constexpr double kMaxGridDeviation = 0.25;
 
+/// The most samples a record that ctid builds itself (resampling, simulation) may hold: 1e8,
+/// 800 MB a signal. A request beyond it is refused before anything is allocated.
+inline constexpr double kMaxRecordSamples = 1e8;
+
 struct TimeStampCheck {
   double step = 0.0;                ///< h found from the first and last stamps [s]
   int digits = 1;                   ///< significant digits the stamps are printed with

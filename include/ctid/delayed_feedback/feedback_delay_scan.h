@@ -75,9 +75,9 @@ struct FeedbackDelayScanOptions {
               "Smallest delay of the grid [s]."),
         field("max_delay", &O::max_delay, Between{0.0, inf},
               "Largest delay of the grid [s] (> min_delay)."),
-        field("points", &O::points, AtLeast{2},
-              "Grid points (finer than the sample time is "
-              "allowed)."),
+        field("points", &O::points, Between{2.0, 10000.0, true, true},
+              "Grid points, 2 to 10000 (finer than the sample time is allowed; each point is "
+              "one step-1 fit)."),
         field("refine", &O::refine, "Golden-section search around the best grid point."),
         field("regressors", &O::regressors, "Step-1 regressors."),
         field("least_squares", &O::least_squares, "Step-1 batch least squares."),

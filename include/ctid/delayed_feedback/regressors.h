@@ -114,7 +114,12 @@ struct FeedbackRegression {
   }
 };
 
-/// Why the regression cannot be built from this record (orders < 1, Δ < 0, a record not longer
+/// The highest order of F or H: the separation step (Kronecker LS, approximate GCD) works on
+/// products of the two polynomials, and orders 40/40 on 600 samples ran for minutes.
+inline constexpr int kMaxFeedbackOrder = 10;
+
+/// Why the regression cannot be built from this record (orders < 1 or > kMaxFeedbackOrder,
+/// Δ < 0, a record not longer
 /// than Δ, fewer equations than unknowns), or nullopt: lets a scan skip such delays.
 std::optional<std::string> feedback_regression_problem(const SampledData& data, int forward_order,
                                                        int feedback_order, double delay,

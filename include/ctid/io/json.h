@@ -17,8 +17,13 @@
 
 namespace ctid::io {
 
+/// The largest JSON document read_json reads (64 MiB): parsing costs about ten times a
+/// document's size in memory, and ctid's documents are far smaller.
+inline constexpr std::size_t kMaxJsonDocumentBytes = std::size_t{64} << 20;
+
 /// Parses JSON text; `source` names it in error messages (InvalidArgument).
 nlohmann::json parse_json(std::string_view text, const std::string& source);
+/// Reads and parses a JSON file of at most kMaxJsonDocumentBytes (InvalidArgument beyond).
 nlohmann::json read_json(const std::filesystem::path& path);
 /// Writes `value` indented by two spaces with a final newline; doubles keep full
 /// precision (they read back bit-identical).

@@ -27,6 +27,9 @@ namespace ctid::io {
 /// The most integrators (poles at the origin) a submodel of a model document may have; the
 /// readers refuse more, and ctid fit refuses to estimate more (it could not read them back).
 inline constexpr int kMaxIntegrators = 16;
+/// The highest polynomial degree a model file may hold: a continuous-time model beyond it is
+/// numerically meaningless, and a file of millions of coefficients would only exhaust memory.
+inline constexpr Eigen::Index kMaxModelDegree = 400;
 inline constexpr const char* kTransferFunctionType = "transfer_function";
 inline constexpr const char* kAdditiveModelType = "additive_model";
 inline constexpr const char* kDiscreteTransferFunctionType = "discrete_transfer_function";
