@@ -110,8 +110,9 @@ void check_cancellation(Verdict& verdict, const Eigen::VectorXcd& poles,
   }
 }
 
-void check_conditioning(Verdict& verdict, double reciprocal_condition) {
+void check_conditioning(Verdict& verdict, double reciprocal_condition, double fit_percent) {
   if (std::isnan(reciprocal_condition)) return;
+  if (fit_percent >= verdict_thresholds::exact_fit_percent) return;
   if (!(reciprocal_condition >= verdict_thresholds::reciprocal_condition)) {
     verdict.fail(
         "the instrument-regressor equations are numerically singular (reciprocal "

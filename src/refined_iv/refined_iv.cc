@@ -754,20 +754,13 @@ std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums) {
 }
 
 // The checks of estimation/verdict.h on a finished estimate (decision 0007).
-// `returned_start`: no iterate fitted better than the start, so the start was returned.
 // `loop_unstable`: closed loop, and the known controller does not stabilise the estimate.
-Verdict refined_iv_verdict(const EstimationResult& r, bool returned_start, bool closed_loop,
-                           bool loop_unstable) {
+Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loop_unstable) {
+  // A returned start (no step completed, or none fitted better) is judged like any model, by
+  // its fit and the checks below, never by the iteration count: on noise-free data the start
+  // can already be exact (issue 33), and a poor start fails the fit check. The termination
+  // message says that the model is the start.
   Verdict verdict;
-  if (r.iterations == 0 && !r.converged()) {
-    verdict.fail("no step of the iteration was completed (" + to_string(r.termination) +
-                     "), so the model is the start",
-                 {verdict_advice::better_start, verdict_advice::lower_order});
-  } else if (returned_start) {
-    verdict.fail("the iteration did not converge (" + to_string(r.termination) +
-                     ") and no iterate fitted better than the start, so the model is the start",
-                 {verdict_advice::lower_order, verdict_advice::better_start});
-  }
   check_finite(verdict, r.parameters.allFinite(), "a parameter");
   if (closed_loop) {
     check_fit(verdict, r.fit_percent, std::numeric_limits<double>::quiet_NaN());
@@ -806,7 +799,7 @@ Verdict refined_iv_verdict(const EstimationResult& r, bool returned_start, bool 
     errors(static_cast<Eigen::Index>(k)) = m.standard_error.natural_frequency;
   }
   check_standard_errors(verdict, names, values, errors);
-  check_conditioning(verdict, r.reciprocal_condition);
+  check_conditioning(verdict, r.reciprocal_condition, r.fit_percent);
   return verdict;
 }
 
@@ -1228,13 +1221,11 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
 
   Eigen::VectorXd residual;
   double sse = 0.0;
-  bool returned_start = false;
   if (!result.converged() && best_beta.size() > 0) {
     evaluate(layout, beta, initial_states, signals, false, h, options.output_interpolation,
              workspace, nullptr, nullptr, nullptr, &sse);
     if (!(sse <= best_sse)) {
       beta = best_beta;
-      returned_start = best_iteration == 0;
       result.message +=
           "; the iterate with the lowest output error (" +
           (best_iteration == 0 ? std::string("the start")
@@ -1242,6 +1233,9 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
                                      (best_iteration == 1 ? " iteration" : " iterations")) +
           ") is returned";
     }
+  }
+  if (!result.converged() && result.iterations == 0) {
+    result.message += "; no step was completed, so the model is the start";
   }
 
   // The estimate and its statistics.
@@ -1259,7 +1253,10 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
   } else {
     result.additive_view = result.model;
   }
-  bool loop_unstable = false;
+  // Stopped before the first step because the controller does not stabilise the start: the
+  // returned model is that start, which cannot describe the recorded loop.
+  bool loop_unstable = closed_loop && result.termination == Termination::closed_loop_unstable &&
+                       result.iterations == 0;
   if (closed_loop && result.termination != Termination::closed_loop_unstable) {
     if (update_source(beta)) {
       closed_loop_sse_at_end = closed_loop_sse(beta);
@@ -1367,7 +1364,7 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
                               " rad/s (Assumption 4): sample faster or lower the model order");
   }
   result.checks = std::move(checks);
-  result.verdict = refined_iv_verdict(result, returned_start, closed_loop, loop_unstable);
+  result.verdict = refined_iv_verdict(result, closed_loop, loop_unstable);
   return result;
 }
 

@@ -279,9 +279,12 @@ TEST(RefinedIvBadInput, ControllerThatDoesNotStabiliseTheModelIsATermination) {
   EXPECT_EQ(e.termination, Termination::closed_loop_unstable);
   EXPECT_THAT(e.message, HasSubstr("does not stabilise"));
   EXPECT_EQ(to_string(e.termination), "closed_loop_unstable");
-  // Nothing was estimated: even though the start is the truth, the verdict says so.
+  // Nothing was estimated, and the message says the model is the start. The verdict judges
+  // the model, not the iteration count: the controller does not stabilise it, so it cannot
+  // describe the recorded loop.
+  EXPECT_THAT(e.message, HasSubstr("the model is the start"));
   EXPECT_FALSE(e.verdict.usable);
-  EXPECT_THAT(e.verdict.reasons.at(0), HasSubstr("no step of the iteration was completed"));
+  EXPECT_THAT(e.verdict.summary(), HasSubstr("does not stabilise the fitted model"));
   EXPECT_EQ(e.start_fit_percent, e.fit_percent);
 }
 

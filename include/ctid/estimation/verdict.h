@@ -7,6 +7,7 @@
 #pragma once
 
 #include <initializer_list>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <tuple>
@@ -56,6 +57,9 @@ inline constexpr double fit_tolerance_points = 1.0;
 /// Closed loop: a fit keeps at least this share of its start's closed-loop fit (decision 0028:
 /// from the true system on tight-loop records CLSRIVC keeps 0.63 or more of it).
 inline constexpr double closed_loop_fit_share = 0.5;
+/// An output-error fit at or above this reproduces the record to a millionth of its RMS: 120 dB,
+/// beyond any measured record, reached by noise-free data only.
+inline constexpr double exact_fit_percent = 100.0 - 1e-4;
 }  // namespace verdict_thresholds
 
 // Advice strings shared by the checks, so the same remedy is written once.
@@ -88,7 +92,11 @@ void check_standard_errors(Verdict& verdict, const std::vector<std::string>& nam
 /// Fails when a zero lies within cancellation_distance * |pole| of a non-zero pole.
 void check_cancellation(Verdict& verdict, const Eigen::VectorXcd& poles,
                         const Eigen::VectorXcd& zeros);
-/// Fails when the reciprocal condition (if not NaN) is below the threshold.
-void check_conditioning(Verdict& verdict, double reciprocal_condition);
+/// Fails when the reciprocal condition (if not NaN) is below the threshold, unless the model
+/// reproduces the record (`fit_percent` at least exact_fit_percent): then the
+/// record itself pins the model down, and over-parameterised exact fits are caught by
+/// check_cancellation instead (issue 33: noise-free 1/(s(s+1)) fitted with two free poles).
+void check_conditioning(Verdict& verdict, double reciprocal_condition,
+                        double fit_percent = std::numeric_limits<double>::quiet_NaN());
 
 }  // namespace ctid
