@@ -80,6 +80,14 @@ void bind_core(py::module_& m) {
       .def(py::init<Polynomial, Polynomial, double>(), py::arg("numerator"), py::arg("denominator"),
            py::arg("input_delay") = 0.0,
            "From numerator and denominator (Polynomial or ascending coefficient lists).")
+      // Coefficient lists that the implicit conversion to Polynomial refused (a NaN, say) reach
+      // this overload, whose Polynomial raises ValueError saying why, instead of pybind's
+      // TypeError listing signatures (issue 33).
+      .def(py::init([](const Eigen::VectorXd& numerator, const Eigen::VectorXd& denominator,
+                       double input_delay) {
+             return TransferFunction(Polynomial(numerator), Polynomial(denominator), input_delay);
+           }),
+           py::arg("numerator"), py::arg("denominator"), py::arg("input_delay") = 0.0)
       .def_property_readonly("numerator", &TransferFunction::numerator, "N(s).")
       .def_property_readonly("denominator", &TransferFunction::denominator, "D(s).")
       .def_property_readonly("input_delay", &TransferFunction::input_delay, "tau [s].")
@@ -115,6 +123,12 @@ void bind_core(py::module_& m) {
       "sample time (controllers, noise filters).")
       .def(py::init<Polynomial, Polynomial, double>(), py::arg("numerator"), py::arg("denominator"),
            py::arg("sample_time"), "Proper model, sample time > 0.")
+      .def(py::init([](const Eigen::VectorXd& numerator, const Eigen::VectorXd& denominator,
+                       double sample_time) {
+             return DiscreteTransferFunction(Polynomial(numerator), Polynomial(denominator),
+                                             sample_time);
+           }),
+           py::arg("numerator"), py::arg("denominator"), py::arg("sample_time"))
       .def_property_readonly("numerator", &DiscreteTransferFunction::numerator, "N(q).")
       .def_property_readonly("denominator", &DiscreteTransferFunction::denominator, "D(q).")
       .def_property_readonly("sample_time", &DiscreteTransferFunction::sample_time, "h [s].")

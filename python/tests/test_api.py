@@ -98,6 +98,16 @@ def test_invalid_argument_is_a_value_error_with_the_cpp_message(experiment):
         ctid.SampledData(0.0, np.ones(4), np.ones(4))
 
 
+def test_a_nan_coefficient_is_a_value_error_naming_it():
+    # Issue 33: a list the implicit Polynomial conversion refused gave pybind's TypeError.
+    import math
+    with pytest.raises(ValueError, match="coefficient 0 .* is nan; coefficients must be finite"):
+        ctid.TransferFunction([1.0], [math.nan, 1.0])
+    with pytest.raises(ValueError, match="is inf; coefficients must be finite"):
+        ctid.DiscreteTransferFunction([1.0], [1.0, math.inf], 0.1)
+    assert ctid.TransferFunction([2.0], [1.0, 1.0]).dc_gain() == 2.0
+
+
 def test_computation_error_is_a_runtime_error():
     assert issubclass(ctid.ComputationError, RuntimeError)
     assert issubclass(ctid.InvalidArgument, ValueError)
