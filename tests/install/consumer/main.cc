@@ -4,7 +4,7 @@
 #include <complex>
 #include <iostream>
 
-#include <ctid/core/polynomial.h>
+#include <ctid/ctid.h>  // the umbrella header: every public header compiles when installed
 
 int main() {
   // 2 - 3x + x^2 = (x - 1)(x - 2), ascending coefficients.
