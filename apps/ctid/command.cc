@@ -6,8 +6,12 @@
 #include <cstdint>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <new>
+#include <regex>
+#include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "ctid/core/error.h"
@@ -73,11 +77,69 @@ std::vector<CommandRegistration> registered_commands() {
   return sorted;
 }
 
-int run_command(const std::string& command_path, const std::function<ExitStatus()>& action) {
+namespace {
+
+// Fields whose flag has another name: the flag, and which part of its value the field is.
+const std::map<std::string, std::pair<std::string, std::string>>& flag_aliases() {
+  static const std::map<std::string, std::pair<std::string, std::string>> aliases{
+      {"start_time", {"--time", "start"}},
+      {"end_time", {"--time", "end"}},
+      {"first_row", {"--rows", "first"}},
+      {"end_row", {"--rows", "end"}}};
+  return aliases;
+}
+
+// The flag of `app` that sets the field `components` ends in, or "" when none does.
+std::string flag_for(const std::vector<std::string>& components, const CLI::App& app) {
+  for (std::size_t j = components.size(); j-- > 0;) {
+    std::string flag = "--" + components[j];
+    std::replace(flag.begin(), flag.end(), '_', '-');
+    std::string rest;
+    for (std::size_t k = j + 1; k < components.size(); ++k) {
+      rest += (rest.empty() ? "" : ".") + components[k];
+    }
+    const auto alias = flag_aliases().find(components[j]);
+    if (app.get_option_no_throw(flag) == nullptr && alias != flag_aliases().end()) {
+      flag = alias->second.first;
+      rest = alias->second.second + (rest.empty() ? "" : "." + rest);
+    }
+    if (app.get_option_no_throw(flag) == nullptr) continue;
+    return rest.empty() ? flag : flag + " (" + rest + ")";
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string with_flag_names(const std::string& message, const CLI::App& app) {
+  static const std::regex path(R"(\b[A-Z][A-Za-z]*Options((?:\.[a-z_][a-z_0-9]*)+))");
+  std::string out;
+  auto from = message.cbegin();
+  for (std::sregex_iterator it(message.begin(), message.end(), path), end; it != end; ++it) {
+    const std::smatch& match = *it;
+    std::vector<std::string> components;
+    const std::string fields = match[1].str().substr(1);
+    for (std::size_t at = 0; at <= fields.size();) {
+      const std::size_t dot = std::min(fields.find('.', at), fields.size());
+      components.push_back(fields.substr(at, dot - at));
+      at = dot + 1;
+    }
+    const std::string flag = flag_for(components, app);
+    out.append(from, match[0].first);
+    out += flag.empty() ? match[0].str() : flag;
+    from = match[0].second;
+  }
+  out.append(from, message.cend());
+  return out;
+}
+
+int run_command(const std::string& command_path, const std::function<ExitStatus()>& action,
+                const CLI::App* app) {
   try {
     return action();
   } catch (const InvalidArgument& e) {
-    std::cerr << command_path << ": error: " << one_line(e.what()) << "\n";
+    const std::string message = app != nullptr ? with_flag_names(e.what(), *app) : e.what();
+    std::cerr << command_path << ": error: " << one_line(message) << "\n";
     return kExitUsage;
   } catch (const io::IoError& e) {
     std::cerr << command_path << ": error: " << one_line(e.what()) << "\n";

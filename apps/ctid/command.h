@@ -43,8 +43,16 @@ std::vector<CommandRegistration> registered_commands();
 
 /// Runs a command's action and returns its status, or maps an exception to one:
 /// ctid::InvalidArgument (bad input) gives 2, anything else 1, each with one line on stderr
-/// naming the command.
-int run_command(const std::string& command_path, const std::function<ExitStatus()>& action);
+/// naming the command. With the command's `app`, a message naming an options field
+/// ("IdentificationOptions.refined_iv.max_iterations") names the flag the user typed instead
+/// (with_flag_names).
+int run_command(const std::string& command_path, const std::function<ExitStatus()>& action,
+                const CLI::App* app = nullptr);
+
+/// `message` with every options-field path ("<Name>Options.a.b") replaced by the flag of `app`
+/// that sets it: the deepest component that is a flag's name ("--max-iterations"), followed by
+/// what remains of the path ("--delay-range (max)"); a path no flag sets is left as it is.
+std::string with_flag_names(const std::string& message, const CLI::App& app);
 
 /// Prints a CLI11 parse error as one line naming the command and the help flag, and
 /// returns 2; --help and --version print to stdout and return 0. A non-empty `hint` (such as

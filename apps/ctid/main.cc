@@ -91,10 +91,13 @@ int main(int argc, char** argv) {
     if (command.app->parsed()) {
       // No output may be an input or another output (output_paths.h): checked before the
       // command reads or writes anything.
-      return run_command("ctid " + command.app->get_name(), [&command] {
-        check_output_paths(*command.app);
-        return command.run();
-      });
+      return run_command(
+          "ctid " + command.app->get_name(),
+          [&command] {
+            check_output_paths(*command.app);
+            return command.run();
+          },
+          command.app);
     }
   }
   std::cerr << "ctid: error: no command given (see 'ctid --help')\n";

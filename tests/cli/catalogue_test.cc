@@ -459,7 +459,7 @@ std::vector<Case> catalogue() {
   add({.name = "FitDelayScanBeyondTheRecord",
        .files = {d},
        .args = fit1({"--delay-scan", "0:100000", "-q"}),
-       .message = {"delay_scan.max is 100000 samples", "at most half of it (150)"}});
+       .message = {"--delay-scan (max) is 100000 samples", "at most half of it (150)"}});
   // Issue 33, finding 4: a correct fit whose iteration made no step (the start was already
   // exact) was called unusable, exit 3; the verdict judges the model by its fit.
   add({.name = "FitNoiseFreeIntegratorWithTwoFreePoles",
@@ -491,10 +491,14 @@ std::vector<Case> catalogue() {
                                   "]}"}},
        .args = white({"simulate", "-m", "big.json", "-o", "y.csv"}),
        .message = {"big.json", "501 coefficients", "degree at most 400"}});
+  add({.name = "FitMaxIterationsZeroNamesTheFlag",
+       .files = {d},
+       .args = fit1({"--max-iterations", "0"}),
+       .message = {"ctid fit: error: --max-iterations is 0; it must be >= 1"}});
   add({.name = "FitDelayScanReversed",
        .files = {d},
        .args = fit1({"--delay-scan", "5:2"}),
-       .message = {"delay_scan.max is 2; it must be >= min (5)"}});
+       .message = {"--delay-scan (max) is 2; it must be >= min (5)"}});
   add({.name = "FitDelayScanMalformed",
        .files = {d},
        .args = fit1({"--delay-scan", "x"}),
@@ -502,7 +506,7 @@ std::vector<Case> catalogue() {
   add({.name = "FitDelayRangeLongerThanRecord",
        .files = {d},
        .args = fit1({"--delay-range", "0:100"}),
-       .message = {"delay_range.max is 100 s; the record lasts only"}});
+       .message = {"--delay-range (max) is 100 s; the record lasts only"}});
   // Finding 1.
   add({.name = "FitDeepInitial",
        .files = {d, deep_objects()},
@@ -814,7 +818,7 @@ std::vector<Case> catalogue() {
   add({.name = "FrfSegmentLongerThanRecord",
        .files = {d},
        .args = {"frf", "d.csv", "--segment-length", "100000"},
-       .message = {"fewer than WelchOptions.segment_length = 100000"}});
+       .message = {"fewer than --segment-length = 100000"}});
   add({.name = "FrfPeriodWithSegmentLength",
        .files = {d},
        .args = {"frf", "d.csv", "--period", "100", "--segment-length", "32"},
@@ -937,7 +941,7 @@ std::vector<Case> catalogue() {
   add({.name = "StructureValidationFractionOne",
        .files = {d},
        .args = {"structure", "d.csv", "--poles", "1:2", "--validation-fraction", "1"},
-       .message = {"validation_fraction is 1"}});
+       .message = {"--validation-fraction is 1"}});
   add({.name = "StructureScan",
        .files = {d},
        .args = {"structure", "d.csv", "--poles", "1:2", "-o", "s.json", "-q"},
@@ -1192,6 +1196,8 @@ TEST_P(Catalogue, Case) {
       EXPECT_THAT(r.err, ::testing::HasSubstr(fragment));
     }
     EXPECT_EQ(r.out, "") << "a refused run printed to stdout";
+    // Issue 33: a message names the flag the user typed, never an options struct's field.
+    EXPECT_THAT(r.err, ::testing::Not(::testing::ContainsRegex("[A-Z][a-z]+Options\\.")));
   }
   // Every message follows the output convention (docs/conventions.md, "What ctid prints");
   // stdout may be a data file written to /dev/stdout, every digit kept.

@@ -152,7 +152,7 @@ TEST_F(DataFlags, RangesAndDecimationAreRecordedAndBadOnesRefused) {
   bad({"--detrend", "mean", "--rows", "3:4"},
       csv + ": rows 3:4 keeps 1 sample; detrend mean needs at least 2");
   bad({"--rows", "300:500"}, "rows 300:500 lie outside the record's 400 rows");
-  bad({"--rows", "50:50"}, "PreprocessingOptions.first_row is 50 and");
+  bad({"--rows", "50:50"}, "--rows (first) is 50 and");
   bad({"--rows", "a:5"}, "--rows 'a:5': 'a' is not a row number");
   bad({"--time", "100:200"}, "time 100:200 s keeps no sample of the record from 0 to 39.9 s");
   bad({"--time", "1:2", "--rows", "1:5"}, "give --rows or --time, not both");

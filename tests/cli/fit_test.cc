@@ -268,7 +268,7 @@ TEST_F(FitCommand, DelayRangeEstimatesAFractionalDelayWithItsStandardError) {
 
   expect_bad_input(ctid({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--integrators", "1",
                          "--delay-range", "-0.5:0.25"}),
-                   "delay_range.min is -0.5");
+                   "--delay-range (min) is -0.5");
   expect_bad_input(ctid({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--integrators", "1",
                          "--delay-range", "0:30", "--detrend", "mean"}),
                    "the record lasts only 20 s");
@@ -462,7 +462,7 @@ TEST_F(FitCommand, RelocateModesFindsAWeakModeTheStartMissed) {
   EXPECT_THAT(r.out, HasSubstr("mode relocation: "));
   // Only additive, open-loop fits can relocate (identify() checks it, naming the option).
   expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--zeros", "0", "--relocate-modes"}),
-                   "relocate_modes is true but the structure is unfactored; mode relocation "
+                   "--relocate-modes is true but the structure is unfactored; mode relocation "
                    "moves submodels of an additive model");
 }
 
@@ -479,9 +479,9 @@ TEST_F(FitCommand, BadInputExitsTwoWithOneLine) {
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--delay", "1", "--delay-scan", "0:3"}),
                    "give one of --delay");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--delay-scan", "5:2"}),
-                   "delay_scan.max is 2; it must be >= min (5)");
+                   "--delay-scan (max) is 2; it must be >= min (5)");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--max-iterations", "0"}),
-                   "max_iterations");
+                   "--max-iterations is 0");
   // Closed loop without a reference column.
   expect_bad_input(
       ctid({"fit", "d.csv", "--modes", "2", "--controller", example("gonzalez_6_2_pid.json")}),

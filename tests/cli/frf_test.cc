@@ -133,13 +133,13 @@ TEST_F(FrfCommand, LineThresholdZeroKeepsEveryWelchLine) {
 }
 
 TEST_F(FrfCommand, BadInputExitsTwoWithOneLine) {
-  expect_bad_input(ctid({"frf", "d.csv", "--line-threshold", "1.5"}), "line_threshold is 1.5");
+  expect_bad_input(ctid({"frf", "d.csv", "--line-threshold", "1.5"}), "--line-threshold is 1.5");
   expect_bad_input(ctid({"frf", "d.csv", "--period", "2048", "--min-coherence", "-1"}),
-                   "min_coherence is -1");
+                   "--min-coherence is -1");
   expect_bad_input(ctid({"frf", "d.csv", "--period", "3000"}), "");
   expect_bad_input(ctid({"frf", "d.csv", "--period", "2048", "--segment-length", "256"}),
                    "no effect with --period");
-  expect_bad_input(ctid({"frf", "d.csv", "--segment-length", "4"}), "segment_length");
+  expect_bad_input(ctid({"frf", "d.csv", "--segment-length", "4"}), "--segment-length is 4");
   expect_bad_input(ctid({"frf", "d.csv", "--output-column", "q"}), "'q'");
   expect_bad_input(ctid({"frf", "d.csv", "--model", "d.csv"}), "--model needs --plot");
   write("f.csv", "keep");

@@ -77,7 +77,7 @@ TEST_F(StructureCommand, BadRangesExitTwoWithOneLine) {
   expect_bad_input(ctid({"structure", "d.csv", "--poles", "2:3", "--zeros", "5"}),
                    "an improper model");
   expect_bad_input(ctid({"structure", "d.csv", "--modes", "1:2", "--validation-fraction", "2"}),
-                   "validation_fraction is 2");
+                   "--validation-fraction is 2");
 }
 
 }  // namespace

@@ -108,7 +108,7 @@ TEST_F(TrackCommand, SaysWhenNoWindowGaveAUsableModel) {
 
 TEST_F(TrackCommand, RefusesBadWindowsWithOneLine) {
   expect_bad_input(ctid({"track", "d.csv", "--window", "200", "--modes", "1"}),
-                   "TrackingOptions.window is 200 s (4000 samples); the record has 3000 samples "
+                   "--window is 200 s (4000 samples); the record has 3000 samples "
                    "(150 s), so the window must not be longer");
   expect_bad_input(ctid({"track", "d.csv", "--window", "100", "--modes", "1"}),
                    "tracking needs at least 2 windows");
@@ -119,7 +119,7 @@ TEST_F(TrackCommand, RefusesBadWindowsWithOneLine) {
   expect_bad_input(ctid({"track", "d.csv", "--window", "30"}), "give one model structure");
   expect_bad_input(
       ctid({"track", "d.csv", "--window", "30", "--modes", "1", "--max-frequency-jump", "0"}),
-      "TrackingOptions.max_frequency_jump is 0; it must be finite and > 0");
+      "--max-frequency-jump is 0; it must be finite and > 0");
 }
 
 // Several outputs (--input-columns / --output-columns, docs/decisions/0026): two modes of
@@ -182,7 +182,7 @@ TEST_F(TrackMimoCommand, RefusesWhatSeveralOutputsCannotDoWithOneLine) {
                    "--delay is not available with --input-columns / --output-columns");
   expect_bad_input(with({"--modes", "2", "--start", "lssvf"}),
                    "--start lssvf is for one input and output");
-  expect_bad_input(with({"--modes", "2", "--min-mac", "1.5"}), "min_mac");
+  expect_bad_input(with({"--modes", "2", "--min-mac", "1.5"}), "--min-mac is 1.5");
   expect_bad_input(ctid({"track", "m.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a3",
                          "--window", "500", "--modes", "2"}),
                    "the window must not be longer");
