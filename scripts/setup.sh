@@ -4,7 +4,11 @@
 # (apt-get update only then), then configures with the "release" preset and builds.
 # Runs as root, or through sudo otherwise; needs no terminal (CI=true, no stdin).
 #   scripts/setup.sh [extra cmake -D options for the release configure]
-# Environment: CTID_JOBS (parallel jobs, default nproc), CTID_SKIP_BUILD=1 (packages only).
+# Environment: CTID_JOBS (parallel jobs, default nproc), CTID_SKIP_BUILD=1 (packages only),
+# CTID_BUILD_TARGETS (space-separated targets to build instead of all; scripts/demo.sh builds
+# only the tool and the Python module, the test command builds the rest),
+# CTID_LINK_BIN=DIR (put a link DIR/ctid to the built tool, unless DIR/ctid is something
+# else already; scripts/demo.sh uses /usr/local/bin when it can write there).
 set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -47,5 +51,25 @@ if [[ -f build/CMakeCache.txt ]] && ! grep -q '^CMAKE_GENERATOR:INTERNAL=Ninja$'
 fi
 # The "release" preset (CMakePresets.json) pins Release, Ninja, build/ and /usr/bin/python3.
 cmake --preset release "$@"
-cmake --build --preset release -j "$jobs"
+if [[ -n ${CTID_BUILD_TARGETS:-} ]]; then
+  read -r -a targets <<<"$CTID_BUILD_TARGETS"
+  cmake --build --preset release -j "$jobs" --target "${targets[@]}"
+else
+  cmake --build --preset release -j "$jobs"
+fi
 echo "setup: build/ is ready"
+
+# `ctid` by name: a link in CTID_LINK_BIN, never over a file or link that is not ours.
+if [[ -n ${CTID_LINK_BIN:-} && -d $CTID_LINK_BIN && -w $CTID_LINK_BIN ]]; then
+  link=$CTID_LINK_BIN/ctid
+  tool=$root/build/apps/ctid/ctid
+  if [[ ! -e $link && ! -L $link ]] || [[ -L $link && $(readlink "$link") == "$tool" ]]; then
+    ln -sfn "$tool" "$link"
+    echo "setup: ctid is on PATH ($link -> $tool)"
+  elif [[ -L $link && $(readlink "$link") == */build/apps/ctid/ctid ]]; then
+    ln -sfn "$tool" "$link"  # another checkout's link: this one is the latest set up
+    echo "setup: ctid is on PATH ($link -> $tool)"
+  else
+    echo "setup: $link exists and is not ctid's link; left alone (run $tool)" >&2
+  fi
+fi

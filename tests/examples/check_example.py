@@ -66,7 +66,7 @@ def check_docs(name, out):
         return
     with open(path) as f:
         in_doc = _common.generated_blocks(f.read(), name)
-    update = f"update with: python3 examples/{name}.py --write-docs (then review the diff)"
+    update = f"update with: /usr/bin/python3 examples/{name}.py --write-docs (then review the diff)"
     for table, text in generated["tables"].items():
         same = in_doc.get(table) == text
         check(same, f"docs/examples/{name}.md block '{table}' matches the regenerated one")
