@@ -38,7 +38,11 @@ import csv
 import json
 import sys
 
+import matplotlib
 import numpy as np
+
+# The command line draws into files only, with or without a display.
+matplotlib.use("Agg")
 
 KINDS = ("bode", "modes", "frf", "frf_matrix", "validation", "compare", "residuals", "mse",
          "stabilisation", "mode_shapes", "mac", "frf_matrix_overlay", "tracking")

@@ -1,4 +1,8 @@
-"""Figures for ctid results, drawn with matplotlib (Agg backend, no display needed).
+"""Figures for ctid results, drawn with matplotlib.
+
+Importing this module leaves matplotlib's backend as it is (an interactive session keeps its
+windows and ``plt.show()``); without a display matplotlib picks a file backend itself, and
+``python3 -m ctid.plot`` (what ``ctid --plot`` runs) chooses Agg.
 
 Every function returns the :class:`matplotlib.figure.Figure` and, given ``filename``
 (``.png`` or ``.svg``), also saves it there. Frequencies given to these functions are in rad/s
@@ -31,13 +35,10 @@ from __future__ import annotations
 import math
 from statistics import NormalDist
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from . import _ctid  # noqa: E402
+from . import _ctid
 
 __all__ = [
     "bode",

@@ -253,3 +253,14 @@ def test_command_line_bad_input_exits_2(tmp_path):
         '"denominator_ascending": [0, 0]}')
     result = run_plot("bode", tmp_path / "tf.json", tmp_path / "x.png")
     assert result.returncode == 2 and result.stderr.startswith("ctid.plot: ")
+
+
+def test_importing_plotting_keeps_the_callers_backend():
+    # Issue 35: `import ctid.plotting` switched matplotlib to Agg, so a later plt.show()
+    # showed nothing. A fresh interpreter chooses "svg", then imports the module.
+    import subprocess
+    import sys
+    code = ("import matplotlib; matplotlib.use('svg'); import ctid.plotting; "
+            "print(matplotlib.get_backend())")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "svg"
