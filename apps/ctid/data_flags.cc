@@ -88,6 +88,11 @@ void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_referen
   app.add_option("--time-column", time_column, "Time column; its uniform step is the sample time")
       ->capture_default_str()
       ->group("Data");
+  app.add_option("--time-unit", time_unit,
+                 "Unit of the time column's stamps: s, ms or us (they are converted to seconds)")
+      ->check(CLI::IsMember({"s", "ms", "us"}))
+      ->capture_default_str()
+      ->group("Data");
   app.add_option("--sample-time,-T", sample_time,
                  "Sample time h in seconds; overrides a time column (its first stamp stays the "
                  "start time)")
@@ -122,6 +127,23 @@ void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_referen
       ->group("Preprocessing");
 }
 
+void DataFlags::stamps_in_seconds(io::CsvTable& table, const std::string& path) const {
+  if (!table.has_column(time_column) || table.unreadable.count(time_column) > 0) return;
+  Eigen::VectorXd& stamps = table.columns[static_cast<std::size_t>(
+      std::find(table.names.begin(), table.names.end(), time_column) - table.names.begin())];
+  if (time_unit == "ms") stamps *= 1e-3;
+  if (time_unit == "us") stamps *= 1e-6;
+  // A step of 1000 s or more is rare (daily records exist); said, not refused: stamps in
+  // milliseconds read as seconds made h = 4000 s for a 4 s logger (issue 35).
+  const Eigen::Index n = stamps.size();
+  const double step = n > 1 ? (stamps(n - 1) - stamps(0)) / static_cast<double>(n - 1) : 0.0;
+  if (time_unit == "s" && step >= 1000.0) {
+    std::cerr << "note: the time column '" << time_column << "' of " << path << " steps by "
+              << format_number(step)
+              << " s; if its stamps are milliseconds or microseconds, pass --time-unit ms or us\n";
+  }
+}
+
 bool DataFlags::preprocessing_asked(const CLI::App& app) const {
   for (const char* flag :
        {"--rows", "--time", "--detrend", "--decimate", "--scale-input", "--scale-output"}) {
@@ -136,7 +158,8 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
   // twice while it is preprocessed.
   Hold hold = Hold::zero_order_hold;
   SampledData record = [&] {
-    const io::CsvTable table = io::read_table(path);
+    io::CsvTable table = io::read_table(path);
+    stamps_in_seconds(table, path);
     const bool reference_flag = app.get_option_no_throw("--reference-column") != nullptr &&
                                 app.count("--reference-column") > 0;
     std::optional<Eigen::VectorXd> reference;
@@ -319,7 +342,8 @@ MimoData DataFlags::load_mimo(const CLI::App& app) const {
   }
   if (files.size() > 1) usage_error("several inputs/outputs take one data file");
   // DATA lands in `files` when the command takes several (ctid fit), else in `file`.
-  const io::CsvTable table = io::read_table(files.empty() ? file : files.front());
+  io::CsvTable table = io::read_table(files.empty() ? file : files.front());
+  stamps_in_seconds(table, files.empty() ? file : files.front());
   io::MimoCsvColumns columns;
   columns.time = time_column;
   columns.inputs = input_columns.empty() ? std::vector<std::string>{input_column} : input_columns;

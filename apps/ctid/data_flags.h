@@ -13,6 +13,7 @@
 #include "ctid/core/mimo_data.h"
 #include "ctid/core/preprocessing.h"
 #include "ctid/core/sampled_data.h"
+#include "ctid/io/csv.h"
 
 namespace ctid::cli {
 
@@ -23,6 +24,7 @@ struct DataFlags {
   std::string output_column = "y";
   std::string reference_column;  ///< empty: "r" when a reference is needed
   std::string time_column = "t";
+  std::string time_unit = "s";  ///< unit of the time column: s, ms or us
   double sample_time = 0.0;
   double resample = 0.0;   ///< --resample H: irregular stamps onto a grid of step H
   std::string input_hold;  ///< "zoh" or "foh"; empty: the file's declaration, else zoh
@@ -73,6 +75,9 @@ struct DataFlags {
 
   /// Whether any preprocessing flag was given (then commands print preprocessing.summary()).
   bool preprocessing_asked(const CLI::App& app) const;
+  /// Converts the time column of `table` (if any) from --time-unit to seconds, and notes a
+  /// step of 1000 s or more read in seconds (stamps that may be milliseconds).
+  void stamps_in_seconds(io::CsvTable& table, const std::string& path) const;
 
  private:
   /// The preprocessing the flags ask for (usage errors for malformed ranges and factors).

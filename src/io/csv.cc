@@ -6,7 +6,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <optional>
+#include <string>
 #include <system_error>
 
 #include "ctid/core/error.h"
@@ -21,18 +23,44 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
-std::vector<std::string_view> split_fields(std::string_view line) {
+// A field without the double quotes around it ("uEst" -> uEst; a "" inside stays as it is).
+std::string_view unquote(std::string_view field) {
+  if (field.size() >= 2 && field.front() == '"' && field.back() == '"') {
+    return trim(field.substr(1, field.size() - 2));
+  }
+  return field;
+}
+
+// The fields of a line split at `delimiter` outside double quotes, trimmed and unquoted.
+std::vector<std::string_view> split_fields(std::string_view line, char delimiter) {
   std::vector<std::string_view> fields;
   size_t begin = 0;
-  while (true) {
-    const size_t comma = line.find(',', begin);
-    if (comma == std::string_view::npos) {
-      fields.push_back(trim(line.substr(begin)));
-      return fields;
+  bool quoted = false;
+  for (size_t i = 0; i <= line.size(); ++i) {
+    if (i < line.size() && line[i] == '"') quoted = !quoted;
+    if (i == line.size() || (line[i] == delimiter && !quoted)) {
+      fields.push_back(unquote(trim(line.substr(begin, i - begin))));
+      begin = i + 1;
     }
-    fields.push_back(trim(line.substr(begin, comma - begin)));
-    begin = comma + 1;
   }
+  return fields;
+}
+
+// The delimiter of a header row: the one of ',', ';' and tab it holds most often outside
+// quotes (',' on a tie, and for a one-column file).
+char detect_delimiter(std::string_view header) {
+  size_t commas = 0, semicolons = 0, tabs = 0;
+  bool quoted = false;
+  for (const char c : header) {
+    if (c == '"') quoted = !quoted;
+    if (quoted) continue;
+    commas += c == ',';
+    semicolons += c == ';';
+    tabs += c == '\t';
+  }
+  if (semicolons > commas && semicolons >= tabs) return ';';
+  if (tabs > commas && tabs > semicolons) return '\t';
+  return ',';
 }
 
 // The whole field as a double, or nullopt if it is not exactly one number. A leading '+'
@@ -78,6 +106,18 @@ std::string echo(std::string_view field) {
   return out;
 }
 
+// Why a field may not be a number in this file's dialect, for the message ("" when no
+// reason is seen): a decimal comma in a comma-separated file, or a delimiter the header did
+// not use.
+std::string dialect_hint(std::string_view field, char delimiter) {
+  if (delimiter == ',' &&
+      (field.find(';') != std::string_view::npos || field.find('\t') != std::string_view::npos)) {
+    return "; the file looks separated by semicolons or tabs, but its header row has more "
+           "commas";
+  }
+  return "";
+}
+
 bool valid_name(std::string_view name) {
   return !name.empty() && name.find_first_of(",\n\r") == std::string_view::npos &&
          trim(name) == name;
@@ -103,7 +143,11 @@ bool CsvTable::has_column(std::string_view name) const {
 
 const Eigen::VectorXd& CsvTable::column(std::string_view name) const {
   for (size_t i = 0; i < names.size(); ++i) {
-    if (names[i] == name) return columns[i];
+    if (names[i] != name) continue;
+    if (const auto bad = unreadable.find(name); bad != unreadable.end()) {
+      throw InvalidArgument(bad->second);
+    }
+    return columns[i];
   }
   throw InvalidArgument(internal::concat(source, ": no column '", echo(name),
                                          "' (columns: ", join_names(names), ")"));
@@ -156,7 +200,7 @@ bool is_line_end(char c) { return c == '\n' || c == '\r'; }
 // the caller then reads the line again the slow way, which builds the message. It accepts
 // a subset of what the slow path accepts and gives the same values, so no string is built
 // for a well-formed row.
-const char* parse_row_fast(const char* p, const char* end, size_t fields,
+const char* parse_row_fast(const char* p, const char* end, size_t fields, char delimiter,
                            std::vector<double>& values) {
   const size_t first = values.size();
   for (size_t i = 0; i < fields; ++i) {
@@ -171,10 +215,14 @@ const char* parse_row_fast(const char* p, const char* end, size_t fields,
     p = after;
     while (p < end && is_blank(*p)) ++p;
     if (i + 1 < fields) {
-      if (p == end || *p != ',') break;
+      if (p == end || *p != delimiter) break;
       ++p;
       values.push_back(value);
       continue;
+    }
+    if (p != end && *p == delimiter) {  // a delimiter that ends every line (spreadsheets)
+      ++p;
+      while (p < end && is_blank(*p)) ++p;
     }
     if (p != end && !is_line_end(*p)) break;
     values.push_back(value);
@@ -192,6 +240,7 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
   // The data rows, row after row (row-major), moved into columns at the end.
   std::vector<double> values;
   size_t width = 0;
+  char delimiter = ',';
   int header_line = 0;
   int line_number = 0;
   const char* const text_end = text.data() + text.size();
@@ -204,7 +253,7 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
       const char* p = text.data() + position;
       while (p < text_end && is_blank(*p)) ++p;
       if (p < text_end && !is_line_end(*p) && *p != '#') {
-        if (const char* line_end = parse_row_fast(p, text_end, width, values)) {
+        if (const char* line_end = parse_row_fast(p, text_end, width, delimiter, values)) {
           position = static_cast<size_t>(line_end - text.data()) + 1;
           if (line_end < text_end && *line_end == '\r' && position < text.size() &&
               text[position] == '\n') {
@@ -235,7 +284,13 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
       continue;
     }
 
-    const auto fields = split_fields(line);
+    if (header_line == 0) delimiter = detect_delimiter(line);
+    auto fields = split_fields(line, delimiter);
+    // A delimiter that ends every line leaves an empty last field: not a value.
+    if (fields.size() > 1 && fields.back().empty() &&
+        (header_line == 0 || fields.size() == width + 1)) {
+      fields.pop_back();
+    }
     if (header_line == 0) {
       header_line = line_number;
       bool all_numbers = true;
@@ -264,18 +319,34 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
     require(fields.size() == width, source, ":", line_number, ": expected ", width, " fields (",
             join_names(table.names), ") but found ", fields.size());
     for (size_t i = 0; i < fields.size(); ++i) {
-      const auto where = [&] {
-        return internal::concat(source, ":", line_number, ": column '", echo(table.names[i]),
-                                "' (field ", i + 1, "): ");
+      // A cell that is not a finite number is an error of its column, thrown only if the
+      // column is used (CsvTable::column): exports carry notes and empty columns.
+      const auto problem = [&](const std::string& what) {
+        table.unreadable.try_emplace(
+            table.names[i],
+            internal::concat(source, ":", line_number, ": column '", echo(table.names[i]),
+                             "' (field ", i + 1, "): ", what));
+        values.push_back(std::numeric_limits<double>::quiet_NaN());
       };
-      if (fields[i].empty()) throw InvalidArgument(where() + "empty field; expected a number");
-      const std::optional<double> value = parse_number(fields[i]);
-      if (!value) throw InvalidArgument(where() + "malformed number '" + echo(fields[i]) + "'");
-      if (!std::isfinite(*value)) {
-        throw InvalidArgument(where() + "value '" + echo(fields[i]) +
-                              "' is not finite; every value must be a finite number");
+      if (fields[i].empty()) {
+        problem("empty field; expected a number");
+        continue;
       }
-      values.push_back(*value);
+      std::optional<double> value = parse_number(fields[i]);
+      if (!value && delimiter != ',' && fields[i].find(',') != std::string_view::npos) {
+        // A decimal comma, as spreadsheets in many locales write beside ';' or tabs.
+        std::string with_point(fields[i]);
+        std::replace(with_point.begin(), with_point.end(), ',', '.');
+        value = parse_number(with_point);
+      }
+      if (!value) {
+        problem("malformed number '" + echo(fields[i]) + "'" + dialect_hint(fields[i], delimiter));
+      } else if (!std::isfinite(*value)) {
+        problem("value '" + echo(fields[i]) +
+                "' is not finite; every value must be a finite number");
+      } else {
+        values.push_back(*value);
+      }
     }
   }
   require(header_line != 0, source,

@@ -15,10 +15,12 @@ namespace {
 
 using ::testing::HasSubstr;
 
-// The message of the InvalidArgument that parsing `text` throws ("" if none).
+// The message of the InvalidArgument that parsing `text` and using every column throws (""
+// if none). A cell that is not a number is an error of its column, raised when it is used.
 std::string parse_error(const std::string& text) {
   try {
-    parse_csv(text, "data.csv");
+    const CsvTable table = parse_csv(text, "data.csv");
+    for (const std::string& name : table.names) table.column(name);
   } catch (const InvalidArgument& e) {
     return e.what();
   }
@@ -245,6 +247,43 @@ TEST(Csv, WritingIntoAMissingDirectoryIsBadInput) {
   CsvTable table;
   table.add_column("x", Eigen::VectorXd::Zero(2));
   EXPECT_THROW(write_csv("/nonexistent/dir/out.csv", table), InvalidArgument);
+}
+
+// Issue 35: a file as MATLAB or a spreadsheet exports it: quoted names, a delimiter ending
+// every line, CRLF, and an unused column that is text on its first row and empty after.
+TEST(Csv, ReadsAnExportWithQuotesTrailingDelimitersAndASparseUnusedColumn) {
+  const CsvTable table = parse_csv(
+      "\"uEst\",\"uVal\",\"yEst\",\"note\",\r\n1.5,2,3,exported from MATLAB,\r\n"
+      "-1,0.25,4,,\r\n",
+      "tank.csv");
+  ASSERT_EQ(table.names, (std::vector<std::string>{"uEst", "uVal", "yEst", "note"}));
+  EXPECT_EQ(table.column("uEst")(0), 1.5);
+  EXPECT_EQ(table.column("uVal")(1), 0.25);
+  EXPECT_EQ(table.column("yEst")(1), 4.0);
+  // The unused column is an error only when asked for, and says where and why.
+  EXPECT_THAT([&] { table.column("note"); },
+              ::testing::ThrowsMessage<InvalidArgument>(
+                  "tank.csv:2: column 'note' (field 4): malformed number 'exported from MATLAB'"));
+  // A missing column lists the names as the header has them, without quotes.
+  EXPECT_THAT([&] { table.column("u"); },
+              ::testing::ThrowsMessage<InvalidArgument>(
+                  "tank.csv: no column 'u' (columns: uEst, uVal, yEst, note)"));
+}
+
+TEST(Csv, SemicolonsAndTabsWithDecimalCommasAreDetected) {
+  const CsvTable semicolons = parse_csv("t;u;y\n0,05;-1,5;2\n0,10;3;4,25\n", "eu.csv");
+  ASSERT_EQ(semicolons.names, (std::vector<std::string>{"t", "u", "y"}));
+  EXPECT_EQ(semicolons.column("t")(1), 0.1);
+  EXPECT_EQ(semicolons.column("u")(0), -1.5);
+  EXPECT_EQ(semicolons.column("y")(1), 4.25);
+  const CsvTable tabs = parse_csv("t\tu\n0\t1,5\n1\t2.5\n", "tabs.csv");
+  EXPECT_EQ(tabs.column("u")(0), 1.5);
+  EXPECT_EQ(tabs.column("u")(1), 2.5);
+  // A comma-separated file keeps the comma as its delimiter: "1,5" there is two fields.
+  EXPECT_THAT(parse_error("t,u\n0,1,5\n"), HasSubstr("expected 2 fields"));
+  // A semicolon row under a comma header is diagnosed as another dialect.
+  EXPECT_THAT(parse_error("t,u,y\n0;1;2,0,0\n"),
+              HasSubstr("looks separated by semicolons or tabs"));
 }
 
 }  // namespace

@@ -1,12 +1,18 @@
 // Numeric CSV tables with a header row of column names (docs/formats.md). Fields are
-// separated by commas; blank lines and lines starting with '#' are skipped (a line
-// "# key: value" is kept as a declaration); every value
-// must be a finite number. Parse errors name the source, the line and the column:
+// separated by commas, semicolons or tabs (the one the header row uses most, decision 0031);
+// in a file separated by semicolons or tabs a decimal comma is read as a decimal point.
+// Names and values may be quoted ("uEst"), a delimiter may end every line, and lines end with
+// LF, CRLF or CR. Blank lines and lines starting with '#' are skipped (a line
+// "# key: value" is kept as a declaration). Every value of a column that is used must be a
+// finite number; a column that is not used may hold anything (an empty or text cell is an
+// error only when the column is asked for). Errors name the source, the line and the column:
 // "data.csv:7: column 'y' (field 3): malformed number 'abc'". Written values use %.17g,
 // so a table read back is bit-identical.
 #pragma once
 
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -33,10 +39,14 @@ struct CsvTable {
   std::vector<Eigen::VectorXd> columns;
   /// Declarations from "# key: value" comment lines, in file order; written back first.
   std::vector<CsvDeclaration> declarations;
+  /// Columns with a cell that is not a finite number, by name: the message for the first such
+  /// cell, thrown by column() when the column is used (its values there are NaN).
+  std::map<std::string, std::string, std::less<>> unreadable;
 
   int rows() const { return columns.empty() ? 0 : static_cast<int>(columns.front().size()); }
   bool has_column(std::string_view name) const;
-  /// Throws InvalidArgument naming the source, the missing column and the columns present.
+  /// Throws InvalidArgument naming the source, the missing column and the columns present, or
+  /// the first cell of the column that is not a finite number.
   const Eigen::VectorXd& column(std::string_view name) const;
   /// Appends a column; throws InvalidArgument for an invalid or repeated name or a length
   /// that differs from the other columns.
