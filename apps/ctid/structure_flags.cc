@@ -2,6 +2,7 @@
 #include "structure_flags.h"
 
 #include <algorithm>
+#include <iostream>
 #include <optional>
 #include <string>
 #include <vector>
@@ -65,11 +66,18 @@ ModelStructure model_structure(const StructureFlagValues& f, const CLI::App& app
                 "unfactored; --submodel and --modes are additive)");
   }
   if (unfactored) {
-    if (app.count("--zeros") == 0) usage_error("--poles needs --zeros (numerator degree)");
     if (f.integrators > io::kMaxIntegrators) {
       usage_error(internal::concat("--integrators is ", f.integrators,
                                    "; a model document holds at most ", io::kMaxIntegrators,
                                    ", so ctid could not read the fitted model back"));
+    }
+    if (app.count("--zeros") == 0) {
+      // As MATLAB's tfest: a strictly proper model with a full numerator, said on stderr.
+      const int zeros = std::max(f.poles + f.integrators - 1, 0);
+      std::cerr << "note: --zeros not given: " << zeros
+                << " zeros, one fewer than the poles (as MATLAB's tfest); give --zeros to "
+                   "choose\n";
+      return ModelStructure::unfactored(f.poles, zeros, f.integrators);
     }
     return ModelStructure::unfactored(f.poles, f.zeros, f.integrators);
   }

@@ -472,7 +472,12 @@ TEST_F(FitCommand, BadInputExitsTwoWithOneLine) {
   expect_bad_input(ctid({"fit", "d.csv"}), "give one model structure");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--poles", "2", "--zeros", "0"}),
                    "give one model structure");
-  expect_bad_input(ctid({"fit", "d.csv", "--poles", "2"}), "--poles needs --zeros");
+  // Issue 35: --poles alone means poles - 1 zeros, as MATLAB's tfest, and says so.
+  const auto defaulted = ctid({"fit", "d.csv", "--poles", "2", "-q", "-o", "z.json"});
+  EXPECT_TRUE(defaulted.status == 0 || defaulted.status == 3) << defaulted.err;
+  EXPECT_THAT(defaulted.err, HasSubstr("note: --zeros not given: 1 zeros, one fewer than the "
+                                       "poles (as MATLAB's tfest)"));
+  EXPECT_EQ(read("z.json")["model"]["submodels"][0]["numerator_ascending"].size(), 2u);
   expect_bad_input(ctid({"fit", "d.csv", "--poles", "0", "--zeros", "0"}), "");
   expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--zeros", "5"}), "");
   expect_bad_input(ctid({"fit", "d.csv", "--submodel", "2,x"}), "--submodel '2,x'");
