@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "cli/run_ctid.h"
+#include "ctid/core/format.h"
 #include "ctid/core/transfer_function.h"
 #include "ctid/io/file.h"
 #include "ctid/io/json.h"
@@ -464,6 +465,33 @@ TEST_F(FitCommand, RelocateModesFindsAWeakModeTheStartMissed) {
   expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--zeros", "0", "--relocate-modes"}),
                    "--relocate-modes is true but the structure is unfactored; mode relocation "
                    "moves submodels of an additive model");
+}
+
+// Issue 35: the summary answers in the engineer's units: the DC gain and the time constant
+// with their standard errors, the RMS error in the output's unit, no paper jargon.
+TEST_F(FitCommand, SummaryGivesDcGainTimeConstantAndRmsError) {
+  write("g.json", R"({"type": "transfer_function", "numerator_ascending": [2.0],)"
+                  R"( "denominator_ascending": [1.0, 40.0]})");
+  ASSERT_EQ(ctid({"simulate", "-m", "g.json", "-e", "prbs", "-n", "500", "-T", "4", "--seed", "1",
+                  "--noise-std", "0.01", "--noise-seed", "2", "-o", "tank.csv", "-q"})
+                .status,
+            0);
+  const auto r = ctid({"fit", "tank.csv", "--poles", "1", "--zeros", "0"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("parameters (± one standard error): theta1.a1 = "));
+  EXPECT_THAT(r.out, HasSubstr("\nDC gain: "));
+  EXPECT_THAT(r.out, HasSubstr("\ntime constants (real poles): "));
+  EXPECT_THAT(r.out, HasSubstr(" (output units), noise variance "));
+  EXPECT_THAT(r.out, ::testing::Not(HasSubstr("Lemma 4.4")));
+  // The printed DC gain's standard error is the delta method's: b0's, as A(0) = 1.
+  const nlohmann::json result = [&] {
+    EXPECT_EQ(
+        ctid({"fit", "tank.csv", "--poles", "1", "--zeros", "0", "-q", "-o", "r.json"}).status, 0);
+    return read("r.json");
+  }();
+  const double b0_se = std::sqrt(result["covariance"][1][1].get<double>());
+  EXPECT_THAT(r.out, HasSubstr("DC gain: " + format_brief(result["parameters"][1].get<double>()) +
+                               " ± " + format_brief(b0_se)));
 }
 
 TEST_F(FitCommand, BadInputExitsTwoWithOneLine) {
