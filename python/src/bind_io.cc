@@ -172,10 +172,11 @@ void bind_io(py::module_& m) {
       "read_result", [](const std::filesystem::path& path) { return io::read_result(path); },
       py::arg("path"),
       "The result in a document written by ctid (fit -o, validate -o, frf -o X.json, study's "
-      "summary.json, feedback -o, structure -o, fit-frf -o) or by write_result: EstimationResult, "
+      "summary.json, feedback -o, structure -o, fit-frf -o, oma -o) or by write_result: "
+      "EstimationResult, "
       "ModeRelocationResult, "
       "InputDelayScanResult, ValidationReport, Frf, StudySummary, DelayedFeedbackResult, "
-      "StructureScanResult, MimoEstimationResult or FrfMatrixFitResult, "
+      "StructureScanResult, MimoEstimationResult, FrfMatrixFitResult, MimoFrf or OmaResult, "
       "chosen by its \"type\". "
       "Raises InvalidArgument for an unknown type or version or a bad field.");
   m.def("result_document_types", &io::result_document_types,

@@ -23,6 +23,7 @@ namespace py = pybind11;
 void bind_core(py::module_& m);
 void bind_simulation(py::module_& m);
 void bind_frequency(py::module_& m);
+void bind_oma(py::module_& m);
 void bind_estimation(py::module_& m);
 void bind_refined_iv(py::module_& m);
 void bind_frf_fit(py::module_& m);

@@ -203,6 +203,8 @@ def documents(run, data, mimo_csv):
     run("frf", mimo_csv, *mimo, "--segment-length", "512", "-o", "all_mimo_frf.csv", "-q")
     run("fit", mimo_csv, *mimo, "--modes", "2", "-o", "all_mimo_fit.json", "-q")
     folder = run("fit-frf", "all_mimo_frf.csv", "--modes", "2", "-o", "all_fit_frf.json", "-q")
+    run("oma", mimo_csv, "--output-columns", "a1:a3", "--max-order", "8", "-o", "all_oma.json",
+        "-q")
     return {
         "estimation_result": (folder / "all_fit.json", ctid.EstimationResult),
         "validation_report": (folder / "all_report.json", ctid.ValidationReport),
@@ -213,6 +215,7 @@ def documents(run, data, mimo_csv):
         "mimo_frf": (folder / "all_mimo_frf.json", ctid.MimoFrf),
         "mimo_estimation_result": (folder / "all_mimo_fit.json", ctid.MimoEstimationResult),
         "frf_matrix_fit_result": (folder / "all_fit_frf.json", ctid.FrfMatrixFitResult),
+        "oma_result": (folder / "all_oma.json", ctid.OmaResult),
     }
 
 
@@ -244,7 +247,8 @@ def test_python_m_ctid_plot_draws_every_document(documents, tmp_path):
 
     drawn = 0
     for kind, (path, _) in documents.items():
-        for figure_kind in plot.DOCUMENT_KINDS[kind]:
+        # oma_result has no figure yet (docs/oma.md, "Not yet").
+        for figure_kind in plot.DOCUMENT_KINDS.get(kind, ()):
             extra = []
             if figure_kind == "frf_matrix_overlay":
                 extra = ["--frf", str(documents["mimo_frf"][0])]

@@ -20,7 +20,8 @@ std::vector<std::string> result_document_types() {
           kStructureScanResultType,
           kMimoEstimationResultType,
           kFrfMatrixFitResultType,
-          kMimoFrfType};
+          kMimoFrfType,
+          kOmaResultType};
 }
 
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source) {
@@ -42,6 +43,7 @@ ResultDocument result_from_json(const nlohmann::json& value, const std::string& 
   if (name == kMimoEstimationResultType) return mimo_estimation_result_from_json(value, source);
   if (name == kFrfMatrixFitResultType) return frf_matrix_fit_result_from_json(value, source);
   if (name == kMimoFrfType) return mimo_frf_from_json(value, source);
+  if (name == kOmaResultType) return oma_result_from_json(value, source);
   throw InvalidArgument(source + ": \"type\" is \"" + name +
                         "\", which is not a result document (" + types + ")");
 }

@@ -63,6 +63,12 @@ ValidationReport validation_report_from_json(const nlohmann::json& value,
       source);
 }
 
+nlohmann::json to_json(const OmaResult& result) { return document(result, kOmaResultType); }
+
+OmaResult oma_result_from_json(const nlohmann::json& value, const std::string& source) {
+  return document_fields<OmaResult>(value, kOmaResultType, {"data"}, source);
+}
+
 nlohmann::json to_json(const Frf& frf) { return document(frf, kFrfType); }
 
 Frf frf_from_json(const nlohmann::json& value, const std::string& source) {

@@ -373,6 +373,28 @@ MimoFrf example_mimo_frf() {
   return frf;
 }
 
+TEST(Documents, OmaResultRoundTripsWithUnknownStandardErrorsAsNull) {
+  OmaResult r;
+  r.termination = Termination::converged;
+  r.sample_time = 0.01;
+  r.channels = {"a", "b"};
+  OmaMode mode;
+  mode.frequency_hz = 1.0 / 3.0;
+  mode.frequency_hz_std = std::numeric_limits<double>::quiet_NaN();
+  mode.shape_real = {1.0, -0.25};
+  mode.shape_imag = {0.0, 0.1};
+  r.modes.push_back(mode);
+  r.stabilisation.push_back({4, 1.0 / 3.0, 0.01, PoleStability::stable, 0.99});
+  r.verdict.fail("no mode found", {"a longer record"});
+  const nlohmann::json written = to_json(ResultDocument(r));
+  EXPECT_TRUE(written.at("modes").at(0).at("frequency_hz_std").is_null());
+  EXPECT_EQ(written.at("stabilisation").at(0).at("stability"), "stable");
+  const OmaResult back = round_trip(r, kOmaResultType);
+  EXPECT_TRUE(same_bits(back.modes.at(0).frequency_hz, mode.frequency_hz));
+  EXPECT_TRUE(std::isnan(back.modes.at(0).frequency_hz_std));
+  EXPECT_FALSE(back.verdict.usable);
+}
+
 TEST(Documents, MimoFrfRoundTripsBitForBit) {
   const MimoFrf r = example_mimo_frf();
   const MimoFrf back = round_trip(r, kMimoFrfType);

@@ -19,6 +19,7 @@
 #include "ctid/frequency/frf.h"
 #include "ctid/io/feedback_result_json.h"
 #include "ctid/io/file.h"
+#include "ctid/oma/oma.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/frf_matrix_fit.h"
 #include "ctid/refined_iv/input_delay_scan.h"
@@ -33,14 +34,15 @@ namespace ctid::io {
 using ResultDocument =
     std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult, ValidationReport,
                  Frf, StudySummary, DelayedFeedbackResult, StructureScanResult,
-                 MimoEstimationResult, FrfMatrixFitResult, MimoFrf>;
+                 MimoEstimationResult, FrfMatrixFitResult, MimoFrf, OmaResult>;
 
 /// The "type" values result_from_json reads, in the order of ResultDocument.
 std::vector<std::string> result_document_types();
 
 /// The result in `value`, by its "type" (estimation_result, mode_relocation_result,
 /// input_delay_scan_result, validation_report, frf, study_summary, delayed_feedback_result,
-/// structure_scan_result, mimo_estimation_result, frf_matrix_fit_result, mimo_frf). Throws
+/// structure_scan_result, mimo_estimation_result, frf_matrix_fit_result, mimo_frf, oma_result).
+/// Throws
 /// InvalidArgument naming `source` for a missing or unknown type, an unknown version or a bad
 /// field.
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source);

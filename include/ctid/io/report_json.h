@@ -13,6 +13,7 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/frequency/mimo_frf.h"
+#include "ctid/oma/oma.h"
 #include "ctid/refined_iv/frf_matrix_fit.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/structure_scan.h"
@@ -25,6 +26,7 @@ namespace ctid::io {
 inline constexpr const char* kValidationReportType = "validation_report";
 inline constexpr const char* kFrfType = "frf";
 inline constexpr const char* kMimoFrfType = "mimo_frf";
+inline constexpr const char* kOmaResultType = "oma_result";
 inline constexpr const char* kStudySummaryType = "study_summary";
 inline constexpr const char* kStructureScanResultType = "structure_scan_result";
 inline constexpr const char* kMimoEstimationResultType = "mimo_estimation_result";
@@ -54,6 +56,11 @@ nlohmann::json to_json(const MimoFrf& frf);
 /// "peaks") is accepted and not read. Every array's length is checked against the lines,
 /// outputs and inputs, and an error names the entry.
 MimoFrf mimo_frf_from_json(const nlohmann::json& value, const std::string& source);
+
+/// {"type": "oma_result", "version": 1, <fields>}: output-only modal analysis (docs/oma.md);
+/// `ctid oma` adds "data", which the reader accepts.
+nlohmann::json to_json(const OmaResult& result);
+OmaResult oma_result_from_json(const nlohmann::json& value, const std::string& source);
 
 /// {"type": "study_summary", "version": 1, <fields>}.
 nlohmann::json to_json(const StudySummary& summary);

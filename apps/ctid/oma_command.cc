@@ -1,0 +1,184 @@
+// `ctid oma`: output-only (operational) modal analysis of several response channels with no
+// measured input: covariance-driven SSI over orders 2..--max-order, the stable poles clustered
+// into modes, segment-based standard errors (ctid::oma, oma/oma.h; docs/oma.md). Prints the
+// modes and the verdict; -o writes an "oma_result" document. Exit 3 when no mode was found.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "command.h"
+#include "ctid/core/error.h"
+#include "ctid/core/format.h"
+#include "ctid/io/csv.h"
+#include "ctid/io/json.h"
+#include "ctid/io/mimo_data_csv.h"
+#include "ctid/io/npy.h"
+#include "ctid/io/report_json.h"
+#include "ctid/oma/oma.h"
+
+namespace ctid::cli {
+namespace {
+
+struct OmaFlags {
+  std::string file;
+  std::vector<std::string> output_columns;
+  std::vector<std::string> reference_columns;
+  std::string time_column = "t";
+  double sample_time = 0.0;
+  std::string method = "ssi-cov";
+  int max_order = OmaOptions{}.max_order;
+  int block_rows = 0;
+  std::vector<double> modes_near;
+  int uncertainty_blocks = OmaOptions{}.uncertainty_blocks;
+  std::string output;
+  bool force = false;
+  bool quiet = false;
+};
+
+// The record: the output columns (names or ranges A:B) and the sample time from the uniform
+// time column, or -T (which overrides it).
+Eigen::MatrixXd read_outputs(const OmaFlags& f, const CLI::App& app,
+                             std::vector<std::string>& names, double& h) {
+  const io::CsvTable table = io::read_table(f.file);
+  names = io::expand_columns(table, f.output_columns, "output");
+  Eigen::MatrixXd y(table.rows(), static_cast<Eigen::Index>(names.size()));
+  for (std::size_t j = 0; j < names.size(); ++j) {
+    y.col(static_cast<Eigen::Index>(j)) = table.column(names[j]);
+  }
+  if (app.count("--sample-time") > 0) {
+    h = f.sample_time;
+    return y;
+  }
+  if (!table.has_column(f.time_column)) {
+    usage_error(internal::concat(f.file, " has no time column '", f.time_column,
+                                 "'; give --sample-time (-T) or --time-column"));
+  }
+  const Eigen::VectorXd& t = table.column(f.time_column);
+  require(t.size() >= 2, f.file, ": fewer than 2 samples");
+  h = (t(t.size() - 1) - t(0)) / static_cast<double>(t.size() - 1);
+  for (Eigen::Index k = 1; k < t.size(); ++k) {
+    if (std::abs(t(k) - t(k - 1) - h) > 1e-3 * std::abs(h)) {
+      usage_error(internal::concat(f.file, ": time column '", f.time_column,
+                                   "' is not uniform at row ", k + 1,
+                                   "; give --sample-time (-T) to override it"));
+    }
+  }
+  return y;
+}
+
+std::string with_error(double value, double error, int digits) {
+  std::string text = format_significant(value, digits);
+  if (std::isfinite(error)) text += " +- " + format_significant(error, 2);
+  return text;
+}
+
+void print_summary(const OmaFlags& f, const OmaResult& r) {
+  std::cout << "ctid oma: " << enum_name(r.method) << " on " << f.file << ": " << r.channels.size()
+            << " channels, " << r.reference_channels.size() << " references, " << r.samples
+            << " samples, h = " << format_brief(r.sample_time) << " s; " << r.message << "\n";
+  if (!r.modes.empty()) {
+    std::cout << "  mode  frequency [Hz]          damping ratio            MPC    orders\n";
+  }
+  for (std::size_t i = 0; i < r.modes.size(); ++i) {
+    const OmaMode& m = r.modes[i];
+    std::ostringstream line;
+    line << "  " << i + 1 << "     " << with_error(m.frequency_hz, m.frequency_hz_std, 6) << "    "
+         << with_error(m.damping_ratio, m.damping_ratio_std, 3) << "    "
+         << format_significant(m.mpc, 3) << "    " << m.supporting_orders;
+    std::cout << line.str() << "\n";
+  }
+  std::cout << (r.verdict.usable ? "verdict: usable" : r.verdict.summary()) << "\n";
+  if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
+}
+
+ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
+  OmaOptions options;
+  const auto method = enum_from_name<OmaMethod>(f.method);
+  if (!method) {
+    usage_error("--method is '" + f.method + "'; it must be " + enum_names<OmaMethod>());
+  }
+  options.method = *method;
+  options.max_order = f.max_order;
+  options.block_rows = f.block_rows;
+  options.modes_near_hz = f.modes_near;
+  options.uncertainty_blocks = f.uncertainty_blocks;
+  std::vector<std::string> names;
+  double h = 0.0;
+  const Eigen::MatrixXd y = read_outputs(f, app, names, h);
+  if (!f.reference_columns.empty()) {
+    const io::CsvTable table = io::read_table(f.file);
+    for (const std::string& ref : io::expand_columns(table, f.reference_columns, "reference")) {
+      const auto at = std::find(names.begin(), names.end(), ref);
+      if (at == names.end()) {
+        usage_error("--reference-columns names '" + ref +
+                    "', which is not one of --output-columns");
+      }
+      options.reference_channels.push_back(static_cast<int>(at - names.begin()));
+    }
+  }
+  const OmaResult result = oma(y, h, options, names);
+  if (!f.output.empty()) {
+    nlohmann::json document = io::to_json(result);
+    document["data"] = {{"file", f.file}};
+    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  }
+  if (!f.quiet) print_summary(f, result);
+  return result.verdict.usable ? kExitOk : kExitNoUsableModel;
+}
+
+Command add_oma_command(CLI::App& parent) {
+  auto flags = std::make_shared<OmaFlags>();
+  OmaFlags& f = *flags;
+  CLI::App* app = parent.add_subcommand(
+      "oma",
+      "Output-only (operational) modal analysis: modes of several response channels with no "
+      "measured input, by covariance-driven SSI, a stabilisation diagram and clustering.");
+  app->footer(
+      "Prints each mode (frequency and damping with segment-based standard errors, MPC, the "
+      "number of orders supporting it) and the verdict. -o X.json writes an \"oma_result\" "
+      "document (docs/oma.md) with every pole of the stabilisation diagram.\n"
+      "Exit status: 0 modes found, 3 no mode found, 2 bad usage or input, 1 other error.");
+  app->add_option("data", f.file, "CSV file with the output columns")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app->add_option("--output-columns", f.output_columns,
+                  "Response channels: names or ranges A:B (file order), e.g. y1:y8")
+      ->delimiter(',')
+      ->required();
+  app->add_option("--reference-columns", f.reference_columns,
+                  "Reference channels (a subset of the outputs; default: all)")
+      ->delimiter(',');
+  app->add_option("--time-column", f.time_column, "Uniform time column")->capture_default_str();
+  app->add_option("--sample-time,-T", f.sample_time, "Sample time [s] (overrides the time column)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--method", f.method, "Method: ssi-cov")->capture_default_str();
+  app->add_option("--max-order", f.max_order, "Largest model order (orders 2, 4, ..., this)")
+      ->capture_default_str();
+  app->add_option("--block-rows", f.block_rows, "Hankel block rows p (0: automatic)")
+      ->capture_default_str();
+  app->add_option("--modes-near", f.modes_near,
+                  "Pick the modes nearest these frequencies [Hz] instead of automatically")
+      ->delimiter(',');
+  app->add_option("--uncertainty-blocks", f.uncertainty_blocks,
+                  "Segments for the standard errors (0: none)")
+      ->capture_default_str();
+  app->add_option("--output,-o", f.output, "JSON file for the oma_result document")
+      ->group("Output");
+  app->add_flag("--force", f.force, "Replace an output file that exists")->group("Output");
+  app->add_flag("--quiet,-q", f.quiet, "Print nothing")->group("Output");
+  Command command;
+  command.app = app;
+  command.run = [flags, app] { return run_oma(*flags, *app); };
+  return command;
+}
+
+}  // namespace
+
+CTID_REGISTER_COMMAND(45, add_oma_command);
+
+}  // namespace ctid::cli

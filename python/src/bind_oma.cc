@@ -1,0 +1,34 @@
+// Python bindings of the oma layer (oma/oma.h): ctid.oma(outputs, sample_time, options,
+// channel_names, **options) returns an OmaResult with its modes, stabilisation diagram and
+// verdict; OmaOptions, OmaMode, OmaPole, OmaMethod and PoleStability mirror the C++ names.
+#include "common.h"
+#include "ctid/oma/oma.h"
+#include "fields.h"
+
+namespace ctid::python {
+
+void bind_oma(py::module_& m) {
+  bind_enum<OmaMethod>(m, "OmaMethod", "Output-only identification method.");
+  bind_enum<PoleStability>(m, "PoleStability", "Stability class of a pole in the diagram.");
+  bind_options<OmaOptions>(m, "Options of output-only modal analysis (docs/oma.md).");
+  bind_result<OmaPole>(m, "One pole of the stabilisation diagram.");
+  bind_result<OmaMode>(m, "One identified mode with its standard errors.");
+  bind_result<OmaResult>(m, "Output-only modal analysis: modes, diagram and verdict.")
+      .def("converged", &OmaResult::converged, "Whether every order was identified.")
+      .def("brief_report", &OmaResult::brief_report, "One line: why it ended.");
+  m.def(
+      "oma",
+      [](const Eigen::MatrixXd& outputs, double sample_time,
+         const std::optional<OmaOptions>& options,
+         const std::optional<std::vector<std::string>>& channel_names, const py::kwargs& kwargs) {
+        return oma(outputs, sample_time, options_from<OmaOptions>("oma", options, kwargs),
+                   channel_names.value_or(std::vector<std::string>{}));
+      },
+      py::arg("outputs"), py::arg("sample_time"), py::arg("options") = py::none(),
+      py::arg("channel_names") = py::none(),
+      "Output-only modal analysis of the (N, l) array `outputs` sampled every sample_time "
+      "seconds: SSI-cov over orders 2..max_order, stable poles clustered into modes, "
+      "segment-based standard errors. OmaOptions fields may be given as keywords.");
+}
+
+}  // namespace ctid::python

@@ -1,0 +1,247 @@
+// oma(): checks, the stabilisation diagram over every order, automatic picking and the
+// segment-based standard errors (Reynders, Pintelon and De Roeck, MSSP 2008, section 3).
+#include "ctid/oma/oma.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ctid/core/error.h"
+#include "ctid/oma/ssi_cov.h"
+#include "ctid/oma/stabilisation.h"
+
+namespace ctid {
+namespace {
+
+using oma_detail::ModalPole;
+using oma_detail::OrderPoles;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// Correlations reach lag 2p - 1; a record of fewer than this many times p samples gives
+// correlations too noisy to be worth a Hankel matrix.
+constexpr int kSamplesPerBlockRow = 20;
+// A user frequency takes the nearest cluster within this relative distance.
+constexpr double kNearTolerance = 0.1;
+
+void check_record(const Eigen::MatrixXd& y, double h, const std::vector<std::string>& names) {
+  require(std::isfinite(h) && h > 0.0, "sample_time is ", h, "; it must be finite and > 0");
+  require(y.cols() >= 2, "outputs has ", y.cols(),
+          " channel(s); output-only modal analysis needs at least 2 (--output-columns)");
+  for (Eigen::Index j = 0; j < y.cols(); ++j) {
+    for (Eigen::Index k = 0; k < y.rows(); ++k) {
+      require(std::isfinite(y(k, j)), "outputs channel '", names[static_cast<std::size_t>(j)],
+              "' is ", y(k, j), " at sample ", k, "; every value must be finite");
+    }
+    require(y.rows() == 0 || (y.col(j).array() != y(0, j)).any(), "outputs channel '",
+            names[static_cast<std::size_t>(j)], "' is ", y.rows() > 0 ? y(0, j) : 0.0,
+            " at every sample; a constant channel carries no response");
+  }
+}
+
+int pick_block_rows(const OmaOptions& o, Eigen::Index l, Eigen::Index r, Eigen::Index n) {
+  const int p = o.block_rows > 0 ? o.block_rows
+                                 : std::max(10, static_cast<int>((o.max_order + r - 1) / r) + 1);
+  require((p - 1) * l >= o.max_order && p * r >= o.max_order, "OmaOptions.max_order is ",
+          o.max_order, "; the Hankel matrix of ", p, " block rows (block_rows) over ", l,
+          " channels and ", r, " references holds at most order ",
+          std::min<Eigen::Index>((p - 1) * l, p * r), " (--max-order / --block-rows)");
+  require(n >= static_cast<Eigen::Index>(kSamplesPerBlockRow) * p, "the record has ", n,
+          " samples; ", p, " block rows (max_order ", o.max_order, ") need at least ",
+          kSamplesPerBlockRow * p, " (a lower --max-order or --block-rows, or a longer record)");
+  return p;
+}
+
+std::vector<OrderPoles> all_orders(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
+                                   double h, const OmaOptions& o) {
+  const auto correlations = oma_detail::output_correlations(y, refs, 2 * p - 1);
+  const auto factor = oma_detail::ssi_factor(correlations, p, o.max_order);
+  std::vector<OrderPoles> orders;
+  for (int n = 2; n <= o.max_order; n += 2) {
+    orders.push_back({n, oma_detail::ssi_poles(factor, n, h, o.max_damping)});
+  }
+  return orders;
+}
+
+OmaMode make_mode(const oma_detail::PoleCluster& cluster, const std::vector<OrderPoles>& orders) {
+  const ModalPole& p = orders[static_cast<std::size_t>(cluster.representative.first)]
+                           .poles[static_cast<std::size_t>(cluster.representative.second)];
+  OmaMode m;
+  m.frequency_hz = p.frequency_hz;
+  m.damping_ratio = p.damping_ratio;
+  for (Eigen::Index j = 0; j < p.shape.size(); ++j) {
+    m.shape_real.push_back(p.shape(j).real());
+    m.shape_imag.push_back(p.shape(j).imag());
+  }
+  m.mpc = p.mpc;
+  m.mpd = p.mpd;
+  m.supporting_orders = cluster.supporting_orders;
+  m.order = orders[static_cast<std::size_t>(cluster.representative.first)].order;
+  m.frequency_hz_std = m.damping_ratio_std = kNaN;
+  m.shape_real_std.assign(m.shape_real.size(), kNaN);
+  m.shape_imag_std.assign(m.shape_real.size(), kNaN);
+  return m;
+}
+
+Eigen::VectorXcd shape_of(const OmaMode& m) {
+  Eigen::VectorXcd s(static_cast<Eigen::Index>(m.shape_real.size()));
+  for (Eigen::Index j = 0; j < s.size(); ++j) {
+    s(j) = {m.shape_real[static_cast<std::size_t>(j)], m.shape_imag[static_cast<std::size_t>(j)]};
+  }
+  return s;
+}
+
+// The modes: clusters with enough supporting orders, and for each user frequency the nearest
+// cluster (any size) within kNearTolerance; reasons for the verdict when one is missing.
+std::vector<OmaMode> pick_modes(const std::vector<oma_detail::PoleCluster>& clusters,
+                                const std::vector<OrderPoles>& orders, const OmaOptions& o,
+                                Verdict& verdict) {
+  std::vector<char> chosen(clusters.size(), 0);
+  const int needed = std::max(
+      2, static_cast<int>(std::ceil(o.min_support_fraction * static_cast<double>(orders.size()))));
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    if (o.modes_near_hz.empty() && clusters[c].supporting_orders >= needed) chosen[c] = 1;
+  }
+  for (double f : o.modes_near_hz) {
+    std::size_t best = clusters.size();
+    for (std::size_t c = 0; c < clusters.size(); ++c) {
+      const double d = std::abs(clusters[c].frequency_hz - f) / f;
+      if (d < kNearTolerance &&
+          (best == clusters.size() || d < std::abs(clusters[best].frequency_hz - f) / f)) {
+        best = c;
+      }
+    }
+    if (best == clusters.size()) {
+      verdict.fail(internal::concat("no stable pole within 10 % of ", f, " Hz"),
+                   {"a higher --max-order", verdict_advice::more_data});
+    } else {
+      chosen[best] = 1;
+    }
+  }
+  std::vector<OmaMode> modes;
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    if (chosen[c]) modes.push_back(make_mode(clusters[c], orders));
+  }
+  if (modes.empty() && o.modes_near_hz.empty()) {
+    verdict.fail(internal::concat("no mode found: no cluster of stable poles is supported by ",
+                                  needed, " of the ", orders.size(), " orders"),
+                 {"a higher --max-order", verdict_advice::more_data});
+  }
+  return modes;
+}
+
+double spread(const std::vector<double>& v, double blocks) {
+  if (v.size() < 2) return kNaN;
+  double mean = 0.0;
+  for (double x : v) mean += x;
+  mean /= static_cast<double>(v.size());
+  double ss = 0.0;
+  for (double x : v) ss += (x - mean) * (x - mean);
+  return std::sqrt(ss / static_cast<double>(v.size() - 1) / blocks);
+}
+
+// Segment-based standard errors: the record in n_b blocks, each identified at the mode's
+// order, the block pole nearest (|Δf|/f + 1 - MAC) taken as its estimate; the variance of the
+// full record's estimate is the blocks' variance over n_b.
+void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p, double h,
+                         const OmaOptions& o, std::vector<OmaMode>& modes) {
+  const int nb = o.uncertainty_blocks;
+  const Eigen::Index length = y.rows() / std::max(nb, 1);
+  if (nb < 2 || modes.empty() || length < static_cast<Eigen::Index>(kSamplesPerBlockRow) * p) {
+    return;
+  }
+  const std::size_t m = modes.size();
+  std::vector<std::vector<double>> f(m), z(m);
+  std::vector<std::vector<Eigen::VectorXcd>> shapes(m);
+  for (int b = 0; b < nb; ++b) {
+    const Eigen::MatrixXd block = y.middleRows(b * length, length);
+    const auto corr = oma_detail::output_correlations(block, refs, 2 * p - 1);
+    const auto factor = oma_detail::ssi_factor(corr, p, o.max_order);
+    for (std::size_t i = 0; i < m; ++i) {
+      const auto poles = oma_detail::ssi_poles(factor, modes[i].order, h, o.max_damping);
+      const Eigen::VectorXcd ref = shape_of(modes[i]);
+      const ModalPole* best = nullptr;
+      double best_d = 0.0;
+      for (const ModalPole& q : poles) {
+        const double df = std::abs(q.frequency_hz - modes[i].frequency_hz) / modes[i].frequency_hz;
+        const double d = df + 1.0 - oma_detail::modal_assurance(ref, q.shape);
+        if (df < o.cluster_distance * 5.0 && (best == nullptr || d < best_d)) {
+          best = &q;
+          best_d = d;
+        }
+      }
+      if (best == nullptr) continue;
+      f[i].push_back(best->frequency_hz);
+      z[i].push_back(best->damping_ratio);
+      const std::complex<double> alpha = best->shape.dot(ref) / best->shape.squaredNorm();
+      shapes[i].push_back(alpha * best->shape);
+    }
+  }
+  for (std::size_t i = 0; i < m; ++i) {
+    modes[i].frequency_hz_std = spread(f[i], nb);
+    modes[i].damping_ratio_std = spread(z[i], nb);
+    for (std::size_t j = 0; j < modes[i].shape_real.size(); ++j) {
+      std::vector<double> re, im;
+      for (const auto& s : shapes[i]) {
+        re.push_back(s(static_cast<Eigen::Index>(j)).real());
+        im.push_back(s(static_cast<Eigen::Index>(j)).imag());
+      }
+      modes[i].shape_real_std[j] = spread(re, nb);
+      modes[i].shape_imag_std[j] = spread(im, nb);
+    }
+  }
+}
+
+}  // namespace
+
+OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptions& options,
+              std::vector<std::string> channel_names) {
+  options.validate();
+  const Eigen::Index l = outputs.cols();
+  if (channel_names.empty()) {
+    for (Eigen::Index j = 0; j < l; ++j) channel_names.push_back("y" + std::to_string(j + 1));
+  }
+  require(static_cast<Eigen::Index>(channel_names.size()) == l, "channel_names has ",
+          channel_names.size(), " names for ", l, " channels");
+  check_record(outputs, sample_time, channel_names);
+  std::vector<int> refs = options.reference_channels;
+  if (refs.empty()) {
+    for (int j = 0; j < static_cast<int>(l); ++j) refs.push_back(j);
+  }
+  for (std::size_t i = 0; i < refs.size(); ++i) {
+    require(refs[i] < l, "OmaOptions.reference_channels[", i, "] is ", refs[i], "; it must be < ",
+            l, " (the number of channels)");
+  }
+  const int p = pick_block_rows(options, l, static_cast<Eigen::Index>(refs.size()), outputs.rows());
+
+  OmaResult result;
+  result.method = options.method;
+  result.sample_time = sample_time;
+  result.samples = static_cast<int>(outputs.rows());
+  result.channels = channel_names;
+  result.reference_channels = refs;
+  result.block_rows = p;
+  const auto orders = all_orders(outputs, refs, p, sample_time, options);
+  const auto stability = oma_detail::classify_poles(orders, options);
+  for (std::size_t o = 0; o < orders.size(); ++o) {
+    for (std::size_t k = 0; k < orders[o].poles.size(); ++k) {
+      const ModalPole& q = orders[o].poles[k];
+      result.stabilisation.push_back(
+          {orders[o].order, q.frequency_hz, q.damping_ratio, stability[o][k], q.mpc});
+    }
+  }
+  const auto clusters =
+      oma_detail::cluster_stable_poles(orders, stability, options.cluster_distance);
+  result.modes = pick_modes(clusters, orders, options, result.verdict);
+  segment_uncertainty(outputs, refs, p, sample_time, options, result.modes);
+  result.termination = Termination::converged;
+  result.iterations = static_cast<int>(orders.size());
+  result.message = internal::concat(result.modes.size(), " mode(s) from orders 2..",
+                                    options.max_order, " (", p, " block rows)");
+  return result;
+}
+
+}  // namespace ctid

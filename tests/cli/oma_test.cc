@@ -1,0 +1,81 @@
+// ctid oma: the DaISy flexible structure used output-only (exit 0, a summary table, an
+// oma_result document that io::read_result reads back), a record with no resonance (exit 3,
+// the verdict), and bad usage (exit 2, one line naming the flag).
+#include <random>
+#include <sstream>
+#include <string>
+#include <variant>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "cli/run_ctid.h"
+#include "ctid/io/documents.h"
+
+namespace ctid::cli {
+namespace {
+
+using ::testing::HasSubstr;
+
+class OmaCommand : public testing::CliTest {
+ protected:
+  std::string flexible() const {
+    return std::string(CTID_SOURCE_DIR) + "/data/daisy_flexible_structure/flexible_structure.csv";
+  }
+  // Three channels of independent white noise: no resonance.
+  std::string white_noise() const {
+    std::mt19937_64 rng(9);
+    std::normal_distribution<double> normal;
+    std::ostringstream csv;
+    csv << "t,a,b,c\n";
+    for (int k = 0; k < 4000; ++k) {
+      csv << k * 0.01 << "," << normal(rng) << "," << normal(rng) << "," << normal(rng) << "\n";
+    }
+    return write("noise.csv", csv.str());
+  }
+};
+
+TEST_F(OmaCommand, FlexibleStructureWritesTheModesAndTheDocument) {
+  const auto r = ctid({"oma", flexible(), "--output-columns", "y1_acc:y28_acc", "--time-column",
+                       "t_s", "--max-order", "60", "--block-rows", "30", "--uncertainty-blocks",
+                       "0", "-o", "oma.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("ctid oma: ssi-cov on"));
+  EXPECT_THAT(r.out, HasSubstr("28 channels"));
+  EXPECT_THAT(r.out, HasSubstr("verdict: usable"));
+  const io::ResultDocument doc = io::read_result(path("oma.json"));
+  const auto* result = std::get_if<OmaResult>(&doc);
+  ASSERT_NE(result, nullptr);
+  EXPECT_EQ(result->channels.size(), 28u);
+  EXPECT_FALSE(result->modes.empty());
+  EXPECT_FALSE(result->stabilisation.empty());
+  EXPECT_EQ(result->modes.front().shape_real.size(), 28u);
+}
+
+TEST_F(OmaCommand, NoResonanceExitsThreeWithTheVerdict) {
+  const auto r = ctid({"oma", white_noise(), "--output-columns", "a:c", "--max-order", "12"});
+  EXPECT_EQ(r.status, 3) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("no mode found"));
+}
+
+TEST_F(OmaCommand, BadUsageNamesTheFlag) {
+  const std::string noise = white_noise();
+  auto r = ctid({"oma", noise, "--output-columns", "a"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("needs at least 2 (--output-columns)"));
+  r = ctid({"oma", noise, "--output-columns", "a,b", "--reference-columns", "c"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("--reference-columns names 'c'"));
+  r = ctid({"oma", noise, "--output-columns", "a:c", "--method", "fdd"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("--method is 'fdd'"));
+  r = ctid({"oma", noise, "--output-columns", "a:c", "--max-order", "40", "--block-rows", "10"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("max_order is 40; the Hankel matrix of 10 block rows"));
+  r = ctid({"oma", noise, "--output-columns", "a:c", "--max-order", "700"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("the record has 4000 samples"));
+}
+
+}  // namespace
+}  // namespace ctid::cli
