@@ -40,6 +40,10 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/estimation/verdict.h"
 
+#include "ctid/oma/oma.h"
+#include "ctid/oma/ssi_cov.h"
+#include "ctid/oma/stabilisation.h"
+
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/clsrivc.h"
 #include "ctid/refined_iv/covariance.h"

@@ -45,7 +45,8 @@ import numpy as np
 matplotlib.use("Agg")
 
 KINDS = ("bode", "modes", "frf", "frf_matrix", "validation", "compare", "residuals", "mse",
-         "stabilisation", "mode_shapes", "mac", "frf_matrix_overlay", "tracking")
+         "stabilisation", "mode_shapes", "mac", "frf_matrix_overlay", "tracking",
+         "oma_stabilisation")
 MIMO_KINDS = ("mode_shapes", "mac", "frf_matrix_overlay")
 
 
@@ -100,6 +101,7 @@ DOCUMENT_KINDS = {
     "frf_matrix_fit_result": MIMO_KINDS,
     "mode_tracking_result": ("tracking",),
     "mimo_mode_tracking_result": ("tracking",),
+    "oma_result": ("oma_stabilisation",),
 }
 
 
@@ -367,6 +369,9 @@ def run(kind, path, output, title=None, frf=None, against=None, frequency_unit="
                 raise InputError(f"{path}: not a structure scan (no 'stabilisation' field)")
             result = document
         return plotting.stabilisation(result, title=title, filename=output, frequency_unit=unit)
+    if kind == "oma_stabilisation":
+        return plotting.oma_stabilisation(result, title=title, filename=output,
+                                          frequency_unit=unit)
     if kind == "compare":
         return _compare_figure(path, output, title)
     if kind == "frf_matrix":

@@ -55,6 +55,7 @@ __all__ = [
     "mse_against_n",
     "mode_tracking",
     "stabilisation",
+    "oma_stabilisation",
     "frequency_response_band",
     "correlations",
     "save",
@@ -748,6 +749,50 @@ def stabilisation(scan, title=None, filename=None, frequency_unit="Hz"):
     ax.set_ylabel("model order (poles)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize="small")
+    if title:
+        ax.set_title(title)
+    return _finish(figure, filename)
+
+
+def oma_stabilisation(result, title=None, filename=None, frequency_unit="Hz"):
+    """Stabilisation diagram of an output-only analysis (``ctid.oma``, ``ctid oma -o``): every
+    pole tried at its natural frequency (x) and model order (y), marked by its stability class
+    against the previous order ("stable": frequency, damping and shape; "frequency and
+    shape", "frequency and damping", "frequency", "new"); each chosen mode is a vertical line
+    labelled with its frequency and the number of orders that support it.
+
+    ``result``: a ctid.OmaResult (``ctid.read_result`` reads the document). Returns the Figure.
+    """
+    factor, axis_label = _frequency_axis(frequency_unit, "oma_stabilisation")
+    factor *= 2.0 * math.pi  # the poles' frequencies are in Hz
+    styles = [("stable", "o", "tab:green"), ("frequency_shape", "s", "tab:olive"),
+              ("frequency_damping", "d", "tab:blue"), ("frequency", "^", "tab:cyan"),
+              ("new", ".", "tab:gray")]
+    labels = {"stable": "stable", "frequency_shape": "frequency and shape",
+              "frequency_damping": "frequency and damping", "frequency": "frequency",
+              "new": "new"}
+    groups = {name: ([], []) for name, _, _ in styles}
+    for pole in result.stabilisation:
+        name = str(pole.stability).split(".")[-1]
+        name = "new" if name == "new_pole" else name
+        groups.setdefault(name, ([], []))
+        groups[name][0].append(pole.frequency_hz * factor)
+        groups[name][1].append(pole.order)
+    figure, ax = _figure(figsize=(7.0, 4.5))
+    for name, marker, colour in styles:
+        x, y = groups[name]
+        if x:
+            ax.plot(x, y, marker, color=colour, ms=5, ls="none", label=labels[name])
+    for mode in result.modes:
+        ax.axvline(mode.frequency_hz * factor, color="k", lw=0.8, ls="--")
+        ax.annotate(f"{mode.frequency_hz:.4g} Hz ({mode.supporting_orders})",
+                    (mode.frequency_hz * factor, 1.0), xycoords=("data", "axes fraction"),
+                    rotation=90, va="top", ha="right", fontsize="x-small")
+    ax.set_xlabel(f"natural {axis_label}")
+    ax.set_ylabel("model order")
+    ax.grid(True, alpha=0.3)
+    if any(groups[name][0] for name, _, _ in styles):
+        ax.legend(loc="lower right", fontsize="small")
     if title:
         ax.set_title(title)
     return _finish(figure, filename)

@@ -247,8 +247,7 @@ def test_python_m_ctid_plot_draws_every_document(documents, tmp_path):
 
     drawn = 0
     for kind, (path, _) in documents.items():
-        # oma_result has no figure yet (docs/oma.md, "Not yet").
-        for figure_kind in plot.DOCUMENT_KINDS.get(kind, ()):
+        for figure_kind in plot.DOCUMENT_KINDS[kind]:
             extra = []
             if figure_kind == "frf_matrix_overlay":
                 extra = ["--frf", str(documents["mimo_frf"][0])]

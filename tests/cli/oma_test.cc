@@ -71,7 +71,7 @@ TEST_F(OmaCommand, BadUsageNamesTheFlag) {
   EXPECT_THAT(r.err, HasSubstr("--method is 'fdd'"));
   r = ctid({"oma", noise, "--output-columns", "a:c", "--max-order", "40", "--block-rows", "10"});
   EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.err, HasSubstr("max_order is 40; the Hankel matrix of 10 block rows"));
+  EXPECT_THAT(r.err, HasSubstr("--max-order is 40; the Hankel matrix of 10 block rows"));
   r = ctid({"oma", noise, "--output-columns", "a:c", "--max-order", "700"});
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("the record has 4000 samples"));
