@@ -1,6 +1,7 @@
 #include "command.h"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -8,8 +9,8 @@
 #include <limits>
 #include <map>
 #include <new>
-#include <regex>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <utility>
 #include <vector>
@@ -112,24 +113,36 @@ std::string flag_for(const std::vector<std::string>& components, const CLI::App&
 }  // namespace
 
 std::string with_flag_names(const std::string& message, const CLI::App& app) {
-  static const std::regex path(R"(\b[A-Z][A-Za-z]*Options((?:\.[a-z_][a-z_0-9]*)+))");
+  // Scanned by hand: std::regex trips GCC 12's -Wmaybe-uninitialized under the sanitizers.
+  const auto lower = [](char c) { return (c >= 'a' && c <= 'z') || c == '_'; };
+  const auto letter = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); };
+  constexpr std::string_view kMark = "Options.";
   std::string out;
-  auto from = message.cbegin();
-  for (std::sregex_iterator it(message.begin(), message.end(), path), end; it != end; ++it) {
-    const std::smatch& match = *it;
+  std::size_t from = 0;
+  for (std::size_t found = message.find(kMark); found != std::string::npos;
+       found = message.find(kMark, found + 1)) {
+    std::size_t start = found;  // the struct's name: letters back to a capital
+    while (start > from && letter(message[start - 1])) --start;
+    if (start == found || !(message[start] >= 'A' && message[start] <= 'Z')) continue;
     std::vector<std::string> components;
-    const std::string fields = match[1].str().substr(1);
-    for (std::size_t at = 0; at <= fields.size();) {
-      const std::size_t dot = std::min(fields.find('.', at), fields.size());
-      components.push_back(fields.substr(at, dot - at));
-      at = dot + 1;
+    std::size_t at = found + kMark.size() - 1;  // at the '.'
+    while (at + 1 < message.size() && message[at] == '.' && lower(message[at + 1])) {
+      std::size_t end = at + 1;
+      while (end < message.size() &&
+             (lower(message[end]) || std::isdigit(static_cast<unsigned char>(message[end])))) {
+        ++end;
+      }
+      components.push_back(message.substr(at + 1, end - at - 1));
+      at = end;
     }
     const std::string flag = flag_for(components, app);
-    out.append(from, match[0].first);
-    out += flag.empty() ? match[0].str() : flag;
-    from = match[0].second;
+    if (flag.empty()) continue;
+    out.append(message, from, start - from);
+    out += flag;
+    from = at;
+    found = at - 1;
   }
-  out.append(from, message.cend());
+  out.append(message, from, std::string::npos);
   return out;
 }
 
