@@ -123,6 +123,13 @@ bool valid_name(std::string_view name) {
          trim(name) == name;
 }
 
+// What format_csv can write so that it reads back: no quote or line break, no surrounding
+// blanks (a name with a delimiter is written quoted).
+bool writable_name(std::string_view name) {
+  return !name.empty() && name.find_first_of("\"\n\r") == std::string_view::npos &&
+         trim(name) == name;
+}
+
 std::string join_names(const std::vector<std::string>& names) {
   std::string joined;
   for (size_t i = 0; i < names.size(); ++i) {
@@ -298,6 +305,9 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
         const std::string_view name = fields[i];
         require(!name.empty(), source, ":", line_number, ": header field ", i + 1,
                 " is empty; every column needs a name");
+        require(name.find('"') == std::string_view::npos, source, ":", line_number,
+                ": column name '", echo(name),
+                "' holds a double quote; quote a name whole (\"name\") or not at all");
         for (size_t j = 0; j < i; ++j) {
           require(fields[j] != name, source, ":", line_number, ": column name '", echo(name),
                   "' appears twice in the header");
@@ -372,7 +382,7 @@ std::string format_csv(const CsvTable& table) {
           " names but ", table.columns.size(), " columns");
   const Eigen::Index rows = table.columns.front().size();
   for (size_t i = 0; i < table.names.size(); ++i) {
-    require(valid_name(table.names[i]), "CSV column name '", table.names[i], "' is invalid");
+    require(writable_name(table.names[i]), "CSV column name '", table.names[i], "' is invalid");
     require(table.columns[i].size() == rows, "CSV column '", table.names[i], "' has ",
             table.columns[i].size(), " values but column '", table.names[0], "' has ", rows);
   }
@@ -381,7 +391,10 @@ std::string format_csv(const CsvTable& table) {
   for (const CsvDeclaration& d : table.declarations) text += "# " + d.key + ": " + d.value + "\n";
   for (size_t i = 0; i < table.names.size(); ++i) {
     if (i > 0) text += ',';
-    text += table.names[i];
+    // Quoted when it holds a delimiter or starts like a comment, so it reads back whole.
+    const std::string& name = table.names[i];
+    const bool quote = name.find_first_of(",;\t") != std::string::npos || name.front() == '#';
+    text += quote ? "\"" + name + "\"" : name;
   }
   text += '\n';
   char buffer[32];
