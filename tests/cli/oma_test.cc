@@ -11,6 +11,7 @@
 
 #include "cli/run_ctid.h"
 #include "ctid/io/documents.h"
+#include "support/sanitizers.h"
 
 namespace ctid::cli {
 namespace {
@@ -36,6 +37,9 @@ class OmaCommand : public testing::CliTest {
 };
 
 TEST_F(OmaCommand, FlexibleStructureWritesTheModesAndTheDocument) {
+  CTID_SKIP_UNDER_SANITIZERS(
+      "the same analysis runs in OmaFlexibleStructure.WellExcitedModesAgreeWithTheInputOutputFit, "
+      "and NoResonanceExitsThreeWithTheVerdict runs the command's whole path");
   const auto r = ctid({"oma", flexible(), "--output-columns", "y1_acc:y28_acc", "--time-column",
                        "t_s", "--max-order", "60", "--block-rows", "30", "--uncertainty-blocks",
                        "0", "-o", "oma.json"});
