@@ -53,6 +53,9 @@ def compare_json(before, after, name):
     new = dict(flatten(json.loads(after.read_text())))
     renamed = {}
     for path, value in old.items():
+        if path in new:  # both sides already in the same schema: nothing to rename
+            renamed[path] = value
+            continue
         for old_prefix, new_prefix in RENAMED.get(name, []):
             if path.startswith(old_prefix):
                 path = None if new_prefix is None else new_prefix + path[len(old_prefix):]

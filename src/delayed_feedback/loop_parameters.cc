@@ -5,16 +5,11 @@
 #include <limits>
 
 #include "ctid/core/error.h"
+#include "delayed_feedback/internal/loop_polynomials.h"
 #include "delayed_feedback/internal/loop_simulation.h"
 
 namespace ctid {
 namespace {
-
-Eigen::VectorXd padded(const Polynomial& p, int size) {
-  Eigen::VectorXd v = Eigen::VectorXd::Zero(size);
-  for (int i = 0; i <= p.degree() && i < size; ++i) v(i) = p.coefficient(i);
-  return v;
-}
 
 TransferFunction monic_model(const Eigen::VectorXd& rho, int offset, int order) {
   Eigen::VectorXd den(order + 1);
@@ -42,8 +37,8 @@ Eigen::VectorXd loop_parameters(const DelayedFeedbackLoop& loop) {
   const int n = f.denominator().degree();
   const int m = h.denominator().degree();
   Eigen::VectorXd rho(2 * (n + m));
-  rho << padded(f.denominator(), n), padded(f.numerator(), n), padded(h.denominator(), m),
-      padded(h.numerator(), m);
+  rho << internal::padded(f.denominator(), n), internal::padded(f.numerator(), n),
+      internal::padded(h.denominator(), m), internal::padded(h.numerator(), m);
   return rho;
 }
 

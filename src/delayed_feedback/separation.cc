@@ -50,12 +50,6 @@ struct KroneckerResidual {
   }
 };
 
-Eigen::VectorXd padded(const Polynomial& p, int size) {
-  Eigen::VectorXd v = Eigen::VectorXd::Zero(size);
-  for (int i = 0; i <= p.degree() && i < size; ++i) v(i) = p.coefficient(i);
-  return v;
-}
-
 // Convolution matrix: conv(x, b) = M x for x of length `len`.
 Eigen::MatrixXd convolution_matrix(const Polynomial& b, int len, int rows) {
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(rows, len);
@@ -69,8 +63,8 @@ Eigen::VectorXd pack(const TransferFunction& f, const TransferFunction& h, int n
   const TransferFunction fn = f.normalized();
   const TransferFunction hn = h.normalized();
   Eigen::VectorXd p(2 * (n + m));
-  p << padded(fn.denominator(), n), padded(fn.numerator(), n), padded(hn.denominator(), m),
-      padded(hn.numerator(), m);
+  p << internal::padded(fn.denominator(), n), internal::padded(fn.numerator(), n),
+      internal::padded(hn.denominator(), m), internal::padded(hn.numerator(), m);
   return p;
 }
 
@@ -177,7 +171,8 @@ double kronecker_cost(const Polynomial& alpha, const Polynomial& beta, const Pol
   const int n = forward.denominator().degree();
   const int m = feedback.denominator().degree();
   const int q = n + m;
-  KroneckerResidual r{padded(alpha, q), padded(beta, q), padded(gamma, q - 1), n, m};
+  KroneckerResidual r{internal::padded(alpha, q), internal::padded(beta, q),
+                      internal::padded(gamma, q - 1), n, m};
   const Eigen::VectorXd p = pack(forward, feedback, n, m);
   Eigen::VectorXd res(3 * q - 1);
   const double* blocks[] = {p.data()};
@@ -192,11 +187,11 @@ GcdSeparationResult separate_approximate_gcd(const Polynomial& alpha, const Poly
   require(alpha.degree() == q - 1, "separate_approximate_gcd: alpha must have degree n + m - 1 ",
           "= ", q - 1, " (a forward F of relative degree 1), got ", alpha.degree());
   const Eigen::VectorXd b = beta.monic().coefficients();
-  const Truncation f = truncate_observable(padded(alpha, q), b, n);
+  const Truncation f = truncate_observable(internal::padded(alpha, q), b, n);
   // H̃ = γ̂/α̂ with α̂ made monic: order q - 1, keep m.
   const double lead = alpha.leading();
   const Truncation h =
-      truncate_observable(padded(gamma, q - 1) / lead, alpha.coefficients() / lead, m);
+      truncate_observable(internal::padded(gamma, q - 1) / lead, alpha.coefficients() / lead, m);
   GcdSeparationResult r;
   r.forward = f.model;
   r.feedback = h.model;
@@ -215,8 +210,8 @@ KroneckerSeparationResult separate_kronecker(const Polynomial& alpha, const Poly
   check(alpha, beta, n, m, "separate_kronecker");
   options.validate();
   const int q = n + m;
-  const Eigen::VectorXd av = padded(alpha, q), bv = padded(beta.monic(), q),
-                        gv = padded(gamma, q - 1);
+  const Eigen::VectorXd av = internal::padded(alpha, q), bv = internal::padded(beta.monic(), q),
+                        gv = internal::padded(gamma, q - 1);
 
   std::vector<std::pair<std::string, Eigen::VectorXd>> starts;
   // With α̂ of low degree the GCD start is unavailable; the root splits remain.
@@ -234,7 +229,7 @@ KroneckerSeparationResult separate_kronecker(const Polynomial& alpha, const Poly
       Eigen::VectorXd nh = Eigen::VectorXd::Zero(m);
       if (!nfp.is_zero()) nh = convolution_matrix(nfp, m, q - 1).colPivHouseholderQr().solve(gv);
       Eigen::VectorXd p(2 * q);
-      p << padded(df, n), nf, padded(dh, m), nh;
+      p << internal::padded(df, n), nf, internal::padded(dh, m), nh;
       starts.emplace_back("roots split " + std::to_string(index++), p);
     }
   }

@@ -156,8 +156,8 @@ const Eigen::VectorXd& CsvTable::column(std::string_view name) const {
     }
     return columns[i];
   }
-  throw InvalidArgument(internal::concat(source, ": no column '", echo(name),
-                                         "' (columns: ", join_names(names), ")"));
+  throw InvalidArgument(ctid::internal::concat(source, ": no column '", echo(name),
+                                               "' (columns: ", join_names(names), ")"));
 }
 
 void CsvTable::add_column(std::string name, Eigen::VectorXd values) {
@@ -334,8 +334,8 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
       const auto problem = [&](const std::string& what) {
         table.unreadable.try_emplace(
             table.names[i],
-            internal::concat(source, ":", line_number, ": column '", echo(table.names[i]),
-                             "' (field ", i + 1, "): ", what));
+            ctid::internal::concat(source, ":", line_number, ": column '", echo(table.names[i]),
+                                   "' (field ", i + 1, "): ", what));
         values.push_back(std::numeric_limits<double>::quiet_NaN());
       };
       if (fields[i].empty()) {

@@ -23,8 +23,8 @@ ExcitationKind excitation_kind_from_string(std::string_view name) {
   if (name == "white") return ExcitationKind::white_noise;
   if (name == "prbs") return ExcitationKind::prbs;
   if (name == "multisine") return ExcitationKind::multisine;
-  throw InvalidArgument(
-      internal::concat("excitation signal '", name, "' is unknown; use white, prbs or multisine"));
+  throw InvalidArgument(ctid::internal::concat("excitation signal '", name,
+                                               "' is unknown; use white, prbs or multisine"));
 }
 
 std::string to_string(FrequencyGrid grid) { return std::string(enum_name(grid)); }
@@ -32,7 +32,7 @@ std::string to_string(FrequencyGrid grid) { return std::string(enum_name(grid));
 FrequencyGrid frequency_grid_from_string(std::string_view name) {
   if (const auto grid = enum_from_name<FrequencyGrid>(name)) return *grid;
   throw InvalidArgument(
-      internal::concat("frequency grid '", name, "' is unknown; use full or odd"));
+      ctid::internal::concat("frequency grid '", name, "' is unknown; use full or odd"));
 }
 
 void ExcitationSpec::validate() const {
@@ -135,7 +135,7 @@ ExcitationSpec excitation_spec_from_json(const nlohmann::json& value, const std:
   const JsonObject o(value, source);
   const std::string type = o.string("type");
   if (type != "excitation") {
-    o.fail("type", internal::concat("is '", type, "' but an excitation is expected here"));
+    o.fail("type", ctid::internal::concat("is '", type, "' but an excitation is expected here"));
   }
   o.string_or("description", "");
   ExcitationSpec spec;
@@ -147,7 +147,7 @@ ExcitationSpec excitation_spec_from_json(const nlohmann::json& value, const std:
   spec.samples = int_field(o, "samples", spec.samples);
   spec.sample_time = o.number("sample_time");
   const long long seed = o.integer_or("seed", static_cast<long long>(spec.seed));
-  if (seed < 0) o.fail("seed", internal::concat("is ", seed, "; it must be >= 0"));
+  if (seed < 0) o.fail("seed", ctid::internal::concat("is ", seed, "; it must be >= 0"));
   spec.seed = static_cast<std::uint64_t>(seed);
   switch (spec.kind) {
     case ExcitationKind::white_noise:
@@ -174,7 +174,7 @@ ExcitationSpec excitation_spec_from_json(const nlohmann::json& value, const std:
   try {
     spec.validate();
   } catch (const InvalidArgument& e) {
-    throw InvalidArgument(internal::concat(source, ": excitation: ", e.what()));
+    throw InvalidArgument(ctid::internal::concat(source, ": excitation: ", e.what()));
   }
   return spec;
 }

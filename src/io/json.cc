@@ -153,8 +153,9 @@ namespace {
 const nlohmann::json& require_object(const nlohmann::json& value, const std::string& source,
                                      const std::string& path) {
   if (!value.is_object()) {
-    throw InvalidArgument(internal::concat(source, ": ", path.empty() ? "document" : path,
-                                           ": expected a JSON object but found ", kind_of(value)));
+    throw InvalidArgument(ctid::internal::concat(source, ": ", path.empty() ? "document" : path,
+                                                 ": expected a JSON object but found ",
+                                                 kind_of(value)));
   }
   return value;
 }
@@ -174,7 +175,7 @@ void JsonObject::fail(std::string_view key, std::string_view message) const {
   // A JSON string may hold "\u0000": a NUL byte in the message would end what() there
   // (the message was cut mid-word), so it is written \x00 as the frame writes other control
   // bytes.
-  std::string text = internal::concat(source_, ": ", field_path(key), ": ", message);
+  std::string text = ctid::internal::concat(source_, ": ", field_path(key), ": ", message);
   for (size_t at = text.find('\0'); at != std::string::npos; at = text.find('\0', at)) {
     text.replace(at, 1, "\\x00");
   }

@@ -24,9 +24,9 @@ std::size_t position(const CsvTable& table, const std::string& name, std::string
   const auto it = std::find(table.names.begin(), table.names.end(), name);
   if (it == table.names.end()) {
     const std::string in_range = entry == name ? "" : " (in range '" + entry + "')";
-    throw InvalidArgument(internal::concat(table.source, ": ", role, " column '", name,
-                                           "' not found", in_range, "; columns are ",
-                                           column_list(table)));
+    throw InvalidArgument(ctid::internal::concat(table.source, ": ", role, " column '", name,
+                                                 "' not found", in_range, "; columns are ",
+                                                 column_list(table)));
   }
   return static_cast<std::size_t>(it - table.names.begin());
 }
@@ -112,7 +112,7 @@ MimoData mimo_data_from_table(const CsvTable& table, const MimoCsvColumns& colum
         .with_names(inputs, outputs)
         .with_input_hold(hold);
   } catch (const InvalidArgument& e) {
-    throw InvalidArgument(internal::concat(table.source, ": ", e.what()));
+    throw InvalidArgument(ctid::internal::concat(table.source, ": ", e.what()));
   }
 }
 

@@ -25,17 +25,17 @@ auto construct(const JsonObject& object, std::string_view what, Make&& make) {
     return make();
   } catch (const InvalidArgument& e) {
     const std::string where = object.path().empty() ? std::string(what) : object.path();
-    throw InvalidArgument(internal::concat(object.source(), ": ", where, ": ", e.what()));
+    throw InvalidArgument(ctid::internal::concat(object.source(), ": ", where, ": ", e.what()));
   }
 }
 
 Polynomial polynomial_field(const JsonObject& object, std::string_view key) {
   const Eigen::VectorXd c = object.numbers(key);
   if (c.size() > kMaxModelDegree + 1) {
-    object.fail(key, internal::concat("has ", c.size(),
-                                      " coefficients; ctid reads polynomials of "
-                                      "degree at most ",
-                                      kMaxModelDegree));
+    object.fail(key, ctid::internal::concat("has ", c.size(),
+                                            " coefficients; ctid reads polynomials of "
+                                            "degree at most ",
+                                            kMaxModelDegree));
   }
   try {
     return Polynomial(c);
@@ -47,7 +47,8 @@ Polynomial polynomial_field(const JsonObject& object, std::string_view key) {
 void check_type(const JsonObject& object, std::string_view expected) {
   const std::string type = object.string("type");
   if (type != expected) {
-    object.fail("type", internal::concat("is '", type, "' but a ", expected, " is expected here"));
+    object.fail("type",
+                ctid::internal::concat("is '", type, "' but a ", expected, " is expected here"));
   }
   object.string_or("description", "");
 }
@@ -72,8 +73,9 @@ AdditiveModel read_additive_model(const JsonObject& object) {
     submodel.b = polynomial_field(entry, "numerator_ascending");
     const long long integrators = entry.integer_or("integrators", 0);
     if (integrators < 0 || integrators > kMaxIntegrators) {
-      entry.fail("integrators", internal::concat("is ", integrators, "; it must be between 0 and ",
-                                                 kMaxIntegrators));
+      entry.fail("integrators",
+                 ctid::internal::concat("is ", integrators, "; it must be between 0 and ",
+                                        kMaxIntegrators));
     }
     submodel.integrators = static_cast<int>(integrators);
     entry.string_or("description", "");
@@ -99,24 +101,26 @@ MimoAdditiveModel read_mimo_additive_model(const JsonObject& object) {
     const std::vector<Eigen::VectorXd> rows = entry.number_rows("numerators_ascending");
     if (static_cast<long long>(rows.size()) != inputs * outputs) {
       entry.fail("numerators_ascending",
-                 internal::concat("has ", rows.size(), " numerators; ", outputs, " outputs x ",
-                                  inputs, " inputs need ", inputs * outputs,
-                                  " (output by output, input by input)"));
+                 ctid::internal::concat("has ", rows.size(), " numerators; ", outputs,
+                                        " outputs x ", inputs, " inputs need ", inputs * outputs,
+                                        " (output by output, input by input)"));
     }
     // A numerator written with trailing zeros ([0.5, 0.0]) is the polynomial it denotes.
     for (const Eigen::VectorXd& row : rows) {
       if (row.size() > kMaxModelDegree + 1) {
-        entry.fail("numerators_ascending",
-                   internal::concat("has a numerator of ", row.size(),
-                                    " coefficients; ctid reads polynomials of degree at most ",
-                                    kMaxModelDegree));
+        entry.fail(
+            "numerators_ascending",
+            ctid::internal::concat("has a numerator of ", row.size(),
+                                   " coefficients; ctid reads polynomials of degree at most ",
+                                   kMaxModelDegree));
       }
       submodel.b.push_back(Polynomial::trimmed(row));
     }
     const long long integrators = entry.integer_or("integrators", 0);
     if (integrators < 0 || integrators > kMaxIntegrators) {
-      entry.fail("integrators", internal::concat("is ", integrators, "; it must be between 0 and ",
-                                                 kMaxIntegrators));
+      entry.fail("integrators",
+                 ctid::internal::concat("is ", integrators, "; it must be between 0 and ",
+                                        kMaxIntegrators));
     }
     submodel.integrators = static_cast<int>(integrators);
     entry.string_or("description", "");
@@ -127,14 +131,16 @@ MimoAdditiveModel read_mimo_additive_model(const JsonObject& object) {
   if (object.has("direct")) {
     const std::vector<Eigen::VectorXd> rows = object.number_rows("direct");
     if (static_cast<long long>(rows.size()) != outputs) {
-      object.fail("direct", internal::concat("has ", rows.size(),
-                                             " rows; it needs one per output (", outputs, ")"));
+      object.fail("direct",
+                  ctid::internal::concat("has ", rows.size(), " rows; it needs one per output (",
+                                         outputs, ")"));
     }
     direct.resize(outputs, inputs);
     for (size_t j = 0; j < rows.size(); ++j) {
       if (rows[j].size() != inputs) {
-        object.fail("direct", internal::concat("[", j, "] has ", rows[j].size(),
-                                               " entries; it needs one per input (", inputs, ")"));
+        object.fail("direct",
+                    ctid::internal::concat("[", j, "] has ", rows[j].size(),
+                                           " entries; it needs one per input (", inputs, ")"));
       }
       direct.row(static_cast<Eigen::Index>(j)) = rows[j].transpose();
     }
@@ -143,9 +149,9 @@ MimoAdditiveModel read_mimo_additive_model(const JsonObject& object) {
   if (object.has("input_delays")) {
     delays = object.numbers("input_delays");
     if (delays.size() != inputs) {
-      object.fail("input_delays",
-                  internal::concat("has ", delays.size(), " entries; it needs one per input (",
-                                   inputs, ") in seconds"));
+      object.fail("input_delays", ctid::internal::concat("has ", delays.size(),
+                                                         " entries; it needs one per input (",
+                                                         inputs, ") in seconds"));
     }
   }
   object.finish();
@@ -284,8 +290,9 @@ ContinuousModel continuous_model_from_json(const nlohmann::json& value, const st
   const std::string type = object.string("type");
   if (type == kTransferFunctionType) return read_transfer_function(object);
   if (type == kAdditiveModelType) return read_additive_model(object);
-  object.fail("type", internal::concat("is '", type, "'; a continuous-time model file needs '",
-                                       kTransferFunctionType, "' or '", kAdditiveModelType, "'"));
+  object.fail("type",
+              ctid::internal::concat("is '", type, "'; a continuous-time model file needs '",
+                                     kTransferFunctionType, "' or '", kAdditiveModelType, "'"));
 }
 
 ContinuousModel read_continuous_model(const std::filesystem::path& path) {

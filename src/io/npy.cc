@@ -35,7 +35,7 @@ class HeaderScanner {
     return false;
   }
   void expect(char c, const char* what) {
-    if (!accept(c)) fail(internal::concat("expected ", what));
+    if (!accept(c)) fail(ctid::internal::concat("expected ", what));
   }
   std::string quoted() {
     skip_space();
@@ -98,8 +98,8 @@ class HeaderScanner {
     }
   }
   [[noreturn]] void fail(const std::string& what) const {
-    throw InvalidArgument(internal::concat(source_, ": malformed .npy header (", what, "): '",
-                                           text_.substr(0, 200), "'"));
+    throw InvalidArgument(ctid::internal::concat(source_, ": malformed .npy header (", what, "): '",
+                                                 text_.substr(0, 200), "'"));
   }
 
  private:
@@ -131,10 +131,10 @@ Header parse_header(std::string_view text, const std::string& source) {
     if (key == "descr") {
       scan.skip_space();
       if (scan.accept('[')) {
-        throw InvalidArgument(
-            internal::concat(source,
-                             ": the array has a structured dtype (named fields); ctid reads plain "
-                             "numeric arrays: save a 2-D float64 array of samples x columns"));
+        throw InvalidArgument(ctid::internal::concat(
+            source,
+            ": the array has a structured dtype (named fields); ctid reads plain "
+            "numeric arrays: save a 2-D float64 array of samples x columns"));
       }
       header.descr = scan.quoted();
       has_descr = true;
@@ -167,9 +167,10 @@ struct Dtype {
 
 Dtype parse_dtype(const std::string& descr, const std::string& source) {
   const auto unsupported = [&](const std::string& why) {
-    return InvalidArgument(internal::concat(source, ": dtype '", descr, "' is not supported (", why,
-                                            "); ctid reads little-endian float64, float32 and "
-                                            "integer arrays: save a.astype('<f8')"));
+    return InvalidArgument(
+        ctid::internal::concat(source, ": dtype '", descr, "' is not supported (", why,
+                               "); ctid reads little-endian float64, float32 and "
+                               "integer arrays: save a.astype('<f8')"));
   };
   if (descr.size() < 3) throw unsupported("not a numeric type");
   const char order = descr[0];
@@ -277,7 +278,7 @@ Layout layout_of(std::string_view bytes, const std::string& source) {
   const std::uint64_t rows = header.shape[0];
   const std::uint64_t columns = header.shape.size() == 2 ? header.shape[1] : 1;
   require(rows > 0 && columns > 0, source, ": the array is empty (shape ", rows,
-          header.shape.size() == 2 ? internal::concat(" x ", columns) : std::string(),
+          header.shape.size() == 2 ? ctid::internal::concat(" x ", columns) : std::string(),
           "); it needs at least one sample and one column");
   // Limits that keep the sizes below from overflowing; far beyond any record in memory.
   require(rows < (std::uint64_t{1} << 40) && columns < (std::uint64_t{1} << 20) &&

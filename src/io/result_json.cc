@@ -14,26 +14,21 @@
 namespace ctid::io {
 namespace {
 
-// JSON has no NaN or infinity; an unknown value is written as null.
-nlohmann::json number(double x) {
-  if (!std::isfinite(x)) return nullptr;
-  return x;
-}
-
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
+using internal::number_or_null;
 
 nlohmann::json modal_json(const ModalEstimate& mode) {
   const ModalParameters& v = mode.value;
   const ModalParameters& se = mode.standard_error;
   return {{"submodel", mode.submodel},
-          {"natural_frequency", number(v.natural_frequency)},
-          {"natural_frequency_standard_error", number(se.natural_frequency)},
-          {"natural_frequency_hz", number(v.natural_frequency / kTwoPi)},
-          {"natural_frequency_hz_standard_error", number(se.natural_frequency / kTwoPi)},
-          {"damping_ratio", number(v.damping_ratio)},
-          {"damping_ratio_standard_error", number(se.damping_ratio)},
-          {"gain", number(v.gain)},
-          {"gain_standard_error", number(se.gain)}};
+          {"natural_frequency", number_or_null(v.natural_frequency)},
+          {"natural_frequency_standard_error", number_or_null(se.natural_frequency)},
+          {"natural_frequency_hz", number_or_null(v.natural_frequency / internal::kTwoPi)},
+          {"natural_frequency_hz_standard_error",
+           number_or_null(se.natural_frequency / internal::kTwoPi)},
+          {"damping_ratio", number_or_null(v.damping_ratio)},
+          {"damping_ratio_standard_error", number_or_null(se.damping_ratio)},
+          {"gain", number_or_null(v.gain)},
+          {"gain_standard_error", number_or_null(se.gain)}};
 }
 
 // The flat layout of a mode in the document back into a ModalEstimate's fields.
@@ -158,7 +153,7 @@ void check_keys(const nlohmann::json& value, const std::vector<std::string>& fie
 nlohmann::json to_json(const EstimationResult& result) {
   nlohmann::json value = fields_to_json(result);
   value["input_delay_samples"] = value.at("input_delay");
-  value["input_delay"] = number(result.model.input_delay());
+  value["input_delay"] = number_or_null(result.model.input_delay());
   value["data_checks"] = value.at("checks");
   value.erase("checks");
   nlohmann::json modes = nlohmann::json::array();

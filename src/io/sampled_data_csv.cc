@@ -29,7 +29,7 @@ TimeGrid uniform_time_grid(const CsvTable& table, const std::string& time_column
     return TimeGrid{checked.start_time(), checked.sample_time()};
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(
-        internal::concat(table.source, ": column '", time_column, "': ", e.what()));
+        ctid::internal::concat(table.source, ": column '", time_column, "': ", e.what()));
   }
 }
 
@@ -45,8 +45,8 @@ std::optional<Hold> declared_input_hold(const CsvTable& table) {
   if (d == nullptr) return std::nullopt;
   if (d->value == "zoh" || d->value == "zero_order_hold") return Hold::zero_order_hold;
   if (d->value == "foh" || d->value == "first_order_hold") return Hold::first_order_hold;
-  throw InvalidArgument(internal::concat(table.source, ":", d->line, ": input_hold is '", d->value,
-                                         "'; it must be zoh or foh"));
+  throw InvalidArgument(ctid::internal::concat(table.source, ":", d->line, ": input_hold is '",
+                                               d->value, "'; it must be zoh or foh"));
 }
 
 SampledData sampled_data_from_table(const CsvTable& table, const CsvColumns& columns) {

@@ -18,16 +18,11 @@
 namespace ctid::io {
 namespace {
 
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
-
-nlohmann::json number(double x) {
-  if (!std::isfinite(x)) return nullptr;
-  return x;
-}
+using internal::number_or_null;
 
 nlohmann::json hz(const std::vector<double>& rad_per_s) {
   nlohmann::json out = nlohmann::json::array();
-  for (double w : rad_per_s) out.push_back(number(w / kTwoPi));
+  for (double w : rad_per_s) out.push_back(number_or_null(w / internal::kTwoPi));
   return out;
 }
 
@@ -48,8 +43,9 @@ void add_track_hz(nlohmann::json& value, const Result& result) {
     nlohmann::json& out = value["tracks"][t];
     out["natural_frequency_hz"] = hz(track.natural_frequency);
     out["natural_frequency_se_hz"] = hz(track.natural_frequency_se);
-    out["mean_natural_frequency_hz"] = number(track.mean_natural_frequency / kTwoPi);
-    out["frequency_drift_hz"] = number(track.frequency_drift / kTwoPi);
+    out["mean_natural_frequency_hz"] =
+        number_or_null(track.mean_natural_frequency / internal::kTwoPi);
+    out["frequency_drift_hz"] = number_or_null(track.frequency_drift / internal::kTwoPi);
   }
 }
 
@@ -66,14 +62,15 @@ nlohmann::json to_json(const TrackingResult& result) {
       modes.push_back(
           {{"submodel", window.modes[k].submodel},
            {"track", window.tracks[k]},
-           {"natural_frequency", number(v.natural_frequency)},
-           {"natural_frequency_standard_error", number(se.natural_frequency)},
-           {"natural_frequency_hz", number(v.natural_frequency / kTwoPi)},
-           {"natural_frequency_hz_standard_error", number(se.natural_frequency / kTwoPi)},
-           {"damping_ratio", number(v.damping_ratio)},
-           {"damping_ratio_standard_error", number(se.damping_ratio)},
-           {"gain", number(v.gain)},
-           {"gain_standard_error", number(se.gain)}});
+           {"natural_frequency", number_or_null(v.natural_frequency)},
+           {"natural_frequency_standard_error", number_or_null(se.natural_frequency)},
+           {"natural_frequency_hz", number_or_null(v.natural_frequency / internal::kTwoPi)},
+           {"natural_frequency_hz_standard_error",
+            number_or_null(se.natural_frequency / internal::kTwoPi)},
+           {"damping_ratio", number_or_null(v.damping_ratio)},
+           {"damping_ratio_standard_error", number_or_null(se.damping_ratio)},
+           {"gain", number_or_null(v.gain)},
+           {"gain_standard_error", number_or_null(se.gain)}});
     }
     value["windows"][w]["modes"] = std::move(modes);
   }
@@ -90,9 +87,10 @@ nlohmann::json to_json(const MimoTrackingResult& result) {
     for (std::size_t k = 0; k < result.windows[w].modes.size(); ++k) {
       const MimoMode& m = result.windows[w].modes[k];
       modes[k]["track"] = result.windows[w].tracks[k];
-      modes[k]["mac"] = number(result.windows[w].mac[k]);
-      modes[k]["natural_frequency_hz"] = number(m.natural_frequency / kTwoPi);
-      modes[k]["natural_frequency_se_hz"] = number(m.natural_frequency_se / kTwoPi);
+      modes[k]["mac"] = number_or_null(result.windows[w].mac[k]);
+      modes[k]["natural_frequency_hz"] = number_or_null(m.natural_frequency / internal::kTwoPi);
+      modes[k]["natural_frequency_se_hz"] =
+          number_or_null(m.natural_frequency_se / internal::kTwoPi);
     }
   }
   add_track_hz(value, result);
@@ -122,9 +120,9 @@ std::string table_csv(const Result& result) {
     }
     for (std::size_t t = 0; t < result.tracks.size(); ++t) {
       const auto& track = result.tracks[t];
-      out << head << t + 1 << "," << cell(track.natural_frequency[w] / kTwoPi) << ","
-          << cell(track.natural_frequency_se[w] / kTwoPi) << "," << cell(track.damping_ratio[w])
-          << "," << cell(track.damping_ratio_se[w]) << ",";
+      out << head << t + 1 << "," << cell(track.natural_frequency[w] / internal::kTwoPi) << ","
+          << cell(track.natural_frequency_se[w] / internal::kTwoPi) << ","
+          << cell(track.damping_ratio[w]) << "," << cell(track.damping_ratio_se[w]) << ",";
       if constexpr (mac) out << cell(track.mac[w]) << ",";
       out << usable << "\n";
     }

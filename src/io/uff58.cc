@@ -160,7 +160,7 @@ struct Record {
 
 // One dataset 58 whose first body line (ID line 1) is line `first` (1-based) of the file.
 Record parse_record(const std::vector<std::string>& body, int first, const std::string& source) {
-  const std::string where = internal::concat(source, ": dataset 58 at line ", first - 1);
+  const std::string where = ctid::internal::concat(source, ": dataset 58 at line ", first - 1);
   require(body.size() >= 11, where, ": ", body.size(),
           " lines before the closing -1; a dataset 58 has 11 header records before its data");
   // Record 6: (2(I5,I10),2(1X,10A,I10,I4)).

@@ -22,25 +22,30 @@
 
 namespace ctid {
 
-namespace {
+namespace internal {
 
 // A filter dz/dt = A z + b x, y = C z + d x discretised for one hold, stepped one sample at a
-// time: z(t_k) = Φ z(t_{k-1}) + γ_current x_{k-1} + γ_next x_k.
-struct Discretized {
+// time: z(t_k) = Φ z(t_{k-1}) + γ_current x_{k-1} + γ_next x_k. Named, not anonymous: a member
+// of the public RecursiveSrivc::State holds it.
+struct RecursiveFilterStep {
   Eigen::MatrixXd phi;
   Eigen::VectorXd current;
   Eigen::VectorXd next;
   Eigen::MatrixXd c;
   Eigen::VectorXd d;
 
-  Discretized() = default;
-  Discretized(const FilterRealization& f, double h, Hold hold) : c(f.c), d(f.d) {
+  RecursiveFilterStep() = default;
+  RecursiveFilterStep(const FilterRealization& f, double h, Hold hold) : c(f.c), d(f.d) {
     DelayedHoldDiscretization w = discretize_delayed(f.a, f.b, h, 0.0, hold);
     phi = std::move(w.phi);
     current = w.current.col(0);
     next = w.next.col(0);
   }
 };
+
+}  // namespace internal
+
+namespace {
 
 bool stable_denominator(const Polynomial& a, int n) {
   if (a.degree() != n || !a.coefficients().allFinite()) return false;
@@ -75,11 +80,11 @@ struct RecursiveSrivc::State {
   Eigen::MatrixXd p;
 
   // The filters of the current prefilter estimate.
-  Eigen::VectorXd filter_theta;  // θ the filters were built from
-  Eigen::MatrixXd to_physical;   // n x n: state of one 1/Â bank -> (p^k/Â) x, k < n
-  double gain = 1.0;             // x̂ stage carries x̂ / gain
-  Discretized u_filter;          // states [u bank (n); x̂ bank (n)]
-  Discretized y_filter;          // states n
+  Eigen::VectorXd filter_theta;            // θ the filters were built from
+  Eigen::MatrixXd to_physical;             // n x n: state of one 1/Â bank -> (p^k/Â) x, k < n
+  double gain = 1.0;                       // x̂ stage carries x̂ / gain
+  internal::RecursiveFilterStep u_filter;  // states [u bank (n); x̂ bank (n)]
+  internal::RecursiveFilterStep y_filter;  // states n
   Eigen::VectorXd zu;
   Eigen::VectorXd zy;
   Eigen::VectorXd u_out;  // rows 0..n p^k u_f, row n+1 x̂, rows n+2..2n+2 p^k x̂_f
@@ -134,8 +139,8 @@ struct RecursiveSrivc::State {
     u_real.c.bottomRows(n + 1) = new_gain * chain.c;
     u_real.d.tail(n + 1) = new_gain * chain.d;
     const Eigen::MatrixXd new_to_physical = bank.c.topRows(n);
-    u_filter = Discretized(u_real, h, input_hold);
-    y_filter = Discretized(bank, h, options.output_interpolation);
+    u_filter = internal::RecursiveFilterStep(u_real, h, input_hold);
+    y_filter = internal::RecursiveFilterStep(bank, h, options.output_interpolation);
     zu = Eigen::VectorXd::Zero(2 * n);
     zy = Eigen::VectorXd::Zero(n);
     refiltered = 0;

@@ -11,7 +11,7 @@
 namespace ctid {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kNoValue = std::numeric_limits<double>::quiet_NaN();
 
 // CSV-safe one-line text: commas and line breaks become spaces, quotes are dropped.
 std::string csv_text(const std::string& text) {
@@ -37,7 +37,7 @@ double geometric_mean_ratio(const std::vector<std::pair<double, double>>& pairs)
       ++count;
     }
   }
-  return count == 0 ? kNaN : std::exp(sum / count);
+  return count == 0 ? kNoValue : std::exp(sum / count);
 }
 
 }  // namespace
@@ -113,7 +113,7 @@ std::vector<ParameterTrend> parameter_trends(const StudyResult& result) {
       trend.mse_over_prediction = geometric_mean_ratio(to_prediction);
       trend.mse_over_reference = geometric_mean_ratio(to_reference);
       trend.scaled_mse_at_largest =
-          rows.empty() ? kNaN : rows.back()->samples * rows.back()->mean_squared_error;
+          rows.empty() ? kNoValue : rows.back()->samples * rows.back()->mean_squared_error;
       trends.push_back(trend);
     }
   }

@@ -19,7 +19,7 @@
 #include "ctid/io/file.h"
 #include "ctid/io/json.h"
 
-namespace ctid::cli {
+namespace ctid::cli::batch_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -308,4 +308,4 @@ TEST_F(BatchCommand, GlobNamesAreUniqueAndSafe) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::batch_test

@@ -51,7 +51,7 @@
 #include "cli/run_ctid.h"
 #include "support/sanitizers.h"
 
-namespace ctid::cli {
+namespace ctid::cli::catalogue_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -1280,4 +1280,4 @@ TEST(CatalogueTable, CoversEveryCommand) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::catalogue_test

@@ -16,8 +16,9 @@
 #include "ctid/core/error.h"
 #include "ctid/core/polynomial.h"
 #include "ctid/core/transfer_function.h"
+#include "support/sanitizers.h"
 
-namespace ctid::cli {
+namespace ctid::cli::conventions_test {
 namespace {
 
 using testing::convention_violations;
@@ -115,6 +116,8 @@ class ConventionsOfRuns : public testing::Section61Test {
 };
 
 TEST_F(ConventionsOfRuns, SummariesOfEveryEstimatingCommand) {
+  CTID_SKIP_UNDER_SANITIZERS(
+      "every command's own CLI tests run its summary path; this runs all of them again");
   // Section 6.1: four second-order modes with their modal table, the paper's two models.
   const std::string fit =
       expect_conventional({"fit", "d.csv", "--modes", "4", "--noise", "white", "-o", "r.json"});
@@ -183,4 +186,4 @@ TEST_F(ConventionsOfRuns, EveryCommandSuggestsTheFlagAMisspeltOneResembles) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::conventions_test

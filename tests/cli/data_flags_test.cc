@@ -12,7 +12,7 @@
 #include "cli/run_ctid.h"
 #include "ctid/io/json.h"
 
-namespace ctid::cli {
+namespace ctid::cli::data_flags_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -161,4 +161,4 @@ TEST_F(DataFlags, RangesAndDecimationAreRecordedAndBadOnesRefused) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::data_flags_test

@@ -2,7 +2,7 @@
 // that command, or the closest command, and names nothing when no name is close.
 #include "cli/run_ctid.h"
 
-namespace ctid::cli {
+namespace ctid::cli::did_you_mean_test {
 namespace {
 
 using testing::CliTest;
@@ -61,4 +61,4 @@ TEST_F(CliTest, CorrectlySpeltFlagsStillRun) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::did_you_mean_test

@@ -10,8 +10,9 @@
 #include "ctid/io/sampled_data_csv.h"
 #include "ctid/simulation/delayed_feedback.h"
 #include "support/de_iuliis_systems.h"
+#include "support/sanitizers.h"
 
-namespace ctid::cli {
+namespace ctid::cli::feedback_test {
 namespace {
 
 using testing::CliTest;
@@ -94,6 +95,9 @@ TEST_F(CliTest, FeedbackRecoversTheLoopAndWritesJson) {
 }
 
 TEST_F(CliTest, FeedbackResultIsAModelForSimulate) {
+  CTID_SKIP_UNDER_SANITIZERS(
+      "CliTest.FeedbackRecoversTheLoopAndWritesJson runs ctid feedback; the simulate tests read "
+      "model files");
   io::write_sampled_data(path("loop.csv"), informative_record());
   ASSERT_EQ(ctid({"feedback", path("loop.csv").string(), "--forward-order", "3", "--feedback-order",
                   "3", "--delay", "0.5", "--output", "result.json", "-q"})
@@ -110,4 +114,4 @@ TEST_F(CliTest, FeedbackResultIsAModelForSimulate) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::feedback_test

@@ -19,7 +19,7 @@
 #include "ctid/refined_iv/frf_matrix_fit.h"
 #include "support/mimo_systems.h"
 
-namespace ctid::cli {
+namespace ctid::cli::fit_frf_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -119,4 +119,4 @@ TEST_F(FitFrfCommand, BadUsageNamesTheProblem) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::fit_frf_test

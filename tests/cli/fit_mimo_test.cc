@@ -24,7 +24,7 @@
 #include "ctid/simulation/simulate.h"
 #include "support/mimo_systems.h"
 
-namespace ctid::cli {
+namespace ctid::cli::fit_mimo_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -249,4 +249,4 @@ TEST_F(FitMimoCommand, PlotDrawsTheShapesTheMacAndTheModelOverTheFrf) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::fit_mimo_test

@@ -20,7 +20,7 @@
 #include "ctid/io/model_json.h"
 #include "ctid/io/result_json.h"
 
-namespace ctid::cli {
+namespace ctid::cli::fit_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -566,4 +566,4 @@ TEST_F(FitCommand, PlotWritesPngFigures) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::fit_test

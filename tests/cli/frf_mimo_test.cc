@@ -26,7 +26,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
 
-namespace ctid::cli {
+namespace ctid::cli::frf_mimo_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -327,4 +327,4 @@ TEST_F(FrfMimoCommand, PreprocessingAppliesToEveryChannel) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::frf_mimo_test

@@ -21,7 +21,7 @@
 #include "ctid/io/model_json.h"
 #include "ctid/simulation/discretization.h"
 
-namespace ctid::cli {
+namespace ctid::cli::frf_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -164,4 +164,4 @@ TEST_F(FrfCommand, PlotWritesTheFrfAndTheModelOverIt) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::frf_test

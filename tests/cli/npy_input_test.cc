@@ -13,7 +13,7 @@
 #include "ctid/io/file.h"
 #include "ctid/io/json.h"
 
-namespace ctid::cli {
+namespace ctid::cli::npy_input_test {
 namespace {
 
 using testing::expect_bad_input;
@@ -102,4 +102,4 @@ TEST_F(NpyInput, MalformedFilesAreOneLineNamingTheFile) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::npy_input_test

@@ -13,7 +13,7 @@
 #include "ctid/io/documents.h"
 #include "support/sanitizers.h"
 
-namespace ctid::cli {
+namespace ctid::cli::oma_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -82,4 +82,4 @@ TEST_F(OmaCommand, BadUsageNamesTheFlag) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::oma_test

@@ -20,7 +20,7 @@
 #include "ctid/simulation/simulate.h"
 #include "support/mimo_systems.h"
 
-namespace ctid::cli {
+namespace ctid::cli::progress_test {
 namespace {
 
 using testing::CliTest;
@@ -219,4 +219,4 @@ TEST_F(CliProgressTest, TrackCountsItsWindowsOnATerminal) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::progress_test

@@ -17,7 +17,7 @@
 
 #include "cli/run_ctid.h"
 
-namespace ctid::cli {
+namespace ctid::cli::reliability_test {
 namespace {
 
 using testing::expect_bad_input;
@@ -320,4 +320,4 @@ TEST_F(ReliabilityTest, TerminatedWriteLeavesNoTemporaryFile) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::reliability_test

@@ -13,8 +13,9 @@
 #include "ctid/io/model_json.h"
 #include "ctid/io/sampled_data_csv.h"
 #include "ctid/simulation/delayed_feedback.h"
+#include "support/sanitizers.h"
 
-namespace ctid::cli {
+namespace ctid::cli::simulate_loop_test {
 namespace {
 
 using testing::CliTest;
@@ -72,6 +73,9 @@ std::string read_text(const std::filesystem::path& p) {
 }
 
 TEST_F(CliTest, SimulateLoopEqualsSimulateDelayedAndFeedbackRecoversIt) {
+  CTID_SKIP_UNDER_SANITIZERS(
+      "CliTest.FeedbackRecoversTheLoopAndWritesJson runs ctid feedback; the other simulate-loop "
+      "tests run the simulation");
   const std::string model = example("de_iuliis_section4_loop.json");
   const std::string data = path("d.csv").string();
   const auto sim = ctid(simulate_args(model, data, {"--hold", "foh"}));
@@ -185,4 +189,4 @@ TEST_F(CliTest, SimulateLoopMisuseIsOneLineAndExitTwo) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::simulate_loop_test

@@ -14,7 +14,7 @@
 #include "ctid/simulation/simulate.h"
 #include "support/paper_systems.h"
 
-namespace ctid::cli {
+namespace ctid::cli::simulate_test {
 namespace {
 
 using testing::CliTest;
@@ -364,4 +364,4 @@ TEST_F(CliTest, FlagsThatWouldHaveNoEffectAreRejected) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::simulate_test

@@ -10,7 +10,7 @@
 #include "ctid/io/documents.h"
 #include "ctid/io/json.h"
 
-namespace ctid::cli {
+namespace ctid::cli::structure_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -81,4 +81,4 @@ TEST_F(StructureCommand, BadRangesExitTwoWithOneLine) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::structure_test

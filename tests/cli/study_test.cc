@@ -12,7 +12,7 @@
 #include "cli/run_ctid.h"
 #include "ctid/io/documents.h"
 
-namespace ctid::cli {
+namespace ctid::cli::study_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -119,4 +119,4 @@ TEST_F(StudyCommand, PlotDrawsMseAgainstN) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::study_test

@@ -17,7 +17,7 @@
 #include "ctid/simulation/simulate.h"
 #include "support/mimo_systems.h"
 
-namespace ctid::cli {
+namespace ctid::cli::track_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -189,4 +189,4 @@ TEST_F(TrackMimoCommand, RefusesWhatSeveralOutputsCannotDoWithOneLine) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::track_test

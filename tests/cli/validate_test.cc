@@ -14,7 +14,7 @@
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
 
-namespace ctid::cli {
+namespace ctid::cli::validate_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -258,4 +258,4 @@ TEST_F(CraneValidation, PlotOfSeveralModelsDrawsOneComparisonFigure) {
 }
 
 }  // namespace
-}  // namespace ctid::cli
+}  // namespace ctid::cli::validate_test

@@ -8,7 +8,7 @@
 #include "ctid/core/error.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::additive_model_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -131,4 +131,4 @@ TEST(AdditiveModel, IntegratorSubmodelTransferFunction) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::additive_model_test

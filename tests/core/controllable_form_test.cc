@@ -7,7 +7,7 @@
 
 #include "ctid/core/polynomial.h"
 
-namespace ctid {
+namespace ctid::controllable_form_test {
 namespace {
 
 std::complex<double> realised(const StateSpace& ss, std::complex<double> x) {
@@ -53,4 +53,4 @@ TEST(ControllableForm, RealisesTheRatioStrictlyProperAndBiproper) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::controllable_form_test

@@ -8,7 +8,7 @@
 #include "ctid/core/error.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::discrete_transfer_function_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -64,4 +64,4 @@ TEST(DiscreteTransferFunction, RejectsNonCausalAndBadSampleTime) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::discrete_transfer_function_test

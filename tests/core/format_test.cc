@@ -12,7 +12,7 @@
 
 #include "ctid/core/error.h"
 
-namespace ctid {
+namespace ctid::format_test {
 namespace {
 
 // What the formatters replaced: printf %.Ng and a stream with precision N.
@@ -86,4 +86,4 @@ TEST(Format, DigitsOutsideOneToSeventeenAreRefused) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::format_test

@@ -7,7 +7,7 @@
 
 #include "ctid/core/error.h"
 
-namespace ctid {
+namespace ctid::mimo_data_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -95,4 +95,4 @@ TEST(MimoData, RejectsBadRecordsWithOneMessage) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::mimo_data_test

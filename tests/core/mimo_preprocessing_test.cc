@@ -5,7 +5,7 @@
 
 #include "ctid/core/error.h"
 
-namespace ctid {
+namespace ctid::mimo_preprocessing_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -62,4 +62,4 @@ TEST(MimoPreprocessing, WarningsNameTheChannel) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::mimo_preprocessing_test

@@ -8,7 +8,7 @@
 
 #include "ctid/core/error.h"
 
-namespace ctid {
+namespace ctid::polynomial_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -125,4 +125,4 @@ TEST(Polynomial, MonicAntiMonicAndString) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::polynomial_test

@@ -8,7 +8,7 @@
 
 #include "ctid/core/error.h"
 
-namespace ctid {
+namespace ctid::preprocessing_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -153,4 +153,4 @@ TEST(Preprocessing, BadRangesAndFactorsAreOneClearError) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::preprocessing_test

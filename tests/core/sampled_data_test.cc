@@ -9,7 +9,7 @@
 
 #include "ctid/core/error.h"
 
-namespace ctid {
+namespace ctid::sampled_data_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -114,7 +114,7 @@ TEST(SampledData, GapsAndJitterBeyondThePrintedDigitsAreRefused) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::sampled_data_test
 
 TEST(SampledData, InputHoldIsZeroOrderByDefaultAndKeptBySegments) {
   const ctid::SampledData data(0.1, Eigen::VectorXd::LinSpaced(10, 0.0, 1.0),

@@ -9,7 +9,7 @@
 #include "ctid/core/error.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::transfer_function_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -110,4 +110,4 @@ TEST(TransferFunction, SumAndProduct) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::transfer_function_test

@@ -16,7 +16,7 @@
 #include "support/de_iuliis_systems.h"
 #include "support/sanitizers.h"
 
-namespace ctid {
+namespace ctid::consistency_test {
 namespace {
 
 constexpr double kSampleTime = 0.05;
@@ -83,4 +83,4 @@ TEST(FeedbackConsistency, SeededMonteCarloIsUnbiasedWithCramerRaoSpread) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::consistency_test

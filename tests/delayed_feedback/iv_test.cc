@@ -13,7 +13,7 @@
 #include "ctid/delayed_feedback/identification.h"
 #include "support/de_iuliis_systems.h"
 
-namespace ctid {
+namespace ctid::iv_test {
 namespace {
 
 DelayedFeedbackLoop paper_loop() { return test_support::paper_feedback_loop(); }
@@ -49,26 +49,26 @@ TEST(FeedbackIv, BadInputIsNamed) {
   StructuredIvOptions o;
   o.iterations = 0;
   EXPECT_THAT([&] { o.validate(); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("iterations")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("iterations")));
   FeedbackIdentificationOptions f;
   f.iv_filter_poles = {-1.0};
   EXPECT_THAT([&] { f.validate(); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("iv_filter_poles")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("iv_filter_poles")));
   f.iv_filter_poles = {1.0};
   f.continuation_fractions = {1.5};
-  EXPECT_THAT([&] { f.validate(); }, testing::ThrowsMessage<InvalidArgument>(
-                                         testing::HasSubstr("continuation_fractions")));
+  EXPECT_THAT([&] { f.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(
+                                         ::testing::HasSubstr("continuation_fractions")));
   f.continuation_fractions = {};
   f.extra_finalists = -1;
   EXPECT_THAT([&] { f.validate(); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("extra_finalists")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("extra_finalists")));
   f.extra_finalists = 2;
   f.finalist_ratio = 0.5;
   EXPECT_THAT([&] { f.validate(); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("finalist_ratio")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("finalist_ratio")));
   const SampledData tiny(0.05, Eigen::VectorXd::Ones(12), Eigen::VectorXd::Ones(12));
   EXPECT_THROW(estimate_structured_step1_iv(tiny, paper_loop(), regressors()), InvalidArgument);
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::iv_test

@@ -14,7 +14,7 @@
 #include "support/de_iuliis_systems.h"
 #include "support/sanitizers.h"
 
-namespace ctid {
+namespace ctid::pipeline_test {
 namespace {
 
 using test_support::feedback_record;
@@ -127,28 +127,28 @@ TEST(FeedbackPipeline, DelayScanFindsTheDelayFromAGridThatMissesIt) {
 TEST(FeedbackPipeline, BadInputIsNamed) {
   const SampledData data(0.05, Eigen::VectorXd::Ones(200), Eigen::VectorXd::Ones(200));
   EXPECT_THAT([&] { identify_delayed_feedback(data, 0, 3, 0.5); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("orders")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("orders")));
   EXPECT_THAT([&] { identify_delayed_feedback(data, 3, 3, -0.1); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("delay")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("delay")));
   EXPECT_THROW(identify_delayed_feedback(data, 3, 3, 20.0), InvalidArgument);
   const SampledData tiny(0.05, Eigen::VectorXd::Ones(12), Eigen::VectorXd::Ones(12));
   EXPECT_THROW(identify_delayed_feedback(tiny, 3, 3, 0.1), InvalidArgument);
   FeedbackIdentificationOptions o;
   o.screening_iterations = 0;
-  EXPECT_THAT([&] { o.validate(); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("screening_iterations")));
+  EXPECT_THAT([&] { o.validate(); }, ::testing::ThrowsMessage<InvalidArgument>(
+                                         ::testing::HasSubstr("screening_iterations")));
   // A nested field is named by its full path, value and rule.
   o.screening_iterations = 15;
   o.output_error.substeps = 0;
   EXPECT_THAT([&] { o.validate(); },
-              testing::ThrowsMessage<InvalidArgument>(testing::StrEq(
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::StrEq(
                   "FeedbackIdentificationOptions.output_error.substeps is 0; it must be >= 1")));
   // The IV stage follows output_error's hold: a contradicting one is rejected, not overwritten.
   o.output_error.substeps = 4;
   o.output_error.hold = Hold::first_order_hold;
   o.iv.hold = Hold::zero_order_hold;
   EXPECT_THAT([&] { o.validate(); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr(
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr(
                   "FeedbackIdentificationOptions.iv.hold is zero_order_hold; it must be empty or "
                   "first_order_hold")));
   o.iv.hold = Hold::first_order_hold;
@@ -156,7 +156,7 @@ TEST(FeedbackPipeline, BadInputIsNamed) {
   DelayIdentificationOptions d;
   d.scan.hold = Hold::zero_order_hold;
   EXPECT_THAT([&] { d.validate(); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr(
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr(
                   "DelayIdentificationOptions.scan.hold is zero_order_hold; it must equal "
                   "identification.output_error.hold")));
 }
@@ -177,4 +177,4 @@ TEST(FeedbackPipeline, AFailedFitIsAResultNotAnException) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::pipeline_test

@@ -8,7 +8,7 @@
 #include "ctid/simulation/delayed_feedback.h"
 #include "support/de_iuliis_systems.h"
 
-namespace ctid {
+namespace ctid::separation_test {
 namespace {
 
 DelayedFeedbackLoop paper_loop() { return test_support::paper_feedback_loop(); }
@@ -90,10 +90,10 @@ TEST(FeedbackSeparation, SmallPerturbationGivesCloseModelsAndSmallerJThanGcd) {
 TEST(FeedbackSeparation, BadInputIsNamed) {
   const DelayedFeedbackLoop loop = paper_loop();
   EXPECT_THAT([&] { separate_approximate_gcd(loop.alpha(), loop.beta(), loop.gamma(), 0, 6); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("forward order n")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("forward order n")));
   EXPECT_THAT([&] { separate_kronecker(loop.alpha(), loop.beta(), loop.gamma(), 2, 3); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("degree n + m")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("degree n + m")));
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::separation_test

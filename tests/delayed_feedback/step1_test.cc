@@ -12,7 +12,7 @@
 #include "ctid/simulation/delayed_feedback.h"
 #include "support/de_iuliis_systems.h"
 
-namespace ctid {
+namespace ctid::step1_test {
 namespace {
 
 // max over the excited band of |Ŵ - W| / |W|: the closed loop is what step 1 identifies; its
@@ -190,8 +190,8 @@ TEST(FeedbackLeastSquares, GcvRidgeStaysCloseOnCleanData) {
 TEST(FeedbackLeastSquares, BadInputIsNamed) {
   const DelayedFeedbackLoop loop = paper_loop();
   const SampledData data = fourier_data(loop, 0.05, 5.0, 5.0);
-  using testing::HasSubstr;
-  using testing::ThrowsMessage;
+  using ::testing::HasSubstr;
+  using ::testing::ThrowsMessage;
   EXPECT_THAT([&] { build_feedback_regression(data, 0, 3, 0.5); },
               ThrowsMessage<InvalidArgument>(HasSubstr("forward order n must be >= 1")));
   EXPECT_THAT([&] { build_feedback_regression(data, 3, 0, 0.5); },
@@ -216,4 +216,4 @@ TEST(FeedbackLeastSquares, BadInputIsNamed) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::step1_test

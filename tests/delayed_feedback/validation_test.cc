@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-namespace ctid {
+namespace ctid::validation_test {
 namespace {
 
 const TransferFunction kF = test_support::paper_feedback_loop().forward;
@@ -52,4 +52,4 @@ TEST(FeedbackValidation, UnstableEstimateIsGuarded) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::validation_test

@@ -7,7 +7,7 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/simulation/excitation.h"
 
-namespace ctid {
+namespace ctid::excitation_order_test {
 namespace {
 
 Eigen::VectorXd sines(int n, std::initializer_list<double> cycles_per_sample) {
@@ -54,4 +54,4 @@ TEST(PersistentExcitationOrder, MultisineWithFewLinesIsLimitedByItsLineCount) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::excitation_order_test

@@ -10,7 +10,7 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/simulation/excitation.h"
 
-namespace ctid {
+namespace ctid::mimo_validation_test {
 namespace {
 
 constexpr double kH = 0.05;
@@ -100,4 +100,4 @@ TEST(MimoValidation, ChannelCountsMustAgree) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::mimo_validation_test

@@ -12,7 +12,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
 
-namespace ctid {
+namespace ctid::validation_initial_state_test {
 namespace {
 
 constexpr double kH = 0.05;
@@ -166,4 +166,4 @@ TEST(ValidationInitialState, AWindowOutsideTheRecordIsRefusedNamingBoth) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::validation_initial_state_test

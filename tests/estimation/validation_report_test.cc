@@ -7,7 +7,7 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/simulation/excitation.h"
 
-namespace ctid {
+namespace ctid::validation_report_test {
 namespace {
 
 // G(s) = 2 / (1 + 0.5 s), h = 0.1 s.
@@ -63,4 +63,4 @@ TEST(ValidationReport, ShortRecordsUseFewerLagsAndBadMaxLagIsRefused) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::validation_report_test

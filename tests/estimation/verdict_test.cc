@@ -9,7 +9,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-namespace ctid {
+namespace ctid::verdict_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -146,4 +146,4 @@ TEST(Verdict, ConditioningCheck) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::verdict_test

@@ -11,7 +11,7 @@
 #include "ctid/core/error.h"
 #include "ctid/simulation/discretization.h"
 
-namespace ctid {
+namespace ctid::filter_bank_test {
 namespace {
 
 Eigen::VectorXd random_signal(int n, unsigned seed) {
@@ -336,4 +336,4 @@ TEST(FractionalDelayFilter, RejectsAFractionOutsideZeroToOne) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::filter_bank_test

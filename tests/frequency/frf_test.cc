@@ -13,7 +13,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
 
-namespace ctid {
+namespace ctid::frf_test {
 namespace {
 
 using Complex = std::complex<double>;
@@ -389,4 +389,4 @@ TEST(ResonancePeaks, RejectsBadInput) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::frf_test

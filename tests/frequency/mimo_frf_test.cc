@@ -18,7 +18,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
 
-namespace ctid {
+namespace ctid::mimo_frf_test {
 namespace {
 
 using Complex = std::complex<double>;
@@ -437,4 +437,4 @@ TEST(MimoFrfSummary, SummedPowerIsTheFrobeniusNormWithPowerWeightedCoherence) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::mimo_frf_test

@@ -15,7 +15,7 @@
 #include "ctid/frequency/periodogram.h"
 #include "ctid/simulation/excitation.h"
 
-namespace ctid {
+namespace ctid::peaks_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -161,4 +161,4 @@ TEST_F(PeriodogramPeaks, RejectsBadOptionsByFieldAndShortRecordsHaveNone) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::peaks_test

@@ -12,7 +12,7 @@
 #include "ctid/core/error.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::response_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -114,4 +114,4 @@ TEST(FrequencyResponse, RejectsNonFiniteFrequency) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::response_test

@@ -10,7 +10,7 @@
 #include "ctid/core/error.h"
 #include "io/test_directory.h"
 
-namespace ctid::io {
+namespace ctid::io::csv_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -287,4 +287,4 @@ TEST(Csv, SemicolonsAndTabsWithDecimalCommasAreDetected) {
 }
 
 }  // namespace
-}  // namespace ctid::io
+}  // namespace ctid::io::csv_test

@@ -19,7 +19,7 @@
 #include "ctid/io/result_json.h"
 #include "io/test_directory.h"
 
-namespace ctid::io {
+namespace ctid::io::documents_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -530,4 +530,4 @@ TEST(Documents, ValidateReadsTheModelOfEveryEstimateDocument) {
 }
 
 }  // namespace
-}  // namespace ctid::io
+}  // namespace ctid::io::documents_test

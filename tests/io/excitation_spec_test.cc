@@ -6,7 +6,7 @@
 #include "ctid/core/error.h"
 #include "ctid/io/json.h"
 
-namespace ctid::io {
+namespace ctid::io::excitation_spec_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -111,4 +111,4 @@ TEST(ExcitationSpec, BadValuesAreNamed) {
 }
 
 }  // namespace
-}  // namespace ctid::io
+}  // namespace ctid::io::excitation_spec_test

@@ -16,7 +16,7 @@
 #include "ctid/io/model_json.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 
-namespace ctid {
+namespace ctid::fields_json_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -180,4 +180,4 @@ TEST(FieldsJson, RefinedIvOptionsRoundTripWithAStartingModel) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::fields_json_test

@@ -16,7 +16,7 @@
 #include "ctid/core/error.h"
 #include "io/test_directory.h"
 
-namespace ctid::io {
+namespace ctid::io::file_test {
 namespace {
 
 TEST(WriteTextFile, WritesIntoAnExistingPipeInsteadOfReplacingIt) {
@@ -128,4 +128,4 @@ TEST(WriteTextFile, ADeadProcesssTemporaryIsRemovedByTheNextWrite) {
 }
 
 }  // namespace
-}  // namespace ctid::io
+}  // namespace ctid::io::file_test

@@ -9,7 +9,7 @@
 #include "ctid/core/error.h"
 #include "io/test_directory.h"
 
-namespace ctid::io {
+namespace ctid::io::json_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -155,4 +155,4 @@ TEST(Json, ADocumentOverSixtyFourMebibytesIsRefusedBeforeReading) {
 }
 
 }  // namespace
-}  // namespace ctid::io
+}  // namespace ctid::io::json_test

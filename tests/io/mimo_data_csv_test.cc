@@ -8,7 +8,7 @@
 #include "ctid/core/error.h"
 #include "io/test_directory.h"
 
-namespace ctid::io {
+namespace ctid::io::mimo_data_csv_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -154,4 +154,4 @@ TEST(MimoDataCsv, WrittenRecordReadsBackBitIdentical) {
 }
 
 }  // namespace
-}  // namespace ctid::io
+}  // namespace ctid::io::mimo_data_csv_test

@@ -19,7 +19,7 @@
 #include "ctid/refined_iv/frf_matrix_fit.h"
 #include "io/test_directory.h"
 
-namespace ctid {
+namespace ctid::mimo_frf_file_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -232,4 +232,4 @@ TEST(FrfMatrixFitDocument, RoundTripsThroughReadResult) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::mimo_frf_file_test

@@ -10,7 +10,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
 
-namespace ctid {
+namespace ctid::mimo_json_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -137,4 +137,4 @@ TEST(MimoJson, EstimationResultRoundTrip) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::mimo_json_test

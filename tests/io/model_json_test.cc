@@ -9,7 +9,7 @@
 #include "ctid/io/json.h"
 #include "io/test_directory.h"
 
-namespace ctid::io {
+namespace ctid::io::model_json_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -217,4 +217,4 @@ TEST(ModelJson, DelayedFeedbackLoopErrorsNameTheFileAndField) {
 }
 
 }  // namespace
-}  // namespace ctid::io
+}  // namespace ctid::io::model_json_test

@@ -15,7 +15,7 @@
 #include "ctid/io/sampled_data_csv.h"
 #include "io/test_directory.h"
 
-namespace ctid::io {
+namespace ctid::io::npy_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -240,4 +240,4 @@ TEST(Npy, TableColumnsAreNamedByIndexAndFeedTheRecordReaders) {
 }
 
 }  // namespace
-}  // namespace ctid::io
+}  // namespace ctid::io::npy_test

@@ -12,7 +12,7 @@
 #include "ctid/io/model_json.h"
 #include "io/test_directory.h"
 
-namespace ctid::io {
+namespace ctid::io::result_json_test {
 namespace {
 
 using ::testing::ElementsAre;
@@ -187,4 +187,4 @@ TEST(ResultJson, WrittenFileReadsBack) {
 }
 
 }  // namespace
-}  // namespace ctid::io
+}  // namespace ctid::io::result_json_test

@@ -7,7 +7,7 @@
 #include "ctid/io/fields_json.h"
 #include "io/test_directory.h"
 
-namespace ctid::io {
+namespace ctid::io::sampled_data_csv_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -105,9 +105,9 @@ TEST(SampledDataCsv, WriteThenReadRoundTripsExactly) {
 }
 
 }  // namespace
-}  // namespace ctid::io
+}  // namespace ctid::io::sampled_data_csv_test
 
-namespace ctid::io {
+namespace ctid::io::sampled_data_csv_test {
 namespace {
 
 TEST(SampledDataCsv, TheFileMayDeclareTheInputHold) {
@@ -127,4 +127,4 @@ TEST(SampledDataCsv, TheFileMayDeclareTheInputHold) {
 }
 
 }  // namespace
-}  // namespace ctid::io
+}  // namespace ctid::io::sampled_data_csv_test

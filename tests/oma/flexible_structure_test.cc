@@ -14,7 +14,7 @@
 
 #include "ctid/oma/oma.h"
 
-namespace ctid {
+namespace ctid::flexible_structure_test {
 namespace {
 
 // 62.34 Hz comes out about 0.5 % low (damping near 1 %, fewer cycles in the lags) and 154.66 Hz
@@ -63,4 +63,4 @@ TEST(OmaFlexibleStructure, WellExcitedModesAgreeWithTheInputOutputFit) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::flexible_structure_test

@@ -18,7 +18,7 @@
 #include "oma/chain_model.h"
 #include "support/sanitizers.h"
 
-namespace ctid {
+namespace ctid::oma_test {
 namespace {
 
 using oma_test::ChainModel;
@@ -204,4 +204,4 @@ TEST(Oma, BadInputIsRefusedNamingWhatIsWrong) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::oma_test

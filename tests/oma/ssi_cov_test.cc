@@ -11,7 +11,7 @@
 
 #include "oma/chain_model.h"
 
-namespace ctid {
+namespace ctid::ssi_cov_test {
 namespace {
 
 using oma_test::ChainModel;
@@ -95,4 +95,4 @@ TEST(SsiCov, IndicatorsOfARealShapeAndARotatedOne) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::ssi_cov_test

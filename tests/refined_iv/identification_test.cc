@@ -19,7 +19,7 @@
 #include "ctid/simulation/simulate.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::identification_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -215,4 +215,4 @@ TEST_F(Identify, RefusesBadStructuresAndOptionsNamingTheField) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::identification_test

@@ -15,7 +15,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
 
-namespace ctid {
+namespace ctid::initialization_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -176,4 +176,4 @@ TEST(AutomaticStart, ScreenedOnAPieceTheFitReachesTheWholeRecordsStationaryPoint
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::initialization_test

@@ -12,7 +12,7 @@
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/excitation.h"
 
-namespace ctid {
+namespace ctid::input_hold_test {
 namespace {
 
 constexpr double kH = 0.05;
@@ -83,4 +83,4 @@ TEST(InputHold, ValidationSimulatesTheInputAsTheRecordDeclares) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::input_hold_test

@@ -18,8 +18,9 @@
 #include "ctid/simulation/simulate.h"
 #include "support/mimo_systems.h"
 #include "support/paper_systems.h"
+#include "support/sanitizers.h"
 
-namespace ctid {
+namespace ctid::mimo_srivc_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -94,6 +95,7 @@ TEST(MimoSrivc, StartsFromTheDataAlone) {
 }
 
 TEST(MimoSrivc, NoiseFreeTwoInputTwentyEightOutputEightModesAreRecoveredExactly) {
+  CTID_SKIP_UNDER_SANITIZERS("the smaller MimoSrivc cases run the same estimator");
   const MimoAdditiveModel truth = eight_mode_structure(28, 31);
   const MimoData data = noise_free(truth, 4000, 13);
   const std::vector<SubmodelOrder> orders(8, {2, 0, 0});
@@ -768,4 +770,4 @@ TEST(MimoSrivc, NoisyRecordsStartingMidMotionAreUnbiasedWithEstimatedInitialCond
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::mimo_srivc_test

@@ -19,7 +19,7 @@
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/excitation.h"
 
-namespace ctid {
+namespace ctid::mimo_tracking_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -236,4 +236,4 @@ TEST(MimoTracking, BadOptionsAreRefusedWithOneMessage) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::mimo_tracking_test

@@ -15,7 +15,7 @@
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
 
-namespace ctid {
+namespace ctid::mode_relocation_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -268,4 +268,4 @@ TEST(ModeRelocation, OptionsNameTheBadField) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::mode_relocation_test

@@ -17,7 +17,7 @@
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/excitation.h"
 
-namespace ctid {
+namespace ctid::mode_tracking_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -257,4 +257,4 @@ TEST(ModeTracking, BadWindowsAndOptionsAreRefusedWithOneMessage) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::mode_tracking_test

@@ -17,7 +17,7 @@
 #include "ctid/simulation/simulate.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::quality_verdict_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -146,4 +146,4 @@ TEST(QualityVerdict, DelayScanSaysWhenNoDelayIsUsable) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::quality_verdict_test

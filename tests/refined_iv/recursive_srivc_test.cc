@@ -15,7 +15,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
 
-namespace ctid {
+namespace ctid::recursive_srivc_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -266,4 +266,4 @@ TEST(RecursiveSrivc, BadInputIsRefusedWithOneMessageNamingTheField) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::recursive_srivc_test

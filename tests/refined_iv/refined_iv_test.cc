@@ -16,7 +16,7 @@
 #include "ctid/simulation/simulate.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::refined_iv_test {
 namespace {
 
 // beta * (1 + U(-0.05, 0.05)), the paper's initialisation.
@@ -170,4 +170,4 @@ TEST(RefinedIv, KnownInputDelayIsHonoured) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::refined_iv_test

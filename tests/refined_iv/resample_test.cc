@@ -14,7 +14,7 @@
 #include "ctid/refined_iv/identification.h"
 #include "ctid/simulation/discretization.h"
 
-namespace ctid {
+namespace ctid::resample_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -102,4 +102,4 @@ TEST(Resample, RefusesStampsThatDoNotIncrease) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::resample_test

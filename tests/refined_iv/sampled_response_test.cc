@@ -13,7 +13,7 @@
 #include "ctid/frequency/response.h"
 #include "ctid/simulation/simulate.h"
 
-namespace ctid {
+namespace ctid::sampled_response_test {
 namespace {
 
 TEST(SampledFrequencyResponse, EqualsTheSteadyStateRatioOfSimulatedSamples) {
@@ -60,4 +60,4 @@ TEST(SampledFrequencyResponse, EqualsTheSteadyStateRatioOfSimulatedSamples) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::sampled_response_test

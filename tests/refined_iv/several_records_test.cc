@@ -15,7 +15,7 @@
 #include "ctid/simulation/simulate.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::several_records_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -173,4 +173,4 @@ TEST(SeveralRecords, RefusesRecordsThatDoNotGoTogether) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::several_records_test

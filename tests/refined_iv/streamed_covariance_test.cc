@@ -20,7 +20,7 @@
 #include "refined_iv/internal/refined_iv_engine.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::streamed_covariance_test {
 namespace {
 
 constexpr double kH = testing::kPaperSampleTime;
@@ -158,4 +158,4 @@ TEST(StreamedCovariance, AdjointArSumIsTheExplicitFormulaWhateverTheChunks) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::streamed_covariance_test

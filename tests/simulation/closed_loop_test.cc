@@ -12,7 +12,7 @@
 #include "ctid/simulation/simulate.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::closed_loop_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -143,4 +143,4 @@ TEST(ClosedLoop, RefusesIllPosedLoopAndBadSignals) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::closed_loop_test

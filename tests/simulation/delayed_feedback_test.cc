@@ -9,7 +9,7 @@
 
 #include "ctid/core/error.h"
 
-namespace ctid {
+namespace ctid::delayed_feedback_test {
 namespace {
 
 // Independent reference: for t < (J+1)Δ the loop response is the finite Neumann series
@@ -193,19 +193,19 @@ TEST(DelayedFeedbackSimulation, FourierBasisInputMatchesThePaper) {
 
 TEST(DelayedFeedbackSimulation, BadInputIsNamed) {
   EXPECT_THAT([] { to_delayed_state_space(simple_loop(-0.1)); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("delay")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("delay")));
   DelayedFeedbackLoop improper = simple_loop(0.5);
   improper.forward = TransferFunction(Polynomial{1.0, 1.0}, Polynomial{1.0, 1.0});
   EXPECT_THAT([&] { to_delayed_state_space(improper); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("strictly proper")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("strictly proper")));
   EXPECT_THAT(
       [] {
         simulate_delayed(to_delayed_state_space(simple_loop(0.5)), Eigen::VectorXd::Ones(5), 0.0,
                          Hold::zero_order_hold);
       },
-      testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("sample_time")));
+      ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("sample_time")));
   EXPECT_THROW(add_noise_at_nsr(Eigen::VectorXd::Ones(3), -1.0, 1), InvalidArgument);
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::delayed_feedback_test

@@ -11,7 +11,7 @@
 
 #include "ctid/core/error.h"
 
-namespace ctid {
+namespace ctid::discretization_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -173,4 +173,4 @@ TEST(Discretize, RejectsBadArguments) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::discretization_test

@@ -14,7 +14,7 @@
 
 #include "ctid/core/error.h"
 
-namespace ctid {
+namespace ctid::excitation_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -226,9 +226,9 @@ TEST(RepeatPeriodic, Copies) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::excitation_test
 
-namespace ctid {
+namespace ctid::excitation_test {
 namespace {
 
 TEST(OrthogonalMultisines, HadamardPhasedExperimentsForThreeInputs) {
@@ -255,4 +255,4 @@ TEST(OrthogonalMultisines, HadamardPhasedExperimentsForThreeInputs) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::excitation_test

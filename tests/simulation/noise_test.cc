@@ -11,7 +11,7 @@
 #include "ctid/simulation/excitation.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::noise_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -80,4 +80,4 @@ TEST(Snr, DefinitionAndScaling) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::noise_test

@@ -11,7 +11,7 @@
 #include "ctid/core/error.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::simulate_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -203,4 +203,4 @@ TEST(Simulate, RejectsBadInput) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::simulate_test

@@ -15,7 +15,7 @@
 
 #include "ctid/core/error.h"
 
-namespace ctid {
+namespace ctid::monte_carlo_test {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -53,7 +53,7 @@ TEST(LogSpacedSizes, KeepsTheEndpointsAndAConstantRatio) {
   }
   EXPECT_EQ(log_spaced_sizes(2000, 100000, 1), std::vector<int>{2000});
   EXPECT_THAT([] { log_spaced_sizes(10, 5, 3); },
-              testing::ThrowsMessage<InvalidArgument>(testing::HasSubstr("last is 5")));
+              ::testing::ThrowsMessage<InvalidArgument>(::testing::HasSubstr("last is 5")));
 }
 
 TEST(ParallelFor, VisitsEveryIndexOnceWhateverTheThreadCount) {
@@ -105,4 +105,4 @@ TEST(LogLogSlope, IsMinusOneForMseProportionalToOneOverN) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::monte_carlo_test

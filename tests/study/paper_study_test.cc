@@ -17,7 +17,7 @@
 #include "ctid/study/study_output.h"
 #include "support/paper_systems.h"
 
-namespace ctid {
+namespace ctid::paper_study_test {
 namespace {
 
 // Bitwise equality, so NaN == NaN and -0 != +0: parallel must equal serial exactly.
@@ -245,4 +245,4 @@ TEST(RunStudy, SmallOpenLoopMseAgreesWithThePredictedCovariance) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::paper_study_test

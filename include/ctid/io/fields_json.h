@@ -14,6 +14,7 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -33,6 +34,14 @@ template <HasFields S>
 void fields_from_json(const nlohmann::json& value, S& object, const std::string& where);
 
 namespace internal {
+
+/// A double as JSON: a number, or null for NaN and infinities (JSON has neither).
+inline nlohmann::json number_or_null(double x) {
+  return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr);
+}
+
+/// 2π, for documents that store frequencies in Hz.
+inline constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 template <class T>
 struct is_complex : std::false_type {};

@@ -5,7 +5,19 @@
 
 #include <vector>
 
+#include <Eigen/Core>
+
+#include "ctid/core/polynomial.h"
+
 namespace ctid::internal {
+
+// The ascending coefficients of p in a vector of `size`, zero beyond its degree (the layout of
+// each block of ρ).
+inline Eigen::VectorXd padded(const Polynomial& p, int size) {
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(size);
+  for (int i = 0; i <= p.degree() && i < size; ++i) v(i) = p.coefficient(i);
+  return v;
+}
 
 template <typename T>
 struct LoopPolynomials {
