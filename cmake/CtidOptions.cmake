@@ -13,10 +13,19 @@ target_compile_options(ctid_compile_options INTERFACE
 # Sanitizers apply to the whole build (libraries, tests, CLI, benchmarks) rather than
 # through ctid_compile_options: every object that ends up in one executable must agree,
 # or a target that forgets the flag fails to link against instrumented static libraries.
+# AddressSanitizer and UndefinedBehaviorSanitizer, less five UBSan checks that cost the most
+# to compile and find nothing here that the rest do not (docs/decisions/0032): null and
+# object-size (AddressSanitizer reports the same accesses), alignment (Eigen aligns its own
+# storage and no reader casts bytes to wider types), vptr (almost no polymorphic classes) and
+# pointer-overflow. Sanitized executables are not position-independent: a PIE of them carries
+# some 3 million dynamic relocations (the sanitizers' per-check data), which every process start
+# applies, and the tests start thousands of processes (each gtest case, each ctid run).
 if(CTID_SANITIZE)
-  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer
-    -fno-sanitize-recover=all)
-  add_link_options(-fsanitize=address,undefined)
+  add_compile_options(-fsanitize=address,undefined
+    -fno-sanitize=null,object-size,alignment,vptr,pointer-overflow -fno-omit-frame-pointer
+    -fno-sanitize-recover=all -fno-pie)
+  add_link_options(-fsanitize=address,undefined -no-pie)
+  set(CMAKE_POSITION_INDEPENDENT_CODE OFF)
 endif()
 
 # Rebuilds are much faster with ccache; use it when the machine has it.
