@@ -296,6 +296,13 @@ FittedModel fitted_model_from_json(const nlohmann::json& value, const std::strin
     if (covariance != value.end()) {
       fitted.covariance = covariance_field(*covariance, source, fitted.model.parameter_count());
     }
+    const auto delay_error = value.find("delay_standard_error");
+    if (delay_error != value.end() && delay_error->is_number()) {
+      fitted.delay_standard_error = delay_error->get<double>();
+      require(std::isfinite(fitted.delay_standard_error) && fitted.delay_standard_error >= 0.0,
+              source, ": delay_standard_error is ", fitted.delay_standard_error,
+              "; it must be finite and >= 0");
+    }
     return fitted;
   }
   const ContinuousModel model = continuous_model_from_json(value, source);

@@ -89,6 +89,9 @@ struct FittedModel {
   AdditiveModel model;
   /// Empty when the document holds no covariance (a plain model file).
   Eigen::MatrixXd covariance;
+  /// Standard error of an estimated continuous input delay [s]; 0 when the delay was given,
+  /// chosen from whole samples, or the document is a plain model file.
+  double delay_standard_error = 0.0;
 };
 
 /// One unfactored transfer function as a single additive submodel B/(p^l A) with A
