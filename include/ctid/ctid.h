@@ -27,6 +27,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
+#include "ctid/simulation/time_response.h"
 
 #include "ctid/frequency/frf.h"
 #include "ctid/frequency/mimo_frf.h"

@@ -4,10 +4,10 @@
                                   [--against RESULT2.json] [--frequency-unit Hz|rad/s]
 
 KIND is one of bode, modes, frf, frf_matrix, validation, compare, residuals, mse,
-stabilisation, mode_shapes, mac, frf_matrix_overlay, tracking. INPUT is a result document the
-command line writes (read by ctid.read_result, or as JSON for tracking; the table below says
-which kinds draw it) or one of the files of docs/python.md (the CLI's --plot inputs and CSV
-tables):
+stabilisation, mode_shapes, mac, frf_matrix_overlay, tracking, oma_stabilisation, step,
+impulse. INPUT is a result document the command line writes (read by ctid.read_result, or as
+JSON for tracking; the table below says which kinds draw it) or one of the files of
+docs/python.md (the CLI's --plot inputs and CSV tables):
 
     estimation_result (ctid fit -o), mode_relocation_result,
     input_delay_scan_result          bode, modes (the estimate)
@@ -22,6 +22,7 @@ tables):
     mode_tracking_result (ctid track -o) tracking (frequency and damping against time)
     mimo_mode_tracking_result (ctid track --output-columns -o)
                                       tracking
+    CSV of ctid step / impulse -o     step, impulse (t, y and, if present, lower, upper)
 
 --frf gives the measured FRF drawn under the model: bode and modes take an frf document or the
 CSV of `ctid frf -o X.csv`, frf_matrix_overlay a mimo_frf document, the CSV table of
@@ -46,7 +47,7 @@ matplotlib.use("Agg")
 
 KINDS = ("bode", "modes", "frf", "frf_matrix", "validation", "compare", "residuals", "mse",
          "stabilisation", "mode_shapes", "mac", "frf_matrix_overlay", "tracking",
-         "oma_stabilisation")
+         "oma_stabilisation", "step", "impulse")
 MIMO_KINDS = ("mode_shapes", "mac", "frf_matrix_overlay")
 
 
@@ -336,6 +337,19 @@ def _tracking_figure(path, output, title, unit):
     return plotting.mode_tracking(document, title=title, filename=output, frequency_unit=unit)
 
 
+def _response_figure(kind, path, output, title):
+    """The response in the CSV of ctid step / impulse -o (t, y[, y_std, lower, upper])."""
+    from . import plotting
+
+    rows = _read_csv(path)
+    t = _column(rows, ("t",), path)
+    y = _column(rows, ("y",), path)
+    band = "lower" in rows[0] and "upper" in rows[0]
+    lower = _column(rows, ("lower",), path) if band else None
+    upper = _column(rows, ("upper",), path) if band else None
+    return plotting.response_curve(t, y, lower, upper, kind=kind, title=title, filename=output)
+
+
 def run(kind, path, output, title=None, frf=None, against=None, frequency_unit="Hz"):
     """Draw one figure; returns the Figure. Raises InputError or ValueError on bad input.
     ``frf``: the measured FRF drawn under the model (bode, modes: an frf document or CSV;
@@ -357,6 +371,8 @@ def run(kind, path, output, title=None, frf=None, against=None, frequency_unit="
     unit = frequency_unit
     if kind == "tracking":
         return _tracking_figure(path, output, title, unit)
+    if kind in ("step", "impulse"):
+        return _response_figure(kind, path, output, title)
     if kind in ("bode", "modes"):
         return _frequency_figure(kind, path, output, title, frf, unit)
     if kind in MIMO_KINDS:

@@ -58,6 +58,9 @@ __all__ = [
     "oma_stabilisation",
     "frequency_response_band",
     "correlations",
+    "response_curve",
+    "step",
+    "impulse",
     "save",
 ]
 
@@ -1120,3 +1123,61 @@ def mode_tracking(result, standard_errors=1.0, title=None, filename=None, freque
     if title:
         figure.suptitle(title)
     return _finish(figure, filename)
+
+
+def response_curve(time, output, lower=None, upper=None, kind="step", final_value=None,
+                   confidence=None, ax=None, title=None, filename=None):
+    """Draw a time response y(t) ("<kind> response") with its band between ``lower`` and
+    ``upper`` ("<confidence>% band", or "band" when ``confidence`` is None) and, given
+    ``final_value``, a dashed "final value" line. Draws into ``ax`` when given (its figure is
+    returned), otherwise into a new figure. Returns the Figure (saved to ``filename`` if given).
+    """
+    if kind not in ("step", "impulse"):
+        raise ValueError(f"response_curve: kind is {kind!r}; it must be 'step' or 'impulse'")
+    t = np.asarray(time, dtype=float)
+    y = np.asarray(output, dtype=float)
+    if t.shape != y.shape or t.size < 2:
+        raise ValueError("response_curve: time and output need the same length, at least 2")
+    if ax is None:
+        figure, ax = _figure(figsize=(7.0, 4.0))
+    else:
+        figure = ax.figure
+    if lower is not None and upper is not None and np.size(lower) == t.size:
+        band = "band" if confidence is None else f"{100 * confidence:g}% band"
+        ax.fill_between(t, np.asarray(lower, dtype=float), np.asarray(upper, dtype=float),
+                        alpha=0.3, color="C0", label=band, linewidth=0)
+    ax.plot(t, y, color="C0", label=f"{kind} response")
+    if final_value is not None and np.isfinite(final_value):
+        ax.axhline(final_value, color="0.4", linestyle="--", linewidth=1.0, label="final value")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("output")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    if title:
+        ax.set_title(title)
+    return _finish(figure, filename)
+
+
+def _time_response(function, model, ax, title, filename, options):
+    response = model if isinstance(model, _ctid.TimeResponse) else function(model, **options)
+    kind = "step" if response.kind == _ctid.ResponseKind.step else "impulse"
+    has_band = np.size(response.standard_deviation) > 0
+    confidence = 2.0 * NormalDist().cdf(response.z) - 1.0 if has_band else None
+    final = response.characteristics.dc_gain.value if kind == "step" else None
+    return response_curve(response.time, response.output,
+                          response.lower if has_band else None,
+                          response.upper if has_band else None, kind=kind, final_value=final,
+                          confidence=confidence, ax=ax, title=title, filename=filename)
+
+
+def step(model, ax=None, title=None, filename=None, **options):
+    """Step response of ``model`` (an EstimationResult, AdditiveModel, TransferFunction, or a
+    TimeResponse already computed) with its delta-method band and final value: ctid.step_response
+    with ``options`` (covariance=, final_time=, points=, confidence=, ...), drawn by
+    response_curve into ``ax`` or a new figure. Returns the Figure."""
+    return _time_response(_ctid.step_response, model, ax, title, filename, options)
+
+
+def impulse(model, ax=None, title=None, filename=None, **options):
+    """Impulse response of ``model`` with its band, as :func:`step`. Returns the Figure."""
+    return _time_response(_ctid.impulse_response, model, ax, title, filename, options)

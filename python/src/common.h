@@ -31,6 +31,7 @@ void bind_identification(py::module_& m);
 void bind_delayed_feedback(py::module_& m);
 void bind_study(py::module_& m);
 void bind_io(py::module_& m);
+void bind_response(py::module_& m);
 
 inline std::string join(const std::vector<std::string>& names) {
   std::string out;

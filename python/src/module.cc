@@ -27,4 +27,5 @@ PYBIND11_MODULE(_ctid, m) {
   ctid::python::bind_oma(m);
   ctid::python::bind_study(m);
   ctid::python::bind_io(m);
+  ctid::python::bind_response(m);
 }

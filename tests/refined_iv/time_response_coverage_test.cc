@@ -14,7 +14,7 @@
 #include "ctid/simulation/time_response.h"
 #include "support/sanitizers.h"
 
-namespace ctid {
+namespace ctid::time_response_coverage_test {
 namespace {
 
 TEST(TimeResponseMonteCarlo, BandCoversTheTrueStepAndDcGainErrorMatchesTheSpread) {
@@ -63,4 +63,4 @@ TEST(TimeResponseMonteCarlo, BandCoversTheTrueStepAndDcGainErrorMatchesTheSpread
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::time_response_coverage_test

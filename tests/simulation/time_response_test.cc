@@ -10,7 +10,7 @@
 
 #include "ctid/core/error.h"
 
-namespace ctid {
+namespace ctid::time_response_test {
 namespace {
 
 using ::testing::HasSubstr;
@@ -237,4 +237,4 @@ TEST(TimeResponse, BadInputIsRefusedBeforeAllocating) {
 }
 
 }  // namespace
-}  // namespace ctid
+}  // namespace ctid::time_response_test
