@@ -69,6 +69,12 @@ def _give_every_class_a_repr():
 
 _give_every_class_a_repr()
 
+from .interop import (  # noqa: E402,F401
+    from_descending, to_descending, to_scipy, to_control, to_dataframe)
+from .interop import _give_results_an_html_view  # noqa: E402
+
+_give_results_an_html_view()
+
 
 def _check_real_samples(where, name, value):
     """Refuse complex samples (NumPy would drop their imaginary parts with only a warning) and
