@@ -82,11 +82,26 @@ def save(figure, filename):
 def _figure(*args, **kwargs):
     """plt.subplots with constrained layout (labels, titles and legends kept on the canvas)."""
     kwargs.setdefault("layout", "constrained")
-    return plt.subplots(*args, **kwargs)
+    figure, axes = plt.subplots(*args, **kwargs)
+    figure._ctid_created = True
+    return figure, axes
+
+
+def _axes_or_new(ax, count, *args, **kwargs):
+    """(figure, axes): the axes the caller gave (``ax``: one Axes, or a sequence of ``count``
+    of them for a figure of several panels), drawn into as they are, or a new figure's."""
+    if ax is None:
+        return _figure(*args, **kwargs)
+    given = [ax] if count == 1 else list(ax) if isinstance(ax, (list, tuple, np.ndarray)) else []
+    if len(given) != count or not all(hasattr(a, "plot") and hasattr(a, "figure") for a in given):
+        what = "a matplotlib Axes" if count == 1 else f"a sequence of {count} matplotlib Axes"
+        raise TypeError(f"ax: expected {what}, got {type(ax).__name__}")
+    return given[0].figure, given[0] if count == 1 else tuple(given)
 
 
 def _finish(figure, filename):
-    if figure.get_layout_engine() is None:
+    # A figure of the caller's (drawn into through ax=) keeps its layout.
+    if getattr(figure, "_ctid_created", False) and figure.get_layout_engine() is None:
         figure.set_layout_engine("constrained")
     if filename is not None:
         save(figure, filename)
@@ -259,7 +274,7 @@ def _db(x):
 
 
 def bode(model, frf=None, covariance=None, omegas=None, confidence=0.95, title=None,
-         filename=None, sampled=None, frequency_unit="Hz", more=None):
+         filename=None, sampled=None, frequency_unit="Hz", more=None, ax=None):
     """Bode plot of a fitted model over a nonparametric FRF, with confidence bands.
 
     ``model``: EstimationResult (its covariance gives the band), AdditiveModel or
@@ -282,7 +297,7 @@ def bode(model, frf=None, covariance=None, omegas=None, confidence=0.95, title=N
     omegas = np.asarray(omegas, dtype=float)
     response, mag_sigma, phase_sigma, z = frequency_response_band(
         model, omegas, covariance, confidence)
-    figure, (ax_mag, ax_phase) = _figure(2, 1, sharex=True, figsize=(7.0, 6.0))
+    figure, (ax_mag, ax_phase) = _axes_or_new(ax, 2, 2, 1, sharex=True, figsize=(7.0, 6.0))
     x = omegas * factor
     phase = _model_phase(response)
     band_label = f"{100 * confidence:g}% band"
@@ -636,7 +651,7 @@ def mode_shapes(result_or_modes, output_names=None, geometry=None, title=None, f
 
 
 def mac_matrix(modes_a, modes_b=None, labels=None, column_labels=None, title=None,
-               filename=None):
+               filename=None, ax=None):
     """The modal assurance criterion MAC(a, b) = |a^H b|^2 / ((a^H a)(b^H b)) as an annotated
     heat map (ctid.modal_assurance), between the modes of one estimate (``modes_b`` None: a
     well-separated set has a MAC near the identity) or between two estimates of the same
@@ -663,7 +678,7 @@ def mac_matrix(modes_a, modes_b=None, labels=None, column_labels=None, title=Non
     if len(row_labels) != len(rows) or len(column_labels) != len(cols):
         raise ValueError(f"mac_matrix: {len(row_labels)} x {len(column_labels)} labels for "
                          f"{len(rows)} x {len(cols)} modes")
-    figure, ax = _figure(figsize=(max(4.5, 2.4 + 0.8 * len(cols)),
+    figure, ax = _axes_or_new(ax, 1, figsize=(max(4.5, 2.4 + 0.8 * len(cols)),
                                        max(3.5, 1.6 + 0.55 * len(rows))))
     image = ax.imshow(mac, vmin=0.0, vmax=1.0, cmap="Blues", aspect="auto")
     for r in range(mac.shape[0]):
@@ -682,14 +697,14 @@ def mac_matrix(modes_a, modes_b=None, labels=None, column_labels=None, title=Non
     return _finish(figure, filename)
 
 
-def channel_fits(names, fits, title=None, filename=None):
+def channel_fits(names, fits, title=None, filename=None, ax=None):
     """Fit [%] per channel (x: the channels in order) for several models or bounds side by
     side: ``fits`` maps a label to one value per channel (NaN: not available). Returns the
     Figure."""
     labels = list(fits)
     count = len(names)
     width = 0.8 / max(len(labels), 1)
-    figure, ax = _figure(figsize=(max(7.0, 0.3 * count + 2.0), 4.0))
+    figure, ax = _axes_or_new(ax, 1, figsize=(max(7.0, 0.3 * count + 2.0), 4.0))
     x = np.arange(count)
     for index, label in enumerate(labels):
         values = np.asarray(fits[label], dtype=float)
@@ -709,7 +724,7 @@ def channel_fits(names, fits, title=None, filename=None):
     return _finish(figure, filename)
 
 
-def stabilisation(scan, title=None, filename=None, frequency_unit="Hz"):
+def stabilisation(scan, title=None, filename=None, frequency_unit="Hz", ax=None):
     """Stabilisation diagram of a structure scan: every pole pair of every fit at its natural
     frequency [Hz] (x) and its fit's order (y). Markers: "stable" (frequency and damping within
     the scan's tolerances of the previous order's), "stable frequency", "new", "unstable pole";
@@ -737,7 +752,7 @@ def stabilisation(scan, title=None, filename=None, frequency_unit="Hz"):
             name = "new"
         groups[name][0].append(get(p, "frequency") * factor)
         groups[name][1].append(get(p, "order"))
-    figure, ax = _figure(figsize=(7.0, 4.5))
+    figure, ax = _axes_or_new(ax, 1, figsize=(7.0, 4.5))
     for name, marker, colour in styles:
         x, y = groups[name]
         if x:
@@ -757,7 +772,7 @@ def stabilisation(scan, title=None, filename=None, frequency_unit="Hz"):
     return _finish(figure, filename)
 
 
-def oma_stabilisation(result, title=None, filename=None, frequency_unit="Hz"):
+def oma_stabilisation(result, title=None, filename=None, frequency_unit="Hz", ax=None):
     """Stabilisation diagram of an output-only analysis (``ctid.oma``, ``ctid oma -o``): every
     pole tried at its natural frequency (x) and model order (y), marked by its stability class
     against the previous order ("stable": frequency, damping and shape; "frequency and
@@ -781,7 +796,7 @@ def oma_stabilisation(result, title=None, filename=None, frequency_unit="Hz"):
         groups.setdefault(name, ([], []))
         groups[name][0].append(pole.frequency_hz * factor)
         groups[name][1].append(pole.order)
-    figure, ax = _figure(figsize=(7.0, 4.5))
+    figure, ax = _axes_or_new(ax, 1, figsize=(7.0, 4.5))
     for name, marker, colour in styles:
         x, y = groups[name]
         if x:
@@ -801,7 +816,8 @@ def oma_stabilisation(result, title=None, filename=None, frequency_unit="Hz"):
     return _finish(figure, filename)
 
 
-def modes(model, omegas=None, frf=None, title=None, filename=None, frequency_unit="Hz"):
+def modes(model, omegas=None, frf=None, title=None, filename=None, frequency_unit="Hz",
+          ax=None):
     """Magnitude of each submodel of an additive model, their sum, and optionally the FRF
     (shaded where its coherence, if known, is below 0.5).
 
@@ -818,7 +834,7 @@ def modes(model, omegas=None, frf=None, title=None, filename=None, frequency_uni
         omegas = _default_omegas(base, frf)
     omegas = np.asarray(omegas, dtype=float)
     columns = np.asarray(_ctid.submodel_frequency_responses(base, omegas))
-    figure, ax = _figure(figsize=(7.0, 4.5))
+    figure, ax = _axes_or_new(ax, 1, figsize=(7.0, 4.5))
     x = omegas * factor
     for i in range(columns.shape[1]):
         label = f"submodel {i + 1}"
@@ -843,7 +859,7 @@ def modes(model, omegas=None, frf=None, title=None, filename=None, frequency_uni
     return _finish(figure, filename)
 
 
-def validation(data, simulated, title=None, filename=None):
+def validation(data, simulated, title=None, filename=None, ax=None):
     """Measured against simulated output over time, with the fit % in the title.
 
     ``data``: ctid.SampledData. ``simulated``: the model's output samples, or a model
@@ -859,7 +875,7 @@ def validation(data, simulated, title=None, filename=None):
     simulated = np.asarray(simulated, dtype=float)
     measured = np.asarray(data.output)
     fit = _ctid.fit_percent(measured, simulated)
-    figure, ax = _figure(figsize=(8.0, 4.0))
+    figure, ax = _axes_or_new(ax, 1, figsize=(8.0, 4.0))
     t = np.asarray(data.time)
     ax.plot(t, measured, color="0.5", lw=1, label="measured")
     ax.plot(t, simulated, color="C0", lw=1, label="simulated")
@@ -872,7 +888,7 @@ def validation(data, simulated, title=None, filename=None):
     return _finish(figure, filename)
 
 
-def compare(data, models, labels=None, options=None, title=None, filename=None):
+def compare(data, models, labels=None, options=None, title=None, filename=None, ax=None):
     """Several models over one measured output, like MATLAB's ``compare``.
 
     ``data``: ctid.SampledData. ``models``: a list of AdditiveModel / EstimationResult (each
@@ -892,7 +908,7 @@ def compare(data, models, labels=None, options=None, title=None, filename=None):
     inside = (t >= start - 1e-9) & (t <= end + 1e-9)
     if inside.sum() < 2:
         raise ValueError(f"compare: the window [{start}, {end}] s holds fewer than 2 samples")
-    figure, ax = _figure(figsize=(8.0, 4.0))
+    figure, ax = _axes_or_new(ax, 1, figsize=(8.0, 4.0))
     ax.plot(t, measured, color="0.5", lw=1, label="measured")
     for i, (model, label) in enumerate(zip(models, labels)):
         if isinstance(model, (np.ndarray, list, tuple)):
@@ -941,7 +957,7 @@ def correlations(residual, input, max_lag=25):
 
 
 def residual_correlation(residual, input=None, max_lag=25, confidence=0.99, title=None,
-                         filename=None):
+                         filename=None, ax=None):
     """Residual autocorrelation and residual-input cross-correlation with confidence bounds.
 
     ``residual`` and ``input``: sample arrays (the correlations of :func:`correlations`), or
@@ -969,7 +985,7 @@ def residual_correlation(residual, input=None, max_lag=25, confidence=0.99, titl
             raise TypeError("residual_correlation: give the input beside the residual samples")
         lags_auto, r_e, lags_cross, r_eu = correlations(residual, input, max_lag)
         bound = NormalDist().inv_cdf(0.5 + confidence / 2.0) / math.sqrt(len(residual))
-    figure, (ax_auto, ax_cross) = _figure(2, 1, figsize=(7.0, 5.5))
+    figure, (ax_auto, ax_cross) = _axes_or_new(ax, 2, 2, 1, figsize=(7.0, 5.5))
     label = f"{100 * confidence:g}% bound"
     ax_auto.plot(lags_auto, r_e, "o-", ms=3, lw=1, label="autocorrelation")
     ax_cross.plot(lags_cross, r_eu, "o-", ms=3, lw=1, color="C2", label="cross-correlation")
@@ -1077,7 +1093,8 @@ def _tracking_arrays(result):
     return times, usable, tracks
 
 
-def mode_tracking(result, standard_errors=1.0, title=None, filename=None, frequency_unit="Hz"):
+def mode_tracking(result, standard_errors=1.0, title=None, filename=None, frequency_unit="Hz",
+                  ax=None):
     """Tracked modes against time: natural frequency (top) and damping ratio (bottom) of every
     track at each window's centre, with error bars of ``standard_errors`` standard errors
     (default one). Windows without a usable model are shaded ("no usable model").
@@ -1090,7 +1107,7 @@ def mode_tracking(result, standard_errors=1.0, title=None, filename=None, freque
     times, usable, tracks = _tracking_arrays(result)
     if len(times) == 0:
         raise ValueError("mode_tracking: the result has no windows")
-    figure, (top, bottom) = _figure(2, 1, figsize=(7.5, 5.5), sharex=True)
+    figure, (top, bottom) = _axes_or_new(ax, 2, 2, 1, figsize=(7.5, 5.5), sharex=True)
     for k, track in enumerate(tracks):
         shown = np.isfinite(track["natural_frequency"])
         if not shown.any():

@@ -244,7 +244,8 @@ def test_command_line_bad_input_exits_2(tmp_path):
     assert result.stderr.strip() == ("ctid.plot: unknown kind 'nyquist'; expected one of "
                                      "bode, modes, frf, frf_matrix, validation, compare, "
                                      "residuals, mse, stabilisation, mode_shapes, mac, "
-                                     "frf_matrix_overlay, tracking, oma_stabilisation")
+                                     "frf_matrix_overlay, tracking, oma_stabilisation, step, "
+                                     "impulse")
     (tmp_path / "bad.json").write_text('{"type": "state_space"}')
     result = run_plot("bode", tmp_path / "bad.json", tmp_path / "x.png")
     assert result.returncode == 2 and '"type" is "state_space"' in result.stderr
@@ -264,3 +265,43 @@ def test_importing_plotting_keeps_the_callers_backend():
             "print(matplotlib.get_backend())")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "svg"
+
+
+def test_figures_draw_into_the_callers_axes(experiment, fitted):
+    """ax=: the figure is the caller's, its axes hold what the function drew (the same lines as
+    a figure of the function's own), its layout and the backend are left as they were, and an
+    ax of the wrong kind is one TypeError."""
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    backend = matplotlib.get_backend()
+    model = fitted.model
+    e = np.random.default_rng(1).standard_normal(300)
+    cases = [
+        ("modes", lambda ax: plotting.modes(model, ax=ax), 1),
+        ("validation", lambda ax: plotting.validation(experiment["data"], fitted, ax=ax), 1),
+        ("compare", lambda ax: plotting.compare(experiment["data"], [fitted], ax=ax), 1),
+        ("channel_fits", lambda ax: plotting.channel_fits(["y1", "y2"], {"fit": [90.0, 80.0]},
+                                                          ax=ax), 1),
+        ("bode", lambda ax: plotting.bode(fitted, ax=ax), 2),
+        ("residual_correlation", lambda ax: plotting.residual_correlation(e, e, ax=ax), 2),
+    ]
+    for name, draw, count in cases:
+        own = draw(None)
+        figure, axes = plt.subplots(1, count)
+        given = axes if count > 1 else [axes]
+        assert figure.get_layout_engine() is None
+        drawn = draw(axes if count > 1 else axes)
+        assert drawn is figure, name
+        assert figure.get_layout_engine() is None, name
+        for mine, theirs in zip(given, own.axes):
+            count_of = lambda a: (len(a.lines), len(a.patches), len(a.collections))
+            assert count_of(mine) == count_of(theirs) and sum(count_of(mine)) > 0, name
+            for a, b in zip(mine.lines, theirs.lines):
+                np.testing.assert_array_equal(a.get_ydata(), b.get_ydata())
+        plt.close(figure)
+        plt.close(own)
+        wrong = "an axes" if count == 1 else plt.subplots(1, 1)[1]
+        with pytest.raises(TypeError, match=r"ax: expected (a matplotlib Axes|a sequence of 2)"):
+            draw(wrong)
+    assert matplotlib.get_backend() == backend
