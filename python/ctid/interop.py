@@ -114,17 +114,6 @@ def to_control(model, delay="refuse"):
     return control.TransferFunction(num, den)
 
 
-def _parameter_names(model):
-    """a1..an, b0..bm of each submodel (prefixed G1., G2., ... when there are several)."""
-    orders = model.orders()
-    names = []
-    for k, order in enumerate(orders):
-        prefix = f"G{k + 1}." if len(orders) > 1 else ""
-        names += [f"{prefix}a{i}" for i in range(1, order.n + 1)]
-        names += [f"{prefix}b{j}" for j in range(order.m + 1)]
-    return names
-
-
 def _table(value):
     """(columns, rows) of what to_dataframe and the notebook views show."""
     from . import _ctid
@@ -137,7 +126,7 @@ def _table(value):
     if isinstance(value, _ctid.EstimationResult):
         theta = np.asarray(value.parameters, dtype=float)
         se = np.asarray(value.standard_errors, dtype=float)
-        names = _parameter_names(value.model)
+        names = list(_ctid.parameter_names(value.model))
         if len(names) != theta.size:
             names = [f"theta{k}" for k in range(theta.size)]
         if se.size != theta.size:

@@ -17,6 +17,7 @@
 #include "ctid/core/sampled_data.h"
 #include "ctid/core/state_space.h"
 #include "ctid/core/transfer_function.h"
+#include "ctid/io/result_json.h"
 #include "fields.h"
 
 namespace ctid::python {
@@ -203,6 +204,10 @@ void bind_core(py::module_& m) {
                             "parameters theta_i = [a_i1..a_in, b_i0..b_im] stacked.")
       .def(py::init<std::vector<Submodel>, double>(), py::arg("submodels"),
            py::arg("input_delay") = 0.0, "From submodels; every rule is checked.")
+      .def(py::init(&io::as_additive_model), py::arg("transfer_function"),
+           "One submodel B/(p^l A) holding the transfer function (A anti-monic, its "
+           "integrators counted, its delay kept); how a TransferFunction is taken wherever an "
+           "AdditiveModel is asked for.")
       .def_static("from_parameters", &AdditiveModel::from_parameters, py::arg("orders"),
                   py::arg("theta"), py::arg("input_delay") = 0.0,
                   "From orders and the stacked parameter vector.")
@@ -230,6 +235,9 @@ void bind_core(py::module_& m) {
            "ModalParameters of submodel i if it is an underdamped mode, else None.")
       .def("to_string", &AdditiveModel::to_string, "Human-readable form.")
       .def("__repr__", &AdditiveModel::to_string);
+  // A TransferFunction is accepted wherever an AdditiveModel is (overloads that take a
+  // TransferFunction itself still come first: pybind11 tries them without conversions).
+  py::implicitly_convertible<TransferFunction, AdditiveModel>();
 
   py::class_<MimoSubmodel>(m, "MimoSubmodel",
                            "One denominator A_i shared by every channel and its numerators "

@@ -16,6 +16,7 @@
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_data_csv.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/result_json.h"
 #include "ctid/io/sampled_data_csv.h"
 #include "fields.h"
 
@@ -164,6 +165,9 @@ void bind_model_writer(py::module_& m) {
 }  // namespace
 
 void bind_io(py::module_& m) {
+  m.def("parameter_names", &io::parameter_names, py::arg("model"),
+        "Names of the stacked parameters of an AdditiveModel, as the documents and ctid fit "
+        "print them: theta1.a1, ..., theta1.b0, theta2.a1, ...");
   bind_result<io::DelayedFeedbackResult>(
       m,
       "What ctid feedback computes: the identification at the known or scanned delay, and "

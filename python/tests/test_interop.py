@@ -120,7 +120,7 @@ def test_dataframes_hold_the_results_numbers():
     result = fitted_second_order()
     table = ctid.to_dataframe(result)
     assert isinstance(table, pandas.DataFrame)
-    assert list(table.parameter) == ["a1", "a2", "b0"]
+    assert list(table.parameter) == ["theta1.a1", "theta1.a2", "theta1.b0"]
     np.testing.assert_array_equal(table.value.to_numpy(), result.parameters)
     np.testing.assert_array_equal(table.standard_error.to_numpy(), result.standard_errors)
 
@@ -146,3 +146,17 @@ def test_notebook_view_shows_the_verdict_and_the_parameters():
     assert not bad.verdict.usable
     view = bad._repr_html_()
     assert "not usable" in view and "is negative" in view
+
+
+def test_a_transfer_function_is_taken_wherever_an_additive_model_is():
+    # model_output takes an AdditiveModel only; a TransferFunction (with an integrator and a
+    # delay) gives what its one-submodel AdditiveModel gives, bit for bit.
+    g = ctid.from_descending([2.0, 1.0], [1.0, 3.0, 2.0, 0.0], input_delay=0.1)
+    one = ctid.AdditiveModel(g)
+    assert len(one) == 1 and one.input_delay == 0.1
+    assert one.submodels[0].integrators == 1
+    u = np.random.default_rng(4).standard_normal(400)
+    np.testing.assert_array_equal(ctid.model_output(g, u, 0.05), ctid.model_output(one, u, 0.05))
+    assert ctid.largest_pole_frequency(g) == ctid.largest_pole_frequency(one)
+    with pytest.raises(ValueError, match="improper"):
+        ctid.AdditiveModel(ctid.TransferFunction([1.0, 1.0, 1.0], [1.0, 1.0]))

@@ -16,21 +16,6 @@ namespace {
 
 using internal::number_or_null;
 
-nlohmann::json modal_json(const ModalEstimate& mode) {
-  const ModalParameters& v = mode.value;
-  const ModalParameters& se = mode.standard_error;
-  return {{"submodel", mode.submodel},
-          {"natural_frequency", number_or_null(v.natural_frequency)},
-          {"natural_frequency_standard_error", number_or_null(se.natural_frequency)},
-          {"natural_frequency_hz", number_or_null(v.natural_frequency / internal::kTwoPi)},
-          {"natural_frequency_hz_standard_error",
-           number_or_null(se.natural_frequency / internal::kTwoPi)},
-          {"damping_ratio", number_or_null(v.damping_ratio)},
-          {"damping_ratio_standard_error", number_or_null(se.damping_ratio)},
-          {"gain", number_or_null(v.gain)},
-          {"gain_standard_error", number_or_null(se.gain)}};
-}
-
 // The flat layout of a mode in the document back into a ModalEstimate's fields.
 nlohmann::json modal_fields(const nlohmann::json& mode, const std::string& where) {
   require(mode.is_object(), where, ": expected an object");
@@ -100,6 +85,22 @@ Eigen::MatrixXd covariance_field(const nlohmann::json& value, const std::string&
 }
 
 }  // namespace
+
+nlohmann::json modal_json(const ModalEstimate& mode) {
+  const ModalParameters& v = mode.value;
+  const ModalParameters& se = mode.standard_error;
+  return {
+      {"submodel", mode.submodel},
+      {"natural_frequency", internal::number_or_null(v.natural_frequency)},
+      {"natural_frequency_standard_error", internal::number_or_null(se.natural_frequency)},
+      {"natural_frequency_hz", internal::number_or_null(v.natural_frequency / internal::kTwoPi)},
+      {"natural_frequency_hz_standard_error",
+       internal::number_or_null(se.natural_frequency / internal::kTwoPi)},
+      {"damping_ratio", internal::number_or_null(v.damping_ratio)},
+      {"damping_ratio_standard_error", internal::number_or_null(se.damping_ratio)},
+      {"gain", internal::number_or_null(v.gain)},
+      {"gain_standard_error", internal::number_or_null(se.gain)}};
+}
 
 std::vector<std::string> parameter_names(const AdditiveModel& model) {
   std::vector<std::string> names;

@@ -57,20 +57,9 @@ nlohmann::json to_json(const TrackingResult& result) {
     const TrackingWindow& window = result.windows[w];
     nlohmann::json modes = nlohmann::json::array();
     for (std::size_t k = 0; k < window.modes.size(); ++k) {
-      const ModalParameters& v = window.modes[k].value;
-      const ModalParameters& se = window.modes[k].standard_error;
-      modes.push_back(
-          {{"submodel", window.modes[k].submodel},
-           {"track", window.tracks[k]},
-           {"natural_frequency", number_or_null(v.natural_frequency)},
-           {"natural_frequency_standard_error", number_or_null(se.natural_frequency)},
-           {"natural_frequency_hz", number_or_null(v.natural_frequency / internal::kTwoPi)},
-           {"natural_frequency_hz_standard_error",
-            number_or_null(se.natural_frequency / internal::kTwoPi)},
-           {"damping_ratio", number_or_null(v.damping_ratio)},
-           {"damping_ratio_standard_error", number_or_null(se.damping_ratio)},
-           {"gain", number_or_null(v.gain)},
-           {"gain_standard_error", number_or_null(se.gain)}});
+      nlohmann::json mode = modal_json(window.modes[k]);  // keys sorted: "track" joins them
+      mode["track"] = window.tracks[k];
+      modes.push_back(std::move(mode));
     }
     value["windows"][w]["modes"] = std::move(modes);
   }

@@ -42,6 +42,10 @@ void check_document(const nlohmann::json& value, std::string_view type, const st
 void check_keys(const nlohmann::json& value, const std::vector<std::string>& fields,
                 const std::vector<std::string>& extra, const std::string& source);
 
+/// A mode as the documents write it: value and standard error of ω_n (rad/s and Hz), ζ and the
+/// gain, null where not finite.
+nlohmann::json modal_json(const ModalEstimate& mode);
+
 /// Names of the stacked parameters beta = [theta_1; ...; theta_K] (eq. 3 order), one per
 /// entry: "theta1.a1", ..., "theta1.b0", ... (submodels counted from 1, as in the paper).
 std::vector<std::string> parameter_names(const AdditiveModel& model);
