@@ -1155,10 +1155,7 @@ def response_curve(time, output, lower=None, upper=None, kind="step", final_valu
     y = np.asarray(output, dtype=float)
     if t.shape != y.shape or t.size < 2:
         raise ValueError("response_curve: time and output need the same length, at least 2")
-    if ax is None:
-        figure, ax = _figure(figsize=(7.0, 4.0))
-    else:
-        figure = ax.figure
+    figure, ax = _axes_or_new(ax, 1, figsize=(7.0, 4.0))
     if lower is not None and upper is not None and np.size(lower) == t.size:
         band = "band" if confidence is None else f"{100 * confidence:g}% band"
         ax.fill_between(t, np.asarray(lower, dtype=float), np.asarray(upper, dtype=float),
