@@ -4,6 +4,7 @@
 #include <set>
 #include <utility>
 
+#include "core/internal/signal_range.h"
 #include "ctid/core/error.h"
 
 namespace ctid {
@@ -18,6 +19,8 @@ void require_finite_channels(const Eigen::MatrixXd& m, const char* signal) {
                 "; every sample must be finite");
       }
     }
+    internal::require_magnitude_in_range(m.col(j),
+                                         std::string(signal) + " " + std::to_string(j + 1));
   }
 }
 

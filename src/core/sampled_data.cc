@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 
+#include "core/internal/signal_range.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 
@@ -59,9 +60,12 @@ SampledData::SampledData(double sample_time, Eigen::VectorXd input, Eigen::Vecto
     require(reference_->size() == input_.size(), "reference has ", reference_->size(),
             " samples but input has ", input_.size(), "; they must have equal lengths");
     require_finite_signal(*reference_, "reference");
+    internal::require_magnitude_in_range(*reference_, "the reference");
   }
   require_finite_signal(input_, "input");
   require_finite_signal(output_, "output");
+  internal::require_magnitude_in_range(input_, "the input");
+  internal::require_magnitude_in_range(output_, "the output");
 }
 
 SampledData SampledData::from_time_stamps(const Eigen::VectorXd& time, Eigen::VectorXd input,

@@ -6,6 +6,7 @@
 #include <optional>
 #include <utility>
 
+#include "core/internal/signal_range.h"
 #include "ctid/core/error.h"
 #include "ctid/io/npy.h"
 #include "ctid/io/sampled_data_csv.h"
@@ -102,6 +103,12 @@ MimoData mimo_data_from_table(const CsvTable& table, const MimoCsvColumns& colum
           references.size(), " reference column", references.size() == 1 ? "" : "s", " for ",
           inputs.size(), " input", inputs.size() == 1 ? "" : "s", "; give one reference per input");
 
+  for (const std::vector<std::string>* names : {&inputs, &outputs, &references}) {
+    for (const std::string& name : *names) {
+      ctid::internal::require_magnitude_in_range(table.column(name),
+                                                 table.source + ": column '" + name + "'");
+    }
+  }
   const Hold hold = declared_input_hold(table).value_or(Hold::zero_order_hold);
   const TimeGrid grid = uniform_time_grid(table, columns.time, columns.relative_tolerance);
   std::optional<Eigen::MatrixXd> reference_matrix;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <optional>
 
+#include "core/internal/signal_range.h"
 #include "ctid/core/error.h"
 #include "ctid/io/npy.h"
 
@@ -56,6 +57,11 @@ SampledData sampled_data_from_table(const CsvTable& table, const CsvColumns& col
   const Eigen::VectorXd& output = table.column(columns.output);
   std::optional<Eigen::VectorXd> reference;
   if (!columns.reference.empty()) reference = table.column(columns.reference);
+  for (const std::string* name : {&columns.input, &columns.output, &columns.reference}) {
+    if (name->empty()) continue;
+    ctid::internal::require_magnitude_in_range(table.column(*name),
+                                               table.source + ": column '" + *name + "'");
+  }
   const Hold hold = declared_input_hold(table).value_or(Hold::zero_order_hold);
   const TimeGrid grid = uniform_time_grid(table, columns.time, columns.relative_tolerance);
   return SampledData(grid.sample_time, input, output, std::move(reference), grid.start_time)

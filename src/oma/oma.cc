@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/internal/signal_range.h"
 #include "ctid/core/error.h"
 #include "ctid/oma/ssi_cov.h"
 #include "ctid/oma/stabilisation.h"
@@ -36,6 +37,8 @@ void check_record(const Eigen::MatrixXd& y, double h, const std::vector<std::str
       require(std::isfinite(y(k, j)), "outputs channel '", names[static_cast<std::size_t>(j)],
               "' is ", y(k, j), " at sample ", k, "; every value must be finite");
     }
+    internal::require_magnitude_in_range(
+        y.col(j), "outputs channel '" + names[static_cast<std::size_t>(j)] + "'");
     require(y.rows() == 0 || (y.col(j).array() != y(0, j)).any(), "outputs channel '",
             names[static_cast<std::size_t>(j)], "' is ", y.rows() > 0 ? y(0, j) : 0.0,
             " at every sample; a constant channel carries no response");

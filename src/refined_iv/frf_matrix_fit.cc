@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 
+#include "core/internal/signal_range.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/estimation/verdict.h"
@@ -732,6 +733,27 @@ Problem problem_of(const MimoFrf& frf, const FrfMatrixFitOptions& options) {
   return p;
 }
 
+// Every entry must respond somewhere, and the response's magnitudes must leave its sums of
+// squares finite (the fit percentages and the cost are such sums).
+void check_frf_magnitudes(const MimoFrf& frf) {
+  double largest = 0.0;
+  for (int i = 0; i < frf.output_count(); ++i) {
+    for (int j = 0; j < frf.input_count(); ++j) {
+      double entry = 0.0;
+      for (const Eigen::MatrixXcd& g : frf.response) entry = std::max(entry, std::abs(g(i, j)));
+      require(entry > 0.0, "frf_matrix_fit: entry ", frf.output_names[static_cast<size_t>(i)], "/",
+              frf.input_names[static_cast<size_t>(j)],
+              " is zero at every line; a response of zeros has no modes (leave that entry out)");
+      largest = std::max(largest, entry);
+    }
+  }
+  require(
+      largest >= internal::kSmallestSampleMagnitude && largest <= internal::kLargestSampleMagnitude,
+      "frf_matrix_fit: the FRF reaches a magnitude of ", largest,
+      "; ctid fits responses whose largest magnitude lies within 1e-100..1e+100, so that "
+      "their sums of squares stay finite: rescale it (give it other units)");
+}
+
 void check_frf(const MimoFrf& frf, const FrfMatrixFitOptions& options) {
   const Eigen::Index lines = frf.frequencies.size();
   const int n_y = frf.output_count();
@@ -758,6 +780,7 @@ void check_frf(const MimoFrf& frf, const FrfMatrixFitOptions& options) {
     require(frf.response[at].allFinite(), "frf_matrix_fit: the response at frequency ", l + 1, " (",
             format_brief(frf.frequencies(l)), " rad/s) is not finite");
   }
+  check_frf_magnitudes(frf);
   if (options.weighting == FrfWeighting::variance) {
     require(static_cast<Eigen::Index>(frf.variance.size()) == lines,
             "frf_matrix_fit: weighting 'variance' needs the FRF's variance at every line, but it "

@@ -220,7 +220,7 @@ TEST_F(ReliabilityTest, FrfOfValuesTooLargeForTheSpectraIsRefused) {
   }
   write("big.csv", text);
   expect_refused({"frf", "big.csv", "-o", "f.csv"},
-                 "big.csv: column 'u' holds values up to 3e+200");
+                 "big.csv: column 'u' reaches a magnitude of 3e+200");
 }
 
 // Finding 9: messages that used to mislead.

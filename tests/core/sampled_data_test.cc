@@ -43,6 +43,26 @@ TEST(SampledData, RejectsBadRecords) {
               ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("reference has 2")));
 }
 
+// Issue 33: sums of squares of a record must stay finite and normal, so a record's largest
+// magnitude lies within 1e-100..1e100 (an all-zero signal is judged elsewhere). At the edges
+// the record is taken; beyond them the message names the signal, the magnitude and the sample.
+TEST(SampledData, MagnitudesOutsideTheRepresentableRangeAreRefused) {
+  const Eigen::VectorXd four = Eigen::VectorXd::LinSpaced(4, -1.0, 2.0);
+  EXPECT_NO_THROW(SampledData(1.0, 1e100 * four / 2.0, 1e-100 * four / 2.0));
+  EXPECT_NO_THROW(SampledData(1.0, four, Eigen::VectorXd::Zero(4)));
+  for (const double scale : {1e101, 1e300, 1e-101, 1e-300, 4.9e-324}) {
+    const Eigen::VectorXd scaled = scale * four / 2.0;
+    EXPECT_THAT([&] { SampledData(1.0, scaled, four); },
+                ::testing::ThrowsMessage<InvalidArgument>(
+                    ::testing::AllOf(HasSubstr("the input reaches a magnitude of"),
+                                     HasSubstr("(sample 3)"), HasSubstr("1e-100..1e+100"))));
+    EXPECT_THAT([&] { SampledData(1.0, four, scaled); },
+                ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("the output reaches")));
+    EXPECT_THAT([&] { SampledData(1.0, four, four, scaled); },
+                ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("the reference reaches")));
+  }
+}
+
 TEST(SampledData, TimeStampsMustBeUniform) {
   Eigen::VectorXd t(5);
   t << 0.0, 0.1, 0.2, 0.3, 0.4;

@@ -89,7 +89,7 @@ TEST(SampledDataCsv, ColumnsRoundTripThroughTheirFields) {
 TEST(SampledDataCsv, WriteThenReadRoundTripsExactly) {
   const testing::TestDirectory dir;
   Eigen::VectorXd u(5), y(5), r(5);
-  u << 1.0 / 3.0, -2.5, 1e-17, 4e100, 0.1;
+  u << 1.0 / 3.0, -2.5, 1e-17, 4e99, 0.1;  // 1e100 is the largest magnitude taken
   y << 0.7, 0.1 + 0.2, -1.0 / 7.0, 3.0, 1e-300;
   r << 1, 2, 3, 4, 5;
   const SampledData data(0.05, u, y, r, 0.0);
