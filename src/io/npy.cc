@@ -6,11 +6,13 @@
 #include <cstdint>
 #include <cstring>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "ctid/core/error.h"
 #include "ctid/io/file.h"
+#include "io/internal/echo.h"
 
 namespace ctid::io {
 namespace {
@@ -99,7 +101,7 @@ class HeaderScanner {
   }
   [[noreturn]] void fail(const std::string& what) const {
     throw InvalidArgument(ctid::internal::concat(source_, ": malformed .npy header (", what, "): '",
-                                                 text_.substr(0, 200), "'"));
+                                                 internal::echo(text_), "'"));
   }
 
  private:
@@ -124,9 +126,11 @@ Header parse_header(std::string_view text, const std::string& source) {
   bool has_descr = false;
   bool has_order = false;
   bool has_shape = false;
+  std::set<std::string> keys;
   scan.expect('{', "'{' opening the header dict");
   while (!scan.accept('}')) {
     const std::string key = scan.quoted();
+    if (!keys.insert(key).second) scan.fail("the key '" + internal::echo(key) + "' appears twice");
     scan.expect(':', "':' after a key");
     if (key == "descr") {
       scan.skip_space();

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "ctid/core/error.h"
+#include "io/internal/echo.h"
 
 namespace ctid::io {
 
@@ -176,7 +177,7 @@ Record parse_record(const std::vector<std::string>& body, int first, const std::
   if (!type || !response_node || !response_direction || !reference_node || !reference_direction) {
     // Not in the fixed columns: the ten fields separated by spaces.
     const std::vector<std::string> t = tokens(r6);
-    require(t.size() == 10, where, ", record 6 (line ", first + 5, "): '", trim(r6),
+    require(t.size() == 10, where, ", record 6 (line ", first + 5, "): '", internal::echo(trim(r6)),
             "' is not the function type, identification, version, load case, response entity, "
             "node, direction, reference entity, node and direction");
     type = to_int(t[0]);
@@ -185,7 +186,7 @@ Record parse_record(const std::vector<std::string>& body, int first, const std::
     reference_node = to_int(t[8]);
     reference_direction = to_int(t[9]);
     require(type && response_node && response_direction && reference_node && reference_direction,
-            where, ", record 6 (line ", first + 5, "): '", trim(r6),
+            where, ", record 6 (line ", first + 5, "): '", internal::echo(trim(r6)),
             "' has a field that is not an integer");
   }
   require(*type == 4, where, ": function type ", *type, " (", function_type_name(*type),
@@ -201,7 +202,8 @@ Record parse_record(const std::vector<std::string>& body, int first, const std::
   }
   // Record 7: (3I10,3E13.5).
   const std::vector<std::string> r7 = tokens(body[6]);
-  require(r7.size() >= 5, where, ", record 7 (line ", first + 6, "): '", trim(body[6]),
+  require(r7.size() >= 5, where, ", record 7 (line ", first + 6, "): '",
+          internal::echo(trim(body[6])),
           "' is not the ordinate type, the number of values, the spacing, the abscissa minimum "
           "and increment");
   const std::optional<long> ordinate = to_int(r7[0]);
@@ -210,7 +212,7 @@ Record parse_record(const std::vector<std::string>& body, int first, const std::
   const std::optional<double> minimum = to_double(r7[3]);
   const std::optional<double> increment = to_double(r7[4]);
   require(ordinate && count && spacing && minimum && increment, where, ", record 7 (line ",
-          first + 6, "): '", trim(body[6]), "' has a field that is not a number");
+          first + 6, "): '", internal::echo(trim(body[6])), "' has a field that is not a number");
   require(*ordinate == 5 || *ordinate == 6, where, ": ordinate data type ", *ordinate,
           " is not complex; only 5 (complex single) and 6 (complex double) are read");
   require(*spacing == 0 || *spacing == 1, where, ": abscissa spacing ", *spacing,
@@ -218,16 +220,17 @@ Record parse_record(const std::vector<std::string>& body, int first, const std::
   require(*count >= 1, where, ": ", *count, " values; a record needs at least one");
   // Record 8: the abscissa must be a frequency (18), or unknown (0) taken as Hz.
   const std::vector<std::string> r8 = tokens(body[7]);
-  const std::optional<long> abscissa = r8.empty() ? std::nullopt : to_int(r8[0]);
-  require(abscissa && (*abscissa == 18 || *abscissa == 0), where, ", record 8 (line ", first + 7,
-          "): the abscissa's specific data type is '", r8.empty() ? "" : r8[0],
+  const long abscissa = r8.empty() ? -1 : to_int(r8[0]).value_or(-1);
+  require(abscissa == 18 || abscissa == 0, where, ", record 8 (line ", first + 7,
+          "): the abscissa's specific data type is '",
+          internal::echo(r8.empty() ? std::string_view() : std::string_view(r8[0])),
           "'; only 18 (frequency, in Hz) or 0 (unknown, taken as Hz) are read");
   std::vector<double> values;
   for (std::size_t q = 11; q < body.size(); ++q) {
     for (const std::string& t : tokens(body[q])) {
       const std::optional<double> v = to_double(t);
-      require(v.has_value(), where, ", record 12 (line ", first + static_cast<int>(q), "): '", t,
-              "' is not a finite number");
+      require(v.has_value(), where, ", record 12 (line ", first + static_cast<int>(q), "): '",
+              internal::echo(t), "' is not a finite number");
       values.push_back(*v);
     }
   }
@@ -279,7 +282,7 @@ MimoFrf parse_uff58(std::string_view text, const std::string& source) {
   std::size_t q = 0;
   while (q < lines.size()) {
     if (!is_delimiter(lines[q])) {
-      require(trim(lines[q]).empty(), source, ":", q + 1, ": '", trim(lines[q]),
+      require(trim(lines[q]).empty(), source, ":", q + 1, ": '", internal::echo(trim(lines[q])),
               "' is outside any dataset (a dataset opens with a line holding -1)");
       ++q;
       continue;
@@ -289,7 +292,7 @@ MimoFrf parse_uff58(std::string_view text, const std::string& source) {
     require(!head.empty(), source, ":", q + 2, ": the dataset number is missing");
     std::size_t end = q + 2;
     while (end < lines.size() && !is_delimiter(lines[end])) ++end;
-    require(end < lines.size(), source, ":", q + 1, ": dataset ", head[0],
+    require(end < lines.size(), source, ":", q + 1, ": dataset ", internal::echo(head[0]),
             " is not closed by a line holding -1");
     require(head[0] != "58b", source, ":", q + 2,
             ": dataset 58b (binary) is not read; export the FRFs as ASCII dataset 58");
