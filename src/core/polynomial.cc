@@ -146,13 +146,23 @@ Polynomial Polynomial::derivative() const {
 
 Polynomial Polynomial::monic() const {
   require(!is_zero(), "the zero polynomial cannot be made monic");
-  return Polynomial(Eigen::VectorXd(coefficients_ / leading()));
+  Eigen::VectorXd c = coefficients_ / leading();
+  require(c.allFinite(), "polynomial ", to_string(), ": its leading coefficient (of ",
+          power_of_s(degree()), ") is ", leading(),
+          ", so small against the others that dividing by it overflows; if the degree is "
+          "lower, leave that coefficient out");
+  return Polynomial(std::move(c));
 }
 
 Polynomial Polynomial::anti_monic() const {
   require(!is_zero() && coefficients_(0) != 0.0, "polynomial ", to_string(),
           " has a zero constant coefficient and cannot be made anti-monic");
-  return Polynomial(Eigen::VectorXd(coefficients_ / coefficients_(0)));
+  Eigen::VectorXd c = coefficients_ / coefficients_(0);
+  require(c.allFinite(), "polynomial ", to_string(), ": its constant coefficient is ",
+          coefficients_(0),
+          ", so small against the others that dividing by it overflows; if the polynomial has a "
+          "root at s = 0, give it as such");
+  return Polynomial(std::move(c));
 }
 
 Polynomial Polynomial::scaled_argument(double scale) const {

@@ -68,8 +68,12 @@ bool TransferFunction::is_stable() const {
 }
 
 TransferFunction TransferFunction::normalized() const {
-  const double lead = denominator_.leading();
-  return TransferFunction((1.0 / lead) * numerator_, denominator_.monic(), input_delay_);
+  Polynomial monic = denominator_.monic();  // refuses a leading coefficient too small to divide by
+  const double inverse = 1.0 / denominator_.leading();
+  require(std::isfinite(inverse) && (inverse * numerator_.coefficients()).allFinite(),
+          "transfer function ", to_string(), ": the denominator's leading coefficient ",
+          denominator_.leading(), " is so small that dividing the numerator by it overflows");
+  return TransferFunction(inverse * numerator_, std::move(monic), input_delay_);
 }
 
 StateSpace TransferFunction::to_state_space() const {
@@ -93,6 +97,11 @@ StateSpace TransferFunction::to_state_space() const {
     w0 = std::max(w0, std::pow(std::abs(monic_den[k]), 1.0 / (n - k)));
   }
   if (!(w0 > 0.0) || !std::isfinite(w0)) w0 = 1.0;
+  require(std::isfinite(std::pow(w0, n)) && std::pow(w0, n) > 0.0, "transfer function ",
+          to_string(), ": its poles reach about ", format_brief(w0),
+          " rad/s, too far apart for a state-space realisation in double precision; if the "
+          "denominator's leading coefficient ",
+          lead, " is not meant, leave it out");
   // G(w0 sigma) = R(w0 sigma)/D(w0 sigma) + d, realised in companion form in sigma, then
   // A = w0 A_sigma, B = w0 B_sigma, C = C_sigma.
   const Polynomial remainder = numerator_ - ss.d * denominator_;

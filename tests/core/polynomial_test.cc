@@ -121,6 +121,21 @@ TEST(Polynomial, MonicAntiMonicAndString) {
   EXPECT_EQ(p.monic(), Polynomial({0.25, 0.5, 1.0}));
   EXPECT_EQ(p.anti_monic(), Polynomial({1.0, 2.0, 4.0}));
   EXPECT_THROW(Polynomial({0.0, 1.0}).anti_monic(), InvalidArgument);
+  // Issue 33: a leading (constant) coefficient too small to divide by is named, not the inf
+  // the division would make of another coefficient.
+  EXPECT_THAT(
+      [] {
+        Polynomial({1.0, 2.0, 1e-310}).monic();
+      },
+      ::testing::ThrowsMessage<InvalidArgument>(
+          ::testing::AllOf(::testing::HasSubstr("its leading coefficient (of s^2) is 1e-310"),
+                           ::testing::HasSubstr("dividing by it overflows"))));
+  EXPECT_THAT(
+      [] {
+        Polynomial({1e-310, 2.0, 1.0}).anti_monic();
+      },
+      ::testing::ThrowsMessage<InvalidArgument>(
+          ::testing::HasSubstr("its constant coefficient is 1e-310")));
   EXPECT_EQ(Polynomial({1.0, -1.0, 2.0}).to_string("p"), "2 p^2 - p + 1");
 }
 
