@@ -146,10 +146,29 @@ std::string with_flag_names(const std::string& message, const CLI::App& app) {
   return out;
 }
 
+std::vector<std::string>& diagnostics() {
+  static std::vector<std::string> queued;
+  return queued;
+}
+
+void queue_diagnostic(std::string line) { diagnostics().push_back(std::move(line)); }
+
+void flush_diagnostics() {
+  for (const std::string& line : diagnostics()) std::cerr << line << "\n";
+  diagnostics().clear();
+}
+
 int run_command(const std::string& command_path, const std::function<ExitStatus()>& action,
                 const CLI::App* app) {
+  diagnostics().clear();
+  // Whatever ends the action, a line queued before a refusal is not printed with it.
+  struct Drop {
+    ~Drop() { diagnostics().clear(); }
+  } drop;
   try {
-    return action();
+    const ExitStatus status = action();
+    flush_diagnostics();
+    return status;
   } catch (const InvalidArgument& e) {
     const std::string message = app != nullptr ? with_flag_names(e.what(), *app) : e.what();
     std::cerr << command_path << ": error: " << one_line(message) << "\n";

@@ -8,6 +8,7 @@
 
 #include <functional>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -40,6 +41,35 @@ struct CommandRegistration {
 bool register_command(int order, CommandFactory factory);
 /// Every registered command, sorted by order.
 std::vector<CommandRegistration> registered_commands();
+
+/// Queues a warning or note line ("warning: FILE: ...") for stderr. Queued lines are printed
+/// by flush_diagnostics(), which a command calls once its refusals are behind it, and by
+/// run_command when the action returns; a refusal drops them, so it stays one line.
+void queue_diagnostic(std::string line);
+/// Prints the queued lines on stderr, in order, and empties the queue.
+void flush_diagnostics();
+
+/// One queued line written like a stream: `QueuedLine() << "note: " << path << ...;` queues
+/// the text (a trailing newline dropped) when the statement ends.
+class QueuedLine {
+ public:
+  QueuedLine() = default;
+  QueuedLine(const QueuedLine&) = delete;
+  QueuedLine& operator=(const QueuedLine&) = delete;
+  ~QueuedLine() {
+    std::string line = text_.str();
+    if (!line.empty() && line.back() == '\n') line.pop_back();
+    queue_diagnostic(std::move(line));
+  }
+  template <typename T>
+  QueuedLine& operator<<(const T& part) {
+    text_ << part;
+    return *this;
+  }
+
+ private:
+  std::ostringstream text_;
+};
 
 /// Runs a command's action and returns its status, or maps an exception to one:
 /// ctid::InvalidArgument (bad input) gives 2, anything else 1, each with one line on stderr

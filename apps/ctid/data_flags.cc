@@ -138,9 +138,10 @@ void DataFlags::stamps_in_seconds(io::CsvTable& table, const std::string& path) 
   const Eigen::Index n = stamps.size();
   const double step = n > 1 ? (stamps(n - 1) - stamps(0)) / static_cast<double>(n - 1) : 0.0;
   if (time_unit == "s" && step >= 1000.0) {
-    std::cerr << "note: the time column '" << time_column << "' of " << path << " steps by "
-              << format_number(step)
-              << " s; if its stamps are milliseconds or microseconds, pass --time-unit ms or us\n";
+    QueuedLine()
+        << "note: the time column '" << time_column << "' of " << path << " steps by "
+        << format_number(step)
+        << " s; if its stamps are milliseconds or microseconds, pass --time-unit ms or us\n";
   }
 }
 
@@ -203,9 +204,9 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
       } catch (const InvalidArgument& e) {
         throw InvalidArgument(path + ": " + e.what());
       }
-      std::cerr << "note: " << path << ": " << stamps.size()
-                << " time stamps resampled onto h = " << format_number(resample) << " s ("
-                << read->size() << " samples)\n";
+      QueuedLine() << "note: " << path << ": " << stamps.size()
+                   << " time stamps resampled onto h = " << format_number(resample) << " s ("
+                   << read->size() << " samples)\n";
     } else if (table.has_column(time_column)) {
       const Eigen::VectorXd& stamps = table.column(time_column);
       if (h_flag) {
@@ -214,19 +215,19 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
           const TimeStampCheck check = check_time_stamps(stamps);
           const double drift = std::abs(sample_time - check.step) * (stamps.size() - 1);
           if (check.worst_sample) {
-            std::cerr << "note: the time column '" << time_column << "' of " << path
-                      << " is not uniform (sample " << *check.worst_sample << " is "
-                      << format_brief(check.deviation) << " s off its grid); --sample-time "
-                      << format_number(sample_time) << " s is used\n";
+            QueuedLine() << "note: the time column '" << time_column << "' of " << path
+                         << " is not uniform (sample " << *check.worst_sample << " is "
+                         << format_brief(check.deviation) << " s off its grid); --sample-time "
+                         << format_number(sample_time) << " s is used\n";
           } else if (drift > check.tolerance) {
-            std::cerr << "note: --sample-time " << format_number(sample_time)
-                      << " s overrides the time column '" << time_column << "' of " << path
-                      << " (step " << format_number(check.step) << " s)\n";
+            QueuedLine() << "note: --sample-time " << format_number(sample_time)
+                         << " s overrides the time column '" << time_column << "' of " << path
+                         << " (step " << format_number(check.step) << " s)\n";
           }
         } catch (const InvalidArgument& e) {
-          std::cerr << "note: the time column '" << time_column << "' of " << path << ": "
-                    << e.what() << "; --sample-time " << format_number(sample_time)
-                    << " s is used\n";
+          QueuedLine() << "note: the time column '" << time_column << "' of " << path << ": "
+                       << e.what() << "; --sample-time " << format_number(sample_time)
+                       << " s is used\n";
         }
         try {
           read.emplace(sample_time, u, y, reference, stamps(0));
@@ -242,7 +243,11 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
         try {
           read.emplace(io::sampled_data_from_table(table, columns));
         } catch (const InvalidArgument& e) {
-          throw InvalidArgument(std::string(e.what()) +
+          const std::string message = e.what();
+          if (message.find("time stamps") == std::string::npos) {
+            throw InvalidArgument(message.starts_with(path) ? message : path + ": " + message);
+          }
+          throw InvalidArgument(message +
                                 "; --sample-time (-T) overrides the time column, and --resample H "
                                 "moves irregular stamps onto a grid of step H");
         }
@@ -271,19 +276,11 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
       throw InvalidArgument(path + ": " + e.what());
     }
   }();
-  if (!defer_warnings) {
-    for (const std::string& warning : result.record.warnings) {
-      std::cerr << "warning: " << path << ": " << warning << "\n";
-    }
+  for (const std::string& warning : result.record.warnings) {
+    QueuedLine() << "warning: " << path << ": " << warning;
   }
   preprocessing = std::move(result.record);
   return std::move(result.data);
-}
-
-void DataFlags::print_warnings() const {
-  for (const std::string& warning : preprocessing.warnings) {
-    std::cerr << "warning: " << file << ": " << warning << "\n";
-  }
 }
 
 void DataFlags::add_mimo_columns(CLI::App& app) {
@@ -397,7 +394,8 @@ MimoData DataFlags::load_mimo(const CLI::App& app) const {
     }
   }();
   for (const std::string& warning : result.record.warnings) {
-    std::cerr << "warning: " << (files.empty() ? file : files.front()) << ": " << warning << "\n";
+    QueuedLine() << "warning: " << (files.empty() ? file : files.front()) << ": " << warning
+                 << "\n";
   }
   preprocessing = std::move(result.record);
   return std::move(result.data);

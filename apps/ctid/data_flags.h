@@ -41,12 +41,6 @@ struct DataFlags {
 
   /// What load() did to the record (set by load(), which the commands call on const flags).
   mutable PreprocessingRecord preprocessing;
-  /// When set, load() keeps the warnings in `preprocessing` for print_warnings() instead of
-  /// printing them: a command that may still refuse the record prints them after its checks,
-  /// so a refusal stays one line.
-  bool defer_warnings = false;
-  /// Prints the warnings of the last load() on stderr, "warning: FILE: ...".
-  void print_warnings() const;
 
   /// Adds DATA (positional, `name` in the help) and the column flags to `app`; with
   /// `with_reference` also --reference-column.

@@ -434,6 +434,7 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
                 << " is not written\n";
     }
   }
+  flush_diagnostics();  // the data's warnings, now that nothing refused it
   if (!f.quiet) {
     if (!result.verdict.usable) std::cout << "WARNING: " << result.verdict.summary() << "\n";
     std::cout << result.message << "\n"
@@ -588,6 +589,7 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
     io::write_model(f.model_output, io::ContinuousModel(result.model),
                     f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
+  flush_diagnostics();  // the data's warnings, now that nothing refused it
   if (!f.quiet) {
     print_summary(std::cout, result, estimator, data, samples, f.data.file_list(),
                   f.data.preprocessing_asked(app) ? f.data.preprocessing.summary() : "");
