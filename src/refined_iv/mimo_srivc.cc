@@ -269,6 +269,22 @@ double relative_output_error(const Layout& layout, const MimoData& data, const I
 // every signal through 1 / (1 + p / lambda)^n. The numerator columns are the same for every
 // output, so they are projected out once and A comes from a system of n unknowns. Its poles
 // are grouped into the structure's submodels (group_into_submodels); none if they do not fit.
+// Whether (1 + p / lambda)^order and its companion realisation (coefficients divided by the
+// leading one) have every coefficient well inside double precision: a structure of a hundred
+// modes would overflow them at most bandwidths.
+bool binomial_filter_is_representable(int order, double lambda) {
+  const double log_lambda = std::log10(lambda);
+  for (int k = 0; k <= order; ++k) {
+    const double log_binomial =
+        (std::lgamma(order + 1.0) - std::lgamma(k + 1.0) - std::lgamma(order - k + 1.0)) /
+        std::log(10.0);
+    const double coefficient = log_binomial - k * log_lambda;         // of p^k in f
+    const double realised = log_binomial + (order - k) * log_lambda;  // divided by the lead
+    if (std::abs(coefficient) > 250.0 || std::abs(realised) > 250.0) return false;
+  }
+  return true;
+}
+
 std::optional<std::vector<Polynomial>> common_denominator_start(const Layout& layout,
                                                                 const MimoData& data, double lambda,
                                                                 Hold interpolation) {
@@ -283,6 +299,7 @@ std::optional<std::vector<Polynomial>> common_denominator_start(const Layout& la
   if (n == 0) return std::vector<Polynomial>(layout.orders.size(), Polynomial{1.0});
   int m = layout.direct ? n + l : 0;  // a direct term makes every channel biproper
   for (const SubmodelOrder& o : layout.orders) m = std::max(m, o.m + n - o.n + l - o.integrators);
+  if (!binomial_filter_is_representable(n + l, lambda)) return std::nullopt;
   Polynomial f{1.0};
   for (int q = 0; q < n + l; ++q) f = f * Polynomial{1.0, 1.0 / lambda};
   const FilterRealization bank = derivative_filters(f);

@@ -827,7 +827,7 @@ std::vector<Case> catalogue() {
                                 number(k % 5);
                        })},
        .args = {"frf", "big.csv", "-o", "f.csv"},
-       .message = {"big.csv: column 'u' holds values up to"}});
+       .message = {"big.csv: column 'u' reaches a magnitude of", "rescale it"}});
   // Finding 9.
   add({.name = "FrfConstantInput",
        .files = {table("flat.csv", "t,u,y",
@@ -1043,6 +1043,95 @@ std::vector<Case> catalogue() {
        .args = {"feedback", "/dev/zero", "--forward-order", "1", "--feedback-order", "1", "--delay",
                 "0.1"},
        .message = {"/dev/zero: is a device, not a file"}});
+
+  // ---- issue 33, finding 6: messages that check their own numbers ----------------------
+  const auto scaled = [](const std::string& name, const char* exponent) {
+    return table(name, "t,u,y", [exponent](int k) {
+      return number(0.05 * k) + "," + std::to_string(k % 3 - 1) + exponent + "," +
+             std::to_string(k % 5) + exponent;
+    });
+  };
+  add({.name = "FitDataScaledToTenToThe300",
+       .files = {scaled("big.csv", "e300")},
+       .args = {"fit", "big.csv", "--poles", "1", "--zeros", "0"},
+       .message = {"big.csv: column 'u' reaches a magnitude of 1e+300", "rescale it"}});
+  add({.name = "FitDataScaledToTenToTheMinus300",
+       .files = {scaled("tiny.csv", "e-300")},
+       .args = {"fit", "tiny.csv", "--poles", "1", "--zeros", "0"},
+       .message = {"tiny.csv: column 'u' reaches a magnitude of 1e-300", "rescale it"}});
+  add({.name = "FitSubnormalData",
+       .files = {scaled("sub.csv", "e-310")},
+       .args = {"fit", "sub.csv", "--poles", "1", "--zeros", "0"},
+       .message = {"sub.csv: column 'u' reaches a magnitude of 1e-310"}});
+  add({.name = "FitFrfOfZeros",
+       .files = {{"f.csv", "frequency,y/u_real,y/u_imag\n1,0,0\n2,0,0\n3,0,0\n4,0,0\n"}},
+       .args = {"fit-frf", "f.csv", "--modes", "1"},
+       .message = {"entry y/u is zero at every line"}});
+  add({.name = "FitFrfOfTenToThe300",
+       .files = {{"f.csv",
+                  "frequency,y/u_real,y/u_imag\n1,1e300,0\n2,5e299,-5e299\n3,2e299,-4e299\n"
+                  "4,1e299,-3e299\n"}},
+       .args = {"fit-frf", "f.csv", "--modes", "1"},
+       .message = {"the FRF reaches a magnitude of 1e+300", "rescale it"}});
+  add({.name = "FitFrfUniversalFileWithANulByte",
+       .files = {{"f.uff", "    -1\n    58\ny/u\nNONE\nNONE\nNONE\nNONE\n   " +
+                               std::string(1, '\0') +
+                               " 4         1    1         0 NONE               1   0 NONE    "
+                               "        1001   0\n"
+                               "         6       128         0  0.00000E+00  1.00000E+00  "
+                               "0.00000E+00\n"
+                               "        18    0    0    0 Frequency            Hz\n"
+                               "         0    0    0    0 NONE                 NONE\n"
+                               "         0    0    0    0 NONE                 NONE\n"
+                               "         0    0    0    0 NONE                 NONE\n"
+                               "  1.0 0.0\n    -1\n"}},
+       .args = {"fit-frf", "f.uff", "--modes", "1"},
+       .message = {"record 6 (line 8): '\\x00 4", "' is not the function type"}});
+  add({.name = "FitNpyHeaderWithDescrTwice",
+       .files =
+           {{"d.npy",
+             [] {
+               std::string header =
+                   "{'descr': '<f8', 'descr': '<f8', 'fortran_order': False, 'shape': (3, 3), }";
+               while ((10 + header.size() + 1) % 64 != 0) header += ' ';
+               header += '\n';
+               std::string bytes = "\x93NUMPY";
+               bytes += '\x01';
+               bytes += '\x00';
+               bytes += static_cast<char>(header.size() & 0xff);
+               bytes += static_cast<char>(header.size() >> 8);
+               return bytes + header + std::string(9 * 8, '\0');
+             }()}},
+       .args = {"fit", "d.npy", "-T", "0.05", "--poles", "1", "--zeros", "0"},
+       .message = {"d.npy: malformed .npy header (the key 'descr' appears twice)"}});
+  add({.name = "SimulateLeadingCoefficientTenToTheMinus300",
+       .files = {{"g.json", R"({"type": "transfer_function", "numerator_ascending": [1.0],)"
+                            R"( "denominator_ascending": [1.0, 2.0, 1e-300]})"}},
+       .args = white({"simulate", "-m", "g.json", "-o", "y.csv"}),
+       .message = {"its poles reach about 2e+300 rad/s",
+                   "leading coefficient 1e-300 is not meant"}});
+  add({.name = "SimulateLeadingCoefficientSubnormal",
+       .files = {{"g.json", R"({"type": "transfer_function", "numerator_ascending": [1.0],)"
+                            R"( "denominator_ascending": [1.0, 2.0, 1e-310]})"}},
+       .args = white({"simulate", "-m", "g.json", "-o", "y.csv"}),
+       .message = {"its leading coefficient (of s^2) is 1e-310", "dividing by it overflows"}});
+  add({.name = "FitDecimatedToTwoSamplesIsOneLine",
+       .files = {d},
+       .args = fit1({"--decimate", "150"}),
+       .message = {"samples are too few"}});
+  add({.name = "FitHundredModesOnTwoInputs",
+       .files = {table(
+           "m.csv", "t,u1,u2,y1,y2",
+           [](int k) {
+             const double u1 = std::sin(0.7 * k) + std::cos(2.3 * k * k);
+             const double u2 = std::cos(1.1 * k) - std::sin(0.9 * k * k);
+             return number(0.01 * k) + "," + number(u1) + "," + number(u2) + "," +
+                    number(u1 + 0.5 * u2) + "," + number(u2 - 0.3 * u1);
+           },
+           2000)},
+       .args = {"fit", "m.csv", "--input-columns", "u1,u2", "--output-columns", "y1,y2", "--modes",
+                "100"},
+       .message = {"no start found from the data", "give an initial model"}});
   return c;
 }
 
