@@ -280,6 +280,50 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
   return std::move(result.data);
 }
 
+IrregularRecord DataFlags::load_irregular(const CLI::App& app) const {
+  for (const char* flag :
+       {"--resample", "--sample-time", "--rows", "--time", "--decimate", "--reference-column"}) {
+    if (app.count(flag) > 0) {
+      usage_error(std::string(flag) +
+                  " does not go with --irregular, which fits the time stamps as logged "
+                  "(docs/decisions/0034)");
+    }
+  }
+  if (detrend == "linear") {
+    usage_error("--detrend linear does not go with --irregular yet; use --detrend mean");
+  }
+  const std::string& path = files.empty() ? file : files.front();
+  io::CsvTable table = io::read_table(path);
+  stamps_in_seconds(table, path);
+  if (!table.has_column(time_column)) {
+    usage_error(internal::concat(
+        "--irregular needs the time stamps, but ", path, " has no time column '", time_column,
+        "' (columns: ", column_list(table), "); name it with --time-column"));
+  }
+  const std::optional<Hold> declared = io::declared_input_hold(table);
+  const std::optional<Hold> flagged = parse_hold(input_hold);
+  if (declared && flagged && *declared != *flagged) {
+    usage_error(internal::concat("--input-hold ", input_hold, " contradicts ", path, ":",
+                                 table.declaration("input_hold")->line,
+                                 ", which declares input_hold: ", hold_flag_name(*declared)));
+  }
+  IrregularRecord r;
+  r.time = table.column(time_column);
+  r.input = table.column(input_column) * scale_input;
+  r.output = table.column(output_column) * scale_output;
+  r.input_hold = flagged.value_or(declared.value_or(Hold::zero_order_hold));
+  try {
+    r.validate();
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(path + ": " + e.what() + " (time column '" + time_column + "')");
+  }
+  if (detrend == "mean") {
+    r.input.array() -= r.input.mean();
+    r.output.array() -= r.output.mean();
+  }
+  return r;
+}
+
 void DataFlags::print_warnings() const {
   for (const std::string& warning : preprocessing.warnings) {
     std::cerr << "warning: " << file << ": " << warning << "\n";

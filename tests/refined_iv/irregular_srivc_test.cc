@@ -14,6 +14,7 @@
 
 #include "ctid/core/error.h"
 #include "ctid/core/preprocessing.h"
+#include "ctid/refined_iv/identification.h"
 #include "ctid/refined_iv/irregular_srivc.h"
 #include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/discretization.h"
@@ -234,6 +235,28 @@ TEST(IrregularSrivc, BadRecordsAreRefusedWithOneClearMessage) {
   RefinedIvOptions delayed;
   delayed.input_delay = 2;
   EXPECT_THROW((void)srivc_irregular(good, kOrder, delayed), InvalidArgument);
+}
+
+TEST(IrregularSrivc, TheFrontDoorRunsItForAnUnfactoredOpenLoopStructureOnly) {
+  const IrregularRecord r = record(600, 0.3, Hold::zero_order_hold, 0.1, 11);
+  IdentificationOptions options;
+  options.refined_iv.compute_covariance = false;
+  const IdentificationResult front = identify(r, ModelStructure::unfactored(2, 1), options);
+  EXPECT_EQ(front.estimator, RefinedIvEstimator::srivc_irregular);
+  EXPECT_EQ(enum_name(front.estimator), "srivc_irregular");
+  EXPECT_FALSE(front.closed_loop);
+  const EstimationResult direct = srivc_irregular(r, kOrder, options.refined_iv);
+  EXPECT_EQ(front.estimate.parameters, direct.parameters);
+  EXPECT_THROW((void)identify(r, ModelStructure::modes(1), options), InvalidArgument);
+  IdentificationOptions closed = options;
+  closed.controller = DiscreteTransferFunction(Polynomial{1.0}, Polynomial{1.0}, kStep);
+  try {
+    (void)identify(r, ModelStructure::unfactored(2, 1), closed);
+    ADD_FAILURE() << "closed loop was not refused";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("controller is set (closed loop)"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace
