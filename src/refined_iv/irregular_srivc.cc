@@ -74,7 +74,10 @@ Eigen::MatrixXd run_on_stamps(const FilterRealization& filter, const Eigen::Vect
                               const Eigen::VectorXd& x, Hold hold) {
   const Eigen::Index n = t.size();
   const int s = filter.order();
+  // At most kCached lengths are kept (stamps with fine jitter rarely repeat a length).
+  constexpr size_t kCached = 4096;
   std::map<double, IntervalStep> steps;
+  IntervalStep uncached;
   auto step_for = [&](double h) -> const IntervalStep& {
     auto found = steps.find(h);
     if (found != steps.end()) return found->second;
@@ -85,6 +88,10 @@ Eigen::MatrixXd run_on_stamps(const FilterRealization& filter, const Eigen::Vect
     } else {
       FohDiscretization d = discretize_foh(filter.a, filter.b, h);
       step = {std::move(d.phi), d.gamma0.col(0), d.gamma1.col(0)};
+    }
+    if (steps.size() >= kCached) {
+      uncached = std::move(step);
+      return uncached;
     }
     return steps.emplace(h, std::move(step)).first->second;
   };

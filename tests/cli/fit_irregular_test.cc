@@ -140,6 +140,9 @@ TEST_F(FitIrregular, BadStampsAreOneClearMessage) {
   expect_bad_input(
       ctid({"fit", write("b.csv", backwards), "--irregular", "--poles", "2", "--zeros", "1"}),
       "fit", "time stamp 40 (1.9 s) goes back before stamp 39");
+  expect_bad_input(ctid({"fit", write("n.csv", "t,u,y\n0,1,2\nnan,2,3\n0.05,1,1\n"), "--irregular",
+                         "--poles", "1", "--zeros", "0"}),
+                   "fit", "column 't' (field 1): value 'nan' is not finite");
   std::string few = "t,u,y\n";
   for (int k = 0; k < 15; ++k) {
     few += std::to_string(0.05 * k) + "," + std::to_string(std::sin(1.3 * k)) + "," +
