@@ -20,12 +20,12 @@
 #include "ctid/core/preprocessing.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/estimation/validation.h"
-#include "ctid/estimation/verdict.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/discretization.h"
 #include "refined_iv/internal/refined_iv_engine.h"
+#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
 
@@ -260,50 +260,14 @@ void check_inputs(const IrregularRecord& r, const SubmodelOrder& o,
           " parameters; at least ", needed, " are needed");
 }
 
-// The checks of estimation/verdict.h on a finished open-loop estimate (as refined_iv.cc).
-Verdict irregular_verdict(const EstimationResult& r) {
-  Verdict verdict;
-  check_finite(verdict, r.parameters.allFinite(), "a parameter");
-  check_fit(verdict, r.fit_percent, r.start_fit_percent);
-  const Polynomial& den = r.model[0].a;  // the poles off the origin, as refined_iv.cc judges
-  if (r.parameters.allFinite() && den.degree() >= 1) {
-    const Eigen::VectorXcd poles = den.roots();
-    if (poles.allFinite()) {
-      check_stable(verdict, poles);
-      const Eigen::VectorXcd zeros = r.transfer_function.numerator().degree() >= 1
-                                         ? r.transfer_function.zeros()
-                                         : Eigen::VectorXcd(0);
-      if (zeros.allFinite()) check_cancellation(verdict, poles, zeros);
-    }
-  }
-  std::vector<std::string> names;
-  Eigen::VectorXd values(static_cast<Eigen::Index>(r.modes.size()));
-  Eigen::VectorXd errors(values.size());
-  for (size_t k = 0; k < r.modes.size(); ++k) {
-    names.push_back("the natural frequency of submodel " + std::to_string(r.modes[k].submodel + 1));
-    values(static_cast<Eigen::Index>(k)) = r.modes[k].value.natural_frequency;
-    errors(static_cast<Eigen::Index>(k)) = r.modes[k].standard_error.natural_frequency;
-  }
-  check_standard_errors(verdict, names, values, errors);
-  check_conditioning(verdict, r.reciprocal_condition, r.fit_percent);
-  return verdict;
-}
-
 // One solve of (30) from the filtered signals: theta_{j+1}, with the reciprocal condition of
 // the column-scaled instrument-regressor matrix; nothing if it is singular or non-finite.
 std::optional<Eigen::VectorXd> solve_step(const FilteredSignals& f, double& rcond) {
   if (!f.instrument.allFinite() || !f.regressor.allFinite() || !f.filtered_output.allFinite()) {
     return std::nullopt;
   }
-  auto norms = [](const Eigen::MatrixXd& x) {
-    Eigen::VectorXd s = x.colwise().norm().transpose();
-    for (Eigen::Index j = 0; j < s.size(); ++j) {
-      if (!(s(j) > 0.0)) s(j) = 1.0;
-    }
-    return s;
-  };
-  const Eigen::VectorXd sz = norms(f.instrument);
-  const Eigen::VectorXd sp = norms(f.regressor);
+  const Eigen::VectorXd sz = internal::column_scales(f.instrument);
+  const Eigen::VectorXd sp = internal::column_scales(f.regressor);
   const Eigen::MatrixXd m = sz.cwiseInverse().asDiagonal() *
                             (f.instrument.transpose() * f.regressor) *
                             sp.cwiseInverse().asDiagonal();
@@ -441,7 +405,7 @@ EstimationResult srivc_irregular(const IrregularRecord& record, const SubmodelOr
                               format_significant(checks.nyquist_frequency, 3) + " rad/s");
   }
   result.checks = std::move(checks);
-  result.verdict = d::irregular_verdict(result);
+  result.verdict = internal::refined_iv_verdict(result, false, false);
   return result;
 }
 
