@@ -354,9 +354,8 @@ EstimationResult srivc_irregular(const IrregularRecord& record, const SubmodelOr
   checks.excitation_order =
       persistent_excitation_order(record.input, std::max(checks.excitation_order_required, p));
   require(checks.excitation_order >= p,
-          "srivc_irregular: the input is persistently exciting "
-          "of order ",
-          checks.excitation_order, " only; the ", p, " parameters need at least order ", p);
+          "srivc_irregular: the input is persistently exciting of order ", checks.excitation_order,
+          " only; the ", p, " parameters need at least order ", p);
   checks.persistently_exciting = checks.excitation_order >= checks.excitation_order_required;
   Eigen::VectorXd theta = d::start_parameters(record, order, options);
   require(theta.size() == p && theta.allFinite(),
