@@ -55,6 +55,19 @@ std::optional<Hold> parse_hold(const std::string& text) {
 
 const char* hold_flag_name(Hold hold) { return hold == Hold::zero_order_hold ? "zoh" : "foh"; }
 
+// The input hold: --input-hold, else the file's '# input_hold:' declaration, else zoh; a flag
+// that contradicts the declaration is a usage error naming both.
+Hold resolved_hold(const io::CsvTable& table, const std::string& path, const std::string& flag) {
+  const std::optional<Hold> declared = io::declared_input_hold(table);
+  const std::optional<Hold> flagged = parse_hold(flag);
+  if (declared && flagged && *declared != *flagged) {
+    usage_error(internal::concat("--input-hold ", flag, " contradicts ", path, ":",
+                                 table.declaration("input_hold")->line,
+                                 ", which declares input_hold: ", hold_flag_name(*declared)));
+  }
+  return flagged.value_or(declared.value_or(Hold::zero_order_hold));
+}
+
 }  // namespace
 
 bool same_sample_time(double a, double b) { return std::abs(a - b) <= 1e-9 * std::abs(b); }
@@ -180,14 +193,7 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
     const Eigen::VectorXd& y = table.column(output_column);
     const bool time_flag = app.count("--time-column") > 0;
     const bool h_flag = app.count("--sample-time") > 0;
-    const std::optional<Hold> declared = io::declared_input_hold(table);
-    const std::optional<Hold> flagged = parse_hold(input_hold);
-    if (declared && flagged && *declared != *flagged) {
-      usage_error(internal::concat("--input-hold ", input_hold, " contradicts ", path, ":",
-                                   table.declaration("input_hold")->line,
-                                   ", which declares input_hold: ", hold_flag_name(*declared)));
-    }
-    hold = flagged.value_or(declared.value_or(Hold::zero_order_hold));
+    hold = resolved_hold(table, path, input_hold);
     const bool resample_flag = app.count("--resample") > 0;
     if (resample_flag && h_flag) usage_error("give --resample or --sample-time, not both");
     if (resample_flag && !table.has_column(time_column)) {
@@ -281,6 +287,43 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
   }
   preprocessing = std::move(result.record);
   return std::move(result.data);
+}
+
+IrregularRecord DataFlags::load_irregular(const CLI::App& app) const {
+  for (const char* flag :
+       {"--resample", "--sample-time", "--rows", "--time", "--decimate", "--reference-column"}) {
+    if (app.count(flag) > 0) {
+      usage_error(std::string(flag) +
+                  " does not go with --irregular, which fits the time stamps as logged "
+                  "(docs/decisions/0034)");
+    }
+  }
+  if (detrend == "linear") {
+    usage_error("--detrend linear does not go with --irregular yet; use --detrend mean");
+  }
+  const std::string& path = files.empty() ? file : files.front();
+  io::CsvTable table = io::read_table(path);
+  stamps_in_seconds(table, path);
+  if (!table.has_column(time_column)) {
+    usage_error(internal::concat(
+        "--irregular needs the time stamps, but ", path, " has no time column '", time_column,
+        "' (columns: ", column_list(table), "); name it with --time-column"));
+  }
+  IrregularRecord r;
+  r.time = table.column(time_column);
+  r.input = table.column(input_column) * scale_input;
+  r.output = table.column(output_column) * scale_output;
+  r.input_hold = resolved_hold(table, path, input_hold);
+  try {
+    r.validate();
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(path + ": " + e.what() + " (time column '" + time_column + "')");
+  }
+  if (detrend == "mean") {
+    r.input.array() -= r.input.mean();
+    r.output.array() -= r.output.mean();
+  }
+  return r;
 }
 
 void DataFlags::add_mimo_columns(CLI::App& app) {

@@ -14,6 +14,7 @@
 #include "ctid/core/preprocessing.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/io/csv.h"
+#include "ctid/refined_iv/irregular_srivc.h"
 
 namespace ctid::cli {
 
@@ -61,6 +62,13 @@ struct DataFlags {
   /// from the time column or --sample-time; the preprocessing flags apply to every channel
   /// (core/mimo_preprocessing.h); --resample and --reference-column are usage errors.
   MimoData load_mimo(const CLI::App& app) const;
+
+  /// Reads `file` as a record at irregular time stamps (fit --irregular, decision 0034): the
+  /// time column as logged (duplicates and gaps kept), u and y, the input hold from
+  /// --input-hold or the file's declaration. Of the preprocessing only --detrend none|mean
+  /// and --scale-input/--scale-output apply; --resample, --sample-time, --rows, --time,
+  /// --decimate, --detrend linear and --reference-column are usage errors naming the flag.
+  IrregularRecord load_irregular(const CLI::App& app) const;
 
   /// load() of every file, each read, checked and preprocessed alike.
   std::vector<SampledData> load_all(const CLI::App& app, bool need_reference) const;

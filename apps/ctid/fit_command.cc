@@ -65,6 +65,7 @@ struct FitFlags {
   bool history = false;
   bool relocate_modes = false;
   bool direct_term = false;  // several inputs/outputs: estimate D
+  bool irregular = false;    // fit on the time stamps as logged (decision 0034)
 
   std::string output;
   std::string model_output;
@@ -155,19 +156,19 @@ void print_engineering_quantities(std::ostream& out, const EstimationResult& r) 
   }
 }
 
+// `step` names h: "h" for a uniform record, "median step" for irregular time stamps.
 void print_summary(std::ostream& out, const EstimationResult& r, const std::string& estimator,
-                   const SampledData& data, int samples, const std::string& file,
-                   const std::string& preprocessing) {
+                   double h, int samples, const std::string& file, const std::string& preprocessing,
+                   const char* step = "h") {
   // A model that failed the quality verdict is announced before anything else.
   if (!r.verdict.usable) out << "WARNING: " << r.verdict.summary() << "\n";
-  out << "ctid fit: " << estimator << " on " << file << " (N = " << samples
-      << ", h = " << format_number(data.sample_time()) << " s)\n";
+  out << "ctid fit: " << estimator << " on " << file << " (N = " << samples << ", " << step << " = "
+      << format_number(h) << " s)\n";
   if (!preprocessing.empty()) out << "preprocessing: " << preprocessing << "\n";
   // The estimator's message restates the reason; print it only when it explains a failure.
   out << "termination: " << r.brief_report() << "\n";
   if (r.delay_standard_error > 0.0) {
     // Estimated as a continuous parameter: tau with its standard error, and in samples.
-    const double h = data.sample_time();
     out << "input delay: " << plus_minus(r.model.input_delay(), r.delay_standard_error) << " s ("
         << format_brief(r.model.input_delay() / h) << " samples)\n";
   } else {
@@ -478,7 +479,67 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   return result.verdict.usable ? kExitOk : kExitNoUsableModel;
 }
 
+// What --irregular does not take yet, each refused naming the flag (decision 0034).
+void check_irregular_flags(const FitFlags& f, const CLI::App& app) {
+  const std::string why =
+      " does not go with --irregular (an unfactored open-loop SISO SRIVC on the time stamps; "
+      "docs/decisions/0034)";
+  if (f.data.mimo_asked(app)) usage_error("--input-columns / --output-columns" + why);
+  for (const char* flag : {"--controller", "--submodel", "--modes", "--delay", "--delay-scan",
+                           "--delay-range", "--record-delays", "--relocate-modes", "--rank-one",
+                           "--input-delays", "--direct", "--plot"}) {
+    if (app.count(flag) > 0) usage_error(std::string(flag) + why);
+  }
+  if (f.model == "additive") usage_error("--model additive" + why);
+  if (f.initial_conditions != "zero") usage_error("--initial-conditions estimate" + why);
+  if (f.data.files.size() > 1) usage_error("several data files" + why);
+}
+
+// --irregular: srivc_irregular through identify() on the stamps as logged.
+ExitStatus run_irregular_fit(const FitFlags& f, const CLI::App& app) {
+  check_irregular_flags(f, app);
+  const ModelStructure structure = model_structure(f, app);
+  const IdentificationOptions options = identification_options(f);
+  validate_identification(structure, options);
+  const IrregularRecord record = f.data.load_irregular(app);
+  const IdentificationResult identified = identify(record, structure, options);
+  const EstimationResult& result = identified.estimate;
+  const std::string estimator(enum_name(identified.estimator));
+  const auto samples = static_cast<int>(record.time.size());
+  const double median = record.median_step();
+  int duplicates = 0;
+  for (Eigen::Index k = 1; k < record.time.size(); ++k) {
+    duplicates += record.time(k) == record.time(k - 1) ? 1 : 0;
+  }
+  const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
+  if (!f.output.empty()) {
+    nlohmann::json document = io::to_json(result);
+    document["estimator"] = estimator;
+    document["loop"] = "open";
+    document["data"] = {
+        {"file", f.data.files.front()},   {"samples", samples},
+        {"sample_time", median},          {"time_stamps", "irregular"},
+        {"duplicate_stamps", duplicates}, {"input_hold", enum_name(record.input_hold)},
+        {"detrend", f.data.detrend}};
+    io::write_json(f.output, document, overwrite);
+  }
+  if (!f.model_output.empty()) {
+    io::write_model(f.model_output, io::ContinuousModel(result.model), overwrite);
+  }
+  if (!f.quiet) {
+    print_summary(std::cout, result, estimator, median, samples, f.data.files.front(), "",
+                  "median step");
+    std::cout << "time stamps: irregular, " << duplicates << " duplicate"
+              << (duplicates == 1 ? "" : "s") << ", steps " << format_brief(median)
+              << " s median, input " << enum_name(record.input_hold) << "\n";
+  } else if (!result.verdict.usable) {
+    std::cerr << "ctid fit: WARNING: " << result.verdict.summary() << "\n";
+  }
+  return result.verdict.usable ? kExitOk : kExitNoUsableModel;
+}
+
 ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
+  if (f.irregular) return run_irregular_fit(f, app);
   if (f.data.mimo_asked(app)) return run_mimo_fit(f, app);
   if (app.count("--rank-one") > 0) {
     usage_error(
@@ -591,7 +652,7 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   }
   flush_diagnostics();  // the data's warnings, now that nothing refused it
   if (!f.quiet) {
-    print_summary(std::cout, result, estimator, data, samples, f.data.file_list(),
+    print_summary(std::cout, result, estimator, data.sample_time(), samples, f.data.file_list(),
                   f.data.preprocessing_asked(app) ? f.data.preprocessing.summary() : "");
     if (scanned) print_delay_scan(std::cout, *scanned);
     if (relocated) std::cout << "mode relocation: " << relocated->message << "\n";
@@ -739,6 +800,11 @@ Command add_fit_command(CLI::App& parent) {
       ->group("Iteration");
   app->add_flag("--history", f.history, "Record every iteration's parameters in the result")
       ->group("Iteration");
+  app->add_flag("--irregular", f.irregular,
+                "Fit on the time stamps as logged (jitter, gaps, duplicate stamps), the filters "
+                "discretised on each interval for --input-hold; unfactored, open loop, one "
+                "input and output (docs/decisions/0034)")
+      ->group("Data");
   app->add_flag("--direct", f.direct_term,
                 "Several inputs/outputs: estimate a direct term D besides the modes (e.g. "
                 "accelerations from forces, with --submodel 2,1)")

@@ -53,6 +53,7 @@
 #include "ctid/refined_iv/identification.h"
 #include "ctid/refined_iv/initialization.h"
 #include "ctid/refined_iv/input_delay_scan.h"
+#include "ctid/refined_iv/irregular_srivc.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
 #include "ctid/refined_iv/mode_tracking.h"

@@ -8,6 +8,7 @@
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/initialization.h"
 #include "ctid/refined_iv/input_delay_scan.h"
+#include "ctid/refined_iv/irregular_srivc.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
 #include "ctid/refined_iv/mode_tracking.h"
@@ -81,6 +82,20 @@ void bind_refined_iv_estimators(py::module_& m) {
       },
       py::arg("data"), py::arg("order"), py::arg("options") = py::none(),
       "SRIVC: one unfactored model B/(p^l A) from open-loop data.");
+  m.def(
+      "srivc_irregular",
+      [](const Eigen::VectorXd& time, const Eigen::VectorXd& input, const Eigen::VectorXd& output,
+         const SubmodelOrder& order, Hold input_hold,
+         const std::optional<RefinedIvOptions>& options, const py::kwargs& kwargs) {
+        const auto o = refined("srivc_irregular", options, kwargs);
+        IrregularRecord record{time, input, output, input_hold};
+        py::gil_scoped_release release;
+        return srivc_irregular(record, order, o);
+      },
+      py::arg("time"), py::arg("input"), py::arg("output"), py::arg("order"),
+      py::arg("input_hold") = Hold::zero_order_hold, py::arg("options") = py::none(),
+      "SRIVC on irregular time stamps (non-decreasing; equal stamps allowed), the filters "
+      "discretised on each interval for input_hold (docs/decisions/0034).");
   m.def(
       "clsrivc",
       [](const SampledData& data, const DiscreteTransferFunction& controller,

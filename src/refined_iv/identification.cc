@@ -258,4 +258,22 @@ IdentificationResult identify(const std::vector<SampledData>& records,
   return identify_records(records, structure, options, progress);
 }
 
+IdentificationResult identify(const IrregularRecord& record, const ModelStructure& structure,
+                              const IdentificationOptions& options) {
+  validate_identification(structure, options);
+  const char* why =
+      "; irregular time stamps are fitted by srivc_irregular, an unfactored "
+      "open-loop SRIVC (docs/decisions/0034)";
+  require(!structure.is_additive(), "ModelStructure.kind is additive", why);
+  require(!options.controller, "IdentificationOptions.controller is set (closed loop)", why);
+  require(!options.delay_scan && !options.delay_range,
+          "IdentificationOptions.delay_scan or delay_range is set", why);
+  require(!options.relocate_modes, "IdentificationOptions.relocate_modes is true", why);
+  IdentificationResult result(
+      srivc_irregular(record, structure.orders.front(), options.refined_iv));
+  result.estimator = RefinedIvEstimator::srivc_irregular;
+  result.closed_loop = false;
+  return result;
+}
+
 }  // namespace ctid

@@ -753,8 +753,8 @@ std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums) {
   return solution;
 }
 
-// The checks of estimation/verdict.h on a finished estimate (decision 0007).
-// `loop_unstable`: closed loop, and the known controller does not stabilise the estimate.
+}  // namespace
+
 Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loop_unstable) {
   // A returned start (no step completed, or none fitted better) is judged like any model, by
   // its fit and the checks below, never by the iteration count: on noise-free data the start
@@ -802,8 +802,6 @@ Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loo
   check_conditioning(verdict, r.reciprocal_condition, r.fit_percent);
   return verdict;
 }
-
-}  // namespace
 
 Polynomial reflect_unstable_roots(const Polynomial& a, bool& reflected) {
   reflected = false;

@@ -21,6 +21,7 @@
 #include "ctid/core/sampled_data.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/input_delay_scan.h"
+#include "ctid/refined_iv/irregular_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 
@@ -119,9 +120,10 @@ enum class RefinedIvEstimator {
   clsrivc,           ///< unfactored, closed loop
   additive_srivc,    ///< additive, open loop
   additive_clsrivc,  ///< additive, closed loop
+  srivc_irregular,   ///< unfactored, open loop, on irregular time stamps (irregular_srivc.h)
 };
 
-inline constexpr std::array<Enumerator<RefinedIvEstimator>, 4> refined_iv_estimator_enumerators{{
+inline constexpr std::array<Enumerator<RefinedIvEstimator>, 5> refined_iv_estimator_enumerators{{
     {RefinedIvEstimator::srivc, "srivc", "SRIVC: unfactored, open loop (eq. 30, instrument (10))."},
     {RefinedIvEstimator::clsrivc, "clsrivc",
      "CLSRIVC: unfactored, closed loop (eq. 30, instrument (20))."},
@@ -129,6 +131,8 @@ inline constexpr std::array<Enumerator<RefinedIvEstimator>, 4> refined_iv_estima
      "Additive, open loop (eq. 29, instrument (10))."},
     {RefinedIvEstimator::additive_clsrivc, "additive_clsrivc",
      "Additive, closed loop (eq. 29, instrument (20))."},
+    {RefinedIvEstimator::srivc_irregular, "srivc_irregular",
+     "SRIVC on irregular time stamps: filters discretised on each interval (decision 0034)."},
 }};
 constexpr std::span<const Enumerator<RefinedIvEstimator>> enumerators(RefinedIvEstimator) {
   return refined_iv_estimator_enumerators;
@@ -240,5 +244,12 @@ IdentificationResult identify(const std::vector<SampledData>& records,
                               const ModelStructure& structure,
                               const IdentificationOptions& options = {},
                               const IdentificationProgress& progress = {});
+
+/// identify() on a record at irregular time stamps (docs/decisions/0034): srivc_irregular,
+/// the filters discretised on each interval as it is. Only what that estimator does is taken:
+/// an unfactored structure, open loop, no delay scan or range, no mode relocation; anything
+/// else is refused with InvalidArgument naming the field. estimator is srivc_irregular.
+IdentificationResult identify(const IrregularRecord& record, const ModelStructure& structure,
+                              const IdentificationOptions& options = {});
 
 }  // namespace ctid

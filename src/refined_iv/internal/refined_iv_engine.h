@@ -60,6 +60,10 @@ struct FreeResponseChain {
 };
 FreeResponseChain free_response_chain(const Polynomial& a, int integrators, double h);
 
+/// The checks of estimation/verdict.h on a finished estimate (decision 0007).
+/// `loop_unstable`: closed loop, and the known controller does not stabilise the estimate.
+Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loop_unstable);
+
 /// Parameters of `model` laid out for `orders` (b padded with zeros up to m_i); throws
 /// InvalidArgument if the structure does not fit.
 Eigen::VectorXd parameters_for_orders(const AdditiveModel& model,

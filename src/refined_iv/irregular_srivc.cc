@@ -1,0 +1,411 @@
+// SRIVC on irregular time stamps (irregular_srivc.h, docs/decisions/0034): the filters of
+// eq. (30) with the instrument (10), discretised exactly on each interval as it is. The
+// uniform-grid engine (refined_iv.cc) and its sampled filters are not touched; this file
+// builds the same realisations (filter_bank.h) and runs them interval by interval.
+#include "ctid/refined_iv/irregular_srivc.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "ctid/core/error.h"
+#include "ctid/core/format.h"
+#include "ctid/core/preprocessing.h"
+#include "ctid/core/sampled_data.h"
+#include "ctid/estimation/validation.h"
+#include "ctid/filtering/filter_bank.h"
+#include "ctid/refined_iv/covariance.h"
+#include "ctid/refined_iv/srivc.h"
+#include "ctid/simulation/discretization.h"
+#include "refined_iv/internal/refined_iv_engine.h"
+#include "refined_iv/internal/scaled_least_squares.h"
+
+namespace ctid {
+
+void IrregularRecord::validate() const {
+  const Eigen::Index n = time.size();
+  require(input.size() == n && output.size() == n, "irregular record: ", n, " time stamps, ",
+          input.size(), " input and ", output.size(), " output samples; the sizes must agree");
+  require(n >= 2, "irregular record: ", n, " samples; at least 2 are needed");
+  for (Eigen::Index k = 0; k < n; ++k) {
+    require(std::isfinite(time(k)), "irregular record: time stamp ", k, " is ", time(k),
+            "; every stamp must be finite");
+    require(k == 0 || time(k) >= time(k - 1), "irregular record: time stamp ", k, " (",
+            format_number(time(k)), " s) goes back before stamp ", k - 1, " (",
+            format_number(time(k - 1)), " s); stamps must not decrease (equal stamps are allowed)");
+    require(std::isfinite(input(k)), "irregular record: input sample ", k, " is ", input(k));
+    require(std::isfinite(output(k)), "irregular record: output sample ", k, " is ", output(k));
+  }
+  require(time(n - 1) > time(0), "irregular record: every time stamp is ", time(0),
+          "; the record spans no time");
+}
+
+double IrregularRecord::median_step() const {
+  std::vector<double> steps;
+  for (Eigen::Index k = 1; k < time.size(); ++k) {
+    if (time(k) > time(k - 1)) steps.push_back(time(k) - time(k - 1));
+  }
+  require(!steps.empty(), "irregular record: no positive step between time stamps");
+  const auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+  std::nth_element(steps.begin(), mid, steps.end());
+  return *mid;
+}
+
+namespace irregular_srivc_detail {
+
+// One interval's exact recursion z+ = phi z + g0 x_k + g1 x_k+1 (g1 = 0 for the ZOH).
+struct IntervalStep {
+  Eigen::MatrixXd phi;
+  Eigen::VectorXd g0;
+  Eigen::VectorXd g1;
+};
+
+// Runs `filter` over x at the stamps t from rest at the first stamp: row k is C z(t_k) +
+// d x_k. A zero-length interval leaves the state where it is. The discretisation of each
+// distinct interval length is computed once per call (loggers repeat a few step lengths).
+Eigen::MatrixXd run_on_stamps(const FilterRealization& filter, const Eigen::VectorXd& t,
+                              const Eigen::VectorXd& x, Hold hold) {
+  const Eigen::Index n = t.size();
+  const int s = filter.order();
+  // At most kCached lengths are kept (stamps with fine jitter rarely repeat a length).
+  constexpr size_t kCached = 4096;
+  std::map<double, IntervalStep> steps;
+  IntervalStep uncached;
+  auto step_for = [&](double h) -> const IntervalStep& {
+    auto found = steps.find(h);
+    if (found != steps.end()) return found->second;
+    IntervalStep step;
+    if (hold == Hold::zero_order_hold) {
+      ZohDiscretization d = discretize_zoh(filter.a, filter.b, h);
+      step = {std::move(d.phi), d.gamma.col(0), Eigen::VectorXd::Zero(s)};
+    } else {
+      FohDiscretization d = discretize_foh(filter.a, filter.b, h);
+      step = {std::move(d.phi), d.gamma0.col(0), d.gamma1.col(0)};
+    }
+    if (steps.size() >= kCached) {
+      uncached = std::move(step);
+      return uncached;
+    }
+    return steps.emplace(h, std::move(step)).first->second;
+  };
+  Eigen::MatrixXd out(n, filter.outputs());
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(s);
+  Eigen::VectorXd next(s);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (k > 0 && t(k) > t(k - 1)) {
+      const IntervalStep& step = step_for(t(k) - t(k - 1));
+      next.noalias() = step.phi * z;
+      next += step.g0 * x(k - 1) + step.g1 * x(k);
+      z.swap(next);
+    }
+    out.row(k) = (filter.c * z + filter.d * x(k)).transpose();
+  }
+  return out;
+}
+
+// The filtered signals of (30) at theta = [a_1..a_n, b_0..b_m]: the instrument psi (10), the
+// regressor phi, the filtered output 1/A y and the model output B/(p^l A) u, all at the stamps.
+struct FilteredSignals {
+  Eigen::MatrixXd instrument;
+  Eigen::MatrixXd regressor;
+  Eigen::VectorXd filtered_output;
+  Eigen::VectorXd model_output;
+};
+
+Polynomial denominator(const SubmodelOrder& o, const Eigen::VectorXd& theta) {
+  Eigen::VectorXd a(o.n + 1);
+  a(0) = 1.0;
+  a.tail(o.n) = theta.head(o.n);
+  return Polynomial::trimmed(a);
+}
+
+// The instrument source: the bank of 1/(p^l A) cascaded (through B/||B||) into p^k/A, read as
+// p^j/(p^l A) u (j = 0..m), p^k B/(p^l A^2) u (k = 1..n) and the model output, as the
+// uniform-grid engine forms them (refined_iv.cc, submodel_filters).
+FilterRealization source_filter(const SubmodelOrder& o, const Polynomial& a,
+                                const Eigen::VectorXd& b) {
+  const FilterRealization bank = derivative_filters(Polynomial::monomial(o.integrators) * a);
+  const int s1 = bank.order();
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank.outputs());
+  w.head(o.m + 1) = b;
+  const double gain = w.norm() > 0.0 ? w.norm() : 1.0;
+  FilterRealization chain = bank;
+  if (o.n > 0) chain = cascade(bank, w / gain, derivative_filters(a));
+  const int rows = o.m + 1 + o.n + 1;
+  FilterRealization f;
+  f.a = chain.a;
+  f.b = chain.b;
+  f.c = Eigen::MatrixXd::Zero(rows, chain.order());
+  f.d = Eigen::VectorXd::Zero(rows);
+  f.c.topLeftCorner(o.m + 1, s1) = bank.c.topRows(o.m + 1);
+  f.d.head(o.m + 1) = bank.d.head(o.m + 1);
+  if (o.n > 0) {
+    f.c.middleRows(o.m + 1, o.n) = gain * chain.c.middleRows(1, o.n);
+    f.d.segment(o.m + 1, o.n) = gain * chain.d.segment(1, o.n);
+  }
+  f.c.block(rows - 1, 0, 1, s1) = w.transpose() * bank.c;
+  f.d(rows - 1) = w.dot(bank.d);
+  return f;
+}
+
+FilteredSignals filter_signals(const IrregularRecord& r, const SubmodelOrder& o,
+                               const Eigen::VectorXd& theta, Hold output_interpolation) {
+  const Polynomial a = denominator(o, theta);
+  const Eigen::VectorXd b = theta.tail(o.m + 1);
+  const Eigen::Index n = r.time.size();
+  const int p = o.n + o.m + 1;
+  const Eigen::MatrixXd source =
+      run_on_stamps(source_filter(o, a, b), r.time, r.input, r.input_hold);
+  FilteredSignals f;
+  f.instrument.resize(n, p);
+  f.regressor.resize(n, p);
+  f.instrument.rightCols(o.m + 1) = source.leftCols(o.m + 1);
+  f.regressor.rightCols(o.m + 1) = source.leftCols(o.m + 1);
+  f.model_output = source.col(o.m + o.n + 1);
+  if (o.n > 0) {
+    f.instrument.leftCols(o.n) = -source.middleCols(o.m + 1, o.n);
+    const Eigen::MatrixXd y =
+        run_on_stamps(derivative_filters(a), r.time, r.output, output_interpolation);
+    f.regressor.leftCols(o.n) = -y.middleCols(1, o.n);
+    f.filtered_output = y.col(0);
+  } else {
+    f.filtered_output = r.output;
+  }
+  return f;
+}
+
+// The block relative change of the uniform-grid engine: max of ||d a|| / ||a||, ||d b|| / ||b||.
+double relative_change(const SubmodelOrder& o, const Eigen::VectorXd& from,
+                       const Eigen::VectorXd& to) {
+  const double whole = std::max(from.norm(), 1e-300);
+  double largest = 0.0;
+  for (const auto& [first, count] : {std::pair{0, o.n}, std::pair{o.n, o.m + 1}}) {
+    if (count == 0) continue;
+    const double size = from.segment(first, count).norm();
+    const double step = (to.segment(first, count) - from.segment(first, count)).norm();
+    largest = std::max(largest, step / (size > 1e-12 * whole ? size : whole));
+  }
+  return largest;
+}
+
+void reflect(const SubmodelOrder& o, Eigen::VectorXd& theta, int& reflections) {
+  if (o.n < 1) return;
+  bool reflected = false;
+  const Polynomial a = internal::reflect_unstable_roots(denominator(o, theta), reflected);
+  if (!reflected || a.degree() != o.n) return;
+  ++reflections;
+  for (int k = 1; k <= o.n; ++k) theta(k - 1) = a[k];
+}
+
+// The record with equal stamps reduced to their last sample, on the grid of its median step:
+// the record the start is found on.
+SampledData start_record(const IrregularRecord& r) {
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index k = 0; k < r.time.size(); ++k) {
+    if (!keep.empty() && r.time(k) == r.time(keep.back())) {
+      keep.back() = k;
+    } else {
+      keep.push_back(k);
+    }
+  }
+  const auto m = static_cast<Eigen::Index>(keep.size());
+  Eigen::VectorXd t(m), u(m), y(m);
+  for (Eigen::Index j = 0; j < m; ++j) {
+    t(j) = r.time(keep[static_cast<size_t>(j)]);
+    u(j) = r.input(keep[static_cast<size_t>(j)]);
+    y(j) = r.output(keep[static_cast<size_t>(j)]);
+  }
+  return resample(t, u, y, std::nullopt, r.median_step(), r.input_hold);
+}
+
+Eigen::VectorXd start_parameters(const IrregularRecord& r, const SubmodelOrder& o,
+                                 const RefinedIvOptions& options) {
+  if (options.initial_model) {
+    return internal::unfactored_parameters(
+        options.initial_model->to_transfer_function().with_input_delay(0.0), o);
+  }
+  RefinedIvOptions start = options;
+  start.compute_covariance = false;
+  start.record_history = false;
+  const EstimationResult fitted = srivc(start_record(r), o, start);
+  return fitted.parameters;
+}
+
+void check_inputs(const IrregularRecord& r, const SubmodelOrder& o,
+                  const RefinedIvOptions& options) {
+  options.validate();
+  r.validate();
+  require(o.n >= 0 && o.m >= 0 && o.integrators >= 0, "srivc_irregular: negative order (n = ", o.n,
+          ", m = ", o.m, ", integrators = ", o.integrators, ")");
+  require(o.n + o.integrators >= 1, "srivc_irregular: the model has no poles");
+  require(o.m <= o.n + o.integrators, "srivc_irregular: m = ", o.m,
+          " > n + integrators = ", o.n + o.integrators, " (improper)");
+  require(options.input_delay == 0 && options.input_delay_fraction == 0.0 &&
+              options.record_input_delays.empty() && !options.delay_estimated,
+          "srivc_irregular: an input delay is not supported on irregular stamps yet");
+  require(options.initial_conditions == InitialConditions::zero,
+          "srivc_irregular: initial_conditions = estimate is not supported on irregular "
+          "stamps yet");
+  const int p = o.n + o.m + 1;
+  const auto n = static_cast<int>(r.time.size());
+  const int needed = std::max(3 * p, p + 20);
+  require(n >= needed, "srivc_irregular: ", n, " samples are too few for ", p,
+          " parameters; at least ", needed, " are needed");
+}
+
+// One solve of (30) from the filtered signals: theta_{j+1}, with the reciprocal condition of
+// the column-scaled instrument-regressor matrix; nothing if it is singular or non-finite.
+std::optional<Eigen::VectorXd> solve_step(const FilteredSignals& f, double& rcond) {
+  if (!f.instrument.allFinite() || !f.regressor.allFinite() || !f.filtered_output.allFinite()) {
+    return std::nullopt;
+  }
+  const Eigen::VectorXd sz = internal::column_scales(f.instrument);
+  const Eigen::VectorXd sp = internal::column_scales(f.regressor);
+  const Eigen::MatrixXd m = sz.cwiseInverse().asDiagonal() *
+                            (f.instrument.transpose() * f.regressor) *
+                            sp.cwiseInverse().asDiagonal();
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(m);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  rcond = sv(sv.size() - 1) / sv(0);
+  if (!(rcond > 1e-14)) return std::nullopt;
+  const Eigen::VectorXd rhs =
+      sz.cwiseInverse().asDiagonal() * (f.instrument.transpose() * f.filtered_output);
+  Eigen::VectorXd next = sp.cwiseInverse().asDiagonal() * Eigen::VectorXd(m.fullPivLu().solve(rhs));
+  if (!next.allFinite()) return std::nullopt;
+  return next;
+}
+
+struct IterationEnd {
+  Eigen::VectorXd theta;
+  double start_sse = std::numeric_limits<double>::quiet_NaN();
+};
+
+// The iteration (30) on the stamps from theta; result's termination, message, iterations,
+// relative_change, reciprocal_condition, reflections and history are set.
+IterationEnd iterate(const IrregularRecord& r, const SubmodelOrder& o, Eigen::VectorXd theta,
+                     const RefinedIvOptions& options, EstimationResult& result) {
+  const std::string name = "srivc_irregular";
+  IterationEnd end;
+  double best_sse = std::numeric_limits<double>::infinity();
+  Eigen::VectorXd best = theta;
+  result.termination = Termination::iteration_limit;
+  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
+    const FilteredSignals f = filter_signals(r, o, theta, options.output_interpolation);
+    const double sse = (r.output - f.model_output).squaredNorm();
+    if (std::isnan(end.start_sse)) end.start_sse = sse;
+    if (std::isfinite(sse) && sse < best_sse) {
+      best_sse = sse;
+      best = theta;
+    }
+    double rcond = std::numeric_limits<double>::quiet_NaN();
+    std::optional<Eigen::VectorXd> next = solve_step(f, rcond);
+    result.reciprocal_condition = rcond;
+    if (!next) {
+      const bool singular = std::isfinite(rcond);
+      result.termination = singular ? Termination::singular_equations : Termination::non_finite;
+      result.message = name +
+                       (singular ? ": the instrument-regressor matrix is numerically "
+                                   "singular (reciprocal condition " +
+                                       format_significant(rcond, 3) + ")"
+                                 : ": the filtered signals became non-finite") +
+                       " at iteration " + std::to_string(iteration) +
+                       "; the iterate with the lowest output error is returned";
+      end.theta = best;
+      return end;
+    }
+    reflect(o, *next, result.unstable_reflections);
+    const double change = relative_change(o, theta, *next);
+    result.relative_change = change;
+    result.iterations = iteration;
+    theta = *next;
+    if (options.record_history) result.history.push_back({iteration, theta, change, 0.0});
+    if (change < options.tolerance) {
+      result.termination = Termination::converged;
+      result.message = name + ": converged after " + std::to_string(iteration) +
+                       " iterations on the time stamps (relative parameter change " +
+                       format_significant(change, 3) + ")";
+      end.theta = theta;
+      return end;
+    }
+  }
+  result.message = name + ": stopped at the iteration limit (" +
+                   std::to_string(options.max_iterations) + ") with relative parameter change " +
+                   format_significant(result.relative_change, 3);
+  end.theta = theta;
+  return end;
+}
+
+}  // namespace irregular_srivc_detail
+
+EstimationResult srivc_irregular(const IrregularRecord& record, const SubmodelOrder& order,
+                                 const RefinedIvOptions& options) {
+  namespace d = irregular_srivc_detail;
+  d::check_inputs(record, order, options);
+  const int p = order.n + order.m + 1;
+  DataChecks checks;
+  checks.excitation_order_required = 2 * (order.n + order.integrators);
+  checks.excitation_order =
+      persistent_excitation_order(record.input, std::max(checks.excitation_order_required, p));
+  require(checks.excitation_order >= p,
+          "srivc_irregular: the input is persistently exciting of order ", checks.excitation_order,
+          " only; the ", p, " parameters need at least order ", p);
+  checks.persistently_exciting = checks.excitation_order >= checks.excitation_order_required;
+  Eigen::VectorXd theta = d::start_parameters(record, order, options);
+  require(theta.size() == p && theta.allFinite(),
+          "srivc_irregular: no finite start was found on the resampled record");
+  const std::vector<SubmodelOrder> orders{order};
+  EstimationResult result{AdditiveModel::from_parameters(orders, theta, 0.0),
+                          TransferFunction(Polynomial{1.0}, Polynomial{1.0})};
+  d::reflect(order, theta, result.unstable_reflections);
+  const d::IterationEnd end = d::iterate(record, order, theta, options, result);
+  theta = end.theta;
+  result.parameters = theta;
+  result.model = AdditiveModel::from_parameters(orders, theta, 0.0);
+  result.transfer_function = result.model.to_transfer_function();
+  try {
+    result.additive_view = AdditiveModel::from_transfer_function(result.transfer_function);
+  } catch (const InvalidArgument&) {
+    result.additive_view.reset();
+  }
+  const d::FilteredSignals f =
+      d::filter_signals(record, order, theta, options.output_interpolation);
+  const Eigen::VectorXd residual = record.output - f.model_output;
+  const auto n = static_cast<int>(record.time.size());
+  result.mean_squared_error = residual.squaredNorm() / n;
+  result.noise_variance = residual.squaredNorm() / std::max(n - p, 1);
+  result.fit_percent = fit_percent(record.output, f.model_output);
+  const double spread = (record.output.array() - record.output.mean()).matrix().norm();
+  result.start_fit_percent = spread > 0.0 ? 100.0 * (1.0 - std::sqrt(end.start_sse) / spread)
+                                          : std::numeric_limits<double>::quiet_NaN();
+  if (options.compute_covariance && f.instrument.allFinite() && residual.allFinite()) {
+    result.covariance = instrumental_variable_covariance(f.instrument, residual, p, options.noise,
+                                                         options.noise_model_max_order);
+    result.standard_errors = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+    result.modes = modal_estimates(result.model, result.covariance, true);
+  }
+  checks.nyquist_frequency = M_PI / record.median_step();
+  checks.largest_pole_frequency = largest_pole_frequency(result.model);
+  checks.sampling_rate_ok = checks.largest_pole_frequency < checks.nyquist_frequency;
+  if (!checks.persistently_exciting) {
+    checks.warnings.push_back("the input is persistently exciting of order " +
+                              std::to_string(checks.excitation_order) + ", below the " +
+                              std::to_string(checks.excitation_order_required) +
+                              " of Assumption 1; consistency is not guaranteed");
+  }
+  if (!checks.sampling_rate_ok) {
+    checks.warnings.push_back("a pole's imaginary part is not below pi / (median step) " +
+                              format_significant(checks.nyquist_frequency, 3) + " rad/s");
+  }
+  result.checks = std::move(checks);
+  result.verdict = internal::refined_iv_verdict(result, false, false);
+  return result;
+}
+
+}  // namespace ctid
