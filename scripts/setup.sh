@@ -39,6 +39,19 @@ else
   echo "setup: all ${#packages[@]} Debian packages present"
 fi
 
+# A locale whose decimal separator is a comma, for the LC_NUMERIC tests (python/tests/
+# test_locale_and_threads.py): made once from the locales package's sources when missing.
+if ! locale -a 2>/dev/null | grep -qix 'de_DE\.utf-\?8'; then
+  if [[ $(id -u) -eq 0 ]]; then
+    localedef -i de_DE -f UTF-8 de_DE.UTF-8 && echo "setup: made the locale de_DE.UTF-8"
+  elif command -v sudo >/dev/null; then
+    sudo --non-interactive localedef -i de_DE -f UTF-8 de_DE.UTF-8 &&
+      echo "setup: made the locale de_DE.UTF-8"
+  else
+    echo "setup: no de_DE.UTF-8 locale and no root: the comma-locale tests will be skipped" >&2
+  fi
+fi
+
 if [[ ${CTID_SKIP_BUILD:-0} == 1 ]]; then
   exit 0
 fi

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "command.h"
+#include "ctid/io/file.h"
 
 namespace ctid::cli {
 namespace {
@@ -104,6 +105,8 @@ void check_output_paths(const CLI::App& command) {
       }
     }
   }
+  // An output this user may not write is refused before anything runs (issue 33).
+  for (const NamedPath& output : outputs) io::check_permission_to_write(output.value);
   // Without --force an existing output file is refused before anything runs (streams such
   // as /dev/null are written into and need no --force; io/file.h).
   const CLI::Option* force = command.get_option_no_throw("--force");

@@ -14,7 +14,9 @@ one Dask task per record (``client``, a ``distributed.Client``), the worker read
 itself. Workers therefore need the files and the ``ctid`` executable at the same paths as the
 client (a shared file system) and run in the client's working directory, so relative paths in
 the manifest mean the same everywhere. A record that fails leaves ``OUT/<name>.error.json``
-with its message; nothing a record does stops the batch. ``ctid batch ... --summarize`` then
+with its message; nothing a record does stops the batch. A Dask cluster that loses its scheduler
+midway raises ``ClusterLost`` (``python3 -m ctid.batch``: one error line, exit 1); the finished
+records are kept and the next run fits the rest. ``ctid batch ... --summarize`` then
 writes ``summary.csv`` and ``summary.json``, whose rows are returned. The documents are the
 bytes a single ``ctid fit DATA FLAGS -o OUT/<name>.json`` writes (docs/batch.md).
 
@@ -27,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import concurrent.futures
+import itertools
 import json
 import os
 import pathlib
@@ -37,10 +40,16 @@ import tempfile
 import time
 import uuid
 
-__all__ = ["fit_many", "find_executable", "plan", "run_task"]
+__all__ = ["ClusterLost", "fit_many", "find_executable", "plan", "run_task"]
 
 _SUMMARY_ROWS = "summary.json"
 _TIMINGS = "timings.json"
+_TEMPORARY_COUNTER = itertools.count()
+
+
+class ClusterLost(ConnectionError):
+    """The Dask cluster stopped running the batch (its scheduler lost, the tasks cancelled):
+    the finished records are kept and running the batch again fits the rest."""
 
 
 def find_executable(ctid_executable=None) -> str:
@@ -170,7 +179,9 @@ def _failure_message(stderr, exit_status):
 
 def _write_json_atomically(path, value):
     path = pathlib.Path(path)
-    temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
+    # Named as ctid's own temporaries, "<file>.tmp-<pid>-<n>": the leftover of a worker killed
+    # mid-write is removed by the next `ctid batch` run on the folder (io::write_text_file).
+    temporary = path.with_name(f"{path.name}.tmp-{os.getpid()}-{next(_TEMPORARY_COUNTER)}")
     try:
         temporary.write_text(json.dumps(value, indent=2, sort_keys=True, ensure_ascii=False) +
                              "\n", encoding="utf-8")
@@ -178,6 +189,29 @@ def _write_json_atomically(path, value):
     finally:
         if temporary.exists():
             temporary.unlink()
+
+
+def _child_dies_with_parent():
+    """A preexec_fn giving the ``ctid fit`` child SIGTERM when the thread that started it ends,
+    as ``ctid batch`` does (batch_command.cc): a Dask worker killed mid-record takes its fit
+    with it (ctid removes its temporary on SIGTERM) instead of leaving an orphan that races the
+    record's rerun on another worker. None where prctl is not available."""
+    if not sys.platform.startswith("linux"):
+        return None
+    try:
+        import ctypes
+        libc = ctypes.CDLL(None, use_errno=True)
+        prctl = libc.prctl
+    except (OSError, AttributeError):
+        return None
+    parent = os.getpid()
+
+    def preexec():
+        prctl(1, 15)  # PR_SET_PDEATHSIG, SIGTERM
+        if os.getppid() != parent:  # the parent ended before prctl
+            os._exit(127)
+
+    return preexec
 
 
 def run_task(task, executable, cwd=None):
@@ -193,7 +227,8 @@ def run_task(task, executable, cwd=None):
             error_output.unlink()  # a retried or forced record
         completed = subprocess.run([executable, *task["args"]], cwd=workdir,
                                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                   text=True, errors="replace")
+                                   text=True, errors="replace",
+                                   preexec_fn=_child_dies_with_parent())
         status = completed.returncode if completed.returncode >= 0 else 128 - completed.returncode
         wrote = (workdir / task["output"]).exists()
         if status not in (0, 3) or not wrote:
@@ -234,32 +269,68 @@ def _record_outcomes(outcomes, tasks, out_dir):
     if not isinstance(timings, dict):
         timings = {}
     for outcome in outcomes:
-        timings[outcome["name"]] = outcome["seconds"]
+        if outcome["seconds"] == outcome["seconds"]:  # NaN (a failed Dask task) is not JSON
+            timings[outcome["name"]] = outcome["seconds"]
     if outcomes:
         _write_json_atomically(timings_file, timings)
 
 
+def _is_cluster_loss(exc, future):
+    """True when a Dask future failed because the cluster stopped running it (scheduler lost,
+    task cancelled, connection closed), not because of its record: run_task never raises, so
+    the only record-made failure is KilledWorker (the record's task ended every worker that
+    tried it)."""
+    if type(exc).__name__ == "KilledWorker":
+        return False
+    return (getattr(future, "status", None) == "cancelled" or
+            isinstance(exc, (concurrent.futures.CancelledError, OSError, TimeoutError)) or
+            type(exc).__name__ in ("CancelledError", "CommClosedError", "FutureCancelledError"))
+
+
+def _run_on_dask(tasks, executable, cwd, client):
+    """The outcomes of the records the cluster finished, and the ClusterLost error naming the
+    others when the cluster stopped running them (None when every record ran)."""
+    keys = [f"ctid-fit-{task['name']}-{uuid.uuid4().hex[:8]}" for task in tasks]
+    futures = client.map(run_task, tasks, [executable] * len(tasks), [cwd] * len(tasks),
+                         key=keys, pure=False)
+    outcomes = []
+    lost = []
+    for task, future in zip(tasks, futures):
+        try:
+            outcomes.append(future.result())
+        except Exception as exc:  # noqa: BLE001 - a worker or the scheduler lost mid-task
+            if _is_cluster_loss(exc, future):
+                lost.append((task, exc))
+                continue
+            outcomes.append({"name": task["name"], "seconds": float("nan"), "error": {
+                "type": "ctid_batch_error", "record": task["name"],
+                "message": f"ctid.batch: the Dask task failed: {type(exc).__name__}: {exc}",
+                "exit_status": 1, "written": False}})
+    if not lost:
+        return outcomes, None
+    try:
+        address = client.scheduler.address
+    except AttributeError:
+        address = "?"
+    reason = f"{type(lost[0][1]).__name__}: {lost[0][1]}".rstrip(": ")
+    connected = getattr(client, "status", "running") == "running"
+    what = ("the Dask tasks were cancelled" if connected else
+            f"the connection to the Dask scheduler at {address} was lost")
+    return outcomes, ClusterLost(
+        f"{what} ({reason}) with {len(lost)} of {len(tasks)} records not done; the "
+        f"{len(outcomes)} finished are kept: run the batch again to fit the rest")
+
+
 def _run_all(tasks, executable, client, jobs):
+    """The records' outcomes, and a ClusterLost error when a Dask cluster stopped midway."""
     cwd = os.getcwd()
     if client is not None:
-        keys = [f"ctid-fit-{task['name']}-{uuid.uuid4().hex[:8]}" for task in tasks]
-        futures = client.map(run_task, tasks, [executable] * len(tasks), [cwd] * len(tasks),
-                             key=keys, pure=False)
-        outcomes = []
-        for task, future in zip(tasks, futures):
-            try:
-                outcomes.append(future.result())
-            except Exception as exc:  # noqa: BLE001 - e.g. a worker lost mid-task
-                outcomes.append({"name": task["name"], "seconds": float("nan"), "error": {
-                    "type": "ctid_batch_error", "record": task["name"],
-                    "message": f"ctid.batch: the Dask task failed: {type(exc).__name__}: {exc}",
-                    "exit_status": 1, "written": False}})
-        return outcomes
+        return _run_on_dask(tasks, executable, cwd, client)
     workers = jobs if jobs is not None and jobs > 0 else (os.cpu_count() or 1)
     if workers == 1:
-        return [run_task(task, executable, cwd) for task in tasks]
+        return [run_task(task, executable, cwd) for task in tasks], None
     with concurrent.futures.ThreadPoolExecutor(max_workers=workers) as pool:
-        return list(pool.map(lambda task: run_task(task, executable, cwd), tasks))
+        return list(pool.map(lambda task: run_task(task, executable, cwd), tasks)), None
 
 
 def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, force, strict,
@@ -281,8 +352,10 @@ def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, 
             executable, [*source, "--out", out_dir, "--plan", *flags]).stdout)
         os.makedirs(out_dir, exist_ok=True)
         pending = [task for task in planned if not task["done"]]
-        outcomes = _run_all(pending, executable, client, jobs)
+        outcomes, lost = _run_all(pending, executable, client, jobs)
         _record_outcomes(outcomes, pending, out_dir)
+        if lost is not None:  # the finished records are recorded; the rest stay to be run
+            raise lost
         summarize = [*source, "--out", out_dir, "--summarize", "--quiet"]
         if strict:
             summarize.append("--strict")
@@ -303,6 +376,11 @@ def fit_many(records, spec=None, *, out_dir, client=None, jobs=None, ctid_execut
     ``distributed.Client`` to run the records on; else ``jobs`` local threads (default every
     core; 1 runs them one after another). Finished records in out_dir are skipped unless
     ``force``; failed ones are run again with ``retry_failed``.
+
+    A worker lost mid-record is Dask's to handle (the record runs again elsewhere; its fit
+    ends with the worker). A cluster that stops running the batch (its scheduler lost) raises
+    ClusterLost (a ConnectionError) once the finished records are recorded; the others have no
+    document, so calling fit_many again fits only them.
     """
     rows, _ = _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, force,
                      strict=False)

@@ -3,13 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/delayed_feedback/loop_parameters.h"
 #include "delayed_feedback/internal/golden_section.h"
 #include "delayed_feedback/internal/structured_system.h"
@@ -22,11 +22,8 @@ namespace {
 
 constexpr double kNoStart = std::numeric_limits<double>::quiet_NaN();
 
-std::string short_number(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", x);
-  return buffer;
-}
+// "%g" of the C locale whatever LC_NUMERIC says (issue 33).
+std::string short_number(double x) { return format_brief(x); }
 
 // The checks of estimation/verdict.h that apply to a delayed-feedback loop (decision 0007):
 // a loop was found, its output error is finite (a stable, simulable loop) and its

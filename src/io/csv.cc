@@ -1,5 +1,6 @@
 #include "ctid/io/csv.h"
 
+#include <locale.h>  // newlocale, strtod_l
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -81,8 +82,11 @@ std::optional<double> parse_number(std::string_view field) {
   if (ec == std::errc::result_out_of_range) {
     // Overflow (1e999) or underflow (1e-999): strtod gives the IEEE result, +-inf or a
     // denormal / signed zero, and the caller rejects the infinite case.
+    // strtod_l in the C locale: strtod follows LC_NUMERIC, which Python may have set to a
+    // comma locale, and would stop at the '.' of 1.5e999.
+    static const locale_t c_locale = ::newlocale(LC_ALL_MASK, "C", static_cast<locale_t>(0));
     const std::string copy(digits);
-    return std::strtod(copy.c_str(), nullptr);
+    return ::strtod_l(copy.c_str(), nullptr, c_locale);
   }
   if (ec != std::errc()) return std::nullopt;
   return value;
@@ -383,8 +387,11 @@ std::string format_csv(const CsvTable& table) {
   for (Eigen::Index k = 0; k < rows; ++k) {
     for (size_t i = 0; i < table.columns.size(); ++i) {
       if (i > 0) text += ',';
-      const int length = std::snprintf(buffer, sizeof buffer, "%.17g", table.columns[i](k));
-      text.append(buffer, static_cast<size_t>(length));
+      // to_chars: "%.17g" of the C locale whatever LC_NUMERIC says (a comma locale set in
+      // Python made snprintf write 0,05 into the CSV).
+      const auto written = std::to_chars(buffer, buffer + sizeof buffer, table.columns[i](k),
+                                         std::chars_format::general, 17);
+      text.append(buffer, written.ptr);
     }
     text += '\n';
   }

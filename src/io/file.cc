@@ -243,6 +243,30 @@ void remove_pending_temporaries() noexcept {
   }
 }
 
+void check_permission_to_write(const fs::path& path) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (fs::exists(status) && !fs::is_regular_file(status)) return;  // a stream or a folder
+  bool through_proc = false;
+  const fs::path target = resolve_links(path, through_proc);
+  if (through_proc) return;
+  const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  // Permissions answer for the user (issue 33): a file this user may not write is refused even
+  // when the folder would let a rename replace it (it belonged to another user), and a folder
+  // this user may not write into is bad input named as such, not a failed temporary.
+  struct stat existing {};
+  if (fs::exists(status) && ::stat(target.c_str(), &existing) == 0 &&
+      ::faccessat(AT_FDCWD, target.c_str(), W_OK, AT_EACCESS) != 0 && errno == EACCES) {
+    throw InvalidArgument(path.string() + ": permission denied: the file belongs to user " +
+                          std::to_string(existing.st_uid) +
+                          " and this user may not write it; ctid does not replace it");
+  }
+  if (::faccessat(AT_FDCWD, parent.c_str(), W_OK | X_OK, AT_EACCESS) != 0 && errno == EACCES) {
+    const std::string what = ": permission denied: this user may not write into the folder '";
+    throw InvalidArgument(path.string() + what + parent.string() + "'");
+  }
+}
+
 void write_text_file(const fs::path& path, std::string_view content, Overwrite overwrite) {
   require(!path.empty() && path.has_filename(), "output path '", path.string(),
           "' does not name a file");
@@ -278,6 +302,7 @@ void write_text_file(const fs::path& path, std::string_view content, Overwrite o
   // A read-only file is one the user protected: --force does not override that.
   require(!replacing || (existing.st_mode & 0222) != 0, path.string(),
           ": file is read-only; make it writable first to replace it");
+  check_permission_to_write(path);
 
   remove_dead_temporaries(target);
   const fs::path temporary = temporary_path_for(target);

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -54,13 +55,29 @@ std::optional<long> to_int(const std::string& text) {
 std::optional<double> to_double(std::string t) {
   std::replace(t.begin(), t.end(), 'D', 'E');
   std::replace(t.begin(), t.end(), 'd', 'e');
-  std::size_t used = 0;
-  try {
-    const double v = std::stod(t, &used);
-    if (used == t.size() && std::isfinite(v)) return v;
-  } catch (const std::exception&) {
-  }
+  // from_chars, not stod: stod follows LC_NUMERIC, which Python may have set to a comma
+  // locale (issue 33). The field is one number: no blanks, an optional leading '+'.
+  std::string_view digits = t;
+  if (!digits.empty() && digits.front() == '+') digits.remove_prefix(1);
+  if (digits.empty() || digits.front() == '+') return std::nullopt;
+  double v = 0.0;
+  const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
+  if (error == std::errc() && end == digits.data() + digits.size() && std::isfinite(v)) return v;
   return std::nullopt;
+}
+
+// printf's "%<width>.<precision>E" of the C locale whatever LC_NUMERIC says (snprintf wrote
+// "1,00000E+00" under a comma locale set in Python, issue 33).
+std::string format_e(double x, int width, int precision) {
+  char buffer[64];
+  const auto written =
+      std::to_chars(buffer, buffer + sizeof buffer, x, std::chars_format::scientific, precision);
+  std::string text(buffer, written.ptr);
+  for (char& c : text) {
+    if (c >= 'a' && c <= 'z') c = static_cast<char>(c - 'a' + 'A');  // e, inf, nan
+  }
+  if (static_cast<int>(text.size()) < width) text.insert(0, width - text.size(), ' ');
+  return text;
 }
 
 std::string function_type_name(long type) {
@@ -375,25 +392,23 @@ std::string format_uff58(const MimoFrf& frf) {
                     ++id, 1, 0, "NONE", response.node, response.direction, "NONE", reference.node,
                     reference.direction);
       out += buffer;
-      std::snprintf(buffer, sizeof buffer, "%10d%10ld%10d%13.5E%13.5E%13.5E\n", 6,
-                    static_cast<long>(n), 0, 0.0, 0.0, 0.0);
+      std::snprintf(buffer, sizeof buffer, "%10d%10ld%10d", 6, static_cast<long>(n), 0);
       out += buffer;
+      out += format_e(0.0, 13, 5) + format_e(0.0, 13, 5) + format_e(0.0, 13, 5) + "\n";
       out += "        18    0    0    0 Frequency            Hz                  \n";
       out += "         0    0    0    0 NONE                 NONE                \n";
       out += "         0    0    0    0 NONE                 NONE                \n";
       out += "         0    0    0    0 NONE                 NONE                \n";
       for (Eigen::Index l = 0; l < n; ++l) {
         const std::complex<double> h = frf.response[static_cast<size_t>(l)](j, k);
-        std::snprintf(buffer, sizeof buffer, "%13.5E",
-                      frf.frequencies(l) / (2.0 * std::numbers::pi));
-        out += buffer;
+        out += format_e(frf.frequencies(l) / (2.0 * std::numbers::pi), 13, 5);
         for (const double part : {h.real(), h.imag()}) {
           // 12 decimals fill the 20-character field when the exponent has three digits
           // (|x| < 1e-99 or >= 1e100): one decimal fewer keeps the blank that separates the
           // value from the one before it (the reader splits on blanks).
-          std::snprintf(buffer, sizeof buffer, "%20.12E", part);
-          if (buffer[0] != ' ') std::snprintf(buffer, sizeof buffer, "%20.11E", part);
-          out += buffer;
+          std::string field = format_e(part, 20, 12);
+          if (field[0] != ' ') field = format_e(part, 20, 11);
+          out += field;
         }
         out += "\n";
       }

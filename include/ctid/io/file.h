@@ -50,6 +50,13 @@ std::string read_text_file(const std::filesystem::path& path);
 void write_text_file(const std::filesystem::path& path, std::string_view content,
                      Overwrite overwrite = Overwrite::no);
 
+/// InvalidArgument ("permission denied: ...") when this user could not write `path`: an
+/// existing regular file it may not write (even where its folder would let a rename replace
+/// it), or a folder it may not write into. write_text_file checks it; commands call it before
+/// their work so that the refusal comes first. Streams and missing folders are left to
+/// write_text_file.
+void check_permission_to_write(const std::filesystem::path& path);
+
 /// Removes the temporary files that writes in progress have created. Async-signal-safe:
 /// meant for a SIGINT/SIGTERM handler, which then ends the process (the CLI installs one).
 void remove_pending_temporaries() noexcept;
