@@ -1,7 +1,8 @@
-// `ctid oma`: output-only (operational) modal analysis of several response channels with no
+// ctid oma: output-only (operational) modal analysis of several response channels with no
 // measured input: covariance-driven SSI over orders 2..--max-order, the stable poles clustered
-// into modes, segment-based standard errors (ctid::oma, oma/oma.h; docs/oma.md). Prints the
-// modes and the verdict; -o writes an "oma_result" document. Exit 3 when no mode was found.
+// into modes, segment-based standard errors; or the peaks of the output spectral matrix's first
+// singular value (fdd, efdd) (ctid::oma, oma/oma.h; docs/oma.md). Prints the modes and the
+// verdict; -o writes an "oma_result" document. Exit 3 when no mode was found.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -35,6 +36,9 @@ struct OmaFlags {
   int block_rows = 0;
   std::vector<double> modes_near;
   int uncertainty_blocks = OmaOptions{}.uncertainty_blocks;
+  int segment_length = 0;
+  double peak_prominence_db = OmaOptions{}.peak_prominence_db;
+  double efdd_mac = OmaOptions{}.efdd_mac;
   std::string output;
   bool force = false;
   bool quiet = false;
@@ -71,7 +75,9 @@ Eigen::MatrixXd read_outputs(const OmaFlags& f, const CLI::App& app,
   return y;
 }
 
+// "-" for a quantity the method does not estimate (fdd's damping).
 std::string with_error(double value, double error, int digits) {
+  if (!std::isfinite(value)) return "-";
   std::string text = format_significant(value, digits);
   if (std::isfinite(error)) text += " +- " + format_significant(error, 2);
   return text;
@@ -81,15 +87,18 @@ void print_summary(const OmaFlags& f, const OmaResult& r) {
   std::cout << "ctid oma: " << enum_name(r.method) << " on " << f.file << ": " << r.channels.size()
             << " channels, " << r.reference_channels.size() << " references, " << r.samples
             << " samples, h = " << format_brief(r.sample_time) << " s; " << r.message << "\n";
+  const bool ssi = r.method == OmaMethod::ssi_cov;  // fdd, efdd: no orders to count
   if (!r.modes.empty()) {
-    std::cout << "  mode  frequency [Hz]          damping ratio            MPC    orders\n";
+    std::cout << "  mode  frequency [Hz]          damping ratio            MPC"
+              << (ssi ? "    orders" : "") << "\n";
   }
   for (std::size_t i = 0; i < r.modes.size(); ++i) {
     const OmaMode& m = r.modes[i];
     std::ostringstream line;
     line << "  " << i + 1 << "     " << with_error(m.frequency_hz, m.frequency_hz_std, 6) << "    "
          << with_error(m.damping_ratio, m.damping_ratio_std, 3) << "    "
-         << format_significant(m.mpc, 3) << "    " << m.supporting_orders;
+         << format_significant(m.mpc, 3);
+    if (ssi) line << "    " << m.supporting_orders;
     std::cout << line.str() << "\n";
   }
   std::cout << (r.verdict.usable ? "verdict: usable" : r.verdict.summary()) << "\n";
@@ -107,6 +116,9 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
   options.block_rows = f.block_rows;
   options.modes_near_hz = f.modes_near;
   options.uncertainty_blocks = f.uncertainty_blocks;
+  options.segment_length = f.segment_length;
+  options.peak_prominence_db = f.peak_prominence_db;
+  options.efdd_mac = f.efdd_mac;
   std::vector<std::string> names;
   double h = 0.0;
   const Eigen::MatrixXd y = read_outputs(f, app, names, h);
@@ -137,7 +149,8 @@ Command add_oma_command(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand(
       "oma",
       "Output-only (operational) modal analysis: modes of several response channels with no "
-      "measured input, by covariance-driven SSI, a stabilisation diagram and clustering.");
+      "measured input, by covariance-driven SSI (a stabilisation diagram and clustering) or "
+      "by frequency-domain decomposition (fdd, efdd).");
   app->footer(
       "Prints each mode (frequency and damping with segment-based standard errors, MPC, the "
       "number of orders supporting it) and the verdict. -o X.json writes an \"oma_result\" "
@@ -156,7 +169,11 @@ Command add_oma_command(CLI::App& parent) {
   app->add_option("--time-column", f.time_column, "Uniform time column")->capture_default_str();
   app->add_option("--sample-time,-T", f.sample_time, "Sample time [s] (overrides the time column)")
       ->check(CLI::PositiveNumber);
-  app->add_option("--method", f.method, "Method: ssi-cov")->capture_default_str();
+  app->add_option("--method", f.method,
+                  "Method: ssi-cov (frequency, damping, shape with standard errors), fdd "
+                  "(frequency and shape from peaks of the spectral matrix) or efdd (fdd with "
+                  "damping)")
+      ->capture_default_str();
   app->add_option("--max-order", f.max_order, "Largest model order (orders 2, 4, ..., this)")
       ->capture_default_str();
   app->add_option("--block-rows", f.block_rows, "Hankel block rows p (0: automatic)")
@@ -166,6 +183,16 @@ Command add_oma_command(CLI::App& parent) {
       ->delimiter(',');
   app->add_option("--uncertainty-blocks", f.uncertainty_blocks,
                   "Segments for the standard errors (0: none)")
+      ->capture_default_str();
+  app->add_option("--segment-length", f.segment_length,
+                  "fdd, efdd: samples per Welch segment (0: a power of two near N/8)")
+      ->capture_default_str();
+  app->add_option("--peak-prominence-db", f.peak_prominence_db,
+                  "fdd, efdd: how far [dB] a peak of the first singular value stands above its "
+                  "valleys")
+      ->capture_default_str();
+  app->add_option("--efdd-mac", f.efdd_mac,
+                  "efdd: MAC with the peak's shape that bounds each mode's bell")
       ->capture_default_str();
   app->add_option("--output,-o", f.output, "JSON file for the oma_result document")
       ->group("Output");

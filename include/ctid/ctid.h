@@ -41,6 +41,7 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/estimation/verdict.h"
 
+#include "ctid/oma/fdd.h"
 #include "ctid/oma/oma.h"
 #include "ctid/oma/ssi_cov.h"
 #include "ctid/oma/stabilisation.h"

@@ -12,6 +12,7 @@
 
 #include "core/internal/signal_range.h"
 #include "ctid/core/error.h"
+#include "ctid/oma/fdd.h"
 #include "ctid/oma/ssi_cov.h"
 #include "ctid/oma/stabilisation.h"
 
@@ -198,6 +199,84 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
   }
 }
 
+int automatic_segment_length(Eigen::Index samples) {
+  int length = 256;
+  while (2 * length <= samples / 8 && 2 * length <= 16384) length *= 2;
+  return static_cast<int>(std::min<Eigen::Index>(length, samples));
+}
+
+// One mode of fdd or efdd at a peak line: the first singular vector there is its shape.
+OmaMode spectral_mode(const oma_detail::SingularSpectrum& spectrum,
+                      const oma_detail::SpectralMatrix& spectral, int line,
+                      const OmaOptions& options, double sample_time) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  OmaMode mode;
+  mode.frequency_hz = oma_detail::interpolated_peak_hz(spectrum, spectral.frequency_hz, line);
+  mode.frequency_hz_std = mode.damping_ratio = mode.damping_ratio_std = nan;
+  if (options.method == OmaMethod::efdd) {
+    const oma_detail::BellEstimate bell =
+        oma_detail::efdd_bell(spectrum, spectral, line, options.efdd_mac, sample_time);
+    if (std::isfinite(bell.frequency_hz)) mode.frequency_hz = bell.frequency_hz;
+    mode.damping_ratio = bell.damping_ratio;
+  }
+  const Eigen::VectorXcd shape =
+      oma_detail::normalise_shape(spectrum.first_vector[static_cast<std::size_t>(line)]);
+  for (Eigen::Index j = 0; j < shape.size(); ++j) {
+    mode.shape_real.push_back(shape(j).real());
+    mode.shape_imag.push_back(shape(j).imag());
+  }
+  mode.shape_real_std.assign(mode.shape_real.size(), nan);
+  mode.shape_imag_std.assign(mode.shape_real.size(), nan);
+  mode.mpc = oma_detail::modal_phase_collinearity(shape);
+  mode.mpd = oma_detail::mean_phase_deviation(shape);
+  return mode;
+}
+
+// fdd and efdd: the peaks of the first singular value (or the ones nearest modes_near_hz).
+void spectral_oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptions& options,
+                  OmaResult& result) {
+  const int length = options.segment_length > 0 ? options.segment_length
+                                                : automatic_segment_length(outputs.rows());
+  const oma_detail::SpectralMatrix spectral =
+      oma_detail::output_spectral_matrix(outputs, sample_time, length);
+  const oma_detail::SingularSpectrum spectrum = oma_detail::singular_spectrum(spectral);
+  std::vector<int> lines;
+  if (options.modes_near_hz.empty()) {
+    lines = oma_detail::singular_value_peaks(spectrum, options.peak_prominence_db);
+    if (lines.empty()) {
+      result.verdict.fail(
+          internal::concat("no mode found: no peak of the first singular value stands ",
+                           options.peak_prominence_db, " dB above its valleys"),
+          {"a lower --peak-prominence-db", verdict_advice::more_data});
+    }
+  }
+  for (const double f : options.modes_near_hz) {
+    const int line = oma_detail::peak_near(spectrum, spectral.frequency_hz, f);
+    const double nyquist_hz = 0.5 / sample_time;
+    if (f >= nyquist_hz) {
+      result.verdict.fail(internal::concat("no mode near ", f,
+                                           " Hz: it is not below the Nyquist "
+                                           "frequency ",
+                                           nyquist_hz, " Hz"),
+                          {"a record sampled faster"});
+    } else if (line < 1) {
+      result.verdict.fail(internal::concat("no spectral line within 10 % of ", f, " Hz"),
+                          {"a longer --segment-length", verdict_advice::more_data});
+    } else if (std::find(lines.begin(), lines.end(), line) == lines.end()) {
+      lines.push_back(line);
+    }
+  }
+  std::sort(lines.begin(), lines.end());
+  for (const int line : lines) {
+    result.modes.push_back(spectral_mode(spectrum, spectral, line, options, sample_time));
+  }
+  result.termination = Termination::converged;
+  result.message = internal::concat(result.modes.size(),
+                                    " mode(s) from the first singular value of the spectral "
+                                    "matrix (",
+                                    length, "-sample segments, ", spectral.segments, " averaged)");
+}
+
 }  // namespace
 
 OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptions& options,
@@ -218,14 +297,17 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
     require(refs[i] < l, "OmaOptions.reference_channels[", i, "] is ", refs[i], "; it must be < ",
             l, " (the number of channels)");
   }
-  const int p = pick_block_rows(options, l, static_cast<Eigen::Index>(refs.size()), outputs.rows());
-
   OmaResult result;
   result.method = options.method;
   result.sample_time = sample_time;
   result.samples = static_cast<int>(outputs.rows());
   result.channels = channel_names;
   result.reference_channels = refs;
+  if (options.method != OmaMethod::ssi_cov) {
+    spectral_oma(outputs, sample_time, options, result);
+    return result;
+  }
+  const int p = pick_block_rows(options, l, static_cast<Eigen::Index>(refs.size()), outputs.rows());
   result.block_rows = p;
   const auto orders = all_orders(outputs, refs, p, sample_time, options);
   const auto stability = oma_detail::classify_poles(orders, options);

@@ -1,6 +1,7 @@
 // ctid oma: the DaISy flexible structure used output-only (exit 0, a summary table, an
-// oma_result document that io::read_result reads back), a record with no resonance (exit 3,
-// the verdict), and bad usage (exit 2, one line naming the flag).
+// oma_result document that io::read_result reads back; by ssi-cov and fdd), a record with no
+// resonance (exit 3, the verdict), and bad usage (exit 2, one line naming the flag).
+#include <cmath>
 #include <random>
 #include <sstream>
 #include <string>
@@ -17,6 +18,7 @@ namespace ctid::cli::oma_test {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 class OmaCommand : public testing::CliTest {
  protected:
@@ -62,6 +64,25 @@ TEST_F(OmaCommand, NoResonanceExitsThreeWithTheVerdict) {
   EXPECT_THAT(r.out, HasSubstr("no mode found"));
 }
 
+// fdd: the table has no orders column and a "-" for the damping it does not estimate; the
+// document reads back with NaN damping (null in JSON).
+TEST_F(OmaCommand, FddPrintsFrequenciesAndWritesADocumentWithoutDamping) {
+  const auto r = ctid({"oma", flexible(), "--output-columns", "y1_acc:y28_acc", "--time-column",
+                       "t_s", "--method", "fdd", "--segment-length", "1024", "-o", "fdd.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("ctid oma: fdd on"));
+  EXPECT_THAT(r.out, HasSubstr("(1024-sample segments, 15 averaged)"));
+  EXPECT_THAT(r.out, Not(HasSubstr("orders")));
+  EXPECT_THAT(r.out, HasSubstr("    -    "));
+  const io::ResultDocument doc = io::read_result(path("fdd.json"));
+  const auto* result = std::get_if<OmaResult>(&doc);
+  ASSERT_NE(result, nullptr);
+  EXPECT_EQ(result->method, OmaMethod::fdd);
+  ASSERT_FALSE(result->modes.empty());
+  EXPECT_TRUE(std::isnan(result->modes.front().damping_ratio));
+  EXPECT_TRUE(result->stabilisation.empty());
+}
+
 TEST_F(OmaCommand, BadUsageNamesTheFlag) {
   const std::string noise = white_noise();
   auto r = ctid({"oma", noise, "--output-columns", "a"});
@@ -70,9 +91,15 @@ TEST_F(OmaCommand, BadUsageNamesTheFlag) {
   r = ctid({"oma", noise, "--output-columns", "a,b", "--reference-columns", "c"});
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("--reference-columns names 'c'"));
-  r = ctid({"oma", noise, "--output-columns", "a:c", "--method", "fdd"});
+  r = ctid({"oma", noise, "--output-columns", "a:c", "--method", "pp"});
   EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.err, HasSubstr("--method is 'fdd'"));
+  EXPECT_THAT(r.err, HasSubstr("--method is 'pp'; it must be ssi-cov, fdd or efdd"));
+  r = ctid({"oma", noise, "--output-columns", "a:c", "--method", "efdd", "--efdd-mac", "1.5"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("--efdd-mac is 1.5; it must be in (0, 1]"));
+  r = ctid({"oma", noise, "--output-columns", "a:c", "--method", "fdd", "--segment-length", "8"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("the segment length is 8 samples; it must lie within 16.."));
   r = ctid({"oma", noise, "--output-columns", "a:c", "--max-order", "40", "--block-rows", "10"});
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("--max-order is 40; the Hankel matrix of 10 block rows"));

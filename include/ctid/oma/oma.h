@@ -22,9 +22,15 @@
 
 namespace ctid {
 
-enum class OmaMethod { ssi_cov };
-inline constexpr std::array<Enumerator<OmaMethod>, 1> oma_method_enumerators{{
+enum class OmaMethod { ssi_cov, fdd, efdd };
+inline constexpr std::array<Enumerator<OmaMethod>, 3> oma_method_enumerators{{
     {OmaMethod::ssi_cov, "ssi-cov", "Covariance-driven stochastic subspace identification."},
+    {OmaMethod::fdd, "fdd",
+     "Frequency-domain decomposition: peaks of the first singular value of the output "
+     "spectral matrix (frequency and shape, no damping)."},
+    {OmaMethod::efdd, "efdd",
+     "Enhanced FDD: frequency and damping from the correlation function of each peak's "
+     "single-degree-of-freedom bell."},
 }};
 constexpr std::span<const Enumerator<OmaMethod>> enumerators(OmaMethod) {
   return oma_method_enumerators;
@@ -67,6 +73,15 @@ struct OmaOptions {
   std::vector<double> modes_near_hz;
   /// Segments n_b for the segment-based standard errors; 0: none (standard errors NaN).
   int uncertainty_blocks = 10;
+  /// fdd, efdd: samples per Welch segment of the spectral matrix; 0: the largest power of
+  /// two up to N / 8, within 256..16384 (and at most N).
+  int segment_length = 0;
+  /// fdd, efdd: a peak of the first singular value stands this far [dB] above the deeper of
+  /// its valleys.
+  double peak_prominence_db = 6.0;
+  /// efdd: lines whose first singular vector has at least this MAC with the peak's form the
+  /// single-degree-of-freedom bell.
+  double efdd_mac = 0.8;
 
   static constexpr std::string_view type_name = "OmaOptions";
   static constexpr auto fields() {
@@ -93,6 +108,12 @@ struct OmaOptions {
               "Frequencies [Hz] to pick near."),
         field("uncertainty_blocks", &S::uncertainty_blocks, AtLeast{0},
               "Segments for the standard errors; 0: none."),
+        field("segment_length", &S::segment_length, AtLeast{0},
+              "fdd, efdd: samples per Welch segment; 0: automatic."),
+        field("peak_prominence_db", &S::peak_prominence_db, GreaterThan{0},
+              "fdd, efdd: how far [dB] a peak stands above its valleys."),
+        field("efdd_mac", &S::efdd_mac, Between{0, 1, false, true},
+              "efdd: MAC with the peak's shape that bounds the bell."),
     };
   }
   void validate() const { validate_fields(*this); }
@@ -155,7 +176,7 @@ struct OmaMode {
   }
 };
 
-/// The result of oma(): why it ended (Outcome), the modes, the diagram and the verdict
+/// The result of oma(): why it ended (Outcome), the modes, the diagram (SSI only) and the verdict
 /// ("no mode found" is an unusable verdict, not an exception).
 struct OmaResult : Outcome {
   OmaMethod method = OmaMethod::ssi_cov;
