@@ -120,6 +120,10 @@ void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_referen
                  "How u is continued between samples: zoh or foh (default: the file's "
                  "'# input_hold:' declaration, else zoh)")
       ->group("Data");
+  add_preprocessing_to(app, true);
+}
+
+void DataFlags::add_preprocessing_to(CLI::App& app, bool with_input_scale) {
   app.add_option("--rows", rows, "Keep data rows A to B-1 (0-based, A:B, either end optional)")
       ->group("Preprocessing");
   app.add_option("--time", time, "Keep samples with A <= t < B seconds (A:B)")
@@ -132,10 +136,14 @@ void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_referen
                  "Keep every N-th sample after a zero-phase anti-alias lowpass filter")
       ->capture_default_str()
       ->group("Preprocessing");
-  app.add_option("--scale-input", scale_input, "Multiply u by this factor")
-      ->capture_default_str()
-      ->group("Preprocessing");
-  app.add_option("--scale-output", scale_output, "Multiply y (and r) by this factor")
+  if (with_input_scale) {
+    app.add_option("--scale-input", scale_input, "Multiply u by this factor")
+        ->capture_default_str()
+        ->group("Preprocessing");
+  }
+  app.add_option("--scale-output", scale_output,
+                 with_input_scale ? "Multiply y (and r) by this factor"
+                                  : "Multiply every output channel by this factor")
       ->capture_default_str()
       ->group("Preprocessing");
 }
@@ -161,7 +169,7 @@ void DataFlags::stamps_in_seconds(io::CsvTable& table, const std::string& path) 
 bool DataFlags::preprocessing_asked(const CLI::App& app) const {
   for (const char* flag :
        {"--rows", "--time", "--detrend", "--decimate", "--scale-input", "--scale-output"}) {
-    if (app.count(flag) > 0) return true;
+    if (app.get_option_no_throw(flag) != nullptr && app.count(flag) > 0) return true;
   }
   return false;
 }

@@ -47,6 +47,11 @@ struct DataFlags {
   /// `with_reference` also --reference-column.
   /// With `several`, DATA takes one or more files (into `files`, else into `file`).
   void add_to(CLI::App& app, const std::string& name, bool with_reference, bool several = false);
+  /// Adds only the preprocessing flags (--rows, --time, --detrend, --decimate, --scale-*;
+  /// --scale-input only `with_input_scale`): what add_to adds besides DATA and the columns.
+  void add_preprocessing_to(CLI::App& app, bool with_input_scale);
+  /// The preprocessing the flags ask for (usage errors for malformed ranges and factors).
+  PreprocessingOptions preprocessing_options() const;
 
   /// Reads the record. With `need_reference` the reference column must be present (its
   /// absence is a usage error naming --reference-column); without it, --reference-column is
@@ -82,8 +87,6 @@ struct DataFlags {
   void stamps_in_seconds(io::CsvTable& table, const std::string& path) const;
 
  private:
-  /// The preprocessing the flags ask for (usage errors for malformed ranges and factors).
-  PreprocessingOptions preprocessing_options() const;
   SampledData load_file(const std::string& path, const CLI::App& app, bool need_reference) const;
 };
 

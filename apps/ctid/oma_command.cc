@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -15,12 +16,15 @@
 #include "command.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/core/mimo_preprocessing.h"
 #include "ctid/io/csv.h"
+#include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_data_csv.h"
 #include "ctid/io/npy.h"
 #include "ctid/io/report_json.h"
 #include "ctid/oma/oma.h"
+#include "data_flags.h"
 
 namespace ctid::cli {
 namespace {
@@ -39,16 +43,18 @@ struct OmaFlags {
   int segment_length = 0;
   double peak_prominence_db = OmaOptions{}.peak_prominence_db;
   double efdd_mac = OmaOptions{}.efdd_mac;
+  DataFlags prep;  ///< its preprocessing flags only (--rows, --time, --detrend, ...)
   std::string output;
   bool force = false;
   bool quiet = false;
 };
 
 // The record: the output columns (names or ranges A:B) and the sample time from the uniform
-// time column, or -T (which overrides it).
+// time column, or -T (which overrides it); `t0` the first time stamp (0 without a column).
 Eigen::MatrixXd read_outputs(const OmaFlags& f, const CLI::App& app,
-                             std::vector<std::string>& names, double& h) {
+                             std::vector<std::string>& names, double& h, double& t0) {
   const io::CsvTable table = io::read_table(f.file);
+  t0 = table.has_column(f.time_column) && table.rows() > 0 ? table.column(f.time_column)(0) : 0.0;
   names = io::expand_columns(table, f.output_columns, "output");
   Eigen::MatrixXd y(table.rows(), static_cast<Eigen::Index>(names.size()));
   for (std::size_t j = 0; j < names.size(); ++j) {
@@ -83,10 +89,26 @@ std::string with_error(double value, double error, int digits) {
   return text;
 }
 
-void print_summary(const OmaFlags& f, const OmaResult& r) {
+// The preprocessing line: rows kept, trends removed, decimation, scale, N and h.
+std::string preprocessing_summary(const PreprocessingRecord& p) {
+  std::ostringstream out;
+  out << "rows " << p.first_row << ":" << p.end_row << ", "
+      << (p.detrend == Detrend::linear ? "each channel's line removed"
+          : p.detrend == Detrend::mean ? "each channel's mean removed"
+                                       : "no detrend");
+  if (p.decimate > 1) out << ", decimated by " << p.decimate;
+  if (p.output_scale != 1.0) out << ", scaled by " << format_brief(p.output_scale);
+  out << ", N = " << p.samples << ", h = " << format_number(p.sample_time) << " s";
+  return out.str();
+}
+
+void print_summary(const OmaFlags& f, const OmaResult& r,
+                   const std::optional<PreprocessingRecord>& preprocessing) {
   std::cout << "ctid oma: " << enum_name(r.method) << " on " << f.file << ": " << r.channels.size()
             << " channels, " << r.reference_channels.size() << " references, " << r.samples
             << " samples, h = " << format_brief(r.sample_time) << " s; " << r.message << "\n";
+  if (preprocessing)
+    std::cout << "preprocessing: " << preprocessing_summary(*preprocessing) << "\n";
   const bool ssi = r.method == OmaMethod::ssi_cov;  // fdd, efdd: no orders to count
   if (!r.modes.empty()) {
     std::cout << "  mode  frequency [Hz]          damping ratio            MPC"
@@ -121,7 +143,21 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
   options.efdd_mac = f.efdd_mac;
   std::vector<std::string> names;
   double h = 0.0;
-  const Eigen::MatrixXd y = read_outputs(f, app, names, h);
+  double t0 = 0.0;
+  Eigen::MatrixXd y = read_outputs(f, app, names, h, t0);
+  std::optional<PreprocessingRecord> preprocessing;
+  if (f.prep.preprocessing_asked(app)) {
+    PreprocessingOptions p = f.prep.preprocessing_options();
+    p.input_scale = 1.0;
+    try {
+      PreprocessedOutputs done = preprocess_outputs(y, h, t0, p);
+      y = std::move(done.outputs);
+      h = done.record.sample_time;
+      preprocessing = std::move(done.record);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(f.file + ": " + e.what());
+    }
+  }
   if (!f.reference_columns.empty()) {
     const io::CsvTable table = io::read_table(f.file);
     for (const std::string& ref : io::expand_columns(table, f.reference_columns, "reference")) {
@@ -137,9 +173,10 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
   if (!f.output.empty()) {
     nlohmann::json document = io::to_json(result);
     document["data"] = {{"file", f.file}};
+    if (preprocessing) document["data"]["preprocessing"] = io::fields_to_json(*preprocessing);
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
-  if (!f.quiet) print_summary(f, result);
+  if (!f.quiet) print_summary(f, result, preprocessing);
   return result.verdict.usable ? kExitOk : kExitNoUsableModel;
 }
 
@@ -194,6 +231,7 @@ Command add_oma_command(CLI::App& parent) {
   app->add_option("--efdd-mac", f.efdd_mac,
                   "efdd: MAC with the peak's shape that bounds each mode's bell")
       ->capture_default_str();
+  f.prep.add_preprocessing_to(*app, false);
   app->add_option("--output,-o", f.output, "JSON file for the oma_result document")
       ->group("Output");
   app->add_flag("--force", f.force, "Replace an output file that exists")->group("Output");

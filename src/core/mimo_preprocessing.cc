@@ -1,10 +1,13 @@
 #include "ctid/core/mimo_preprocessing.h"
 
 #include <algorithm>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "ctid/core/error.h"
 
 namespace ctid {
 namespace {
@@ -76,6 +79,32 @@ PreprocessedMimoData preprocess(const MimoData& data, const PreprocessingOptions
   return PreprocessedMimoData{
       std::move(out),          std::move(record),         std::move(input_offsets),
       std::move(input_slopes), std::move(output_offsets), std::move(output_slopes)};
+}
+
+PreprocessedOutputs preprocess_outputs(const Eigen::MatrixXd& outputs, double sample_time,
+                                       double start_time, const PreprocessingOptions& options) {
+  PreprocessedOutputs result;
+  PreprocessingOptions own = options;
+  own.input_scale = 1.0;  // each channel rides as its own input; only output_scale applies
+  for (Eigen::Index j = 0; j < outputs.cols(); ++j) {
+    const Eigen::VectorXd channel = outputs.col(j);
+    for (Eigen::Index k = 0; k < channel.size(); ++k) {
+      require(std::isfinite(channel(k)), "output channel ", j + 1, " is ", channel(k),
+              " at sample ", k, "; every value must be finite");
+    }
+    const PreprocessedData p =
+        preprocess(SampledData(sample_time, channel, channel, std::nullopt, start_time), own);
+    if (j == 0) {
+      result.outputs.resize(p.data.size(), outputs.cols());
+      result.record = p.record;
+      result.start_time = p.data.start_time();
+    }
+    result.outputs.col(j) = p.data.output();
+  }
+  result.record.input_offset = result.record.input_slope = 0.0;
+  result.record.output_offset = result.record.output_slope = 0.0;
+  result.record.warnings.clear();
+  return result;
 }
 
 }  // namespace ctid

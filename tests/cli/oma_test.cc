@@ -2,16 +2,19 @@
 // oma_result document that io::read_result reads back; by ssi-cov and fdd), a record with no
 // resonance (exit 3, the verdict), and bad usage (exit 2, one line naming the flag).
 #include <cmath>
+#include <fstream>
 #include <random>
 #include <sstream>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "cli/run_ctid.h"
 #include "ctid/io/documents.h"
+#include "ctid/io/json.h"
 #include "support/sanitizers.h"
 
 namespace ctid::cli::oma_test {
@@ -83,6 +86,38 @@ TEST_F(OmaCommand, FddPrintsFrequenciesAndWritesADocumentWithoutDamping) {
   EXPECT_TRUE(result->stabilisation.empty());
 }
 
+// The preprocessing flags of ctid fit: the summary and the document say what was done, and
+// scaling every channel by 1000 changes no frequency or damping (to rounding).
+TEST_F(OmaCommand, PreprocessingIsAppliedAndRecorded) {
+  const std::vector<std::string> base = {
+      "oma",           flexible(), "--output-columns", "y1_acc:y28_acc",
+      "--time-column", "t_s",      "--method",         "efdd"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = base;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return ctid(args);
+  };
+  const auto r =
+      with({"--rows", "0:8000", "--decimate", "2", "--detrend", "linear", "-o", "prep.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("4000 samples"));
+  EXPECT_THAT(r.out, HasSubstr("preprocessing: rows 0:8000, each channel's line removed, "
+                               "decimated by 2, N = 4000"));
+  const nlohmann::json doc = nlohmann::json::parse(std::ifstream(path("prep.json")));
+  EXPECT_EQ(doc["data"]["preprocessing"]["samples"], 4000);
+  EXPECT_EQ(doc["data"]["preprocessing"]["detrend"], "linear");
+
+  ASSERT_EQ(with({"-o", "plain.json"}).status, 0);
+  ASSERT_EQ(with({"--scale-output", "1000", "-o", "scaled.json"}).status, 0);
+  const auto plain = std::get<OmaResult>(io::read_result(path("plain.json")));
+  const auto scaled = std::get<OmaResult>(io::read_result(path("scaled.json")));
+  ASSERT_EQ(plain.modes.size(), scaled.modes.size());
+  for (std::size_t i = 0; i < plain.modes.size(); ++i) {
+    EXPECT_NEAR(scaled.modes[i].frequency_hz, plain.modes[i].frequency_hz,
+                1e-9 * plain.modes[i].frequency_hz);
+  }
+}
+
 TEST_F(OmaCommand, BadUsageNamesTheFlag) {
   const std::string noise = white_noise();
   auto r = ctid({"oma", noise, "--output-columns", "a"});
@@ -91,6 +126,12 @@ TEST_F(OmaCommand, BadUsageNamesTheFlag) {
   r = ctid({"oma", noise, "--output-columns", "a,b", "--reference-columns", "c"});
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("--reference-columns names 'c'"));
+  r = ctid({"oma", noise, "--output-columns", "a:c", "--rows", "0:10", "--time", "0:1"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("give --rows or --time, not both"));
+  r = ctid({"oma", noise, "--output-columns", "a:c", "--time", "100:200"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_THAT(r.err, HasSubstr("noise.csv: "));
   r = ctid({"oma", noise, "--output-columns", "a:c", "--method", "pp"});
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("--method is 'pp'; it must be ssi-cov, fdd or efdd"));

@@ -1,5 +1,7 @@
 #include "ctid/core/mimo_preprocessing.h"
 
+#include <limits>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -48,6 +50,34 @@ TEST(MimoPreprocessing, EveryChannelIsTheSisoPreprocessingOfIt) {
   }
   EXPECT_EQ(p.record.samples, p.data.size());
   EXPECT_NEAR(p.output_slopes(1), 0.3, 0.01);
+}
+
+// An output-only record: every channel as the MIMO preprocessing gives it, bit for bit, and
+// no warnings (oma removes the means itself).
+TEST(MimoPreprocessing, OutputsOnlyAreTheMimoOutputsBitForBit) {
+  const MimoData data = record();
+  PreprocessingOptions options;
+  options.start_time = 4.0;
+  options.end_time = 40.0;
+  options.detrend = Detrend::linear;
+  options.decimate = 3;
+  options.output_scale = 0.5;
+  const PreprocessedMimoData p = preprocess(data, options);
+  const PreprocessedOutputs q = preprocess_outputs(data.outputs(), 0.1, 2.0, options);
+  EXPECT_EQ(q.outputs, p.data.outputs());
+  EXPECT_EQ(q.start_time, p.data.start_time());
+  EXPECT_EQ(q.record.samples, p.record.samples);
+  EXPECT_EQ(q.record.first_row, p.record.first_row);
+  EXPECT_DOUBLE_EQ(q.record.sample_time, 0.3);
+  EXPECT_TRUE(q.record.warnings.empty());
+  Eigen::MatrixXd bad = data.outputs();
+  bad(7, 2) = std::numeric_limits<double>::quiet_NaN();
+  try {
+    preprocess_outputs(bad, 0.1, 2.0, options);
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("output channel 3 is nan at sample 7"));
+  }
 }
 
 TEST(MimoPreprocessing, WarningsNameTheChannel) {

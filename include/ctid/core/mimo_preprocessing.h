@@ -27,4 +27,17 @@ struct PreprocessedMimoData {
 /// Throws InvalidArgument as preprocess(SampledData) does.
 PreprocessedMimoData preprocess(const MimoData& data, const PreprocessingOptions& options = {});
 
+/// An output-only record (oma) after the same steps: range, detrend, decimation behind the
+/// anti-alias filter and output_scale, on every column alike. The record's input fields stay
+/// at their defaults and it carries no warnings: oma removes each channel's mean itself, so
+/// the large-mean advice does not apply.
+struct PreprocessedOutputs {
+  Eigen::MatrixXd outputs;
+  PreprocessingRecord record;
+  double start_time = 0.0;  ///< the first kept time stamp [s]
+};
+/// Throws InvalidArgument as preprocess(SampledData) does, naming the channel for a value.
+PreprocessedOutputs preprocess_outputs(const Eigen::MatrixXd& outputs, double sample_time,
+                                       double start_time, const PreprocessingOptions& options = {});
+
 }  // namespace ctid
