@@ -777,7 +777,9 @@ def oma_stabilisation(result, title=None, filename=None, frequency_unit="Hz", ax
     pole tried at its natural frequency (x) and model order (y), marked by its stability class
     against the previous order ("stable": frequency, damping and shape; "frequency and
     shape", "frequency and damping", "frequency", "new"); each chosen mode is a vertical line
-    labelled with its frequency and the number of orders that support it.
+    labelled with its frequency and the number of orders that support it. Behind them, on a
+    second axis, the first singular value of the output spectral matrix in dB (the result's
+    ``first_singular_value``, when it has one).
 
     ``result``: a ctid.OmaResult (``ctid.read_result`` reads the document). Returns the Figure.
     """
@@ -797,6 +799,15 @@ def oma_stabilisation(result, title=None, filename=None, frequency_unit="Hz", ax
         groups[name][0].append(pole.frequency_hz * factor)
         groups[name][1].append(pole.order)
     figure, ax = _axes_or_new(ax, 1, figsize=(7.0, 4.5))
+    s1 = list(result.first_singular_value)
+    if s1:
+        behind = ax.twinx()
+        positive = min((v for v in s1 if v > 0.0), default=1.0)
+        behind.plot([f * factor for f in result.spectrum_hz],
+                    [10.0 * math.log10(max(v, positive)) for v in s1], color="0.65", lw=0.8)
+        behind.set_ylabel("first singular value [dB]")
+        ax.set_zorder(behind.get_zorder() + 1)  # the poles over the curve
+        ax.patch.set_visible(False)
     for name, marker, colour in styles:
         x, y = groups[name]
         if x:

@@ -6,6 +6,7 @@
 // registered for JSON (io/fields_json.h): ctid.options_to_json / ctid.options_from_json.
 #pragma once
 
+#include <algorithm>
 #include <functional>
 #include <map>
 #include <string>
@@ -21,11 +22,16 @@
 
 namespace ctid::python {
 
-/// Binds E as a Python enum named `name`, its values and docs from enumerators(E).
+/// Binds E as a Python enum named `name`, its values and docs from enumerators(E); a name
+/// with a hyphen (the command line's "ssi-cov") is a Python identifier with an underscore.
 template <NamedEnum E>
 py::enum_<E> bind_enum(py::module_& m, const char* name, const char* doc) {
   py::enum_<E> e(m, name, doc);
-  for (const auto& each : enumerators(E{})) e.value(each.name.data(), each.value, each.doc.data());
+  for (const auto& each : enumerators(E{})) {
+    std::string identifier(each.name);
+    std::replace(identifier.begin(), identifier.end(), '-', '_');
+    e.value(identifier.c_str(), each.value, each.doc.data());
+  }
   return e;
 }
 

@@ -144,3 +144,33 @@ def test_efdd_gives_damping_near_the_truth():
     for mode, (f, zeta) in zip(result.modes, modes):
         assert mode.frequency_hz == pytest.approx(f, rel=0.01)
         assert 0.5 * zeta < mode.damping_ratio < 2.0 * zeta
+
+
+def test_every_result_carries_scipys_first_singular_value():
+    """The first singular value every method reports is scipy.signal.csd's spectral matrix's,
+    line by line, to 1e-9 relative (ssi-cov and efdd alike)."""
+    y, _ = _record(23)
+    length = 1024
+    f, s1 = _scipy_first_singular_value(y, length)
+    for method in (ctid.OmaMethod.ssi_cov, ctid.OmaMethod.efdd):
+        result = ctid.oma(y, H, method=method, segment_length=length, max_order=12,
+                          uncertainty_blocks=0)
+        np.testing.assert_allclose(result.spectrum_hz, f, rtol=1e-12)
+        np.testing.assert_allclose(result.first_singular_value, s1, rtol=1e-9,
+                                   atol=1e-12 * s1.max())
+
+
+def test_the_stabilisation_diagram_draws_the_first_singular_value_behind_the_poles():
+    """oma_stabilisation: a second axis holds the first singular value in dB at its lines,
+    under the axis of the poles."""
+    pytest.importorskip("matplotlib")
+    from ctid import plotting
+    y, _ = _record(24)
+    result = ctid.oma(y, H, max_order=12, uncertainty_blocks=0)
+    figure = plotting.oma_stabilisation(result)
+    poles_axis, behind = figure.axes
+    (curve,) = behind.get_lines()
+    np.testing.assert_allclose(curve.get_xdata(), result.spectrum_hz)
+    np.testing.assert_allclose(curve.get_ydata(), 10 * np.log10(result.first_singular_value))
+    assert poles_axis.get_zorder() > behind.get_zorder()
+    assert "singular value" in behind.get_ylabel()

@@ -233,13 +233,33 @@ OmaMode spectral_mode(const oma_detail::SingularSpectrum& spectrum,
 }
 
 // fdd and efdd: the peaks of the first singular value (or the ones nearest modes_near_hz).
-void spectral_oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptions& options,
-                  OmaResult& result) {
+struct OutputSpectrum {
+  oma_detail::SpectralMatrix spectral;
+  oma_detail::SingularSpectrum singular;
+};
+
+// The spectral matrix and its singular values, the first of which every method's result
+// carries (the curve behind the stabilisation diagram).
+OutputSpectrum output_spectrum(const Eigen::MatrixXd& outputs, double sample_time,
+                               const OmaOptions& options, OmaResult& result) {
   const int length = options.segment_length > 0 ? options.segment_length
                                                 : automatic_segment_length(outputs.rows());
-  const oma_detail::SpectralMatrix spectral =
-      oma_detail::output_spectral_matrix(outputs, sample_time, length);
-  const oma_detail::SingularSpectrum spectrum = oma_detail::singular_spectrum(spectral);
+  OutputSpectrum s;
+  s.spectral = oma_detail::output_spectral_matrix(outputs, sample_time, length);
+  s.singular = oma_detail::singular_spectrum(s.spectral);
+  const Eigen::VectorXd& f = s.spectral.frequency_hz;
+  const Eigen::VectorXd s1 = s.singular.values.col(0);
+  result.spectrum_hz.assign(f.data(), f.data() + f.size());
+  result.first_singular_value.assign(s1.data(), s1.data() + s1.size());
+  return s;
+}
+
+void spectral_oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptions& options,
+                  OmaResult& result) {
+  const OutputSpectrum both = output_spectrum(outputs, sample_time, options, result);
+  const oma_detail::SpectralMatrix& spectral = both.spectral;
+  const oma_detail::SingularSpectrum& spectrum = both.singular;
+  const int length = spectral.segment_length;
   std::vector<int> lines;
   if (options.modes_near_hz.empty()) {
     lines = oma_detail::singular_value_peaks(spectrum, options.peak_prominence_db);
@@ -309,6 +329,7 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
   }
   const int p = pick_block_rows(options, l, static_cast<Eigen::Index>(refs.size()), outputs.rows());
   result.block_rows = p;
+  output_spectrum(outputs, sample_time, options, result);
   const auto orders = all_orders(outputs, refs, p, sample_time, options);
   const auto stability = oma_detail::classify_poles(orders, options);
   for (std::size_t o = 0; o < orders.size(); ++o) {

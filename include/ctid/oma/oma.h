@@ -73,10 +73,10 @@ struct OmaOptions {
   std::vector<double> modes_near_hz;
   /// Segments n_b for the segment-based standard errors; 0: none (standard errors NaN).
   int uncertainty_blocks = 10;
-  /// fdd, efdd: samples per Welch segment of the spectral matrix; 0: the largest power of
-  /// two up to N / 8, within 256..16384 (and at most N).
+  /// Samples per Welch segment of the spectral matrix (fdd, efdd, and every result's first
+  /// singular value); 0: the largest power of two up to N / 8, within 256..16384 (at most N).
   int segment_length = 0;
-  /// fdd, efdd: a peak of the first singular value stands this far [dB] above the deeper of
+  /// fdd, efdd: a peak of the first singular value stands this far [dB] above the higher of
   /// its valleys.
   double peak_prominence_db = 6.0;
   /// efdd: lines whose first singular vector has at least this MAC with the peak's form the
@@ -109,7 +109,7 @@ struct OmaOptions {
         field("uncertainty_blocks", &S::uncertainty_blocks, AtLeast{0},
               "Segments for the standard errors; 0: none."),
         field("segment_length", &S::segment_length, AtLeast{0},
-              "fdd, efdd: samples per Welch segment; 0: automatic."),
+              "Samples per Welch segment of the spectral matrix; 0: automatic."),
         field("peak_prominence_db", &S::peak_prominence_db, GreaterThan{0},
               "fdd, efdd: how far [dB] a peak stands above its valleys."),
         field("efdd_mac", &S::efdd_mac, Between{0, 1, false, true},
@@ -187,6 +187,8 @@ struct OmaResult : Outcome {
   int block_rows = 0;
   std::vector<OmaMode> modes;
   std::vector<OmaPole> stabilisation;
+  std::vector<double> spectrum_hz;
+  std::vector<double> first_singular_value;
   Verdict verdict;
 
   static constexpr std::string_view type_name = "OmaResult";
@@ -203,6 +205,9 @@ struct OmaResult : Outcome {
             field("block_rows", &S::block_rows, "Hankel block rows p used."),
             field("modes", &S::modes, "Identified modes, by frequency."),
             field("stabilisation", &S::stabilisation, "Every pole kept, every order."),
+            field("spectrum_hz", &S::spectrum_hz, "Lines [Hz] of the output spectral matrix."),
+            field("first_singular_value", &S::first_singular_value,
+                  "Its first singular value at each line [unit^2/Hz]."),
             field("verdict", &S::verdict, "Whether any mode was found."),
         });
   }
