@@ -25,6 +25,7 @@
 #include "ctid/io/report_json.h"
 #include "ctid/oma/oma.h"
 #include "data_flags.h"
+#include "plot_support.h"
 
 namespace ctid::cli {
 namespace {
@@ -45,6 +46,7 @@ struct OmaFlags {
   double efdd_mac = OmaOptions{}.efdd_mac;
   DataFlags prep;  ///< its preprocessing flags only (--rows, --time, --detrend, ...)
   std::string output;
+  std::string plot;  // DIR for stabilisation.png
   bool force = false;
   bool quiet = false;
 };
@@ -127,7 +129,28 @@ void print_summary(const OmaFlags& f, const OmaResult& r,
   if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
 }
 
+// --plot DIR: the stabilisation diagram over the first singular value, from the document
+// (written to a temporary when -o is not given).
+void draw_stabilisation(const std::filesystem::path& package, const OmaFlags& f,
+                        const nlohmann::json& document) {
+  const TemporaryDirectory work;
+  std::filesystem::path input = f.output;
+  if (input.empty()) {
+    input = work.path() / "oma.json";
+    io::write_json(input, document);
+  }
+  const std::filesystem::path figure = std::filesystem::path(f.plot) / "stabilisation.png";
+  plot(package, {{"oma_stabilisation", input, figure,
+                  "ctid oma on " + std::filesystem::path(f.file).filename().string()}});
+  if (!f.quiet) std::cout << "wrote " << figure.string() << "\n";
+}
+
 ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
+  std::filesystem::path package;
+  if (!f.plot.empty()) {
+    package = require_plotting();
+    prepare_plot_directory(f.plot, {"stabilisation.png"}, f.force);
+  }
   OmaOptions options;
   const auto method = enum_from_name<OmaMethod>(f.method);
   if (!method) {
@@ -170,13 +193,14 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
     }
   }
   const OmaResult result = oma(y, h, options, names);
+  nlohmann::json document = io::to_json(result);
+  document["data"] = {{"file", f.file}};
+  if (preprocessing) document["data"]["preprocessing"] = io::fields_to_json(*preprocessing);
   if (!f.output.empty()) {
-    nlohmann::json document = io::to_json(result);
-    document["data"] = {{"file", f.file}};
-    if (preprocessing) document["data"]["preprocessing"] = io::fields_to_json(*preprocessing);
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
   if (!f.quiet) print_summary(f, result, preprocessing);
+  if (!f.plot.empty()) draw_stabilisation(package, f, document);
   return result.verdict.usable ? kExitOk : kExitNoUsableModel;
 }
 
@@ -233,6 +257,10 @@ Command add_oma_command(CLI::App& parent) {
       ->capture_default_str();
   f.prep.add_preprocessing_to(*app, false);
   app->add_option("--output,-o", f.output, "JSON file for the oma_result document")
+      ->group("Output");
+  app->add_option("--plot", f.plot,
+                  "Directory for stabilisation.png: every pole by order and stability class, the "
+                  "modes, the first singular value behind them (python3 -m ctid.plot)")
       ->group("Output");
   app->add_flag("--force", f.force, "Replace an output file that exists")->group("Output");
   app->add_flag("--quiet,-q", f.quiet, "Print nothing")->group("Output");

@@ -118,6 +118,20 @@ TEST_F(OmaCommand, PreprocessingIsAppliedAndRecorded) {
   }
 }
 
+TEST_F(OmaCommand, PlotDrawsTheStabilisationDiagram) {
+  if (testing::python_package().empty()) {
+    GTEST_SKIP() << "the ctid Python package is not built (CTID_BUILD_PYTHON=OFF); set "
+                    "CTID_PYTHONPATH to test --plot";
+  }
+  const std::vector<std::string> args = {
+      "oma", white_noise(), "--output-columns", "a:c", "--max-order", "12", "--plot", "figures"};
+  const auto r = ctid(args);
+  EXPECT_EQ(r.status, 3) << r.err;  // no mode: the diagram is drawn all the same
+  testing::expect_png(path("figures") / "stabilisation.png");
+  EXPECT_THAT(r.out, HasSubstr("wrote figures/stabilisation.png"));
+  testing::expect_bad_input(ctid(args), "oma", "stabilisation.png: file exists");
+}
+
 TEST_F(OmaCommand, BadUsageNamesTheFlag) {
   const std::string noise = white_noise();
   auto r = ctid({"oma", noise, "--output-columns", "a"});
