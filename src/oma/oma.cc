@@ -12,6 +12,7 @@
 
 #include "core/internal/signal_range.h"
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/oma/fdd.h"
 #include "ctid/oma/ssi_cov.h"
 #include "ctid/oma/stabilisation.h"
@@ -26,6 +27,10 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Correlations reach lag 2p - 1; a record of fewer than this many times p samples gives
 // correlations too noisy to be worth a Hankel matrix.
 constexpr int kSamplesPerBlockRow = 20;
+// Automatic block rows: lags spanning this many periods of the lowest spectral peak, within
+// this many rows (and columns) of the Hankel matrix (decision 0035).
+constexpr double kLagPeriods = 4.0;
+constexpr double kMaxHankelRows = 1000.0;
 // A user frequency takes the nearest cluster within this relative distance.
 constexpr double kNearTolerance = 0.1;
 
@@ -254,6 +259,30 @@ OutputSpectrum output_spectrum(const Eigen::MatrixXd& outputs, double sample_tim
   return s;
 }
 
+// Automatic block rows (decision 0035): the order rule's p, raised so that the lags, 2p - 1
+// samples, span kLagPeriods periods of the lowest peak of the first singular value, within
+// kMaxHankelRows rows or columns of the Hankel matrix and kSamplesPerBlockRow samples per
+// block row. When the budget stops short, `note` says how many periods the lags span.
+int block_rows_for_lowest_peak(const OutputSpectrum& spectrum, int p, Eigen::Index l,
+                               Eigen::Index r, Eigen::Index n, double sample_time,
+                               const OmaOptions& options, std::string& note) {
+  const std::vector<int> peaks =
+      oma_detail::singular_value_peaks(spectrum.singular, options.peak_prominence_db);
+  if (peaks.empty()) return p;
+  const double lowest_hz = spectrum.spectral.frequency_hz(peaks.front());
+  const double wanted = std::ceil(0.5 * (kLagPeriods / (lowest_hz * sample_time) + 1.0));
+  const double budget = std::min(std::floor(kMaxHankelRows / static_cast<double>(std::max(l, r))),
+                                 std::floor(static_cast<double>(n) / kSamplesPerBlockRow));
+  const int raised = static_cast<int>(std::max<double>(p, std::min(wanted, budget)));
+  if (wanted > budget) {
+    note = internal::concat(
+        "; lags span ", format_significant((2.0 * raised - 1.0) * sample_time * lowest_hz, 2),
+        " periods of the lowest spectral peak at ", format_significant(lowest_hz, 4), " Hz; ",
+        static_cast<int>(wanted), " block rows would span ", kLagPeriods);
+  }
+  return raised;
+}
+
 void spectral_oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptions& options,
                   OmaResult& result) {
   const OutputSpectrum both = output_spectrum(outputs, sample_time, options, result);
@@ -327,9 +356,14 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
     spectral_oma(outputs, sample_time, options, result);
     return result;
   }
-  const int p = pick_block_rows(options, l, static_cast<Eigen::Index>(refs.size()), outputs.rows());
+  int p = pick_block_rows(options, l, static_cast<Eigen::Index>(refs.size()), outputs.rows());
+  const OutputSpectrum spectrum = output_spectrum(outputs, sample_time, options, result);
+  std::string lag_note;
+  if (options.block_rows == 0) {
+    p = block_rows_for_lowest_peak(spectrum, p, l, static_cast<Eigen::Index>(refs.size()),
+                                   outputs.rows(), sample_time, options, lag_note);
+  }
   result.block_rows = p;
-  output_spectrum(outputs, sample_time, options, result);
   const auto orders = all_orders(outputs, refs, p, sample_time, options);
   const auto stability = oma_detail::classify_poles(orders, options);
   for (std::size_t o = 0; o < orders.size(); ++o) {
@@ -346,7 +380,7 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
   result.termination = Termination::converged;
   result.iterations = static_cast<int>(orders.size());
   result.message = internal::concat(result.modes.size(), " mode(s) from orders 2..",
-                                    options.max_order, " (", p, " block rows)");
+                                    options.max_order, " (", p, " block rows", lag_note, ")");
   return result;
 }
 

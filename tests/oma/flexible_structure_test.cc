@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/oma/oma.h"
+#include "support/sanitizers.h"
 
 namespace ctid::flexible_structure_test {
 namespace {
@@ -79,6 +80,33 @@ TEST(OmaFlexibleStructure, EfddFindsEveryInputOutputModeWithinHalfAPercent) {
     }
     EXPECT_LT(std::abs(closest - f) / f, 0.005);
   }
+}
+
+// Decision 0035: the default block rows (10 by the order rule) are raised so that the lags
+// span 4 periods of the lowest spectral peak (near 62 Hz: 2p - 1 >= 4 * 1024 / 62, p = 34);
+// with them the default analysis (orders to 60) finds the lowest input-output mode.
+TEST(OmaFlexibleStructure, DefaultBlockRowsSpanTheLowestMode) {
+  CTID_SKIP_UNDER_SANITIZERS("ten segment SVDs of a 952 x 952 Hankel matrix");
+  const Eigen::MatrixXd y = read_accelerations();
+  OmaOptions o;
+  o.max_order = 60;
+  const OmaResult r = oma(y, 1.0 / 1024.0, o);
+  EXPECT_EQ(r.block_rows, 34);
+  EXPECT_GE((2.0 * r.block_rows - 1.0) / 1024.0 * 62.0, 4.0);
+  double closest = 0.0;
+  for (const auto& m : r.modes) {
+    if (std::abs(m.frequency_hz - 62.34) < std::abs(closest - 62.34)) closest = m.frequency_hz;
+  }
+  EXPECT_LT(std::abs(closest - 62.34) / 62.34, 0.01);
+  // A budget that stops the raise is said in the message.
+  const Eigen::MatrixXd few = y.topRows(600);
+  OmaOptions small;
+  small.max_order = 20;
+  small.uncertainty_blocks = 0;
+  const OmaResult short_record = oma(few, 1.0 / 1024.0, small);
+  EXPECT_EQ(short_record.block_rows, 30);  // 600 samples / 20 per block row
+  EXPECT_NE(short_record.message.find("periods of the lowest spectral peak"), std::string::npos)
+      << short_record.message;
 }
 
 }  // namespace

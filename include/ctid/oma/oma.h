@@ -54,7 +54,9 @@ struct OmaOptions {
   /// Largest model order (states); orders 2, 4, ..., max_order are identified.
   int max_order = 40;
   /// Block rows p (= block columns q) of the Hankel matrix of correlations R_1..R_{2p-1};
-  /// 0 picks max(10, ceil(max_order / references) + 1).
+  /// 0 picks max(10, ceil(max_order / references) + 1), raised so that the lags span 4
+  /// periods of the lowest peak of the first singular value, within p * max(channels,
+  /// references) <= 1000 (decision 0035).
   int block_rows = 0;
   /// Reference channels (0-based output indices); empty: every channel.
   std::vector<int> reference_channels;
@@ -76,8 +78,8 @@ struct OmaOptions {
   /// Samples per Welch segment of the spectral matrix (fdd, efdd, and every result's first
   /// singular value); 0: the largest power of two up to N / 8, within 256..16384 (at most N).
   int segment_length = 0;
-  /// fdd, efdd: a peak of the first singular value stands this far [dB] above the higher of
-  /// its valleys.
+  /// A peak of the first singular value stands this far [dB] above the higher of its valleys
+  /// (fdd and efdd's modes; the lowest peak sets ssi-cov's automatic block rows).
   double peak_prominence_db = 6.0;
   /// efdd: lines whose first singular vector has at least this MAC with the peak's form the
   /// single-degree-of-freedom bell.
@@ -111,7 +113,8 @@ struct OmaOptions {
         field("segment_length", &S::segment_length, AtLeast{0},
               "Samples per Welch segment of the spectral matrix; 0: automatic."),
         field("peak_prominence_db", &S::peak_prominence_db, GreaterThan{0},
-              "fdd, efdd: how far [dB] a peak stands above its valleys."),
+              "How far [dB] a spectral peak stands above its valleys (fdd, efdd; ssi-cov's "
+              "automatic block rows)."),
         field("efdd_mac", &S::efdd_mac, Between{0, 1, false, true},
               "efdd: MAC with the peak's shape that bounds the bell."),
     };
