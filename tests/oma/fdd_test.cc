@@ -2,7 +2,7 @@
 // spectral matrix against closed forms (a sinusoid's line, white noise's level, Hermitian and
 // positive semi-definite), the modes of seeded simulated ambient records of a known chain
 // (frequency within a line, shapes MAC >= 0.99, a seeded Monte Carlo of EFDD's frequency and
-// damping), and records with no resonance (a verdict, not invented modes).
+// damping). Records with no resonance: oma_test.cc, for every method.
 #include "ctid/oma/fdd.h"
 
 #include <cmath>
@@ -156,36 +156,6 @@ TEST(Fdd, ModesNearPicksTheNamedPeaksOnly) {
   o.modes_near_hz = {0.001};  // below the first line (0.049 Hz): none within 10 %
   const OmaResult low = oma(y, model.h, o);
   EXPECT_THAT(low.verdict.summary(), ::testing::HasSubstr("no spectral line within 10 % of 0.001"));
-}
-
-TEST(Fdd, WhiteNoiseHasNoMode) {
-  std::mt19937_64 rng(5);
-  std::normal_distribution<double> normal;
-  Eigen::MatrixXd y(20000, 4);
-  for (Eigen::Index k = 0; k < y.rows(); ++k) {
-    for (Eigen::Index j = 0; j < y.cols(); ++j) y(k, j) = normal(rng);
-  }
-  for (const OmaMethod method : {OmaMethod::fdd, OmaMethod::efdd}) {
-    const OmaResult r = oma(y, 0.01, options(method));
-    EXPECT_TRUE(r.modes.empty()) << r.modes.size() << " modes";
-    EXPECT_FALSE(r.verdict.usable);
-    EXPECT_THAT(r.verdict.summary(), ::testing::HasSubstr("no mode found"));
-  }
-}
-
-TEST(Fdd, FirstOrderLagHasNoMode) {
-  std::mt19937_64 rng(6);
-  std::normal_distribution<double> normal;
-  Eigen::MatrixXd y(20000, 3);
-  double x = 0.0;
-  for (Eigen::Index k = 0; k < y.rows(); ++k) {
-    x = 0.95 * x + normal(rng);
-    for (Eigen::Index j = 0; j < y.cols(); ++j) y(k, j) = (j + 1.0) * x + 0.1 * normal(rng);
-  }
-  const OmaResult r = oma(y, 0.01, options(OmaMethod::efdd));
-  EXPECT_TRUE(r.modes.empty()) << r.modes.size() << " modes, first at "
-                               << (r.modes.empty() ? 0.0 : r.modes[0].frequency_hz);
-  EXPECT_FALSE(r.verdict.usable);
 }
 
 }  // namespace

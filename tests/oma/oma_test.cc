@@ -140,6 +140,7 @@ TEST(Oma, MonteCarloSpreadMatchesTheReportedStandardErrors) {
   }
 }
 
+// Independent white noise on four channels: no resonance, for every method.
 TEST(Oma, WhiteNoiseHasNoMode) {
   std::mt19937_64 rng(5);
   std::normal_distribution<double> normal;
@@ -147,14 +148,20 @@ TEST(Oma, WhiteNoiseHasNoMode) {
   for (Eigen::Index k = 0; k < y.rows(); ++k) {
     for (Eigen::Index j = 0; j < y.cols(); ++j) y(k, j) = normal(rng);
   }
-  const OmaResult r = oma(y, 0.01, chain_options());
-  EXPECT_TRUE(r.modes.empty());
-  EXPECT_FALSE(r.verdict.usable);
-  EXPECT_THAT(r.verdict.summary(), ::testing::HasSubstr("no mode found"));
+  for (const OmaMethod method : {OmaMethod::ssi_cov, OmaMethod::fdd, OmaMethod::efdd}) {
+    SCOPED_TRACE(enum_name(method));
+    OmaOptions o = chain_options();
+    o.method = method;
+    const OmaResult r = oma(y, 0.01, o);
+    EXPECT_TRUE(r.modes.empty()) << r.modes.size() << " modes";
+    EXPECT_FALSE(r.verdict.usable);
+    EXPECT_THAT(r.verdict.summary(), ::testing::HasSubstr("no mode found"));
+  }
 }
 
 TEST(Oma, FirstOrderLagHasNoMode) {
-  // Two channels of one white noise through a first-order lag (a real pole) plus sensor noise.
+  // Three channels of one white noise through a first-order lag (a real pole) plus sensor
+  // noise, for every method.
   std::mt19937_64 rng(6);
   std::normal_distribution<double> normal;
   Eigen::MatrixXd y(20000, 3);
@@ -163,12 +170,16 @@ TEST(Oma, FirstOrderLagHasNoMode) {
     x = 0.95 * x + normal(rng);
     for (Eigen::Index j = 0; j < y.cols(); ++j) y(k, j) = (j + 1.0) * x + 0.1 * normal(rng);
   }
-  OmaOptions o;
-  o.max_order = 12;
-  const OmaResult r = oma(y, 0.01, o);
-  EXPECT_TRUE(r.modes.empty()) << r.modes.size() << " modes, first at "
-                               << (r.modes.empty() ? 0.0 : r.modes[0].frequency_hz);
-  EXPECT_FALSE(r.verdict.usable);
+  for (const OmaMethod method : {OmaMethod::ssi_cov, OmaMethod::fdd, OmaMethod::efdd}) {
+    SCOPED_TRACE(enum_name(method));
+    OmaOptions o;
+    o.method = method;
+    o.max_order = 12;
+    const OmaResult r = oma(y, 0.01, o);
+    EXPECT_TRUE(r.modes.empty()) << r.modes.size() << " modes, first at "
+                                 << (r.modes.empty() ? 0.0 : r.modes[0].frequency_hz);
+    EXPECT_FALSE(r.verdict.usable);
+  }
 }
 
 void expect_invalid(const Eigen::MatrixXd& y, const OmaOptions& o, const std::string& text) {
