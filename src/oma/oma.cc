@@ -14,6 +14,7 @@
 #include "ctid/core/error.h"
 #include "ctid/oma/fdd.h"
 #include "ctid/oma/ssi_cov.h"
+#include "ctid/oma/ssi_data.h"
 #include "ctid/oma/stabilisation.h"
 
 namespace ctid {
@@ -46,6 +47,14 @@ void check_record(const Eigen::MatrixXd& y, double h, const std::vector<std::str
   }
 }
 
+// Samples the method needs for p block rows: SSI-cov kSamplesPerBlockRow per block row; SSI-data
+// that too, and at least as many Hankel columns as rows.
+Eigen::Index ssi_samples_needed(const OmaOptions& o, int p, Eigen::Index l, Eigen::Index r) {
+  const Eigen::Index needed = static_cast<Eigen::Index>(kSamplesPerBlockRow) * p;
+  if (o.method != OmaMethod::ssi_data) return needed;
+  return std::max(needed, oma_detail::ssi_data_samples_needed(p, l, r));
+}
+
 int pick_block_rows(const OmaOptions& o, Eigen::Index l, Eigen::Index r, Eigen::Index n) {
   const int p = o.block_rows > 0 ? o.block_rows
                                  : std::max(10, static_cast<int>((o.max_order + r - 1) / r) + 1);
@@ -56,13 +65,30 @@ int pick_block_rows(const OmaOptions& o, Eigen::Index l, Eigen::Index r, Eigen::
   require(n >= static_cast<Eigen::Index>(kSamplesPerBlockRow) * p, "the record has ", n,
           " samples; ", p, " block rows (max_order ", o.max_order, ") need at least ",
           kSamplesPerBlockRow * p, " (a lower --max-order or --block-rows, or a longer record)");
+  const Eigen::Index needed = ssi_samples_needed(o, p, l, r);
+  require(n >= needed, "the record has ", n, " samples; ssi-data with ", p, " block rows over ", r,
+          " references and ", l, " channels needs at least ", needed,
+          " (N - 2p + 1 Hankel columns for its p(r + l) = ", p * (r + l),
+          " rows; a lower --block-rows or --max-order, fewer --reference-channels, or a longer "
+          "record)");
   return p;
+}
+
+// The observability factor of the SSI method: SSI-cov from the Hankel matrix of the
+// correlations, SSI-data from the LQ factor of the data Hankel matrix. Orders, poles, shapes,
+// stabilisation, picking and standard errors are shared from here on.
+oma_detail::SsiFactor method_factor(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
+                                    const OmaOptions& o) {
+  if (o.method == OmaMethod::ssi_data) {
+    return oma_detail::ssi_data_factor(y, refs, p, o.max_order);
+  }
+  return oma_detail::ssi_factor(oma_detail::output_correlations(y, refs, 2 * p - 1), p,
+                                o.max_order);
 }
 
 std::vector<OrderPoles> all_orders(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
                                    double h, const OmaOptions& o) {
-  const auto correlations = oma_detail::output_correlations(y, refs, 2 * p - 1);
-  const auto factor = oma_detail::ssi_factor(correlations, p, o.max_order);
+  const auto factor = method_factor(y, refs, p, o);
   std::vector<OrderPoles> orders;
   for (int n = 2; n <= o.max_order; n += 2) {
     orders.push_back({n, oma_detail::ssi_poles(factor, n, h, o.max_damping)});
@@ -154,7 +180,8 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
                          const OmaOptions& o, std::vector<OmaMode>& modes) {
   const int nb = o.uncertainty_blocks;
   const Eigen::Index length = y.rows() / std::max(nb, 1);
-  if (nb < 2 || modes.empty() || length < static_cast<Eigen::Index>(kSamplesPerBlockRow) * p) {
+  const auto r = static_cast<Eigen::Index>(refs.size());
+  if (nb < 2 || modes.empty() || length < ssi_samples_needed(o, p, y.cols(), r)) {
     return;
   }
   const std::size_t m = modes.size();
@@ -162,8 +189,7 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
   std::vector<std::vector<Eigen::VectorXcd>> shapes(m);
   for (int b = 0; b < nb; ++b) {
     const Eigen::MatrixXd block = y.middleRows(b * length, length);
-    const auto corr = oma_detail::output_correlations(block, refs, 2 * p - 1);
-    const auto factor = oma_detail::ssi_factor(corr, p, o.max_order);
+    const auto factor = method_factor(block, refs, p, o);
     for (std::size_t i = 0; i < m; ++i) {
       const auto poles = oma_detail::ssi_poles(factor, modes[i].order, h, o.max_damping);
       const Eigen::VectorXcd ref = shape_of(modes[i]);
@@ -303,7 +329,7 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
   result.samples = static_cast<int>(outputs.rows());
   result.channels = channel_names;
   result.reference_channels = refs;
-  if (options.method != OmaMethod::ssi_cov) {
+  if (options.method == OmaMethod::fdd || options.method == OmaMethod::efdd) {
     spectral_oma(outputs, sample_time, options, result);
     return result;
   }

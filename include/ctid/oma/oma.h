@@ -22,9 +22,12 @@
 
 namespace ctid {
 
-enum class OmaMethod { ssi_cov, fdd, efdd };
-inline constexpr std::array<Enumerator<OmaMethod>, 3> oma_method_enumerators{{
+enum class OmaMethod { ssi_cov, fdd, efdd, ssi_data };
+inline constexpr std::array<Enumerator<OmaMethod>, 4> oma_method_enumerators{{
     {OmaMethod::ssi_cov, "ssi-cov", "Covariance-driven stochastic subspace identification."},
+    {OmaMethod::ssi_data, "ssi-data",
+     "Data-driven stochastic subspace identification: the projection of the future outputs on "
+     "the past references by an LQ factorisation of the data Hankel matrix."},
     {OmaMethod::fdd, "fdd",
      "Frequency-domain decomposition: peaks of the first singular value of the output "
      "spectral matrix (frequency and shape, no damping)."},
