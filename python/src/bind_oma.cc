@@ -8,7 +8,10 @@
 namespace ctid::python {
 
 void bind_oma(py::module_& m) {
-  bind_enum<OmaMethod>(m, "OmaMethod", "Output-only identification method.");
+  auto method = bind_enum<OmaMethod>(m, "OmaMethod", "Output-only identification method.");
+  // The SSI names hold a dash; these make them attributes too (ctid.OmaMethod.ssi_data).
+  method.attr("ssi_cov") = py::cast(OmaMethod::ssi_cov);
+  method.attr("ssi_data") = py::cast(OmaMethod::ssi_data);
   bind_enum<PoleStability>(m, "PoleStability", "Stability class of a pole in the diagram.");
   bind_options<OmaOptions>(m, "Options of output-only modal analysis (docs/oma.md).");
   bind_result<OmaPole>(m, "One pole of the stabilisation diagram.");
