@@ -69,7 +69,7 @@ int pick_block_rows(const OmaOptions& o, Eigen::Index l, Eigen::Index r, Eigen::
   require(n >= needed, "the record has ", n, " samples; ssi-data with ", p, " block rows over ", r,
           " references and ", l, " channels needs at least ", needed,
           " (N - 2p + 1 Hankel columns for its p(r + l) = ", p * (r + l),
-          " rows; a lower --block-rows or --max-order, fewer --reference-channels, or a longer "
+          " rows; a lower --block-rows or --max-order, fewer --reference-columns, or a longer "
           "record)");
   return p;
 }
