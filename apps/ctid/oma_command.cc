@@ -111,7 +111,8 @@ void print_summary(const OmaFlags& f, const OmaResult& r,
             << " samples, h = " << format_brief(r.sample_time) << " s; " << r.message << "\n";
   if (preprocessing)
     std::cout << "preprocessing: " << preprocessing_summary(*preprocessing) << "\n";
-  const bool ssi = r.method == OmaMethod::ssi_cov;  // fdd, efdd: no orders to count
+  // fdd, efdd: no orders to count
+  const bool ssi = r.method == OmaMethod::ssi_cov || r.method == OmaMethod::ssi_data;
   if (!r.modes.empty()) {
     std::cout << "  mode  frequency [Hz]          damping ratio            MPC"
               << (ssi ? "    orders" : "") << "\n";
@@ -231,7 +232,8 @@ Command add_oma_command(CLI::App& parent) {
   app->add_option("--sample-time,-T", f.sample_time, "Sample time [s] (overrides the time column)")
       ->check(CLI::PositiveNumber);
   app->add_option("--method", f.method,
-                  "Method: ssi-cov (frequency, damping, shape with standard errors), fdd "
+                  "Method: ssi-cov (frequency, damping, shape with standard errors), ssi-data "
+                  "(the same from the data Hankel matrix instead of its correlations), fdd "
                   "(frequency and shape from peaks of the spectral matrix) or efdd (fdd with "
                   "damping)")
       ->capture_default_str();

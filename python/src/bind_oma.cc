@@ -27,8 +27,9 @@ void bind_oma(py::module_& m) {
       py::arg("outputs"), py::arg("sample_time"), py::arg("options") = py::none(),
       py::arg("channel_names") = py::none(),
       "Output-only modal analysis of the (N, l) array `outputs` sampled every sample_time "
-      "seconds: SSI-cov over orders 2..max_order, stable poles clustered into modes, "
-      "segment-based standard errors. OmaOptions fields may be given as keywords.");
+      "seconds: SSI-cov (or SSI-data, by method) over orders 2..max_order, stable poles "
+      "clustered into modes, segment-based standard errors; or fdd/efdd peaks. OmaOptions "
+      "fields may be given as keywords.");
 }
 
 }  // namespace ctid::python

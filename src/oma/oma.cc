@@ -15,6 +15,7 @@
 #include "ctid/core/format.h"
 #include "ctid/oma/fdd.h"
 #include "ctid/oma/ssi_cov.h"
+#include "ctid/oma/ssi_data.h"
 #include "ctid/oma/stabilisation.h"
 
 namespace ctid {
@@ -51,6 +52,14 @@ void check_record(const Eigen::MatrixXd& y, double h, const std::vector<std::str
   }
 }
 
+// Samples the method needs for p block rows: SSI-cov kSamplesPerBlockRow per block row; SSI-data
+// that too, and at least as many Hankel columns as rows.
+Eigen::Index ssi_samples_needed(const OmaOptions& o, int p, Eigen::Index l, Eigen::Index r) {
+  const Eigen::Index needed = static_cast<Eigen::Index>(kSamplesPerBlockRow) * p;
+  if (o.method != OmaMethod::ssi_data) return needed;
+  return std::max(needed, oma_detail::ssi_data_samples_needed(p, l, r));
+}
+
 int pick_block_rows(const OmaOptions& o, Eigen::Index l, Eigen::Index r, Eigen::Index n) {
   const int p = o.block_rows > 0 ? o.block_rows
                                  : std::max(10, static_cast<int>((o.max_order + r - 1) / r) + 1);
@@ -61,13 +70,30 @@ int pick_block_rows(const OmaOptions& o, Eigen::Index l, Eigen::Index r, Eigen::
   require(n >= static_cast<Eigen::Index>(kSamplesPerBlockRow) * p, "the record has ", n,
           " samples; ", p, " block rows (max_order ", o.max_order, ") need at least ",
           kSamplesPerBlockRow * p, " (a lower --max-order or --block-rows, or a longer record)");
+  const Eigen::Index needed = ssi_samples_needed(o, p, l, r);
+  require(n >= needed, "the record has ", n, " samples; ssi-data with ", p, " block rows over ", r,
+          " references and ", l, " channels needs at least ", needed,
+          " (N - 2p + 1 Hankel columns for its p(r + l) = ", p * (r + l),
+          " rows; a lower --block-rows or --max-order, fewer --reference-columns, or a longer "
+          "record)");
   return p;
+}
+
+// The observability factor of the SSI method: SSI-cov from the Hankel matrix of the
+// correlations, SSI-data from the LQ factor of the data Hankel matrix. Orders, poles, shapes,
+// stabilisation, picking and standard errors are shared from here on.
+oma_detail::SsiFactor method_factor(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
+                                    const OmaOptions& o) {
+  if (o.method == OmaMethod::ssi_data) {
+    return oma_detail::ssi_data_factor(y, refs, p, o.max_order);
+  }
+  return oma_detail::ssi_factor(oma_detail::output_correlations(y, refs, 2 * p - 1), p,
+                                o.max_order);
 }
 
 std::vector<OrderPoles> all_orders(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
                                    double h, const OmaOptions& o) {
-  const auto correlations = oma_detail::output_correlations(y, refs, 2 * p - 1);
-  const auto factor = oma_detail::ssi_factor(correlations, p, o.max_order);
+  const auto factor = method_factor(y, refs, p, o);
   std::vector<OrderPoles> orders;
   for (int n = 2; n <= o.max_order; n += 2) {
     orders.push_back({n, oma_detail::ssi_poles(factor, n, h, o.max_damping)});
@@ -159,7 +185,8 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
                          const OmaOptions& o, std::vector<OmaMode>& modes) {
   const int nb = o.uncertainty_blocks;
   const Eigen::Index length = y.rows() / std::max(nb, 1);
-  if (nb < 2 || modes.empty() || length < static_cast<Eigen::Index>(kSamplesPerBlockRow) * p) {
+  const auto r = static_cast<Eigen::Index>(refs.size());
+  if (nb < 2 || modes.empty() || length < ssi_samples_needed(o, p, y.cols(), r)) {
     return;
   }
   const std::size_t m = modes.size();
@@ -167,8 +194,7 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
   std::vector<std::vector<Eigen::VectorXcd>> shapes(m);
   for (int b = 0; b < nb; ++b) {
     const Eigen::MatrixXd block = y.middleRows(b * length, length);
-    const auto corr = oma_detail::output_correlations(block, refs, 2 * p - 1);
-    const auto factor = oma_detail::ssi_factor(corr, p, o.max_order);
+    const auto factor = method_factor(block, refs, p, o);
     for (std::size_t i = 0; i < m; ++i) {
       const auto poles = oma_detail::ssi_poles(factor, modes[i].order, h, o.max_damping);
       const Eigen::VectorXcd ref = shape_of(modes[i]);
@@ -261,8 +287,9 @@ OutputSpectrum output_spectrum(const Eigen::MatrixXd& outputs, double sample_tim
 
 // Automatic block rows (decision 0035): the order rule's p, raised so that the lags, 2p - 1
 // samples, span kLagPeriods periods of the lowest peak of the first singular value, within
-// kMaxHankelRows rows or columns of the Hankel matrix and kSamplesPerBlockRow samples per
-// block row. When the budget stops short, `note` says how many periods the lags span.
+// kMaxHankelRows rows or columns of the Hankel matrix, kSamplesPerBlockRow samples per
+// block row and the samples ssi-data needs. When the budget stops short, `note` says how many
+// periods the lags span.
 int block_rows_for_lowest_peak(const OutputSpectrum& spectrum, int p, Eigen::Index l,
                                Eigen::Index r, Eigen::Index n, double sample_time,
                                const OmaOptions& options, std::string& note) {
@@ -271,8 +298,12 @@ int block_rows_for_lowest_peak(const OutputSpectrum& spectrum, int p, Eigen::Ind
   if (peaks.empty()) return p;
   const double lowest_hz = spectrum.spectral.frequency_hz(peaks.front());
   const double wanted = std::ceil(0.5 * (kLagPeriods / (lowest_hz * sample_time) + 1.0));
-  const double budget = std::min(std::floor(kMaxHankelRows / static_cast<double>(std::max(l, r))),
-                                 std::floor(static_cast<double>(n) / kSamplesPerBlockRow));
+  // SSI-data's Hankel matrix has p (l + r) rows, SSI-cov's p l rows and p r columns.
+  const bool data = options.method == OmaMethod::ssi_data;
+  const auto width = static_cast<double>(data ? l + r : std::max(l, r));
+  double budget = std::min(std::floor(kMaxHankelRows / width),
+                           std::floor(static_cast<double>(n) / kSamplesPerBlockRow));
+  while (budget > p && ssi_samples_needed(options, static_cast<int>(budget), l, r) > n) --budget;
   const int raised = static_cast<int>(std::max<double>(p, std::min(wanted, budget)));
   if (wanted > budget) {
     note = internal::concat(
@@ -352,7 +383,7 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
   result.samples = static_cast<int>(outputs.rows());
   result.channels = channel_names;
   result.reference_channels = refs;
-  if (options.method != OmaMethod::ssi_cov) {
+  if (options.method == OmaMethod::fdd || options.method == OmaMethod::efdd) {
     spectral_oma(outputs, sample_time, options, result);
     return result;
   }

@@ -60,12 +60,18 @@ SsiFactor ssi_factor(const std::vector<Eigen::MatrixXd>& correlations, int block
     }
   }
   const Eigen::BDCSVD<Eigen::MatrixXd> svd(hankel, Eigen::ComputeThinU);
+  return observability_factor(svd.matrixU(), svd.singularValues(), static_cast<int>(l), max_order);
+}
+
+SsiFactor observability_factor(const Eigen::MatrixXd& left_vectors,
+                               const Eigen::VectorXd& singular_values, int outputs, int max_order) {
+  const Eigen::Index l = outputs;
+  const Eigen::Index p = left_vectors.rows() / l;
   SsiFactor f;
-  f.outputs = static_cast<int>(l);
-  const Eigen::VectorXd& sv = svd.singularValues();
+  f.outputs = outputs;
+  const Eigen::VectorXd& sv = singular_values;
   f.rank = static_cast<int>((sv.array() > 1e-12 * sv(0)).count());
-  f.observability = svd.matrixU().leftCols(max_order) *
-                    svd.singularValues().head(max_order).cwiseSqrt().asDiagonal();
+  f.observability = left_vectors.leftCols(max_order) * sv.head(max_order).cwiseSqrt().asDiagonal();
   const Eigen::MatrixXd up = f.observability.topRows((p - 1) * l);
   const Eigen::MatrixXd down = f.observability.bottomRows((p - 1) * l);
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(up);

@@ -61,6 +61,25 @@ TEST_F(OmaCommand, FlexibleStructureWritesTheModesAndTheDocument) {
   EXPECT_EQ(result->modes.front().shape_real.size(), 28u);
 }
 
+// ssi-data on the same record: its name in the summary and the document, the table with orders.
+TEST_F(OmaCommand, SsiDataRunsOnTheFlexibleStructure) {
+  CTID_SKIP_UNDER_SANITIZERS(
+      "OmaFlexibleStructure.SsiDataWellExcitedModesAgreeWithTheInputOutputFit runs the same "
+      "analysis");
+  const auto r = ctid({"oma", flexible(), "--output-columns", "y1_acc:y28_acc", "--time-column",
+                       "t_s", "--method", "ssi-data", "--max-order", "40", "--block-rows", "20",
+                       "--uncertainty-blocks", "0", "-o", "data.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("ctid oma: ssi-data on"));
+  EXPECT_THAT(r.out, HasSubstr("orders"));
+  const io::ResultDocument doc = io::read_result(path("data.json"));
+  const auto* result = std::get_if<OmaResult>(&doc);
+  ASSERT_NE(result, nullptr);
+  EXPECT_EQ(result->method, OmaMethod::ssi_data);
+  EXPECT_FALSE(result->modes.empty());
+  EXPECT_FALSE(result->stabilisation.empty());
+}
+
 TEST_F(OmaCommand, NoResonanceExitsThreeWithTheVerdict) {
   const auto r = ctid({"oma", white_noise(), "--output-columns", "a:c", "--max-order", "12"});
   EXPECT_EQ(r.status, 3) << r.err;
@@ -148,7 +167,7 @@ TEST_F(OmaCommand, BadUsageNamesTheFlag) {
   EXPECT_THAT(r.err, HasSubstr("noise.csv: "));
   r = ctid({"oma", noise, "--output-columns", "a:c", "--method", "pp"});
   EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.err, HasSubstr("--method is 'pp'; it must be ssi-cov, fdd or efdd"));
+  EXPECT_THAT(r.err, HasSubstr("--method is 'pp'; it must be ssi-cov, ssi-data, fdd or efdd"));
   r = ctid({"oma", noise, "--output-columns", "a:c", "--method", "efdd", "--efdd-mac", "1.5"});
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("--efdd-mac is 1.5; it must be in (0, 1]"));

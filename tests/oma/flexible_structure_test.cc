@@ -65,6 +65,40 @@ TEST(OmaFlexibleStructure, WellExcitedModesAgreeWithTheInputOutputFit) {
   }
 }
 
+// ssi-data (20 block rows, to keep the LQ of the 8484 x 1120 transposed Hankel matrix to about
+// two seconds): the well-excited modes picked automatically except 214.98 Hz, whose poles are
+// stable in frequency and shape but not in damping at most orders, so its cluster is too small;
+// named with modes_near_hz, it and 154.66 Hz are found within 0.5 % too.
+TEST(OmaFlexibleStructure, SsiDataWellExcitedModesAgreeWithTheInputOutputFit) {
+  CTID_SKIP_UNDER_SANITIZERS("two LQ factorisations of a 8484 x 1120 matrix");
+  const Eigen::MatrixXd y = read_accelerations();
+  OmaOptions o;
+  o.method = OmaMethod::ssi_data;
+  o.max_order = 60;
+  o.block_rows = 20;
+  o.uncertainty_blocks = 0;
+  const OmaResult r = oma(y, 1.0 / 1024.0, o);
+  EXPECT_TRUE(r.verdict.usable) << r.verdict.summary();
+  auto closest_to = [](const OmaResult& result, double f) {
+    double closest = 0.0;
+    for (const auto& m : result.modes) {
+      if (std::abs(m.frequency_hz - f) < std::abs(closest - f)) closest = m.frequency_hz;
+    }
+    return closest;
+  };
+  for (double f : {119.01, 192.48, 229.45, 239.38}) {
+    SCOPED_TRACE(f);
+    EXPECT_LT(std::abs(closest_to(r, f) - f) / f, 0.005);
+  }
+  o.modes_near_hz = {154.66, 214.98};
+  const OmaResult named = oma(y, 1.0 / 1024.0, o);
+  ASSERT_EQ(named.modes.size(), 2u) << named.verdict.summary();
+  for (double f : o.modes_near_hz) {
+    SCOPED_TRACE(f);
+    EXPECT_LT(std::abs(closest_to(named, f) - f) / f, 0.005);
+  }
+}
+
 // All seven input-output modes, each matched by the nearest efdd mode.
 TEST(OmaFlexibleStructure, EfddFindsEveryInputOutputModeWithinHalfAPercent) {
   const Eigen::MatrixXd y = read_accelerations();

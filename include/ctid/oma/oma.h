@@ -3,7 +3,9 @@
 // with reference channels (Peeters and De Roeck, MSSP 1999), every order 2..max_order from one
 // SVD (Döhler and Mevel, CEP 2012), a stabilisation diagram, automatic picking by clustering
 // the stable poles (Magalhães, Cunha and Caetano, MSSP 2009) and segment-based standard errors
-// (Reynders, Pintelon and De Roeck, MSSP 2008, section 3). Poles s = ln(λ)/h; shapes normalised
+// (Reynders, Pintelon and De Roeck, MSSP 2008, section 3); or the data-driven variant (the LQ
+// factor of the data Hankel matrix, ssi_data.h) feeding the same path from the observability
+// matrix on; or FDD/EFDD. Poles s = ln(λ)/h; shapes normalised
 // as docs/decisions/0030-oma-conventions.md says. Method and options: docs/oma.md.
 #pragma once
 
@@ -22,9 +24,12 @@
 
 namespace ctid {
 
-enum class OmaMethod { ssi_cov, fdd, efdd };
-inline constexpr std::array<Enumerator<OmaMethod>, 3> oma_method_enumerators{{
+enum class OmaMethod { ssi_cov, fdd, efdd, ssi_data };
+inline constexpr std::array<Enumerator<OmaMethod>, 4> oma_method_enumerators{{
     {OmaMethod::ssi_cov, "ssi-cov", "Covariance-driven stochastic subspace identification."},
+    {OmaMethod::ssi_data, "ssi-data",
+     "Data-driven stochastic subspace identification: the projection of the future outputs on "
+     "the past references by an LQ factorisation of the data Hankel matrix."},
     {OmaMethod::fdd, "fdd",
      "Frequency-domain decomposition: peaks of the first singular value of the output "
      "spectral matrix (frequency and shape, no damping)."},
@@ -54,9 +59,10 @@ struct OmaOptions {
   /// Largest model order (states); orders 2, 4, ..., max_order are identified.
   int max_order = 40;
   /// Block rows p (= block columns q) of the Hankel matrix of correlations R_1..R_{2p-1};
+  /// ssi-data: p block rows of past references over p of future outputs.
   /// 0 picks max(10, ceil(max_order / references) + 1), raised so that the lags span 4
   /// periods of the lowest peak of the first singular value, within p * max(channels,
-  /// references) <= 1000 (decision 0035).
+  /// references) <= 1000 (ssi-data: p * (channels + references) <= 1000; decision 0035).
   int block_rows = 0;
   /// Reference channels (0-based output indices); empty: every channel.
   std::vector<int> reference_channels;

@@ -32,6 +32,12 @@ struct SsiFactor {
 SsiFactor ssi_factor(const std::vector<Eigen::MatrixXd>& correlations, int block_rows,
                      int max_order);
 
+/// What every SSI variant shares once it has a matrix whose column space is that of the
+/// observability matrix (pl rows): from its left singular vectors and singular values,
+/// O = U_n S_n^{1/2} of order max_order, the numerical rank and the QR of O_up.
+SsiFactor observability_factor(const Eigen::MatrixXd& left_vectors,
+                               const Eigen::VectorXd& singular_values, int outputs, int max_order);
+
 /// One continuous-time mode of one order.
 struct ModalPole {
   std::complex<double> s;

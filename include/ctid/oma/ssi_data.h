@@ -1,0 +1,30 @@
+// The numerical core of data-driven SSI with reference channels (Peeters and De Roeck, MSSP
+// 1999; van Overschee and De Moor 1996): the block Hankel matrix of past references over future
+// outputs, built transposed (one row per Hankel column), its LQ factor as the R of a Householder
+// QR accumulated chunk by chunk (neither Q nor the projection is formed), and the SVD of the L21
+// block (future outputs x past references), whose left singular vectors span the observability
+// matrix. From there on it is the SSI-cov path (observability_factor, ssi_poles).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ctid/oma/ssi_cov.h"
+
+namespace ctid::oma_detail {
+
+/// Samples N that p block rows need: the transposed Hankel matrix has N - 2p + 1 rows and must
+/// have at least its p (r + l) columns.
+Eigen::Index ssi_data_samples_needed(int block_rows, Eigen::Index outputs, Eigen::Index references);
+
+/// The lower triangle L (p (r + l) square, L L^T = H H^T) of the LQ factorisation of the
+/// mean-removed, 1/sqrt(j)-scaled block Hankel matrix H of past references over future outputs.
+Eigen::MatrixXd ssi_data_triangle(const Eigen::MatrixXd& y, const std::vector<int>& references,
+                                  int block_rows);
+
+/// O of order max_order and the QR of O_up from the SVD of L21 (pl x pr).
+SsiFactor ssi_data_factor(const Eigen::MatrixXd& y, const std::vector<int>& references,
+                          int block_rows, int max_order);
+
+}  // namespace ctid::oma_detail

@@ -1,0 +1,194 @@
+// Data-driven SSI: the LQ factor equals the data Hankel matrix's Gram matrix (chunked QR
+// included), a noise-free free decay gives the model's modes to rounding (the projection of the
+// future on the past is exact there), a simulated ambient record of the chain gives every mode
+// within its reported standard errors, records with no resonance give a verdict, and too short a
+// record is refused naming what is wrong.
+#include "ctid/oma/ssi_data.h"
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "ctid/core/error.h"
+#include "ctid/oma/oma.h"
+#include "ctid/oma/ssi_cov.h"
+#include "oma/chain_model.h"
+
+namespace ctid::ssi_data_test {
+namespace {
+
+using oma_test::ChainModel;
+
+Eigen::VectorXcd mode_shape(const OmaMode& m) {
+  Eigen::VectorXcd s(static_cast<Eigen::Index>(m.shape_real.size()));
+  for (Eigen::Index j = 0; j < s.size(); ++j) {
+    s(j) = {m.shape_real[static_cast<std::size_t>(j)], m.shape_imag[static_cast<std::size_t>(j)]};
+  }
+  return s;
+}
+
+const OmaMode* nearest_mode(const OmaResult& r, double f) {
+  const OmaMode* best = nullptr;
+  for (const auto& m : r.modes) {
+    if (best == nullptr || std::abs(m.frequency_hz - f) < std::abs(best->frequency_hz - f)) {
+      best = &m;
+    }
+  }
+  return best;
+}
+
+OmaOptions data_options() {
+  OmaOptions o;
+  o.method = OmaMethod::ssi_data;
+  o.max_order = 24;
+  o.block_rows = 20;
+  return o;
+}
+
+// L L^T = H H^T with H built here as written in the papers (p block rows of past references over
+// p block rows of future outputs, mean removed, 1/sqrt(j)); 9000 samples run the QR in chunks.
+TEST(SsiData, TriangleIsTheLqFactorOfTheDataHankelMatrix) {
+  const ChainModel model;
+  const Eigen::MatrixXd y = model.simulate(9000, 0.1, 4);
+  const std::vector<int> refs = {1, 3};
+  const int p = 6;
+  const Eigen::Index j = y.rows() - 2 * p + 1;
+  const Eigen::MatrixXd centred = y.rowwise() - y.colwise().mean();
+  Eigen::MatrixXd hankel(p * (2 + 4), j);
+  for (int i = 0; i < p; ++i) {
+    for (int b = 0; b < 2; ++b) hankel.row(i * 2 + b) = centred.col(refs[b]).segment(i, j);
+    for (int c = 0; c < 4; ++c) hankel.row(p * 2 + i * 4 + c) = centred.col(c).segment(p + i, j);
+  }
+  hankel /= std::sqrt(static_cast<double>(j));
+  const Eigen::MatrixXd lower = oma_detail::ssi_data_triangle(y, refs, p);
+  ASSERT_EQ(lower.rows(), hankel.rows());
+  ASSERT_EQ(lower.cols(), hankel.rows());
+  EXPECT_TRUE(lower.isLowerTriangular(0.0));
+  const Eigen::MatrixXd gram = hankel * hankel.transpose();
+  EXPECT_LT((lower * lower.transpose() - gram).cwiseAbs().maxCoeff(),
+            1e-12 * gram.cwiseAbs().maxCoeff());
+}
+
+// A free decay y_k = C A^k x_0 (no noise): the future rows lie in the row space of the past
+// ones, so the projection is O times the states exactly. With the mean removed the record is of
+// order 9 (a constant added); every order from 10 is cut to that rank and the four modes come
+// back to rounding.
+TEST(SsiData, NoiseFreeFreeDecayGivesTheModelsModesToRounding) {
+  const ChainModel model;
+  std::mt19937_64 rng(21);
+  std::normal_distribution<double> normal;
+  Eigen::VectorXd x(model.ad.rows());
+  for (Eigen::Index i = 0; i < x.size(); ++i) x(i) = normal(rng);
+  Eigen::MatrixXd y(1500, model.dofs);
+  for (Eigen::Index k = 0; k < y.rows(); ++k) {
+    y.row(k) = (model.c * x).transpose();
+    x = model.ad * x;
+  }
+  const int p = 10;
+  const auto factor = oma_detail::ssi_data_factor(y, {0, 1, 2, 3}, p, 20);
+  EXPECT_EQ(factor.rank, 9);
+  for (int n = 10; n <= 20; n += 2) {
+    SCOPED_TRACE(n);
+    const auto poles = oma_detail::ssi_poles(factor, n, model.h, 0.2);
+    ASSERT_EQ(poles.size(), model.modes.size());
+    for (std::size_t i = 0; i < poles.size(); ++i) {
+      EXPECT_NEAR(poles[i].frequency_hz / model.modes[i].frequency_hz, 1.0, 1e-9);
+      EXPECT_NEAR(poles[i].damping_ratio / model.modes[i].damping_ratio, 1.0, 1e-7);
+      EXPECT_LT((poles[i].shape - model.modes[i].shape).cwiseAbs().maxCoeff(), 1e-8);
+    }
+  }
+}
+
+TEST(SsiData, SimulatedChainRecordGivesEveryModeWithinItsStandardErrors) {
+  const ChainModel model;
+  const Eigen::MatrixXd y = model.simulate(40000, 0.05, 11);
+  const OmaResult r = oma(y, model.h, data_options());
+  EXPECT_EQ(r.method, OmaMethod::ssi_data);
+  EXPECT_TRUE(r.verdict.usable) << r.verdict.summary();
+  ASSERT_EQ(r.modes.size(), model.modes.size());
+  for (const auto& truth : model.modes) {
+    SCOPED_TRACE(truth.frequency_hz);
+    const OmaMode* m = nearest_mode(r, truth.frequency_hz);
+    ASSERT_NE(m, nullptr);
+    EXPECT_TRUE(std::isfinite(m->frequency_hz_std) && m->frequency_hz_std > 0.0);
+    EXPECT_LT(std::abs(m->frequency_hz - truth.frequency_hz), 4.0 * m->frequency_hz_std);
+    EXPECT_LT(std::abs(m->damping_ratio - truth.damping_ratio), 4.0 * m->damping_ratio_std);
+    EXPECT_GE(oma_detail::modal_assurance(mode_shape(*m), truth.shape), 0.99);
+    EXPECT_GT(m->mpc, 0.95);
+    EXPECT_GE(m->supporting_orders, 3);
+  }
+}
+
+TEST(SsiData, ReferenceChannelsGiveTheSameModes) {
+  const ChainModel model;
+  const Eigen::MatrixXd y = model.simulate(40000, 0.05, 12);
+  OmaOptions o = data_options();
+  o.reference_channels = {0, 3};
+  const OmaResult r = oma(y, model.h, o);
+  ASSERT_EQ(r.modes.size(), model.modes.size()) << r.verdict.summary();
+  for (const auto& truth : model.modes) {
+    const OmaMode* m = nearest_mode(r, truth.frequency_hz);
+    EXPECT_LT(std::abs(m->frequency_hz - truth.frequency_hz), 4.0 * m->frequency_hz_std);
+  }
+}
+
+TEST(SsiData, WhiteNoiseHasNoMode) {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd y(20000, 4);
+  for (Eigen::Index k = 0; k < y.rows(); ++k) {
+    for (Eigen::Index j = 0; j < y.cols(); ++j) y(k, j) = normal(rng);
+  }
+  const OmaResult r = oma(y, 0.01, data_options());
+  EXPECT_TRUE(r.modes.empty());
+  EXPECT_FALSE(r.verdict.usable);
+  EXPECT_THAT(r.verdict.summary(), ::testing::HasSubstr("no mode found"));
+}
+
+TEST(SsiData, FirstOrderLagHasNoMode) {
+  std::mt19937_64 rng(6);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd y(20000, 3);
+  double x = 0.0;
+  for (Eigen::Index k = 0; k < y.rows(); ++k) {
+    x = 0.95 * x + normal(rng);
+    for (Eigen::Index j = 0; j < y.cols(); ++j) y(k, j) = (j + 1.0) * x + 0.1 * normal(rng);
+  }
+  OmaOptions o;
+  o.method = OmaMethod::ssi_data;
+  o.max_order = 12;
+  const OmaResult r = oma(y, 0.01, o);
+  EXPECT_TRUE(r.modes.empty()) << r.modes.size() << " modes, first at "
+                               << (r.modes.empty() ? 0.0 : r.modes[0].frequency_hz);
+  EXPECT_FALSE(r.verdict.usable);
+}
+
+// 12 channels and 20 block rows: 400 samples satisfy the 20 per block row, but the transposed
+// Hankel matrix needs N - 2p + 1 >= p (r + l) = 480 rows, so 518 samples are one too few.
+TEST(SsiData, TooShortARecordForTheHankelMatrixIsRefused) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd y(518, 12);
+  for (Eigen::Index k = 0; k < y.rows(); ++k) {
+    for (Eigen::Index j = 0; j < y.cols(); ++j) y(k, j) = normal(rng);
+  }
+  try {
+    oma(y, 0.01, data_options());
+    ADD_FAILURE() << "no exception";
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("the record has 518 samples; ssi-data with 20 block "
+                                               "rows over 12 references and 12 channels needs "
+                                               "at least 519"));
+  }
+  Eigen::MatrixXd longer(519, 12);
+  longer.topRows(518) = y;
+  longer.row(518) = y.row(0);
+  EXPECT_NO_THROW(oma(longer, 0.01, data_options()));
+}
+
+}  // namespace
+}  // namespace ctid::ssi_data_test
