@@ -37,9 +37,13 @@ void IrregularRecord::validate() const {
   for (Eigen::Index k = 0; k < n; ++k) {
     require(std::isfinite(time(k)), "irregular record: time stamp ", k, " is ", time(k),
             "; every stamp must be finite");
-    require(k == 0 || time(k) >= time(k - 1), "irregular record: time stamp ", k, " (",
-            format_number(time(k)), " s) goes back before stamp ", k - 1, " (",
-            format_number(time(k - 1)), " s); stamps must not decrease (equal stamps are allowed)");
+    // (require evaluates its message parts: time(k - 1) only from k = 1)
+    if (k > 0) {
+      require(time(k) >= time(k - 1), "irregular record: time stamp ", k, " (",
+              format_number(time(k)), " s) goes back before stamp ", k - 1, " (",
+              format_number(time(k - 1)),
+              " s); stamps must not decrease (equal stamps are allowed)");
+    }
     require(std::isfinite(input(k)), "irregular record: input sample ", k, " is ", input(k));
     require(std::isfinite(output(k)), "irregular record: output sample ", k, " is ", output(k));
   }
