@@ -22,15 +22,18 @@
 
 namespace ctid::python {
 
-/// Binds E as a Python enum named `name`, its values and docs from enumerators(E); a name
-/// with a hyphen (the command line's "ssi-cov") is a Python identifier with an underscore.
+/// Binds E as a Python enum named `name`, its values and docs from enumerators(E). A value's
+/// name is the command line's ("ssi-cov", what JSON holds and .name gives); one with a hyphen
+/// is also an attribute with an underscore (ctid.OmaMethod.ssi_cov), as Python needs.
 template <NamedEnum E>
 py::enum_<E> bind_enum(py::module_& m, const char* name, const char* doc) {
   py::enum_<E> e(m, name, doc);
+  for (const auto& each : enumerators(E{})) e.value(each.name.data(), each.value, each.doc.data());
   for (const auto& each : enumerators(E{})) {
     std::string identifier(each.name);
+    if (identifier.find('-') == std::string::npos) continue;
     std::replace(identifier.begin(), identifier.end(), '-', '_');
-    e.value(identifier.c_str(), each.value, each.doc.data());
+    e.attr(identifier.c_str()) = py::cast(each.value);
   }
   return e;
 }

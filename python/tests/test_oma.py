@@ -212,3 +212,12 @@ def test_numpy_ssi_data_gives_the_same_poles():
     np.testing.assert_allclose(ours, reference, rtol=1e-8)
     # and they are the chain's modes, near SSI-cov's on the same record
     np.testing.assert_allclose(ours, _numpy_poles(y, p, order), rtol=0.02)
+
+
+def test_a_hyphenated_method_is_an_attribute_and_keeps_its_name_in_json():
+    """ctid.OmaMethod.ssi_data is the command line's "ssi-data": the name JSON holds."""
+    assert ctid.OmaMethod.ssi_data.name == "ssi-data"
+    options = ctid.OmaOptions(method=ctid.OmaMethod.ssi_data)
+    document = ctid.options_to_json(options)
+    assert document["method"] == "ssi-data"
+    assert ctid.options_from_json("OmaOptions", document).method == ctid.OmaMethod.ssi_data
