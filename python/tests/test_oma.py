@@ -45,13 +45,10 @@ def _record(seed, samples=30000, n=3):
     return y, modes
 
 
-def _numpy_poles(y, p, order, max_damping=0.2):
-    """SSI-cov written independently: lag sums, Hankel, SVD, A by least squares."""
-    y = y - y.mean(axis=0)
-    n, l = y.shape
-    r = [y[i:].T @ y[:n - i] / n for i in range(1, 2 * p)]
-    hankel = np.block([[r[i + j] for j in range(p)] for i in range(p)])
-    u, s, _ = np.linalg.svd(hankel)
+def _frequencies_from_factor(u, s, order, l, max_damping):
+    """What both independent SSIs share after their SVD: O = U_n S_n^(1/2), A by least squares
+    on O's shifted rows, the continuous poles' natural frequencies [Hz], sorted, of the ones
+    with a damping ratio in (0, max_damping)."""
     o = u[:, :order] * np.sqrt(s[:order])
     a = np.linalg.lstsq(o[:-l], o[l:], rcond=None)[0]
     lam = np.linalg.eigvals(a)
@@ -60,6 +57,16 @@ def _numpy_poles(y, p, order, max_damping=0.2):
     zeta = -s_c.real / abs(s_c)
     keep = (zeta > 0) & (zeta < max_damping)
     return np.sort(abs(s_c[keep]) / (2 * np.pi))
+
+
+def _numpy_poles(y, p, order, max_damping=0.2):
+    """SSI-cov written independently: lag sums, Hankel, SVD, A by least squares."""
+    y = y - y.mean(axis=0)
+    n, l = y.shape
+    r = [y[i:].T @ y[:n - i] / n for i in range(1, 2 * p)]
+    hankel = np.block([[r[i + j] for j in range(p)] for i in range(p)])
+    u, s, _ = np.linalg.svd(hankel)
+    return _frequencies_from_factor(u, s, order, l, max_damping)
 
 
 def test_oma_finds_the_chain_modes_within_their_standard_errors():
@@ -189,14 +196,7 @@ def _numpy_ssi_data_poles(y, p, order, max_damping=0.2):
     lower = np.linalg.qr(hankel.T, mode="r").T
     l21 = lower[p * l :, : p * l]
     u, s, _ = np.linalg.svd(l21)
-    o = u[:, :order] * np.sqrt(s[:order])
-    a = np.linalg.lstsq(o[:-l], o[l:], rcond=None)[0]
-    lam = np.linalg.eigvals(a)
-    lam = lam[(lam.imag > 0) & (abs(lam) < 1)]
-    s_c = np.log(lam) / H
-    zeta = -s_c.real / abs(s_c)
-    keep = (zeta > 0) & (zeta < max_damping)
-    return np.sort(abs(s_c[keep]) / (2 * np.pi))
+    return _frequencies_from_factor(u, s, order, l, max_damping)
 
 
 def test_numpy_ssi_data_gives_the_same_poles():

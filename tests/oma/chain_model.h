@@ -14,6 +14,7 @@
 #include <Eigen/Eigenvalues>
 #include <unsupported/Eigen/KroneckerProduct>
 
+#include "ctid/oma/oma.h"
 #include "ctid/oma/ssi_cov.h"
 
 namespace ctid::oma_test {
@@ -109,5 +110,25 @@ struct ChainModel {
     return y;
   }
 };
+
+/// A mode's shape as the complex vector the library reports (shape_real + i shape_imag).
+inline Eigen::VectorXcd shape_of(const OmaMode& m) {
+  Eigen::VectorXcd s(static_cast<Eigen::Index>(m.shape_real.size()));
+  for (Eigen::Index j = 0; j < s.size(); ++j) {
+    s(j) = {m.shape_real[static_cast<std::size_t>(j)], m.shape_imag[static_cast<std::size_t>(j)]};
+  }
+  return s;
+}
+
+/// The mode of `r` nearest `f` [Hz]; nullptr when there is none.
+inline const OmaMode* nearest(const OmaResult& r, double f) {
+  const OmaMode* best = nullptr;
+  for (const auto& m : r.modes) {
+    if (best == nullptr || std::abs(m.frequency_hz - f) < std::abs(best->frequency_hz - f)) {
+      best = &m;
+    }
+  }
+  return best;
+}
 
 }  // namespace ctid::oma_test

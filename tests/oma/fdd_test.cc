@@ -23,14 +23,6 @@ namespace {
 
 using oma_test::ChainModel;
 
-Eigen::VectorXcd fdd_shape(const OmaMode& m) {
-  Eigen::VectorXcd s(static_cast<Eigen::Index>(m.shape_real.size()));
-  for (Eigen::Index j = 0; j < s.size(); ++j) {
-    s(j) = {m.shape_real[static_cast<std::size_t>(j)], m.shape_imag[static_cast<std::size_t>(j)]};
-  }
-  return s;
-}
-
 OmaOptions options(OmaMethod method) {
   OmaOptions o;
   o.method = method;
@@ -99,7 +91,8 @@ TEST(Fdd, SimulatedChainRecordGivesEveryModeWithinALineAndItsShape) {
     for (std::size_t i = 0; i < r.modes.size(); ++i) {
       SCOPED_TRACE(model.modes[i].frequency_hz);
       EXPECT_LT(std::abs(r.modes[i].frequency_hz - model.modes[i].frequency_hz), 2.0 * line_hz);
-      EXPECT_GE(oma_detail::modal_assurance(fdd_shape(r.modes[i]), model.modes[i].shape), 0.99);
+      EXPECT_GE(oma_detail::modal_assurance(oma_test::shape_of(r.modes[i]), model.modes[i].shape),
+                0.99);
       EXPECT_GT(r.modes[i].mpc, 0.95);
       EXPECT_TRUE(std::isnan(r.modes[i].frequency_hz_std));
       EXPECT_EQ(std::isnan(r.modes[i].damping_ratio), method == OmaMethod::fdd);

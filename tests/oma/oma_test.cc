@@ -23,24 +23,6 @@ namespace {
 
 using oma_test::ChainModel;
 
-Eigen::VectorXcd shape_of(const OmaMode& m) {
-  Eigen::VectorXcd s(static_cast<Eigen::Index>(m.shape_real.size()));
-  for (Eigen::Index j = 0; j < s.size(); ++j) {
-    s(j) = {m.shape_real[static_cast<std::size_t>(j)], m.shape_imag[static_cast<std::size_t>(j)]};
-  }
-  return s;
-}
-
-const OmaMode* nearest(const OmaResult& r, double f) {
-  const OmaMode* best = nullptr;
-  for (const auto& m : r.modes) {
-    if (best == nullptr || std::abs(m.frequency_hz - f) < std::abs(best->frequency_hz - f)) {
-      best = &m;
-    }
-  }
-  return best;
-}
-
 OmaOptions chain_options() {
   OmaOptions o;
   o.max_order = 24;

@@ -23,24 +23,6 @@ namespace {
 
 using oma_test::ChainModel;
 
-Eigen::VectorXcd mode_shape(const OmaMode& m) {
-  Eigen::VectorXcd s(static_cast<Eigen::Index>(m.shape_real.size()));
-  for (Eigen::Index j = 0; j < s.size(); ++j) {
-    s(j) = {m.shape_real[static_cast<std::size_t>(j)], m.shape_imag[static_cast<std::size_t>(j)]};
-  }
-  return s;
-}
-
-const OmaMode* nearest_mode(const OmaResult& r, double f) {
-  const OmaMode* best = nullptr;
-  for (const auto& m : r.modes) {
-    if (best == nullptr || std::abs(m.frequency_hz - f) < std::abs(best->frequency_hz - f)) {
-      best = &m;
-    }
-  }
-  return best;
-}
-
 OmaOptions data_options() {
   OmaOptions o;
   o.method = OmaMethod::ssi_data;
@@ -112,12 +94,12 @@ TEST(SsiData, SimulatedChainRecordGivesEveryModeWithinItsStandardErrors) {
   ASSERT_EQ(r.modes.size(), model.modes.size());
   for (const auto& truth : model.modes) {
     SCOPED_TRACE(truth.frequency_hz);
-    const OmaMode* m = nearest_mode(r, truth.frequency_hz);
+    const OmaMode* m = oma_test::nearest(r, truth.frequency_hz);
     ASSERT_NE(m, nullptr);
     EXPECT_TRUE(std::isfinite(m->frequency_hz_std) && m->frequency_hz_std > 0.0);
     EXPECT_LT(std::abs(m->frequency_hz - truth.frequency_hz), 4.0 * m->frequency_hz_std);
     EXPECT_LT(std::abs(m->damping_ratio - truth.damping_ratio), 4.0 * m->damping_ratio_std);
-    EXPECT_GE(oma_detail::modal_assurance(mode_shape(*m), truth.shape), 0.99);
+    EXPECT_GE(oma_detail::modal_assurance(oma_test::shape_of(*m), truth.shape), 0.99);
     EXPECT_GT(m->mpc, 0.95);
     EXPECT_GE(m->supporting_orders, 3);
   }
@@ -131,7 +113,7 @@ TEST(SsiData, ReferenceChannelsGiveTheSameModes) {
   const OmaResult r = oma(y, model.h, o);
   ASSERT_EQ(r.modes.size(), model.modes.size()) << r.verdict.summary();
   for (const auto& truth : model.modes) {
-    const OmaMode* m = nearest_mode(r, truth.frequency_hz);
+    const OmaMode* m = oma_test::nearest(r, truth.frequency_hz);
     EXPECT_LT(std::abs(m->frequency_hz - truth.frequency_hz), 4.0 * m->frequency_hz_std);
   }
 }
