@@ -53,9 +53,8 @@ struct OmaFlags {
 
 // The record: the output columns (names or ranges A:B) and the sample time from the uniform
 // time column, or -T (which overrides it); `t0` the first time stamp (0 without a column).
-Eigen::MatrixXd read_outputs(const OmaFlags& f, const CLI::App& app,
+Eigen::MatrixXd read_outputs(const OmaFlags& f, const CLI::App& app, const io::CsvTable& table,
                              std::vector<std::string>& names, double& h, double& t0) {
-  const io::CsvTable table = io::read_table(f.file);
   t0 = table.has_column(f.time_column) && table.rows() > 0 ? table.column(f.time_column)(0) : 0.0;
   names = io::expand_columns(table, f.output_columns, "output");
   Eigen::MatrixXd y(table.rows(), static_cast<Eigen::Index>(names.size()));
@@ -168,7 +167,8 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
   std::vector<std::string> names;
   double h = 0.0;
   double t0 = 0.0;
-  Eigen::MatrixXd y = read_outputs(f, app, names, h, t0);
+  const io::CsvTable table = io::read_table(f.file);
+  Eigen::MatrixXd y = read_outputs(f, app, table, names, h, t0);
   std::optional<PreprocessingRecord> preprocessing;
   if (f.prep.preprocessing_asked(app)) {
     PreprocessingOptions p = f.prep.preprocessing_options();
@@ -183,7 +183,6 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
     }
   }
   if (!f.reference_columns.empty()) {
-    const io::CsvTable table = io::read_table(f.file);
     for (const std::string& ref : io::expand_columns(table, f.reference_columns, "reference")) {
       const auto at = std::find(names.begin(), names.end(), ref);
       if (at == names.end()) {
