@@ -3,7 +3,10 @@
 # change no estimate: run it on the tree before and after, then compare the two folders with
 # scripts/compare_snapshots.py (numbers must be identical; only renamed fields may differ).
 #   scripts/behaviour_snapshot.sh OUT_DIR [BUILD_DIR]
-# Takes about a minute on two cores. Uses the shipped models and ../shared/data.
+# Takes about a minute on two cores. Uses the shipped models, data/ and ../shared/data.
+# Covers every command that estimates: fit (SISO, additive, closed loop, several channels),
+# validate, frf, fit-frf, structure, track (one and several channels), batch, feedback, oma
+# (each method) and study.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 out=${1:?usage: behaviour_snapshot.sh OUT_DIR [BUILD_DIR]}
@@ -49,3 +52,28 @@ run feedback "$ctid" feedback loop.csv --forward-order 3 --feedback-order 3 --de
   --hold foh --force -o feedback.json
 run study_open "$ctid" study open-loop --sizes 2 --runs 3 --threads 2 --no-plot --force -o study_open
 run study_closed "$ctid" study closed-loop --sizes 2 --runs 3 --threads 2 --no-plot --force -o study_closed
+cp "$root/data/daisy_flexible_structure/flexible_structure.csv" flexible_structure.csv
+flex=flexible_structure.csv
+run fit_mimo "$ctid" fit "$flex" --time-column t_s --input-columns u1_force,u2_force \
+  --output-columns y1_acc:y6_acc --modes 4 --force -o fit_mimo.json
+run frf_matrix "$ctid" frf "$flex" --time-column t_s --input-columns u1_force,u2_force \
+  --output-columns y1_acc:y4_acc --force -o frf_matrix.csv
+run fit_frf "$ctid" fit-frf frf_matrix.csv --modes 4 --band 10:500 --force -o fit_frf.json
+run structure "$ctid" structure open.csv --modes 2:5 --force -o structure.json
+run track "$ctid" track "$flex" --time-column t_s --input-column u1_force --output-column y1_acc \
+  --modes 2 --window 2 --force -o track.json
+run track_mimo "$ctid" track "$flex" --time-column t_s --input-columns u1_force,u2_force \
+  --output-columns y1_acc:y4_acc --modes 3 --window 2 --force -o track_mimo.json
+cat >manifest.json <<'JSON'
+{"spec": {"zeros": 2},
+ "records": [{"name": "open", "data": "open.csv", "poles": 4},
+             {"name": "closed_as_open", "data": "closed.csv", "poles": 4},
+             {"name": "modes", "data": "open.csv", "modes": 4, "zeros": null},
+             {"name": "two_structures", "data": "open.csv", "poles": 4, "modes": 4}]}
+JSON
+run batch "$ctid" batch manifest.json --out batch --jobs 2 --force
+rm -f batch/timings.json # wall-clock seconds, not results (summary columns "seconds" are skipped)
+for method in ssi-cov ssi-data fdd efdd; do
+  run "oma_$method" "$ctid" oma "$flex" --time-column t_s --output-columns y1_acc:y8_acc \
+    --method "$method" --max-order 60 --force -o "oma_$method.json"
+done
