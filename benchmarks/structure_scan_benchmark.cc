@@ -10,8 +10,8 @@
 
 #include <benchmark/benchmark.h>
 
-#include "ctid/refined_iv/identification.h"
-#include "ctid/refined_iv/structure_scan.h"
+#include "ctid/identification/identification.h"
+#include "ctid/identification/structure_scan.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"

@@ -1,6 +1,6 @@
 // `ctid fit`: estimates a continuous-time model from sampled data (CSV) with the refined IV
 // estimators of González et al. through the library's front door, identify()
-// (refined_iv/identification.h), which chooses SRIVC / CLSRIVC or the additive open/closed-loop
+// (identification/identification.h), which chooses SRIVC / CLSRIVC or the additive open/closed-loop
 // iteration (29) and runs the delay scan and mode relocation. This file turns the flags into a
 // ModelStructure and IdentificationOptions, writes the result as JSON (io/result_json.h plus
 // what was run on what), prints a summary, and draws figures on request (plot_support.h).
@@ -26,7 +26,7 @@
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
-#include "ctid/refined_iv/identification.h"
+#include "ctid/identification/identification.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "data_flags.h"
 #include "plot_support.h"

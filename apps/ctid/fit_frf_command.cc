@@ -1,5 +1,5 @@
 // `ctid fit-frf`: a modal model with poles shared by every channel fitted to a measured FRF
-// matrix (refined_iv/frf_matrix_fit.h), for users with an analyser's FRF and no time records.
+// matrix (frf_fit/frf_matrix_fit.h), for users with an analyser's FRF and no time records.
 // Reads the CSV table `ctid frf -o X.csv` writes or a universal file (dataset 58), prints the
 // mode table, every channel's fit and the verdict like `ctid fit` with several inputs and
 // outputs, and writes an frf_matrix_fit_result document. No numerics here.
@@ -23,7 +23,7 @@
 #include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
-#include "ctid/refined_iv/frf_matrix_fit.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "plot_support.h"
 #include "progress.h"
 

@@ -1,5 +1,5 @@
 // `ctid structure`: fits a range of structures (K modes, or unfactored n poles) with the
-// library's scan_structures (refined_iv/structure_scan.h), prints a table of how each fit ended
+// library's scan_structures (identification/structure_scan.h), prints a table of how each fit ended
 // and scores (estimation and held-out validation fit, YIC, RT2, AIC, BIC, usable), recommends
 // one by the stated rule, and writes the scan with its stabilisation diagram as JSON.
 #include <cmath>
@@ -18,7 +18,7 @@
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
-#include "ctid/refined_iv/structure_scan.h"
+#include "ctid/identification/structure_scan.h"
 #include "data_flags.h"
 #include "plot_support.h"
 #include "progress.h"

@@ -9,7 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "ctid/refined_iv/identification.h"
+#include "ctid/identification/identification.h"
 
 namespace ctid::cli {
 

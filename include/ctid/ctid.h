@@ -51,18 +51,15 @@
 #include "ctid/refined_iv/clsrivc.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/estimation_result.h"
-#include "ctid/refined_iv/frf_matrix_fit.h"
-#include "ctid/refined_iv/identification.h"
 #include "ctid/refined_iv/initialization.h"
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/irregular_srivc.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
-#include "ctid/refined_iv/mode_tracking.h"
 #include "ctid/refined_iv/recursive_srivc.h"
+#include "ctid/refined_iv/refined_iv.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 #include "ctid/refined_iv/srivc.h"
-#include "ctid/refined_iv/structure_scan.h"
 
 #include "ctid/delayed_feedback/cramer_rao.h"
 #include "ctid/delayed_feedback/feedback_delay_scan.h"
@@ -75,6 +72,12 @@
 #include "ctid/delayed_feedback/structured_iv.h"
 #include "ctid/delayed_feedback/structured_step1.h"
 #include "ctid/delayed_feedback/validation.h"
+
+#include "ctid/frf_fit/frf_matrix_fit.h"
+
+#include "ctid/identification/identification.h"
+#include "ctid/identification/mode_tracking.h"
+#include "ctid/identification/structure_scan.h"
 
 #include "ctid/study/monte_carlo.h"
 #include "ctid/study/paper_study.h"

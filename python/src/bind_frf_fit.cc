@@ -1,4 +1,4 @@
-// Python bindings of the modal model fitted to a measured FRF matrix (refined_iv/frf_matrix_fit.h)
+// Python bindings of the modal model fitted to a measured FRF matrix (frf_fit/frf_matrix_fit.h)
 // and of the FRF-matrix files it reads (io/mimo_frf_file.h, io/uff58.h): ctid.mimo_frf builds a
 // MimoFrf from NumPy arrays, ctid.frf_matrix_fit fits it, ctid.read_mimo_frf reads a CSV table
 // or a universal file (dataset 58). No numerics here.
@@ -14,7 +14,7 @@
 #include "ctid/io/csv.h"
 #include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/uff58.h"
-#include "ctid/refined_iv/frf_matrix_fit.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "fields.h"
 
 namespace ctid::python {

@@ -11,7 +11,7 @@
 #include "ctid/refined_iv/irregular_srivc.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
-#include "ctid/refined_iv/mode_tracking.h"
+#include "ctid/identification/mode_tracking.h"
 #include "ctid/refined_iv/recursive_srivc.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 #include "ctid/refined_iv/srivc.h"
@@ -219,7 +219,7 @@ void bind_covariance(py::module_& m) {
         py::arg("unfactored") = false, "Modal parameters with delta-method standard errors.");
 }
 
-// --- Mode tracking (issue 17; refined_iv/mode_tracking.h) ------------------------------------
+// --- Mode tracking (issue 17; identification/mode_tracking.h) ------------------------------------
 void bind_mode_tracking(py::module_& m) {
   bind_options<TrackingOptions>(
       m, "Options of track_modes: window and step [s], identify() options, matching gates.");

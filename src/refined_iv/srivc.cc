@@ -3,9 +3,15 @@
 
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/clsrivc.h"
+#include "ctid/refined_iv/refined_iv.h"
 #include "refined_iv/internal/refined_iv_engine.h"
 
 namespace ctid {
+
+EstimationResult estimate_refined_iv(const RefinedIvProblem& problem,
+                                     const RefinedIvOptions& options) {
+  return internal::run_refined_iv(problem, options);
+}
 
 EstimationResult srivc(const SampledData& data, const SubmodelOrder& order,
                        const RefinedIvOptions& options) {

@@ -16,7 +16,7 @@
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/uff58.h"
-#include "ctid/refined_iv/frf_matrix_fit.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "support/mimo_systems.h"
 
 namespace ctid::cli::fit_frf_test {

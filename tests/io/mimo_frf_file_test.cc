@@ -16,7 +16,7 @@
 #include "ctid/io/documents.h"
 #include "ctid/io/report_json.h"
 #include "ctid/io/uff58.h"
-#include "ctid/refined_iv/frf_matrix_fit.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "io/test_directory.h"
 
 namespace ctid::mimo_frf_file_test {

@@ -21,11 +21,11 @@
 #include "ctid/io/file.h"
 #include "ctid/oma/oma.h"
 #include "ctid/refined_iv/estimation_result.h"
-#include "ctid/refined_iv/frf_matrix_fit.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
-#include "ctid/refined_iv/structure_scan.h"
+#include "ctid/identification/structure_scan.h"
 #include "ctid/study/study_output.h"
 
 namespace ctid::io {

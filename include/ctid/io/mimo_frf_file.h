@@ -1,5 +1,5 @@
 // Measured FRF matrices from files, for fitting a modal model without time records
-// (refined_iv/frf_matrix_fit.h). CSV: the table `ctid frf --input-columns ... -o X.csv` writes
+// (frf_fit/frf_matrix_fit.h). CSV: the table `ctid frf --input-columns ... -o X.csv` writes
 // (docs/formats.md, "FRF matrix CSV"): a "frequency" column in rad/s (or "frequency_hz" in
 // Hz), and for every output/input pair "<output>/<input>_real" and "<output>/<input>_imag",
 // optionally "<output>/<input>_variance" and "coherence_<output>"; outputs and inputs in the

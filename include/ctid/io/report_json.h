@@ -14,9 +14,9 @@
 #include "ctid/frequency/frf.h"
 #include "ctid/frequency/mimo_frf.h"
 #include "ctid/oma/oma.h"
-#include "ctid/refined_iv/frf_matrix_fit.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "ctid/refined_iv/mimo_srivc.h"
-#include "ctid/refined_iv/structure_scan.h"
+#include "ctid/identification/structure_scan.h"
 #include "ctid/study/paper_study.h"
 #include "ctid/study/study_output.h"
 

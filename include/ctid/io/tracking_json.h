@@ -1,5 +1,5 @@
 // Mode tracking results as JSON (docs/formats.md, "mode_tracking_result"): every field of a
-// TrackingResult (refined_iv/mode_tracking.h), with frequencies in rad/s and Hz beside, and the
+// TrackingResult (identification/mode_tracking.h), with frequencies in rad/s and Hz beside, and the
 // per-window, per-track table `ctid track --table` writes.
 #pragma once
 
@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ctid/io/file.h"
-#include "ctid/refined_iv/mode_tracking.h"
+#include "ctid/identification/mode_tracking.h"
 
 namespace ctid::io {
 

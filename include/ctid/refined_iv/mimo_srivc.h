@@ -142,13 +142,11 @@ std::vector<MimoMode> mimo_modes(const MimoAdditiveModel& model,
                                  const std::vector<SubmodelOrder>& orders,
                                  const Eigen::MatrixXd& covariance = {});
 
-struct MimoEstimationResult {
+/// Derives termination, message and iterations from Outcome.
+struct MimoEstimationResult : Outcome {
   /// The estimate: the fixed point when the iteration converged, else the iterate with the
   /// lowest output error (none if nothing was computed).
   std::optional<MimoAdditiveModel> model;
-  Termination termination = Termination::not_run;
-  std::string message;  ///< one sentence: how the iteration ended
-  int iterations = 0;
   /// Steps halved toward the last accepted iterate because the equations at the new one could
   /// not be formed or solved (numerator regressors collinear, singular denominators' system).
   int step_halvings = 0;
@@ -167,28 +165,26 @@ struct MimoEstimationResult {
   /// the value and first n_i + l_i - 1 derivatives at the first sample of its estimated free
   /// response; empty otherwise.
   Eigen::MatrixXd initial_conditions;
-  bool converged() const { return termination == Termination::converged; }
 
   static constexpr std::string_view type_name = "MimoEstimationResult";
   static constexpr auto fields() {
     using S = MimoEstimationResult;
-    return std::tuple{
-        field("model", &S::model,
-              "The estimate: the fixed point, or the iterate with the lowest output error."),
-        field("termination", &S::termination, "How the iteration ended."),
-        field("message", &S::message, "One sentence: how the iteration ended."),
-        field("iterations", &S::iterations, "Iterations run."),
-        field("step_halvings", &S::step_halvings, "Steps halved toward the last accepted one."),
-        field("mean_squared_errors", &S::mean_squared_errors,
-              "Per output: mean squared output error."),
-        field("fit_percent", &S::fit_percent, "Per output: fit_percent on the data."),
-        field("verdict", &S::verdict, "Whether the model is usable, and why not."),
-        field("covariance", &S::covariance,
-              "Covariance of [a of every submodel; per output its numerators and D]."),
-        field("modes", &S::modes, "MimoMode of every second-order submodel."),
-        field("initial_conditions", &S::initial_conditions,
-              "Per output, per submodel: estimated free response and derivatives at t_0."),
-    };
+    return join_fields(
+        Outcome::fields(),
+        std::tuple{
+            field("model", &S::model,
+                  "The estimate: the fixed point, or the iterate with the lowest output error."),
+            field("step_halvings", &S::step_halvings, "Steps halved toward the last accepted one."),
+            field("mean_squared_errors", &S::mean_squared_errors,
+                  "Per output: mean squared output error."),
+            field("fit_percent", &S::fit_percent, "Per output: fit_percent on the data."),
+            field("verdict", &S::verdict, "Whether the model is usable, and why not."),
+            field("covariance", &S::covariance,
+                  "Covariance of [a of every submodel; per output its numerators and D]."),
+            field("modes", &S::modes, "MimoMode of every second-order submodel."),
+            field("initial_conditions", &S::initial_conditions,
+                  "Per output, per submodel: estimated free response and derivatives at t_0."),
+        });
   }
 };
 

@@ -127,7 +127,7 @@ struct RelocationTrial {
   double mean_squared_error = 0.0;            ///< after the iteration
   double projected_mean_squared_error = 0.0;  ///< after the iteration, numerators re-fitted
   double score = 0.0;  ///< the criterion's value for this trial (see RelocationCriterion)
-  Termination termination = Termination::iteration_limit;
+  Termination termination = Termination::not_run;
   bool accepted = false;
 
   static constexpr std::string_view type_name = "RelocationTrial";

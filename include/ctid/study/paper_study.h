@@ -158,7 +158,7 @@ struct StudyRecord {
   int samples = 0;
   std::uint64_t seed = 0;
   StudyEstimator estimator = StudyEstimator::srivc;
-  Termination termination = Termination::iteration_limit;
+  Termination termination = Termination::not_run;
   int iterations = 0;
   /// The compared parameters could be formed (the estimate splits into the true structure,
   /// e.g. four complex-pole modes); otherwise `estimate` is NaN.

@@ -11,24 +11,13 @@
 #include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/refined_iv/estimation_result.h"
+#include "ctid/refined_iv/refined_iv.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 
 namespace ctid::internal {
 
-struct RefinedIvProblem {
-  /// One record, or several of one system, each with its own initial state (one parameter
-  /// vector; the same sample time, input hold, signals and input delay).
-  std::vector<const SampledData*> records;
-  std::vector<SubmodelOrder> orders;
-  /// nullptr: open loop (instrument (10)); otherwise closed loop (instrument (20)).
-  const DiscreteTransferFunction* controller = nullptr;
-  /// One unfactored model whose additive view comes from partial fractions.
-  bool unfactored = false;
-  const char* name = "estimator";
-  /// The covariance from the whole N x p instrument held in memory, as before it was streamed
-  /// (issue 14): the reference the streamed sums are tested against, not for estimation.
-  bool stored_instrument_covariance = false;
-};
+// The problem is public (ctid/refined_iv/refined_iv.h); the engine keeps its old name for it.
+using RefinedIvProblem = ::ctid::RefinedIvProblem;
 
 /// The unfactored start screened from the data (initial_transfer_function), kept for another
 /// run on the same records with the same start options and total order (an additive and an

@@ -2,7 +2,7 @@
 // window's modes come out exact and stay on their tracks; the matching keeps a mode's identity
 // where sorting by frequency would swap two modes and when a window loses a mode; bad windows
 // and options are refused with messages naming them.
-#include "ctid/refined_iv/mode_tracking.h"
+#include "ctid/identification/mode_tracking.h"
 
 #include <cmath>
 #include <string>

@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/estimation/validation.h"
-#include "ctid/refined_iv/identification.h"
+#include "ctid/identification/identification.h"
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/excitation.h"
 

@@ -15,7 +15,7 @@
 
 #include "ctid/core/error.h"
 #include "ctid/core/state_space.h"
-#include "ctid/refined_iv/mode_tracking.h"
+#include "ctid/identification/mode_tracking.h"
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/excitation.h"
 

@@ -11,7 +11,7 @@
 
 #include "ctid/core/error.h"
 #include "ctid/core/preprocessing.h"
-#include "ctid/refined_iv/identification.h"
+#include "ctid/identification/identification.h"
 #include "ctid/simulation/discretization.h"
 
 namespace ctid::resample_test {

@@ -16,7 +16,7 @@
 
 #include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
-#include "ctid/refined_iv/identification.h"
+#include "ctid/identification/identification.h"
 
 namespace ctid {
 

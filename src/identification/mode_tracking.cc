@@ -1,5 +1,5 @@
 // Mode tracking over consecutive windows (mode_tracking.h, docs/decisions/0024-mode-tracking.md).
-#include "ctid/refined_iv/mode_tracking.h"
+#include "ctid/identification/mode_tracking.h"
 
 #include <algorithm>
 #include <cmath>

@@ -87,12 +87,10 @@ struct FrfMatrixFitOptions {
   void validate() const;
 };
 
-struct FrfMatrixFitResult {
+/// Derives termination, message and iterations (Levenberg-Marquardt's) from Outcome.
+struct FrfMatrixFitResult : Outcome {
   /// The estimate: the last accepted iterate (none if nothing was computed).
   std::optional<MimoAdditiveModel> model;
-  Termination termination = Termination::not_run;
-  std::string message;       ///< one sentence: how the fit ended
-  int iterations = 0;        ///< Levenberg-Marquardt iterations
   int start_iterations = 0;  ///< pole relocations of the vector-fitting start
   int lines = 0;             ///< lines fitted (inside the band)
   /// outputs x inputs: 100 (1 - ||H_jk - G_jk|| / ||H_jk||) over the lines fitted.
@@ -108,27 +106,26 @@ struct FrfMatrixFitResult {
   Eigen::MatrixXd covariance;
   /// Every second-order submodel with complex poles as a mode (mimo_modes), in submodel order.
   std::vector<MimoMode> modes;
-  bool converged() const { return termination == Termination::converged; }
 
   static constexpr std::string_view type_name = "FrfMatrixFitResult";
   static constexpr auto fields() {
     using S = FrfMatrixFitResult;
-    return std::tuple{
-        field("model", &S::model, "The estimate: the last accepted iterate."),
-        field("termination", &S::termination, "How the iteration ended."),
-        field("message", &S::message, "One sentence: how the fit ended."),
-        field("iterations", &S::iterations, "Levenberg-Marquardt iterations run."),
-        field("start_iterations", &S::start_iterations,
-              "Pole relocations of the vector-fitting start."),
-        field("lines", &S::lines, "Lines fitted."),
-        field("fit_percent", &S::fit_percent,
-              "outputs x inputs: 100 (1 - ||H - G|| / ||H||) per channel."),
-        field("noise_variance", &S::noise_variance, "Per output: mean weighted squared residual."),
-        field("verdict", &S::verdict, "Whether the model is usable, and why not."),
-        field("covariance", &S::covariance,
-              "Covariance of [a of every submodel; per output its numerators and D]."),
-        field("modes", &S::modes, "MimoMode of every second-order submodel."),
-    };
+    return join_fields(
+        Outcome::fields(),
+        std::tuple{
+            field("model", &S::model, "The estimate: the last accepted iterate."),
+            field("start_iterations", &S::start_iterations,
+                  "Pole relocations of the vector-fitting start."),
+            field("lines", &S::lines, "Lines fitted."),
+            field("fit_percent", &S::fit_percent,
+                  "outputs x inputs: 100 (1 - ||H - G|| / ||H||) per channel."),
+            field("noise_variance", &S::noise_variance,
+                  "Per output: mean weighted squared residual."),
+            field("verdict", &S::verdict, "Whether the model is usable, and why not."),
+            field("covariance", &S::covariance,
+                  "Covariance of [a of every submodel; per output its numerators and D]."),
+            field("modes", &S::modes, "MimoMode of every second-order submodel."),
+        });
   }
 };
 

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/refined_iv/additive_srivc.h"
-#include "ctid/refined_iv/identification.h"
+#include "ctid/identification/identification.h"
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/excitation.h"

@@ -2,7 +2,7 @@
 // modes with random shapes (3 inputs x 5 outputs) and of eight lightly damped modes over
 // 2 inputs x 28 outputs from noise-free FRFs, the direct term, standard errors against the
 // spread of a seeded Monte Carlo, and one clear message for each kind of bad input.
-#include "ctid/refined_iv/frf_matrix_fit.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
 
 #include <cmath>
 #include <complex>

@@ -1,5 +1,5 @@
 // The refined IV front door: chooses the estimator, runs the delay scan and the relocation.
-#include "ctid/refined_iv/identification.h"
+#include "ctid/identification/identification.h"
 
 #include <algorithm>
 #include <cmath>
@@ -13,8 +13,8 @@
 
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/refined_iv/refined_iv.h"
 #include "ctid/simulation/simulate.h"
-#include "refined_iv/internal/refined_iv_engine.h"
 
 namespace ctid {
 
@@ -200,13 +200,13 @@ IdentificationResult identify_records(std::span<const SampledData> records,
 
   // The estimators of srivc.h, on every record.
   auto run = [&](const RefinedIvOptions& o) {
-    internal::RefinedIvProblem problem;
+    RefinedIvProblem problem;
     for (const SampledData& record : records) problem.records.push_back(&record);
     problem.orders = orders;
     problem.controller = closed_loop ? &*options.controller : nullptr;
     problem.unfactored = !structure.is_additive();
     problem.name = enum_name(estimator).data();  // the enumerator names are literals
-    return internal::run_refined_iv(problem, o);
+    return estimate_refined_iv(problem, o);
   };
   auto estimate = [&](int delay) {
     RefinedIvOptions o = options.refined_iv;

@@ -1,7 +1,7 @@
 // The front door identify(): it runs exactly the estimator the structure and the loop call for
 // (bit for bit the direct call), the delay scan and the relocation as the CLI always has, and
 // refuses bad structures and options with the full path of the field.
-#include "ctid/refined_iv/identification.h"
+#include "ctid/identification/identification.h"
 
 #include <cstring>
 #include <utility>

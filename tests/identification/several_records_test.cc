@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
-#include "ctid/refined_iv/identification.h"
+#include "ctid/identification/identification.h"
 #include "ctid/simulation/closed_loop.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"

@@ -22,7 +22,7 @@
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/verdict.h"
 #include "ctid/refined_iv/estimation_result.h"
-#include "ctid/refined_iv/identification.h"
+#include "ctid/identification/identification.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 
 namespace ctid {

@@ -1,5 +1,5 @@
 // A shared-pole modal model fitted to a measured FRF matrix (frf_matrix_fit.h).
-#include "ctid/refined_iv/frf_matrix_fit.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
 
 #include <algorithm>
 #include <cmath>
@@ -15,8 +15,8 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/estimation/verdict.h"
-#include "internal/mimo_layout.h"
-#include "internal/scaled_least_squares.h"
+#include "refined_iv/internal/mimo_layout.h"
+#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
 

@@ -14,7 +14,7 @@
 
 #include "ctid/core/error.h"
 #include "ctid/core/preprocessing.h"
-#include "ctid/refined_iv/identification.h"
+#include "ctid/identification/identification.h"
 #include "ctid/refined_iv/irregular_srivc.h"
 #include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/discretization.h"

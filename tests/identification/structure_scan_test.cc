@@ -1,7 +1,7 @@
 // Structure selection (structure_scan.h): on records of a known two-mode system the scan
 // recommends two modes, noise-free and at 20 dB SNR over seeds; its statistics follow their
 // definitions; the true modes are stable in the stabilisation diagram; bad options are named.
-#include "ctid/refined_iv/structure_scan.h"
+#include "ctid/identification/structure_scan.h"
 
 #include <cmath>
 #include <vector>

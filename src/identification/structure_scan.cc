@@ -1,5 +1,5 @@
 // Candidate structures fitted with identify() and scored on held-out data (structure_scan.h).
-#include "ctid/refined_iv/structure_scan.h"
+#include "ctid/identification/structure_scan.h"
 
 #include <algorithm>
 #include <cmath>

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
-#include "ctid/refined_iv/identification.h"
+#include "ctid/identification/identification.h"
 #include "ctid/refined_iv/initialization.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"

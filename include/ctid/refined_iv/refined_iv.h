@@ -1,0 +1,39 @@
+// The refined IV estimator as one call: one record, or several records of one system, open
+// or closed loop, unfactored or additive. srivc, clsrivc, additive_srivc and additive_clsrivc
+// are this call with one record; the identification layer's identify() chooses the problem
+// from the data and the structure (docs/architecture.md).
+#pragma once
+
+#include <vector>
+
+#include "ctid/core/additive_model.h"
+#include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/sampled_data.h"
+#include "ctid/refined_iv/estimation_result.h"
+#include "ctid/refined_iv/refined_iv_options.h"
+
+namespace ctid {
+
+/// What the refined IV iteration estimates, from what.
+struct RefinedIvProblem {
+  /// One record, or several of one system, each with its own initial state (one parameter
+  /// vector; the same sample time, input hold, signals and input delay).
+  std::vector<const SampledData*> records;
+  std::vector<SubmodelOrder> orders;
+  /// nullptr: open loop (instrument (10)); otherwise closed loop (instrument (20)).
+  const DiscreteTransferFunction* controller = nullptr;
+  /// One unfactored model whose additive view comes from partial fractions.
+  bool unfactored = false;
+  const char* name = "estimator";
+  /// The covariance from the whole N x p instrument held in memory, as before it was streamed
+  /// (issue 14): the reference the streamed sums are tested against, not for estimation.
+  bool stored_instrument_covariance = false;
+};
+
+/// The refined IV estimate of the problem: the iteration of González et al. (eq. 29 and 30)
+/// from RefinedIvOptions::initial_model or the automatic start, with covariance and verdict.
+/// Throws InvalidArgument for bad records, orders or options, as srivc does.
+EstimationResult estimate_refined_iv(const RefinedIvProblem& problem,
+                                     const RefinedIvOptions& options = {});
+
+}  // namespace ctid
