@@ -1,7 +1,8 @@
-// The refined IV iteration (29) shared by every estimator of González et al.: per iteration
-// and submodel, one filter bank of u through 1/(p^l A_i) (regressor B-part, model output),
-// one cascade p^k B_i/(p^l A_i^2) of the instrument source (u or S_uo r), and one bank of the
-// residual output y~_i (23) through 1/A_i. Columns are scaled to unit norm before solving.
+// The refined IV iteration (29) shared by every estimator of González et al., as a driver
+// (run_refined_iv_from_start) over named phases: the data and structure checks, the start, the
+// iteration with step control, the estimate, its statistics and the verdict. The streamed
+// passes over the data that each phase calls are in refined_iv_passes.cc. Columns are scaled to
+// unit norm before solving.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -23,737 +24,11 @@
 #include "ctid/simulation/discretization.h"
 #include "refined_iv/internal/covariance_sums.h"
 #include "refined_iv/internal/refined_iv_engine.h"
+#include "refined_iv/internal/refined_iv_passes.h"
 
 namespace ctid {
 
 namespace internal {
-namespace {
-
-// The augmented vector of (29): beta first, then (InitialConditions::estimate) the n_i + l_i
-// free-response coefficients of every submodel in every record, so the parameter block of any
-// joint matrix is its top-left p x p corner.
-struct Layout {
-  std::vector<SubmodelOrder> orders;
-  std::vector<int> offset;
-  std::vector<int> free_offset;  // of record r's submodel i: [r * K + i]
-  int parameters = 0;
-  int poles = 0;      // sum n_i + l_i
-  int records = 1;    // each with its own initial state
-  int augmented = 0;  // parameters, plus records * poles when initial conditions are estimated
-  Hold input_hold = Hold::zero_order_hold;  // how the measured input behaves between samples
-  double delay_fraction = 0.0;              // of a sample, on top of the whole-sample delay
-
-  Layout(std::vector<SubmodelOrder> o, bool initial_conditions, int record_count)
-      : orders(std::move(o)), records(record_count) {
-    for (const SubmodelOrder& s : orders) {
-      offset.push_back(parameters);
-      parameters += s.n + s.m + 1;
-      poles += s.n + s.integrators;
-    }
-    augmented = parameters;
-    if (initial_conditions) {
-      for (int r = 0; r < records; ++r) {
-        for (const SubmodelOrder& s : orders) {
-          free_offset.push_back(augmented);
-          augmented += s.n + s.integrators;
-        }
-      }
-    }
-  }
-  explicit Layout(std::vector<SubmodelOrder> o) : Layout(std::move(o), false, 1) {}
-  bool free_responses() const { return augmented > parameters; }
-  int free_at(int record, int i) const {
-    return free_offset[static_cast<size_t>(record * size() + i)];
-  }
-  int states(int i) const {
-    return orders[static_cast<size_t>(i)].n + orders[static_cast<size_t>(i)].integrators;
-  }
-  int size() const { return static_cast<int>(orders.size()); }
-  int count(int i) const {
-    return orders[static_cast<size_t>(i)].n + orders[static_cast<size_t>(i)].m + 1;
-  }
-};
-
-// The stopping rule's relative change, block by block: the largest over the submodels of
-// ||d a_i|| / ||a_i|| and ||d b_i|| / ||b_i||. One norm over the whole of beta lets the block
-// with the largest coefficients decide: with a gain of 1e6 the numerators dominate and the
-// iteration stopped with the poles still moving by 1e-4 (issue 16). A block whose norm
-// vanishes is measured against the whole vector's norm.
-double relative_change(const Layout& layout, const Eigen::VectorXd& from,
-                       const Eigen::VectorXd& to) {
-  const double whole = std::max(from.norm(), 1e-300);
-  double largest = 0.0;
-  for (int i = 0; i < layout.size(); ++i) {
-    const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
-    const int at = layout.offset[static_cast<size_t>(i)];
-    for (const auto& [first, count] : {std::pair{at, o.n}, std::pair{at + o.n, o.m + 1}}) {
-      if (count == 0) continue;
-      const double size = from.segment(first, count).norm();
-      const double step = (to.segment(first, count) - from.segment(first, count)).norm();
-      largest = std::max(largest, step / (size > 1e-12 * whole ? size : whole));
-    }
-  }
-  return largest;
-}
-
-Polynomial denominator_of(const Layout& layout, const Eigen::VectorXd& beta, int i) {
-  const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
-  Eigen::VectorXd a(o.n + 1);
-  a(0) = 1.0;
-  a.tail(o.n) = beta.segment(layout.offset[static_cast<size_t>(i)], o.n);
-  return Polynomial::trimmed(a);
-}
-
-Eigen::VectorXd numerator_of(const Layout& layout, const Eigen::VectorXd& beta, int i) {
-  const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
-  return beta.segment(layout.offset[static_cast<size_t>(i)] + o.n, o.m + 1);
-}
-
-}  // namespace
-
-FreeResponseChain free_response_chain(const Polynomial& a, int integrators, double h) {
-  const FilterRealization bank = derivative_filters(Polynomial::monomial(integrators) * a);
-  const int n = a.degree();
-  FilterRealization chain = bank;
-  if (n > 0) {
-    Eigen::VectorXd first = Eigen::VectorXd::Zero(bank.outputs());
-    first(0) = 1.0;
-    chain = cascade(bank, first, derivative_filters(a));
-  }
-  const int states = chain.order();
-  FreeResponseChain out;
-  out.phi = discretize_zoh(chain.a, chain.b, h).phi;
-  out.c0 = Eigen::RowVectorXd::Zero(states);
-  out.c0.head(bank.order()) = bank.c.row(0);
-  out.ck = n > 0 ? Eigen::MatrixXd(chain.c.middleRows(1, n)) : Eigen::MatrixXd(0, states);
-  return out;
-}
-
-namespace {
-
-// Realisation of B/(p^l A): the bank of 1/(p^l A) with the outputs combined by b.
-FilterRealization submodel_realization(const Polynomial& a, const Eigen::VectorXd& b, int l) {
-  const FilterRealization bank = derivative_filters(Polynomial::monomial(l) * a);
-  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank.outputs());
-  w.head(b.size()) = b;
-  return combine_outputs(bank, w);
-}
-
-// S_uo(q) r with S_uo = C_d / (1 + G_d C_d), G_d = ZOH equivalent of the model with the input
-// delay; std::nullopt when the loop is unstable or ill-posed.
-std::optional<Eigen::VectorXd> sensitivity_filtered_reference(
-    const Layout& layout, const Eigen::VectorXd& beta, const DiscreteTransferFunction& controller,
-    const Eigen::VectorXd& r, double h, int delay) {
-  // Plant: submodels side by side, each with the fraction of the delay (one more state).
-  std::vector<StateSpace> parts;
-  double dg = 0.0;
-  int ng = 0;
-  for (int i = 0; i < layout.size(); ++i) {
-    const FilterRealization f =
-        submodel_realization(denominator_of(layout, beta, i), numerator_of(layout, beta, i),
-                             layout.orders[static_cast<size_t>(i)].integrators);
-    parts.push_back(
-        discretize_zoh(StateSpace{f.a, f.b, f.c.row(0), f.d(0)}, h, layout.delay_fraction));
-    dg += parts.back().d;
-    ng += parts.back().order();
-  }
-  const StateSpace c = controller.to_state_space();
-  const int nc = c.order();
-  const int n = ng + delay + nc;
-  // State X = [x_g; u_{k-1} .. u_{k-delay}; x_c]; u_k = ku X + kr r_k, y_k = yx X + yr r_k.
-  Eigen::RowVectorXd cg = Eigen::RowVectorXd::Zero(n);
-  Eigen::MatrixXd phig = Eigen::MatrixXd::Zero(ng, ng);
-  Eigen::VectorXd gammag(ng);
-  int at = 0;
-  for (const StateSpace& part : parts) {
-    const int s = part.order();
-    phig.block(at, at, s, s) = part.a;
-    gammag.segment(at, s) = part.b;
-    cg.segment(at, s) = part.c;
-    at += s;
-  }
-  Eigen::RowVectorXd cc = Eigen::RowVectorXd::Zero(n);
-  cc.tail(nc) = c.c;
-  Eigen::RowVectorXd ku(n);
-  double kr = 0.0;
-  Eigen::RowVectorXd yx(n);
-  double yr = 0.0;
-  if (delay > 0) {
-    // y_k = C_g x_g + D_g u_{k-delay}: no algebraic loop.
-    yx = cg;
-    yx(ng + delay - 1) += dg;
-    yr = 0.0;
-    ku = cc - c.d * yx;
-    kr = c.d;
-  } else {
-    const double loop = 1.0 + c.d * dg;
-    if (!(std::abs(loop) > 1e-12)) return std::nullopt;
-    ku = (cc - c.d * cg) / loop;
-    kr = c.d / loop;
-    yx = cg + dg * ku;
-    yr = dg * kr;
-  }
-  Eigen::MatrixXd acl = Eigen::MatrixXd::Zero(n, n);
-  Eigen::VectorXd bcl = Eigen::VectorXd::Zero(n);
-  acl.topLeftCorner(ng, ng) = phig;
-  if (delay > 0) {
-    acl.block(0, ng + delay - 1, ng, 1) += gammag;
-    acl.row(ng) = ku;
-    bcl(ng) = kr;
-    for (int j = 1; j < delay; ++j) acl(ng + j, ng + j - 1) = 1.0;
-  } else {
-    acl.topRows(ng) += gammag * ku;
-    bcl.head(ng) = gammag * kr;
-  }
-  // x_c+ = A_c x_c + B_c (r - y)
-  acl.bottomRows(nc) += -c.b * yx;
-  acl.bottomRightCorner(nc, nc) += c.a;
-  bcl.tail(nc) += c.b * (1.0 - yr);
-  if (!acl.allFinite()) return std::nullopt;
-  if (n > 0) {
-    const Eigen::VectorXcd eig = acl.eigenvalues();
-    if (eig.cwiseAbs().maxCoeff() >= 1.0 - 1e-9) return std::nullopt;
-  }
-  Eigen::VectorXd out(r.size());
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
-  Eigen::VectorXd next(n);
-  for (Eigen::Index k = 0; k < r.size(); ++k) {
-    out(k) = ku.dot(x) + kr * r(k);
-    next.noalias() = acl * x;
-    next += bcl * r(k);
-    x.swap(next);
-  }
-  if (!out.allFinite()) return std::nullopt;
-  return out;
-}
-
-// Rows of the record processed together: the block buffers (a few times kBlock x p doubles)
-// stay in cache, and the sums of eq. (29) are formed block by block, so no N x p matrix is
-// ever stored during the iteration.
-constexpr Eigen::Index kBlock = 256;
-
-// Sums of eq. (29) over the record: Z'Phi, Z'Upsilon and the squared column norms of the
-// instrument Z and regressor Phi (for the unit-norm scaling).
-struct Moments {
-  Eigen::MatrixXd zp;  // p x p
-  Eigen::MatrixXd zy;  // p x K
-  Eigen::VectorXd zz;  // p
-  Eigen::VectorXd pp;  // p
-
-  bool all_finite() const {
-    return zp.allFinite() && zy.allFinite() && zz.allFinite() && pp.allFinite();
-  }
-};
-
-// The filters of one submodel at one iterate. Outputs of `source`: rows 0..m are
-// p^j/(p^l A) z (B-part of the instrument), rows m+1..m+n are p^k B/(p^l A^2) z, k = 1..n
-// (one cascade whose first stage is the 1/(p^l A) bank itself), and in open loop row m+n+1
-// is the model output B/(p^l A) u. `input` (closed loop, or when no instrument is needed)
-// gives p^j/(p^l A) u in rows 0..m and B/(p^l A) u in row m+1. `output` is the bank of
-// 1/A on the residual output y~_i (23).
-// Free responses of one submodel at one iterate (InitialConditions::estimate), exact at the
-// samples: the homogeneous chain 1/(p^l A) -> p^k/A with transition matrix phi, propagated
-// from the s = n + l initial states [e_j; 0] (columns j < s: the basis 1/(p^l A) of the
-// submodel's free responses, regressor and instrument columns alike) and from [c_i; 0]
-// (column s: the current free response f_i, added to the model output, and p^k/A f_i,
-// added to the a-part of the open-loop instrument).
-struct FreeResponse {
-  Eigen::MatrixXd phi;
-  Eigen::MatrixXd state;  // chain states x (s + 1)
-  Eigen::MatrixXd next;
-  Eigen::RowVectorXd c0;     // 1/(p^l A)
-  Eigen::MatrixXd ck;        // p^k/A of it, k = 1..n
-  Eigen::MatrixXd basis;     // kBlock x s
-  Eigen::VectorXd value;     // kBlock: f_i
-  Eigen::MatrixXd filtered;  // kBlock x n: p^k/A f_i
-};
-
-struct SubmodelFilters {
-  std::optional<FreeResponse> free;
-  std::optional<SampledFilter> source;
-  std::optional<SampledFilter> input;
-  std::optional<SampledFilter> output;
-  SampledFilter::Stream source_stream;
-  SampledFilter::Stream input_stream;
-  SampledFilter::Stream output_stream;
-};
-
-// Block buffers reused by every pass of one estimate.
-struct Workspace {
-  Eigen::MatrixXd instrument;  // kBlock x p
-  Eigen::MatrixXd regressor;   // kBlock x p
-  Eigen::MatrixXd filtered;    // kBlock x K, Upsilon (26)
-  Eigen::MatrixXd outputs;     // kBlock x K, G_i u
-  Eigen::VectorXd total;       // kBlock
-  Eigen::VectorXd residual_output;
-  std::vector<Eigen::MatrixXd> source_out;
-  std::vector<Eigen::MatrixXd> input_out;
-  std::vector<Eigen::MatrixXd> output_out;
-
-  explicit Workspace(const Layout& layout)
-      : instrument(kBlock, layout.augmented),
-        regressor(kBlock, layout.augmented),
-        filtered(kBlock, layout.size()),
-        outputs(kBlock, layout.size()),
-        total(kBlock),
-        residual_output(kBlock),
-        source_out(static_cast<size_t>(layout.size())),
-        input_out(static_cast<size_t>(layout.size())),
-        output_out(static_cast<size_t>(layout.size())) {}
-};
-
-FilterRealization with_rows(const FilterRealization& f, const Eigen::MatrixXd& c,
-                            const Eigen::VectorXd& d) {
-  FilterRealization out;
-  out.a = f.a;
-  out.b = f.b;
-  out.c = c;
-  out.d = d;
-  return out;
-}
-
-SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& beta,
-                                 const Eigen::VectorXd& initial_states, int record, int i, double h,
-                                 Hold output_interpolation, bool closed_loop, bool need_instrument,
-                                 bool need_regressor) {
-  const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
-  const Polynomial a = denominator_of(layout, beta, i);
-  const Eigen::VectorXd b = numerator_of(layout, beta, i);
-  const FilterRealization bank = derivative_filters(Polynomial::monomial(o.integrators) * a);
-  const int s1 = bank.order();
-  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank.outputs());
-  w.head(o.m + 1) = b;
-  const Eigen::RowVectorXd model_c = w.transpose() * bank.c;
-  const double model_d = w.dot(bank.d);
-  SubmodelFilters f;
-  if (need_instrument) {
-    const bool with_model = !closed_loop;
-    const int rows = o.m + 1 + o.n + (with_model ? 1 : 0);
-    // The cascade carries B / ||B||, and ||B|| multiplies its outputs instead: with B in the
-    // coupling of the state matrix, a gain of 1e6 made the discretised chain lose the
-    // small entries and moved the fixed point of noise-free data by 1e-4 (issue 16).
-    const double gain = w.norm() > 0.0 ? w.norm() : 1.0;
-    FilterRealization chain = bank;
-    if (o.n > 0) chain = cascade(bank, w / gain, derivative_filters(a));
-    const int states = chain.order();
-    Eigen::MatrixXd c = Eigen::MatrixXd::Zero(rows, states);
-    Eigen::VectorXd d = Eigen::VectorXd::Zero(rows);
-    c.topLeftCorner(o.m + 1, s1) = bank.c.topRows(o.m + 1);
-    d.head(o.m + 1) = bank.d.head(o.m + 1);
-    if (o.n > 0) {
-      c.middleRows(o.m + 1, o.n) = gain * chain.c.middleRows(1, o.n);
-      d.segment(o.m + 1, o.n) = gain * chain.d.segment(1, o.n);
-    }
-    if (with_model) {
-      c.block(rows - 1, 0, 1, s1) = model_c;
-      d(rows - 1) = model_d;
-    }
-    // Open loop the source is the measured input; closed loop it is the controller's output
-    // S_uo r, held by the DAC.
-    f.source.emplace(with_rows(chain, c, d), h,
-                     closed_loop ? Hold::zero_order_hold : layout.input_hold,
-                     layout.delay_fraction);
-    f.source_stream = f.source->start();
-  }
-  if (closed_loop || !need_instrument) {
-    Eigen::MatrixXd c(o.m + 2, s1);
-    Eigen::VectorXd d(o.m + 2);
-    c.topRows(o.m + 1) = bank.c.topRows(o.m + 1);
-    d.head(o.m + 1) = bank.d.head(o.m + 1);
-    c.row(o.m + 1) = model_c;
-    d(o.m + 1) = model_d;
-    f.input.emplace(with_rows(bank, c, d), h, layout.input_hold, layout.delay_fraction);
-    f.input_stream = f.input->start();
-  }
-  if (need_regressor && o.n > 0) {
-    f.output.emplace(derivative_filters(a), h, output_interpolation);
-    f.output_stream = f.output->start();
-  }
-  if (layout.free_responses()) {
-    const int s = layout.states(i);
-    FreeResponseChain chain = free_response_chain(a, o.integrators, h);
-    const int states = static_cast<int>(chain.phi.rows());
-    const int given = std::min(s, s1);  // s1 < s only if the iterate lost its leading a_in
-    FreeResponse& r = f.free.emplace();
-    r.phi = std::move(chain.phi);
-    r.state = Eigen::MatrixXd::Zero(states, s + 1);
-    r.state.topLeftCorner(given, given).setIdentity();
-    r.state.block(0, s, given, 1) =
-        initial_states.segment(layout.free_at(record, i) - layout.parameters, given);
-    r.next.resize(states, s + 1);
-    r.c0 = std::move(chain.c0);
-    r.ck = std::move(chain.ck);
-    r.basis.resize(kBlock, s);
-    r.value.resize(kBlock);
-    r.filtered.resize(kBlock, o.n);
-  }
-  return f;
-}
-
-// One record's signals: the input delayed by the whole samples of the delay, the output, and
-// in closed loop S_uo r (delayed likewise) and S_uo r itself; `offset` is the row of its
-// first sample in the stacked residual and instrument.
-struct RecordSignals {
-  Eigen::VectorXd u;
-  const Eigen::VectorXd* y = nullptr;
-  std::optional<Eigen::VectorXd> source;
-  Eigen::VectorXd undelayed_source;
-  Eigen::Index offset = 0;
-};
-
-// One record's filters at beta, from rest; the workspace's free-response columns of the other
-// records are cleared (they are zero on this record's rows).
-std::vector<SubmodelFilters> record_filters(const Layout& layout, const Eigen::VectorXd& beta,
-                                            const Eigen::VectorXd& initial_states, int record,
-                                            double h, Hold output_interpolation, bool closed_loop,
-                                            bool need_instrument, bool need_regressor,
-                                            Workspace& w) {
-  std::vector<SubmodelFilters> filters;
-  filters.reserve(static_cast<size_t>(layout.size()));
-  for (int i = 0; i < layout.size(); ++i) {
-    filters.push_back(submodel_filters(layout, beta, initial_states, record, i, h,
-                                       output_interpolation, closed_loop, need_instrument,
-                                       need_regressor));
-  }
-  if (layout.free_responses()) {
-    const int free = layout.augmented - layout.parameters;
-    w.instrument.rightCols(free).setZero();
-    w.regressor.rightCols(free).setZero();
-  }
-  return filters;
-}
-
-// Where a record's filters are between two blocks: enough to run them on from there.
-struct FilterCheckpoint {
-  std::vector<SampledFilter::Stream> source;
-  std::vector<SampledFilter::Stream> input;
-  std::vector<SampledFilter::Stream> output;
-  std::vector<Eigen::MatrixXd> free;
-};
-
-FilterCheckpoint checkpoint(const std::vector<SubmodelFilters>& filters) {
-  FilterCheckpoint c;
-  for (const SubmodelFilters& f : filters) {
-    c.source.push_back(f.source_stream);
-    c.input.push_back(f.input_stream);
-    c.output.push_back(f.output_stream);
-    c.free.push_back(f.free ? f.free->state : Eigen::MatrixXd());
-  }
-  return c;
-}
-
-void restore(std::vector<SubmodelFilters>& filters, const FilterCheckpoint& c) {
-  for (size_t i = 0; i < filters.size(); ++i) {
-    filters[i].source_stream = c.source[i];
-    filters[i].input_stream = c.input[i];
-    filters[i].output_stream = c.output[i];
-    if (filters[i].free) filters[i].free->state = c.free[i];
-  }
-}
-
-// Rows [k0, k0 + len) of one record through its filters, which continue from row k0: the
-// instrument and regressor rows, the submodel outputs and their sum and, with the regressor,
-// the filtered residual outputs (22).
-void filter_block(const Layout& layout, int record, const RecordSignals& signals,
-                  const Eigen::VectorXd* source, Eigen::Index k0, Eigen::Index len,
-                  bool need_instrument, bool need_regressor, std::vector<SubmodelFilters>& filters,
-                  Workspace& w) {
-  const Eigen::VectorXd& u = signals.u;
-  const Eigen::VectorXd& y = *signals.y;
-  const int k_count = layout.size();
-  const bool closed_loop = source != nullptr;
-  for (int i = 0; i < k_count; ++i) {
-    const auto at = static_cast<size_t>(i);
-    const SubmodelOrder& o = layout.orders[at];
-    const int off = layout.offset[at];
-    SubmodelFilters& f = filters[at];
-    if (f.source) {
-      Eigen::MatrixXd& out = w.source_out[at];
-      out.resize(len, f.source->outputs());
-      f.source->run((closed_loop ? *source : u).segment(k0, len), f.source_stream, out);
-      w.instrument.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
-      if (o.n > 0) w.instrument.block(0, off, len, o.n) = -out.middleCols(o.m + 1, o.n);
-      if (!closed_loop) {
-        w.outputs.col(i).head(len) = out.col(o.m + o.n + 1);
-        if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
-      }
-    }
-    if (f.input) {
-      Eigen::MatrixXd& out = w.input_out[at];
-      out.resize(len, f.input->outputs());
-      f.input->run(u.segment(k0, len), f.input_stream, out);
-      w.outputs.col(i).head(len) = out.col(o.m + 1);
-      if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
-    }
-    if (f.free) {
-      FreeResponse& r = *f.free;
-      const int s = layout.states(i);
-      for (Eigen::Index k = 0; k < len; ++k) {
-        r.basis.row(k).noalias() = r.c0 * r.state.leftCols(s);
-        r.value(k) = r.c0.dot(r.state.col(s));
-        if (o.n > 0) r.filtered.row(k).noalias() = (r.ck * r.state.col(s)).transpose();
-        r.next.noalias() = r.phi * r.state;
-        r.state.swap(r.next);
-      }
-      const int free_off = layout.free_at(record, i);
-      w.outputs.col(i).head(len) += r.value.head(len);
-      if (need_instrument) {
-        w.instrument.block(0, free_off, len, s) = r.basis.topRows(len);
-        if (!closed_loop && o.n > 0) {
-          w.instrument.block(0, off, len, o.n) -= r.filtered.topRows(len);
-        }
-      }
-      if (need_regressor) w.regressor.block(0, free_off, len, s) = r.basis.topRows(len);
-    }
-  }
-  w.total.head(len) = w.outputs.topRows(len).rowwise().sum();
-  if (need_regressor) {
-    for (int i = 0; i < k_count; ++i) {
-      const auto at = static_cast<size_t>(i);
-      const SubmodelOrder& o = layout.orders[at];
-      const int off = layout.offset[at];
-      SubmodelFilters& f = filters[at];
-      w.residual_output.head(len) =
-          y.segment(k0, len) - w.total.head(len) + w.outputs.col(i).head(len);  // (23)
-      if (f.output) {
-        Eigen::MatrixXd& out = w.output_out[at];
-        out.resize(len, f.output->outputs());
-        f.output->run(w.residual_output.head(len), f.output_stream, out);
-        w.filtered.col(i).head(len) = out.col(0);                       // (22)
-        w.regressor.block(0, off, len, o.n) = -out.middleCols(1, o.n);  // (24)
-      } else {
-        w.filtered.col(i).head(len) = w.residual_output.head(len);
-      }
-    }
-  }
-}
-
-// Rows of a record between two checkpoints of the instrument pass.
-constexpr Eigen::Index kSegment = 16 * kBlock;
-
-// The instrument's share of the covariance, streamed so that the N x q instrument psi is
-// never stored: its Gram matrix psi' psi and, for the coloured-noise sandwich, each record's
-// filter states every kSegment rows, from which psi is formed again segment by segment, newest
-// first (adjoint_instrument_sum). psi is the stacked instrument at beta with `extra` (the
-// delay's column, stacked like the residual) appended when it is estimated.
-struct InstrumentPass {
-  const Eigen::VectorXd* extra = nullptr;
-  bool keep_checkpoints = false;
-  Eigen::MatrixXd* stored = nullptr;  // psi itself (RefinedIvProblem::stored_instrument_covariance)
-  Eigen::MatrixXd gram;               // q x q
-  std::vector<std::vector<FilterCheckpoint>> saved;  // [record][segment]
-  Eigen::MatrixXd rows;                              // kBlock x q, the pass's block of psi
-
-  int columns(const Layout& layout) const { return layout.augmented + (extra != nullptr ? 1 : 0); }
-
-  // psi's rows [k0, k0 + len) of the record starting at `first`, from the workspace, into `to`
-  // (len x q).
-  void copy_rows(const Layout& layout, const Workspace& w, Eigen::Index first, Eigen::Index k0,
-                 Eigen::Index len, Eigen::Ref<Eigen::MatrixXd> to) const {
-    to.leftCols(layout.augmented) = w.instrument.topRows(len);
-    if (extra != nullptr) to.col(layout.augmented) = extra->segment(first + k0, len);
-  }
-};
-
-// evaluate() on one record: its filters from rest, its free responses, its rows of the
-// stacked residual and instrument; the sums are added to.
-void evaluate_record(const Layout& layout, const Eigen::VectorXd& beta,
-                     const Eigen::VectorXd& initial_states, int record,
-                     const RecordSignals& signals, const Eigen::VectorXd* source, double h,
-                     Hold output_interpolation, Workspace& w, Moments* moments,
-                     Eigen::VectorXd* residual, InstrumentPass* instrument, double* sse) {
-  const Eigen::VectorXd& y = *signals.y;
-  const Eigen::Index n = signals.u.size();
-  const Eigen::Index first = signals.offset;
-  const bool need_instrument = moments != nullptr || instrument != nullptr;
-  const bool need_regressor = moments != nullptr;
-  std::vector<SubmodelFilters> filters =
-      record_filters(layout, beta, initial_states, record, h, output_interpolation,
-                     source != nullptr, need_instrument, need_regressor, w);
-  for (Eigen::Index k0 = 0; k0 < n; k0 += kBlock) {
-    const Eigen::Index len = std::min(kBlock, n - k0);
-    if (instrument != nullptr && instrument->keep_checkpoints && k0 % kSegment == 0) {
-      instrument->saved[static_cast<size_t>(record)].push_back(checkpoint(filters));
-    }
-    filter_block(layout, record, signals, source, k0, len, need_instrument, need_regressor, filters,
-                 w);
-    if (moments != nullptr) {
-      const auto z = w.instrument.topRows(len);
-      const auto phi = w.regressor.topRows(len);
-      moments->zp.noalias() += z.transpose() * phi;
-      moments->zy.noalias() += z.transpose() * w.filtered.topRows(len);
-      moments->zz += z.colwise().squaredNorm().transpose();
-      moments->pp += phi.colwise().squaredNorm().transpose();
-    }
-    if (residual != nullptr) {
-      residual->segment(first + k0, len) = y.segment(k0, len) - w.total.head(len);
-    }
-    if (sse != nullptr) *sse += (y.segment(k0, len) - w.total.head(len)).squaredNorm();
-    if (instrument != nullptr) {
-      auto z = instrument->rows.topRows(len);
-      instrument->copy_rows(layout, w, first, k0, len, z);
-      instrument->gram.noalias() += z.transpose() * z;
-      if (instrument->stored != nullptr) instrument->stored->middleRows(first + k0, len) = z;
-    }
-  }
-}
-
-// One pass over the records at beta (instrument source: u in open loop, S_uo r when
-// `with_source`); each record's filters start at rest at its first sample and its free
-// responses have their own coefficients. With `moments`: the sums of eq. (29) over all
-// records; with `residual`: y - sum_i G_i u, records stacked; with `instrument`: the
-// instrument's sums for the covariance (InstrumentPass); with `sse`: the sum of squared output
-// errors
-// ||y - sum_i G_i u||^2 (the model output is formed on every pass anyway).
-void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
-              const Eigen::VectorXd& initial_states, const std::vector<RecordSignals>& records,
-              bool with_source, double h, Hold output_interpolation, Workspace& w, Moments* moments,
-              Eigen::VectorXd* residual, InstrumentPass* instrument, double* sse = nullptr) {
-  Eigen::Index n = 0;
-  for (const RecordSignals& record : records) n += record.u.size();
-  const int k_count = layout.size();
-  const int p = layout.augmented;
-  for (int i = 0; i < k_count; ++i) {
-    if (denominator_of(layout, beta, i).degree() < layout.orders[static_cast<size_t>(i)].n) {
-      // A_i lost its leading coefficient: the iterate has fewer poles than the structure and
-      // its filters cannot be formed. The pass reads as non-finite, so the iteration treats
-      // it as a failed step (and a final model as not usable).
-      const double nan = std::numeric_limits<double>::quiet_NaN();
-      if (moments != nullptr) {
-        moments->zp = Eigen::MatrixXd::Constant(p, p, nan);
-        moments->zy = Eigen::MatrixXd::Constant(p, k_count, nan);
-        moments->zz = Eigen::VectorXd::Constant(p, nan);
-        moments->pp = Eigen::VectorXd::Constant(p, nan);
-      }
-      if (residual != nullptr) *residual = Eigen::VectorXd::Constant(n, nan);
-      if (instrument != nullptr) {
-        const int q = instrument->columns(layout);
-        instrument->gram = Eigen::MatrixXd::Constant(q, q, nan);
-      }
-      if (sse != nullptr) *sse = nan;
-      return;
-    }
-  }
-  if (moments != nullptr) {
-    moments->zp = Eigen::MatrixXd::Zero(p, p);
-    moments->zy = Eigen::MatrixXd::Zero(p, k_count);
-    moments->zz = Eigen::VectorXd::Zero(p);
-    moments->pp = Eigen::VectorXd::Zero(p);
-  }
-  if (residual != nullptr) residual->resize(n);
-  if (instrument != nullptr) {
-    const int q = instrument->columns(layout);
-    instrument->gram = Eigen::MatrixXd::Zero(q, q);
-    instrument->rows.resize(kBlock, q);
-    instrument->saved.assign(records.size(), {});
-    if (instrument->stored != nullptr) instrument->stored->resize(n, q);
-  }
-  if (sse != nullptr) *sse = 0.0;
-  for (int record = 0; record < static_cast<int>(records.size()); ++record) {
-    const RecordSignals& signals = records[static_cast<size_t>(record)];
-    evaluate_record(layout, beta, initial_states, record, signals,
-                    with_source ? &*signals.source : nullptr, h, output_interpolation, w, moments,
-                    residual, instrument, sse);
-  }
-}
-
-// The coloured-noise middle factor's sum (AdjointArOuterSum) over the instrument of an
-// InstrumentPass that kept its checkpoints: records and their segments newest first, each
-// segment's rows formed again from its checkpoint, so only kSegment rows of psi are held.
-Eigen::MatrixXd adjoint_instrument_sum(const Layout& layout, const Eigen::VectorXd& beta,
-                                       const Eigen::VectorXd& initial_states,
-                                       const std::vector<RecordSignals>& records, bool with_source,
-                                       double h, Hold output_interpolation, Workspace& w,
-                                       const InstrumentPass& pass, const AutoregressiveModel& ar,
-                                       const Eigen::VectorXd& scales) {
-  AdjointArOuterSum sum(ar, scales);
-  Eigen::MatrixXd segment(kSegment, pass.columns(layout));
-  for (int record = static_cast<int>(records.size()) - 1; record >= 0; --record) {
-    const RecordSignals& signals = records[static_cast<size_t>(record)];
-    const Eigen::VectorXd* source = with_source ? &*signals.source : nullptr;
-    const Eigen::Index n = signals.u.size();
-    std::vector<SubmodelFilters> filters =
-        record_filters(layout, beta, initial_states, record, h, output_interpolation,
-                       source != nullptr, true, false, w);
-    const std::vector<FilterCheckpoint>& saved = pass.saved[static_cast<size_t>(record)];
-    for (auto s = static_cast<Eigen::Index>(saved.size()) - 1; s >= 0; --s) {
-      restore(filters, saved[static_cast<size_t>(s)]);
-      const Eigen::Index start = s * kSegment;
-      const Eigen::Index length = std::min(kSegment, n - start);
-      for (Eigen::Index k0 = start; k0 < start + length; k0 += kBlock) {
-        const Eigen::Index len = std::min(kBlock, n - k0);
-        filter_block(layout, record, signals, source, k0, len, true, false, filters, w);
-        pass.copy_rows(layout, w, signals.offset, k0, len, segment.middleRows(k0 - start, len));
-      }
-      sum.add_earlier(segment.topRows(length));
-    }
-  }
-  return sum.sum();
-}
-
-// The free-response coefficients of every submodel in every record from the submodel's own
-// column of the solution of (29).
-Eigen::VectorXd free_response_coefficients(const Layout& layout, const Eigen::MatrixXd& solution) {
-  Eigen::VectorXd c(layout.augmented - layout.parameters);
-  for (int r = 0; r < layout.records && layout.free_responses(); ++r) {
-    for (int i = 0; i < layout.size(); ++i) {
-      const int at = layout.free_at(r, i);
-      c.segment(at - layout.parameters, layout.states(i)) =
-          solution.block(at, i, layout.states(i), 1);
-    }
-  }
-  return c;
-}
-
-// Realisation-independent form of the coefficients: per record and submodel, the free
-// response f_i and its first n_i + l_i - 1 derivatives at the record's first sample, c0 A^k x0
-// of 1/(p^l A_i).
-Eigen::VectorXd free_response_derivatives(const Layout& layout, const Eigen::VectorXd& beta,
-                                          const Eigen::VectorXd& initial_states) {
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(initial_states.size());
-  for (int i = 0; i < layout.size(); ++i) {
-    const FilterRealization bank =
-        derivative_filters(Polynomial::monomial(layout.orders[static_cast<size_t>(i)].integrators) *
-                           denominator_of(layout, beta, i));
-    const int s = layout.states(i);
-    if (bank.order() != s) continue;
-    for (int r = 0; r < layout.records; ++r) {
-      const int at = layout.free_at(r, i) - layout.parameters;
-      Eigen::VectorXd x = initial_states.segment(at, s);
-      for (int k = 0; k < s; ++k) {
-        out(at + k) = bank.c.row(0).dot(x);
-        x = bank.a * x;
-      }
-    }
-  }
-  return out;
-}
-
-Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares) {
-  Eigen::VectorXd s = squares.cwiseSqrt();
-  for (Eigen::Index j = 0; j < s.size(); ++j) {
-    if (!(s(j) > 0.0) || !std::isfinite(s(j))) s(j) = 1.0;
-  }
-  return s;
-}
-
-// The solution of (29) from its sums with unit-norm columns, or nothing if they are not
-// finite or the equations are singular.
-std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums) {
-  if (!sums.all_finite()) return std::nullopt;
-  const Eigen::VectorXd sz = norms_from_squares(sums.zz);
-  const Eigen::VectorXd sp = norms_from_squares(sums.pp);
-  const Eigen::MatrixXd m =
-      sz.cwiseInverse().asDiagonal() * sums.zp * sp.cwiseInverse().asDiagonal();
-  const Eigen::FullPivLU<Eigen::MatrixXd> lu(m);
-  if (!(lu.rcond() > 1e-14)) return std::nullopt;
-  const Eigen::MatrixXd rhs = sz.cwiseInverse().asDiagonal() * sums.zy;
-  Eigen::MatrixXd solution = sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(lu.solve(rhs));
-  if (!solution.allFinite()) return std::nullopt;
-  return solution;
-}
-
-}  // namespace
 
 Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loop_unstable) {
   // A returned start (no step completed, or none fitted better) is judged like any model, by
@@ -821,8 +96,8 @@ bool controller_stabilises(const std::vector<SubmodelOrder>& orders, const Eigen
                            const DiscreteTransferFunction& controller, double h, int input_delay) {
   try {
     // An empty reference: only the loop's poles are checked, nothing is filtered.
-    return sensitivity_filtered_reference(Layout(orders), beta, controller, Eigen::VectorXd(), h,
-                                          input_delay)
+    return srivc_engine::sensitivity_filtered_reference(
+               srivc_engine::Layout(orders), beta, controller, Eigen::VectorXd(), h, input_delay)
         .has_value();
   } catch (const InvalidArgument&) {
     return false;  // a degenerate model (e.g. A lost its leading coefficient) has no loop
@@ -833,7 +108,7 @@ Eigen::VectorXd parameters_for_orders(const AdditiveModel& model,
                                       const std::vector<SubmodelOrder>& orders) {
   require(model.size() == static_cast<int>(orders.size()), "initial model has ", model.size(),
           " submodels; the structure asks for ", orders.size());
-  const Layout layout(orders);
+  const srivc_engine::Layout layout(orders);
   Eigen::VectorXd beta = Eigen::VectorXd::Zero(layout.parameters);
   for (int i = 0; i < model.size(); ++i) {
     const Submodel& s = model[i];
@@ -866,19 +141,30 @@ Eigen::VectorXd unfactored_parameters(const TransferFunction& g, const SubmodelO
   return beta;
 }
 
-EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
-                                           const RefinedIvOptions& options, ScreenedStart* shared) {
-  options.validate();
-  const std::string name = problem.name;
-  const std::vector<const SampledData*>& records = problem.records;
+namespace srivc_engine {
+namespace {
+
+// Whole samples by which record r's input is delayed: the model's delay plus the record's own
+// (an acquisition that lags its input).
+int record_delay(const RefinedIvOptions& options, size_t r) {
+  return options.input_delay +
+         (options.record_input_delays.empty() ? 0 : options.record_input_delays[r]);
+}
+
+int total_samples(const std::vector<const SampledData*>& records) {
+  int n_samples = 0;
+  for (const SampledData* record : records) n_samples += record->size();
+  return n_samples;
+}
+
+// The records share their sample time, input hold and signals; the start (and the data
+// checks) use the longest, whose index is returned.
+size_t check_records(const std::vector<const SampledData*>& records, const std::string& name) {
   require(!records.empty(), name, ": no data record was given");
-  // The start (and the data checks) use the longest record; every record shares its sample
-  // time and input hold.
   size_t longest_index = 0;
   for (size_t r = 1; r < records.size(); ++r) {
     if (records[r]->size() > records[longest_index]->size()) longest_index = r;
   }
-  const SampledData& data = *records[longest_index];
   for (size_t r = 1; r < records.size(); ++r) {
     const double h0 = records.front()->sample_time();
     const double hr = records[r]->sample_time();
@@ -893,65 +179,69 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
             (records.front()->has_reference() ? " has" : " has none"),
             "; records of one estimate have the same signals");
   }
-  Layout layout(problem.orders, options.initial_conditions == InitialConditions::estimate,
-                static_cast<int>(records.size()));
-  layout.input_hold = data.input_hold();
-  layout.delay_fraction = options.input_delay_fraction;
+  return longest_index;
+}
+
+// The structure: every submodel proper with at least one pole, at most one biproper and at
+// most one with integrators.
+void check_orders(const Layout& layout, const std::string& name) {
   require(layout.size() >= 1, name, ": the model structure has no submodels");
-  {
-    int biproper = 0;
-    int integrating = 0;
-    for (size_t i = 0; i < layout.orders.size(); ++i) {
-      const SubmodelOrder& o = layout.orders[i];
-      require(o.n >= 0 && o.m >= 0 && o.integrators >= 0, name, ": submodel ", i + 1,
-              " has a negative order (n = ", o.n, ", m = ", o.m, ", integrators = ", o.integrators,
-              ")");
-      require(o.n + o.integrators >= 1, name, ": submodel ", i + 1,
-              " has no poles (n = 0 and no integrators)");
-      require(o.m <= o.n + o.integrators, name, ": submodel ", i + 1, " has m = ", o.m,
-              " > n + integrators = ", o.n + o.integrators, " (improper)");
-      if (o.m == o.n + o.integrators) ++biproper;
-      if (o.integrators > 0) ++integrating;
-    }
-    require(biproper <= 1, name, ": ", biproper,
-            " submodels are biproper; at most one may be (the split would not be unique)");
-    require(integrating <= 1, name, ": ", integrating,
-            " submodels have integrators; at most one may have poles at the origin");
+  int biproper = 0;
+  int integrating = 0;
+  for (size_t i = 0; i < layout.orders.size(); ++i) {
+    const SubmodelOrder& o = layout.orders[i];
+    require(o.n >= 0 && o.m >= 0 && o.integrators >= 0, name, ": submodel ", i + 1,
+            " has a negative order (n = ", o.n, ", m = ", o.m, ", integrators = ", o.integrators,
+            ")");
+    require(o.n + o.integrators >= 1, name, ": submodel ", i + 1,
+            " has no poles (n = 0 and no integrators)");
+    require(o.m <= o.n + o.integrators, name, ": submodel ", i + 1, " has m = ", o.m,
+            " > n + integrators = ", o.n + o.integrators, " (improper)");
+    if (o.m == o.n + o.integrators) ++biproper;
+    if (o.integrators > 0) ++integrating;
   }
+  require(biproper <= 1, name, ": ", biproper,
+          " submodels are biproper; at most one may be (the split would not be unique)");
+  require(integrating <= 1, name, ": ", integrating,
+          " submodels have integrators; at most one may have poles at the origin");
+}
+
+// Enough samples for the unknowns once the delays are taken off, and in closed loop a
+// reference and a controller at the data's sample time.
+void check_samples(const RefinedIvProblem& problem, const RefinedIvOptions& options,
+                   const Layout& layout, const SampledData& data, const std::string& name) {
+  const std::vector<const SampledData*>& records = problem.records;
   const int delay = options.input_delay;
   require(
       options.record_input_delays.empty() || options.record_input_delays.size() == records.size(),
       name, ": record_input_delays has ", options.record_input_delays.size(), " entries for ",
       records.size(), " records; give one per record or none");
-  // Whole samples by which each record's input is delayed: the model's delay plus the
-  // record's own (an acquisition that lags its input).
-  auto delay_of = [&](size_t r) {
-    return delay + (options.record_input_delays.empty() ? 0 : options.record_input_delays[r]);
-  };
-  int n_samples = 0;
-  for (const SampledData* record : records) n_samples += record->size();
-  const int p = layout.parameters;
+  const int n_samples = total_samples(records);
   const int unknowns = layout.augmented;  // with the free-response coefficients
   int lost = 0;
-  for (size_t r = 0; r < records.size(); ++r) lost += delay_of(r);
+  for (size_t r = 0; r < records.size(); ++r) lost += record_delay(options, r);
   require(n_samples - lost >= std::max(3 * unknowns, unknowns + 20), name, ": ", n_samples,
           " samples (input delay ", delay, ") are too few for ", unknowns,
           " parameters and initial conditions; at least ",
           std::max(3 * unknowns, unknowns + 20) + lost, " are needed");
-  const bool closed_loop = problem.controller != nullptr;
   const double h = data.sample_time();
-  if (closed_loop) {
+  if (problem.controller != nullptr) {
     require(data.has_reference(), name, ": closed-loop estimation needs a measured reference r");
     require(std::abs(problem.controller->sample_time() - h) <= 1e-9 * h, name,
             ": the controller's sample time ", problem.controller->sample_time(),
             " differs from the data's ", h);
   }
+}
 
-  // Assumption 1: persistency of excitation (of the best-excited record when there are several).
+// Assumption 1: persistency of excitation (of the best-excited record when there are several).
+DataChecks check_excitation(const RefinedIvProblem& problem, const Layout& layout,
+                            const std::string& name) {
+  const bool closed_loop = problem.controller != nullptr;
+  const int p = layout.parameters;
   DataChecks checks;
   const int nc = closed_loop ? problem.controller->denominator().degree() : 0;
   checks.excitation_order_required = 2 * layout.poles + nc;
-  for (const SampledData* record : records) {
+  for (const SampledData* record : problem.records) {
     const Eigen::VectorXd& excitation = closed_loop ? record->reference() : record->input();
     checks.excitation_order = std::max(
         checks.excitation_order,
@@ -968,8 +258,14 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
                               std::to_string(checks.excitation_order_required) +
                               " of Assumption 1; consistency is not guaranteed");
   }
+  return checks;
+}
 
-  // Starting point.
+// The starting point: options.initial_model laid out for the structure (grouped into its
+// submodels when it is not of that structure), or the start screened from the longest record.
+Eigen::VectorXd starting_point(const RefinedIvProblem& problem, const RefinedIvOptions& options,
+                               const Layout& layout, size_t longest_index, ScreenedStart* shared) {
+  const SampledData& data = *problem.records[longest_index];
   Eigen::VectorXd beta;
   if (options.initial_model) {
     const AdditiveModel& given = *options.initial_model;
@@ -986,18 +282,18 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
     } else {
       beta = parameters_for_orders(
           group_into_submodels(given.to_transfer_function().with_input_delay(0.0), layout.orders,
-                               data, delay_of(longest_index)),
+                               data, record_delay(options, longest_index)),
           layout.orders);
     }
   } else {
     ScreenedStart own_start;
     InitializationOptions init;
-    init.input_delay = delay_of(longest_index);
+    init.input_delay = record_delay(options, longest_index);
     init.method = options.start;
     init.screening_samples = options.start_screening_samples;
     // Closed loop: only starts the controller stabilises (decision 0011); an open-loop start
     // it does not stabilise would stop the iteration before its first step.
-    if (closed_loop) init.controller = *problem.controller;
+    if (problem.controller != nullptr) init.controller = *problem.controller;
     ScreenedStart& start = shared != nullptr ? *shared : own_start;
     if (!start.g) {
       const SubmodelOrder total =
@@ -1011,84 +307,135 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
                                    layout.orders);
     }
   }
-  require(beta.allFinite(), name, ": the initial model has a non-finite parameter");
+  return beta;
+}
 
-  const double tau = (delay + layout.delay_fraction) * h;
-  EstimationResult result{AdditiveModel::from_parameters(layout.orders, beta, tau),
-                          TransferFunction(Polynomial{1.0}, Polynomial{1.0})};
-  auto reflect_all = [&](Eigen::VectorXd& b) {
-    for (int i = 0; i < layout.size(); ++i) {
-      const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
-      if (o.n < 1) continue;
-      bool reflected = false;
-      const Polynomial a = reflect_unstable_roots(denominator_of(layout, b, i), reflected);
-      if (reflected) {
-        ++result.unstable_reflections;
-        for (int k = 1; k <= o.n; ++k) b(layout.offset[static_cast<size_t>(i)] + k - 1) = a[k];
-      }
-    }
-  };
-  reflect_all(beta);
-
-  std::vector<RecordSignals> signals(records.size());
-  Eigen::VectorXd y(n_samples);  // the records' outputs stacked
-  {
-    Eigen::Index at = 0;
-    for (size_t r = 0; r < records.size(); ++r) {
-      signals[r].u = delay_samples(records[r]->input(), delay_of(r));
-      signals[r].y = &records[r]->output();
-      signals[r].offset = at;
-      y.segment(at, records[r]->size()) = records[r]->output();
-      at += records[r]->size();
-    }
-  }
-  // S_uo r of every record (closed loop); false when the loop is unstable.
-  bool source = false;
-  auto update_source = [&](const Eigen::VectorXd& b) -> bool {
-    std::vector<Eigen::VectorXd> updated;  // all records or none: a failure keeps the last
-    for (size_t r = 0; r < records.size(); ++r) {
-      std::optional<Eigen::VectorXd> s = sensitivity_filtered_reference(
-          layout, b, *problem.controller, records[r]->reference(), h, delay_of(r));
-      if (!s) return false;
-      updated.push_back(std::move(*s));
-    }
-    for (size_t r = 0; r < records.size(); ++r) {
-      signals[r].source = delay_samples(updated[r], delay_of(r));
-      signals[r].undelayed_source = std::move(updated[r]);
-    }
-    source = true;
-    return true;
-  };
-
-  // Closed loop: the sum over the records of (y - G S_uo(G) r)^2 at b, from the S_uo r that
-  // update_source last formed for b (the model's output from the reference alone).
-  auto closed_loop_sse = [&](const Eigen::VectorXd& b) {
-    const AdditiveModel model = AdditiveModel::from_parameters(layout.orders, b, tau);
-    double sum = 0.0;
-    for (size_t r = 0; r < records.size(); ++r) {
-      const double own = (delay_of(r) - delay) * h;
-      sum += (records[r]->output() - model_output(model.with_input_delay(tau + own),
-                                                  signals[r].undelayed_source, h,
-                                                  Hold::zero_order_hold))
-                 .squaredNorm();
-    }
-    return sum;
-  };
+// What the phases of one estimate share: the problem, the layout, the stacked signals, the
+// current iterate and its free-response coefficients, and the result being filled in.
+struct Run {
+  const RefinedIvProblem& problem;
+  const RefinedIvOptions& options;
+  const std::string& name;
+  const std::vector<const SampledData*>& records;
+  Layout layout;
+  DataChecks checks;
+  int delay;
+  int n_samples;
+  int p;
+  int unknowns;  // with the free-response coefficients
+  bool closed_loop;
+  double h;
+  double tau;
+  EstimationResult result;
+  Eigen::VectorXd beta;
+  std::vector<RecordSignals> signals;
+  Eigen::VectorXd y;    // the records' outputs stacked
+  bool source = false;  // S_uo r of every record formed (closed loop)
   double start_closed_loop_sse = std::numeric_limits<double>::quiet_NaN();
   double closed_loop_sse_at_end = std::numeric_limits<double>::quiet_NaN();
-
-  Workspace workspace(layout);
+  double start_sse = std::numeric_limits<double>::quiet_NaN();
+  Workspace workspace;
   // Free-response coefficients (initial states of each submodel's 1/(p^l A_i) realisation at
   // the current iterate), taken from the last solution of (29); empty with `zero`.
-  Eigen::VectorXd initial_states = Eigen::VectorXd::Zero(layout.augmented - p);
-  Eigen::VectorXd states_at = beta;  // the iterate whose realisations they refer to
-  result.termination = Termination::iteration_limit;
-  bool stopped = false;
-  if (closed_loop && update_source(beta)) {
-    start_closed_loop_sse = closed_loop_sse(beta);
-  } else if (closed_loop) {
-    result.termination = Termination::closed_loop_unstable;
-    result.message =
+  Eigen::VectorXd initial_states;
+  Eigen::VectorXd states_at;  // the iterate whose realisations they refer to
+  bool loop_unstable = false;
+
+  Run(const RefinedIvProblem& pr, const RefinedIvOptions& op, const std::string& n, Layout l,
+      DataChecks c, const Eigen::VectorXd& start, double sample_time)
+      : problem(pr),
+        options(op),
+        name(n),
+        records(pr.records),
+        layout(std::move(l)),
+        checks(std::move(c)),
+        delay(op.input_delay),
+        n_samples(total_samples(pr.records)),
+        p(layout.parameters),
+        unknowns(layout.augmented),
+        closed_loop(pr.controller != nullptr),
+        h(sample_time),
+        tau((delay + layout.delay_fraction) * h),
+        result{AdditiveModel::from_parameters(layout.orders, start, tau),
+               TransferFunction(Polynomial{1.0}, Polynomial{1.0})},
+        beta(start),
+        signals(pr.records.size()),
+        y(n_samples),
+        workspace(layout) {}
+
+  int delay_of(size_t r) const { return record_delay(options, r); }
+};
+
+// Right-half-plane roots of every A_i in b reflected, counted in the result.
+void reflect_all(Run& run, Eigen::VectorXd& b) {
+  const Layout& layout = run.layout;
+  for (int i = 0; i < layout.size(); ++i) {
+    const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+    if (o.n < 1) continue;
+    bool reflected = false;
+    const Polynomial a = reflect_unstable_roots(denominator_of(layout, b, i), reflected);
+    if (reflected) {
+      ++run.result.unstable_reflections;
+      for (int k = 1; k <= o.n; ++k) b(layout.offset[static_cast<size_t>(i)] + k - 1) = a[k];
+    }
+  }
+}
+
+// Each record's delayed input and its output, and the outputs stacked.
+void stack_signals(Run& run) {
+  Eigen::Index at = 0;
+  for (size_t r = 0; r < run.records.size(); ++r) {
+    run.signals[r].u = delay_samples(run.records[r]->input(), run.delay_of(r));
+    run.signals[r].y = &run.records[r]->output();
+    run.signals[r].offset = at;
+    run.y.segment(at, run.records[r]->size()) = run.records[r]->output();
+    at += run.records[r]->size();
+  }
+}
+
+// S_uo r of every record (closed loop) at b; false when the loop is unstable.
+bool update_source(Run& run, const Eigen::VectorXd& b) {
+  std::vector<Eigen::VectorXd> updated;  // all records or none: a failure keeps the last
+  for (size_t r = 0; r < run.records.size(); ++r) {
+    std::optional<Eigen::VectorXd> s =
+        sensitivity_filtered_reference(run.layout, b, *run.problem.controller,
+                                       run.records[r]->reference(), run.h, run.delay_of(r));
+    if (!s) return false;
+    updated.push_back(std::move(*s));
+  }
+  for (size_t r = 0; r < run.records.size(); ++r) {
+    run.signals[r].source = delay_samples(updated[r], run.delay_of(r));
+    run.signals[r].undelayed_source = std::move(updated[r]);
+  }
+  run.source = true;
+  return true;
+}
+
+// Closed loop: the sum over the records of (y - G S_uo(G) r)^2 at b, from the S_uo r that
+// update_source last formed for b (the model's output from the reference alone).
+double closed_loop_sse(const Run& run, const Eigen::VectorXd& b) {
+  const AdditiveModel model = AdditiveModel::from_parameters(run.layout.orders, b, run.tau);
+  double sum = 0.0;
+  for (size_t r = 0; r < run.records.size(); ++r) {
+    const double own = (run.delay_of(r) - run.delay) * run.h;
+    sum += (run.records[r]->output() - model_output(model.with_input_delay(run.tau + own),
+                                                    run.signals[r].undelayed_source, run.h,
+                                                    Hold::zero_order_hold))
+               .squaredNorm();
+  }
+  return sum;
+}
+
+// Closed loop: S_uo r at the start, or the reason the iteration cannot begin. Returns whether
+// the iteration is stopped before its first step.
+bool start_loop(Run& run) {
+  if (run.closed_loop && update_source(run, run.beta)) {
+    run.start_closed_loop_sse = closed_loop_sse(run, run.beta);
+  } else if (run.closed_loop) {
+    const RefinedIvOptions& options = run.options;
+    const std::string& name = run.name;
+    run.result.termination = Termination::closed_loop_unstable;
+    run.result.message =
         options.initial_model
             ? name +
                   ": the controller does not stabilise the initial model, so S_uo r "
@@ -1104,126 +451,158 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
                   std::to_string(InitializationOptions::kStartGainHalvings) +
                   " times and refined by CLSRIVC), so S_uo r (instrument (20)) cannot be formed; "
                   "give a model the controller stabilises";
-    stopped = true;
+    return true;
   }
+  return false;
+}
 
-  // Step control: a full step of (29) at which the equations are singular or non-finite is
-  // halved toward the last accepted iterate instead of ending the iteration. Accepted steps
-  // are the plain iteration, so every fixed point of (29) is still one of this iteration.
-  const bool control = options.step_control;
+// Step control: a full step of (29) at which the equations are singular or non-finite is
+// halved toward the last accepted iterate instead of ending the iteration. Accepted steps
+// are the plain iteration, so every fixed point of (29) is still one of this iteration.
+// The iterate with the lowest output error seen (the start included) is returned instead of
+// the last one when the iteration did not converge and the last one fits worse.
+struct StepControl {
   Eigen::VectorXd accepted;
   int halvings = 0;  // of the current step
-  // The iterate with the lowest output error seen (the start included): returned instead of
-  // the last one when the iteration did not converge and the last one fits worse.
-  double start_sse = std::numeric_limits<double>::quiet_NaN();
   double best_sse = std::numeric_limits<double>::infinity();
   Eigen::VectorXd best_beta;
   int best_iteration = 0;
-  int iteration = 1;
-  while (!stopped && iteration <= options.max_iterations) {
-    bool source_ok = true;
-    if (closed_loop && iteration > 1) source_ok = update_source(beta);
-    Moments sums;
-    double sse = 0.0;
-    evaluate(layout, beta, initial_states, signals, source, h, options.output_interpolation,
-             workspace, &sums, nullptr, nullptr, &sse);
-    if (std::isnan(start_sse)) start_sse = sse;
-    if (std::isfinite(sse) && !(sse >= best_sse)) {
-      best_sse = sse;
-      best_beta = beta;
-      best_iteration = iteration - 1;
-    }
-    const bool finite = sums.all_finite();
-    Eigen::VectorXd sz;
-    Eigen::VectorXd sp;
-    Eigen::MatrixXd m;
-    double rcond = 0.0;
-    std::optional<Eigen::JacobiSVD<Eigen::MatrixXd>> svd;
-    if (finite) {
-      sz = norms_from_squares(sums.zz);
-      sp = norms_from_squares(sums.pp);
-      m = sz.cwiseInverse().asDiagonal() * sums.zp * sp.cwiseInverse().asDiagonal();
-      svd.emplace(m);
-      const Eigen::VectorXd& sv = svd->singularValues();
-      rcond = sv(sv.size() - 1) / sv(0);
-      result.reciprocal_condition = rcond;
-    }
-    if (control && accepted.size() > 0 && halvings < options.max_step_halvings &&
-        (!finite || !(rcond > 1e-14))) {
-      beta = 0.5 * (accepted + beta);
-      ++halvings;
-      ++result.step_halvings;
-      continue;
-    }
-    if (!source_ok) ++result.sensitivity_fallbacks;
-    if (!finite) {
-      result.termination = Termination::non_finite;
-      result.message = name + ": the filtered signals became non-finite at iteration " +
-                       std::to_string(iteration) + "; the last finite iterate is returned";
-      break;
-    }
-    const Eigen::MatrixXd rhs = sz.cwiseInverse().asDiagonal() * sums.zy;
-    if (!(rcond > 1e-14)) {
-      result.termination = Termination::singular_equations;
-      result.message = name +
-                       ": the instrument-regressor matrix of eq. (29) is numerically "
-                       "singular at iteration " +
-                       std::to_string(iteration) + " (reciprocal condition " +
-                       format_significant(rcond, 3) +
-                       "): the data do not excite the model enough or the orders are too high";
-      break;
-    }
-    accepted = beta;
-    halvings = 0;
-    const Eigen::MatrixXd solution =
-        sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(m.fullPivLu().solve(rhs));
-    Eigen::VectorXd next(p);
-    Eigen::MatrixXd off = solution.topRows(p);
-    for (int i = 0; i < layout.size(); ++i) {
-      const int o = layout.offset[static_cast<size_t>(i)];
-      next.segment(o, layout.count(i)) = solution.block(o, i, layout.count(i), 1);
-      off.block(o, i, layout.count(i), 1).setZero();
-    }
-    if (!next.allFinite()) {
-      result.termination = Termination::non_finite;
-      result.message = name + ": iteration " + std::to_string(iteration) +
-                       " produced a non-finite parameter; the last finite iterate is returned";
-      break;
-    }
-    reflect_all(next);
-    const double change = relative_change(layout, beta, next);
-    result.off_diagonal_norm = off.norm() / std::max(next.norm(), 1e-300);
-    result.relative_change = change;
-    result.iterations = iteration;
-    initial_states = free_response_coefficients(layout, solution);
-    states_at = beta;
-    beta = next;
-    if (options.record_history) {
-      result.history.push_back({iteration, beta, change, result.off_diagonal_norm});
-    }
-    if (change < options.tolerance) {
-      result.termination = Termination::converged;
-      result.message = name + ": converged after " + std::to_string(iteration) +
-                       " iterations (relative parameter change " + format_significant(change, 3) +
-                       " < tolerance " + format_significant(options.tolerance, 3) + ")";
-      break;
-    }
-    ++iteration;
-  }
-  if (result.termination == Termination::iteration_limit) {
-    result.message = name + ": stopped at the iteration limit (" +
-                     std::to_string(options.max_iterations) + ") with relative parameter change " +
-                     format_significant(result.relative_change, 3) + ", above the tolerance " +
-                     format_significant(options.tolerance, 3);
-  }
+};
 
-  Eigen::VectorXd residual;
+// The equations of (29) at the iterate with unit-norm columns, and their reciprocal condition.
+struct ScaledEquations {
+  bool finite = false;
+  Eigen::VectorXd sz;
+  Eigen::VectorXd sp;
+  Eigen::MatrixXd m;
+  double rcond = 0.0;
+};
+
+ScaledEquations scaled_equations(const Moments& sums, EstimationResult& result) {
+  ScaledEquations e;
+  e.finite = sums.all_finite();
+  std::optional<Eigen::JacobiSVD<Eigen::MatrixXd>> svd;
+  if (e.finite) {
+    e.sz = norms_from_squares(sums.zz);
+    e.sp = norms_from_squares(sums.pp);
+    e.m = e.sz.cwiseInverse().asDiagonal() * sums.zp * e.sp.cwiseInverse().asDiagonal();
+    svd.emplace(e.m);
+    const Eigen::VectorXd& sv = svd->singularValues();
+    e.rcond = sv(sv.size() - 1) / sv(0);
+    result.reciprocal_condition = e.rcond;
+  }
+  return e;
+}
+
+enum class StepOutcome { halved, stopped, taken };
+
+// The step from the solution of (29): each submodel's block of its own column, the
+// off-block-diagonal remainder (Lemma 4.4), and the stopping rule.
+StepOutcome take_step(Run& run, const ScaledEquations& e, const Eigen::MatrixXd& rhs,
+                      int iteration) {
+  const Layout& layout = run.layout;
+  EstimationResult& result = run.result;
+  const Eigen::MatrixXd solution =
+      e.sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(e.m.fullPivLu().solve(rhs));
+  Eigen::VectorXd next(run.p);
+  Eigen::MatrixXd off = solution.topRows(run.p);
+  for (int i = 0; i < layout.size(); ++i) {
+    const int o = layout.offset[static_cast<size_t>(i)];
+    next.segment(o, layout.count(i)) = solution.block(o, i, layout.count(i), 1);
+    off.block(o, i, layout.count(i), 1).setZero();
+  }
+  if (!next.allFinite()) {
+    result.termination = Termination::non_finite;
+    result.message = run.name + ": iteration " + std::to_string(iteration) +
+                     " produced a non-finite parameter; the last finite iterate is returned";
+    return StepOutcome::stopped;
+  }
+  reflect_all(run, next);
+  const double change = relative_change(layout, run.beta, next);
+  result.off_diagonal_norm = off.norm() / std::max(next.norm(), 1e-300);
+  result.relative_change = change;
+  result.iterations = iteration;
+  run.initial_states = free_response_coefficients(layout, solution);
+  run.states_at = run.beta;
+  run.beta = next;
+  if (run.options.record_history) {
+    result.history.push_back({iteration, run.beta, change, result.off_diagonal_norm});
+  }
+  if (change < run.options.tolerance) {
+    result.termination = Termination::converged;
+    result.message = run.name + ": converged after " + std::to_string(iteration) +
+                     " iterations (relative parameter change " + format_significant(change, 3) +
+                     " < tolerance " + format_significant(run.options.tolerance, 3) + ")";
+    return StepOutcome::stopped;
+  }
+  return StepOutcome::taken;
+}
+
+// One pass of (29) at the current iterate: its sums and output error, then a halved step, a
+// stop (non-finite or singular equations, convergence) or the next iterate.
+StepOutcome iteration_step(Run& run, StepControl& control, int iteration) {
+  EstimationResult& result = run.result;
+  const RefinedIvOptions& options = run.options;
+  bool source_ok = true;
+  if (run.closed_loop && iteration > 1) source_ok = update_source(run, run.beta);
+  Moments sums;
   double sse = 0.0;
-  if (!result.converged() && best_beta.size() > 0) {
-    evaluate(layout, beta, initial_states, signals, false, h, options.output_interpolation,
-             workspace, nullptr, nullptr, nullptr, &sse);
-    if (!(sse <= best_sse)) {
-      beta = best_beta;
+  evaluate(run.layout, run.beta, run.initial_states, run.signals, run.source, run.h,
+           options.output_interpolation, run.workspace, &sums, nullptr, nullptr, &sse);
+  if (std::isnan(run.start_sse)) run.start_sse = sse;
+  if (std::isfinite(sse) && !(sse >= control.best_sse)) {
+    control.best_sse = sse;
+    control.best_beta = run.beta;
+    control.best_iteration = iteration - 1;
+  }
+  const ScaledEquations e = scaled_equations(sums, result);
+  if (options.step_control && control.accepted.size() > 0 &&
+      control.halvings < options.max_step_halvings && (!e.finite || !(e.rcond > 1e-14))) {
+    run.beta = 0.5 * (control.accepted + run.beta);
+    ++control.halvings;
+    ++result.step_halvings;
+    return StepOutcome::halved;
+  }
+  if (!source_ok) ++result.sensitivity_fallbacks;
+  if (!e.finite) {
+    result.termination = Termination::non_finite;
+    result.message = run.name + ": the filtered signals became non-finite at iteration " +
+                     std::to_string(iteration) + "; the last finite iterate is returned";
+    return StepOutcome::stopped;
+  }
+  const Eigen::MatrixXd rhs = e.sz.cwiseInverse().asDiagonal() * sums.zy;
+  if (!(e.rcond > 1e-14)) {
+    result.termination = Termination::singular_equations;
+    result.message = run.name +
+                     ": the instrument-regressor matrix of eq. (29) is numerically "
+                     "singular at iteration " +
+                     std::to_string(iteration) + " (reciprocal condition " +
+                     format_significant(e.rcond, 3) +
+                     "): the data do not excite the model enough or the orders are too high";
+    return StepOutcome::stopped;
+  }
+  control.accepted = run.beta;
+  control.halvings = 0;
+  return take_step(run, e, rhs, iteration);
+}
+
+// Not converged: the last iterate, or the best one seen when the last fits worse.
+void keep_best_iterate(Run& run, const StepControl& control) {
+  EstimationResult& result = run.result;
+  if (result.termination == Termination::iteration_limit) {
+    result.message = run.name + ": stopped at the iteration limit (" +
+                     std::to_string(run.options.max_iterations) +
+                     ") with relative parameter change " +
+                     format_significant(result.relative_change, 3) + ", above the tolerance " +
+                     format_significant(run.options.tolerance, 3);
+  }
+  double sse = 0.0;
+  if (!result.converged() && control.best_beta.size() > 0) {
+    evaluate(run.layout, run.beta, run.initial_states, run.signals, false, run.h,
+             run.options.output_interpolation, run.workspace, nullptr, nullptr, nullptr, &sse);
+    if (!(sse <= control.best_sse)) {
+      run.beta = control.best_beta;
+      const int best_iteration = control.best_iteration;
       result.message +=
           "; the iterate with the lowest output error (" +
           (best_iteration == 0 ? std::string("the start")
@@ -1235,14 +614,31 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
   if (!result.converged() && result.iterations == 0) {
     result.message += "; no step was completed, so the model is the start";
   }
+}
 
-  // The estimate and its statistics.
-  result.parameters = beta;
-  result.input_delay = delay;
-  result.input_delay_fraction = layout.delay_fraction;
-  result.model = AdditiveModel::from_parameters(layout.orders, beta, tau);
+// The iteration (29) from the start, with step control, up to convergence or a stop.
+void iterate(Run& run, bool stopped) {
+  StepControl control;
+  int iteration = 1;
+  while (!stopped && iteration <= run.options.max_iterations) {
+    const StepOutcome outcome = iteration_step(run, control, iteration);
+    if (outcome == StepOutcome::halved) continue;
+    if (outcome == StepOutcome::stopped) break;
+    ++iteration;
+  }
+  keep_best_iterate(run, control);
+}
+
+// The estimate in every form the result holds, and in closed loop whether the controller
+// holds it and its closed-loop output error.
+void set_estimate(Run& run) {
+  EstimationResult& result = run.result;
+  result.parameters = run.beta;
+  result.input_delay = run.delay;
+  result.input_delay_fraction = run.layout.delay_fraction;
+  result.model = AdditiveModel::from_parameters(run.layout.orders, run.beta, run.tau);
   result.transfer_function = result.model.to_transfer_function();
-  if (problem.unfactored) {
+  if (run.problem.unfactored) {
     try {
       result.additive_view = AdditiveModel::from_transfer_function(result.transfer_function);
     } catch (const InvalidArgument&) {
@@ -1253,105 +649,129 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
   }
   // Stopped before the first step because the controller does not stabilise the start: the
   // returned model is that start, which cannot describe the recorded loop.
-  bool loop_unstable = closed_loop && result.termination == Termination::closed_loop_unstable &&
-                       result.iterations == 0;
-  if (closed_loop && result.termination != Termination::closed_loop_unstable) {
-    if (update_source(beta)) {
-      closed_loop_sse_at_end = closed_loop_sse(beta);
+  run.loop_unstable = run.closed_loop && result.termination == Termination::closed_loop_unstable &&
+                      result.iterations == 0;
+  if (run.closed_loop && result.termination != Termination::closed_loop_unstable) {
+    if (update_source(run, run.beta)) {
+      run.closed_loop_sse_at_end = closed_loop_sse(run, run.beta);
     } else {
       ++result.sensitivity_fallbacks;
-      loop_unstable = true;
+      run.loop_unstable = true;
     }
   }
-  if (layout.free_responses() && result.iterations > 0) {
-    // The loop's free-response coefficients come from the solve at the previous iterate;
-    // one more solve of (29) at the returned beta gives them in its own realisations.
-    Moments sums;
-    evaluate(layout, beta, initial_states, signals, source, h, options.output_interpolation,
-             workspace, &sums, nullptr, nullptr);
-    if (std::optional<Eigen::MatrixXd> solution = solve_scaled(sums)) {
-      initial_states = free_response_coefficients(layout, *solution);
-      states_at = beta;
-    }
+}
+
+// The loop's free-response coefficients come from the solve at the previous iterate; one more
+// solve of (29) at the returned beta gives them in its own realisations.
+void refresh_free_responses(Run& run) {
+  if (!(run.layout.free_responses() && run.result.iterations > 0)) return;
+  Moments sums;
+  evaluate(run.layout, run.beta, run.initial_states, run.signals, run.source, run.h,
+           run.options.output_interpolation, run.workspace, &sums, nullptr, nullptr);
+  if (std::optional<Eigen::MatrixXd> solution = solve_scaled(sums)) {
+    run.initial_states = free_response_coefficients(run.layout, *solution);
+    run.states_at = run.beta;
   }
-  // The delay's column of the instrument: the sensitivity of the noise-free model output to
-  // tau, as the other columns are theirs to the parameters (a central difference within the
-  // sample interval, where the held input makes the output smooth in tau).
-  Eigen::VectorXd delay_column;
+}
+
+// The delay's column of the instrument: the sensitivity of the noise-free model output to
+// tau, as the other columns are theirs to the parameters (a central difference within the
+// sample interval, where the held input makes the output smooth in tau).
+Eigen::VectorXd delay_column(const Run& run) {
+  const Hold hold = run.closed_loop ? Hold::zero_order_hold : run.layout.input_hold;
+  const double h = run.h;
+  const double step = 1e-4;
+  const double f = run.layout.delay_fraction;
+  const double up = f + step < 1.0 ? step : 0.0;
+  const double down = f - step >= 0.0 ? step : 0.0;
+  auto output_at = [&](double shift) {
+    Eigen::VectorXd out(run.n_samples);
+    for (size_t r = 0; r < run.records.size(); ++r) {
+      const Eigen::VectorXd& driven =
+          run.closed_loop ? run.signals[r].undelayed_source : run.records[r]->input();
+      const double own = (run.delay_of(r) - run.delay) * h;
+      out.segment(run.signals[r].offset, run.records[r]->size()) = model_output(
+          run.result.model.with_input_delay(run.tau + own + shift * h), driven, h, hold);
+    }
+    return out;
+  };
+  return (output_at(up) - output_at(-down)) / ((up + down) * h);
+}
+
+// The start's fit and, in closed loop, the closed-loop fits from r, from the same definition
+// as the estimate's: 100 (1 - ||e|| / ||y - mean(y)||).
+void set_start_fits(Run& run) {
+  EstimationResult& result = run.result;
+  const Eigen::VectorXd& y = run.y;
+  const double spread = (y.array() - y.mean()).matrix().norm();
+  result.start_fit_percent = std::isnan(run.start_sse) ? result.fit_percent
+                             : spread > 0.0 ? 100.0 * (1.0 - std::sqrt(run.start_sse) / spread)
+                                            : std::numeric_limits<double>::quiet_NaN();
+  if (spread > 0.0) {
+    result.closed_loop_fit_percent = 100.0 * (1.0 - std::sqrt(run.closed_loop_sse_at_end) / spread);
+    result.start_closed_loop_fit_percent =
+        100.0 * (1.0 - std::sqrt(run.start_closed_loop_sse) / spread);
+  }
+}
+
+// The residual pass at the estimate (with the instrument's sums when the covariance is asked)
+// and the statistics of the fit; then the covariance of beta (and of the delay when it is
+// estimated) and the modal estimates.
+void set_statistics(Run& run) {
+  const RefinedIvOptions& options = run.options;
+  const Layout& layout = run.layout;
+  EstimationResult& result = run.result;
+  Eigen::VectorXd delay_col;
   const bool delay_column_used =
-      options.compute_covariance && options.delay_estimated && beta.allFinite();
-  if (delay_column_used) {
-    const Hold hold = closed_loop ? Hold::zero_order_hold : layout.input_hold;
-    const double step = 1e-4;
-    const double f = layout.delay_fraction;
-    const double up = f + step < 1.0 ? step : 0.0;
-    const double down = f - step >= 0.0 ? step : 0.0;
-    auto output_at = [&](double shift) {
-      Eigen::VectorXd out(n_samples);
-      for (size_t r = 0; r < records.size(); ++r) {
-        const Eigen::VectorXd& driven =
-            closed_loop ? signals[r].undelayed_source : records[r]->input();
-        const double own = (delay_of(r) - delay) * h;
-        out.segment(signals[r].offset, records[r]->size()) =
-            model_output(result.model.with_input_delay(tau + own + shift * h), driven, h, hold);
-      }
-      return out;
-    };
-    delay_column = (output_at(up) - output_at(-down)) / ((up + down) * h);
-  }
+      options.compute_covariance && options.delay_estimated && run.beta.allFinite();
+  if (delay_column_used) delay_col = delay_column(run);
   InstrumentPass instrument;
-  instrument.extra = delay_column_used ? &delay_column : nullptr;
+  instrument.extra = delay_column_used ? &delay_col : nullptr;
   instrument.keep_checkpoints =
-      options.noise != NoiseAssumption::white && !problem.stored_instrument_covariance;
+      options.noise != NoiseAssumption::white && !run.problem.stored_instrument_covariance;
   Eigen::MatrixXd stored_psi;
-  if (problem.stored_instrument_covariance) instrument.stored = &stored_psi;
-  evaluate(layout, beta, initial_states, signals, source, h, options.output_interpolation,
-           workspace, nullptr, &residual, options.compute_covariance ? &instrument : nullptr);
-  sse = residual.squaredNorm();
-  result.mean_squared_error = sse / n_samples;
-  result.noise_variance = sse / std::max(n_samples - unknowns, 1);
-  result.fit_percent = fit_percent(y, y - residual);
+  if (run.problem.stored_instrument_covariance) instrument.stored = &stored_psi;
+  Eigen::VectorXd residual;
+  evaluate(layout, run.beta, run.initial_states, run.signals, run.source, run.h,
+           options.output_interpolation, run.workspace, nullptr, &residual,
+           options.compute_covariance ? &instrument : nullptr);
+  const double sse = residual.squaredNorm();
+  result.mean_squared_error = sse / run.n_samples;
+  result.noise_variance = sse / std::max(run.n_samples - run.unknowns, 1);
+  result.fit_percent = fit_percent(run.y, run.y - residual);
   if (layout.free_responses())
-    result.initial_conditions = free_response_derivatives(layout, states_at, initial_states);
-  {
-    // The start's fit, from the same definition: 100 (1 - ||e|| / ||y - mean(y)||).
-    const double spread = (y.array() - y.mean()).matrix().norm();
-    result.start_fit_percent = std::isnan(start_sse) ? result.fit_percent
-                               : spread > 0.0        ? 100.0 * (1.0 - std::sqrt(start_sse) / spread)
-                                                     : std::numeric_limits<double>::quiet_NaN();
-    if (spread > 0.0) {
-      result.closed_loop_fit_percent = 100.0 * (1.0 - std::sqrt(closed_loop_sse_at_end) / spread);
-      result.start_closed_loop_fit_percent =
-          100.0 * (1.0 - std::sqrt(start_closed_loop_sse) / spread);
-    }
+    result.initial_conditions =
+        free_response_derivatives(layout, run.states_at, run.initial_states);
+  set_start_fits(run);
+  if (!(options.compute_covariance && instrument.gram.allFinite() && residual.allFinite())) return;
+  // With free responses the joint covariance of beta and their coefficients; its beta
+  // block is the covariance of beta with the nuisance coefficients estimated alongside.
+  const int joint_unknowns = run.unknowns + (delay_column_used ? 1 : 0);
+  const Eigen::MatrixXd joint =
+      run.problem.stored_instrument_covariance
+          ? instrumental_variable_covariance(stored_psi, residual, joint_unknowns, options.noise,
+                                             options.noise_model_max_order)
+          : covariance_from_gram(instrument.gram, residual, joint_unknowns, options.noise,
+                                 options.noise_model_max_order,
+                                 [&](const AutoregressiveModel& ar, const Eigen::VectorXd& scales) {
+                                   return adjoint_instrument_sum(
+                                       layout, run.beta, run.initial_states, run.signals,
+                                       run.source, run.h, options.output_interpolation,
+                                       run.workspace, instrument, ar, scales);
+                                 });
+  result.covariance = joint.topLeftCorner(run.p, run.p);
+  if (delay_column_used) {
+    result.delay_standard_error = std::sqrt(std::max(joint(run.unknowns, run.unknowns), 0.0));
   }
+  result.standard_errors = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  result.modes = modal_estimates(result.model, result.covariance, run.problem.unfactored);
+}
 
-  if (options.compute_covariance && instrument.gram.allFinite() && residual.allFinite()) {
-    // With free responses the joint covariance of beta and their coefficients; its beta
-    // block is the covariance of beta with the nuisance coefficients estimated alongside.
-    const int joint_unknowns = unknowns + (delay_column_used ? 1 : 0);
-    const Eigen::MatrixXd joint =
-        problem.stored_instrument_covariance
-            ? instrumental_variable_covariance(stored_psi, residual, joint_unknowns, options.noise,
-                                               options.noise_model_max_order)
-            : covariance_from_gram(
-                  instrument.gram, residual, joint_unknowns, options.noise,
-                  options.noise_model_max_order,
-                  [&](const AutoregressiveModel& ar, const Eigen::VectorXd& scales) {
-                    return adjoint_instrument_sum(layout, beta, initial_states, signals, source, h,
-                                                  options.output_interpolation, workspace,
-                                                  instrument, ar, scales);
-                  });
-    result.covariance = joint.topLeftCorner(p, p);
-    if (delay_column_used) {
-      result.delay_standard_error = std::sqrt(std::max(joint(unknowns, unknowns), 0.0));
-    }
-    result.standard_errors = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-    result.modes = modal_estimates(result.model, result.covariance, problem.unfactored);
-  }
-
-  // Assumption 4.
-  checks.nyquist_frequency = M_PI / h;
+// Assumption 4 on the estimate, then the verdict.
+void judge(Run& run) {
+  DataChecks& checks = run.checks;
+  EstimationResult& result = run.result;
+  checks.nyquist_frequency = M_PI / run.h;
   checks.largest_pole_frequency = largest_pole_frequency(result.model);
   checks.sampling_rate_ok = checks.largest_pole_frequency < checks.nyquist_frequency;
   if (!checks.sampling_rate_ok) {
@@ -1362,8 +782,43 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
                               " rad/s (Assumption 4): sample faster or lower the model order");
   }
   result.checks = std::move(checks);
-  result.verdict = refined_iv_verdict(result, closed_loop, loop_unstable);
-  return result;
+  result.verdict = refined_iv_verdict(result, run.closed_loop, run.loop_unstable);
+}
+
+}  // namespace
+}  // namespace srivc_engine
+
+EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
+                                           const RefinedIvOptions& options, ScreenedStart* shared) {
+  namespace se = srivc_engine;
+  options.validate();
+  const std::string name = problem.name;
+  const size_t longest_index = se::check_records(problem.records, name);
+  const SampledData& data = *problem.records[longest_index];
+  se::Layout layout(problem.orders, options.initial_conditions == InitialConditions::estimate,
+                    static_cast<int>(problem.records.size()));
+  layout.input_hold = data.input_hold();
+  layout.delay_fraction = options.input_delay_fraction;
+  se::check_orders(layout, name);
+  se::check_samples(problem, options, layout, data, name);
+  DataChecks checks = se::check_excitation(problem, layout, name);
+  const Eigen::VectorXd beta = se::starting_point(problem, options, layout, longest_index, shared);
+  require(beta.allFinite(), name, ": the initial model has a non-finite parameter");
+
+  se::Run run(problem, options, name, std::move(layout), std::move(checks), beta,
+              data.sample_time());
+  se::reflect_all(run, run.beta);
+  se::stack_signals(run);
+  run.initial_states = Eigen::VectorXd::Zero(run.layout.augmented - run.p);
+  run.states_at = run.beta;
+  run.result.termination = Termination::iteration_limit;
+  const bool stopped = se::start_loop(run);
+  se::iterate(run, stopped);
+  se::set_estimate(run);
+  se::refresh_free_responses(run);
+  se::set_statistics(run);
+  se::judge(run);
+  return std::move(run.result);
 }
 
 namespace {

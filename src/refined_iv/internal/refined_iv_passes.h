@@ -1,0 +1,195 @@
+// The streamed passes of the refined IV iteration (29) behind SRIVC, CLSRIVC and the additive
+// estimators: the augmented parameter layout, the per-record filter banks run block by block
+// over the data, and the sums and instrument Gram matrix they leave. Split out of
+// refined_iv.cc so that the driver there reads as the algorithm's phases; private to
+// refined_iv.
+#pragma once
+
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ctid/core/additive_model.h"
+#include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/hold.h"
+#include "ctid/core/polynomial.h"
+#include "ctid/core/sampled_data.h"
+#include "ctid/filtering/filter_bank.h"
+#include "ctid/refined_iv/covariance.h"
+#include "ctid/refined_iv/refined_iv_options.h"
+
+namespace ctid::internal::srivc_engine {
+
+// The augmented vector of (29): beta first, then (InitialConditions::estimate) the n_i + l_i
+// free-response coefficients of every submodel in every record, so the parameter block of any
+// joint matrix is its top-left p x p corner.
+struct Layout {
+  std::vector<SubmodelOrder> orders;
+  std::vector<int> offset;
+  std::vector<int> free_offset;  // of record r's submodel i: [r * K + i]
+  int parameters = 0;
+  int poles = 0;      // sum n_i + l_i
+  int records = 1;    // each with its own initial state
+  int augmented = 0;  // parameters, plus records * poles when initial conditions are estimated
+  Hold input_hold = Hold::zero_order_hold;  // how the measured input behaves between samples
+  double delay_fraction = 0.0;              // of a sample, on top of the whole-sample delay
+
+  Layout(std::vector<SubmodelOrder> o, bool initial_conditions, int record_count)
+      : orders(std::move(o)), records(record_count) {
+    for (const SubmodelOrder& s : orders) {
+      offset.push_back(parameters);
+      parameters += s.n + s.m + 1;
+      poles += s.n + s.integrators;
+    }
+    augmented = parameters;
+    if (initial_conditions) {
+      for (int r = 0; r < records; ++r) {
+        for (const SubmodelOrder& s : orders) {
+          free_offset.push_back(augmented);
+          augmented += s.n + s.integrators;
+        }
+      }
+    }
+  }
+  explicit Layout(std::vector<SubmodelOrder> o) : Layout(std::move(o), false, 1) {}
+  bool free_responses() const { return augmented > parameters; }
+  int free_at(int record, int i) const {
+    return free_offset[static_cast<size_t>(record * size() + i)];
+  }
+  int states(int i) const {
+    return orders[static_cast<size_t>(i)].n + orders[static_cast<size_t>(i)].integrators;
+  }
+  int size() const { return static_cast<int>(orders.size()); }
+  int count(int i) const {
+    return orders[static_cast<size_t>(i)].n + orders[static_cast<size_t>(i)].m + 1;
+  }
+};
+
+// Rows of the record processed together: the block buffers (a few times kBlock x p doubles)
+// stay in cache, and the sums of eq. (29) are formed block by block, so no N x p matrix is
+// ever stored during the iteration.
+constexpr Eigen::Index kBlock = 256;
+
+// Sums of eq. (29) over the record: Z'Phi, Z'Upsilon and the squared column norms of the
+// instrument Z and regressor Phi (for the unit-norm scaling).
+struct Moments {
+  Eigen::MatrixXd zp;  // p x p
+  Eigen::MatrixXd zy;  // p x K
+  Eigen::VectorXd zz;  // p
+  Eigen::VectorXd pp;  // p
+
+  bool all_finite() const {
+    return zp.allFinite() && zy.allFinite() && zz.allFinite() && pp.allFinite();
+  }
+};
+
+// Block buffers reused by every pass of one estimate.
+struct Workspace {
+  Eigen::MatrixXd instrument;  // kBlock x p
+  Eigen::MatrixXd regressor;   // kBlock x p
+  Eigen::MatrixXd filtered;    // kBlock x K, Upsilon (26)
+  Eigen::MatrixXd outputs;     // kBlock x K, G_i u
+  Eigen::VectorXd total;       // kBlock
+  Eigen::VectorXd residual_output;
+  std::vector<Eigen::MatrixXd> source_out;
+  std::vector<Eigen::MatrixXd> input_out;
+  std::vector<Eigen::MatrixXd> output_out;
+
+  explicit Workspace(const Layout& layout)
+      : instrument(kBlock, layout.augmented),
+        regressor(kBlock, layout.augmented),
+        filtered(kBlock, layout.size()),
+        outputs(kBlock, layout.size()),
+        total(kBlock),
+        residual_output(kBlock),
+        source_out(static_cast<size_t>(layout.size())),
+        input_out(static_cast<size_t>(layout.size())),
+        output_out(static_cast<size_t>(layout.size())) {}
+};
+
+// One record's signals: the input delayed by the whole samples of the delay, the output, and
+// in closed loop S_uo r (delayed likewise) and S_uo r itself; `offset` is the row of its
+// first sample in the stacked residual and instrument.
+struct RecordSignals {
+  Eigen::VectorXd u;
+  const Eigen::VectorXd* y = nullptr;
+  std::optional<Eigen::VectorXd> source;
+  Eigen::VectorXd undelayed_source;
+  Eigen::Index offset = 0;
+};
+
+// Where a record's filters are between two blocks: enough to run them on from there.
+struct FilterCheckpoint {
+  std::vector<SampledFilter::Stream> source;
+  std::vector<SampledFilter::Stream> input;
+  std::vector<SampledFilter::Stream> output;
+  std::vector<Eigen::MatrixXd> free;
+};
+
+// The instrument's share of the covariance, streamed so that the N x q instrument psi is
+// never stored: its Gram matrix psi' psi and, for the coloured-noise sandwich, each record's
+// filter states every kSegment rows, from which psi is formed again segment by segment, newest
+// first (adjoint_instrument_sum). psi is the stacked instrument at beta with `extra` (the
+// delay's column, stacked like the residual) appended when it is estimated.
+struct InstrumentPass {
+  const Eigen::VectorXd* extra = nullptr;
+  bool keep_checkpoints = false;
+  Eigen::MatrixXd* stored = nullptr;  // psi itself (RefinedIvProblem::stored_instrument_covariance)
+  Eigen::MatrixXd gram;               // q x q
+  std::vector<std::vector<FilterCheckpoint>> saved;  // [record][segment]
+  Eigen::MatrixXd rows;                              // kBlock x q, the pass's block of psi
+
+  int columns(const Layout& layout) const { return layout.augmented + (extra != nullptr ? 1 : 0); }
+
+  // psi's rows [k0, k0 + len) of the record starting at `first`, from the workspace, into `to`
+  // (len x q).
+  void copy_rows(const Layout& layout, const Workspace& w, Eigen::Index first, Eigen::Index k0,
+                 Eigen::Index len, Eigen::Ref<Eigen::MatrixXd> to) const {
+    to.leftCols(layout.augmented) = w.instrument.topRows(len);
+    if (extra != nullptr) to.col(layout.augmented) = extra->segment(first + k0, len);
+  }
+};
+
+/// The stopping rule's relative change, block by block (see the definition).
+double relative_change(const Layout& layout, const Eigen::VectorXd& from,
+                       const Eigen::VectorXd& to);
+/// A_i and B_i of submodel i at beta.
+Polynomial denominator_of(const Layout& layout, const Eigen::VectorXd& beta, int i);
+Eigen::VectorXd numerator_of(const Layout& layout, const Eigen::VectorXd& beta, int i);
+
+/// S_uo(q) r with S_uo = C_d / (1 + G_d C_d); std::nullopt when the loop is unstable or
+/// ill-posed.
+std::optional<Eigen::VectorXd> sensitivity_filtered_reference(
+    const Layout& layout, const Eigen::VectorXd& beta, const DiscreteTransferFunction& controller,
+    const Eigen::VectorXd& r, double h, int delay);
+
+/// One pass over the records at beta: the sums of eq. (29), the stacked residual, the
+/// instrument's sums for the covariance and the output error's sum of squares, each when asked.
+void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
+              const Eigen::VectorXd& initial_states, const std::vector<RecordSignals>& records,
+              bool with_source, double h, Hold output_interpolation, Workspace& w, Moments* moments,
+              Eigen::VectorXd* residual, InstrumentPass* instrument, double* sse = nullptr);
+
+/// The coloured-noise middle factor's sum over the instrument of a pass that kept its
+/// checkpoints.
+Eigen::MatrixXd adjoint_instrument_sum(const Layout& layout, const Eigen::VectorXd& beta,
+                                       const Eigen::VectorXd& initial_states,
+                                       const std::vector<RecordSignals>& records, bool with_source,
+                                       double h, Hold output_interpolation, Workspace& w,
+                                       const InstrumentPass& pass, const AutoregressiveModel& ar,
+                                       const Eigen::VectorXd& scales);
+
+/// The free-response coefficients from the solution of (29), and their realisation-independent
+/// form.
+Eigen::VectorXd free_response_coefficients(const Layout& layout, const Eigen::MatrixXd& solution);
+Eigen::VectorXd free_response_derivatives(const Layout& layout, const Eigen::VectorXd& beta,
+                                          const Eigen::VectorXd& initial_states);
+
+/// Column norms from their squares, 1 where a norm is zero or not finite.
+Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares);
+/// The solution of (29) from its sums with unit-norm columns, or nothing.
+std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums);
+
+}  // namespace ctid::internal::srivc_engine

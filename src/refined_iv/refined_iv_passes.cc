@@ -1,0 +1,627 @@
+// The streamed passes of the refined IV iteration (29) (internal/refined_iv_passes.h): per
+// iteration and submodel, one filter bank of u through 1/(p^l A_i) (regressor B-part, model
+// output), one cascade p^k B_i/(p^l A_i^2) of the instrument source (u or S_uo r), and one bank
+// of the residual output y~_i (23) through 1/A_i, run block by block over every record.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
+
+#include "ctid/core/error.h"
+#include "ctid/estimation/validation.h"
+#include "ctid/filtering/filter_bank.h"
+#include "ctid/refined_iv/covariance.h"
+#include "ctid/simulation/discretization.h"
+#include "refined_iv/internal/covariance_sums.h"
+#include "refined_iv/internal/refined_iv_engine.h"
+#include "refined_iv/internal/refined_iv_passes.h"
+
+namespace ctid::internal {
+
+FreeResponseChain free_response_chain(const Polynomial& a, int integrators, double h) {
+  const FilterRealization bank = derivative_filters(Polynomial::monomial(integrators) * a);
+  const int n = a.degree();
+  FilterRealization chain = bank;
+  if (n > 0) {
+    Eigen::VectorXd first = Eigen::VectorXd::Zero(bank.outputs());
+    first(0) = 1.0;
+    chain = cascade(bank, first, derivative_filters(a));
+  }
+  const int states = chain.order();
+  FreeResponseChain out;
+  out.phi = discretize_zoh(chain.a, chain.b, h).phi;
+  out.c0 = Eigen::RowVectorXd::Zero(states);
+  out.c0.head(bank.order()) = bank.c.row(0);
+  out.ck = n > 0 ? Eigen::MatrixXd(chain.c.middleRows(1, n)) : Eigen::MatrixXd(0, states);
+  return out;
+}
+
+namespace srivc_engine {
+
+// The stopping rule's relative change, block by block: the largest over the submodels of
+// ||d a_i|| / ||a_i|| and ||d b_i|| / ||b_i||. One norm over the whole of beta lets the block
+// with the largest coefficients decide: with a gain of 1e6 the numerators dominate and the
+// iteration stopped with the poles still moving by 1e-4 (issue 16). A block whose norm
+// vanishes is measured against the whole vector's norm.
+double relative_change(const Layout& layout, const Eigen::VectorXd& from,
+                       const Eigen::VectorXd& to) {
+  const double whole = std::max(from.norm(), 1e-300);
+  double largest = 0.0;
+  for (int i = 0; i < layout.size(); ++i) {
+    const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+    const int at = layout.offset[static_cast<size_t>(i)];
+    for (const auto& [first, count] : {std::pair{at, o.n}, std::pair{at + o.n, o.m + 1}}) {
+      if (count == 0) continue;
+      const double size = from.segment(first, count).norm();
+      const double step = (to.segment(first, count) - from.segment(first, count)).norm();
+      largest = std::max(largest, step / (size > 1e-12 * whole ? size : whole));
+    }
+  }
+  return largest;
+}
+
+Polynomial denominator_of(const Layout& layout, const Eigen::VectorXd& beta, int i) {
+  const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+  Eigen::VectorXd a(o.n + 1);
+  a(0) = 1.0;
+  a.tail(o.n) = beta.segment(layout.offset[static_cast<size_t>(i)], o.n);
+  return Polynomial::trimmed(a);
+}
+
+Eigen::VectorXd numerator_of(const Layout& layout, const Eigen::VectorXd& beta, int i) {
+  const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+  return beta.segment(layout.offset[static_cast<size_t>(i)] + o.n, o.m + 1);
+}
+
+namespace {
+
+// Realisation of B/(p^l A): the bank of 1/(p^l A) with the outputs combined by b.
+FilterRealization submodel_realization(const Polynomial& a, const Eigen::VectorXd& b, int l) {
+  const FilterRealization bank = derivative_filters(Polynomial::monomial(l) * a);
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank.outputs());
+  w.head(b.size()) = b;
+  return combine_outputs(bank, w);
+}
+
+}  // namespace
+
+// delay; std::nullopt when the loop is unstable or ill-posed.
+std::optional<Eigen::VectorXd> sensitivity_filtered_reference(
+    const Layout& layout, const Eigen::VectorXd& beta, const DiscreteTransferFunction& controller,
+    const Eigen::VectorXd& r, double h, int delay) {
+  // Plant: submodels side by side, each with the fraction of the delay (one more state).
+  std::vector<StateSpace> parts;
+  double dg = 0.0;
+  int ng = 0;
+  for (int i = 0; i < layout.size(); ++i) {
+    const FilterRealization f =
+        submodel_realization(denominator_of(layout, beta, i), numerator_of(layout, beta, i),
+                             layout.orders[static_cast<size_t>(i)].integrators);
+    parts.push_back(
+        discretize_zoh(StateSpace{f.a, f.b, f.c.row(0), f.d(0)}, h, layout.delay_fraction));
+    dg += parts.back().d;
+    ng += parts.back().order();
+  }
+  const StateSpace c = controller.to_state_space();
+  const int nc = c.order();
+  const int n = ng + delay + nc;
+  // State X = [x_g; u_{k-1} .. u_{k-delay}; x_c]; u_k = ku X + kr r_k, y_k = yx X + yr r_k.
+  Eigen::RowVectorXd cg = Eigen::RowVectorXd::Zero(n);
+  Eigen::MatrixXd phig = Eigen::MatrixXd::Zero(ng, ng);
+  Eigen::VectorXd gammag(ng);
+  int at = 0;
+  for (const StateSpace& part : parts) {
+    const int s = part.order();
+    phig.block(at, at, s, s) = part.a;
+    gammag.segment(at, s) = part.b;
+    cg.segment(at, s) = part.c;
+    at += s;
+  }
+  Eigen::RowVectorXd cc = Eigen::RowVectorXd::Zero(n);
+  cc.tail(nc) = c.c;
+  Eigen::RowVectorXd ku(n);
+  double kr = 0.0;
+  Eigen::RowVectorXd yx(n);
+  double yr = 0.0;
+  if (delay > 0) {
+    // y_k = C_g x_g + D_g u_{k-delay}: no algebraic loop.
+    yx = cg;
+    yx(ng + delay - 1) += dg;
+    yr = 0.0;
+    ku = cc - c.d * yx;
+    kr = c.d;
+  } else {
+    const double loop = 1.0 + c.d * dg;
+    if (!(std::abs(loop) > 1e-12)) return std::nullopt;
+    ku = (cc - c.d * cg) / loop;
+    kr = c.d / loop;
+    yx = cg + dg * ku;
+    yr = dg * kr;
+  }
+  Eigen::MatrixXd acl = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd bcl = Eigen::VectorXd::Zero(n);
+  acl.topLeftCorner(ng, ng) = phig;
+  if (delay > 0) {
+    acl.block(0, ng + delay - 1, ng, 1) += gammag;
+    acl.row(ng) = ku;
+    bcl(ng) = kr;
+    for (int j = 1; j < delay; ++j) acl(ng + j, ng + j - 1) = 1.0;
+  } else {
+    acl.topRows(ng) += gammag * ku;
+    bcl.head(ng) = gammag * kr;
+  }
+  // x_c+ = A_c x_c + B_c (r - y)
+  acl.bottomRows(nc) += -c.b * yx;
+  acl.bottomRightCorner(nc, nc) += c.a;
+  bcl.tail(nc) += c.b * (1.0 - yr);
+  if (!acl.allFinite()) return std::nullopt;
+  if (n > 0) {
+    const Eigen::VectorXcd eig = acl.eigenvalues();
+    if (eig.cwiseAbs().maxCoeff() >= 1.0 - 1e-9) return std::nullopt;
+  }
+  Eigen::VectorXd out(r.size());
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd next(n);
+  for (Eigen::Index k = 0; k < r.size(); ++k) {
+    out(k) = ku.dot(x) + kr * r(k);
+    next.noalias() = acl * x;
+    next += bcl * r(k);
+    x.swap(next);
+  }
+  if (!out.allFinite()) return std::nullopt;
+  return out;
+}
+
+namespace {
+
+// The filters of one submodel at one iterate. Outputs of `source`: rows 0..m are
+// p^j/(p^l A) z (B-part of the instrument), rows m+1..m+n are p^k B/(p^l A^2) z, k = 1..n
+// (one cascade whose first stage is the 1/(p^l A) bank itself), and in open loop row m+n+1
+// is the model output B/(p^l A) u. `input` (closed loop, or when no instrument is needed)
+// gives p^j/(p^l A) u in rows 0..m and B/(p^l A) u in row m+1. `output` is the bank of
+// 1/A on the residual output y~_i (23).
+// Free responses of one submodel at one iterate (InitialConditions::estimate), exact at the
+// samples: the homogeneous chain 1/(p^l A) -> p^k/A with transition matrix phi, propagated
+// from the s = n + l initial states [e_j; 0] (columns j < s: the basis 1/(p^l A) of the
+// submodel's free responses, regressor and instrument columns alike) and from [c_i; 0]
+// (column s: the current free response f_i, added to the model output, and p^k/A f_i,
+// added to the a-part of the open-loop instrument).
+struct FreeResponse {
+  Eigen::MatrixXd phi;
+  Eigen::MatrixXd state;  // chain states x (s + 1)
+  Eigen::MatrixXd next;
+  Eigen::RowVectorXd c0;     // 1/(p^l A)
+  Eigen::MatrixXd ck;        // p^k/A of it, k = 1..n
+  Eigen::MatrixXd basis;     // kBlock x s
+  Eigen::VectorXd value;     // kBlock: f_i
+  Eigen::MatrixXd filtered;  // kBlock x n: p^k/A f_i
+};
+
+struct SubmodelFilters {
+  std::optional<FreeResponse> free;
+  std::optional<SampledFilter> source;
+  std::optional<SampledFilter> input;
+  std::optional<SampledFilter> output;
+  SampledFilter::Stream source_stream;
+  SampledFilter::Stream input_stream;
+  SampledFilter::Stream output_stream;
+};
+
+FilterRealization with_rows(const FilterRealization& f, const Eigen::MatrixXd& c,
+                            const Eigen::VectorXd& d) {
+  FilterRealization out;
+  out.a = f.a;
+  out.b = f.b;
+  out.c = c;
+  out.d = d;
+  return out;
+}
+
+SubmodelFilters submodel_filters(const Layout& layout, const Eigen::VectorXd& beta,
+                                 const Eigen::VectorXd& initial_states, int record, int i, double h,
+                                 Hold output_interpolation, bool closed_loop, bool need_instrument,
+                                 bool need_regressor) {
+  const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+  const Polynomial a = denominator_of(layout, beta, i);
+  const Eigen::VectorXd b = numerator_of(layout, beta, i);
+  const FilterRealization bank = derivative_filters(Polynomial::monomial(o.integrators) * a);
+  const int s1 = bank.order();
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank.outputs());
+  w.head(o.m + 1) = b;
+  const Eigen::RowVectorXd model_c = w.transpose() * bank.c;
+  const double model_d = w.dot(bank.d);
+  SubmodelFilters f;
+  if (need_instrument) {
+    const bool with_model = !closed_loop;
+    const int rows = o.m + 1 + o.n + (with_model ? 1 : 0);
+    // The cascade carries B / ||B||, and ||B|| multiplies its outputs instead: with B in the
+    // coupling of the state matrix, a gain of 1e6 made the discretised chain lose the
+    // small entries and moved the fixed point of noise-free data by 1e-4 (issue 16).
+    const double gain = w.norm() > 0.0 ? w.norm() : 1.0;
+    FilterRealization chain = bank;
+    if (o.n > 0) chain = cascade(bank, w / gain, derivative_filters(a));
+    const int states = chain.order();
+    Eigen::MatrixXd c = Eigen::MatrixXd::Zero(rows, states);
+    Eigen::VectorXd d = Eigen::VectorXd::Zero(rows);
+    c.topLeftCorner(o.m + 1, s1) = bank.c.topRows(o.m + 1);
+    d.head(o.m + 1) = bank.d.head(o.m + 1);
+    if (o.n > 0) {
+      c.middleRows(o.m + 1, o.n) = gain * chain.c.middleRows(1, o.n);
+      d.segment(o.m + 1, o.n) = gain * chain.d.segment(1, o.n);
+    }
+    if (with_model) {
+      c.block(rows - 1, 0, 1, s1) = model_c;
+      d(rows - 1) = model_d;
+    }
+    // Open loop the source is the measured input; closed loop it is the controller's output
+    // S_uo r, held by the DAC.
+    f.source.emplace(with_rows(chain, c, d), h,
+                     closed_loop ? Hold::zero_order_hold : layout.input_hold,
+                     layout.delay_fraction);
+    f.source_stream = f.source->start();
+  }
+  if (closed_loop || !need_instrument) {
+    Eigen::MatrixXd c(o.m + 2, s1);
+    Eigen::VectorXd d(o.m + 2);
+    c.topRows(o.m + 1) = bank.c.topRows(o.m + 1);
+    d.head(o.m + 1) = bank.d.head(o.m + 1);
+    c.row(o.m + 1) = model_c;
+    d(o.m + 1) = model_d;
+    f.input.emplace(with_rows(bank, c, d), h, layout.input_hold, layout.delay_fraction);
+    f.input_stream = f.input->start();
+  }
+  if (need_regressor && o.n > 0) {
+    f.output.emplace(derivative_filters(a), h, output_interpolation);
+    f.output_stream = f.output->start();
+  }
+  if (layout.free_responses()) {
+    const int s = layout.states(i);
+    FreeResponseChain chain = free_response_chain(a, o.integrators, h);
+    const int states = static_cast<int>(chain.phi.rows());
+    const int given = std::min(s, s1);  // s1 < s only if the iterate lost its leading a_in
+    FreeResponse& r = f.free.emplace();
+    r.phi = std::move(chain.phi);
+    r.state = Eigen::MatrixXd::Zero(states, s + 1);
+    r.state.topLeftCorner(given, given).setIdentity();
+    r.state.block(0, s, given, 1) =
+        initial_states.segment(layout.free_at(record, i) - layout.parameters, given);
+    r.next.resize(states, s + 1);
+    r.c0 = std::move(chain.c0);
+    r.ck = std::move(chain.ck);
+    r.basis.resize(kBlock, s);
+    r.value.resize(kBlock);
+    r.filtered.resize(kBlock, o.n);
+  }
+  return f;
+}
+
+// One record's filters at beta, from rest; the workspace's free-response columns of the other
+// records are cleared (they are zero on this record's rows).
+std::vector<SubmodelFilters> record_filters(const Layout& layout, const Eigen::VectorXd& beta,
+                                            const Eigen::VectorXd& initial_states, int record,
+                                            double h, Hold output_interpolation, bool closed_loop,
+                                            bool need_instrument, bool need_regressor,
+                                            Workspace& w) {
+  std::vector<SubmodelFilters> filters;
+  filters.reserve(static_cast<size_t>(layout.size()));
+  for (int i = 0; i < layout.size(); ++i) {
+    filters.push_back(submodel_filters(layout, beta, initial_states, record, i, h,
+                                       output_interpolation, closed_loop, need_instrument,
+                                       need_regressor));
+  }
+  if (layout.free_responses()) {
+    const int free = layout.augmented - layout.parameters;
+    w.instrument.rightCols(free).setZero();
+    w.regressor.rightCols(free).setZero();
+  }
+  return filters;
+}
+
+FilterCheckpoint checkpoint(const std::vector<SubmodelFilters>& filters) {
+  FilterCheckpoint c;
+  for (const SubmodelFilters& f : filters) {
+    c.source.push_back(f.source_stream);
+    c.input.push_back(f.input_stream);
+    c.output.push_back(f.output_stream);
+    c.free.push_back(f.free ? f.free->state : Eigen::MatrixXd());
+  }
+  return c;
+}
+
+void restore(std::vector<SubmodelFilters>& filters, const FilterCheckpoint& c) {
+  for (size_t i = 0; i < filters.size(); ++i) {
+    filters[i].source_stream = c.source[i];
+    filters[i].input_stream = c.input[i];
+    filters[i].output_stream = c.output[i];
+    if (filters[i].free) filters[i].free->state = c.free[i];
+  }
+}
+
+// Rows [k0, k0 + len) of one record through its filters, which continue from row k0: the
+// instrument and regressor rows, the submodel outputs and their sum and, with the regressor,
+// the filtered residual outputs (22).
+void filter_block(const Layout& layout, int record, const RecordSignals& signals,
+                  const Eigen::VectorXd* source, Eigen::Index k0, Eigen::Index len,
+                  bool need_instrument, bool need_regressor, std::vector<SubmodelFilters>& filters,
+                  Workspace& w) {
+  const Eigen::VectorXd& u = signals.u;
+  const Eigen::VectorXd& y = *signals.y;
+  const int k_count = layout.size();
+  const bool closed_loop = source != nullptr;
+  for (int i = 0; i < k_count; ++i) {
+    const auto at = static_cast<size_t>(i);
+    const SubmodelOrder& o = layout.orders[at];
+    const int off = layout.offset[at];
+    SubmodelFilters& f = filters[at];
+    if (f.source) {
+      Eigen::MatrixXd& out = w.source_out[at];
+      out.resize(len, f.source->outputs());
+      f.source->run((closed_loop ? *source : u).segment(k0, len), f.source_stream, out);
+      w.instrument.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+      if (o.n > 0) w.instrument.block(0, off, len, o.n) = -out.middleCols(o.m + 1, o.n);
+      if (!closed_loop) {
+        w.outputs.col(i).head(len) = out.col(o.m + o.n + 1);
+        if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+      }
+    }
+    if (f.input) {
+      Eigen::MatrixXd& out = w.input_out[at];
+      out.resize(len, f.input->outputs());
+      f.input->run(u.segment(k0, len), f.input_stream, out);
+      w.outputs.col(i).head(len) = out.col(o.m + 1);
+      if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+    }
+    if (f.free) {
+      FreeResponse& r = *f.free;
+      const int s = layout.states(i);
+      for (Eigen::Index k = 0; k < len; ++k) {
+        r.basis.row(k).noalias() = r.c0 * r.state.leftCols(s);
+        r.value(k) = r.c0.dot(r.state.col(s));
+        if (o.n > 0) r.filtered.row(k).noalias() = (r.ck * r.state.col(s)).transpose();
+        r.next.noalias() = r.phi * r.state;
+        r.state.swap(r.next);
+      }
+      const int free_off = layout.free_at(record, i);
+      w.outputs.col(i).head(len) += r.value.head(len);
+      if (need_instrument) {
+        w.instrument.block(0, free_off, len, s) = r.basis.topRows(len);
+        if (!closed_loop && o.n > 0) {
+          w.instrument.block(0, off, len, o.n) -= r.filtered.topRows(len);
+        }
+      }
+      if (need_regressor) w.regressor.block(0, free_off, len, s) = r.basis.topRows(len);
+    }
+  }
+  w.total.head(len) = w.outputs.topRows(len).rowwise().sum();
+  if (need_regressor) {
+    for (int i = 0; i < k_count; ++i) {
+      const auto at = static_cast<size_t>(i);
+      const SubmodelOrder& o = layout.orders[at];
+      const int off = layout.offset[at];
+      SubmodelFilters& f = filters[at];
+      w.residual_output.head(len) =
+          y.segment(k0, len) - w.total.head(len) + w.outputs.col(i).head(len);  // (23)
+      if (f.output) {
+        Eigen::MatrixXd& out = w.output_out[at];
+        out.resize(len, f.output->outputs());
+        f.output->run(w.residual_output.head(len), f.output_stream, out);
+        w.filtered.col(i).head(len) = out.col(0);                       // (22)
+        w.regressor.block(0, off, len, o.n) = -out.middleCols(1, o.n);  // (24)
+      } else {
+        w.filtered.col(i).head(len) = w.residual_output.head(len);
+      }
+    }
+  }
+}
+
+// Rows of a record between two checkpoints of the instrument pass.
+constexpr Eigen::Index kSegment = 16 * kBlock;
+
+// evaluate() on one record: its filters from rest, its free responses, its rows of the
+// stacked residual and instrument; the sums are added to.
+void evaluate_record(const Layout& layout, const Eigen::VectorXd& beta,
+                     const Eigen::VectorXd& initial_states, int record,
+                     const RecordSignals& signals, const Eigen::VectorXd* source, double h,
+                     Hold output_interpolation, Workspace& w, Moments* moments,
+                     Eigen::VectorXd* residual, InstrumentPass* instrument, double* sse) {
+  const Eigen::VectorXd& y = *signals.y;
+  const Eigen::Index n = signals.u.size();
+  const Eigen::Index first = signals.offset;
+  const bool need_instrument = moments != nullptr || instrument != nullptr;
+  const bool need_regressor = moments != nullptr;
+  std::vector<SubmodelFilters> filters =
+      record_filters(layout, beta, initial_states, record, h, output_interpolation,
+                     source != nullptr, need_instrument, need_regressor, w);
+  for (Eigen::Index k0 = 0; k0 < n; k0 += kBlock) {
+    const Eigen::Index len = std::min(kBlock, n - k0);
+    if (instrument != nullptr && instrument->keep_checkpoints && k0 % kSegment == 0) {
+      instrument->saved[static_cast<size_t>(record)].push_back(checkpoint(filters));
+    }
+    filter_block(layout, record, signals, source, k0, len, need_instrument, need_regressor, filters,
+                 w);
+    if (moments != nullptr) {
+      const auto z = w.instrument.topRows(len);
+      const auto phi = w.regressor.topRows(len);
+      moments->zp.noalias() += z.transpose() * phi;
+      moments->zy.noalias() += z.transpose() * w.filtered.topRows(len);
+      moments->zz += z.colwise().squaredNorm().transpose();
+      moments->pp += phi.colwise().squaredNorm().transpose();
+    }
+    if (residual != nullptr) {
+      residual->segment(first + k0, len) = y.segment(k0, len) - w.total.head(len);
+    }
+    if (sse != nullptr) *sse += (y.segment(k0, len) - w.total.head(len)).squaredNorm();
+    if (instrument != nullptr) {
+      auto z = instrument->rows.topRows(len);
+      instrument->copy_rows(layout, w, first, k0, len, z);
+      instrument->gram.noalias() += z.transpose() * z;
+      if (instrument->stored != nullptr) instrument->stored->middleRows(first + k0, len) = z;
+    }
+  }
+}
+
+}  // namespace
+
+// One pass over the records at beta (instrument source: u in open loop, S_uo r when
+// `with_source`); each record's filters start at rest at its first sample and its free
+// responses have their own coefficients. With `moments`: the sums of eq. (29) over all
+// records; with `residual`: y - sum_i G_i u, records stacked; with `instrument`: the
+// instrument's sums for the covariance (InstrumentPass); with `sse`: the sum of squared output
+// errors
+// ||y - sum_i G_i u||^2 (the model output is formed on every pass anyway).
+void evaluate(const Layout& layout, const Eigen::VectorXd& beta,
+              const Eigen::VectorXd& initial_states, const std::vector<RecordSignals>& records,
+              bool with_source, double h, Hold output_interpolation, Workspace& w, Moments* moments,
+              Eigen::VectorXd* residual, InstrumentPass* instrument, double* sse) {
+  Eigen::Index n = 0;
+  for (const RecordSignals& record : records) n += record.u.size();
+  const int k_count = layout.size();
+  const int p = layout.augmented;
+  for (int i = 0; i < k_count; ++i) {
+    if (denominator_of(layout, beta, i).degree() < layout.orders[static_cast<size_t>(i)].n) {
+      // A_i lost its leading coefficient: the iterate has fewer poles than the structure and
+      // its filters cannot be formed. The pass reads as non-finite, so the iteration treats
+      // it as a failed step (and a final model as not usable).
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      if (moments != nullptr) {
+        moments->zp = Eigen::MatrixXd::Constant(p, p, nan);
+        moments->zy = Eigen::MatrixXd::Constant(p, k_count, nan);
+        moments->zz = Eigen::VectorXd::Constant(p, nan);
+        moments->pp = Eigen::VectorXd::Constant(p, nan);
+      }
+      if (residual != nullptr) *residual = Eigen::VectorXd::Constant(n, nan);
+      if (instrument != nullptr) {
+        const int q = instrument->columns(layout);
+        instrument->gram = Eigen::MatrixXd::Constant(q, q, nan);
+      }
+      if (sse != nullptr) *sse = nan;
+      return;
+    }
+  }
+  if (moments != nullptr) {
+    moments->zp = Eigen::MatrixXd::Zero(p, p);
+    moments->zy = Eigen::MatrixXd::Zero(p, k_count);
+    moments->zz = Eigen::VectorXd::Zero(p);
+    moments->pp = Eigen::VectorXd::Zero(p);
+  }
+  if (residual != nullptr) residual->resize(n);
+  if (instrument != nullptr) {
+    const int q = instrument->columns(layout);
+    instrument->gram = Eigen::MatrixXd::Zero(q, q);
+    instrument->rows.resize(kBlock, q);
+    instrument->saved.assign(records.size(), {});
+    if (instrument->stored != nullptr) instrument->stored->resize(n, q);
+  }
+  if (sse != nullptr) *sse = 0.0;
+  for (int record = 0; record < static_cast<int>(records.size()); ++record) {
+    const RecordSignals& signals = records[static_cast<size_t>(record)];
+    evaluate_record(layout, beta, initial_states, record, signals,
+                    with_source ? &*signals.source : nullptr, h, output_interpolation, w, moments,
+                    residual, instrument, sse);
+  }
+}
+
+// The coloured-noise middle factor's sum (AdjointArOuterSum) over the instrument of an
+// InstrumentPass that kept its checkpoints: records and their segments newest first, each
+// segment's rows formed again from its checkpoint, so only kSegment rows of psi are held.
+Eigen::MatrixXd adjoint_instrument_sum(const Layout& layout, const Eigen::VectorXd& beta,
+                                       const Eigen::VectorXd& initial_states,
+                                       const std::vector<RecordSignals>& records, bool with_source,
+                                       double h, Hold output_interpolation, Workspace& w,
+                                       const InstrumentPass& pass, const AutoregressiveModel& ar,
+                                       const Eigen::VectorXd& scales) {
+  AdjointArOuterSum sum(ar, scales);
+  Eigen::MatrixXd segment(kSegment, pass.columns(layout));
+  for (int record = static_cast<int>(records.size()) - 1; record >= 0; --record) {
+    const RecordSignals& signals = records[static_cast<size_t>(record)];
+    const Eigen::VectorXd* source = with_source ? &*signals.source : nullptr;
+    const Eigen::Index n = signals.u.size();
+    std::vector<SubmodelFilters> filters =
+        record_filters(layout, beta, initial_states, record, h, output_interpolation,
+                       source != nullptr, true, false, w);
+    const std::vector<FilterCheckpoint>& saved = pass.saved[static_cast<size_t>(record)];
+    for (auto s = static_cast<Eigen::Index>(saved.size()) - 1; s >= 0; --s) {
+      restore(filters, saved[static_cast<size_t>(s)]);
+      const Eigen::Index start = s * kSegment;
+      const Eigen::Index length = std::min(kSegment, n - start);
+      for (Eigen::Index k0 = start; k0 < start + length; k0 += kBlock) {
+        const Eigen::Index len = std::min(kBlock, n - k0);
+        filter_block(layout, record, signals, source, k0, len, true, false, filters, w);
+        pass.copy_rows(layout, w, signals.offset, k0, len, segment.middleRows(k0 - start, len));
+      }
+      sum.add_earlier(segment.topRows(length));
+    }
+  }
+  return sum.sum();
+}
+
+// The free-response coefficients of every submodel in every record from the submodel's own
+// column of the solution of (29).
+Eigen::VectorXd free_response_coefficients(const Layout& layout, const Eigen::MatrixXd& solution) {
+  Eigen::VectorXd c(layout.augmented - layout.parameters);
+  for (int r = 0; r < layout.records && layout.free_responses(); ++r) {
+    for (int i = 0; i < layout.size(); ++i) {
+      const int at = layout.free_at(r, i);
+      c.segment(at - layout.parameters, layout.states(i)) =
+          solution.block(at, i, layout.states(i), 1);
+    }
+  }
+  return c;
+}
+
+// Realisation-independent form of the coefficients: per record and submodel, the free
+// response f_i and its first n_i + l_i - 1 derivatives at the record's first sample, c0 A^k x0
+// of 1/(p^l A_i).
+Eigen::VectorXd free_response_derivatives(const Layout& layout, const Eigen::VectorXd& beta,
+                                          const Eigen::VectorXd& initial_states) {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(initial_states.size());
+  for (int i = 0; i < layout.size(); ++i) {
+    const FilterRealization bank =
+        derivative_filters(Polynomial::monomial(layout.orders[static_cast<size_t>(i)].integrators) *
+                           denominator_of(layout, beta, i));
+    const int s = layout.states(i);
+    if (bank.order() != s) continue;
+    for (int r = 0; r < layout.records; ++r) {
+      const int at = layout.free_at(r, i) - layout.parameters;
+      Eigen::VectorXd x = initial_states.segment(at, s);
+      for (int k = 0; k < s; ++k) {
+        out(at + k) = bank.c.row(0).dot(x);
+        x = bank.a * x;
+      }
+    }
+  }
+  return out;
+}
+
+Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares) {
+  Eigen::VectorXd s = squares.cwiseSqrt();
+  for (Eigen::Index j = 0; j < s.size(); ++j) {
+    if (!(s(j) > 0.0) || !std::isfinite(s(j))) s(j) = 1.0;
+  }
+  return s;
+}
+
+// The solution of (29) from its sums with unit-norm columns, or nothing if they are not
+// finite or the equations are singular.
+std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums) {
+  if (!sums.all_finite()) return std::nullopt;
+  const Eigen::VectorXd sz = norms_from_squares(sums.zz);
+  const Eigen::VectorXd sp = norms_from_squares(sums.pp);
+  const Eigen::MatrixXd m =
+      sz.cwiseInverse().asDiagonal() * sums.zp * sp.cwiseInverse().asDiagonal();
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(m);
+  if (!(lu.rcond() > 1e-14)) return std::nullopt;
+  const Eigen::MatrixXd rhs = sz.cwiseInverse().asDiagonal() * sums.zy;
+  Eigen::MatrixXd solution = sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(lu.solve(rhs));
+  if (!solution.allFinite()) return std::nullopt;
+  return solution;
+}
+
+}  // namespace srivc_engine
+}  // namespace ctid::internal
