@@ -128,10 +128,19 @@ void DataFlags::add_preprocessing_to(CLI::App& app, bool with_input_scale) {
       ->group("Preprocessing");
   app.add_option("--time", time, "Keep samples with A <= t < B seconds (A:B)")
       ->group("Preprocessing");
-  app.add_option("--detrend", detrend, "Remove nothing, the means, or straight lines")
-      ->check(CLI::IsMember({"none", "mean", "linear"}))
-      ->capture_default_str()
-      ->group("Preprocessing");
+  if (detrend_fit) {
+    app.add_option("--detrend", detrend,
+                   "Remove nothing, the means, straight lines, or the trend the fit's record "
+                   "had removed (fit)")
+        ->check(CLI::IsMember({"none", "mean", "linear", "fit"}))
+        ->capture_default_str()
+        ->group("Preprocessing");
+  } else {
+    app.add_option("--detrend", detrend, "Remove nothing, the means, or straight lines")
+        ->check(CLI::IsMember({"none", "mean", "linear"}))
+        ->capture_default_str()
+        ->group("Preprocessing");
+  }
   app.add_option("--decimate", decimate,
                  "Keep every N-th sample after a zero-phase anti-alias lowpass filter")
       ->capture_default_str()
@@ -368,7 +377,8 @@ PreprocessingOptions DataFlags::preprocessing_options() const {
   if (!(scale_input > 0.0) || !(scale_output > 0.0)) {
     usage_error("--scale-input and --scale-output must be > 0");
   }
-  options.detrend = *enum_from_name<Detrend>(detrend);
+  // --detrend fit: loaded as measured; the command removes the fit's trend afterwards.
+  options.detrend = detrend == "fit" ? Detrend::none : *enum_from_name<Detrend>(detrend);
   options.decimate = decimate;
   options.input_scale = scale_input;
   options.output_scale = scale_output;

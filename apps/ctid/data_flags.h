@@ -32,6 +32,9 @@ struct DataFlags {
   std::string rows;        ///< "A:B"; empty: all
   std::string time;        ///< "A:B" in seconds; empty: all
   std::string detrend = "none";
+  /// --detrend also takes `fit` (ctid validate): the record is loaded without detrending and
+  /// the command removes the fit's trend (core/preprocessing.h: remove_trend).
+  bool detrend_fit = false;
   int decimate = 1;
   double scale_input = 1.0;
   double scale_output = 1.0;

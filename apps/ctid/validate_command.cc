@@ -23,6 +23,7 @@
 #include "command.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/core/preprocessing.h"
 #include "ctid/delayed_feedback/loop_parameters.h"
 #include "ctid/delayed_feedback/output_error.h"
 #include "ctid/estimation/validation.h"
@@ -88,19 +89,23 @@ void parse_window(const std::string& text, ValidationOptions& options) {
   }
 }
 
+// The summary in the output's own unit (RMS error beside the fit), six significant digits
+// like ctid fit's; every digit is in the --output document.
 void print_statistics(const ValidationReport& report) {
   const double bound = report.whiteness_bound;
-  std::cout << "fit: " << format_number(report.fit_percent) << " %, mean squared error "
-            << format_number(report.mean_squared_error) << "\n"
-            << "residual: mean " << format_number(report.residual_mean) << ", std "
-            << format_number(report.residual_std) << "\n"
+  std::cout << "fit: " << format_fixed(report.fit_percent, 2) << " %, RMS error "
+            << format_brief(std::sqrt(report.mean_squared_error))
+            << " (output units), mean squared error " << format_brief(report.mean_squared_error)
+            << "\n"
+            << "residual: mean " << format_brief(report.residual_mean) << ", std "
+            << format_brief(report.residual_std) << "\n"
             << "whiteness (autocorrelation, lags 1-" << report.max_lag
-            << "): max |r| = " << format_number(report.max_residual_autocorrelation) << " against "
-            << format_number(bound)
+            << "): max |r| = " << format_brief(report.max_residual_autocorrelation) << " against "
+            << format_brief(bound)
             << " (99 %): " << (report.residual_white() ? "white" : "not white") << "\n"
             << "cross-correlation with the input (lags -" << report.max_lag << ".."
-            << report.max_lag << "): max |r| = " << format_number(report.max_cross_correlation)
-            << " against " << format_number(bound) << " (99 %): "
+            << report.max_lag << "): max |r| = " << format_brief(report.max_cross_correlation)
+            << " against " << format_brief(bound) << " (99 %): "
             << (report.residual_uncorrelated_with_input() ? "uncorrelated" : "correlated") << "\n";
 }
 
@@ -124,6 +129,55 @@ void print_table(const std::vector<std::string>& names,
               << " to " << format_number(r.window_end) << " s (" << r.window_samples
               << " samples)\n";
   }
+}
+
+// --detrend fit: the record minus the trend the estimation record's preprocessing removed
+// (its offsets and slopes, scaled as this record is), so a model fitted to detrended data is
+// judged at its own operating point. The record's preprocessing entry then names that trend.
+SampledData without_fit_trend(const ValidateFlags& f, const std::vector<std::string>& files,
+                              bool loop, const SampledData& data) {
+  if (loop) {
+    usage_error("--detrend fit takes the trend of a ctid fit result; " + f.model +
+                " holds a closed loop with delayed feedback");
+  }
+  const std::optional<PreprocessingRecord> trend = io::fit_preprocessing(files.front());
+  if (!trend) {
+    usage_error("--detrend fit takes the trend from the fit's record, but " + f.model +
+                " holds no preprocessing record (a plain model file, or a result written "
+                "before version 1 documents carried it); give --detrend mean or none");
+  }
+  for (std::size_t i = 1; i < files.size(); ++i) {
+    const std::optional<PreprocessingRecord> other = io::fit_preprocessing(files[i]);
+    if (!other || other->input_offset != trend->input_offset ||
+        other->output_offset != trend->output_offset || other->input_slope != trend->input_slope ||
+        other->output_slope != trend->output_slope) {
+      usage_error("--detrend fit: " + f.more_models[i - 1] +
+                  " was fitted with another trend than " + f.model +
+                  "; compare models with --detrend fit only when they share it");
+    }
+  }
+  PreprocessingRecord& record = f.data.preprocessing;
+  if (trend->input_scale != record.input_scale || trend->output_scale != record.output_scale) {
+    usage_error(internal::concat("--detrend fit: the fit scaled u by ", trend->input_scale,
+                                 " and y by ", trend->output_scale, ", this record by ",
+                                 record.input_scale, " and ", record.output_scale,
+                                 "; give the fit's --scale-input and --scale-output"));
+  }
+  PreprocessingRecord scaled = *trend;
+  scaled.input_offset *= record.input_scale;
+  scaled.input_slope *= record.input_scale;
+  scaled.output_offset *= record.output_scale;
+  scaled.output_slope *= record.output_scale;
+  scaled.reference_offset *= record.output_scale;
+  scaled.reference_slope *= record.output_scale;
+  record.detrend = trend->detrend;
+  record.input_offset = trend->input_offset;
+  record.input_slope = trend->input_slope;
+  record.output_offset = trend->output_offset;
+  record.output_slope = trend->output_slope;
+  record.reference_offset = trend->reference_offset;
+  record.reference_slope = trend->reference_slope;
+  return remove_trend(data, scaled);
 }
 
 void run_validate(const ValidateFlags& f, const CLI::App& app) {
@@ -171,7 +225,8 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
         f.plot, several ? std::vector<std::string>{"validation.png"} : model_figure_names(modes),
         f.force);
   }
-  const SampledData data = f.data.load(app, false);
+  SampledData data = f.data.load(app, false);
+  if (f.data.detrend == "fit") data = without_fit_trend(f, files, loop.has_value(), data);
 
   std::vector<ValidationReport> reports;
   try {
@@ -251,8 +306,12 @@ Command add_validate_command(CLI::App& parent) {
       "on --window; the fits from rest and from the estimated state are printed side by side.\n"
       "Tests use lags 1-20 (autocorrelation) and -20..20 (cross-correlation) against\n"
       "2.58/sqrt(N), N the samples scored.\n"
+      "--detrend fit removes the fit's trend (the offsets and slopes its record's --detrend\n"
+      "removed, from the result document) instead of this record's own, so a model fitted\n"
+      "to detrended data is judged at the operating point it was fitted at.\n"
       "Exit status: 0 ran (whatever the verdict), 2 bad usage or input, 1 other error.");
   app->add_option("model", f.model, "Model or result JSON")->required()->check(CLI::ExistingFile);
+  f.data.detrend_fit = true;
   f.data.add_to(*app, "data", false);
   app->add_option("models", f.more_models, "More model JSON files to compare on the same data")
       ->check(CLI::ExistingFile);

@@ -383,6 +383,15 @@ void bind_core(py::module_& m) {
       },
       py::arg("data"), py::arg("options") = py::none(),
       "PreprocessedData: the record after range, detrend, decimation and scaling.");
+  m.def("remove_trend", &remove_trend, py::arg("data"), py::arg("trend"),
+        "Another record minus the trend an earlier preprocess removed (trend: its "
+        "PreprocessingRecord; offset + slope (t - t_0) per signal, t_0 the record's first "
+        "sample), as `ctid validate --detrend fit` does. Example: "
+        "ctid.remove_trend(validation, fitted_record) before ctid.validate_model.");
+  m.def("add_output_trend", &add_output_trend, py::arg("output"), py::arg("sample_time"),
+        py::arg("trend"),
+        "The output trend of `trend` added back to an output sampled every sample_time from "
+        "its first sample: a simulated output at the record's own level.");
   py::class_<PreprocessedMimoData>(
       m, "PreprocessedMimoData",
       "A preprocessed MimoData, the record of what was done and each channel's removed line.")

@@ -29,6 +29,26 @@ def test_detrend_mean_removes_the_dryer_means_and_records_them():
     np.testing.assert_array_equal(by_object.data.output, done.data.output)
 
 
+def test_the_estimation_trend_travels_to_the_validation_record():
+    data = _dryer()
+    estimation = data.segment(0, 600).preprocess(detrend=ctid.Detrend.linear)
+    validation = data.segment(600, 400)
+    removed = ctid.remove_trend(validation, estimation.record)
+    t = np.arange(400) * validation.sample_time
+    rec = estimation.record
+    np.testing.assert_allclose(removed.output,
+                               validation.output - rec.output_offset - rec.output_slope * t,
+                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(removed.input,
+                               validation.input - rec.input_offset - rec.input_slope * t,
+                               rtol=0, atol=1e-12)
+    back = ctid.add_output_trend(removed.output, validation.sample_time, rec)
+    np.testing.assert_allclose(back, validation.output, rtol=0, atol=1e-12)
+    # On the estimation record itself it is preprocess's own detrending, bit for bit.
+    same = ctid.remove_trend(data.segment(0, 600), rec)
+    np.testing.assert_array_equal(same.output, estimation.data.output)
+
+
 def test_ranges_decimation_and_scaling():
     data = _dryer()
     p = data.preprocess(first_row=100, end_row=500, decimate=2, input_scale=2.0)

@@ -113,6 +113,22 @@ Eigen::VectorXd anti_alias_filter(const Eigen::VectorXd& x, int factor) {
   return y;
 }
 
+SampledData remove_trend(const SampledData& data, const PreprocessingRecord& trend) {
+  const double h = data.sample_time();
+  const Eigen::VectorXd u = remove(data.input(), h, {trend.input_offset, trend.input_slope});
+  const Eigen::VectorXd y = remove(data.output(), h, {trend.output_offset, trend.output_slope});
+  std::optional<Eigen::VectorXd> r;
+  if (data.has_reference()) {
+    r = remove(data.reference(), h, {trend.reference_offset, trend.reference_slope});
+  }
+  return SampledData(h, u, y, r, data.start_time()).with_input_hold(data.input_hold());
+}
+
+Eigen::VectorXd add_output_trend(const Eigen::VectorXd& output, double h,
+                                 const PreprocessingRecord& trend) {
+  return remove(output, h, {-trend.output_offset, -trend.output_slope});
+}
+
 PreprocessedData preprocess(const SampledData& data, const PreprocessingOptions& options) {
   options.validate();
   const int n = data.size();

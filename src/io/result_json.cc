@@ -315,4 +315,17 @@ FittedModel read_fitted_model(const std::filesystem::path& path) {
   return fitted_model_from_json(read_json(path), path.string());
 }
 
+std::optional<PreprocessingRecord> fit_preprocessing(const std::filesystem::path& path) {
+  const nlohmann::json document = read_json(path);
+  const auto type = document.find("type");
+  if (type == document.end() || *type != kEstimationResultType) return std::nullopt;
+  const auto data = document.find("data");
+  if (data == document.end() || !data->is_object() || !data->contains("preprocessing")) {
+    return std::nullopt;
+  }
+  PreprocessingRecord record = PreprocessingRecord();
+  fields_from_json(data->at("preprocessing"), record, path.string() + ": data.preprocessing");
+  return record;
+}
+
 }  // namespace ctid::io

@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include "cli/run_ctid.h"
+#include "ctid/core/format.h"
+#include "ctid/io/csv.h"
 #include "ctid/io/json.h"
 
 namespace ctid::cli::data_flags_test {
@@ -71,6 +73,67 @@ TEST_F(DataFlags, DryerValidatesFarBetterWithItsMeansRemoved) {
   // Measured: 52.8 % raw, 84.3 % with the means removed (n = 2, m = 0, delay 3).
   EXPECT_LT(fit[0], 60.0);
   EXPECT_GT(fit[1], 80.0);
+}
+
+TEST_F(DataFlags, DetrendFitCarriesTheEstimationMeansToTheValidationRecord) {
+  // Fitted on the dryer's first 600 samples with their means removed, judged on the last 400:
+  // --detrend fit removes the estimation record's means (the validation record's own differ),
+  // which is validating by hand on a file with those means subtracted, number for number.
+  const std::string dryer = kData + "daisy_dryer_ljung/dryer.csv";
+  const std::vector<std::string> columns = {"--time-column",   "t_s_assumed_0.08",
+                                            "--input-column",  "u_heater_voltage",
+                                            "--output-column", "y_outlet_temperature"};
+  std::vector<std::string> fit = {"fit",       dryer,     "--poles", "2",       "--zeros",
+                                  "0",         "--delay", "3",       "--rows",  "0:600",
+                                  "--detrend", "mean",    "-o",      "fit.json"};
+  fit.insert(fit.end(), columns.begin(), columns.end());
+  ASSERT_EQ(ctid(fit).status, 0);
+  const nlohmann::json trend = io::read_json(path("fit.json"))["data"]["preprocessing"];
+  std::vector<std::string> check = {
+      "validate", "fit.json", dryer, "--rows", "600:", "--detrend", "fit", "-o", "report.json"};
+  check.insert(check.end(), columns.begin(), columns.end());
+  const auto validated = ctid(check);
+  ASSERT_EQ(validated.status, 0) << validated.err;
+  const nlohmann::json report = io::read_json(path("report.json"));
+  EXPECT_EQ(report["data"]["preprocessing"]["output_offset"], trend["output_offset"]);
+  const double mse = report["mean_squared_error"];
+  EXPECT_THAT(validated.out,
+              HasSubstr("RMS error " + format_brief(std::sqrt(mse)) + " (output units)"));
+
+  const io::CsvTable table = io::read_csv(dryer);
+  const double u0 = trend["input_offset"];
+  const double y0 = trend["output_offset"];
+  std::string text = "t,u,y\n";
+  for (int k = 600; k < table.rows(); ++k) {
+    text += format_round_trip(table.column("t_s_assumed_0.08")(k)) + "," +
+            format_round_trip(table.column("u_heater_voltage")(k) - u0) + "," +
+            format_round_trip(table.column("y_outlet_temperature")(k) - y0) + "\n";
+  }
+  write("by_hand.csv", text);
+  ASSERT_EQ(ctid({"validate", "fit.json", "by_hand.csv", "-o", "by_hand.json"}).status, 0);
+  const nlohmann::json by_hand = io::read_json(path("by_hand.json"));
+  EXPECT_NEAR(report["fit_percent"].get<double>(), by_hand["fit_percent"].get<double>(), 1e-9);
+  EXPECT_NEAR(mse, by_hand["mean_squared_error"].get<double>(), 1e-12);
+
+  // The validation record's own means instead: another operating point, a different score.
+  check[6] = "mean";
+  check[8] = "own.json";
+  ASSERT_EQ(ctid(check).status, 0);
+  EXPECT_NE(io::read_json(path("own.json"))["data"]["preprocessing"]["output_offset"],
+            trend["output_offset"]);
+
+  // A plain model file has no trend to carry: one clear line.
+  ASSERT_EQ(ctid({"fit", dryer, "--poles", "1", "--zeros", "0", "--model-output", "m.json", "-q",
+                  "--time-column", "t_s_assumed_0.08", "--input-column", "u_heater_voltage",
+                  "--output-column", "y_outlet_temperature"})
+                .status,
+            0);
+  check[1] = "m.json";
+  check[6] = "fit";
+  check[8] = "plain.json";
+  const auto plain = ctid(check);
+  EXPECT_EQ(plain.status, 2);
+  EXPECT_THAT(plain.err, HasSubstr("m.json holds no preprocessing record"));
 }
 
 TEST_F(DataFlags, ShippedFlexibleStructureStampsAreUniform) {

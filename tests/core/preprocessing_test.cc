@@ -65,6 +65,44 @@ TEST(Preprocessing, MeanAndLinearTrendsAreRemovedAndRecorded) {
   EXPECT_THAT(l.record.summary(), HasSubstr("lines removed (u 3 + -0.7 t"));
 }
 
+TEST(Preprocessing, AFitsTrendTravelsToAnotherRecord) {
+  // On the estimation record itself, removing the recorded trend is preprocess's detrending
+  // bit for bit; on another record it removes the same line from that record's first sample,
+  // not the record's own (MATLAB's detrend(zv, T)), and add_output_trend puts it back.
+  const SampledData data = ramp_record(400, 0.1);
+  for (const Detrend detrend : {Detrend::mean, Detrend::linear}) {
+    PreprocessingOptions options;
+    options.detrend = detrend;
+    const PreprocessedData fitted = preprocess(data, options);
+    const SampledData same = remove_trend(data, fitted.record);
+    EXPECT_EQ(same.input(), fitted.data.input());
+    EXPECT_EQ(same.output(), fitted.data.output());
+
+    const SampledData other = ramp_record(250, 0.1);
+    const SampledData moved(0.1, other.input().array() + 0.25, other.output().array() - 1.5,
+                            std::nullopt, 7.0);
+    const SampledData removed = remove_trend(moved, fitted.record);
+    EXPECT_EQ(removed.size(), 250);
+    EXPECT_EQ(removed.start_time(), 7.0);
+    for (const int k : {0, 17, 249}) {
+      const double t = 0.1 * k;
+      EXPECT_NEAR(removed.input()(k),
+                  moved.input()(k) - fitted.record.input_offset - fitted.record.input_slope * t,
+                  1e-13);
+      EXPECT_NEAR(removed.output()(k),
+                  moved.output()(k) - fitted.record.output_offset - fitted.record.output_slope * t,
+                  1e-13);
+    }
+    // The moved record's own mean is not what was removed: its offset of +0.25 stays.
+    if (detrend == Detrend::mean) {
+      EXPECT_NEAR(removed.input().mean() - (other.input().mean() - data.input().mean()), 0.25,
+                  1e-12);
+    }
+    const Eigen::VectorXd back = add_output_trend(removed.output(), 0.1, fitted.record);
+    EXPECT_LT((back - moved.output()).cwiseAbs().maxCoeff(), 1e-12);
+  }
+}
+
 TEST(Preprocessing, RowAndTimeRangesKeepTheRightSamples) {
   const SampledData data = ramp_record(100, 0.5);  // t = 1 + 0.5 k
   PreprocessingOptions rows;

@@ -124,6 +124,18 @@ struct PreprocessedData {
 /// than 2 samples (3 for detrend linear), or a decimation leaving fewer than 2 samples.
 PreprocessedData preprocess(const SampledData& data, const PreprocessingOptions& options = {});
 
+/// Another record with the trend an earlier preprocess() removed (`trend`: its offsets and
+/// slopes, in the original units) removed: each signal minus offset + slope (t - t_0), t_0 the
+/// record's first sample (MATLAB's detrend(z, T) with a TrendInfo). The record's length, time
+/// and hold are kept; scaling and decimation are not applied. Used to validate a model fitted
+/// to detrended data on a record with the same operating point (`--detrend fit`).
+SampledData remove_trend(const SampledData& data, const PreprocessingRecord& trend);
+
+/// The output trend of `trend` put back onto an output sampled every h from t_0: the
+/// simulated output of a model fitted to detrended data, in the record's own level.
+Eigen::VectorXd add_output_trend(const Eigen::VectorXd& output, double h,
+                                 const PreprocessingRecord& trend);
+
 /// A record with irregular time stamps moved onto the uniform grid t_0 + k h (t_0 the first
 /// stamp, up to the last one): the input as `input_hold` says it behaves between its
 /// samples (zero-order hold: the last sample at or before each grid time, exact for a held

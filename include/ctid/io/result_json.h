@@ -7,6 +7,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ctid/core/additive_model.h"
+#include "ctid/core/preprocessing.h"
 #include "ctid/core/transfer_function.h"
 #include "ctid/io/file.h"
 #include "ctid/refined_iv/estimation_result.h"
@@ -107,5 +109,10 @@ AdditiveModel as_additive_model(const TransferFunction& model);
 /// or a transfer_function / additive_model document. Errors name `source` and the field.
 FittedModel fitted_model_from_json(const nlohmann::json& value, const std::string& source);
 FittedModel read_fitted_model(const std::filesystem::path& path);
+
+/// What the record of a `ctid fit` result went through (its `data.preprocessing`: the trend
+/// removed, the scales); nullopt for any other document (a plain model file, a result without
+/// it). `ctid validate --detrend fit` removes that trend from the validation record.
+std::optional<PreprocessingRecord> fit_preprocessing(const std::filesystem::path& path);
 
 }  // namespace ctid::io
