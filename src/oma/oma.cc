@@ -244,8 +244,8 @@ int perturbation_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& r
   const auto r = static_cast<Eigen::Index>(refs.size());
   if (nb < 2 || modes.empty()) return 0;
   if (length < ssi_samples_needed(o, p, y.cols(), r)) return -1;
-  const Eigen::MatrixXd hankel =
-      oma_detail::correlation_hankel(oma_detail::output_correlations(y, refs, 2 * p - 1), p);
+  const oma_detail::HankelSvd hankel = oma_detail::hankel_svd(
+      oma_detail::correlation_hankel(oma_detail::output_correlations(y, refs, 2 * p - 1), p));
   const Eigen::MatrixXd factor = oma_detail::hankel_covariance_factor(y, refs, p, nb);
   int failed = 0;
   for (OmaMode& m : modes) {

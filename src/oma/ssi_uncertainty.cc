@@ -37,18 +37,28 @@ Eigen::MatrixXd hankel_covariance_factor(const Eigen::MatrixXd& y,
   return t / std::sqrt(static_cast<double>(blocks) * static_cast<double>(blocks - 1));
 }
 
+HankelSvd hankel_svd(const Eigen::MatrixXd& hankel) {
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(hankel, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  return {svd.matrixU(), svd.matrixV(), svd.singularValues(), hankel.rows(), hankel.cols()};
+}
+
 std::optional<PoleSensitivity> pole_sensitivity(const Eigen::MatrixXd& hankel, int outputs,
                                                 int order, double sample_time,
                                                 std::complex<double> target,
                                                 const Eigen::MatrixXd& directions) {
+  return pole_sensitivity(hankel_svd(hankel), outputs, order, sample_time, target, directions);
+}
+
+std::optional<PoleSensitivity> pole_sensitivity(const HankelSvd& svd, int outputs, int order,
+                                                double sample_time, std::complex<double> target,
+                                                const Eigen::MatrixXd& directions) {
   using Complex = std::complex<double>;
-  const Eigen::Index m1 = hankel.rows();
-  const Eigen::Index m2 = hankel.cols();
+  const Eigen::Index m1 = svd.rows;
+  const Eigen::Index m2 = svd.cols;
   const Eigen::Index l = outputs;
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(hankel, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::MatrixXd& u = svd.matrixU();
-  const Eigen::MatrixXd& v = svd.matrixV();
-  const Eigen::VectorXd& sv = svd.singularValues();
+  const Eigen::MatrixXd& u = svd.u;
+  const Eigen::MatrixXd& v = svd.v;
+  const Eigen::VectorXd& sv = svd.singular_values;
   const auto rank = static_cast<Eigen::Index>((sv.array() > 1e-12 * sv(0)).count());
   const Eigen::Index n = std::min<Eigen::Index>(order, rank);
   if (n < 1) return std::nullopt;

@@ -37,9 +37,21 @@ struct PoleSensitivity {
   Eigen::MatrixXcd shape_change;  ///< l x directions: ∂φ · ΔH_k (largest entry's row is 0)
 };
 
+/// The full SVD of the Hankel matrix (U, S and V), shared by every mode's sensitivities.
+struct HankelSvd {
+  Eigen::MatrixXd u, v;
+  Eigen::VectorXd singular_values;
+  Eigen::Index rows = 0, cols = 0;
+};
+HankelSvd hankel_svd(const Eigen::MatrixXd& hankel);
+
 /// The eigenvalue of A (order `order`, capped at the numerical rank as ssi_poles does) with
 /// Im λ > 0 nearest `target` (a discrete pole), and its sensitivities; nullopt when A has no
 /// such eigenvalue.
+std::optional<PoleSensitivity> pole_sensitivity(const HankelSvd& svd, int outputs, int order,
+                                                double sample_time, std::complex<double> target,
+                                                const Eigen::MatrixXd& directions);
+/// The same from the Hankel matrix itself.
 std::optional<PoleSensitivity> pole_sensitivity(const Eigen::MatrixXd& hankel, int outputs,
                                                 int order, double sample_time,
                                                 std::complex<double> target,
