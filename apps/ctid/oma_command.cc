@@ -1,8 +1,9 @@
 // ctid oma: output-only (operational) modal analysis of several response channels with no
 // measured input: covariance-driven SSI over orders 2..--max-order, the stable poles clustered
-// into modes, segment-based standard errors; or the peaks of the output spectral matrix's first
-// singular value (fdd, efdd) (ctid::oma, oma/oma.h; docs/oma.md). Prints the modes and the
-// verdict; -o writes an "oma_result" document. Exit 3 when no mode was found.
+// into modes, standard errors by first-order perturbation or from segments; or the peaks of the
+// output spectral matrix's first singular value (fdd, efdd) (ctid::oma, oma/oma.h; docs/oma.md).
+// Prints the modes and the verdict; -o writes an "oma_result" document. Exit 3 when no mode was
+// found.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -41,6 +42,7 @@ struct OmaFlags {
   int block_rows = 0;
   std::vector<double> modes_near;
   int uncertainty_blocks = OmaOptions{}.uncertainty_blocks;
+  std::string uncertainty = std::string(enum_name(OmaOptions{}.uncertainty));
   int segment_length = 0;
   double peak_prominence_db = OmaOptions{}.peak_prominence_db;
   double efdd_mac = OmaOptions{}.efdd_mac;
@@ -161,6 +163,12 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
   options.block_rows = f.block_rows;
   options.modes_near_hz = f.modes_near;
   options.uncertainty_blocks = f.uncertainty_blocks;
+  const auto uncertainty = enum_from_name<OmaUncertainty>(f.uncertainty);
+  if (!uncertainty) {
+    usage_error("--uncertainty is '" + f.uncertainty + "'; it must be " +
+                enum_names<OmaUncertainty>());
+  }
+  options.uncertainty = *uncertainty;
   options.segment_length = f.segment_length;
   options.peak_prominence_db = f.peak_prominence_db;
   options.efdd_mac = f.efdd_mac;
@@ -213,7 +221,7 @@ Command add_oma_command(CLI::App& parent) {
       "measured input, by covariance-driven SSI (a stabilisation diagram and clustering) or "
       "by frequency-domain decomposition (fdd, efdd).");
   app->footer(
-      "Prints each mode (frequency and damping with segment-based standard errors, MPC, the "
+      "Prints each mode (frequency and damping with their standard errors, MPC, the "
       "number of orders supporting it) and the verdict. -o X.json writes an \"oma_result\" "
       "document (docs/oma.md) with every pole of the stabilisation diagram.\n"
       "Exit status: 0 modes found, 3 no mode found, 2 bad usage or input, 1 other error.");
@@ -244,7 +252,12 @@ Command add_oma_command(CLI::App& parent) {
                   "Pick the modes nearest these frequencies [Hz] instead of automatically")
       ->delimiter(',');
   app->add_option("--uncertainty-blocks", f.uncertainty_blocks,
-                  "Segments for the standard errors (0: none)")
+                  "Blocks for the standard errors (0: none)")
+      ->capture_default_str();
+  app->add_option("--uncertainty", f.uncertainty,
+                  "Standard errors: perturbation (first-order perturbation of the SSI-cov "
+                  "estimate; ssi-data uses segments) or segments (the spread of the modes of "
+                  "each block)")
       ->capture_default_str();
   app->add_option("--segment-length", f.segment_length,
                   "fdd, efdd: samples per Welch segment (0: a power of two near N/8)")

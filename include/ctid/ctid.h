@@ -45,6 +45,7 @@
 #include "ctid/oma/oma.h"
 #include "ctid/oma/ssi_cov.h"
 #include "ctid/oma/ssi_data.h"
+#include "ctid/oma/ssi_uncertainty.h"
 #include "ctid/oma/stabilisation.h"
 
 #include "ctid/refined_iv/additive_srivc.h"

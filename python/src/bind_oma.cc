@@ -1,6 +1,7 @@
 // Python bindings of the oma layer (oma/oma.h): ctid.oma(outputs, sample_time, options,
 // channel_names, **options) returns an OmaResult with its modes, stabilisation diagram and
-// verdict; OmaOptions, OmaMode, OmaPole, OmaMethod and PoleStability mirror the C++ names.
+// verdict; OmaOptions, OmaMode, OmaPole, OmaMethod, OmaUncertainty and PoleStability mirror the C++
+// names.
 #include "common.h"
 #include "ctid/oma/oma.h"
 #include "fields.h"
@@ -9,6 +10,8 @@ namespace ctid::python {
 
 void bind_oma(py::module_& m) {
   bind_enum<OmaMethod>(m, "OmaMethod", "Output-only identification method.");
+  bind_enum<OmaUncertainty>(m, "OmaUncertainty",
+                            "How the standard errors of the SSI modes are computed.");
   bind_enum<PoleStability>(m, "PoleStability", "Stability class of a pole in the diagram.");
   bind_options<OmaOptions>(m, "Options of output-only modal analysis (docs/oma.md).");
   bind_result<OmaPole>(m, "One pole of the stabilisation diagram.");
@@ -28,7 +31,8 @@ void bind_oma(py::module_& m) {
       py::arg("channel_names") = py::none(),
       "Output-only modal analysis of the (N, l) array `outputs` sampled every sample_time "
       "seconds: SSI-cov (or SSI-data, by method) over orders 2..max_order, stable poles "
-      "clustered into modes, segment-based standard errors; or fdd/efdd peaks. OmaOptions "
+      "clustered into modes, standard errors by first-order perturbation or from segments; or "
+      "fdd/efdd peaks. OmaOptions "
       "fields may be given as keywords.");
 }
 

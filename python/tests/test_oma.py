@@ -221,3 +221,24 @@ def test_a_hyphenated_method_is_an_attribute_and_keeps_its_name_in_json():
     document = ctid.options_to_json(options)
     assert document["method"] == "ssi-data"
     assert ctid.options_from_json("OmaOptions", document).method == ctid.OmaMethod.ssi_data
+
+
+def test_perturbation_standard_errors_are_finite_and_positive():
+    """uncertainty=perturbation (the default for ssi-cov) and segments: the same modes, finite
+    positive standard errors of frequency, damping and every shape entry but the largest."""
+    y, modes = _record(4, samples=20000)
+    kinds = (ctid.OmaUncertainty.perturbation, ctid.OmaUncertainty.segments)
+    results = [ctid.oma(y, H, max_order=20, block_rows=20, uncertainty=kind) for kind in kinds]
+    assert ctid.OmaOptions().uncertainty == ctid.OmaUncertainty.perturbation
+    assert "first-order perturbation standard errors" in results[0].message
+    perturbation, segments = results
+    assert len(perturbation.modes) == len(modes)
+    for mode, other in zip(perturbation.modes, segments.modes):
+        assert mode.frequency_hz == other.frequency_hz
+        assert mode.damping_ratio == other.damping_ratio
+        assert np.isfinite(mode.frequency_hz_std) and mode.frequency_hz_std > 0
+        assert np.isfinite(mode.damping_ratio_std) and mode.damping_ratio_std > 0
+        largest = int(np.argmax(np.hypot(mode.shape_real, mode.shape_imag)))
+        for j, (re, im) in enumerate(zip(mode.shape_real_std, mode.shape_imag_std)):
+            assert np.isfinite(re) and np.isfinite(im)
+            assert (re == 0 and im == 0) if j == largest else (re > 0 and im > 0)

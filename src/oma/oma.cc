@@ -1,11 +1,13 @@
 // oma(): checks, the stabilisation diagram over every order, automatic picking and the
-// segment-based standard errors (Reynders, Pintelon and De Roeck, MSSP 2008, section 3).
+// standard errors: first-order perturbation (ssi_uncertainty.h) or segment-based (Reynders,
+// Pintelon and De Roeck, MSSP 2008, section 3); decision 0036.
 #include "ctid/oma/oma.h"
 
 #include <algorithm>
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <numbers>
 #include <string>
 #include <utility>
 #include <vector>
@@ -16,6 +18,7 @@
 #include "ctid/oma/fdd.h"
 #include "ctid/oma/ssi_cov.h"
 #include "ctid/oma/ssi_data.h"
+#include "ctid/oma/ssi_uncertainty.h"
 #include "ctid/oma/stabilisation.h"
 
 namespace ctid {
@@ -230,6 +233,74 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
   }
 }
 
+// First-order perturbation standard errors of the SSI-cov modes (decision 0036): the Hankel
+// matrix of the record, the square-root factor of its covariance from n_b blocks, and each
+// mode's sensitivities at its own order. Returns how many modes' standard errors came out
+// non-finite (left NaN), or -1 when the blocks are too short for any.
+int perturbation_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
+                             double h, const OmaOptions& o, std::vector<OmaMode>& modes) {
+  const int nb = o.uncertainty_blocks;
+  const Eigen::Index length = y.rows() / std::max(nb, 1);
+  const auto r = static_cast<Eigen::Index>(refs.size());
+  if (nb < 2 || modes.empty()) return 0;
+  if (length < ssi_samples_needed(o, p, y.cols(), r)) return -1;
+  const oma_detail::HankelSvd hankel = oma_detail::hankel_svd(
+      oma_detail::correlation_hankel(oma_detail::output_correlations(y, refs, 2 * p - 1), p));
+  const Eigen::MatrixXd factor = oma_detail::hankel_covariance_factor(y, refs, p, nb);
+  int failed = 0;
+  for (OmaMode& m : modes) {
+    const double wn = 2.0 * std::numbers::pi * m.frequency_hz;
+    const std::complex<double> s(-m.damping_ratio * wn,
+                                 wn * std::sqrt(1.0 - m.damping_ratio * m.damping_ratio));
+    const auto sensitivity = oma_detail::pole_sensitivity(hankel, static_cast<int>(y.cols()),
+                                                          m.order, h, std::exp(s * h), factor);
+    const bool same = sensitivity.has_value() &&
+                      std::abs(sensitivity->frequency_hz / m.frequency_hz - 1.0) < 1e-6;
+    const auto root_sum = [](const auto& row) {
+      const double v = std::sqrt(row.squaredNorm());
+      return std::isfinite(v) ? v : kNaN;
+    };
+    if (!same) {
+      ++failed;
+      continue;
+    }
+    m.frequency_hz_std = root_sum(sensitivity->frequency);
+    m.damping_ratio_std = root_sum(sensitivity->damping);
+    bool finite = std::isfinite(m.frequency_hz_std) && std::isfinite(m.damping_ratio_std);
+    for (std::size_t j = 0; j < m.shape_real.size(); ++j) {
+      const auto row = sensitivity->shape_change.row(static_cast<Eigen::Index>(j));
+      m.shape_real_std[j] = root_sum(row.real().eval());
+      m.shape_imag_std[j] = root_sum(row.imag().eval());
+      finite = finite && std::isfinite(m.shape_real_std[j]) && std::isfinite(m.shape_imag_std[j]);
+    }
+    if (!finite) ++failed;
+  }
+  return failed;
+}
+
+// The standard errors the options ask for, and what the message says about them.
+std::string standard_errors(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p, double h,
+                            const OmaOptions& o, std::vector<OmaMode>& modes) {
+  if (o.uncertainty_blocks < 2 || modes.empty()) return "";
+  if (o.method == OmaMethod::ssi_data || o.uncertainty == OmaUncertainty::segments) {
+    segment_uncertainty(y, refs, p, h, o, modes);
+    return "";
+  }
+  const int failed = perturbation_uncertainty(y, refs, p, h, o, modes);
+  if (failed < 0) {
+    return internal::concat("; no standard errors: ", o.uncertainty_blocks,
+                            " blocks are too short for ", p, " block rows");
+  }
+  std::string note = internal::concat("; first-order perturbation standard errors from ",
+                                      o.uncertainty_blocks, " blocks");
+  if (failed > 0) {
+    note += internal::concat(" (NaN for ", failed,
+                             " mode(s): the perturbation is singular there, e.g. two equal "
+                             "singular values)");
+  }
+  return note;
+}
+
 int automatic_segment_length(Eigen::Index samples) {
   int length = 256;
   while (2 * length <= samples / 8 && 2 * length <= 16384) length *= 2;
@@ -407,11 +478,13 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
   const auto clusters =
       oma_detail::cluster_stable_poles(orders, stability, options.cluster_distance);
   result.modes = pick_modes(clusters, orders, options, result.verdict);
-  segment_uncertainty(outputs, refs, p, sample_time, options, result.modes);
+  const std::string error_note =
+      standard_errors(outputs, refs, p, sample_time, options, result.modes);
   result.termination = Termination::converged;
   result.iterations = static_cast<int>(orders.size());
-  result.message = internal::concat(result.modes.size(), " mode(s) from orders 2..",
-                                    options.max_order, " (", p, " block rows", lag_note, ")");
+  result.message =
+      internal::concat(result.modes.size(), " mode(s) from orders 2..", options.max_order, " (", p,
+                       " block rows", lag_note, ")", error_note);
   return result;
 }
 

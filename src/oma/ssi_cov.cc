@@ -48,8 +48,8 @@ std::vector<Eigen::MatrixXd> output_correlations(const Eigen::MatrixXd& y,
   return out;
 }
 
-SsiFactor ssi_factor(const std::vector<Eigen::MatrixXd>& correlations, int block_rows,
-                     int max_order) {
+Eigen::MatrixXd correlation_hankel(const std::vector<Eigen::MatrixXd>& correlations,
+                                   int block_rows) {
   const Eigen::Index l = correlations.front().rows();
   const Eigen::Index r = correlations.front().cols();
   const Eigen::Index p = block_rows;
@@ -59,8 +59,15 @@ SsiFactor ssi_factor(const std::vector<Eigen::MatrixXd>& correlations, int block
       hankel.block(i * l, j * r, l, r) = correlations[static_cast<std::size_t>(i + j)];
     }
   }
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(hankel, Eigen::ComputeThinU);
-  return observability_factor(svd.matrixU(), svd.singularValues(), static_cast<int>(l), max_order);
+  return hankel;
+}
+
+SsiFactor ssi_factor(const std::vector<Eigen::MatrixXd>& correlations, int block_rows,
+                     int max_order) {
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(correlation_hankel(correlations, block_rows),
+                                           Eigen::ComputeThinU);
+  return observability_factor(svd.matrixU(), svd.singularValues(),
+                              static_cast<int>(correlations.front().rows()), max_order);
 }
 
 SsiFactor observability_factor(const Eigen::MatrixXd& left_vectors,

@@ -28,6 +28,36 @@ class OmaCommand : public testing::CliTest {
   std::string flexible() const {
     return std::string(CTID_SOURCE_DIR) + "/data/daisy_flexible_structure/flexible_structure.csv";
   }
+  // Three channels of two lightly damped resonances (5 and 12 Hz, 2 % damping, each an AR(2)
+  // process driven by white noise) plus sensor noise, h = 0.01 s.
+  std::string two_modes() const {
+    std::mt19937_64 rng(10);
+    std::normal_distribution<double> normal;
+    const double h = 0.01;
+    double a[2][2];
+    const double hz[2] = {5.0, 12.0};
+    for (int i = 0; i < 2; ++i) {
+      const double w = 2.0 * 3.141592653589793 * hz[i];
+      const double radius = std::exp(-0.02 * w * h);
+      a[i][0] = 2.0 * radius * std::cos(w * h * std::sqrt(1.0 - 0.02 * 0.02));
+      a[i][1] = -radius * radius;
+    }
+    double x[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
+    std::ostringstream csv;
+    csv << "t,a,b,c\n";
+    for (int k = -500; k < 12000; ++k) {
+      for (int i = 0; i < 2; ++i) {
+        const double next = a[i][0] * x[i][0] + a[i][1] * x[i][1] + normal(rng);
+        x[i][1] = x[i][0];
+        x[i][0] = next;
+      }
+      if (k < 0) continue;
+      csv << k * h << "," << x[0][0] + x[1][0] + 0.3 * normal(rng) << ","
+          << 0.5 * x[0][0] - x[1][0] + 0.3 * normal(rng) << ","
+          << -0.8 * x[0][0] + 0.6 * x[1][0] + 0.3 * normal(rng) << "\n";
+    }
+    return write("two_modes.csv", csv.str());
+  }
   // Three channels of independent white noise: no resonance.
   std::string white_noise() const {
     std::mt19937_64 rng(9);
@@ -78,6 +108,38 @@ TEST_F(OmaCommand, SsiDataRunsOnTheFlexibleStructure) {
   EXPECT_EQ(result->method, OmaMethod::ssi_data);
   EXPECT_FALSE(result->modes.empty());
   EXPECT_FALSE(result->stabilisation.empty());
+}
+
+// --uncertainty: perturbation (the default for ssi-cov) says so in the summary; segments gives
+// the same modes with other standard errors; a bad name is a usage error naming the flag.
+TEST_F(OmaCommand, UncertaintyChoosesHowTheStandardErrorsAreComputed) {
+  const std::string data = two_modes();
+  const auto first = ctid({"oma", data, "--output-columns", "a:c", "--max-order", "12",
+                           "--block-rows", "12", "-o", "perturbation.json"});
+  ASSERT_EQ(first.status, 0) << first.err << first.out;
+  EXPECT_THAT(first.out, HasSubstr("first-order perturbation standard errors from 10 blocks"));
+  const auto second =
+      ctid({"oma", data, "--output-columns", "a:c", "--max-order", "12", "--block-rows", "12",
+            "--uncertainty", "segments", "-o", "segments.json"});
+  ASSERT_EQ(second.status, 0) << second.err;
+  EXPECT_THAT(second.out, Not(HasSubstr("perturbation")));
+  const io::ResultDocument a = io::read_result(path("perturbation.json"));
+  const io::ResultDocument b = io::read_result(path("segments.json"));
+  const auto* pa = std::get_if<OmaResult>(&a);
+  const auto* pb = std::get_if<OmaResult>(&b);
+  ASSERT_TRUE(pa != nullptr && pb != nullptr);
+  ASSERT_EQ(pa->modes.size(), 2u);
+  ASSERT_EQ(pb->modes.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(pa->modes[i].frequency_hz, pb->modes[i].frequency_hz);
+    EXPECT_EQ(pa->modes[i].damping_ratio, pb->modes[i].damping_ratio);
+    EXPECT_GT(pa->modes[i].frequency_hz_std, 0.0);
+    EXPECT_GT(pa->modes[i].damping_ratio_std, 0.0);
+    EXPECT_NE(pa->modes[i].frequency_hz_std, pb->modes[i].frequency_hz_std);
+  }
+  const auto bad = ctid({"oma", data, "--output-columns", "a:c", "--uncertainty", "bootstrap"});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_THAT(bad.err, HasSubstr("--uncertainty is 'bootstrap'"));
 }
 
 TEST_F(OmaCommand, NoResonanceExitsThreeWithTheVerdict) {

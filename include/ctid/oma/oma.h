@@ -2,11 +2,11 @@
 // ambient response, no input measured. Covariance-driven stochastic subspace identification
 // with reference channels (Peeters and De Roeck, MSSP 1999), every order 2..max_order from one
 // SVD (Döhler and Mevel, CEP 2012), a stabilisation diagram, automatic picking by clustering
-// the stable poles (Magalhães, Cunha and Caetano, MSSP 2009) and segment-based standard errors
-// (Reynders, Pintelon and De Roeck, MSSP 2008, section 3); or the data-driven variant (the LQ
-// factor of the data Hankel matrix, ssi_data.h) feeding the same path from the observability
-// matrix on; or FDD/EFDD. Poles s = ln(λ)/h; shapes normalised
-// as docs/decisions/0030-oma-conventions.md says. Method and options: docs/oma.md.
+// the stable poles (Magalhães, Cunha and Caetano, MSSP 2009) and standard errors by first-order
+// perturbation or from segments (Reynders, Pintelon and De Roeck, MSSP 2008; decision 0036); or the
+// data-driven variant (the LQ factor of the data Hankel matrix, ssi_data.h) feeding the same path
+// from the observability matrix on; or FDD/EFDD. Poles s = ln(λ)/h; shapes normalised as
+// docs/decisions/0030-oma-conventions.md says. Method and options: docs/oma.md.
 #pragma once
 
 #include <array>
@@ -39,6 +39,21 @@ inline constexpr std::array<Enumerator<OmaMethod>, 4> oma_method_enumerators{{
 }};
 constexpr std::span<const Enumerator<OmaMethod>> enumerators(OmaMethod) {
   return oma_method_enumerators;
+}
+
+/// How the standard errors of the SSI modes are computed (decision 0036).
+enum class OmaUncertainty { perturbation, segments };
+inline constexpr std::array<Enumerator<OmaUncertainty>, 2> oma_uncertainty_enumerators{{
+    {OmaUncertainty::perturbation, "perturbation",
+     "First-order perturbation of the SSI-cov estimate: the covariance of the Hankel matrix from "
+     "uncertainty_blocks blocks, carried through the SVD, A and the eigenvalue problem "
+     "(Reynders, Pintelon and De Roeck 2008; Doehler and Mevel 2013). ssi-data: as segments."},
+    {OmaUncertainty::segments, "segments",
+     "The modes re-identified on each of uncertainty_blocks segments: their spread over "
+     "sqrt(uncertainty_blocks)."},
+}};
+constexpr std::span<const Enumerator<OmaUncertainty>> enumerators(OmaUncertainty) {
+  return oma_uncertainty_enumerators;
 }
 
 /// Stability of a pole against the poles of the previous order in the diagram.
@@ -79,8 +94,11 @@ struct OmaOptions {
   /// Frequencies [Hz] to pick near: each takes the nearest cluster of stable poles (any
   /// size) within 10 % in frequency; empty: automatic picking only.
   std::vector<double> modes_near_hz;
-  /// Segments n_b for the segment-based standard errors; 0: none (standard errors NaN).
+  /// Blocks n_b for the standard errors (either kind); 0: none (standard errors NaN).
   int uncertainty_blocks = 10;
+  /// perturbation (SSI-cov's first-order perturbation; ssi-data falls back to segments) or
+  /// segments (the spread of the modes of n_b segments); decision 0036.
+  OmaUncertainty uncertainty = OmaUncertainty::perturbation;
   /// Samples per Welch segment of the spectral matrix (fdd, efdd, and every result's first
   /// singular value); 0: the largest power of two up to N / 8, within 256..16384 (at most N).
   int segment_length = 0;
@@ -115,7 +133,9 @@ struct OmaOptions {
         field("modes_near_hz", &S::modes_near_hz, Each{Finite{GreaterThan{0}}},
               "Frequencies [Hz] to pick near."),
         field("uncertainty_blocks", &S::uncertainty_blocks, AtLeast{0},
-              "Segments for the standard errors; 0: none."),
+              "Blocks for the standard errors; 0: none."),
+        field("uncertainty", &S::uncertainty,
+              "Standard errors by first-order perturbation (ssi-cov) or from segments."),
         field("segment_length", &S::segment_length, AtLeast{0},
               "Samples per Welch segment of the spectral matrix; 0: automatic."),
         field("peak_prominence_db", &S::peak_prominence_db, GreaterThan{0},
@@ -149,7 +169,7 @@ struct OmaPole {
   }
 };
 
-/// One identified mode: its cluster's representative, with segment-based standard errors.
+/// One identified mode: its cluster's representative, with standard errors (decision 0036).
 struct OmaMode {
   double frequency_hz = 0.0;
   double frequency_hz_std = 0.0;

@@ -28,6 +28,10 @@ struct SsiFactor {
   int rank = 0;
 };
 
+/// The p-block-row, p-block-column Hankel matrix H_ij = R_{i+j-1} of R_1..R_{2p-1}.
+Eigen::MatrixXd correlation_hankel(const std::vector<Eigen::MatrixXd>& correlations,
+                                   int block_rows);
+
 /// Hankel matrix of R_1..R_{2p-1} (p block rows, p block columns), its SVD and the QR.
 SsiFactor ssi_factor(const std::vector<Eigen::MatrixXd>& correlations, int block_rows,
                      int max_order);
