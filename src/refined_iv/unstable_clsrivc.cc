@@ -17,7 +17,9 @@
 #include "ctid/estimation/verdict.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/initialization.h"
+#include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/discretization.h"
+#include "ctid/simulation/simulate.h"
 
 namespace ctid {
 namespace {
@@ -332,6 +334,27 @@ std::vector<AdditiveModel> unstable_clsrivc_starts(const SampledData& data,
   std::vector<AdditiveModel> bases;
   InitializationOptions init;
   bases.push_back(unstable_loop_submodel(initial_transfer_function(data, order, init)));
+  // Two-stage: the input's part explained by r (an open-loop SRIVC fit of r -> u of the
+  // loop's order, biproper like a biproper controller), free of the noise fed back, then the
+  // open-loop start on that input.
+  try {
+    const int loop_order = order.n + order.integrators + controller.denominator().degree();
+    RefinedIvOptions quick;
+    quick.compute_covariance = false;
+    const EstimationResult sensitivity =
+        srivc(SampledData(data.sample_time(), data.reference(), data.input()),
+              SubmodelOrder{loop_order, loop_order, 0}, quick);
+    if (sensitivity.parameters.allFinite()) {
+      const Eigen::VectorXd explained =
+          simulate(sensitivity.transfer_function, data.reference(), data.sample_time());
+      if (explained.allFinite()) {
+        bases.push_back(unstable_loop_submodel(initial_transfer_function(
+            SampledData(data.sample_time(), explained, data.output()), order, init)));
+      }
+    }
+  } catch (const InvalidArgument&) {
+    // too short or too poorly excited for the first stage: the other starts remain
+  }
   init.controller = controller;
   bases.push_back(unstable_loop_submodel(initial_transfer_function(data, order, init)));
   // Each with every combination of its real roots and complex pairs moved to the other
@@ -363,16 +386,20 @@ std::vector<AdditiveModel> unstable_clsrivc_starts(const SampledData& data,
         }
       }
       const Polynomial a = mask == 0 ? s.a : Polynomial::from_roots(moved).anti_monic();
-      const AdditiveModel candidate({Submodel{a, s.b, s.integrators}});
-      if (candidate[0].n() != order.n || candidate[0].m() > order.m) continue;
-      Eigen::VectorXd theta = Eigen::VectorXd::Zero(order.n + order.m + 1);
-      for (int k = 1; k <= order.n; ++k) theta(k - 1) = a[k];
-      for (int k = 0; k <= s.b.degree(); ++k) theta(order.n + k) = s.b[k];
-      if (!theta.allFinite()) continue;
-      const std::optional<UnstableLoopPass> pass =
-          unstable_loop_pass_at(order, theta, controller, data);
-      if (!pass) continue;
-      scored.push_back({unstable_loop_fit(data, *pass), candidate});
+      if (a.degree() != order.n || s.b.degree() > order.m) continue;
+      // The gain as it is, else the nearest power of two the controller stabilises.
+      for (double gain : {1.0, 0.5, 2.0, 0.25, 4.0, 0.125, 8.0}) {
+        const AdditiveModel candidate({Submodel{a, gain * s.b, s.integrators}});
+        Eigen::VectorXd theta = Eigen::VectorXd::Zero(order.n + order.m + 1);
+        for (int k = 1; k <= order.n; ++k) theta(k - 1) = a[k];
+        for (int k = 0; k <= s.b.degree(); ++k) theta(order.n + k) = gain * s.b[k];
+        if (!theta.allFinite()) break;
+        const std::optional<UnstableLoopPass> pass =
+            unstable_loop_pass_at(order, theta, controller, data);
+        if (!pass) continue;
+        scored.push_back({unstable_loop_fit(data, *pass), candidate});
+        break;
+      }
     }
   }
   std::stable_sort(scored.begin(), scored.end(),
