@@ -129,9 +129,8 @@ struct UnstableLoopStep {
 
 // One step of the iteration at theta = [a_1..a_n, b_0..b_m] from its closed-loop pass.
 std::optional<UnstableLoopStep> unstable_loop_step(const SampledData& data, const SubmodelOrder& o,
-                                                   const Eigen::VectorXd& theta,
                                                    const UnstableLoopPass& pass,
-                                                   const Polynomial& af) {
+                                                   const Polynomial& af, bool stale) {
   const double h = data.sample_time();
   const Eigen::Index samples = data.size();
   const int p = o.n + o.m + 1;
@@ -140,11 +139,16 @@ std::optional<UnstableLoopStep> unstable_loop_step(const SampledData& data, cons
   const Eigen::MatrixXd fu = input_filter.apply(data.input());
   const Eigen::MatrixXd fur = input_filter.apply(pass.input);
   const SampledFilter output_filter(derivative_filters(af), h, Hold::first_order_hold);
+  // A stale pass (an earlier iterate's, the current one's loop being unstable) gives u_r and a
+  // noise-free x still, but not p^k/A_f x for this A_f: x is filtered like y then.
+  const Eigen::MatrixXd fx =
+      stale ? output_filter.apply(pass.output) : Eigen::MatrixXd(pass.filtered_output);
   const Eigen::MatrixXd fy =
-      pass.filtered_output + output_filter.apply(data.output() - pass.output);
+      stale ? output_filter.apply(data.output())
+            : Eigen::MatrixXd(fx + output_filter.apply(data.output() - pass.output));
   Eigen::MatrixXd z(samples, p);
   Eigen::MatrixXd phi(samples, p);
-  z.leftCols(o.n) = -pass.filtered_output.middleCols(1, o.n);
+  z.leftCols(o.n) = -fx.middleCols(1, o.n);
   phi.leftCols(o.n) = -fy.middleCols(1, o.n);
   z.rightCols(o.m + 1) = fur.leftCols(o.m + 1);
   phi.rightCols(o.m + 1) = fu.leftCols(o.m + 1);
@@ -164,7 +168,6 @@ std::optional<UnstableLoopStep> unstable_loop_step(const SampledData& data, cons
   if (!(step.reciprocal_condition > 1e-14)) return std::nullopt;
   step.theta = sp.cwiseInverse().asDiagonal() * Eigen::VectorXd(m.fullPivLu().solve(rhs));
   if (!step.theta.allFinite()) return std::nullopt;
-  (void)theta;
   return step;
 }
 
@@ -213,6 +216,7 @@ EstimationResult unstable_clsrivc_from(const SampledData& data,
   if (pass) result.start_closed_loop_fit_percent = unstable_loop_fit(data, *pass);
   result.start_fit_percent = result.start_closed_loop_fit_percent;
   int iteration = 1;
+  bool stale = false;  // pass is an earlier iterate's
   if (!pass) {
     result.termination = Termination::closed_loop_unstable;
     result.message = name +
@@ -224,7 +228,7 @@ EstimationResult unstable_clsrivc_from(const SampledData& data,
     if (af.coefficients() != unstable_loop_denominator(o, theta).coefficients()) {
       ++result.unstable_reflections;
     }
-    const std::optional<UnstableLoopStep> step = unstable_loop_step(data, o, theta, *pass, af);
+    const std::optional<UnstableLoopStep> step = unstable_loop_step(data, o, *pass, af, stale);
     if (!step) {
       result.termination = Termination::singular_equations;
       result.message = name +
@@ -245,19 +249,19 @@ EstimationResult unstable_clsrivc_from(const SampledData& data,
       next_pass = unstable_loop_pass_at(o, next, controller, data);
     }
     if (!next_pass) {
-      result.termination = Termination::closed_loop_unstable;
-      result.message = name + ": at iteration " + std::to_string(iteration) +
-                       " the controller stabilises no step toward the new iterate; the last "
-                       "iterate is returned";
-      break;
+      // As the engine does: the full step is taken and this pass reused until an iterate's
+      // loop is stable again.
+      next = step->theta;
+      ++result.sensitivity_fallbacks;
     }
+    stale = !next_pass;
     const double change = (next - theta).norm() / std::max(next.norm(), 1e-300);
     result.relative_change = change;
     result.iterations = iteration;
     theta = next;
-    pass = std::move(next_pass);
+    if (next_pass) pass = std::move(next_pass);
     if (options.record_history) result.history.push_back({iteration, theta, change, 0.0});
-    if (change < options.tolerance) {
+    if (change < options.tolerance && !stale) {
       result.termination = Termination::converged;
       result.message = name + ": converged after " + std::to_string(iteration) +
                        " iterations (relative parameter change " + format_significant(change, 3) +
@@ -279,7 +283,7 @@ EstimationResult unstable_clsrivc_from(const SampledData& data,
     result.additive_view = AdditiveModel::from_transfer_function(result.transfer_function);
   } catch (const InvalidArgument&) {
   }
-  const bool loop_stable = pass.has_value();
+  const bool loop_stable = pass.has_value() && !stale;
   if (loop_stable) {
     result.closed_loop_fit_percent = unstable_loop_fit(data, *pass);
     const Eigen::VectorXd residual = data.output() - pass->output;

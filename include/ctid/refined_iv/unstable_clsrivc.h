@@ -15,7 +15,9 @@
 //   - y is interpolated between samples as x plus the linear interpolant of y - x: exact
 //     whatever the interpolation when y = x (noise-free data at the true model), so noise-free
 //     data give the plant to rounding.
-// An iterate the controller does not stabilise has its step halved toward the last one.
+// A step to a model the controller does not stabilise is halved toward the iterate; if no
+// halved step is stabilised, the full step is taken with the last closed-loop pass reused
+// (sensitivity_fallbacks), and the fit cannot converge or be usable until a loop is stable.
 #pragma once
 
 #include <vector>
