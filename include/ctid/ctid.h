@@ -61,6 +61,7 @@
 #include "ctid/refined_iv/refined_iv.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 #include "ctid/refined_iv/srivc.h"
+#include "ctid/refined_iv/unstable_clsrivc.h"
 
 #include "ctid/delayed_feedback/cramer_rao.h"
 #include "ctid/delayed_feedback/feedback_delay_scan.h"

@@ -14,6 +14,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/refined_iv/refined_iv.h"
+#include "ctid/refined_iv/unstable_clsrivc.h"
 #include "ctid/simulation/simulate.h"
 
 namespace ctid {
@@ -236,6 +237,20 @@ IdentificationResult identify_records(std::span<const SampledData> records,
     fitted = relocated->estimate;
   }
 
+  // Decision 0038: an unusable unfactored closed-loop fit may be of a plant the engine cannot
+  // hold (it reflects every unstable root); the fit with a stabilised prefilter replaces it
+  // when that one is usable.
+  if (closed_loop && !structure.is_additive() && records.size() == 1 && !options.delay_scan &&
+      !options.delay_range && !options.relocate_modes && !fitted->verdict.usable &&
+      options.refined_iv.input_delay == 0 && options.refined_iv.input_delay_fraction == 0.0) {
+    try {
+      EstimationResult held =
+          unstable_clsrivc(data, *options.controller, orders[0], options.refined_iv);
+      if (held.verdict.usable) fitted = std::move(held);
+    } catch (const InvalidArgument&) {
+      // an order it does not take (n = 0): the engine's fit stands
+    }
+  }
   IdentificationResult result(std::move(*fitted));
   result.estimator = estimator;
   result.closed_loop = closed_loop;
