@@ -20,6 +20,7 @@
 #include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/simulate.h"
+#include "refined_iv/internal/refined_iv_engine.h"
 
 namespace ctid {
 namespace {
@@ -27,19 +28,11 @@ namespace {
 // Starts iterated from, at most (the best by their closed-loop fit from r).
 constexpr int kUnstableStarts = 3;
 
-// A with its right-half-plane roots reflected, kept anti-monic.
+// A with its right-half-plane roots reflected, kept anti-monic: the engine's reflection,
+// applied here to the prefilter only.
 Polynomial unstable_loop_prefilter(const Polynomial& a) {
-  if (a.degree() < 1) return a;
-  Eigen::VectorXcd roots = a.roots();
   bool reflected = false;
-  for (Eigen::Index j = 0; j < roots.size(); ++j) {
-    if (roots(j).real() > 0.0) {
-      roots(j) = std::complex<double>(-roots(j).real(), roots(j).imag());
-      reflected = true;
-    }
-  }
-  if (!reflected) return a;
-  return Polynomial::from_roots(roots).anti_monic();
+  return internal::reflect_unstable_roots(a, reflected);
 }
 
 // What the closed-loop recursion of the model gives from r: the controller output u_r, the
