@@ -18,12 +18,12 @@
 #include "command.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
-#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "plot_support.h"
 #include "progress.h"
 

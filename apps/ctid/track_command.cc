@@ -1,6 +1,6 @@
 // `ctid track`: follows the modes of one channel through time (issue 17) with the library's
-// track_modes (identification/mode_tracking.h): consecutive windows of the record, each fitted with a
-// warm start from the previous window's model, the modes matched into tracks. Writes the whole
+// track_modes (identification/mode_tracking.h): consecutive windows of the record, each fitted with
+// a warm start from the previous window's model, the modes matched into tracks. Writes the whole
 // result as JSON (io/tracking_json.h), the per-window table as CSV and the tracking figure, and
 // prints one line per track.
 #include <algorithm>
@@ -19,12 +19,12 @@
 #include "ctid/core/error.h"
 #include "ctid/core/fields.h"
 #include "ctid/core/format.h"
+#include "ctid/identification/mode_tracking.h"
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/result_json.h"
 #include "ctid/io/tracking_json.h"
-#include "ctid/identification/mode_tracking.h"
 #include "data_flags.h"
 #include "plot_support.h"
 #include "progress.h"

@@ -11,10 +11,10 @@
 
 #include "common.h"
 #include "ctid/core/error.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/uff58.h"
-#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "fields.h"
 
 namespace ctid::python {

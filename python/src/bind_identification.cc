@@ -1,6 +1,6 @@
-// Python binding of the refined IV front door (identification/identification.h): ctid.identify(data,
-// structure, options=None, **keywords) runs what `ctid fit` runs. Every class here is derived
-// from its C++ field list (fields.h); no field is named in this file.
+// Python binding of the refined IV front door (identification/identification.h):
+// ctid.identify(data, structure, options=None, **keywords) runs what `ctid fit` runs. Every class
+// here is derived from its C++ field list (fields.h); no field is named in this file.
 #include "common.h"
 #include "ctid/identification/identification.h"
 #include "ctid/identification/structure_scan.h"

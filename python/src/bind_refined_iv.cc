@@ -2,6 +2,7 @@
 // closed loop, delay scans, mode relocation, automatic initialisation, covariance. Options are
 // keyword arguments.
 #include "common.h"
+#include "ctid/identification/mode_tracking.h"
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/clsrivc.h"
 #include "ctid/refined_iv/covariance.h"
@@ -11,7 +12,6 @@
 #include "ctid/refined_iv/irregular_srivc.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
-#include "ctid/identification/mode_tracking.h"
 #include "ctid/refined_iv/recursive_srivc.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 #include "ctid/refined_iv/srivc.h"

@@ -11,12 +11,12 @@
 
 #include "cli/run_ctid.h"
 #include "ctid/core/mimo_model.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/uff58.h"
-#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "support/mimo_systems.h"
 
 namespace ctid::cli::fit_frf_test {

@@ -9,8 +9,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/identification/identification.h"
+#include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/excitation.h"

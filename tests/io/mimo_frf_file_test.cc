@@ -13,10 +13,10 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/report_json.h"
 #include "ctid/io/uff58.h"
-#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "io/test_directory.h"
 
 namespace ctid::mimo_frf_file_test {

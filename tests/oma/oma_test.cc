@@ -82,9 +82,9 @@ TEST(Oma, ModesNearPicksTheNamedModesOnly) {
   EXPECT_THAT(none.verdict.summary(), ::testing::HasSubstr("no stable pole within 10 %"));
 }
 
-// The reported standard errors (first-order perturbation, the default) against the spread of the estimates over
-// seeded runs: the root-mean-square reported error within a factor 1.6 of the observed
-// standard deviation (30 runs: the observed one is itself uncertain by about 13 %, and the
+// The reported standard errors (first-order perturbation, the default) against the spread of the
+// estimates over seeded runs: the root-mean-square reported error within a factor 1.6 of the
+// observed standard deviation (30 runs: the observed one is itself uncertain by about 13 %, and the
 // block estimate is biased by finite-block effects), and at least 85 % of the estimates
 // within 3 reported standard errors of the truth. A mode is found (within 2 % of the truth)
 // in all but at most 3 of the runs; the statistics are over the runs that found it.

@@ -21,8 +21,8 @@
 #include "ctid/core/sampled_data.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/verdict.h"
-#include "ctid/refined_iv/estimation_result.h"
 #include "ctid/identification/identification.h"
+#include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 
 namespace ctid {

@@ -17,15 +17,15 @@
 
 #include "ctid/estimation/validation.h"
 #include "ctid/frequency/frf.h"
+#include "ctid/frf_fit/frf_matrix_fit.h"
+#include "ctid/identification/structure_scan.h"
 #include "ctid/io/feedback_result_json.h"
 #include "ctid/io/file.h"
 #include "ctid/oma/oma.h"
 #include "ctid/refined_iv/estimation_result.h"
-#include "ctid/frf_fit/frf_matrix_fit.h"
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/refined_iv/mode_relocation.h"
-#include "ctid/identification/structure_scan.h"
 #include "ctid/study/study_output.h"
 
 namespace ctid::io {

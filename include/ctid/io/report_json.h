@@ -13,10 +13,10 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/frequency/mimo_frf.h"
-#include "ctid/oma/oma.h"
 #include "ctid/frf_fit/frf_matrix_fit.h"
-#include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/identification/structure_scan.h"
+#include "ctid/oma/oma.h"
+#include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/study/paper_study.h"
 #include "ctid/study/study_output.h"
 

@@ -8,8 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "ctid/io/file.h"
 #include "ctid/identification/mode_tracking.h"
+#include "ctid/io/file.h"
 
 namespace ctid::io {
 
