@@ -54,6 +54,9 @@ struct FitFlags {
   bool rank_one = false;             // several inputs and outputs: Res_i = psi_i L_i^T
 
   std::string controller;
+  bool two_stage = false;  // closed loop, unknown controller (decision 0043)
+  std::string sensitivity_model = "automatic";
+  int sensitivity_order = TwoStageOptions{}.sensitivity_order;
   std::string initial;
   std::string start = "auto";
   int start_screening = RefinedIvOptions{}.start_screening_samples;
@@ -228,6 +231,14 @@ NoiseAssumption noise_assumption(const FitFlags& f) {
   return enum_from_name<NoiseAssumption>(f.noise).value();
 }
 
+// Stage 1 of --two-stage and what the estimate assumes (decision 0043).
+void print_two_stage(std::ostream& out, const TwoStageResult& stage) {
+  out << "two-stage (unknown controller): r -> u by a " << enum_name(stage.sensitivity_model)
+      << " model of order " << stage.sensitivity_order << ", fit";
+  for (const double fit : stage.sensitivity_fit_percent) out << " " << format_brief(fit) << " %";
+  out << "\n  assumes " << stage.assumptions << "\n";
+}
+
 // The flags as IdentificationOptions (the controller and --initial read from their files).
 IdentificationOptions identification_options(const FitFlags& f) {
   IdentificationOptions options;
@@ -235,6 +246,9 @@ IdentificationOptions identification_options(const FitFlags& f) {
   if (!f.delay_scan.empty()) options.delay_scan = parse_delay_range(f.delay_scan);
   if (!f.delay_range.empty()) options.delay_range = parse_delay_interval(f.delay_range);
   options.relocate_modes = f.relocate_modes;
+  if (f.two_stage)
+    options.two_stage = TwoStageOptions{
+        enum_from_name<SensitivityModel>(f.sensitivity_model).value(), f.sensitivity_order};
   RefinedIvOptions& refined = options.refined_iv;
   refined.max_iterations = f.max_iterations;
   refined.tolerance = f.tolerance;
@@ -366,8 +380,8 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
         "with --input-columns / --output-columns give the modes (--modes K or "
         "--submodel N,M repeated); an unfactored model has no shared modes");
   }
-  for (const char* flag : {"--controller", "--delay", "--delay-scan", "--delay-range",
-                           "--record-delays", "--relocate-modes", "--history"}) {
+  for (const char* flag : {"--controller", "--two-stage", "--delay", "--delay-scan",
+                           "--delay-range", "--record-delays", "--relocate-modes", "--history"}) {
     if (app.count(flag) > 0) {
       usage_error(std::string(flag) +
                   " is not available with --input-columns / --output-columns yet (the "
@@ -485,9 +499,9 @@ void check_irregular_flags(const FitFlags& f, const CLI::App& app) {
       " does not go with --irregular (an unfactored open-loop SISO SRIVC on the time stamps; "
       "docs/decisions/0034)";
   if (f.data.mimo_asked(app)) usage_error("--input-columns / --output-columns" + why);
-  for (const char* flag : {"--controller", "--submodel", "--modes", "--delay", "--delay-scan",
-                           "--delay-range", "--record-delays", "--relocate-modes", "--rank-one",
-                           "--input-delays", "--direct", "--plot"}) {
+  for (const char* flag : {"--controller", "--two-stage", "--submodel", "--modes", "--delay",
+                           "--delay-scan", "--delay-range", "--record-delays", "--relocate-modes",
+                           "--rank-one", "--input-delays", "--direct", "--plot"}) {
     if (app.count(flag) > 0) usage_error(std::string(flag) + why);
   }
   if (f.model == "additive") usage_error("--model additive" + why);
@@ -580,7 +594,8 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
                 std::to_string(options.refined_iv.record_input_delays.size()) + " delays for " +
                 std::to_string(f.data.files.size()) + " data files; give one per file");
   }
-  const std::vector<SampledData> records = f.data.load_all(app, controller.has_value());
+  const std::vector<SampledData> records =
+      f.data.load_all(app, controller.has_value() || options.two_stage.has_value());
   const SampledData& data = records.front();
   int samples = 0;
   for (std::size_t k = 0; k < records.size(); ++k) {
@@ -638,6 +653,7 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
       document["data"]["record_samples"] = sizes;
     }
     if (controller) document["controller"] = io::to_json(*controller);
+    if (identified.two_stage) document["two_stage"] = io::fields_to_json(*identified.two_stage);
     if (scanned) document["delay_scan"] = io::delay_scan_summary_to_json(*scanned);
     if (relocated) {
       document["mode_relocation"] = io::relocation_summary_to_json(*relocated);
@@ -656,6 +672,7 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
                   f.data.preprocessing_asked(app) ? f.data.preprocessing.summary() : "");
     if (scanned) print_delay_scan(std::cout, *scanned);
     if (relocated) std::cout << "mode relocation: " << relocated->message << "\n";
+    if (identified.two_stage) print_two_stage(std::cout, *identified.two_stage);
   }
 
   if (!f.plot.empty()) {
@@ -691,7 +708,8 @@ Command add_fit_command(CLI::App& parent) {
       "adds D; --start/--initial take a mimo_additive_model or mimo_estimation_result); the "
       "summary lists the modes and every output's fit.\n"
       "Closed loop: --controller C.json (discrete controller) uses CLSRIVC / additive CL and "
-      "needs the reference column.\n"
+      "needs the reference column; with the controller unknown, --two-stage fits r -> u first "
+      "and the plant from the simulated input.\n"
       "Output: --output RESULT.json holds everything; its \"model\" field (or --model-output) "
       "is a model file for 'ctid validate' and 'ctid simulate --model'.\n"
       "Formats: docs/formats.md, docs/cli-estimation.md. Exit status: 0 ran and the model passed "
@@ -756,6 +774,24 @@ Command add_fit_command(CLI::App& parent) {
   app->add_option("--controller,-c", f.controller,
                   "Discrete controller JSON (discrete_transfer_function in q): closed loop")
       ->check(CLI::ExistingFile)
+      ->group("Closed loop");
+  app->add_flag("--two-stage", f.two_stage,
+                "Closed loop with an unknown controller: model r -> u (discrete, refined IV), then "
+                "fit the "
+                "plant from the simulated noise-free input (needs the reference column; "
+                "decision 0043)")
+      ->excludes("--controller")
+      ->group("Closed loop");
+  app->add_option("--sensitivity-model", f.sensitivity_model,
+                  "--two-stage: model of r -> u: automatic (by AIC), fir or rational")
+      ->check(CLI::IsMember({"automatic", "fir", "rational"}))
+      ->needs("--two-stage")
+      ->group("Closed loop");
+  app->add_option("--sensitivity-order", f.sensitivity_order,
+                  "--two-stage: FIR taps or rational order of the model of r -> u (0: by AIC); "
+                  "with --sensitivity-model fir or rational")
+      ->check(CLI::Range(0, kMaxSensitivityOrder))
+      ->needs("--two-stage")
       ->group("Closed loop");
 
   app->add_option("--start", f.start,

@@ -80,6 +80,7 @@
 #include "ctid/identification/identification.h"
 #include "ctid/identification/mode_tracking.h"
 #include "ctid/identification/structure_scan.h"
+#include "ctid/identification/two_stage.h"
 
 #include "ctid/study/monte_carlo.h"
 #include "ctid/study/paper_study.h"

@@ -26,6 +26,11 @@ void bind_identification(py::module_& m) {
   bind_options<DelayInterval>(
       m,
       "Input delays min..max [s] within which the delay is estimated as a continuous parameter.");
+  bind_enum<SensitivityModel>(m, "SensitivityModel",
+                              "Stage 1 of the two-stage method: the model of r -> u.");
+  bind_options<TwoStageOptions>(
+      m, "The two-stage method for an unknown controller: the model of r -> u and its order.");
+  bind_result<TwoStageResult>(m, "What stage 1 of the two-stage method chose and how well it fit.");
   bind_options<IdentificationOptions>(
       m, "Options of identify: controller (closed loop), delay scan, mode relocation, estimator.");
   bind_result<IdentificationResult>(

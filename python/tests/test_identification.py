@@ -163,6 +163,30 @@ def test_closed_loop_equals_ctid_fit(cli, closed_loop):
     expect_same_as_cli(result, fit(cli, csv, "--modes", "2", "-c", str(PID_FILE)))
 
 
+def test_two_stage_equals_ctid_fit_and_needs_no_controller(cli, closed_loop):
+    data, csv = closed_loop
+    result = ctid.identify(data, ctid.ModelStructure.modes(2),
+                           two_stage=ctid.TwoStageOptions())
+    assert result.closed_loop and result.estimator == ctid.RefinedIvEstimator.additive_srivc
+    stage = result.two_stage
+    assert stage.sensitivity_model in (ctid.SensitivityModel.fir, ctid.SensitivityModel.rational)
+    assert "uncorrelated with the noise" in stage.assumptions
+    document = fit(cli, csv, "--modes", "2", "--two-stage")
+    expect_same_as_cli(result, document)
+    assert document["two_stage"]["sensitivity_order"] == stage.sensitivity_order
+    assert document["two_stage"]["sensitivity_model"] == stage.sensitivity_model.name
+    # Close to the truth without the controller: within 10 % on every parameter at this noise
+    # (the lightly damped mode's a1 = 0.01 is the farthest, at 8 %).
+    error = np.abs(np.asarray(result.estimate.parameters) / np.asarray(TRUTH.parameters()) - 1)
+    assert error.max() < 0.1, error
+    with pytest.raises(ctid.InvalidArgument, match="two_stage and .*controller are both set"):
+        ctid.identify(data, ctid.ModelStructure.modes(2), controller=PID,
+                      two_stage=ctid.TwoStageOptions())
+    with pytest.raises(ctid.InvalidArgument, match="but sensitivity_model is automatic"):
+        ctid.identify(data, ctid.ModelStructure.modes(2),
+                      two_stage=ctid.TwoStageOptions(sensitivity_order=3))
+
+
 def test_relocation_equals_ctid_fit(cli, open_loop):
     data, csv = open_loop
     refined = ctid.RefinedIvOptions(input_delay=2)
@@ -209,9 +233,10 @@ def test_options_and_structure_are_checked_with_the_field_path(open_loop):
 
 def test_classes_follow_the_cpp_field_lists():
     assert ctid.IdentificationOptions.fields == (
-        "controller", "delay_scan", "delay_range", "relocate_modes", "relocation", "refined_iv")
+        "controller", "delay_scan", "delay_range", "relocate_modes", "relocation", "refined_iv",
+        "two_stage")
     assert ctid.IdentificationResult.fields == (
-        "estimator", "closed_loop", "estimate", "delay_scan", "mode_relocation")
+        "estimator", "closed_loop", "estimate", "delay_scan", "mode_relocation", "two_stage")
     assert ctid.ModelStructure.fields == ("kind", "orders")
     assert ctid.DelayRange.fields == ("min", "max")
     options = ctid.IdentificationOptions()

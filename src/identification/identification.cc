@@ -65,6 +65,9 @@ void IdentificationOptions::check_relations(const std::string& path) const {
           " and ", path, ".delay_range is set; give a known delay or a range, not both");
   require(!delay_range || !delay_scan, path, ".delay_scan and ", path,
           ".delay_range are both set; a range already scans its whole samples");
+  require(!two_stage || !controller, path, ".two_stage and ", path,
+          ".controller are both set; the two-stage method is for an unknown controller (with a "
+          "known one, CLSRIVC uses it)");
 }
 
 RefinedIvEstimator choose_estimator(const ModelStructure& structure, bool closed_loop) {
@@ -166,10 +169,16 @@ EstimationResult estimate_delay(std::span<const SampledData> records, const Dela
   return result;
 }
 
+IdentificationResult identify_two_stage(std::span<const SampledData> records,
+                                        const ModelStructure& structure,
+                                        const IdentificationOptions& options,
+                                        const IdentificationProgress& progress);
+
 IdentificationResult identify_records(std::span<const SampledData> records,
                                       const ModelStructure& structure,
                                       const IdentificationOptions& options,
                                       const IdentificationProgress& progress) {
+  if (options.two_stage) return identify_two_stage(records, structure, options, progress);
   validate_identification(structure, options);
   require(!records.empty(), "identify: no data record was given");
   require(!options.relocate_modes || records.size() == 1,
@@ -259,6 +268,56 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   return result;
 }
 
+// Decision 0043: stage 1 models r -> u on every record by an FIR or a discrete output-error
+// model (the kind and order chosen on the longest record), stage 2 is the open-loop estimation from
+// u_hat = S_hat r, which the noise does not reach when r is external.
+IdentificationResult identify_two_stage(std::span<const SampledData> records,
+                                        const ModelStructure& structure,
+                                        const IdentificationOptions& options,
+                                        const IdentificationProgress& progress) {
+  validate_identification(structure, options);
+  require(!records.empty(), "identify: no data record was given");
+  const SampledData* longest = &records.front();
+  for (const SampledData& record : records) {
+    require(record.has_reference(),
+            "IdentificationOptions.two_stage is set but a record has no reference; the two-stage "
+            "method fits the map from the reference r to the input u (--reference-column)");
+    if (record.size() > longest->size()) longest = &record;
+  }
+  TwoStageOptions chosen = *options.two_stage;
+  if (chosen.sensitivity_model == SensitivityModel::automatic || chosen.sensitivity_order == 0) {
+    const SensitivityFit fit = fit_sensitivity(*longest, chosen);
+    chosen = TwoStageOptions{fit.model, fit.order};
+  }
+  TwoStageResult stage;
+  stage.sensitivity_model = chosen.sensitivity_model;
+  stage.sensitivity_order = chosen.sensitivity_order;
+  std::vector<SampledData> simulated;
+  simulated.reserve(records.size());
+  for (const SampledData& record : records) {
+    SensitivityFit fit = fit_sensitivity(record, chosen);
+    stage.sensitivity_fit_percent.push_back(fit.fit_percent);
+    simulated.push_back(SampledData(record.sample_time(), std::move(fit.simulated_input),
+                                    record.output(), std::nullopt, record.start_time())
+                            .with_input_hold(record.input_hold()));
+  }
+  stage.assumptions =
+      "r is external (uncorrelated with the noise) and excites the loop; the loop is linear and "
+      "time-invariant, and stage 1's model holds its map r -> u (an FIR its impulse response); the "
+      "standard errors treat the simulated input as exact, so they leave out stage 1's error";
+  IdentificationOptions open = options;
+  open.two_stage.reset();
+  IdentificationResult result = identify_records(simulated, structure, open, progress);
+  result.closed_loop = true;
+  result.estimate.message += internal::concat(
+      "; two-stage (unknown controller): r -> u by a ", enum_name(chosen.sensitivity_model),
+      " model of order ", chosen.sensitivity_order, " (fit ",
+      format_significant(stage.sensitivity_fit_percent.front(), 4),
+      " %), then the plant from the simulated input");
+  result.two_stage = std::move(stage);
+  return result;
+}
+
 }  // namespace
 
 IdentificationResult identify(const SampledData& data, const ModelStructure& structure,
@@ -284,6 +343,7 @@ IdentificationResult identify(const IrregularRecord& record, const ModelStructur
   require(!options.delay_scan && !options.delay_range,
           "IdentificationOptions.delay_scan or delay_range is set", why);
   require(!options.relocate_modes, "IdentificationOptions.relocate_modes is true", why);
+  require(!options.two_stage, "IdentificationOptions.two_stage is set", why);
   IdentificationResult result(
       srivc_irregular(record, structure.orders.front(), options.refined_iv));
   result.estimator = RefinedIvEstimator::srivc_irregular;

@@ -169,6 +169,43 @@ TEST_F(FitCommand, ClosedLoopAdditiveAndClsrivcRecoverSection62) {
   }
 }
 
+// The same loop with the controller unknown (decision 0043): --two-stage models r -> u (here a
+// rational map of order 6, the plant's 4 plus the PID's 2) and fits the plant from the
+// simulated input, exactly on noise-free data.
+TEST_F(FitCommand, TwoStageRecoversSection62WithoutTheController) {
+  const auto s =
+      ctid({"simulate", "-m", example("gonzalez_6_2_plant.json"), "--controller",
+            example("gonzalez_6_2_pid.json"), "--excitation", "prbs", "--register-length", "10",
+            "--samples-per-bit", "3", "--samples", "3000", "-o", "d.csv", "-q"});
+  ASSERT_EQ(s.status, 0) << s.err;
+  const Eigen::VectorXd truth = example_additive("gonzalez_6_2_plant.json").parameters();
+  const auto r = ctid({"fit", "d.csv", "--modes", "2", "--two-stage", "-o", "t.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("two-stage (unknown controller): r -> u by a rational model of "
+                               "order 6, fit 100 %"));
+  EXPECT_THAT(r.out, HasSubstr("assumes r is external"));
+  const nlohmann::json t = read("t.json");
+  EXPECT_EQ(t.at("loop"), "closed");
+  EXPECT_EQ(t.at("two_stage").at("sensitivity_model"), "rational");
+  EXPECT_EQ(t.at("two_stage").at("sensitivity_order"), 6);
+  EXPECT_LT(relative_error(numbers(t.at("parameters")), truth), 1e-8);
+
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--two-stage", "--controller",
+                         example("gonzalez_6_2_pid.json")}),
+                   "--controller excludes --two-stage");
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--sensitivity-order", "3"}),
+                   "--sensitivity-order requires --two-stage");
+  expect_bad_input(
+      ctid({"fit", "d.csv", "--modes", "2", "--two-stage", "--sensitivity-order", "3"}),
+      "but sensitivity_model is automatic");
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--two-stage", "--sensitivity-model",
+                         "rational", "--sensitivity-order", "7"}),
+                   "the rational model of r -> u of order 7 cannot be fitted");
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--two-stage", "--sensitivity-model",
+                         "fir", "--sensitivity-order", "2000"}),
+                   "takes at most 1500");
+}
+
 // A proportional controller close to the loop's stability limit and coloured noise: on this
 // record the open-loop start (SRIVC on u -> y) is a model the controller does not stabilise,
 // which used to stop CLSRIVC at iteration 0 (closed_loop_unstable, exit 3). With the

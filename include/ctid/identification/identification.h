@@ -19,6 +19,7 @@
 #include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
+#include "ctid/identification/two_stage.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/irregular_srivc.h"
@@ -162,6 +163,11 @@ struct IdentificationOptions {
   ModeRelocationOptions relocation;
   /// Options of the estimator (iterations, tolerance, start, known delay, covariance, ...).
   RefinedIvOptions refined_iv;
+  /// Closed loop with an unknown controller (two_stage.h, decision 0043): the map r -> u by
+  /// an FIR model, then the plant by the open-loop estimator from the simulated input; the
+  /// data must hold the reference and no controller is given. None: open loop, or CLSRIVC
+  /// with the known controller.
+  std::optional<TwoStageOptions> two_stage;
 
   static constexpr std::string_view type_name = "IdentificationOptions";
   static constexpr auto fields() {
@@ -177,6 +183,8 @@ struct IdentificationOptions {
               "Move second-order submodels to residual peaks after the fit (additive, open loop)."),
         field("relocation", &O::relocation, "ModeRelocationOptions of relocate_modes."),
         field("refined_iv", &O::refined_iv, "RefinedIvOptions of the estimator."),
+        field("two_stage", &O::two_stage,
+              "TwoStageOptions of the two-stage method (unknown controller), or none."),
     };
   }
   void check_relations(const std::string& path) const;
@@ -189,6 +197,7 @@ struct IdentificationResult {
   explicit IdentificationResult(EstimationResult result) : estimate(std::move(result)) {}
 
   RefinedIvEstimator estimator = RefinedIvEstimator::srivc;
+  /// Closed loop: a controller was given, or the two-stage method ran.
   bool closed_loop = false;
   /// The final estimate (after the delay scan and the relocation, when asked for).
   EstimationResult estimate;
@@ -196,17 +205,21 @@ struct IdentificationResult {
   std::optional<InputDelayScanResult> delay_scan;
   /// What the relocation tried and kept, with IdentificationOptions::relocate_modes.
   std::optional<ModeRelocationResult> mode_relocation;
+  /// Stage 1 of the two-stage method, with IdentificationOptions::two_stage.
+  std::optional<TwoStageResult> two_stage;
 
   static constexpr std::string_view type_name = "IdentificationResult";
   static constexpr auto fields() {
     using R = IdentificationResult;
     return std::tuple{
         field("estimator", &R::estimator, "The refined IV estimator that ran."),
-        field("closed_loop", &R::closed_loop, "Closed loop (a controller was given)."),
+        field("closed_loop", &R::closed_loop,
+              "Closed loop (a controller was given, or the two-stage method ran)."),
         field("estimate", &R::estimate, "The final EstimationResult."),
         field("delay_scan", &R::delay_scan, "InputDelayScanResult of the delay scan, or none."),
         field("mode_relocation", &R::mode_relocation,
               "ModeRelocationResult of the relocation, or none."),
+        field("two_stage", &R::two_stage, "TwoStageResult of the two-stage method, or none."),
     };
   }
 };
