@@ -64,10 +64,13 @@ Eigen::MatrixXd correlation_hankel(const std::vector<Eigen::MatrixXd>& correlati
 
 SsiFactor ssi_factor(const std::vector<Eigen::MatrixXd>& correlations, int block_rows,
                      int max_order) {
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(correlation_hankel(correlations, block_rows),
-                                           Eigen::ComputeThinU);
-  return observability_factor(svd.matrixU(), svd.singularValues(),
-                              static_cast<int>(correlations.front().rows()), max_order);
+  return hankel_factor(correlation_hankel(correlations, block_rows),
+                       static_cast<int>(correlations.front().rows()), max_order);
+}
+
+SsiFactor hankel_factor(const Eigen::MatrixXd& hankel, int outputs, int max_order) {
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(hankel, Eigen::ComputeThinU);
+  return observability_factor(svd.matrixU(), svd.singularValues(), outputs, max_order);
 }
 
 SsiFactor observability_factor(const Eigen::MatrixXd& left_vectors,

@@ -36,6 +36,9 @@ Eigen::MatrixXd correlation_hankel(const std::vector<Eigen::MatrixXd>& correlati
 SsiFactor ssi_factor(const std::vector<Eigen::MatrixXd>& correlations, int block_rows,
                      int max_order);
 
+/// The same from the Hankel matrix itself (pl x pr, `outputs` = l).
+SsiFactor hankel_factor(const Eigen::MatrixXd& hankel, int outputs, int max_order);
+
 /// What every SSI variant shares once it has a matrix whose column space is that of the
 /// observability matrix (pl rows): from its left singular vectors and singular values,
 /// O = U_n S_n^{1/2} of order max_order, the numerical rank and the QR of O_up.
