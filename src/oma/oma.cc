@@ -84,24 +84,31 @@ int pick_block_rows(const OmaOptions& o, Eigen::Index l, Eigen::Index r, Eigen::
 
 // The observability factor of the SSI method: SSI-cov from the Hankel matrix of the
 // correlations, SSI-data from the LQ factor of the data Hankel matrix. Orders, poles, shapes,
-// stabilisation, picking and standard errors are shared from here on. SSI-cov's Hankel matrix
-// is kept: the whole record's correlations are computed once, for the factor of every order
-// and for the perturbation standard errors (empty for SSI-data).
+// stabilisation, picking and standard errors are shared from here on. When the whole
+// record's SSI-cov estimate gets standard errors (`with_errors`: either kind, so that both give
+// the same modes), its Hankel matrix has one SVD with U and V, from which come both the factor
+// of every order and the perturbation standard errors (decision 0041); otherwise U alone.
 struct RecordSsi {
-  Eigen::MatrixXd hankel;
+  oma_detail::HankelSvd svd;  // empty unless with_errors
   oma_detail::SsiFactor factor;
 };
 
 RecordSsi record_ssi(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
-                     const OmaOptions& o) {
+                     const OmaOptions& o, bool with_errors) {
   RecordSsi out;
   if (o.method == OmaMethod::ssi_data) {
     out.factor = oma_detail::ssi_data_factor(y, refs, p, o.max_order);
     return out;
   }
-  out.hankel =
+  const Eigen::MatrixXd hankel =
       oma_detail::correlation_hankel(oma_detail::output_correlations(y, refs, 2 * p - 1), p);
-  out.factor = oma_detail::hankel_factor(out.hankel, static_cast<int>(y.cols()), o.max_order);
+  const int l = static_cast<int>(y.cols());
+  if (!with_errors) {
+    out.factor = oma_detail::hankel_factor(hankel, l, o.max_order);
+    return out;
+  }
+  out.svd = oma_detail::hankel_svd(hankel);
+  out.factor = oma_detail::observability_factor(out.svd.u, out.svd.singular_values, l, o.max_order);
   return out;
 }
 
@@ -207,7 +214,7 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
   std::vector<std::vector<Eigen::VectorXcd>> shapes(m);
   for (int b = 0; b < nb; ++b) {
     const Eigen::MatrixXd block = y.middleRows(b * length, length);
-    const auto factor = record_ssi(block, refs, p, o).factor;
+    const auto factor = record_ssi(block, refs, p, o, false).factor;
     for (std::size_t i = 0; i < m; ++i) {
       const auto poles = oma_detail::ssi_poles(factor, modes[i].order, h, o.max_damping);
       const Eigen::VectorXcd ref = shape_of(modes[i]);
@@ -247,7 +254,7 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
 // matrix of the record, the square-root factor of its covariance from n_b blocks, and each
 // mode's sensitivities at its own order. Returns how many modes' standard errors came out
 // non-finite (left NaN), or -1 when the blocks are too short for any.
-int perturbation_uncertainty(const Eigen::MatrixXd& y, const Eigen::MatrixXd& record_hankel,
+int perturbation_uncertainty(const Eigen::MatrixXd& y, const oma_detail::HankelSvd& hankel,
                              const std::vector<int>& refs, int p, double h, const OmaOptions& o,
                              std::vector<OmaMode>& modes) {
   const int nb = o.uncertainty_blocks;
@@ -255,7 +262,6 @@ int perturbation_uncertainty(const Eigen::MatrixXd& y, const Eigen::MatrixXd& re
   const auto r = static_cast<Eigen::Index>(refs.size());
   if (nb < 2 || modes.empty()) return 0;
   if (length < ssi_samples_needed(o, p, y.cols(), r)) return -1;
-  const oma_detail::HankelSvd hankel = oma_detail::hankel_svd(record_hankel);
   const Eigen::MatrixXd factor = oma_detail::hankel_covariance_factor(y, refs, p, nb);
   int failed = 0;
   for (OmaMode& m : modes) {
@@ -297,7 +303,7 @@ std::string standard_errors(const Eigen::MatrixXd& y, const RecordSsi& record,
     segment_uncertainty(y, refs, p, h, o, modes);
     return "";
   }
-  const int failed = perturbation_uncertainty(y, record.hankel, refs, p, h, o, modes);
+  const int failed = perturbation_uncertainty(y, record.svd, refs, p, h, o, modes);
   if (failed < 0) {
     return internal::concat("; no standard errors: ", o.uncertainty_blocks,
                             " blocks are too short for ", p, " block rows");
@@ -477,7 +483,11 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
                                    outputs.rows(), sample_time, options, lag_note);
   }
   result.block_rows = p;
-  const RecordSsi record = record_ssi(outputs, refs, p, options);
+  const auto r = static_cast<Eigen::Index>(refs.size());
+  const bool with_errors =
+      options.uncertainty_blocks >= 2 &&
+      outputs.rows() / options.uncertainty_blocks >= ssi_samples_needed(options, p, l, r);
+  const RecordSsi record = record_ssi(outputs, refs, p, options, with_errors);
   const auto orders = all_orders(record.factor, sample_time, options);
   const auto stability = oma_detail::classify_poles(orders, options);
   for (std::size_t o = 0; o < orders.size(); ++o) {
