@@ -263,13 +263,16 @@ int perturbation_uncertainty(const Eigen::MatrixXd& y, const oma_detail::HankelS
   if (nb < 2 || modes.empty()) return 0;
   if (length < ssi_samples_needed(o, p, y.cols(), r)) return -1;
   const Eigen::MatrixXd factor = oma_detail::hankel_covariance_factor(y, refs, p, nb);
+  int highest = 0;
+  for (const OmaMode& m : modes) highest = std::max(highest, m.order);
+  const auto changes = oma_detail::observability_changes(hankel, highest, factor);
   int failed = 0;
   for (OmaMode& m : modes) {
     const double wn = 2.0 * std::numbers::pi * m.frequency_hz;
     const std::complex<double> s(-m.damping_ratio * wn,
                                  wn * std::sqrt(1.0 - m.damping_ratio * m.damping_ratio));
     const auto sensitivity = oma_detail::pole_sensitivity(hankel, static_cast<int>(y.cols()),
-                                                          m.order, h, std::exp(s * h), factor);
+                                                          m.order, h, std::exp(s * h), changes);
     const bool same = sensitivity.has_value() &&
                       std::abs(sensitivity->frequency_hz / m.frequency_hz - 1.0) < 1e-6;
     const auto root_sum = [](const auto& row) {
