@@ -14,10 +14,17 @@
   s = ln(lambda)/h, f = |s|/(2 pi), zeta = -Re s/|s|, and shape C psi scaled so that its entry
   of largest modulus is exactly 1.
 
+For `ctid oma --method fdd` the same file has the spectral side, `first_singular_value`: the
+output spectral matrix by scipy.signal.csd (Welch, periodic Hann window, half overlap, each
+segment's mean removed, one-sided density: the conventions docs/oma.md gives) and at every line
+its singular values and first singular vector (numpy.linalg.svd over all lines at once). The
+peak picking is not repeated.
+
 No code is shared with ctid. Command line: reference_ssi_cov.py DATA.npy H BLOCK_ROWS
 MAX_ORDER prints a JSON object with every order's poles (frequency, damping ratio) and the
-seconds spent loading and identifying; DATA.npy holds one column per channel (every channel is
-a reference).
+seconds spent loading and identifying; reference_ssi_cov.py --fdd DATA.npy H SEGMENT_LENGTH
+prints the first singular value at every line. DATA.npy holds one column per channel (every
+channel is a reference).
 """
 
 import json
@@ -25,7 +32,7 @@ import sys
 import time
 
 import numpy as np
-from scipy import linalg
+from scipy import linalg, signal
 
 
 def correlations(y, lags, references=None):
@@ -82,8 +89,27 @@ def ssi_cov(y, h, block_rows, max_order, max_damping=0.2, references=None):
     return orders
 
 
+def first_singular_value(y, h, segment_length):
+    """Frequencies [Hz], the first singular value of the spectral matrix and its first singular
+    vector at every line."""
+    channels = y.T
+    f, g = signal.csd(channels[:, None, :], channels[None, :, :], fs=1.0 / h, window="hann",
+                      nperseg=segment_length, noverlap=segment_length // 2, detrend="constant",
+                      scaling="density", axis=-1)
+    u, sv, _ = np.linalg.svd(np.moveaxis(g, -1, 0))
+    return f, sv[:, 0], u[:, :, 0]
+
+
 def main():
     began = time.perf_counter()
+    if sys.argv[1] == "--fdd":
+        y = np.load(sys.argv[2])
+        loaded = time.perf_counter()
+        f, s1, _ = first_singular_value(y, float(sys.argv[3]), int(sys.argv[4]))
+        done = time.perf_counter()
+        print(json.dumps({"frequency_hz": f.tolist(), "first_singular_value": s1.tolist(),
+                          "seconds_load": loaded - began, "seconds_spectrum": done - loaded}))
+        return
     y = np.load(sys.argv[1])
     h, block_rows, max_order = float(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4])
     loaded = time.perf_counter()

@@ -14,7 +14,11 @@ record.
    np.load, SSI) with the block rows ctid chose (read from its result) and orders 2..60 step 2.
 3. The in-process times: ctid.oma through the Python package and the reference's function,
    the record in memory (skipped when the package is not built).
-4. The two must agree on the poles: at every order the same number of poles, and each of
+4. The spectral side: `ctid oma --method fdd` as a whole process against the Welch spectral
+   matrix by scipy.signal.csd and its singular values at every line by numpy.linalg.svd
+   (reference_ssi_cov.py --fdd; ctid's peak picking is not repeated), the same segment
+   length; their first singular values must agree to 1e-9 relative.
+5. The two must agree on the poles: at every order the same number of poles, and each of
    ctid's poles within --agreement (relative, frequency and damping) of the reference's pole of
    that order nearest it; the largest differences are printed, for the picked modes and for
    every pole of the stabilisation diagram.
@@ -22,7 +26,7 @@ record.
 Times are medians of --repeat runs (wall clock; CPU time of the child process beside it).
 Usage:
     /usr/bin/python3 benchmarks/ssi_cov_benchmark.py [--build build] [--samples 100000]
-        [--repeat 5]
+        [--repeat 5] [--write-record d.npy]
 """
 
 import argparse
@@ -136,7 +140,13 @@ def main():
     parser.add_argument("--agreement", type=float, default=1e-6,
                         help="largest allowed relative difference of a picked mode's frequency "
                              "and damping ratio from the reference's")
+    parser.add_argument("--write-record", metavar="FILE.npy",
+                        help="only write the record to this .npy file (to time the commands "
+                             "by hand) and stop")
     args = parser.parse_args()
+    if args.write_record:
+        np.save(args.write_record, chain_record(args.samples)[0])
+        return
     build = pathlib.Path(args.build).resolve()
     cli = build / "apps" / "ctid" / "ctid"
     if not cli.exists():
@@ -157,6 +167,16 @@ def main():
             [sys.executable, HERE / "reference_ssi_cov.py", "d.npy", H, p, MAX_ORDER], folder,
             args.repeat)
         reference = json.loads(printed)
+        # The spectral side: `ctid oma --method fdd` (automatic segment length) against the
+        # Welch spectral matrix and its singular values by SciPy/NumPy.
+        fdd_wall, fdd_cpu, _ = timed(oma + ["--method", "fdd", "-o", "f.json"], folder,
+                                     args.repeat)
+        spectral = json.loads((folder / "f.json").read_text())
+        segment = 2 * (len(spectral["spectrum_hz"]) - 1)
+        welch_wall, welch_cpu, printed = timed(
+            [sys.executable, HERE / "reference_ssi_cov.py", "--fdd", "d.npy", H, segment],
+            folder, args.repeat)
+        welch = json.loads(printed)
 
     in_memory = None
     sys.path.insert(0, str(build / "python"))
@@ -186,6 +206,13 @@ def main():
     print(f"largest relative difference from the reference: picked modes frequency "
           f"{mode_f:.1e}, damping {mode_z:.1e}; every pole frequency {all_f:.1e}, "
           f"damping {all_z:.1e}")
+    s1 = np.asarray(spectral["first_singular_value"])
+    welch_s1 = np.asarray(welch["first_singular_value"])
+    s1_difference = (np.max(np.abs(s1 - welch_s1) / np.abs(welch_s1))
+                     if s1.shape == welch_s1.shape else np.inf)
+    print(f"fdd: {len(spectral['modes'])} modes; first singular value ({segment}-sample segments, "
+          f"{len(s1)} lines) vs scipy.signal.csd + numpy.linalg.svd: largest relative "
+          f"difference {s1_difference:.1e}")
     print()
     print(f"{'what is timed':<60} {'ctid s':>8} {'reference s':>12} {'ratio':>7}")
     rows = [("whole process, no standard errors (wall)", plain_wall, ref_wall),
@@ -193,10 +220,14 @@ def main():
             ("whole process, ctid with standard errors (wall)", errors_wall, ref_wall)]
     if in_memory is not None:
         rows.append(("in memory: ctid.oma vs reference_ssi_cov.ssi_cov", *in_memory))
+    rows += [("fdd whole process vs Welch matrix + SVD by SciPy (wall)", fdd_wall, welch_wall),
+             ("fdd whole process vs Welch matrix + SVD by SciPy (CPU)", fdd_cpu, welch_cpu)]
     for name, ours_s, theirs_s in rows:
         print(f"{name:<60} {ours_s:8.3f} {theirs_s:12.3f} {theirs_s / ours_s:6.1f}x")
     print(f"(reference inside its process: np.load {reference['seconds_load']:.3f} s, "
           f"SSI {reference['seconds_ssi']:.3f} s)")
+    if not s1_difference <= 1e-9:
+        sys.exit(f"the first singular values differ from SciPy's by {s1_difference:.2e}")
     if not (mode_f <= args.agreement and mode_z <= args.agreement):
         sys.exit(f"the picked modes differ from the reference by {max(mode_f, mode_z):.2e} > "
                  f"{args.agreement:.0e}")

@@ -1,5 +1,5 @@
 // The numerical core of covariance-driven SSI (Peeters and De Roeck, MSSP 1999): output
-// correlations R_i = E[y_{k+i} y_ref,k^T] for every lag by one zero-padded FFT, the block
+// correlations R_i = E[y_{k+i} y_ref,k^T] for every lag by blocked (overlap-save) FFT, the block
 // Hankel matrix H_ij = R_{i+j-1} (from lag 1: R_0 carries the sensor noise), its SVD once, and
 // the system matrix of every order from one QR of the largest O_up (Döhler and Mevel, CEP
 // 2012, section 3: A_n = R_n^{-1} (Q^T O_down)_n). Poles s = ln(λ)/h, shapes φ = C ψ normalised
