@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Record what ctid computes on a fixed set of commands, so that a refactoring can be shown to
 # change no estimate: run it on the tree before and after, then compare the two folders with
-# scripts/compare_snapshots.py (numbers must be identical; only renamed fields may differ).
+# scripts/compare_snapshots.py (numbers must be identical; only renamed fields may differ; with
+# --relative BOUND, numbers within BOUND: issue 38's rule for changes that may alter rounding).
 #   scripts/behaviour_snapshot.sh OUT_DIR [BUILD_DIR]
 # Takes about a minute on two cores. Uses the shipped models, data/ and ../shared/data.
 # Covers every command that estimates: fit (SISO, additive, closed loop, several channels),
@@ -77,3 +78,11 @@ for method in ssi-cov ssi-data fdd efdd; do
   run "oma_$method" "$ctid" oma "$flex" --time-column t_s --output-columns y1_acc:y8_acc \
     --method "$method" --max-order 60 --force -o "oma_$method.json"
 done
+# SSI-cov with standard errors (the runs above have blocks too short for them): perturbation
+# with all and with two references, and segments.
+run oma_errors "$ctid" oma "$flex" --time-column t_s --output-columns y1_acc:y8_acc \
+  --block-rows 20 --max-order 40 --force -o oma_errors.json
+run oma_errors_refs "$ctid" oma "$flex" --time-column t_s --output-columns y1_acc:y8_acc \
+  --reference-columns y1_acc,y4_acc --block-rows 20 --max-order 40 --force -o oma_errors_refs.json
+run oma_segments "$ctid" oma "$flex" --time-column t_s --output-columns y1_acc:y8_acc \
+  --block-rows 20 --max-order 40 --uncertainty segments --force -o oma_segments.json

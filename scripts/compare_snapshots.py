@@ -5,9 +5,17 @@ value at every path present in both, so a refactoring may add fields or rename t
 in RENAMED, but every number it kept must be bit-identical. Prints each difference and exits 1
 if there is one.
     python3 scripts/compare_snapshots.py BEFORE AFTER
+    python3 scripts/compare_snapshots.py --relative 1e-9 BEFORE AFTER
+With --relative BOUND (issue 38's rule for changes that may alter rounding) numbers may differ:
+JSON numbers and the numbers inside text and CSV lines are compared relatively, a number in a
+list of numbers (a shape, a spectrum) relative to that list's largest magnitude, any other
+relative to its own; the rest of each line must still be identical. It prints the largest
+relative difference of each field (list indices written []) and exits 1 if one exceeds BOUND.
 """
+import argparse
 import csv
 import json
+import math
 import pathlib
 import re
 import sys
@@ -49,6 +57,84 @@ def flatten(value, path=""):
             yield from flatten(element, f"{path}[{i}]")
     else:
         yield path, value
+
+
+INDEX = re.compile(r"\[\d+\]")
+NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def relative_difference(a, b, scale=0.0):
+    if a == b or (isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b)):
+        return 0.0
+    return abs(a - b) / max(abs(a), abs(b), scale)
+
+
+def list_scales(value, path=""):
+    """For every number inside a list of numbers, its list's largest magnitude."""
+    if isinstance(value, dict):
+        for key, element in value.items():
+            yield from list_scales(element, f"{path}.{key}" if path else key)
+    elif isinstance(value, list):
+        numbers = [abs(e) for e in value
+                   if isinstance(e, (int, float)) and not isinstance(e, bool) and math.isfinite(e)]
+        scale = max(numbers, default=0.0)
+        for i, element in enumerate(value):
+            if isinstance(element, (dict, list)):
+                yield from list_scales(element, f"{path}[{i}]")
+            else:
+                yield f"{path}[{i}]", scale
+
+
+class Largest:
+    """The largest relative difference of each field (indices written [])."""
+
+    def __init__(self):
+        self.fields = {}
+
+    def add(self, name, path, difference):
+        field = name + ": " + INDEX.sub("[]", path)
+        if difference > self.fields.get(field, (-1.0, ""))[0]:
+            self.fields[field] = (difference, path)
+
+
+def is_number(value):
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def compare_json_relative(before, after, name, largest):
+    old_document = json.loads(before.read_text())
+    old = dict(flatten(old_document))
+    new = dict(flatten(json.loads(after.read_text())))
+    scales = dict(list_scales(old_document))
+    problems = []
+    for path, value in old.items():
+        if path.rsplit(".", 1)[-1] == TIMING_KEY:
+            continue
+        if path not in new:
+            problems.append(f"{name}: {path} is gone")
+        elif is_number(value) and is_number(new[path]):
+            largest.add(name, path, relative_difference(value, new[path], scales.get(path, 0.0)))
+        elif new[path] != value:
+            problems.append(f"{name}: {path}: {value!r} -> {new[path]!r}")
+    return problems
+
+
+def compare_text_relative(before, after, name, largest):
+    old = before.read_text().splitlines()
+    new = after.read_text().splitlines()
+    if before.suffix == ".csv":
+        old, new = without_timing_column(old), without_timing_column(new)
+    problems = []
+    if len(old) != len(new):
+        problems.append(f"{name}: {len(old)} lines -> {len(new)} lines")
+    for i, (a, b) in enumerate(zip(old, new)):
+        a, b = TIMING.sub("<time>", a), TIMING.sub("<time>", b)
+        if NUMBER.sub("#", a) != NUMBER.sub("#", b):
+            problems.append(f"{name}:{i + 1}: {a!r} -> {b!r}")
+            continue
+        for x, y in zip(NUMBER.findall(a), NUMBER.findall(b)):
+            largest.add(name, "lines", relative_difference(float(x), float(y)))
+    return problems
 
 
 def compare_json(before, after, name):
@@ -101,25 +187,45 @@ def compare_text(before, after, name):
     return problems
 
 
-def main(before, after):
+def main(before, after, bound=None):
     before, after = pathlib.Path(before), pathlib.Path(after)
     problems = []
+    largest = Largest()
     for old in sorted(p for p in before.rglob("*") if p.is_file()):
         name = str(old.relative_to(before))
         new = after / name
         if not new.exists():
             problems.append(f"{name}: missing")
-        elif old.suffix == ".json":
-            problems += compare_json(old, new, name)
         elif old.suffix == ".png":
             continue
+        elif bound is not None:
+            compare = compare_json_relative if old.suffix == ".json" else compare_text_relative
+            problems += compare(old, new, name, largest)
+        elif old.suffix == ".json":
+            problems += compare_json(old, new, name)
         else:
             problems += compare_text(old, new, name)
     for problem in problems:
         print(problem)
-    print(f"compare_snapshots: {len(problems)} difference(s)")
-    return 1 if problems else 0
+    if bound is None:
+        print(f"compare_snapshots: {len(problems)} difference(s)")
+        return 1 if problems else 0
+    over = 0
+    for field, (difference, path) in sorted(largest.fields.items()):
+        if difference > 0.0:
+            print(f"{difference:.1e}  {field}  (at {path})")
+        over += difference > bound
+    print(f"compare_snapshots: {len(problems)} difference(s) other than in numbers; {over} "
+          f"field(s) differ by more than {bound:g} relative; largest "
+          f"{max((d for d, _ in largest.fields.values()), default=0.0):.1e}")
+    return 1 if problems or over else 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(*sys.argv[1:3]))
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("before")
+    parser.add_argument("after")
+    parser.add_argument("--relative", type=float, metavar="BOUND",
+                        help="numbers may differ by up to BOUND relative (issue 38)")
+    arguments = parser.parse_args()
+    sys.exit(main(arguments.before, arguments.after, arguments.relative))

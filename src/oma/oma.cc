@@ -84,19 +84,36 @@ int pick_block_rows(const OmaOptions& o, Eigen::Index l, Eigen::Index r, Eigen::
 
 // The observability factor of the SSI method: SSI-cov from the Hankel matrix of the
 // correlations, SSI-data from the LQ factor of the data Hankel matrix. Orders, poles, shapes,
-// stabilisation, picking and standard errors are shared from here on.
-oma_detail::SsiFactor method_factor(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
-                                    const OmaOptions& o) {
+// stabilisation, picking and standard errors are shared from here on. When the whole
+// record's SSI-cov estimate gets standard errors (`with_errors`: either kind, so that both give
+// the same modes), its Hankel matrix has one SVD with U and V, from which come both the factor
+// of every order and the perturbation standard errors (decision 0041); otherwise U alone.
+struct RecordSsi {
+  oma_detail::HankelSvd svd;  // empty unless with_errors
+  oma_detail::SsiFactor factor;
+};
+
+RecordSsi record_ssi(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
+                     const OmaOptions& o, bool with_errors) {
+  RecordSsi out;
   if (o.method == OmaMethod::ssi_data) {
-    return oma_detail::ssi_data_factor(y, refs, p, o.max_order);
+    out.factor = oma_detail::ssi_data_factor(y, refs, p, o.max_order);
+    return out;
   }
-  return oma_detail::ssi_factor(oma_detail::output_correlations(y, refs, 2 * p - 1), p,
-                                o.max_order);
+  const Eigen::MatrixXd hankel =
+      oma_detail::correlation_hankel(oma_detail::output_correlations(y, refs, 2 * p - 1), p);
+  const int l = static_cast<int>(y.cols());
+  if (!with_errors) {
+    out.factor = oma_detail::hankel_factor(hankel, l, o.max_order);
+    return out;
+  }
+  out.svd = oma_detail::hankel_svd(hankel);
+  out.factor = oma_detail::observability_factor(out.svd.u, out.svd.singular_values, l, o.max_order);
+  return out;
 }
 
-std::vector<OrderPoles> all_orders(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
-                                   double h, const OmaOptions& o) {
-  const auto factor = method_factor(y, refs, p, o);
+std::vector<OrderPoles> all_orders(const oma_detail::SsiFactor& factor, double h,
+                                   const OmaOptions& o) {
   std::vector<OrderPoles> orders;
   for (int n = 2; n <= o.max_order; n += 2) {
     orders.push_back({n, oma_detail::ssi_poles(factor, n, h, o.max_damping)});
@@ -197,7 +214,7 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
   std::vector<std::vector<Eigen::VectorXcd>> shapes(m);
   for (int b = 0; b < nb; ++b) {
     const Eigen::MatrixXd block = y.middleRows(b * length, length);
-    const auto factor = method_factor(block, refs, p, o);
+    const auto factor = record_ssi(block, refs, p, o, false).factor;
     for (std::size_t i = 0; i < m; ++i) {
       const auto poles = oma_detail::ssi_poles(factor, modes[i].order, h, o.max_damping);
       const Eigen::VectorXcd ref = shape_of(modes[i]);
@@ -237,23 +254,25 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
 // matrix of the record, the square-root factor of its covariance from n_b blocks, and each
 // mode's sensitivities at its own order. Returns how many modes' standard errors came out
 // non-finite (left NaN), or -1 when the blocks are too short for any.
-int perturbation_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
-                             double h, const OmaOptions& o, std::vector<OmaMode>& modes) {
+int perturbation_uncertainty(const Eigen::MatrixXd& y, const oma_detail::HankelSvd& hankel,
+                             const std::vector<int>& refs, int p, double h, const OmaOptions& o,
+                             std::vector<OmaMode>& modes) {
   const int nb = o.uncertainty_blocks;
   const Eigen::Index length = y.rows() / std::max(nb, 1);
   const auto r = static_cast<Eigen::Index>(refs.size());
   if (nb < 2 || modes.empty()) return 0;
   if (length < ssi_samples_needed(o, p, y.cols(), r)) return -1;
-  const oma_detail::HankelSvd hankel = oma_detail::hankel_svd(
-      oma_detail::correlation_hankel(oma_detail::output_correlations(y, refs, 2 * p - 1), p));
   const Eigen::MatrixXd factor = oma_detail::hankel_covariance_factor(y, refs, p, nb);
+  int highest = 0;
+  for (const OmaMode& m : modes) highest = std::max(highest, m.order);
+  const auto changes = oma_detail::observability_changes(hankel, highest, factor);
   int failed = 0;
   for (OmaMode& m : modes) {
     const double wn = 2.0 * std::numbers::pi * m.frequency_hz;
     const std::complex<double> s(-m.damping_ratio * wn,
                                  wn * std::sqrt(1.0 - m.damping_ratio * m.damping_ratio));
     const auto sensitivity = oma_detail::pole_sensitivity(hankel, static_cast<int>(y.cols()),
-                                                          m.order, h, std::exp(s * h), factor);
+                                                          m.order, h, std::exp(s * h), changes);
     const bool same = sensitivity.has_value() &&
                       std::abs(sensitivity->frequency_hz / m.frequency_hz - 1.0) < 1e-6;
     const auto root_sum = [](const auto& row) {
@@ -279,14 +298,15 @@ int perturbation_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& r
 }
 
 // The standard errors the options ask for, and what the message says about them.
-std::string standard_errors(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p, double h,
-                            const OmaOptions& o, std::vector<OmaMode>& modes) {
+std::string standard_errors(const Eigen::MatrixXd& y, const RecordSsi& record,
+                            const std::vector<int>& refs, int p, double h, const OmaOptions& o,
+                            std::vector<OmaMode>& modes) {
   if (o.uncertainty_blocks < 2 || modes.empty()) return "";
   if (o.method == OmaMethod::ssi_data || o.uncertainty == OmaUncertainty::segments) {
     segment_uncertainty(y, refs, p, h, o, modes);
     return "";
   }
-  const int failed = perturbation_uncertainty(y, refs, p, h, o, modes);
+  const int failed = perturbation_uncertainty(y, record.svd, refs, p, h, o, modes);
   if (failed < 0) {
     return internal::concat("; no standard errors: ", o.uncertainty_blocks,
                             " blocks are too short for ", p, " block rows");
@@ -466,7 +486,12 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
                                    outputs.rows(), sample_time, options, lag_note);
   }
   result.block_rows = p;
-  const auto orders = all_orders(outputs, refs, p, sample_time, options);
+  const auto r = static_cast<Eigen::Index>(refs.size());
+  const bool with_errors =
+      options.uncertainty_blocks >= 2 &&
+      outputs.rows() / options.uncertainty_blocks >= ssi_samples_needed(options, p, l, r);
+  const RecordSsi record = record_ssi(outputs, refs, p, options, with_errors);
+  const auto orders = all_orders(record.factor, sample_time, options);
   const auto stability = oma_detail::classify_poles(orders, options);
   for (std::size_t o = 0; o < orders.size(); ++o) {
     for (std::size_t k = 0; k < orders[o].poles.size(); ++k) {
@@ -479,7 +504,7 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
       oma_detail::cluster_stable_poles(orders, stability, options.cluster_distance);
   result.modes = pick_modes(clusters, orders, options, result.verdict);
   const std::string error_note =
-      standard_errors(outputs, refs, p, sample_time, options, result.modes);
+      standard_errors(outputs, record, refs, p, sample_time, options, result.modes);
   result.termination = Termination::converged;
   result.iterations = static_cast<int>(orders.size());
   result.message =

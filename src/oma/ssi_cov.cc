@@ -1,4 +1,4 @@
-// Covariance-driven SSI: correlations by FFT, one SVD, every order from one QR.
+// Covariance-driven SSI: correlations by blocked FFT, one SVD, every order from one QR.
 #include "ctid/oma/ssi_cov.h"
 
 #include <algorithm>
@@ -17,31 +17,51 @@ std::vector<Eigen::MatrixXd> output_correlations(const Eigen::MatrixXd& y,
                                                  const std::vector<int>& references, int max_lag) {
   const Eigen::Index n = y.rows();
   const Eigen::Index l = y.cols();
-  // Zero-padded to >= 2N (a power of two) so the circular correlation has no wrap-around.
-  std::size_t nfft = 1;
-  while (nfft < static_cast<std::size_t>(2 * n)) nfft *= 2;
-  Eigen::FFT<double> fft;
-  std::vector<std::vector<std::complex<double>>> spectra(static_cast<std::size_t>(l));
-  std::vector<double> buffer(nfft, 0.0);
-  for (Eigen::Index j = 0; j < l; ++j) {
-    const double mean = y.col(j).mean();
-    std::fill(buffer.begin(), buffer.end(), 0.0);
-    for (Eigen::Index k = 0; k < n; ++k) buffer[static_cast<std::size_t>(k)] = y(k, j) - mean;
-    fft.fwd(spectra[static_cast<std::size_t>(j)], buffer);
-  }
   const auto r = static_cast<Eigen::Index>(references.size());
-  std::vector<Eigen::MatrixXd> out(static_cast<std::size_t>(max_lag), Eigen::MatrixXd(l, r));
-  std::vector<std::complex<double>> product(nfft);
-  std::vector<double> correlation;
-  for (Eigen::Index a = 0; a < l; ++a) {
+  const Eigen::Index lags = max_lag;
+  // Overlap-save: the record in blocks of `step` reference samples; block k's references
+  // (zero-padded to nfft) against the outputs from the same start over nfft samples hold every
+  // lag 0..max_lag of that block without wrap-around (step + max_lag <= nfft). The blocks'
+  // cross-spectra are summed, so each channel pair needs one inverse transform of nfft points.
+  Eigen::Index nfft = 1;
+  while (nfft < std::min<Eigen::Index>(4 * (lags + 1), n + lags)) nfft *= 2;
+  const Eigen::Index step = nfft - lags;
+  const Eigen::Index bins = nfft / 2 + 1;
+  Eigen::FFT<double> fft;
+  fft.SetFlag(Eigen::FFT<double>::HalfSpectrum);
+  const Eigen::RowVectorXd mean = y.colwise().mean();
+  Eigen::MatrixXcd cross = Eigen::MatrixXcd::Zero(bins, l * r);  // column a + l b
+  Eigen::MatrixXcd out_spectra(bins, l);
+  Eigen::MatrixXcd ref_spectra(bins, r);
+  std::vector<double> buffer(static_cast<std::size_t>(nfft));
+  const auto transform = [&](Eigen::Index channel, Eigen::Index start, Eigen::Index count,
+                             std::complex<double>* spectrum) {
+    const Eigen::Index used = std::max<Eigen::Index>(0, std::min(count, n - start));
+    for (Eigen::Index k = 0; k < used; ++k) {
+      buffer[static_cast<std::size_t>(k)] = y(start + k, channel) - mean(channel);
+    }
+    std::fill(buffer.begin() + used, buffer.end(), 0.0);
+    fft.fwd(spectrum, buffer.data(), nfft);
+  };
+  for (Eigen::Index start = 0; start < n; start += step) {
+    for (Eigen::Index a = 0; a < l; ++a) transform(a, start, nfft, out_spectra.col(a).data());
     for (Eigen::Index b = 0; b < r; ++b) {
-      const auto& ya = spectra[static_cast<std::size_t>(a)];
-      const auto& yb = spectra[static_cast<std::size_t>(references[static_cast<std::size_t>(b)])];
-      for (std::size_t k = 0; k < ya.size(); ++k) product[k] = ya[k] * std::conj(yb[k]);
-      fft.inv(correlation, product);
-      for (int i = 1; i <= max_lag; ++i) {
+      transform(references[static_cast<std::size_t>(b)], start, step, ref_spectra.col(b).data());
+    }
+    for (Eigen::Index b = 0; b < r; ++b) {
+      for (Eigen::Index a = 0; a < l; ++a) {
+        cross.col(a + l * b).array() +=
+            out_spectra.col(a).array() * ref_spectra.col(b).array().conjugate();
+      }
+    }
+  }
+  std::vector<Eigen::MatrixXd> out(static_cast<std::size_t>(max_lag), Eigen::MatrixXd(l, r));
+  for (Eigen::Index b = 0; b < r; ++b) {
+    for (Eigen::Index a = 0; a < l; ++a) {
+      fft.inv(buffer.data(), cross.col(a + l * b).data(), nfft);
+      for (Eigen::Index i = 1; i <= lags; ++i) {
         out[static_cast<std::size_t>(i - 1)](a, b) =
-            correlation[static_cast<std::size_t>(i)] / static_cast<double>(n);
+            buffer[static_cast<std::size_t>(i)] / static_cast<double>(n);
       }
     }
   }
@@ -64,10 +84,13 @@ Eigen::MatrixXd correlation_hankel(const std::vector<Eigen::MatrixXd>& correlati
 
 SsiFactor ssi_factor(const std::vector<Eigen::MatrixXd>& correlations, int block_rows,
                      int max_order) {
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(correlation_hankel(correlations, block_rows),
-                                           Eigen::ComputeThinU);
-  return observability_factor(svd.matrixU(), svd.singularValues(),
-                              static_cast<int>(correlations.front().rows()), max_order);
+  return hankel_factor(correlation_hankel(correlations, block_rows),
+                       static_cast<int>(correlations.front().rows()), max_order);
+}
+
+SsiFactor hankel_factor(const Eigen::MatrixXd& hankel, int outputs, int max_order) {
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(hankel, Eigen::ComputeThinU);
+  return observability_factor(svd.matrixU(), svd.singularValues(), outputs, max_order);
 }
 
 SsiFactor observability_factor(const Eigen::MatrixXd& left_vectors,

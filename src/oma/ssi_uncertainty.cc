@@ -15,6 +15,7 @@
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 
+#include "ctid/core/error.h"
 #include "ctid/oma/ssi_cov.h"
 
 namespace ctid::oma_detail {
@@ -49,19 +50,74 @@ std::optional<PoleSensitivity> pole_sensitivity(const Eigen::MatrixXd& hankel, i
   return pole_sensitivity(hankel_svd(hankel), outputs, order, sample_time, target, directions);
 }
 
-std::optional<PoleSensitivity> pole_sensitivity(const HankelSvd& svd, int outputs, int order,
-                                                double sample_time, std::complex<double> target,
-                                                const Eigen::MatrixXd& directions) {
-  using Complex = std::complex<double>;
+int numerical_rank(const HankelSvd& svd) {
+  const Eigen::VectorXd& sv = svd.singular_values;
+  return static_cast<int>((sv.array() > 1e-12 * sv(0)).count());
+}
+
+std::vector<Eigen::MatrixXd> observability_changes(const HankelSvd& svd, int order,
+                                                   const Eigen::MatrixXd& directions) {
   const Eigen::Index m1 = svd.rows;
   const Eigen::Index m2 = svd.cols;
-  const Eigen::Index l = outputs;
   const Eigen::MatrixXd& u = svd.u;
   const Eigen::MatrixXd& v = svd.v;
   const Eigen::VectorXd& sv = svd.singular_values;
-  const auto rank = static_cast<Eigen::Index>((sv.array() > 1e-12 * sv(0)).count());
-  const Eigen::Index n = std::min<Eigen::Index>(order, rank);
+  const Eigen::Index n = std::min(order, numerical_rank(svd));
+  std::vector<Eigen::MatrixXd> out;
+  if (n < 1) return out;
+  const Eigen::VectorXd root = sv.head(n).cwiseSqrt();
+  const Eigen::MatrixXd vn = v.leftCols(n);
+  const Eigen::MatrixXd un = u.leftCols(n);
+  const Eigen::Index kmin = std::min(m1, m2);
+  Eigen::MatrixXd coefficients(m1, n);
+  Eigen::VectorXd d_sigma(n);
+  for (Eigen::Index d = 0; d < directions.cols(); ++d) {
+    const Eigen::Map<const Eigen::MatrixXd> dh(directions.col(d).data(), m1, m2);
+    // E = U^T ΔH V, only the columns (E_ji) and rows (E_ij) of the n leading triplets.
+    const Eigen::MatrixXd e_cols = u.transpose() * (dh * vn);  // m1 x n
+    const Eigen::MatrixXd e_rows = (un.transpose() * dh) * v;  // n x m2
+    // Δu_i = Σ_{j≠i} u_j (σ_i E_ji + σ_j E_ij) / (σ_i² − σ_j²), σ_j = 0 and E_ij = 0 beyond
+    // the matrix's singular values; Δσ_i = E_ii. Column i depends on i alone, not on n.
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double si = sv(i);
+      d_sigma(i) = e_rows(i, i);
+      for (Eigen::Index j = 0; j < m1; ++j) {
+        if (j == i) {
+          coefficients(j, i) = 0.0;
+          continue;
+        }
+        const double sj = j < kmin ? sv(j) : 0.0;
+        const double eij = j < m2 ? e_rows(i, j) : 0.0;
+        coefficients(j, i) = (si * e_cols(j, i) + sj * eij) / (si * si - sj * sj);
+      }
+    }
+    out.push_back((u * coefficients) * root.asDiagonal() +
+                  un * (0.5 * d_sigma.cwiseQuotient(root)).asDiagonal());
+  }
+  return out;
+}
+
+std::optional<PoleSensitivity> pole_sensitivity(const HankelSvd& svd, int outputs, int order,
+                                                double sample_time, std::complex<double> target,
+                                                const Eigen::MatrixXd& directions) {
+  return pole_sensitivity(svd, outputs, order, sample_time, target,
+                          observability_changes(svd, order, directions));
+}
+
+std::optional<PoleSensitivity> pole_sensitivity(const HankelSvd& svd, int outputs, int order,
+                                                double sample_time, std::complex<double> target,
+                                                const std::vector<Eigen::MatrixXd>& changes) {
+  using Complex = std::complex<double>;
+  const Eigen::Index m1 = svd.rows;
+  const Eigen::Index l = outputs;
+  const Eigen::MatrixXd& u = svd.u;
+  const Eigen::VectorXd& sv = svd.singular_values;
+  const Eigen::Index n = std::min(order, numerical_rank(svd));
   if (n < 1) return std::nullopt;
+  for (const Eigen::MatrixXd& change : changes) {
+    require(change.rows() == m1 && change.cols() >= n, "pole_sensitivity: a change of O has ",
+            change.rows(), " x ", change.cols(), " entries; the order needs ", m1, " x ", n);
+  }
   // The point of linearisation: O = U_n S_n^{1/2}, A = O_up^† O_down, as ssi_poles computes it.
   const Eigen::VectorXd root = sv.head(n).cwiseSqrt();
   const Eigen::MatrixXd o = u.leftCols(n) * root.asDiagonal();
@@ -98,36 +154,13 @@ std::optional<PoleSensitivity> pole_sensitivity(const HankelSvd& svd, int output
   out.frequency_hz = wn / (2.0 * std::numbers::pi);
   out.damping_ratio = -s.real() / wn;
   out.shape = normalise_shape(phi);
-  const Eigen::Index count = directions.cols();
+  const auto count = static_cast<Eigen::Index>(changes.size());
   out.frequency.resize(count);
   out.damping.resize(count);
   out.shape_change.resize(l, count);
 
-  const Eigen::MatrixXd vn = v.leftCols(n);
-  const Eigen::MatrixXd un = u.leftCols(n);
-  const Eigen::Index kmin = std::min(m1, m2);
   for (Eigen::Index d = 0; d < count; ++d) {
-    const Eigen::Map<const Eigen::MatrixXd> dh(directions.col(d).data(), m1, m2);
-    // E = U^T ΔH V, only the columns (E_ji) and rows (E_ij) of the n leading triplets.
-    const Eigen::MatrixXd e_cols = u.transpose() * (dh * vn);  // m1 x n
-    const Eigen::MatrixXd e_rows = (un.transpose() * dh) * v;  // n x m2
-    // Δu_i = Σ_{j≠i} u_j (σ_i E_ji + σ_j E_ij) / (σ_i² − σ_j²), σ_j = 0 and E_ij = 0 beyond
-    // the matrix's singular values; Δσ_i = E_ii.
-    Eigen::MatrixXd coefficients = Eigen::MatrixXd::Zero(m1, n);
-    Eigen::VectorXd d_sigma(n);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const double si = sv(i);
-      d_sigma(i) = e_rows(i, i);
-      for (Eigen::Index j = 0; j < m1; ++j) {
-        if (j == i) continue;
-        const double sj = j < kmin ? sv(j) : 0.0;
-        const double eij = j < m2 ? e_rows(i, j) : 0.0;
-        coefficients(j, i) = (si * e_cols(j, i) + sj * eij) / (si * si - sj * sj);
-      }
-    }
-    const Eigen::MatrixXd du = u * coefficients;
-    const Eigen::MatrixXd d_o =
-        du * root.asDiagonal() + un * (0.5 * d_sigma.cwiseQuotient(root)).asDiagonal();
+    const auto d_o = changes[static_cast<std::size_t>(d)].leftCols(n);
     const Eigen::MatrixXd d_up = d_o.topRows(rows);
     const Eigen::MatrixXd d_down = d_o.bottomRows(rows);
     // A = (O_up^T O_up)^{-1} O_up^T O_down: both the fit and the residual terms.

@@ -1,5 +1,5 @@
 // The numerical core of covariance-driven SSI (Peeters and De Roeck, MSSP 1999): output
-// correlations R_i = E[y_{k+i} y_ref,k^T] for every lag by one zero-padded FFT, the block
+// correlations R_i = E[y_{k+i} y_ref,k^T] for every lag by blocked (overlap-save) FFT, the block
 // Hankel matrix H_ij = R_{i+j-1} (from lag 1: R_0 carries the sensor noise), its SVD once, and
 // the system matrix of every order from one QR of the largest O_up (Döhler and Mevel, CEP
 // 2012, section 3: A_n = R_n^{-1} (Q^T O_down)_n). Poles s = ln(λ)/h, shapes φ = C ψ normalised
@@ -35,6 +35,9 @@ Eigen::MatrixXd correlation_hankel(const std::vector<Eigen::MatrixXd>& correlati
 /// Hankel matrix of R_1..R_{2p-1} (p block rows, p block columns), its SVD and the QR.
 SsiFactor ssi_factor(const std::vector<Eigen::MatrixXd>& correlations, int block_rows,
                      int max_order);
+
+/// The same from the Hankel matrix itself (pl x pr, `outputs` = l).
+SsiFactor hankel_factor(const Eigen::MatrixXd& hankel, int outputs, int max_order);
 
 /// What every SSI variant shares once it has a matrix whose column space is that of the
 /// observability matrix (pl rows): from its left singular vectors and singular values,

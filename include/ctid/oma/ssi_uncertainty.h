@@ -45,12 +45,26 @@ struct HankelSvd {
 };
 HankelSvd hankel_svd(const Eigen::MatrixXd& hankel);
 
+/// Singular values above 1e-12 times the largest.
+int numerical_rank(const HankelSvd& svd);
+
+/// ΔO = ΔU_n S_n^{1/2} + U_n ΔS_n / (2 S_n^{1/2}) (p l x n, n = `order` capped at the numerical
+/// rank) along each direction. Column i depends on the i-th triplet alone, so the changes for
+/// the largest order serve every lower order (its leading columns): computed once for all the
+/// modes of a record.
+std::vector<Eigen::MatrixXd> observability_changes(const HankelSvd& svd, int order,
+                                                   const Eigen::MatrixXd& directions);
+
 /// The eigenvalue of A (order `order`, capped at the numerical rank as ssi_poles does) with
 /// Im λ > 0 nearest `target` (a discrete pole), and its sensitivities; nullopt when A has no
 /// such eigenvalue.
 std::optional<PoleSensitivity> pole_sensitivity(const HankelSvd& svd, int outputs, int order,
                                                 double sample_time, std::complex<double> target,
                                                 const Eigen::MatrixXd& directions);
+/// The same from the changes of O (observability_changes of this or a higher order).
+std::optional<PoleSensitivity> pole_sensitivity(const HankelSvd& svd, int outputs, int order,
+                                                double sample_time, std::complex<double> target,
+                                                const std::vector<Eigen::MatrixXd>& changes);
 /// The same from the Hankel matrix itself.
 std::optional<PoleSensitivity> pole_sensitivity(const Eigen::MatrixXd& hankel, int outputs,
                                                 int order, double sample_time,
