@@ -68,6 +68,7 @@ struct ProcessParameterSetting {
         field("upper", &S::upper, Finite{}, "Upper bound, or None."),
     };
   }
+  void validate() const { validate_fields(*this); }
 };
 
 struct ProcessModelOptions {
