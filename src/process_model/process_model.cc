@@ -234,9 +234,14 @@ struct Problem {
   std::vector<int> free_index;   // positions of the free parameters in `full`
   Eigen::VectorXd lower, upper;  // of all parameters
 
+  // The free parameters from theta, each clamped into its bounds: the central differences of
+  // the Jacobian may step just outside them (a time constant below 0 is an unstable pole).
   Eigen::VectorXd with(const double* theta) const {
     Eigen::VectorXd p = full;
-    for (std::size_t i = 0; i < free_index.size(); ++i) p(free_index[i]) = theta[i];
+    for (std::size_t i = 0; i < free_index.size(); ++i) {
+      const int j = free_index[i];
+      p(j) = std::min(std::max(theta[i], lower(j)), upper(j));
+    }
     return p;
   }
   Eigen::VectorXd output(const Eigen::VectorXd& p) const {

@@ -10,7 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "ctid/core/additive_model.h"
 #include "ctid/core/error.h"
+#include "ctid/estimation/validation.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
 
@@ -64,6 +66,30 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"P3DZ", {1.2, 2.5, 1.0, 0.4, -0.6, 0.37}},
                       Case{"P3DU", {1.0, 1.2, 0.2, 0.5, 0.37}}, Case{"P1", {3.0, 0.9}}),
     [](const ::testing::TestParamInfo<Case>& p) { return p.param.name; });
+
+// A first-order hold: the record's input is linear between samples, and the fit follows it.
+// The reference output comes from validation's model_output, whose filters realise the
+// fractional delay by another route (SampledFilter).
+TEST(ProcessModel, AFirstOrderHoldRecordIsRecoveredExactly) {
+  const ProcessStructure s = ProcessStructure::parse("P2DZ");
+  Eigen::VectorXd truth(5);
+  truth << 0.8, 1.8, 0.5, 0.9, 0.37;
+  const TransferFunction g = process_transfer_function(s, truth);
+  const AdditiveModel model({Submodel{g.denominator(), g.numerator(), 0}}, g.input_delay());
+  const Eigen::VectorXd u = white_noise(1500, 1.0, 5);
+  const double h = 0.1;
+  const SampledData data = SampledData(h, u, model_output(model, u, h, Hold::first_order_hold))
+                               .with_input_hold(Hold::first_order_hold);
+  const ProcessModelResult r = estimate_process_model(data, s);
+  for (Eigen::Index i = 0; i < truth.size(); ++i) {
+    EXPECT_NEAR(r.parameters(i), truth(i), 1e-8 * std::abs(truth(i)))
+        << r.parameter_names[static_cast<std::size_t>(i)];
+  }
+  // Read as a ZOH record, the same samples give another model.
+  const ProcessModelResult zoh =
+      estimate_process_model(data.with_input_hold(Hold::zero_order_hold), s);
+  EXPECT_GT(std::abs(zoh.parameter("Td") - 0.37), 1e-3);
+}
 
 TEST(ProcessModel, TheModuleSimulationAgreesWithTheSimulationLayer) {
   const ProcessStructure s = ProcessStructure::parse("P2DZ");
