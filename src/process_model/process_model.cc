@@ -591,9 +591,9 @@ ProcessModelResult estimate_process_model(const SampledData& data,
   }
   result.termination = best.termination;
   result.iterations = iterations;
-  result.message = best.termination == Termination::converged
-                       ? ""
-                       : "Levenberg-Marquardt on the output error: " + best.message;
+  result.message = "Levenberg-Marquardt on the output error from the best of " +
+                   std::to_string(candidates.size()) + " starts (" + best_start.method +
+                   "): " + best.message;
   Eigen::VectorXd p = best.parameters;
   problem.full = p;
 
