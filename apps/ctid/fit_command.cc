@@ -13,6 +13,7 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "command.h"
@@ -27,6 +28,7 @@
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
+#include "ctid/process_model/process_model.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "data_flags.h"
 #include "plot_support.h"
@@ -69,6 +71,13 @@ struct FitFlags {
   bool relocate_modes = false;
   bool direct_term = false;  // several inputs/outputs: estimate D
   bool irregular = false;    // fit on the time stamps as logged (decision 0034)
+
+  // Process models (decision 0040): --process P1D and its parameters' settings.
+  std::string process;
+  std::vector<std::string> process_start;  // NAME=VALUE
+  std::vector<std::string> process_fix;    // NAME=VALUE
+  std::vector<std::string> process_bound;  // NAME=LO:HI (either side may be empty)
+  double max_delay = -1.0;                 // [s]; negative: the default
 
   std::string output;
   std::string model_output;
@@ -552,7 +561,149 @@ ExitStatus run_irregular_fit(const FitFlags& f, const CLI::App& app) {
   return result.verdict.usable ? kExitOk : kExitNoUsableModel;
 }
 
+// --- Process models (--process) ---------------------------------------------------------------
+
+// "NAME=VALUE" split at the first '='; the flag names the entry in the message.
+std::pair<std::string, std::string> parameter_entry(const std::string& text, const char* flag,
+                                                    const char* form) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    usage_error(std::string(flag) + " '" + text + "': expected " + form);
+  }
+  return {text.substr(0, eq), text.substr(eq + 1)};
+}
+
+double parameter_number(const std::string& text, const std::string& entry, const char* flag,
+                        const char* form) {
+  const std::optional<double> value = parse_number<double>(text);
+  if (!value) usage_error(std::string(flag) + " '" + entry + "': expected " + form);
+  return *value;
+}
+
+ProcessParameterSetting& setting_for(ProcessModelOptions& options, const std::string& name) {
+  for (ProcessParameterSetting& s : options.parameters) {
+    if (s.name == name) return s;
+  }
+  options.parameters.push_back(ProcessParameterSetting{name, {}, false, {}, {}});
+  return options.parameters.back();
+}
+
+ProcessModelOptions process_options(const FitFlags& f) {
+  ProcessModelOptions options;
+  options.max_iterations = f.max_iterations;
+  if (f.max_delay >= 0.0) options.max_delay = f.max_delay;
+  for (const std::string& entry : f.process_start) {
+    const auto [name, text] = parameter_entry(entry, "--process-start", "NAME=VALUE, e.g. Tp1=2");
+    ProcessParameterSetting& s = setting_for(options, name);
+    if (s.value) usage_error("--process-start and --process-fix both give " + name);
+    s.value = parameter_number(text, entry, "--process-start", "NAME=VALUE, e.g. Tp1=2");
+  }
+  for (const std::string& entry : f.process_fix) {
+    const auto [name, text] = parameter_entry(entry, "--process-fix", "NAME=VALUE, e.g. Td=0.5");
+    ProcessParameterSetting& s = setting_for(options, name);
+    if (s.value) usage_error("--process-start and --process-fix both give " + name);
+    s.value = parameter_number(text, entry, "--process-fix", "NAME=VALUE, e.g. Td=0.5");
+    s.fixed = true;
+  }
+  for (const std::string& entry : f.process_bound) {
+    constexpr const char* form = "NAME=LOWER:UPPER (either may be empty), e.g. Tp1=0.1:10";
+    const auto [name, text] = parameter_entry(entry, "--process-bound", form);
+    const auto colon = text.find(':');
+    if (colon == std::string::npos)
+      usage_error("--process-bound '" + entry + "': expected " + form);
+    ProcessParameterSetting& s = setting_for(options, name);
+    const std::string lo = text.substr(0, colon);
+    const std::string hi = text.substr(colon + 1);
+    if (!lo.empty()) s.lower = parameter_number(lo, entry, "--process-bound", form);
+    if (!hi.empty()) s.upper = parameter_number(hi, entry, "--process-bound", form);
+  }
+  return options;
+}
+
+// The parameters in the engineer's units, each with its standard error.
+void print_process_summary(std::ostream& out, const ProcessModelResult& r, double h, int samples,
+                           const std::string& file, Hold hold, const std::string& preprocessing) {
+  if (!r.verdict.usable) out << "WARNING: " << r.verdict.summary() << "\n";
+  out << "ctid fit: process model " << r.structure << " on " << file << " (N = " << samples
+      << ", h = " << format_number(h) << " s, input " << enum_name(hold) << ")\n";
+  if (!preprocessing.empty()) out << "preprocessing: " << preprocessing << "\n";
+  out << "termination: " << r.brief_report() << "\n";
+  out << "start: " << r.start_method << " (fit " << format_brief(r.start_fit_percent) << " %)\n";
+  out << "parameters (± one standard error):\n";
+  for (std::size_t i = 0; i < r.parameter_names.size(); ++i) {
+    const std::string& name = r.parameter_names[i];
+    const auto k = static_cast<Eigen::Index>(i);
+    const bool held = std::find(r.fixed_parameters.begin(), r.fixed_parameters.end(), name) !=
+                      r.fixed_parameters.end();
+    out << "  " << name << " = "
+        << (held ? format_brief(r.parameters(k))
+                 : plus_minus(r.parameters(k), r.standard_errors(k)))
+        << (name == "K" || name == "Zeta" ? "" : " s");
+    if (name == "Td") out << " (" << format_brief(r.parameters(k) / h) << " samples)";
+    if (held) out << " (held)";
+    out << "\n";
+  }
+  out << "transfer function: " << r.transfer_function().to_string() << "\n";
+  out << "fit: " << format_brief(r.fit_percent) << " %, RMS error "
+      << format_brief(std::sqrt(r.mean_squared_error)) << " (output units), noise variance "
+      << format_brief(r.noise_variance) << "\n";
+}
+
+// --process NAME: identify(data, ProcessStructure, ProcessModelOptions).
+ExitStatus run_process_fit(const FitFlags& f, const CLI::App& app) {
+  const std::string why =
+      " does not go with --process (a process model is named by its structure, e.g. P1D; its "
+      "dead time is estimated, its settings are --process-start/--process-fix/--process-bound)";
+  if (f.irregular) usage_error("--irregular" + why);
+  if (f.data.mimo_asked(app)) usage_error("--input-columns / --output-columns" + why);
+  for (const char* flag : {"--model",           "--poles",          "--zeros",
+                           "--integrators",     "--submodel",       "--modes",
+                           "--delay",           "--delay-scan",     "--delay-range",
+                           "--record-delays",   "--controller",     "--start",
+                           "--start-screening", "--initial",        "--tolerance",
+                           "--interpolation",   "--noise",          "--initial-conditions",
+                           "--history",         "--relocate-modes", "--rank-one",
+                           "--input-delays",    "--direct",         "--plot"}) {
+    if (app.count(flag) > 0) usage_error(std::string(flag) + why);
+  }
+  if (f.data.files.size() > 1) usage_error("several data files" + why);
+  const ProcessStructure structure = ProcessStructure::parse(f.process);
+  const ProcessModelOptions options = process_options(f);
+  validate_process_model(structure, options);  // before the data is read
+  const SampledData data = f.data.load_all(app, false).front();
+  const ProcessModelResult result = identify(data, structure, options);
+  const TransferFunction model = result.transfer_function();
+
+  const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
+  if (!f.output.empty()) {
+    nlohmann::json document = io::fields_to_json(result);
+    document["type"] = "process_model_result";
+    document["model"] = io::to_json(io::ContinuousModel(model));
+    document["data"] = {{"file", f.data.files.front()},
+                        {"samples", data.size()},
+                        {"sample_time", data.sample_time()},
+                        {"input_hold", enum_name(data.input_hold())},
+                        {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
+    io::write_json(f.output, document, overwrite);
+  }
+  if (!f.model_output.empty())
+    io::write_model(f.model_output, io::ContinuousModel(model), overwrite);
+  flush_diagnostics();
+  if (!f.quiet) {
+    print_process_summary(std::cout, result, data.sample_time(), data.size(), f.data.files.front(),
+                          data.input_hold(),
+                          f.data.preprocessing_asked(app) ? f.data.preprocessing.summary() : "");
+  } else if (!result.verdict.usable) {
+    std::cerr << "ctid fit: WARNING: " << result.verdict.summary() << "\n";
+  }
+  return result.verdict.usable ? kExitOk : kExitNoUsableModel;
+}
+
 ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
+  if (!f.process.empty()) return run_process_fit(f, app);
+  for (const char* flag : {"--process-start", "--process-fix", "--process-bound", "--max-delay"}) {
+    if (app.count(flag) > 0) usage_error(std::string(flag) + " goes with --process NAME");
+  }
   if (f.irregular) return run_irregular_fit(f, app);
   if (f.data.mimo_asked(app)) return run_mimo_fit(f, app);
   if (app.count("--rank-one") > 0) {
@@ -770,6 +921,31 @@ Command add_fit_command(CLI::App& parent) {
                   "Estimate the delay as a continuous parameter in MIN:MAX (seconds): the "
                   "whole samples are scanned, then the delay is refined with its standard error")
       ->group("Structure");
+
+  app->add_option("--process", f.process,
+                  "Process model as procest names it: P + poles 0..3, then D (dead time), Z "
+                  "(zero), I (integrator), U (underdamped pair), e.g. P1D, P2DU, P1DI "
+                  "(docs/process-models.md)")
+      ->group("Process model");
+  app->add_option("--process-start", f.process_start,
+                  "Start of process parameters, NAME=VALUE (K, Tp1, Tp2, Tp3, Tw, Zeta, Tz, Td), "
+                  "comma-separated or repeated")
+      ->delimiter(',')
+      ->group("Process model");
+  app->add_option("--process-fix", f.process_fix,
+                  "Process parameters held at a value, NAME=VALUE, comma-separated or repeated")
+      ->delimiter(',')
+      ->group("Process model");
+  app->add_option("--process-bound", f.process_bound,
+                  "Bounds of process parameters, NAME=LOWER:UPPER (either may be empty), "
+                  "comma-separated or repeated")
+      ->delimiter(',')
+      ->group("Process model");
+  app->add_option("--max-delay", f.max_delay,
+                  "Process model: largest dead time [s] the automatic start scans (default: a "
+                  "quarter of the record, at most 200 samples)")
+      ->check(non_negative_number())
+      ->group("Process model");
 
   app->add_option("--controller,-c", f.controller,
                   "Discrete controller JSON (discrete_transfer_function in q): closed loop")

@@ -77,6 +77,8 @@
 
 #include "ctid/frf_fit/frf_matrix_fit.h"
 
+#include "ctid/process_model/process_model.h"
+
 #include "ctid/identification/identification.h"
 #include "ctid/identification/mode_tracking.h"
 #include "ctid/identification/structure_scan.h"

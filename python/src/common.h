@@ -28,6 +28,7 @@ void bind_estimation(py::module_& m);
 void bind_refined_iv(py::module_& m);
 void bind_frf_fit(py::module_& m);
 void bind_identification(py::module_& m);
+void bind_process_model(py::module_& m);
 void bind_delayed_feedback(py::module_& m);
 void bind_study(py::module_& m);
 void bind_io(py::module_& m);

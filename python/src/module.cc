@@ -23,6 +23,7 @@ PYBIND11_MODULE(_ctid, m) {
   ctid::python::bind_refined_iv(m);
   ctid::python::bind_frf_fit(m);
   ctid::python::bind_identification(m);
+  ctid::python::bind_process_model(m);
   ctid::python::bind_delayed_feedback(m);
   ctid::python::bind_oma(m);
   ctid::python::bind_study(m);

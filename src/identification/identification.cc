@@ -351,4 +351,9 @@ IdentificationResult identify(const IrregularRecord& record, const ModelStructur
   return result;
 }
 
+ProcessModelResult identify(const SampledData& data, const ProcessStructure& structure,
+                            const ProcessModelOptions& options) {
+  return estimate_process_model(data, structure, options);
+}
+
 }  // namespace ctid

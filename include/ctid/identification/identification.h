@@ -20,6 +20,7 @@
 #include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/identification/two_stage.h"
+#include "ctid/process_model/process_model.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/irregular_srivc.h"
@@ -264,5 +265,12 @@ IdentificationResult identify(const std::vector<SampledData>& records,
 /// else is refused with InvalidArgument naming the field. estimator is srivc_irregular.
 IdentificationResult identify(const IrregularRecord& record, const ModelStructure& structure,
                               const IdentificationOptions& options = {});
+
+/// A process model (procest's P1D, P2DU, ...; process_model/process_model.h, decision 0040)
+/// through the front door: the output-error fit of its physical parameters, open loop, from
+/// the automatic start or the starts, held values and bounds of `options`. The refined IV
+/// options do not apply; the automatic start runs SRIVC of the matching order.
+ProcessModelResult identify(const SampledData& data, const ProcessStructure& structure,
+                            const ProcessModelOptions& options = {});
 
 }  // namespace ctid
