@@ -273,7 +273,7 @@ Record parse_record(const std::vector<std::string>& body, int first, const std::
 
 bool is_delimiter(const std::string& line) { return trim(line) == "-1"; }
 
-int position(std::vector<std::string>& names, const std::string& name) {
+int uff_channel_position(std::vector<std::string>& names, const std::string& name) {
   const auto at = std::find(names.begin(), names.end(), name);
   if (at != names.end()) return static_cast<int>(at - names.begin());
   names.push_back(name);
@@ -325,8 +325,8 @@ MimoFrf parse_uff58(std::string_view text, const std::string& source) {
   MimoFrf frf;
   std::map<std::pair<int, int>, const Record*> by_pair;
   for (const Record& r : records) {
-    const int j = position(frf.output_names, r.output);
-    const int k = position(frf.input_names, r.input);
+    const int j = uff_channel_position(frf.output_names, r.output);
+    const int k = uff_channel_position(frf.input_names, r.input);
     const auto [at, inserted] = by_pair.emplace(std::make_pair(j, k), &r);
     require(inserted, source, ": dataset 58 at line ", r.line, " repeats response ", r.output,
             " / reference ", r.input, " (first at line ", at->second->line, ")");
