@@ -468,9 +468,7 @@ double run_task(const std::string& exe, const Task& task) {
       {"message", wrote || child.exit_status != kExitOk ? failure_message(child)
                                                         : "ctid fit wrote no result document"},
       {"exit_status", child.exit_status}};
-  io::write_text_file(task.error_output,
-                      error.dump(2, ' ', false, json::error_handler_t::replace) + "\n",
-                      io::Overwrite::yes);
+  io::write_text_file(task.error_output, io::json_text(error) + "\n", io::Overwrite::yes);
   return seconds;
 }
 
@@ -678,8 +676,7 @@ Counts write_summary(const BatchFlags& f, const std::vector<Task>& tasks) {
   }
   const json summary = {{"type", "ctid_batch_summary"}, {"records", records}};
   io::write_text_file(join_path(f.out, kSummaryCsv), csv, io::Overwrite::yes);
-  io::write_text_file(join_path(f.out, kSummaryJson),
-                      summary.dump(2, ' ', false, json::error_handler_t::replace) + "\n",
+  io::write_text_file(join_path(f.out, kSummaryJson), io::json_text(summary) + "\n",
                       io::Overwrite::yes);
   return counts;
 }
@@ -757,7 +754,7 @@ ExitStatus run_batch(const BatchFlags& f) {
                       {"error_output", task.error_output},
                       {"done", done}});
     }
-    std::cout << plan.dump(2, ' ', false, json::error_handler_t::replace) << "\n";
+    std::cout << io::json_text(plan) << "\n";
     return kExitOk;
   }
   prepare_out(f);
@@ -792,9 +789,7 @@ ExitStatus run_batch(const BatchFlags& f) {
       for (std::size_t k = 0; k < pending.size(); ++k) {
         timings[tasks[static_cast<std::size_t>(pending[k])].name] = seconds[k];
       }
-      io::write_text_file(timings_file,
-                          timings.dump(2, ' ', false, json::error_handler_t::replace) + "\n",
-                          io::Overwrite::yes);
+      io::write_text_file(timings_file, io::json_text(timings) + "\n", io::Overwrite::yes);
     }
   }
   const Counts counts = write_summary(f, tasks);
