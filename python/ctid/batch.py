@@ -396,6 +396,8 @@ def main(argv=None):
     parser.add_argument("--spec", help="JSON object of ctid fit flags shared by every record")
     parser.add_argument("--out", "-o", required=True, help="folder for the results")
     parser.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
+    parser.add_argument("--connect-timeout", type=float, default=30.0, metavar="SECONDS",
+                        help="how long to try to reach --scheduler before giving up (default 30)")
     parser.add_argument("--jobs", "-j", type=int, default=None,
                         help="local threads when no scheduler is given (default: every core)")
     parser.add_argument("--retry-failed", action="store_true")
@@ -406,6 +408,10 @@ def main(argv=None):
     options = parser.parse_args(argv)
     if (options.manifest is None) == (options.glob is None):
         print("ctid.batch: error: give a manifest or --glob PATTERN, not both", file=sys.stderr)
+        return 2
+    if not options.connect_timeout > 0:  # also refuses nan
+        print(f"ctid.batch: error: --connect-timeout is {options.connect_timeout}; give a "
+              "number of seconds above 0", file=sys.stderr)
         return 2
     records = options.manifest if options.manifest is not None else options.glob
     client = None
@@ -418,7 +424,7 @@ def main(argv=None):
                       "(dask.distributed)", file=sys.stderr)
                 return 1
             try:
-                client = Client(options.scheduler, timeout="30s")
+                client = Client(options.scheduler, timeout=f"{options.connect_timeout}s")
             except Exception as exc:  # noqa: BLE001 - one line, exit 1
                 print(f"ctid.batch: error: cannot reach the Dask scheduler at "
                       f"{options.scheduler}: {exc}", file=sys.stderr)
