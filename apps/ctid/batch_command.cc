@@ -481,6 +481,18 @@ std::string csv_cell(const std::string& text) {
   return quoted + "\"";
 }
 
+// The bytes of `text` as lowercase hex ("caf\xe9" -> "636166e9").
+std::string hex_of(const std::string& text) {
+  constexpr char kHex[] = "0123456789abcdef";
+  std::string out;
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    out += kHex[byte >> 4];
+    out += kHex[byte & 0xf];
+  }
+  return out;
+}
+
 // A JSON value as a cell: numbers exactly as the document holds them, null empty.
 std::string cell_of(const json& value) {
   if (value.is_null()) return "";
@@ -747,12 +759,26 @@ ExitStatus run_batch(const BatchFlags& f) {
     for (const Task& task : tasks) {
       const bool done = !f.force && (fs::exists(task.output) ||
                                      (!f.retry_failed && fs::exists(task.error_output)));
-      plan.push_back({{"name", task.name},
-                      {"data", task.data.size() == 1 ? json(task.data.front()) : json(task.data)},
-                      {"args", task.args},
-                      {"output", task.output},
-                      {"error_output", task.error_output},
-                      {"done", done}});
+      json entry = {{"name", task.name},
+                    {"data", task.data.size() == 1 ? json(task.data.front()) : json(task.data)},
+                    {"args", task.args},
+                    {"output", task.output},
+                    {"error_output", task.error_output},
+                    {"done", done}};
+      // The document escapes bytes that are not UTF-8 (decision 0042); the runner that
+      // executes the plan (python3 -m ctid.batch) needs the exact paths, given here in hex.
+      std::vector<std::string> words = task.args;
+      words.push_back(task.output);
+      words.push_back(task.error_output);
+      if (std::any_of(words.begin(), words.end(),
+                      [](const std::string& w) { return io::escape_invalid_utf8(w) != w; })) {
+        json args = json::array();
+        for (const std::string& word : task.args) args.push_back(hex_of(word));
+        entry["bytes"] = {{"args", args},
+                          {"output", hex_of(task.output)},
+                          {"error_output", hex_of(task.error_output)}};
+      }
+      plan.push_back(std::move(entry));
     }
     std::cout << io::json_text(plan) << "\n";
     return kExitOk;

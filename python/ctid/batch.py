@@ -154,7 +154,21 @@ def plan(records, spec=None, *, out_dir, ctid_executable=None, retry_failed=Fals
         if force:
             args.append("--force")
         completed = _run_batch_command(executable, args)
-    return json.loads(completed.stdout)
+    return _tasks_of(completed.stdout)
+
+
+def _tasks_of(plan_text):
+    """The tasks of a ``--plan`` document. A path that is not UTF-8 is escaped (\\xHH) in the
+    document and also given in hex under "bytes": the task takes the exact path, as a str that
+    os.fsencode turns back into those bytes (decision 0042)."""
+    tasks = json.loads(plan_text)
+    for task in tasks:
+        exact = task.pop("bytes", None)
+        if exact is not None:
+            task["args"] = [os.fsdecode(bytes.fromhex(word)) for word in exact["args"]]
+            task["output"] = os.fsdecode(bytes.fromhex(exact["output"]))
+            task["error_output"] = os.fsdecode(bytes.fromhex(exact["error_output"]))
+    return tasks
 
 
 def _failure_message(stderr, exit_status):
@@ -348,7 +362,7 @@ def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, 
     with tempfile.TemporaryDirectory(prefix="ctid-batch-") as scratch:
         source = _source_arguments(records, spec, scratch, glob)
         flags = (["--retry-failed"] if retry_failed else []) + (["--force"] if force else [])
-        planned = json.loads(_run_batch_command(
+        planned = _tasks_of(_run_batch_command(
             executable, [*source, "--out", out_dir, "--plan", *flags]).stdout)
         os.makedirs(out_dir, exist_ok=True)
         pending = [task for task in planned if not task["done"]]

@@ -170,3 +170,22 @@ def test_a_python_error_naming_a_latin1_file_keeps_its_message(folder):
     with pytest.raises(Exception) as raised:
         ctid.write_csv(os.path.join(folder, DATA), ctid.read_csv(os.path.join(folder, DATA)))
     assert ESCAPED_DATA in str(raised.value), repr(raised.value)
+
+
+def test_fit_many_runs_a_record_whose_path_is_not_utf8(cli, folder):
+    """The plan escapes the path, and gives it in hex for the runner, which must fit the file
+    (it used to run ctid fit on the escaped text: "File does not exist: caf\\xe9.csv")."""
+    import ctid.batch
+    with open(os.path.join(folder, b"spec.json"), "w") as f:
+        f.write(json.dumps({"poles": 2, "zeros": 0}))
+    out = os.fsdecode(os.path.join(folder, b"many"))
+    rows = ctid.batch.fit_many(os.fsdecode(os.path.join(folder, b"caf\xe9.cs*")),
+                               spec=os.fsdecode(os.path.join(folder, b"spec.json")),
+                               out_dir=out, jobs=1, ctid_executable=cli)
+    assert [(row["name"], row["status"]) for row in rows] == [("caf_", "ok")], rows
+    assert rows[0]["data"].endswith(ESCAPED_DATA)
+    tasks = ctid.batch.plan(os.fsdecode(os.path.join(folder, b"caf\xe9.cs*")),
+                            spec=os.fsdecode(os.path.join(folder, b"spec.json")),
+                            out_dir=out, ctid_executable=cli)
+    assert os.fsencode(tasks[0]["args"][1]) == os.path.join(folder, DATA)
+    assert tasks[0]["done"]
