@@ -189,3 +189,13 @@ def test_fit_many_runs_a_record_whose_path_is_not_utf8(cli, folder):
                             out_dir=out, ctid_executable=cli)
     assert os.fsencode(tasks[0]["args"][1]) == os.path.join(folder, DATA)
     assert tasks[0]["done"]
+
+
+def test_summaries_on_stdout_name_the_file_escaped(cli, folder):
+    fitted = _run(cli, folder, b"fit", DATA, b"--poles", b"2", b"--zeros", b"0")
+    assert fitted.returncode == 0, fitted.stderr
+    validated = _run(cli, folder, b"validate", b"m.json", DATA)
+    assert validated.returncode == 0, validated.stderr
+    for done in (fitted, validated):
+        text = done.stdout.decode("utf-8")  # decodes: no byte that is not UTF-8
+        assert f"on {ESCAPED_DATA} (N = 600" in text, text
