@@ -100,7 +100,8 @@ TEST(BatchManifest, MalformedManifestsNameWhatIsWrong) {
   EXPECT_THAT(csv_error("name\na\n"), HasSubstr("column 'data' is missing from the header"));
   EXPECT_THAT(csv_error("data,data\na,b\n"), HasSubstr("column 'data' is given twice"));
   EXPECT_THAT(csv_error("data,modes\na\n"), HasSubstr("record 1: 1 cells; the header has 2"));
-  EXPECT_THAT(csv_error("data\n\"a\n"), HasSubstr("in/m.csv: line 2: the quote opened here is not closed"));
+  EXPECT_THAT(csv_error("data\n\"a\n"),
+              HasSubstr("in/m.csv: line 2: the quote opened here is not closed"));
 }
 
 TEST(BatchManifest, EveryFlagNameGoesThroughTheCallersCheck) {
