@@ -93,6 +93,21 @@ def _last_line(text):
     return lines[-1] if lines else ""
 
 
+def _manifest_path(path, index):
+    """A record's data path as the JSON manifest holds it: absolute, and text. A path whose
+    bytes are not UTF-8 cannot be JSON text (ctid's reader refuses the surrogate escapes
+    json.dumps would write), so it is refused here, naming the ways that do take it."""
+    text = os.path.abspath(os.fsdecode(os.fspath(path)))
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        shown = os.fsencode(text).decode("utf-8", "backslashreplace")
+        raise _invalid(f"record {index + 1}: data path '{shown}' is not UTF-8, which a list of "
+                       "records (sent as a JSON manifest) cannot hold; give a CSV manifest "
+                       "file or a glob pattern that names it") from None
+    return text
+
+
 def _source_arguments(records, spec, scratch, glob=False):
     """The ``ctid batch`` arguments naming the records: a manifest, or --glob, and --spec.
     A string that names no file and holds a wildcard is a glob pattern (``glob`` forces it)."""
@@ -112,10 +127,10 @@ def _source_arguments(records, spec, scratch, glob=False):
             entry = dict(record)
             # The manifest is written in a scratch folder: relative paths are the caller's.
             data = entry.get("data")
-            if isinstance(data, (str, os.PathLike)):
-                entry["data"] = os.path.abspath(os.fspath(data))
+            if isinstance(data, (str, bytes, os.PathLike)):
+                entry["data"] = _manifest_path(data, len(entries))
             elif isinstance(data, (list, tuple)):
-                entry["data"] = [os.path.abspath(os.fspath(d)) for d in data]
+                entry["data"] = [_manifest_path(d, len(entries)) for d in data]
             entries.append(entry)
         manifest = pathlib.Path(scratch) / "manifest.json"
         manifest.write_text(json.dumps({"records": entries}))

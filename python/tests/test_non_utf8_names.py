@@ -199,3 +199,24 @@ def test_summaries_on_stdout_name_the_file_escaped(cli, folder):
     for done in (fitted, validated):
         text = done.stdout.decode("utf-8")  # decodes: no byte that is not UTF-8
         assert f"on {ESCAPED_DATA} (N = 600" in text, text
+
+
+def test_fit_many_on_a_list_of_records_refuses_a_path_that_is_not_utf8_by_name(cli, folder):
+    """A list of records travels as a JSON manifest, which cannot hold such a path: one clear
+    ValueError naming it and the ways that work (it was ctid's "malformed JSON ... surrogate"
+    for a str path and a TypeError for a bytes path), and nothing written."""
+    import ctid.batch
+    out = os.fsdecode(os.path.join(folder, b"listed"))
+    for path in (os.path.join(folder, DATA), os.fsdecode(os.path.join(folder, DATA))):
+        with pytest.raises(ValueError) as raised:
+            ctid.batch.fit_many([{"data": os.path.join(folder, b"good.csv")}, {"data": path}],
+                                spec={"poles": 2, "zeros": 0}, out_dir=out, jobs=1,
+                                ctid_executable=cli)
+        message = str(raised.value)
+        assert "record 2: data path '" in message and ESCAPED_DATA + "' is not UTF-8" in message
+        assert "CSV manifest" in message
+        assert not os.path.exists(out)
+    rows = ctid.batch.fit_many([{"data": os.path.join(folder, b"good.csv")}],
+                               spec={"poles": 2, "zeros": 0}, out_dir=out, jobs=1,
+                               ctid_executable=cli)  # a bytes path that is UTF-8 is taken
+    assert [row["status"] for row in rows] == ["ok"]
