@@ -58,6 +58,7 @@ regress_one() {
 dictionary() {
   case $1 in
     csv) echo -dict=fuzz/csv.dict ;;
+    batch_manifest) echo -dict=fuzz/manifest.dict ;;
     *json*) echo -dict=fuzz/json.dict ;;
   esac
 }

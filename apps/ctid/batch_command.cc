@@ -33,6 +33,7 @@
 #include "command.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/io/batch_manifest.h"
 #include "ctid/io/file.h"
 #include "ctid/io/json.h"
 #include "ctid/study/monte_carlo.h"
@@ -89,21 +90,8 @@ struct Task {
 };
 
 // A record's flag value as written: JSON in a JSON manifest or spec, text in a CSV cell.
-struct FlagValue {
-  json value;
-  bool from_csv = false;
-};
-using FlagSet = std::map<std::string, FlagValue>;
-
-// Where a setting came from, for messages: "m.json: record 3 ('a')".
-std::string where(const std::string& source, int index, const std::string& name) {
-  std::string text = source;
-  if (index >= 0) {
-    text += ": record " + std::to_string(index + 1);
-    if (!name.empty()) text += " ('" + name + "')";
-  }
-  return text;
-}
+using FlagValue = io::ManifestValue;
+using FlagSet = io::ManifestSettings;
 
 // The subcommand `fit` on a scratch app, to check flag names against.
 class FitFlagsReference {
@@ -205,212 +193,13 @@ void check_flag_name(const FitFlagsReference& fit, const std::string& key,
   }
 }
 
-FlagSet flags_from_json(const FitFlagsReference& fit, const json& object,
-                        const std::string& context, bool record) {
-  FlagSet flags;
-  for (const auto& [key, value] : object.items()) {
-    if (record && (key == "name" || key == "data")) continue;
-    if (!record && (key == "name" || key == "data")) {
-      usage_error(context + ": field '" + key + "' belongs to a record, not to the shared spec");
-    }
-    check_flag_name(fit, key, context);
-    flags[key] = FlagValue{value, false};
-  }
-  return flags;
-}
-
 json read_json_object(const std::string& file, const std::string& what) {
   const json document = io::read_json(file);
   if (!document.is_object()) usage_error(file + ": " + what + " is a JSON object");
   return document;
 }
 
-// A record name is a file name on every system: letters, digits, '.', '_', '-', not starting
-// with '.', and not one of the batch's own files.
-void check_name(const std::string& name, const std::string& context) {
-  if (name.empty() || name.size() > 200) {
-    usage_error(context + ": field 'name' must have 1 to 200 characters");
-  }
-  for (const char c : name) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '.' || c == '_' || c == '-';
-    if (!ok) {
-      usage_error(context + ": field 'name' is '" + name +
-                  "'; a name holds only letters, digits, '.', '_' and '-' (it names the "
-                  "record's files)");
-    }
-  }
-  if (name.front() == '.' || name.front() == '-') {
-    usage_error(context + ": field 'name' is '" + name + "'; it may not start with '.' or '-'");
-  }
-  if (name == "summary" || name == "timings" || name.ends_with(".error")) {
-    usage_error(context + ": field 'name' is '" + name +
-                "'; summary, timings and names ending in .error are the batch's own files");
-  }
-}
-
-// ---- CSV manifests (a small reader: quoted cells, "" inside quotes, CRLF) ----
-
-std::vector<std::vector<std::string>> parse_csv(const std::string& text, const std::string& file) {
-  std::vector<std::vector<std::string>> rows;
-  std::vector<std::string> row;
-  std::string cell;
-  bool quoted = false;
-  bool any = false;
-  int line = 1;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
-        cell += '"';
-        ++i;
-      } else if (c == '"') {
-        quoted = false;
-      } else {
-        if (c == '\n') ++line;
-        cell += c;
-      }
-      continue;
-    }
-    if (c == '"' && cell.empty()) {
-      quoted = true;
-      any = true;
-    } else if (c == ',') {
-      row.push_back(cell);
-      cell.clear();
-      any = true;
-    } else if (c == '\n' || c == '\r') {
-      if (c == '\r' && i + 1 < text.size() && text[i + 1] == '\n') ++i;
-      if (any || !cell.empty()) {
-        row.push_back(cell);
-        rows.push_back(row);
-      }
-      row.clear();
-      cell.clear();
-      any = false;
-      ++line;
-    } else {
-      cell += c;
-      any = true;
-    }
-  }
-  if (quoted) usage_error(file + ": line " + std::to_string(line) + ": a quote is not closed");
-  if (any || !cell.empty()) {
-    row.push_back(cell);
-    rows.push_back(row);
-  }
-  return rows;
-}
-
-struct RecordEntry {
-  std::string name;  // empty: from the file
-  std::vector<std::string> data;
-  FlagSet flags;
-  std::string context;
-};
-
-// "data": a path or a list of paths, relative ones taken from the manifest's folder.
-std::vector<std::string> data_paths(const json& value, const fs::path& base,
-                                    const std::string& context) {
-  std::vector<std::string> paths;
-  const auto add = [&](const json& item) {
-    if (!item.is_string() || item.get<std::string>().empty()) {
-      usage_error(context + ": field 'data' is " + item.dump() +
-                  "; it is a file path or a list of them");
-    }
-    fs::path path(item.get<std::string>());
-    if (path.is_relative()) path = base / path;
-    std::string text = path.lexically_normal().string();
-    if (text.front() == '-') text = "./" + text;  // never read as a flag
-    paths.push_back(text);
-  };
-  if (value.is_array() && !value.empty()) {
-    for (const json& item : value) add(item);
-  } else {
-    add(value);
-  }
-  return paths;
-}
-
-std::vector<RecordEntry> records_from_json(const FitFlagsReference& fit, const std::string& file,
-                                           FlagSet& spec) {
-  const json manifest = read_json_object(file, "a manifest");
-  for (const auto& [key, value] : manifest.items()) {
-    if (key != "spec" && key != "records") {
-      usage_error(file + ": field '" + key + "' is not a manifest field (spec, records)");
-    }
-  }
-  if (manifest.contains("spec")) {
-    if (!manifest["spec"].is_object()) usage_error(file + ": field 'spec' is a JSON object");
-    for (auto& [key, value] : flags_from_json(fit, manifest["spec"], file + ": spec", false)) {
-      spec[key] = value;
-    }
-  }
-  if (!manifest.contains("records") || !manifest["records"].is_array()) {
-    usage_error(file + ": field 'records' (a list of records) is missing");
-  }
-  const fs::path base = fs::path(file).parent_path();
-  std::vector<RecordEntry> entries;
-  int index = 0;
-  for (const json& record : manifest["records"]) {
-    std::string name;
-    if (record.is_object() && record.contains("name")) {
-      if (!record["name"].is_string()) {
-        usage_error(where(file, index, "") + ": field 'name' is " + record["name"].dump() +
-                    "; it is a string");
-      }
-      name = record["name"].get<std::string>();
-    }
-    const std::string context = where(file, index, name);
-    if (!record.is_object()) usage_error(context + ": a record is a JSON object");
-    if (!record.contains("data")) usage_error(context + ": field 'data' is missing");
-    entries.push_back({name, data_paths(record["data"], base, context),
-                       flags_from_json(fit, record, context, true), context});
-    ++index;
-  }
-  return entries;
-}
-
-std::vector<RecordEntry> records_from_csv(const FitFlagsReference& fit, const std::string& file) {
-  const auto rows = parse_csv(io::read_text_file(file), file);
-  if (rows.empty()) usage_error(file + ": the manifest is empty (expected a header name,data,...)");
-  const std::vector<std::string>& header = rows.front();
-  std::optional<std::size_t> data_column;
-  std::optional<std::size_t> name_column;
-  std::set<std::string> seen;
-  for (std::size_t c = 0; c < header.size(); ++c) {
-    const std::string& key = header[c];
-    if (!seen.insert(key).second) usage_error(file + ": column '" + key + "' is given twice");
-    if (key == "data") {
-      data_column = c;
-    } else if (key == "name") {
-      name_column = c;
-    } else {
-      check_flag_name(fit, key, file + ": header");
-    }
-  }
-  if (!data_column) usage_error(file + ": column 'data' is missing from the header");
-  const fs::path base = fs::path(file).parent_path();
-  std::vector<RecordEntry> entries;
-  for (std::size_t r = 1; r < rows.size(); ++r) {
-    const std::vector<std::string>& row = rows[r];
-    const int index = static_cast<int>(r) - 1;
-    const std::string name = name_column && *name_column < row.size() ? row[*name_column] : "";
-    const std::string context = where(file, index, name);
-    if (row.size() != header.size()) {
-      usage_error(context + ": " + std::to_string(row.size()) + " cells; the header has " +
-                  std::to_string(header.size()));
-    }
-    if (row[*data_column].empty()) usage_error(context + ": field 'data' is missing");
-    RecordEntry entry{name, data_paths(json(row[*data_column]), base, context), {}, context};
-    for (std::size_t c = 0; c < header.size(); ++c) {
-      if (c == *data_column || (name_column && c == *name_column) || row[c].empty()) continue;
-      entry.flags[header[c]] = FlagValue{json(row[c]), true};
-    }
-    entries.push_back(std::move(entry));
-  }
-  return entries;
-}
+using RecordEntry = io::ManifestRecord;
 
 std::vector<RecordEntry> records_from_glob(const std::string& pattern) {
   glob_t matches{};
@@ -431,75 +220,6 @@ std::vector<RecordEntry> records_from_glob(const std::string& pattern) {
 
 std::string join_path(const std::string& dir, const std::string& file) {
   return (fs::path(dir) / file).string();
-}
-
-// ---- names derived from data paths: safe and unique by construction ----
-
-// `text` as a record name: every byte check_name does not allow becomes '_', a leading '.'
-// or '-' gets a '_' before it, the batch's own names get "_record" after them, and the result
-// is at most 200 bytes.
-std::string safe_name(const std::string& text) {
-  std::string name;
-  for (const char c : text) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '.' || c == '_' || c == '-';
-    name += ok ? c : '_';
-  }
-  if (name.empty() || name.front() == '.' || name.front() == '-') name.insert(0, "_");
-  if (name.size() > 180) name.resize(180);
-  if (name == "summary" || name == "timings" || name.ends_with(".error")) name += "_record";
-  return name;
-}
-
-// The name of a record without "name": its data file's stem, or, when several records would
-// share that stem (site_a/rec.csv, site_b/rec.csv), its path without extension from the
-// folder all of those records share, '/' written '_'. A name still taken gets "-2", "-3", ...
-// so a --glob batch never stops on its names.
-std::vector<std::string> derived_names(const std::vector<RecordEntry>& entries) {
-  std::map<std::string, std::vector<std::size_t>> by_stem;
-  std::set<std::string> taken;
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    if (!entries[i].name.empty()) {
-      taken.insert(entries[i].name);
-    } else {
-      by_stem[safe_name(fs::path(entries[i].data.front()).stem().string())].push_back(i);
-    }
-  }
-  std::vector<std::string> names(entries.size());
-  for (const auto& [stem, members] : by_stem) {
-    if (members.size() == 1 && taken.count(stem) == 0) {
-      names[members.front()] = stem;
-      continue;
-    }
-    fs::path shared = fs::path(entries[members.front()].data.front()).lexically_normal();
-    shared = shared.parent_path();
-    for (const std::size_t i : members) {
-      const fs::path folder = fs::path(entries[i].data.front()).lexically_normal().parent_path();
-      while (!shared.empty() && folder.lexically_relative(shared).string().starts_with("..")) {
-        shared = shared.parent_path();
-      }
-    }
-    for (const std::size_t i : members) {
-      fs::path relative = fs::path(entries[i].data.front()).lexically_normal();
-      if (!shared.empty()) relative = relative.lexically_relative(shared);
-      relative.replace_extension();
-      std::string joined;
-      for (const fs::path& part : relative) {
-        if (part == "." || part.empty()) continue;
-        joined += (joined.empty() ? "" : "_") + part.string();
-      }
-      names[i] = safe_name(joined.empty() ? stem : joined);
-    }
-  }
-  // What is still shared (a_b.csv beside a/b.csv, a name a record chose) is numbered in order.
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    if (!entries[i].name.empty()) continue;
-    std::string name = names[i];
-    for (int k = 2; taken.count(name) > 0; ++k) name = names[i] + "-" + std::to_string(k);
-    taken.insert(name);
-    names[i] = name;
-  }
-  return names;
 }
 
 // ---- no output of the batch may be one of its inputs ----
@@ -597,36 +317,34 @@ std::vector<Task> expand(const BatchFlags& f) {
   if (f.manifest.empty() == f.glob_pattern.empty()) {
     usage_error("give a manifest (MANIFEST.json or MANIFEST.csv) or --glob PATTERN, not both");
   }
+  const io::ManifestKeyCheck check_key = [&fit](const std::string& key,
+                                                const std::string& context) {
+    check_flag_name(fit, key, context);
+  };
   FlagSet spec;
-  if (!f.spec.empty())
-    spec = flags_from_json(fit, read_json_object(f.spec, "a spec"), f.spec, false);
+  if (!f.spec.empty()) {
+    spec = io::manifest_settings_from_json(read_json_object(f.spec, "a spec"), f.spec, check_key);
+  }
   std::vector<RecordEntry> entries;
   if (!f.glob_pattern.empty()) {
     entries = records_from_glob(f.glob_pattern);
-  } else if (fs::path(f.manifest).extension() == ".csv") {
-    entries = records_from_csv(fit, f.manifest);
   } else {
-    entries = records_from_json(fit, f.manifest, spec);
+    io::BatchManifest manifest = io::read_batch_manifest(f.manifest, check_key);
+    for (auto& [key, value] : manifest.spec) spec[key] = std::move(value);
+    entries = std::move(manifest.records);
   }
   if (entries.empty()) usage_error(f.manifest + ": the manifest has no records");
   std::vector<Task> tasks;
-  std::map<std::string, std::string> names;  // name -> context of its first record
-  const std::vector<std::string> derived = derived_names(entries);
+  const std::vector<std::string> names = io::record_names(entries);
   for (std::size_t e = 0; e < entries.size(); ++e) {
     const RecordEntry& entry = entries[e];
     Task task;
-    task.name = entry.name.empty() ? derived[e] : entry.name;
-    check_name(task.name, entry.context);
-    const auto [first, inserted] = names.emplace(task.name, entry.context);
-    if (!inserted) {
-      usage_error(entry.context + ": the name '" + task.name + "' is taken by " + first->second +
-                  "; names must be unique (give \"name\")");
-    }
+    task.name = names[e];
     task.data = entry.data;
     task.output = join_path(f.out, task.name + ".json");
     task.error_output = join_path(f.out, task.name + ".error.json");
     FlagSet merged = spec;
-    for (const auto& [key, value] : entry.flags) merged[key] = value;
+    for (const auto& [key, value] : entry.settings) merged[key] = value;
     task.args.push_back("fit");
     task.args.insert(task.args.end(), task.data.begin(), task.data.end());
     for (const auto& [key, value] : merged) {
@@ -750,9 +468,7 @@ double run_task(const std::string& exe, const Task& task) {
       {"message", wrote || child.exit_status != kExitOk ? failure_message(child)
                                                         : "ctid fit wrote no result document"},
       {"exit_status", child.exit_status}};
-  io::write_text_file(task.error_output,
-                      error.dump(2, ' ', false, json::error_handler_t::replace) + "\n",
-                      io::Overwrite::yes);
+  io::write_text_file(task.error_output, io::json_text(error) + "\n", io::Overwrite::yes);
   return seconds;
 }
 
@@ -763,6 +479,18 @@ std::string csv_cell(const std::string& text) {
   std::string quoted = "\"";
   for (const char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
   return quoted + "\"";
+}
+
+// The bytes of `text` as lowercase hex ("caf\xe9" -> "636166e9").
+std::string hex_of(const std::string& text) {
+  constexpr char kHex[] = "0123456789abcdef";
+  std::string out;
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    out += kHex[byte >> 4];
+    out += kHex[byte & 0xf];
+  }
+  return out;
 }
 
 // A JSON value as a cell: numbers exactly as the document holds them, null empty.
@@ -960,8 +688,7 @@ Counts write_summary(const BatchFlags& f, const std::vector<Task>& tasks) {
   }
   const json summary = {{"type", "ctid_batch_summary"}, {"records", records}};
   io::write_text_file(join_path(f.out, kSummaryCsv), csv, io::Overwrite::yes);
-  io::write_text_file(join_path(f.out, kSummaryJson),
-                      summary.dump(2, ' ', false, json::error_handler_t::replace) + "\n",
+  io::write_text_file(join_path(f.out, kSummaryJson), io::json_text(summary) + "\n",
                       io::Overwrite::yes);
   return counts;
 }
@@ -1032,14 +759,28 @@ ExitStatus run_batch(const BatchFlags& f) {
     for (const Task& task : tasks) {
       const bool done = !f.force && (fs::exists(task.output) ||
                                      (!f.retry_failed && fs::exists(task.error_output)));
-      plan.push_back({{"name", task.name},
-                      {"data", task.data.size() == 1 ? json(task.data.front()) : json(task.data)},
-                      {"args", task.args},
-                      {"output", task.output},
-                      {"error_output", task.error_output},
-                      {"done", done}});
+      json entry = {{"name", task.name},
+                    {"data", task.data.size() == 1 ? json(task.data.front()) : json(task.data)},
+                    {"args", task.args},
+                    {"output", task.output},
+                    {"error_output", task.error_output},
+                    {"done", done}};
+      // The document escapes bytes that are not UTF-8 (decision 0042); the runner that
+      // executes the plan (python3 -m ctid.batch) needs the exact paths, given here in hex.
+      std::vector<std::string> words = task.args;
+      words.push_back(task.output);
+      words.push_back(task.error_output);
+      if (std::any_of(words.begin(), words.end(),
+                      [](const std::string& w) { return io::escape_invalid_utf8(w) != w; })) {
+        json args = json::array();
+        for (const std::string& word : task.args) args.push_back(hex_of(word));
+        entry["bytes"] = {{"args", args},
+                          {"output", hex_of(task.output)},
+                          {"error_output", hex_of(task.error_output)}};
+      }
+      plan.push_back(std::move(entry));
     }
-    std::cout << plan.dump(2, ' ', false, json::error_handler_t::replace) << "\n";
+    std::cout << io::json_text(plan) << "\n";
     return kExitOk;
   }
   prepare_out(f);
@@ -1074,9 +815,7 @@ ExitStatus run_batch(const BatchFlags& f) {
       for (std::size_t k = 0; k < pending.size(); ++k) {
         timings[tasks[static_cast<std::size_t>(pending[k])].name] = seconds[k];
       }
-      io::write_text_file(timings_file,
-                          timings.dump(2, ' ', false, json::error_handler_t::replace) + "\n",
-                          io::Overwrite::yes);
+      io::write_text_file(timings_file, io::json_text(timings) + "\n", io::Overwrite::yes);
     }
   }
   const Counts counts = write_summary(f, tasks);

@@ -18,6 +18,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/io/file.h"
+#include "ctid/io/json.h"
 
 namespace ctid::cli {
 namespace {
@@ -52,7 +53,9 @@ std::string one_line(const std::string& text) {
     out += "... (message cut; " + std::to_string(text.size()) + " bytes)";
   }
   while (!out.empty() && out.back() == ' ') out.pop_back();
-  return out;
+  // A file name of any bytes (or a cut through a character) is shown, never printed as bytes
+  // that are not UTF-8 (decision 0042).
+  return io::escape_invalid_utf8(out);
 }
 
 // Whether `part` is `whole` with characters left out.
@@ -154,7 +157,7 @@ std::vector<std::string>& diagnostics() {
 void queue_diagnostic(std::string line) { diagnostics().push_back(std::move(line)); }
 
 void flush_diagnostics() {
-  for (const std::string& line : diagnostics()) std::cerr << line << "\n";
+  for (const std::string& line : diagnostics()) std::cerr << io::escape_invalid_utf8(line) << "\n";
   diagnostics().clear();
 }
 

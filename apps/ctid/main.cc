@@ -6,13 +6,16 @@
 
 #include <csignal>
 #include <iostream>
+#include <streambuf>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "command.h"
 #include "ctid/io/file.h"
+#include "ctid/io/json.h"
 #include "output_paths.h"
 
 #ifndef CTID_VERSION
@@ -40,11 +43,60 @@ void install_signal_handlers() {
   }
 }
 
+// std::cout line by line with the bytes that are not UTF-8 written \xHH (decision 0042): the
+// summaries echo the names of the files read and written, which may be any bytes. A complete
+// line goes out at once, so its order with what else reaches stdout is as before.
+class Utf8Lines : public std::streambuf {
+ public:
+  explicit Utf8Lines(std::streambuf* target) : target_(target) {}
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (traits_type::eq_int_type(c, traits_type::eof())) return traits_type::not_eof(c);
+    const char byte = traits_type::to_char_type(c);
+    return xsputn(&byte, 1) == 1 ? c : traits_type::eof();
+  }
+  std::streamsize xsputn(const char* text, std::streamsize count) override {
+    pending_.append(text, static_cast<std::size_t>(count));
+    const std::size_t end = pending_.rfind('\n');
+    if (end != std::string::npos && !emit(end + 1)) return 0;
+    return count;
+  }
+  int sync() override { return emit(pending_.size()) && target_->pubsync() == 0 ? 0 : -1; }
+
+ private:
+  // Writes the first `count` bytes of pending_, escaped.
+  bool emit(std::size_t count) {
+    const std::string out =
+        ctid::io::escape_invalid_utf8(std::string_view(pending_).substr(0, count));
+    pending_.erase(0, count);
+    const auto size = static_cast<std::streamsize>(out.size());
+    return target_->sputn(out.data(), size) == size;
+  }
+  std::streambuf* target_;
+  std::string pending_;
+};
+
+// Puts Utf8Lines in front of std::cout for the life of the process: a static, so that what is
+// pending is written and std::cout restored also when the process ends by std::exit.
+void escape_stdout() {
+  struct Guard {
+    Utf8Lines lines{std::cout.rdbuf()};
+    std::streambuf* original = std::cout.rdbuf(&lines);
+    ~Guard() {
+      std::cout.flush();
+      std::cout.rdbuf(original);
+    }
+  };
+  static Guard guard;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace ctid::cli;
   install_signal_handlers();
+  escape_stdout();
   CLI::App app{
       "ctid: continuous-time system identification from sampled data.\n"
       "Models are JSON files with coefficients in ascending powers (docs/formats.md);\n"

@@ -88,6 +88,7 @@
 #include "ctid/study/paper_study.h"
 #include "ctid/study/study_output.h"
 
+#include "ctid/io/batch_manifest.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/excitation_spec.h"

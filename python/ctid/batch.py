@@ -93,6 +93,21 @@ def _last_line(text):
     return lines[-1] if lines else ""
 
 
+def _manifest_path(path, index):
+    """A record's data path as the JSON manifest holds it: absolute, and text. A path whose
+    bytes are not UTF-8 cannot be JSON text (ctid's reader refuses the surrogate escapes
+    json.dumps would write), so it is refused here, naming the ways that do take it."""
+    text = os.path.abspath(os.fsdecode(os.fspath(path)))
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        shown = os.fsencode(text).decode("utf-8", "backslashreplace")
+        raise _invalid(f"record {index + 1}: data path '{shown}' is not UTF-8, which a list of "
+                       "records (sent as a JSON manifest) cannot hold; give a CSV manifest "
+                       "file or a glob pattern that names it") from None
+    return text
+
+
 def _source_arguments(records, spec, scratch, glob=False):
     """The ``ctid batch`` arguments naming the records: a manifest, or --glob, and --spec.
     A string that names no file and holds a wildcard is a glob pattern (``glob`` forces it)."""
@@ -112,10 +127,10 @@ def _source_arguments(records, spec, scratch, glob=False):
             entry = dict(record)
             # The manifest is written in a scratch folder: relative paths are the caller's.
             data = entry.get("data")
-            if isinstance(data, (str, os.PathLike)):
-                entry["data"] = os.path.abspath(os.fspath(data))
+            if isinstance(data, (str, bytes, os.PathLike)):
+                entry["data"] = _manifest_path(data, len(entries))
             elif isinstance(data, (list, tuple)):
-                entry["data"] = [os.path.abspath(os.fspath(d)) for d in data]
+                entry["data"] = [_manifest_path(d, len(entries)) for d in data]
             entries.append(entry)
         manifest = pathlib.Path(scratch) / "manifest.json"
         manifest.write_text(json.dumps({"records": entries}))
@@ -154,7 +169,21 @@ def plan(records, spec=None, *, out_dir, ctid_executable=None, retry_failed=Fals
         if force:
             args.append("--force")
         completed = _run_batch_command(executable, args)
-    return json.loads(completed.stdout)
+    return _tasks_of(completed.stdout)
+
+
+def _tasks_of(plan_text):
+    """The tasks of a ``--plan`` document. A path that is not UTF-8 is escaped (\\xHH) in the
+    document and also given in hex under "bytes": the task takes the exact path, as a str that
+    os.fsencode turns back into those bytes (decision 0042)."""
+    tasks = json.loads(plan_text)
+    for task in tasks:
+        exact = task.pop("bytes", None)
+        if exact is not None:
+            task["args"] = [os.fsdecode(bytes.fromhex(word)) for word in exact["args"]]
+            task["output"] = os.fsdecode(bytes.fromhex(exact["output"]))
+            task["error_output"] = os.fsdecode(bytes.fromhex(exact["error_output"]))
+    return tasks
 
 
 def _failure_message(stderr, exit_status):
@@ -348,7 +377,7 @@ def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, 
     with tempfile.TemporaryDirectory(prefix="ctid-batch-") as scratch:
         source = _source_arguments(records, spec, scratch, glob)
         flags = (["--retry-failed"] if retry_failed else []) + (["--force"] if force else [])
-        planned = json.loads(_run_batch_command(
+        planned = _tasks_of(_run_batch_command(
             executable, [*source, "--out", out_dir, "--plan", *flags]).stdout)
         os.makedirs(out_dir, exist_ok=True)
         pending = [task for task in planned if not task["done"]]
@@ -396,6 +425,8 @@ def main(argv=None):
     parser.add_argument("--spec", help="JSON object of ctid fit flags shared by every record")
     parser.add_argument("--out", "-o", required=True, help="folder for the results")
     parser.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
+    parser.add_argument("--connect-timeout", type=float, default=30.0, metavar="SECONDS",
+                        help="how long to try to reach --scheduler before giving up (default 30)")
     parser.add_argument("--jobs", "-j", type=int, default=None,
                         help="local threads when no scheduler is given (default: every core)")
     parser.add_argument("--retry-failed", action="store_true")
@@ -406,6 +437,10 @@ def main(argv=None):
     options = parser.parse_args(argv)
     if (options.manifest is None) == (options.glob is None):
         print("ctid.batch: error: give a manifest or --glob PATTERN, not both", file=sys.stderr)
+        return 2
+    if not options.connect_timeout > 0:  # also refuses nan
+        print(f"ctid.batch: error: --connect-timeout is {options.connect_timeout}; give a "
+              "number of seconds above 0", file=sys.stderr)
         return 2
     records = options.manifest if options.manifest is not None else options.glob
     client = None
@@ -418,7 +453,7 @@ def main(argv=None):
                       "(dask.distributed)", file=sys.stderr)
                 return 1
             try:
-                client = Client(options.scheduler, timeout="30s")
+                client = Client(options.scheduler, timeout=f"{options.connect_timeout}s")
             except Exception as exc:  # noqa: BLE001 - one line, exit 1
                 print(f"ctid.batch: error: cannot reach the Dask scheduler at "
                       f"{options.scheduler}: {exc}", file=sys.stderr)

@@ -30,7 +30,7 @@ void bind_writers(py::module_& m, std::variant<T...>*) {
   (m.def(
        "result_to_json",
        [](const T& result, int indent) {
-         return io::to_json(io::ResultDocument(result)).dump(indent);
+         return io::json_text(io::to_json(io::ResultDocument(result)), indent);
        },
        py::arg("result"), py::arg("indent") = 2,
        "The document of a result as JSON text (read back by read_result bit for bit)."),
@@ -149,7 +149,7 @@ template <class Model>
 void bind_model_writer(py::module_& m) {
   m.def(
       "model_to_json",
-      [](const Model& model, int indent) { return io::to_json(model).dump(indent); },
+      [](const Model& model, int indent) { return io::json_text(io::to_json(model), indent); },
       py::arg("model"), py::arg("indent") = 2,
       "The model document of a model as JSON text (read back by model_from_json bit for bit).");
   m.def(

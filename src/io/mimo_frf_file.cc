@@ -23,7 +23,7 @@ bool ends_with(std::string_view text, std::string_view suffix) {
   return text.size() >= suffix.size() && text.substr(text.size() - suffix.size()) == suffix;
 }
 
-int position(std::vector<std::string>& names, const std::string& name) {
+int frf_channel_position(std::vector<std::string>& names, const std::string& name) {
   const auto at = std::find(names.begin(), names.end(), name);
   if (at != names.end()) return static_cast<int>(at - names.begin());
   names.push_back(name);
@@ -63,8 +63,8 @@ MimoFrf mimo_frf_from_table(const CsvTable& table) {
             ": column '", name, "' is not named <output>/<input>_real");
     require(table.has_column(pair + "_imag"), source, ": column '", name, "' has no partner '",
             pair, "_imag'");
-    pairs.emplace_back(position(frf.output_names, pair.substr(0, slash)),
-                       position(frf.input_names, pair.substr(slash + 1)));
+    pairs.emplace_back(frf_channel_position(frf.output_names, pair.substr(0, slash)),
+                       frf_channel_position(frf.input_names, pair.substr(slash + 1)));
     pair_names.push_back(pair);
   }
   for (const std::string& name : table.names) {

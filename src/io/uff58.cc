@@ -273,7 +273,23 @@ Record parse_record(const std::vector<std::string>& body, int first, const std::
 
 bool is_delimiter(const std::string& line) { return trim(line) == "-1"; }
 
-int position(std::vector<std::string>& names, const std::string& name) {
+// Record 1, the free-text ID line, as the writer fills it: the channel names with their control
+// bytes escaped (\x00, \x0a: a NUL or a line break in a name would otherwise be written into
+// the file, and a line break shifts every record after it), at most 80 characters.
+std::string id_line(const std::string& names) {
+  constexpr char kHex[] = "0123456789abcdef";
+  std::string line;
+  for (const char c : names) {
+    const auto byte = static_cast<unsigned char>(c);
+    std::string shown(1, c);
+    if (byte < 0x20 || byte == 0x7f) shown = {'\\', 'x', kHex[byte >> 4], kHex[byte & 0xf]};
+    if (line.size() + shown.size() > 80) break;
+    line += shown;
+  }
+  return line;
+}
+
+int uff_channel_position(std::vector<std::string>& names, const std::string& name) {
   const auto at = std::find(names.begin(), names.end(), name);
   if (at != names.end()) return static_cast<int>(at - names.begin());
   names.push_back(name);
@@ -325,8 +341,8 @@ MimoFrf parse_uff58(std::string_view text, const std::string& source) {
   MimoFrf frf;
   std::map<std::pair<int, int>, const Record*> by_pair;
   for (const Record& r : records) {
-    const int j = position(frf.output_names, r.output);
-    const int k = position(frf.input_names, r.input);
+    const int j = uff_channel_position(frf.output_names, r.output);
+    const int k = uff_channel_position(frf.input_names, r.input);
     const auto [at, inserted] = by_pair.emplace(std::make_pair(j, k), &r);
     require(inserted, source, ": dataset 58 at line ", r.line, " repeats response ", r.output,
             " / reference ", r.input, " (first at line ", at->second->line, ")");
@@ -384,10 +400,9 @@ std::string format_uff58(const MimoFrf& frf) {
       const Channel& response = responses[static_cast<size_t>(j)];
       const Channel& reference = references[static_cast<size_t>(k)];
       out += "    -1\n    58\n";
-      out +=
-          (frf.output_names[static_cast<size_t>(j)] + "/" + frf.input_names[static_cast<size_t>(k)])
-              .substr(0, 80) +
-          "\nNONE\nNONE\nNONE\nNONE\n";
+      out += id_line(frf.output_names[static_cast<size_t>(j)] + "/" +
+                     frf.input_names[static_cast<size_t>(k)]) +
+             "\nNONE\nNONE\nNONE\nNONE\n";
       std::snprintf(buffer, sizeof buffer, "%5d%10d%5d%10d %-10s%10ld%4ld %-10s%10ld%4ld\n", 4,
                     ++id, 1, 0, "NONE", response.node, response.direction, "NONE", reference.node,
                     reference.direction);

@@ -445,6 +445,23 @@ std::vector<Case> catalogue() {
        .args = fit1({"-o", "r.json", "--model-output", "m.json", "-q"}),
        .status = 0,
        .outputs = {"r.json", "m.json"}});
+  // Issue 33: file names that are not UTF-8 (Latin-1 "caf\xe9") are read and written under
+  // their exact bytes, and a message names them with those bytes written \xHH (decision 0042).
+  const File latin1{"caf\xe9.csv", d.content};
+  add({.name = "FitLatin1NamesReadAndWritten",
+       .files = {latin1},
+       .args = {"fit", "caf\xe9.csv", "--poles", "1", "--zeros", "0", "-o", "r\xe9.json",
+                "--model-output", "m\xe9.json", "-q"},
+       .status = 0,
+       .outputs = {"r\xe9.json", "m\xe9.json"}});
+  add({.name = "FitMissingLatin1DataIsNamedEscaped",
+       .args = {"fit", "absent\xe9.csv", "--poles", "1", "--zeros", "0"},
+       .message = {"absent\\xe9.csv"}});
+  add({.name = "FitOutputIsItsLatin1DataNamedEscaped",
+       .files = {latin1},
+       .args = {"fit", "caf\xe9.csv", "--poles", "1", "--zeros", "0", "-o", "caf\xe9.csv",
+                "--force"},
+       .message = {"'caf\\xe9.csv' is the input file 'caf\\xe9.csv'"}});
   // Finding 5: unbounded work.
   add({.name = "FitDevZero",
        .args = {"fit", "/dev/zero", "--poles", "1", "--zeros", "0"},

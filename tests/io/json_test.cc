@@ -154,5 +154,32 @@ TEST(Json, ADocumentOverSixtyFourMebibytesIsRefusedBeforeReading) {
   EXPECT_TRUE(read_json(big).is_object());
 }
 
+// Decision 0042: a file name is any bytes; what is not UTF-8 is written \xHH, as Python's
+// "backslashreplace" writes it, and UTF-8 (up to four-byte characters) is kept as it is.
+TEST(Json, BytesThatAreNotUtf8AreEscapedAndUtf8IsKept) {
+  EXPECT_EQ(escape_invalid_utf8("caf\xc3\xa9 \xf0\x9f\x93\x88.csv"),
+            "caf\xc3\xa9 \xf0\x9f\x93\x88.csv");
+  EXPECT_EQ(escape_invalid_utf8("caf\xe9.csv"), "caf\\xe9.csv");
+  EXPECT_EQ(escape_invalid_utf8("\xff\xfe"), "\\xff\\xfe");
+  EXPECT_EQ(escape_invalid_utf8("\xc0\xaf"), "\\xc0\\xaf");                    // overlong '/'
+  EXPECT_EQ(escape_invalid_utf8("\xed\xa0\x80"), "\\xed\\xa0\\x80");           // a surrogate
+  EXPECT_EQ(escape_invalid_utf8("\xf4\x90\x80\x80"), "\\xf4\\x90\\x80\\x80");  // > U+10FFFF
+  EXPECT_EQ(escape_invalid_utf8("a\xc3"), "a\\xc3");  // a character cut at the end
+}
+
+TEST(Json, ADocumentHoldingANameThatIsNotUtf8IsWrittenEscaped) {
+  nlohmann::json document = {{"data", {{"file", "caf\xe9.csv"}}},
+                             {"r\xe9sultats", {1.5, "na\xefve"}}};
+  EXPECT_THROW((void)document.dump(), nlohmann::json::type_error);  // what used to happen
+  const std::string text = json_text(document);
+  const nlohmann::json back = parse_json(text, "back.json");
+  EXPECT_EQ(back["data"]["file"], "caf\\xe9.csv");
+  EXPECT_EQ(back["r\\xe9sultats"][1], "na\\xefve");
+  EXPECT_EQ(back["r\\xe9sultats"][0], 1.5);
+  const nlohmann::json plain = {{"file", "caf\xc3\xa9.csv"}, {"x", 0.1}};
+  EXPECT_EQ(json_text(plain), plain.dump(2));
+  EXPECT_EQ(json_text(plain, -1), plain.dump());
+}
+
 }  // namespace
 }  // namespace ctid::io::json_test

@@ -170,6 +170,42 @@ std::string record(const std::string& type = "4", const std::string& ordinate = 
          "    -1\n";
 }
 
+// The ID line (record 1) holds the channel names as free text. A NUL or a line break in a
+// name was written into it as is: a line break shifted every record after it, so ctid refused
+// its own file, and a NUL went into the file. Control bytes are written escaped (\x00), and
+// the reader, which names channels by node and direction, never takes a name from that line.
+TEST(Uff58, ChannelNamesWithANulOrALineBreakAreWrittenEscapedAndReadBack) {
+  MimoFrf frf = random_frf(3, false);
+  frf.output_names[1] = std::string("a\0b", 3);
+  frf.input_names[0] = "c\n    -1\nd";
+  const std::string text = io::format_uff58(frf);
+  EXPECT_EQ(text.find('\0'), std::string::npos);
+  EXPECT_THAT(text, HasSubstr("\na\\x00b/c\\x0a    -1\\x0ad\n"));
+  const MimoFrf back = io::parse_uff58(text, "f.uff");
+  ASSERT_EQ(back.output_count(), 3);
+  ASSERT_EQ(back.input_count(), 2);
+  for (const auto* names : {&back.output_names, &back.input_names}) {
+    for (const std::string& name : *names) {
+      for (const char c : name) EXPECT_GE(static_cast<unsigned char>(c), 0x20) << name;
+    }
+  }
+  for (std::size_t l = 0; l < back.response.size(); ++l) {
+    EXPECT_LT((back.response[l] - frf.response[l]).cwiseAbs().maxCoeff(),
+              1e-10 * frf.response[l].cwiseAbs().maxCoeff());
+  }
+}
+
+TEST(Uff58, ANulByteInAFilesIdLineIsNoPartOfAChannelName) {
+  const MimoFrf frf = random_frf(2, false);
+  std::string text = io::format_uff58(frf);
+  const std::size_t id = text.find("11+Z/101+X");
+  ASSERT_NE(id, std::string::npos);
+  text.insert(id + 2, std::string(1, '\0'));
+  const MimoFrf back = io::parse_uff58(text, "f.uff");
+  EXPECT_EQ(back.output_names, frf.output_names);
+  EXPECT_EQ(back.input_names, frf.input_names);
+}
+
 TEST(Uff58, EvenSingleRecordsAndOtherDatasetsAreRead) {
   const std::string text =
       "    -1\n   151\nmodel\n    -1\n" + record("4", "5", "1", "2") + record("4", "5", "3", "2");

@@ -25,8 +25,17 @@ inline constexpr std::size_t kMaxJsonDocumentBytes = std::size_t{64} << 20;
 nlohmann::json parse_json(std::string_view text, const std::string& source);
 /// Reads and parses a JSON file of at most kMaxJsonDocumentBytes (InvalidArgument beyond).
 nlohmann::json read_json(const std::filesystem::path& path);
-/// Writes `value` indented by two spaces with a final newline; doubles keep full
-/// precision (they read back bit-identical).
+/// `text` with every byte that is not part of well-formed UTF-8 written as the four
+/// characters \xHH (lowercase hex, as Python's "backslashreplace" writes them), so that a file
+/// name of any bytes can be shown in a message or stored in a JSON document (decision 0042).
+/// Text that is UTF-8 is returned unchanged.
+std::string escape_invalid_utf8(std::string_view text);
+/// `value` as JSON text, `indent` spaces per level (-1: one line): every string and key that
+/// is not UTF-8 is written as escape_invalid_utf8 writes it, where nlohmann::json's dump would
+/// throw. Every document ctid writes goes through here.
+std::string json_text(const nlohmann::json& value, int indent = 2);
+/// Writes json_text(value) with a final newline; doubles keep full precision (they read back
+/// bit-identical).
 void write_json(const std::filesystem::path& path, const nlohmann::json& value,
                 Overwrite overwrite = Overwrite::no);
 
