@@ -119,7 +119,8 @@ def compare_json_relative(before, after, name, largest):
     return problems
 
 
-def compare_text_relative(before, after, name, largest):
+def comparable_lines(before, after, name):
+    """Both files' lines (a CSV without its timing column) and a problem if their counts differ."""
     old = before.read_text().splitlines()
     new = after.read_text().splitlines()
     if before.suffix == ".csv":
@@ -127,6 +128,11 @@ def compare_text_relative(before, after, name, largest):
     problems = []
     if len(old) != len(new):
         problems.append(f"{name}: {len(old)} lines -> {len(new)} lines")
+    return old, new, problems
+
+
+def compare_text_relative(before, after, name, largest):
+    old, new, problems = comparable_lines(before, after, name)
     for i, (a, b) in enumerate(zip(old, new)):
         a, b = TIMING.sub("<time>", a), TIMING.sub("<time>", b)
         if NUMBER.sub("#", a) != NUMBER.sub("#", b):
@@ -173,13 +179,7 @@ def without_timing_column(lines):
 
 
 def compare_text(before, after, name):
-    old = before.read_text().splitlines()
-    new = after.read_text().splitlines()
-    if before.suffix == ".csv":
-        old, new = without_timing_column(old), without_timing_column(new)
-    problems = []
-    if len(old) != len(new):
-        problems.append(f"{name}: {len(old)} lines -> {len(new)} lines")
+    old, new, problems = comparable_lines(before, after, name)
     for i, (a, b) in enumerate(zip(old, new)):
         a, b = TIMING.sub("<time>", a), TIMING.sub("<time>", b)
         if a != b and not (a.startswith(REWORDED_PREFIXES) and b.startswith(REWORDED_PREFIXES)):

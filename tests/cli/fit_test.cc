@@ -39,6 +39,15 @@ class FitCommand : public testing::CliTest {
     return path("d.csv").string();
   }
 
+  // Section 6.2's plant under the shipped PID, a PRBS reference, noise-free, as d.csv.
+  void section_6_2_loop_data() const {
+    const auto r =
+        ctid({"simulate", "-m", example("gonzalez_6_2_plant.json"), "--controller",
+              example("gonzalez_6_2_pid.json"), "--excitation", "prbs", "--register-length", "10",
+              "--samples-per-bit", "3", "--samples", "3000", "-o", "d.csv", "-q"});
+    ASSERT_EQ(r.status, 0) << r.err;
+  }
+
   nlohmann::json read(const std::string& name) const { return io::read_json(path(name)); }
   std::string read_text(const std::string& name) const { return io::read_text_file(path(name)); }
 };
@@ -140,11 +149,7 @@ TEST_F(FitCommand, InitialConditionsEstimateFitsARecordThatStartsMidMotion) {
 }
 
 TEST_F(FitCommand, ClosedLoopAdditiveAndClsrivcRecoverSection62) {
-  const auto s =
-      ctid({"simulate", "-m", example("gonzalez_6_2_plant.json"), "--controller",
-            example("gonzalez_6_2_pid.json"), "--excitation", "prbs", "--register-length", "10",
-            "--samples-per-bit", "3", "--samples", "3000", "-o", "d.csv", "-q"});
-  ASSERT_EQ(s.status, 0) << s.err;
+  section_6_2_loop_data();
   const Eigen::VectorXd truth = example_additive("gonzalez_6_2_plant.json").parameters();
 
   const auto additive =
@@ -173,11 +178,7 @@ TEST_F(FitCommand, ClosedLoopAdditiveAndClsrivcRecoverSection62) {
 // rational map of order 6, the plant's 4 plus the PID's 2) and fits the plant from the
 // simulated input, exactly on noise-free data.
 TEST_F(FitCommand, TwoStageRecoversSection62WithoutTheController) {
-  const auto s =
-      ctid({"simulate", "-m", example("gonzalez_6_2_plant.json"), "--controller",
-            example("gonzalez_6_2_pid.json"), "--excitation", "prbs", "--register-length", "10",
-            "--samples-per-bit", "3", "--samples", "3000", "-o", "d.csv", "-q"});
-  ASSERT_EQ(s.status, 0) << s.err;
+  section_6_2_loop_data();
   const Eigen::VectorXd truth = example_additive("gonzalez_6_2_plant.json").parameters();
   const auto r = ctid({"fit", "d.csv", "--modes", "2", "--two-stage", "-o", "t.json"});
   ASSERT_EQ(r.status, 0) << r.err;
