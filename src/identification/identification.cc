@@ -284,10 +284,12 @@ IdentificationResult identify_two_stage(std::span<const SampledData> records,
             "method fits the map from the reference r to the input u (--reference-column)");
     if (record.size() > longest->size()) longest = &record;
   }
+  // The kind and order are chosen on the longest record, whose fit is then kept as it is.
   TwoStageOptions chosen = *options.two_stage;
+  std::optional<SensitivityFit> longest_fit;
   if (chosen.sensitivity_model == SensitivityModel::automatic || chosen.sensitivity_order == 0) {
-    const SensitivityFit fit = fit_sensitivity(*longest, chosen);
-    chosen = TwoStageOptions{fit.model, fit.order};
+    longest_fit = fit_sensitivity(*longest, chosen);
+    chosen = TwoStageOptions{longest_fit->model, longest_fit->order};
   }
   TwoStageResult stage;
   stage.sensitivity_model = chosen.sensitivity_model;
@@ -295,7 +297,8 @@ IdentificationResult identify_two_stage(std::span<const SampledData> records,
   std::vector<SampledData> simulated;
   simulated.reserve(records.size());
   for (const SampledData& record : records) {
-    SensitivityFit fit = fit_sensitivity(record, chosen);
+    SensitivityFit fit = &record == longest && longest_fit ? std::move(*longest_fit)
+                                                           : fit_sensitivity(record, chosen);
     stage.sensitivity_fit_percent.push_back(fit.fit_percent);
     simulated.push_back(SampledData(record.sample_time(), std::move(fit.simulated_input),
                                     record.output(), std::nullopt, record.start_time())

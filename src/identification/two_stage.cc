@@ -77,13 +77,11 @@ std::optional<Eigen::VectorXd> solve_fir(const FirNormalEquations& e, int taps) 
   return Eigen::VectorXd(ldlt.solve(e.rhs.head(taps)));
 }
 
-// AIC of an output error with this many parameters; residuals below 1e-20 of the energy count
-// as zero, so that noise-free records compare by the parameters alone.
-double sensitivity_aic(const Eigen::VectorXd& u, const Eigen::VectorXd& simulated, int parameters) {
-  const double samples = static_cast<double>(u.size());
-  const double residual = (u - simulated).squaredNorm();
-  const double floor = u.squaredNorm() * 1e-20 + std::numeric_limits<double>::min();
+// AIC N ln(RSS/N) + 2k; residuals below 1e-20 of the energy u^T u count as zero, so that
+// noise-free records compare by the parameters alone.
+double sensitivity_aic(double residual, double energy, double samples, int parameters) {
   if (!std::isfinite(residual)) return std::numeric_limits<double>::infinity();
+  const double floor = energy * 1e-20 + std::numeric_limits<double>::min();
   return samples * std::log(std::max(residual, floor) / samples) + 2.0 * parameters;
 }
 
@@ -96,7 +94,8 @@ SensitivityFit finished_fit(const SampledData& record, SensitivityModel model, i
   fit.numerator = std::move(b);
   fit.simulated_input = filter_from_rest(fit.numerator, fit.denominator, record.reference());
   fit.fit_percent = fit_percent(record.input(), fit.simulated_input);
-  fit.aic = sensitivity_aic(record.input(), fit.simulated_input,
+  fit.aic = sensitivity_aic((record.input() - fit.simulated_input).squaredNorm(),
+                            record.input().squaredNorm(), static_cast<double>(record.size()),
                             static_cast<int>(fit.numerator.size() + fit.denominator.size() - 1));
   fit.converged = converged;
   return fit;
@@ -113,14 +112,12 @@ std::optional<SensitivityFit> fir_fit(const SampledData& record, const FirNormal
 // The taps AIC prefers among 4, 8, 16, ... up to `largest` (scored on the same equations).
 std::optional<SensitivityFit> fir_by_aic(const SampledData& record, int largest) {
   const FirNormalEquations e = fir_normal_equations(record.reference(), record.input(), largest);
-  const double n = record.size();
-  const double floor = e.output_energy * 1e-20 + std::numeric_limits<double>::min();
   int best = 0;
   double best_score = std::numeric_limits<double>::infinity();
   for (int taps = std::min(4, largest);; taps = std::min(2 * taps, largest)) {
     if (const std::optional<Eigen::VectorXd> g = solve_fir(e, taps)) {
-      const double residual = std::max(e.output_energy - e.rhs.head(taps).dot(*g), floor);
-      const double score = n * std::log(residual / n) + 2.0 * taps;
+      const double score = sensitivity_aic(e.output_energy - e.rhs.head(taps).dot(*g),
+                                           e.output_energy, record.size(), taps);
       if (score < best_score) {
         best_score = score;
         best = taps;
