@@ -5,6 +5,8 @@
 # Runs as root, or through sudo otherwise; needs no terminal (CI=true, no stdin).
 #   scripts/setup.sh [extra cmake -D options for the release configure]
 # Environment: CTID_JOBS (parallel jobs, default nproc), CTID_SKIP_BUILD=1 (packages only),
+# CTID_PACKAGES=demo (only what the tool, the Python module and the main job need; the tests
+# and benchmarks are then configured off),
 # CTID_BUILD_TARGETS (space-separated targets to build instead of all; scripts/demo.sh builds
 # only the tool and the Python module, the test command builds the rest),
 # CTID_LINK_BIN=DIR (put a link DIR/ctid to the built tool, unless DIR/ctid is something
@@ -15,8 +17,12 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 jobs=${CTID_JOBS:-$(nproc)}
 export DEBIAN_FRONTEND=noninteractive
 
-mapfile -t packages < <(sed -e 's/#.*//' -e 's/[[:space:]]//g' "$root/scripts/debian-packages.txt" |
-  grep -v '^$')
+# CTID_PACKAGES=demo leaves out the lines marked [test] (scripts/demo.sh); anything else: all.
+package_lines=$(cat "$root/scripts/debian-packages.txt")
+if [[ ${CTID_PACKAGES:-all} == demo ]]; then
+  package_lines=$(grep -v '#[[:space:]]*\[test\]' <<<"$package_lines")
+fi
+mapfile -t packages < <(sed -e 's/#.*//' -e 's/[[:space:]]//g' <<<"$package_lines" | grep -v '^$')
 missing=()
 for package in "${packages[@]}"; do
   status=$(dpkg-query -W -f='${Status}' "$package" 2>/dev/null || true)
@@ -41,7 +47,7 @@ fi
 
 # A locale whose decimal separator is a comma, for the LC_NUMERIC tests (python/tests/
 # test_locale_and_threads.py): made once from the locales package's sources when missing.
-if ! locale -a 2>/dev/null | grep -qix 'de_DE\.utf-\?8'; then
+if [[ ${CTID_PACKAGES:-all} != demo ]] && ! locale -a 2>/dev/null | grep -qix 'de_DE\.utf-\?8'; then
   if [[ $(id -u) -eq 0 ]]; then
     localedef -i de_DE -f UTF-8 de_DE.UTF-8 && echo "setup: made the locale de_DE.UTF-8"
   elif command -v sudo >/dev/null; then
@@ -63,7 +69,14 @@ if [[ -f build/CMakeCache.txt ]] && ! grep -q '^CMAKE_GENERATOR:INTERNAL=Ninja$'
   rm -rf build/CMakeCache.txt build/CMakeFiles
 fi
 # The "release" preset (CMakePresets.json) pins Release, Ninja, build/ and /usr/bin/python3.
-cmake --preset release "$@"
+# Without the [test] packages there is no GoogleTest or Google Benchmark to configure against,
+# so the tests and benchmarks are configured off; a full set-up turns them back on.
+if [[ ${CTID_PACKAGES:-all} == demo ]]; then
+  suite=(-DCTID_BUILD_TESTS=OFF -DCTID_BUILD_BENCHMARKS=OFF)
+else
+  suite=(-DCTID_BUILD_TESTS=ON -DCTID_BUILD_BENCHMARKS=ON)
+fi
+cmake --preset release "${suite[@]}" "$@"
 if [[ -n ${CTID_BUILD_TARGETS:-} ]]; then
   read -r -a targets <<<"$CTID_BUILD_TARGETS"
   cmake --build --preset release -j "$jobs" --target "${targets[@]}"
