@@ -92,7 +92,7 @@ void bind_core(py::module_& m) {
       .def_property_readonly("numerator", &TransferFunction::numerator, "N(s).")
       .def_property_readonly("denominator", &TransferFunction::denominator, "D(s).")
       .def_property_readonly("input_delay", &TransferFunction::input_delay, "tau [s].")
-      .def("with_input_delay", &TransferFunction::with_input_delay, py::arg("tau"),
+      .def("with_input_delay", &TransferFunction::with_input_delay, py::arg("delay"),
            "Copy with another input delay.")
       .def("poles", &TransferFunction::poles, "Roots of D.")
       .def("zeros", &TransferFunction::zeros, "Roots of N.")
@@ -219,7 +219,7 @@ void bind_core(py::module_& m) {
       .def("__len__", &AdditiveModel::size)
       .def("__getitem__", &AdditiveModel::operator[], py::arg("i"))
       .def("size", &AdditiveModel::size, "Number of submodels K.")
-      .def("with_input_delay", &AdditiveModel::with_input_delay, py::arg("tau"),
+      .def("with_input_delay", &AdditiveModel::with_input_delay, py::arg("delay"),
            "Copy with another delay.")
       .def("orders", &AdditiveModel::orders, "SubmodelOrder of each submodel.")
       .def("parameter_count", &AdditiveModel::parameter_count, "Length of theta.")
@@ -419,7 +419,7 @@ void bind_core(py::module_& m) {
       [](const Eigen::VectorXd& time, const Eigen::VectorXd& input, const Eigen::VectorXd& output,
          double h, const std::optional<Eigen::VectorXd>& reference,
          Hold input_hold) { return resample(time, input, output, reference, h, input_hold); },
-      py::arg("time"), py::arg("input"), py::arg("output"), py::arg("h"),
+      py::arg("time"), py::arg("input"), py::arg("output"), py::arg("sample_time"),
       py::arg("reference") = py::none(), py::arg("input_hold") = Hold::zero_order_hold,
       "A record with irregular time stamps on the uniform grid t_0 + k h: the input as "
       "input_hold says it is held, the output and reference linearly (ctid fit --resample).");

@@ -115,7 +115,7 @@ void bind_frequency(py::module_& m) {
         py::overload_cast<const AdditiveModel&, const Eigen::VectorXd&>(&frequency_response),
         py::arg("g"), py::arg("omegas"), "e^{-j omega tau} sum_i G_i(j omega) on a grid.");
   m.def("sampled_frequency_response", &sampled_frequency_response, py::arg("g"), py::arg("omegas"),
-        py::arg("h"), py::arg("hold") = Hold::zero_order_hold,
+        py::arg("sample_time"), py::arg("hold") = Hold::zero_order_hold,
         "The model's response from u_k to y_k for an input held as `hold` says (the exact "
         "discrete equivalent at e^{j omega h}, delay included): what a nonparametric FRF of "
         "sampled data estimates.");

@@ -24,30 +24,30 @@ void bind_simulation(py::module_& m) {
       .def_readonly("gamma1", &FohDiscretization::gamma1, "Weight of u_{k+1}.");
   m.def("discretize_zoh",
         py::overload_cast<const Eigen::MatrixXd&, const Eigen::MatrixXd&, double>(&discretize_zoh),
-        py::arg("a"), py::arg("b"), py::arg("h"),
+        py::arg("a"), py::arg("b"), py::arg("sample_time"),
         "Exact ZOH discretisation of dx = A x + B u (augmented matrix exponential).");
   m.def("discretize_zoh", py::overload_cast<const StateSpace&, double>(&discretize_zoh),
-        py::arg("model"), py::arg("h"), "ZOH equivalent (Phi, Gamma, C, D) of a realisation.");
-  m.def("discretize_foh", &discretize_foh, py::arg("a"), py::arg("b"), py::arg("h"),
+        py::arg("model"), py::arg("sample_time"), "ZOH equivalent (Phi, Gamma, C, D) of a realisation.");
+  m.def("discretize_foh", &discretize_foh, py::arg("a"), py::arg("b"), py::arg("sample_time"),
         "Exact FOH (triangle-hold) discretisation.");
 
   // ZOH simulation.
-  m.def("delay_in_samples", &delay_in_samples, py::arg("tau"), py::arg("h"),
-        "tau / h as an integer; ValueError unless within 1e-9 of one.");
+  m.def("delay_in_samples", &delay_in_samples, py::arg("delay"), py::arg("sample_time"),
+        "delay / sample_time as an integer; ValueError unless within 1e-9 of one.");
   m.def("simulate_discrete", &simulate_discrete, py::arg("discrete"), py::arg("u"),
         "Response from rest of a discrete realisation.");
   m.def("zoh_equivalent", py::overload_cast<const TransferFunction&, double>(&zoh_equivalent),
-        py::arg("g"), py::arg("h"), "Exact discrete model from u_k to y_k (delay as states).");
+        py::arg("g"), py::arg("sample_time"), "Exact discrete model from u_k to y_k (delay as states).");
   m.def("zoh_equivalent", py::overload_cast<const AdditiveModel&, double>(&zoh_equivalent),
-        py::arg("g"), py::arg("h"), "Exact discrete model of an additive model.");
+        py::arg("g"), py::arg("sample_time"), "Exact discrete model of an additive model.");
   m.def("simulate",
         py::overload_cast<const TransferFunction&, const Eigen::VectorXd&, double>(&simulate),
-        py::arg("g"), py::arg("u"), py::arg("h"),
+        py::arg("g"), py::arg("u"), py::arg("sample_time"),
         "Samples y_k of the response of G to the ZOH input u, from rest.");
   m.def("simulate",
         py::overload_cast<const AdditiveModel&, const Eigen::VectorXd&, double>(&simulate),
-        py::arg("g"), py::arg("u"), py::arg("h"), "The same for an additive model.");
-  m.def("simulate_submodels", &simulate_submodels, py::arg("g"), py::arg("u"), py::arg("h"),
+        py::arg("g"), py::arg("u"), py::arg("sample_time"), "The same for an additive model.");
+  m.def("simulate_submodels", &simulate_submodels, py::arg("g"), py::arg("u"), py::arg("sample_time"),
         "Column i: response of submodel i (rows sum to simulate(g, u, h)).");
 
   // Sampled-data closed loop.
