@@ -34,9 +34,11 @@
 #include "ctid/frequency/peaks.h"
 #include "ctid/frequency/periodogram.h"
 #include "ctid/frequency/response.h"
+#include "ctid/frequency/response_band.h"
 
 #include "ctid/filtering/filter_bank.h"
 
+#include "ctid/estimation/residual_correlation.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/estimation/verdict.h"

@@ -26,8 +26,10 @@ Confidence bands of a Bode plot come from the parameter covariance P by first-or
 propagation (the delta method): the Jacobian J = dG(jw)/dtheta is taken by central finite
 differences of the model's frequency response (step 1e-6 |theta_i|, or 1e-9 for a zero
 parameter), then var|G| = g' P g with g = Re(conj(G) J) / |G| and var(arg G) = h' P h with
-h = Im(J / G). The band is |G| +- z sigma (z the two-sided normal quantile of
-``confidence``), drawn in dB, and arg G +- z sigma in degrees.
+h = Im(J / G), computed by the library (ctid.frequency_response_band, C++
+frequency/response_band.h). The band is |G| +- z sigma (z the two-sided normal quantile of
+``confidence``), drawn in dB, and arg G +- z sigma in degrees. The residual correlations come
+from the library too (ctid.residual_correlations), as validate_model's report does.
 """
 
 from __future__ import annotations
@@ -237,36 +239,21 @@ def frequency_response_band(model, omegas, covariance=None, confidence=0.95):
     ``(response, magnitude_sigma, phase_sigma_rad, z)``; the sigmas are None without a
     covariance. See the module docstring for the propagation.
     """
-    base, theta, cov = _as_model(model)
+    base, _, cov = _as_model(model)
     if covariance is not None:
         cov = np.asarray(covariance, dtype=float)
     omegas = np.asarray(omegas, dtype=float)
-    response = np.asarray(_ctid.frequency_response(base, omegas))
     z = NormalDist().inv_cdf(0.5 + confidence / 2.0)
     if cov is None or not isinstance(base, _ctid.AdditiveModel):
-        return response, None, None, z
-    theta = np.asarray(base.parameters(), dtype=float) if theta is None else theta
-    if cov.shape != (theta.size, theta.size):
+        return np.asarray(_ctid.frequency_response(base, omegas)), None, None, z
+    size = len(base.parameters())
+    if cov.shape != (size, size):
         raise ValueError(
             f"frequency_response_band: covariance is {cov.shape[0]}x{cov.shape[1]} but the "
-            f"model has {theta.size} parameters"
+            f"model has {size} parameters"
         )
-    jacobian = np.empty((omegas.size, theta.size), dtype=complex)
-    for i in range(theta.size):
-        step = 1e-6 * abs(theta[i]) if theta[i] != 0.0 else 1e-9
-        up, down = theta.copy(), theta.copy()
-        up[i] += step
-        down[i] -= step
-        jacobian[:, i] = (
-            np.asarray(_ctid.frequency_response(base.with_parameters(up), omegas))
-            - np.asarray(_ctid.frequency_response(base.with_parameters(down), omegas))
-        ) / (2.0 * step)
-    magnitude = np.abs(response)
-    g_mag = np.real(np.conj(response)[:, None] * jacobian) / magnitude[:, None]
-    g_phase = np.imag(jacobian / response[:, None])
-    mag_sigma = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", g_mag, cov, g_mag), 0.0))
-    phase_sigma = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", g_phase, cov, g_phase), 0.0))
-    return response, mag_sigma, phase_sigma, z
+    response, mag_sigma, phase_sigma = _ctid.frequency_response_band(base, omegas, cov)
+    return np.asarray(response), np.asarray(mag_sigma), np.asarray(phase_sigma), z
 
 
 def _db(x):
@@ -950,21 +937,15 @@ def correlations(residual, input, max_lag=25):
     r_e(k) = sum_t e_t e_{t+k} / sum e^2 and r_eu(k) = sum_t e_{t+k} u_t /
     sqrt(sum e^2 sum u^2). Returns (lags_auto, r_e, lags_cross, r_eu).
     """
-    e = np.asarray(residual, dtype=float) - np.mean(residual)
-    u = np.asarray(input, dtype=float) - np.mean(input)
+    e = np.asarray(residual, dtype=float)
+    u = np.asarray(input, dtype=float)
     if e.size != u.size:
         raise ValueError(f"correlations: residual has {e.size} samples but input {u.size}")
     if not 1 <= max_lag < e.size:
         raise ValueError(f"correlations: max_lag = {max_lag} must lie in [1, {e.size - 1}]")
-    n = e.size
-    ee, uu = float(e @ e), float(u @ u)
-    lags_auto = np.arange(max_lag + 1)
-    r_e = np.array([e[: n - k] @ e[k:] for k in lags_auto]) / ee
-    lags_cross = np.arange(-max_lag, max_lag + 1)
-    r_eu = np.array(
-        [(e[k:] @ u[: n - k]) if k >= 0 else (e[: n + k] @ u[-k:]) for k in lags_cross]
-    ) / math.sqrt(ee * uu)
-    return lags_auto, r_e, lags_cross, r_eu
+    r_e, r_eu = _ctid.residual_correlations(e, u, int(max_lag))
+    return (np.arange(max_lag + 1), np.asarray(r_e), np.arange(-max_lag, max_lag + 1),
+            np.asarray(r_eu))
 
 
 def residual_correlation(residual, input=None, max_lag=25, confidence=0.99, title=None,

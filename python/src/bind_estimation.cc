@@ -1,6 +1,7 @@
 // Python bindings of the shared estimation base: the Termination of every iterative method, model
 // output, fit, the quality verdict and the residual tests of a model on data (validation.h).
 #include "common.h"
+#include "ctid/estimation/residual_correlation.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/estimation/verdict.h"
@@ -18,6 +19,15 @@ void bind_estimation(py::module_& m) {
         "Exact response of the model (from rest) to the input held as input_hold says.");
   m.def("fit_percent", &fit_percent, py::arg("measured"), py::arg("modelled"),
         "100 (1 - ||y - y_model|| / ||y - mean y||).");
+  m.def(
+      "residual_correlations",
+      [](const Eigen::VectorXd& residual, const Eigen::VectorXd& input, int max_lag) {
+        ResidualCorrelations r = residual_correlations(residual, input, max_lag);
+        return py::make_tuple(r.autocorrelation, r.cross_correlation);
+      },
+      py::arg("residual"), py::arg("input"), py::arg("max_lag"),
+      "(r_ee at lags 0..max_lag, r_eu at lags -max_lag..max_lag), means removed "
+      "(estimation/residual_correlation.h).");
   bind_enum<InitialState>(m, "InitialState", "Where validate_model's simulation starts.");
   bind_options<ValidationOptions>(m, "Options of validate_model: initial state and window.");
   bind_result<ValidationReport>(m, "Residual statistics of a model.")

@@ -6,6 +6,7 @@
 #include "ctid/frequency/mimo_frf.h"
 #include "ctid/frequency/peaks.h"
 #include "ctid/frequency/response.h"
+#include "ctid/frequency/response_band.h"
 #include "fields.h"
 
 namespace ctid::python {
@@ -121,6 +122,16 @@ void bind_frequency(py::module_& m) {
         "sampled data estimates.");
   m.def("submodel_frequency_responses", &submodel_frequency_responses, py::arg("g"),
         py::arg("omegas"), "Column i: submodel i's response (no delay factor).");
+  m.def(
+      "frequency_response_band",
+      [](const AdditiveModel& model, const Eigen::VectorXd& omegas,
+         const Eigen::MatrixXd& covariance) {
+        FrequencyResponseBand band = frequency_response_band(model, omegas, covariance);
+        return py::make_tuple(band.response, band.magnitude_sigma, band.phase_sigma);
+      },
+      py::arg("model"), py::arg("omegas"), py::arg("covariance"),
+      "(G(j omega), sigma of |G|, sigma of arg G [rad]) on a grid: the first-order band of the "
+      "covariance of model.parameters() (frequency/response_band.h).");
 
   bind_result<Frf>(m,
                    "A nonparametric FRF on DFT lines: frequencies [rad/s], response, variance "

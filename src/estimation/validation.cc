@@ -10,6 +10,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/core/transfer_function.h"
+#include "ctid/estimation/residual_correlation.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/simulate.h"
@@ -266,23 +267,15 @@ ValidationReport residual_report(const SampledData& data, const Eigen::VectorXd&
   r.mean_squared_error = e.squaredNorm() / static_cast<double>(n);
   r.residual_mean = e.mean();
   const Eigen::VectorXd c = e.array() - r.residual_mean;
-  const Eigen::VectorXd u = data.input().array() - data.input().mean();
-  const double c0 = c.squaredNorm();
-  r.residual_std = std::sqrt(c0 / static_cast<double>(n));
+  r.residual_std = std::sqrt(c.squaredNorm() / static_cast<double>(n));
   r.whiteness_bound = 2.58 / std::sqrt(static_cast<double>(n));
   r.max_lag = static_cast<int>(std::min<Eigen::Index>(max_lag, n - 1));
   r.residual_autocorrelation = Eigen::VectorXd::Zero(r.max_lag);
   r.cross_correlation = Eigen::VectorXd::Zero(2 * r.max_lag + 1);
-  const double cross_scale = std::sqrt(c0 * u.squaredNorm());
-  for (int k = 1; k <= r.max_lag && c0 > 0.0; ++k) {
-    r.residual_autocorrelation(k - 1) = c.head(n - k).dot(c.tail(n - k)) / c0;
-  }
-  for (int k = -r.max_lag; k <= r.max_lag && cross_scale > 0.0; ++k) {
-    const Eigen::Index m = n - std::abs(k);
-    const double sum = k >= 0 ? c.tail(m).dot(u.head(m)) : c.head(m).dot(u.tail(m));
-    r.cross_correlation(k + r.max_lag) = sum / cross_scale;
-  }
   if (r.max_lag > 0) {
+    const ResidualCorrelations correlations = residual_correlations(e, data.input(), r.max_lag);
+    r.residual_autocorrelation = correlations.autocorrelation.tail(r.max_lag);
+    r.cross_correlation = correlations.cross_correlation;
     r.max_residual_autocorrelation = r.residual_autocorrelation.cwiseAbs().maxCoeff();
     r.max_cross_correlation = r.cross_correlation.cwiseAbs().maxCoeff();
   }
