@@ -220,7 +220,7 @@ def _estimation_section(path, document):
                  _table(("parameter", "value", "standard error", "relative"), rows))
     modes = document.get("modes", [])
     if modes:
-        rows = [(m.get("submodel", i),
+        rows = [(m.get("submodel", i) + 1,
                  _plus_minus(m.get("natural_frequency_hz"),
                              m.get("natural_frequency_hz_standard_error")),
                  _plus_minus(m.get("damping_ratio"), m.get("damping_ratio_standard_error")),
@@ -234,7 +234,8 @@ def _estimation_section(path, document):
         ("iterations", _number(document.get("iterations"))),
         ("stopped", document.get("message", document.get("termination", "—"))),
         ("fit on the estimation data", _percent(fit)),
-        ("input delay", f"{_plus_minus(document.get('input_delay'), document.get('delay_standard_error'))} s"),
+        ("input delay", _plus_minus(document.get("input_delay"),
+                                    document.get("delay_standard_error") or None) + " s"),
         ("noise variance", _number(document.get("noise_variance"))),
     ]
     parts.append("<h3>The iteration</h3>" + _table(None, summary, cls="pairs"))

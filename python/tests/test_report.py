@@ -16,7 +16,6 @@ import subprocess
 import numpy as np
 import pytest
 
-import ctid
 from ctid import report
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -147,6 +146,17 @@ def test_the_fit_page_screenshot_is_not_blank(pages):
     assert ink.mean() > 0.03, f"only {100 * ink.mean():.2f} % of the screenshot is drawn"
     # Not one flat colour either: the figures and the text vary.
     assert pixels.std() > 0.05
+
+
+def test_a_fit_that_failed_its_verdict_says_why_and_what_to_try(pages, tmp_path):
+    document = json.loads(pages["fit"].read_text())
+    document["verdict"] = {"usable": False, "reasons": ["The poles are unstable."],
+                           "advice": "fewer poles"}
+    failed = tmp_path / "failed.json"
+    failed.write_text(json.dumps(document))
+    page = report.render([str(failed)])
+    assert '<div class="verdict bad"><strong>Fit:</strong> The fitted model is NOT usable as ' \
+        "it is: The poles are unstable. What to try: fewer poles</div>" in page
 
 
 def test_the_oma_page_renders_its_modes_and_stabilisation_diagram(pages):
