@@ -59,7 +59,10 @@ Command add_report_command(CLI::App& parent) {
   auto flags = std::make_shared<ReportFlags>();
   ReportFlags& f = *flags;
   CLI::App* app = parent.add_subcommand(
-      "report", "One self-contained HTML page (verdict, tables, figures) from result documents");
+      "report",
+      "Write one self-contained HTML page from the documents of fit, validate or oma: the "
+      "verdict in words, parameters and modes ± standard errors, the figures, and how they "
+      "were made.");
   app->footer(
       "RESULT is what 'ctid fit -o' (one input and output), 'ctid validate -o' or 'ctid oma -o' "
       "wrote; VALIDATION, a second 'ctid validate -o' document, adds the model's check on other "
