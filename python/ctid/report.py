@@ -312,22 +312,28 @@ def _oma_section(path, document):
         words = [f"The output-only analysis found nothing usable: {reasons}"]
         if verdict.get("advice"):
             words.append(f"What to try: {verdict['advice']}")
+    # fdd and efdd pick peaks of the spectrum: no model orders, no Hankel matrix.
+    spectral = document.get("method") in ("fdd", "efdd")
     rows = [(i + 1, _plus_minus(m.get("frequency_hz"), m.get("frequency_hz_std")),
              _plus_minus(m.get("damping_ratio"), m.get("damping_ratio_std")),
-             _number(m.get("mpc"), 3), _number(m.get("supporting_orders")))
+             _number(m.get("mpc"), 3),
+             "—" if spectral else _number(m.get("supporting_orders")))
             for i, m in enumerate(modes)]
     parts = ["<h3>Modes</h3>" + _table(
         ("mode", "natural frequency [Hz]", "damping ratio", "MPC", "supporting orders"), rows)]
     summary = [("method", document.get("method", "—")),
                ("channels", ", ".join(str(c) for c in channels) or "—"),
                ("samples", _number(document.get("samples"))),
-               ("sample time", f"{_number(document.get('sample_time'))} s"),
-               ("Hankel block rows", _number(document.get("block_rows")))]
+               ("sample time", f"{_number(document.get('sample_time'))} s")]
+    if not spectral:
+        summary.append(("Hankel block rows", _number(document.get("block_rows"))))
     parts.append("<h3>Analysis</h3>" + _table(None, summary, cls="pairs"))
-    if result.stabilisation:
+    if result.stabilisation or len(result.first_singular_value):
+        caption = ("The first singular value of the output spectral matrix and the modes "
+                   "picked on it" if spectral else
+                   "Stabilisation diagram: the poles of every order and the modes chosen")
         parts.append('<div class="figures">' + _figure_html(
-            _figure_uri(plotting.oma_stabilisation(result)),
-            "Stabilisation diagram: the poles of every order and the modes chosen") + "</div>")
+            _figure_uri(plotting.oma_stabilisation(result)), caption) + "</div>")
     return words, "".join(parts)
 
 

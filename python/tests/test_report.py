@@ -16,6 +16,7 @@ import subprocess
 import numpy as np
 import pytest
 
+import ctid
 from ctid import report
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -219,3 +220,14 @@ def test_the_module_runs_without_the_command_line(pages, tmp_path):
     assert report.main([str(pages["oma"]), "-o", str(page)]) == 0
     text = page.read_text()
     assert "python3 -m ctid.report" in text and "<img src=\"data:image/png;base64," in text
+
+
+def test_an_fdd_page_draws_the_spectrum_and_claims_no_model_orders(tmp_path):
+    from test_oma import H, _record
+
+    y, _ = _record(6, samples=4000)
+    path = tmp_path / "fdd.json"
+    ctid.write_result(path, ctid.oma(y, H, method=ctid.OmaMethod.fdd))
+    page = report.render([str(path)])
+    assert page.count('<img src="data:image/png;base64,') == 1
+    assert "picked on it" in page and "Hankel block rows" not in page
