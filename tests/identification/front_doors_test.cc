@@ -60,6 +60,9 @@ bool same_model(const MimoAdditiveModel& a, const MimoAdditiveModel& b) {
   return true;
 }
 
+// The same double, NaN included (FDD estimates no damping ratio).
+bool same(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
+
 // (done, total) of every progress call.
 struct Calls {
   std::vector<std::pair<int, int>> seen;
@@ -177,7 +180,7 @@ TEST(FrontDoors, OutputOnlyIsOmaBitForBit) {
     ASSERT_EQ(front.modes.size(), direct.modes.size());
     for (std::size_t i = 0; i < direct.modes.size(); ++i) {
       EXPECT_EQ(front.modes[i].frequency_hz, direct.modes[i].frequency_hz);
-      EXPECT_EQ(front.modes[i].damping_ratio, direct.modes[i].damping_ratio);
+      EXPECT_TRUE(same(front.modes[i].damping_ratio, direct.modes[i].damping_ratio));
       EXPECT_TRUE(front.modes[i].shape_real == direct.modes[i].shape_real);
     }
     EXPECT_EQ(front.stabilisation.size(), direct.stabilisation.size());
@@ -186,15 +189,22 @@ TEST(FrontDoors, OutputOnlyIsOmaBitForBit) {
               ThrowsMessage<InvalidArgument>(HasSubstr("outputs has 1")));
 }
 
+// One candidate (the approximate gcd) to keep the runs short; the pipeline tests cover the
+// others.
 FeedbackIdentificationOptions foh_feedback() {
   FeedbackIdentificationOptions o;
   o.output_error.hold = Hold::first_order_hold;
+  o.separation = SeparationMethod::gcd;
+  o.structured_candidate = false;
+  o.iv_filter_poles.clear();
   return o;
 }
 
 TEST(FrontDoors, ADelayedFeedbackLoopIsIdentifyDelayedFeedbackBitForBit) {
+  CTID_SKIP_UNDER_SANITIZERS(
+      "FeedbackPipeline.NoiseFreeInformativeRecordRecoversFAndH runs the same identification");
   const DelayedFeedbackLoop loop = test_support::paper_feedback_loop();
-  const SampledData data = test_support::feedback_record(loop);
+  const SampledData data = test_support::feedback_record(loop, 15.0);
   const FeedbackIdentificationResult front =
       identify(data, DelayedFeedbackStructure{3, 3}, 0.5, foh_feedback());
   const FeedbackIdentificationResult direct =
@@ -203,7 +213,7 @@ TEST(FrontDoors, ADelayedFeedbackLoopIsIdentifyDelayedFeedbackBitForBit) {
   EXPECT_TRUE(loop_parameters(front.loop) == loop_parameters(direct.loop));
   EXPECT_EQ(front.output_rms, direct.output_rms);
   EXPECT_EQ(front.candidates.size(), direct.candidates.size());
-  EXPECT_LT(front.output_rms, 1e-9);  // noise-free: the loop itself
+  for (const SeparationCandidateReport& c : front.candidates) EXPECT_EQ(c.source, "gcd");
 
   // validate_model of a loop is validate_loop: the true loop fits the noise-free record.
   const ValidationReport report = validate_model(loop, data, Hold::first_order_hold);
@@ -221,15 +231,20 @@ TEST(FrontDoors, ADelayedFeedbackLoopIsIdentifyDelayedFeedbackBitForBit) {
 TEST(FrontDoors, AnUnknownFeedbackDelayIsTheDelayScanBitForBit) {
   CTID_SKIP_UNDER_SANITIZERS(
       "FeedbackPipeline.DelayScanFindsTheDelayFromAGridThatMissesIt runs the same scan");
+  // A short record and a two-point grid: the scan's accuracy is the pipeline test's; here the
+  // front door must give the scan's result and progress, whatever they are.
   const DelayedFeedbackLoop loop = test_support::paper_feedback_loop();
-  const SampledData data = test_support::feedback_record(loop);
+  const SampledData data = test_support::feedback_record(loop, 12.0);
   DelayIdentificationOptions options;
   options.identification = foh_feedback();
   options.scan.min_delay = 0.44;
   options.scan.max_delay = 0.52;
-  options.scan.points = 3;
+  options.scan.points = 2;
   options.scan.hold = Hold::first_order_hold;
   options.scan.regressors = options.identification.regressors;
+  options.scan.criterion = DelayCriterion::equation_error;  // the cheapest
+  options.joint_delay = false;
+  options.golden_iterations = 2;
   Calls front_calls;
   Calls direct_calls;
   const DelayIdentificationResult front =
@@ -237,10 +252,11 @@ TEST(FrontDoors, AnUnknownFeedbackDelayIsTheDelayScanBitForBit) {
   const DelayIdentificationResult direct =
       identify_delayed_feedback_with_delay_scan(data, 3, 3, options, direct_calls.callback());
   EXPECT_EQ(front.delay, direct.delay);
-  EXPECT_LT(std::abs(front.delay - 0.5), 0.005) << front.identification.message;
+  EXPECT_EQ(front.evaluations, direct.evaluations);
+  EXPECT_EQ(front.identification.output_rms, direct.identification.output_rms);
   EXPECT_TRUE(loop_parameters(front.identification.loop) ==
               loop_parameters(direct.identification.loop));
-  EXPECT_EQ(front_calls.seen.size(), 3U);
+  EXPECT_EQ(front_calls.seen.size(), 2U);
   EXPECT_EQ(front_calls.seen, direct_calls.seen);
 }
 
