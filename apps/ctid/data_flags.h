@@ -13,8 +13,8 @@
 #include "ctid/core/mimo_data.h"
 #include "ctid/core/preprocessing.h"
 #include "ctid/core/sampled_data.h"
+#include "ctid/identification/identification.h"
 #include "ctid/io/csv.h"
-#include "ctid/refined_iv/irregular_srivc.h"
 
 namespace ctid::cli {
 

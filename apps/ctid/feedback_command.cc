@@ -1,7 +1,8 @@
 // `ctid feedback`: forward F and feedback H of a loop with a delay in the feedback path,
 // W = F/(1 + F H e^{-Δs}), from a record t,u,y (u the loop input, y its output), by
-// ctid::identify_delayed_feedback (step 1, separation candidates, output-error refinement
-// from each) or, with --delay-scan, identify_delayed_feedback_with_delay_scan. Writes the
+// the front door identify(data, DelayedFeedbackStructure, ...) (identification/feedback_loop.h):
+// identify_delayed_feedback (step 1, separation candidates, output-error refinement from each)
+// or, with --delay-scan, identify_delayed_feedback_with_delay_scan. Writes the
 // delayed_feedback_result document of io (feedback_result_json.h), which `ctid simulate
 // --model` reads back; algorithm and conventions in docs/algorithms/feedback-delay.md.
 #include <cmath>
@@ -14,7 +15,7 @@
 #include "command.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
-#include "ctid/delayed_feedback/identification.h"
+#include "ctid/identification/feedback_loop.h"
 #include "ctid/io/feedback_result_json.h"
 #include "ctid/io/sampled_data_csv.h"
 #include "progress.h"
@@ -60,6 +61,7 @@ void run_feedback(const FeedbackFlags& f) {
   columns.output = f.output_column;
   const SampledData data = io::read_sampled_data(f.data, columns);
 
+  const DelayedFeedbackStructure structure{f.forward_order, f.feedback_order};
   FeedbackIdentificationOptions options;
   options.regressors.filter_pole = f.filter_pole;
   options.step1 = f.step1 == "rls" ? Step1Method::recursive : Step1Method::batch;
@@ -91,13 +93,13 @@ void run_feedback(const FeedbackFlags& f) {
     d.scan.regressors = options.regressors;
     d.scan.hold = options.output_error.hold;
     Progress progress("ctid feedback", f.quiet);
-    const DelayIdentificationResult s = identify_delayed_feedback_with_delay_scan(
-        data, f.forward_order, f.feedback_order, d, progress.callback("delay scan"));
+    const DelayIdentificationResult s =
+        identify(data, structure, d, progress.callback("delay scan"));
     progress.clear();
     r = s.identification;
     document.delay_scan = s.scan;
   } else {
-    r = identify_delayed_feedback(data, f.forward_order, f.feedback_order, f.delay, options);
+    r = identify(data, structure, f.delay, options);
   }
 
   if (!f.output.empty())

@@ -22,14 +22,13 @@
 #include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/identification/identification.h"
+#include "ctid/identification/mimo.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
-#include "ctid/process_model/process_model.h"
-#include "ctid/refined_iv/mimo_srivc.h"
 #include "data_flags.h"
 #include "plot_support.h"
 #include "progress.h"
@@ -374,7 +373,8 @@ void check_start_channels(const MimoAdditiveModel& start, const std::string& fil
 }
 
 // Several inputs and outputs (--input-columns / --output-columns): the shared-pole estimator
-// (mimo_srivc), open loop, from the automatic start or a model file.
+// (mimo_srivc) through identify(MimoData, orders, ...), open loop, from the automatic start or
+// a model file.
 ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   ModelStructure structure = model_structure(f, app);
   // --modes K: a mode's residues differ in phase from channel to channel (complex shapes,
@@ -413,19 +413,20 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
                                           [](const SubmodelOrder& o) { return o.n == 2; });
     prepare_plot_directory(f.plot, mimo_figure_names(second_order), f.force);
   }
-  MimoRefinedIvOptions options;
-  options.max_iterations = f.max_iterations;
-  options.tolerance = f.tolerance;
-  options.output_interpolation = output_interpolation(f);
-  options.noise = noise_assumption(f);
-  options.direct_term = f.direct_term;
-  options.input_delays = f.input_delays;
-  options.rank_one_residues = f.rank_one;
-  options.initial_conditions = enum_from_name<InitialConditions>(f.initial_conditions).value();
-  options.validate();
+  MimoIdentificationOptions options;
+  MimoRefinedIvOptions& refined = options.refined_iv;
+  refined.max_iterations = f.max_iterations;
+  refined.tolerance = f.tolerance;
+  refined.output_interpolation = output_interpolation(f);
+  refined.noise = noise_assumption(f);
+  refined.direct_term = f.direct_term;
+  refined.input_delays = f.input_delays;
+  refined.rank_one_residues = f.rank_one;
+  refined.initial_conditions = enum_from_name<InitialConditions>(f.initial_conditions).value();
+  refined.validate();  // named as MimoRefinedIvOptions, before the data is read
   const std::string start_file = f.initial.empty() ? (f.start == "auto" ? "" : f.start) : f.initial;
   const std::string start_flag = f.initial.empty() ? "--start" : "--initial";
-  std::optional<MimoAdditiveModel> start;
+  std::optional<MimoAdditiveModel>& start = options.initial_model;
   if (!start_file.empty()) {
     start = read_mimo_start(start_file, start_flag, structure.orders, f.direct_term);
   }
@@ -440,7 +441,7 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   // line (of at most --max-iterations; a converging fit stops before the total).
   Progress progress("ctid fit", f.quiet);
   const MimoEstimationResult result =
-      mimo_srivc(data, structure.orders, options, start, progress.callback("mimo_srivc iteration"));
+      identify(data, structure.orders, options, progress.callback("mimo_srivc iteration"));
   progress.clear();
 
   nlohmann::json document = io::to_json(result);
@@ -669,7 +670,7 @@ ExitStatus run_process_fit(const FitFlags& f, const CLI::App& app) {
   if (f.data.files.size() > 1) usage_error("several data files" + why);
   const ProcessStructure structure = ProcessStructure::parse(f.process);
   const ProcessModelOptions options = process_options(f);
-  validate_process_model(structure, options);  // before the data is read
+  validate_identification(structure, options);  // before the data is read
   const SampledData data = f.data.load_all(app, false).front();
   const ProcessModelResult result = identify(data, structure, options);
   const TransferFunction model = result.transfer_function();

@@ -1,5 +1,6 @@
 // `ctid fit-frf`: a modal model with poles shared by every channel fitted to a measured FRF
-// matrix (frf_fit/frf_matrix_fit.h), for users with an analyser's FRF and no time records.
+// matrix (identify(MimoFrf, ...), identification/frf_matrix.h, which runs frf_matrix_fit), for
+// users with an analyser's FRF and no time records.
 // Reads the CSV table `ctid frf -o X.csv` writes or a universal file (dataset 58), prints the
 // mode table, every channel's fit and the verdict like `ctid fit` with several inputs and
 // outputs, and writes an frf_matrix_fit_result document. No numerics here.
@@ -18,7 +19,7 @@
 #include "command.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
-#include "ctid/frf_fit/frf_matrix_fit.h"
+#include "ctid/identification/frf_matrix.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_frf_file.h"
@@ -110,13 +111,14 @@ MimoAdditiveModel initial_model(const std::string& path) {
 
 ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
   const std::vector<SubmodelOrder> orders = orders_of(f, app);
-  FrfMatrixFitOptions options;
-  std::tie(options.min_frequency, options.max_frequency) = band_of(f.band);
-  options.direct_term = f.direct;
-  options.weighting = f.weighting == "variance" ? FrfWeighting::variance : FrfWeighting::uniform;
-  options.max_iterations = f.max_iterations;
-  options.tolerance = f.tolerance;
-  options.validate();
+  FrfIdentificationOptions options;
+  FrfMatrixFitOptions& fit = options.frf_fit;
+  std::tie(fit.min_frequency, fit.max_frequency) = band_of(f.band);
+  fit.direct_term = f.direct;
+  fit.weighting = f.weighting == "variance" ? FrfWeighting::variance : FrfWeighting::uniform;
+  fit.max_iterations = f.max_iterations;
+  fit.tolerance = f.tolerance;
+  fit.validate();  // named as FrfMatrixFitOptions, before the FRF is read
   std::filesystem::path package;
   if (!f.plot.empty()) {
     package = require_plotting();
@@ -125,13 +127,11 @@ ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
     prepare_plot_directory(f.plot, mimo_figure_names(modes), f.force);
   }
   const MimoFrf frf = io::read_mimo_frf(f.file);
-  std::optional<MimoAdditiveModel> start;
-  if (!f.initial.empty()) start = initial_model(f.initial);
+  if (!f.initial.empty()) options.initial_model = initial_model(f.initial);
   // Vector fitting and Levenberg-Marquardt on a large FRF matrix take seconds: one progress
   // line counts both (against the most they may run; a converging fit stops sooner).
   Progress progress("ctid fit-frf", f.quiet);
-  const FrfMatrixFitResult result =
-      frf_matrix_fit(frf, orders, options, start, progress.callback("step"));
+  const FrfMatrixFitResult result = identify(frf, orders, options, progress.callback("step"));
   progress.clear();
 
   nlohmann::json document = io::to_json(result);

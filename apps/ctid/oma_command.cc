@@ -1,7 +1,8 @@
 // ctid oma: output-only (operational) modal analysis of several response channels with no
 // measured input: covariance-driven SSI over orders 2..--max-order, the stable poles clustered
 // into modes, standard errors by first-order perturbation or from segments; or the peaks of the
-// output spectral matrix's first singular value (fdd, efdd) (ctid::oma, oma/oma.h; docs/oma.md).
+// output spectral matrix's first singular value (fdd, efdd) (ctid::identify_output_only, the front
+// door of ctid::oma: identification/output_only.h; docs/oma.md).
 // Prints the modes and the verdict; -o writes an "oma_result" document. Exit 3 when no mode was
 // found.
 #include <algorithm>
@@ -18,13 +19,13 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/core/mimo_preprocessing.h"
+#include "ctid/identification/output_only.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_data_csv.h"
 #include "ctid/io/npy.h"
 #include "ctid/io/report_json.h"
-#include "ctid/oma/oma.h"
 #include "data_flags.h"
 #include "plot_support.h"
 
@@ -200,7 +201,7 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
       options.reference_channels.push_back(static_cast<int>(at - names.begin()));
     }
   }
-  const OmaResult result = oma(y, h, options, names);
+  const OmaResult result = identify_output_only(y, h, options, names);
   nlohmann::json document = io::to_json(result);
   document["data"] = {{"file", f.file}};
   if (preprocessing) document["data"]["preprocessing"] = io::fields_to_json(*preprocessing);

@@ -4,8 +4,8 @@
 // residual-input cross-correlation (lags -20..20), both against the 99 % band 2.58/sqrt(N).
 // The numerics are ctid::validate_model and ctid::model_output (estimation/validation.h). A
 // closed loop with delayed feedback (a `ctid feedback` result or a delayed_feedback_loop
-// model) is simulated with the measured input continued by --hold (validate_loop,
-// delayed_feedback/loop_parameters.h) and judged by the same statistics.
+// model) is simulated with the measured input continued by --hold (validate_model's loop
+// overload, identification/feedback_loop.h) and judged by the same statistics.
 // --initial-state estimate starts the simulation from the least-squares initial state and
 // --window A:B scores part of the record (simulated from its start); both fits, from rest and
 // from the estimated state, are printed beside each other, one row per model when several
@@ -24,9 +24,8 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/core/preprocessing.h"
-#include "ctid/delayed_feedback/loop_parameters.h"
-#include "ctid/delayed_feedback/output_error.h"
 #include "ctid/estimation/validation.h"
+#include "ctid/identification/feedback_loop.h"
 #include "ctid/io/feedback_result_json.h"
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
@@ -232,7 +231,7 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
   try {
     if (loop) {
       const Hold hold = f.hold == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
-      reports.push_back(validate_loop(*loop, data, hold, f.substeps, kMaxLag));
+      reports.push_back(validate_model(*loop, data, hold, f.substeps, kMaxLag));
     } else {
       for (const auto& each : fitted) reports.push_back(validate_model(each.model, data, options));
     }

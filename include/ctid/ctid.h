@@ -81,8 +81,12 @@
 
 #include "ctid/process_model/process_model.h"
 
+#include "ctid/identification/feedback_loop.h"
+#include "ctid/identification/frf_matrix.h"
 #include "ctid/identification/identification.h"
+#include "ctid/identification/mimo.h"
 #include "ctid/identification/mode_tracking.h"
+#include "ctid/identification/output_only.h"
 #include "ctid/identification/structure_scan.h"
 #include "ctid/identification/two_stage.h"
 

@@ -1,7 +1,8 @@
-// Python bindings of the modal model fitted to a measured FRF matrix (frf_fit/frf_matrix_fit.h)
-// and of the FRF-matrix files it reads (io/mimo_frf_file.h, io/uff58.h): ctid.mimo_frf builds a
-// MimoFrf from NumPy arrays, ctid.frf_matrix_fit fits it, ctid.read_mimo_frf reads a CSV table
-// or a universal file (dataset 58). No numerics here.
+// Python bindings of the modal model fitted to a measured FRF matrix (frf_fit/frf_matrix_fit.h,
+// reached through its front door identification/frf_matrix.h) and of the FRF-matrix files it
+// reads (io/mimo_frf_file.h, io/uff58.h): ctid.mimo_frf builds a MimoFrf from NumPy arrays,
+// ctid.frf_matrix_fit fits it (identify(MimoFrf, ...), as `ctid fit-frf`), ctid.read_mimo_frf
+// reads a CSV table or a universal file (dataset 58). No numerics here.
 #include <complex>
 #include <filesystem>
 #include <string>
@@ -11,7 +12,7 @@
 
 #include "common.h"
 #include "ctid/core/error.h"
-#include "ctid/frf_fit/frf_matrix_fit.h"
+#include "ctid/identification/frf_matrix.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/uff58.h"
@@ -109,7 +110,7 @@ void bind_frf_fit(py::module_& m) {
          const std::optional<FrfMatrixFitOptions>& options, const py::kwargs& kwargs) {
         const auto o = options_from<FrfMatrixFitOptions>("frf_matrix_fit", options, kwargs);
         py::gil_scoped_release release;
-        return frf_matrix_fit(frf, orders, o, initial_model);
+        return identify(frf, orders, FrfIdentificationOptions{o, initial_model});
       },
       py::arg("frf"), py::arg("orders"), py::arg("initial_model") = py::none(),
       py::arg("options") = py::none(),

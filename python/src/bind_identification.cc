@@ -1,8 +1,12 @@
-// Python binding of the refined IV front door (identification/identification.h):
-// ctid.identify(data, structure, options=None, **keywords) runs what `ctid fit` runs. Every class
-// here is derived from its C++ field list (fields.h); no field is named in this file.
+// Python binding of the front door (identification/identification.h, mimo.h):
+// ctid.identify(data, structure, options=None, **keywords) runs what `ctid fit` runs, and
+// ctid.identify(mimo_data, orders, ...) what `ctid fit --input-columns/--output-columns` runs and
+// ctid.identify(mimo_frf, orders, ...) what `ctid fit-frf` runs.
+// Every class here is derived from its C++ field list (fields.h); no field is named in this file.
 #include "common.h"
+#include "ctid/identification/frf_matrix.h"
 #include "ctid/identification/identification.h"
+#include "ctid/identification/mimo.h"
 #include "ctid/identification/structure_scan.h"
 #include "fields.h"
 
@@ -62,6 +66,38 @@ void bind_identification(py::module_& m) {
       "identify on several records of one system (a list of SampledData, e.g. separate "
       "experiments): one parameter vector fitted to all, each record with its own initial state "
       "(with refined_iv.initial_conditions = estimate); as `ctid fit a.csv b.csv`.");
+
+  bind_options<MimoIdentificationOptions>(
+      m, "Options of identify for several inputs and outputs: MimoRefinedIvOptions and a start.");
+  m.def(
+      "identify",
+      [](const MimoData& data, const std::vector<SubmodelOrder>& orders,
+         const std::optional<MimoIdentificationOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<MimoIdentificationOptions>("identify", options, kwargs);
+        py::gil_scoped_release release;
+        return identify(data, orders, o);
+      },
+      py::arg("data"), py::arg("orders"), py::arg("options") = py::none(),
+      "identify on a record of several inputs and outputs (a MimoData): the submodels `orders` "
+      "(a list of SubmodelOrder) with denominators shared by every channel, by the shared-pole "
+      "refined IV estimator (mimo_srivc), open loop, as `ctid fit --input-columns ... "
+      "--output-columns ...`. Options are one MimoIdentificationOptions or its fields "
+      "(refined_iv, initial_model) as keywords.");
+
+  bind_options<FrfIdentificationOptions>(
+      m, "Options of identify for an FRF matrix: FrfMatrixFitOptions and a start.");
+  m.def(
+      "identify",
+      [](const MimoFrf& frf, const std::vector<SubmodelOrder>& orders,
+         const std::optional<FrfIdentificationOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<FrfIdentificationOptions>("identify", options, kwargs);
+        py::gil_scoped_release release;
+        return identify(frf, orders, o);
+      },
+      py::arg("frf"), py::arg("orders"), py::arg("options") = py::none(),
+      "identify on a measured FRF matrix (a MimoFrf): the submodels `orders` with poles shared "
+      "by every channel, by frf_matrix_fit, as `ctid fit-frf`. Options are one "
+      "FrfIdentificationOptions or its fields (frf_fit, initial_model) as keywords.");
 
   bind_options<StructureScanOptions>(
       m, "Options of scan_structures: held-out share, parsimony tolerance, diagram tolerances.");

@@ -1,9 +1,10 @@
-// Python bindings of the oma layer (oma/oma.h): ctid.oma(outputs, sample_time, options,
-// channel_names, **options) returns an OmaResult with its modes, stabilisation diagram and
-// verdict; OmaOptions, OmaMode, OmaPole, OmaMethod, OmaUncertainty and PoleStability mirror the C++
-// names.
+// Python bindings of the oma layer (oma/oma.h, reached through its front door
+// identification/output_only.h): ctid.oma(outputs, sample_time, options, channel_names,
+// **options) runs identify_output_only, as `ctid oma` does, and returns an OmaResult with its
+// modes, stabilisation diagram and verdict; OmaOptions, OmaMode, OmaPole, OmaMethod,
+// OmaUncertainty and PoleStability mirror the C++ names.
 #include "common.h"
-#include "ctid/oma/oma.h"
+#include "ctid/identification/output_only.h"
 #include "fields.h"
 
 namespace ctid::python {
@@ -24,8 +25,9 @@ void bind_oma(py::module_& m) {
       [](const Eigen::MatrixXd& outputs, double sample_time,
          const std::optional<OmaOptions>& options,
          const std::optional<std::vector<std::string>>& channel_names, const py::kwargs& kwargs) {
-        return oma(outputs, sample_time, options_from<OmaOptions>("oma", options, kwargs),
-                   channel_names.value_or(std::vector<std::string>{}));
+        return identify_output_only(outputs, sample_time,
+                                    options_from<OmaOptions>("oma", options, kwargs),
+                                    channel_names.value_or(std::vector<std::string>{}));
       },
       py::arg("outputs"), py::arg("sample_time"), py::arg("options") = py::none(),
       py::arg("channel_names") = py::none(),

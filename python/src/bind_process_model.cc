@@ -1,4 +1,5 @@
-// Python binding of the process models (process_model/process_model.h, decision 0040):
+// Python binding of the process models (process_model/process_model.h, decision 0040; its
+// types and identify's overload reached through identification/identification.h):
 // ctid.process_model(data, "P1D", start={...}, fixed={...}, bounds={...}) runs what
 // `ctid fit --process P1D` runs (identify's process-model overload). The options and the
 // result are derived from their C++ field lists (fields.h).
@@ -11,7 +12,6 @@
 
 #include "common.h"
 #include "ctid/identification/identification.h"
-#include "ctid/process_model/process_model.h"
 #include "fields.h"
 
 namespace ctid::python {

@@ -8,8 +8,8 @@
 #include <utility>
 
 #include "common.h"
+#include "ctid/identification/identification.h"
 #include "ctid/io/result_json.h"
-#include "ctid/refined_iv/estimation_result.h"
 #include "ctid/simulation/time_response.h"
 #include "fields.h"
 

@@ -69,6 +69,28 @@ def test_standard_errors_and_options():
         assert abs(mode.natural_frequency - true_w) < 5 * mode.natural_frequency_se
 
 
+def test_identify_is_the_front_door_of_frf_matrix_fit():
+    # ctid.identify on a MimoFrf runs what `ctid fit-frf` runs: frf_matrix_fit, bit for bit,
+    # with its options and start given as FrfIdentificationOptions (decision 0044).
+    truth = two_modes()
+    frf = frf_of(truth, 2 * np.pi * np.linspace(0.01, 1.6, 160))
+    orders = [ctid.SubmodelOrder(2, 1)] * 2
+    direct = ctid.frf_matrix_fit(frf, orders, max_iterations=50)
+    front = ctid.identify(frf, orders, frf_fit=ctid.FrfMatrixFitOptions(max_iterations=50))
+    assert isinstance(front, ctid.FrfMatrixFitResult)
+    assert front.converged(), front.message
+    assert front.message == direct.message
+    assert np.array_equal(front.fit_percent, direct.fit_percent)
+    assert np.array_equal(front.covariance, direct.covariance)
+    started = ctid.identify(frf, orders, ctid.FrfIdentificationOptions(
+        frf_fit=ctid.FrfMatrixFitOptions(max_iterations=2), initial_model=truth))
+    expected = ctid.frf_matrix_fit(frf, orders, truth, max_iterations=2)
+    assert started.iterations == expected.iterations
+    assert np.array_equal(started.fit_percent, expected.fit_percent)
+    with pytest.raises(ctid.InvalidArgument, match="n = 1 or 2"):
+        ctid.identify(frf, [ctid.SubmodelOrder(4, 0)])
+
+
 def test_bad_input_is_one_clear_error():
     w = np.linspace(0.05, 10.0, 50)
     frf = frf_of(two_modes(), w)

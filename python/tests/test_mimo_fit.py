@@ -50,6 +50,32 @@ def test_modes_shapes_and_mac(tmp_path):
     assert np.array_equal(back.covariance, r.covariance)
 
 
+def test_identify_is_the_front_door_of_mimo_srivc():
+    # ctid.identify on a MimoData runs what `ctid fit --input-columns/--output-columns` runs:
+    # mimo_srivc, bit for bit, with its options and start given as MimoIdentificationOptions.
+    truth = two_modes()
+    data = record(truth)
+    orders = [ctid.SubmodelOrder(2, 0)] * 2
+    direct = ctid.mimo_srivc(data, orders, max_iterations=50)
+    front = ctid.identify(data, orders, refined_iv=ctid.MimoRefinedIvOptions(max_iterations=50))
+    assert isinstance(front, ctid.MimoEstimationResult)
+    assert front.converged(), front.message
+    assert front.message == direct.message
+    assert np.array_equal(front.covariance, direct.covariance)
+    assert [m.natural_frequency for m in front.modes] == [m.natural_frequency for m in direct.modes]
+    started = ctid.identify(data, orders, ctid.MimoIdentificationOptions(
+        refined_iv=ctid.MimoRefinedIvOptions(max_iterations=2, noise=ctid.NoiseAssumption.white),
+        initial_model=truth))
+    expected = ctid.mimo_srivc(data, orders, initial_model=truth, max_iterations=2,
+                               noise=ctid.NoiseAssumption.white)
+    assert started.iterations == expected.iterations
+    assert np.array_equal(started.covariance, expected.covariance)
+    with pytest.raises(ctid.InvalidArgument, match="has no poles"):
+        ctid.identify(data, [ctid.SubmodelOrder(0, 0)])
+    with pytest.raises(TypeError, match="valid keywords"):
+        ctid.identify(data, orders, max_iterations=5)
+
+
 def test_bad_input_is_one_clear_error():
     data = record(two_modes(), n=400)
     with pytest.raises(ctid.InvalidArgument, match="has no poles"):

@@ -359,4 +359,9 @@ ProcessModelResult identify(const SampledData& data, const ProcessStructure& str
   return estimate_process_model(data, structure, options);
 }
 
+void validate_identification(const ProcessStructure& structure,
+                             const ProcessModelOptions& options) {
+  validate_process_model(structure, options);
+}
+
 }  // namespace ctid

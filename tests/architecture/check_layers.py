@@ -4,6 +4,12 @@ the top-level CMakeLists.txt (so the CMake dependencies and the includes cannot 
 and each declared ctid dependency is used by at least one include. The two paper modules
 (refined_iv, delayed_feedback) never reach each other.
 
+One front door (issue 32, decision 0044): no file under apps/ includes a header of an estimator
+module (ESTIMATOR_MODULES); nor does one under python/src, except the bindings listed in
+PYTHON_ESTIMATOR_BINDINGS, which expose the papers' estimators themselves on purpose. Both
+reach estimators, their options and their results through the identification layer. No
+estimator module includes anything from identification.
+
     python3 tests/architecture/check_layers.py SOURCE_DIR
 Exit 0 when the tree is layered; otherwise one line per offending include, exit 1.
 """
@@ -12,6 +18,19 @@ import re
 import sys
 
 PAPER_MODULES = ("refined_iv", "delayed_feedback")
+# Modules that hold estimators and nothing that chooses between them; the identification
+# layer above them is the front door.
+ESTIMATOR_MODULES = ("refined_iv", "delayed_feedback", "frf_fit", "oma", "process_model")
+FRONT_DOOR = "identification"
+# python/src files that may include estimator headers, each with the reason (decision 0044).
+PYTHON_ESTIMATOR_BINDINGS = {
+    "bind_refined_iv.cc": "binds paper 000's estimators themselves (srivc, clsrivc, "
+                          "additive_srivc, covariance, initialisation, delay scan, relocation, "
+                          "recursive, irregular and shared-pole SRIVC) for their own study",
+    "bind_delayed_feedback.cc": "binds paper 002's steps themselves (step-1 least squares and "
+                                "structured IV, separation, output-error refinement, Cramer-Rao "
+                                "bound, delay scan) for their own study",
+}
 
 
 def declared_layers(cmake_text):
@@ -38,6 +57,35 @@ def included_layers(path):
             for m in re.finditer(r'#include\s+"(?:ctid/)?(\w+)/', text)]
 
 
+def ctid_includes(path):
+    """[(module, header, line)] of every #include "ctid/<module>/<header>" (or <...>)."""
+    text = path.read_text(encoding="utf-8")
+    return [(m.group(1), m.group(2), text.count("\n", 0, m.start()) + 1)
+            for m in re.finditer(r'#include\s+["<]ctid/(\w+)/([^">]+)[">]', text)]
+
+
+def source_files(folder):
+    return [p for p in sorted(folder.rglob("*")) if p.suffix in (".h", ".cc")] \
+        if folder.is_dir() else []
+
+
+def front_door_problems(root):
+    """apps/ and python/src reach no estimator module but through identification (less the
+    listed bindings)."""
+    problems = []
+    for where, exempt in (("apps", {}), ("python/src", PYTHON_ESTIMATOR_BINDINGS)):
+        for path in source_files(root / where):
+            if path.name in exempt and path.parent == root / where:
+                continue
+            for module, header, line in ctid_includes(path):
+                if module in ESTIMATOR_MODULES:
+                    problems.append(
+                        f"{path.relative_to(root)}:{line}: includes 'ctid/{module}/{header}', a "
+                        f"header of the estimator module '{module}'; {where} reaches estimators "
+                        f"through '{FRONT_DOOR}' (decision 0044)")
+    return problems
+
+
 def main(root):
     root = pathlib.Path(root)
     layers = declared_layers((root / "CMakeLists.txt").read_text(encoding="utf-8"))
@@ -45,6 +93,10 @@ def main(root):
     for module in PAPER_MODULES:
         if module not in layers:
             problems.append(f"CMakeLists.txt: no ctid_add_layer({module} ...)")
+    for module in ESTIMATOR_MODULES:
+        if module in layers and FRONT_DOOR in closure(layers, module):
+            problems.append(f"CMakeLists.txt: estimator module '{module}' depends on "
+                            f"'{FRONT_DOOR}', the front door above it (decision 0044)")
     a, b = PAPER_MODULES
     if a in layers and b in layers and (a in closure(layers, b) or b in closure(layers, a)):
         problems.append(f"CMakeLists.txt: {a} and {b} must not depend on each other")
@@ -60,7 +112,11 @@ def main(root):
                     if included not in layers:
                         continue  # e.g. "internal/..." or a test-support folder
                     used.add(included)
-                    if included not in allowed:
+                    if layer in ESTIMATOR_MODULES and included == FRONT_DOOR:
+                        problems.append(
+                            f"{path.relative_to(root)}:{line}: estimator module '{layer}' "
+                            f"includes '{FRONT_DOOR}', the front door above it (decision 0044)")
+                    elif included not in allowed:
                         problems.append(
                             f"{path.relative_to(root)}:{line}: layer '{layer}' includes "
                             f"'{included}', which is not below it (allowed: "
@@ -68,6 +124,7 @@ def main(root):
         for dep in sorted(direct - used):
             problems.append(f"CMakeLists.txt: layer '{layer}' declares a dependency on "
                             f"'{dep}' but includes nothing from it")
+    problems += front_door_problems(root)
     for problem in problems:
         print(problem)
     print(f"check_layers: {len(layers)} layers, {len(problems)} problem(s)")

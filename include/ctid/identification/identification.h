@@ -273,4 +273,10 @@ IdentificationResult identify(const IrregularRecord& record, const ModelStructur
 ProcessModelResult identify(const SampledData& data, const ProcessStructure& structure,
                             const ProcessModelOptions& options = {});
 
+/// Throws InvalidArgument if the process-model options are bad or do not go with the structure
+/// (validate_process_model: a parameter it does not have, a start outside its bounds, ...);
+/// identify(data, ProcessStructure, ...) checks the same, so a caller may check before reading
+/// the data.
+void validate_identification(const ProcessStructure& structure, const ProcessModelOptions& options);
+
 }  // namespace ctid
