@@ -8,8 +8,8 @@
 #include <Eigen/Dense>
 
 #include "ctid/core/error.h"
+#include "estimation/internal/scaled_least_squares.h"
 #include "refined_iv/internal/covariance_sums.h"
-#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
 

@@ -16,8 +16,8 @@
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/refined_iv/srivc.h"
+#include "estimation/internal/scaled_least_squares.h"
 #include "refined_iv/internal/refined_iv_engine.h"
-#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
 

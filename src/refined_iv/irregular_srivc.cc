@@ -24,8 +24,8 @@
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/discretization.h"
+#include "estimation/internal/scaled_least_squares.h"
 #include "refined_iv/internal/refined_iv_engine.h"
-#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
 

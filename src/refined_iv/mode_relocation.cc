@@ -18,7 +18,7 @@
 #include "ctid/frequency/peaks.h"
 #include "ctid/frequency/periodogram.h"
 #include "ctid/refined_iv/additive_srivc.h"
-#include "refined_iv/internal/scaled_least_squares.h"
+#include "estimation/internal/scaled_least_squares.h"
 
 namespace ctid {
 
