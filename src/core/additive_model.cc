@@ -7,6 +7,7 @@
 #include <optional>
 #include <sstream>
 
+#include "core/internal/finite_transfer_function.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 
@@ -327,15 +328,35 @@ AdditiveModel AdditiveModel::with_parameters(const Eigen::VectorXd& theta) const
 }
 
 TransferFunction AdditiveModel::to_transfer_function() const {
+  std::optional<TransferFunction> g = internal::transfer_function_if_finite(*this);
+  if (!g) {  // the message only when it is needed (require would format the model every time)
+    throw InvalidArgument(internal::concat("the transfer function of ", to_string(),
+                                           " overflows: its coefficients are not finite"));
+  }
+  return std::move(*g);
+}
+
+namespace internal {
+
+std::optional<TransferFunction> transfer_function_if_finite(const AdditiveModel& model) {
   Polynomial num;
   Polynomial den = Polynomial::constant(1.0);
-  for (const Submodel& s : submodels_) {
-    const Polynomial a = integrator_factor(s.integrators) * s.a;
-    num = num * a + s.b * den;
-    den = den * a;
+  for (const Submodel& s : model.submodels()) {
+    const std::optional<Polynomial> a = finite_product(integrator_factor(s.integrators), s.a);
+    if (!a) return std::nullopt;
+    const std::optional<Polynomial> left = finite_product(num, *a);
+    const std::optional<Polynomial> right = finite_product(s.b, den);
+    const std::optional<Polynomial> sum = left && right ? finite_sum(*left, *right) : std::nullopt;
+    const std::optional<Polynomial> next = finite_product(den, *a);
+    if (!sum || !next) return std::nullopt;
+    num = *sum;
+    den = *next;
   }
-  return TransferFunction(num, den, input_delay_);
+  if (den.is_zero()) return std::nullopt;
+  return TransferFunction(num, den, model.input_delay());
 }
+
+}  // namespace internal
 
 std::complex<double> AdditiveModel::frequency_response(double omega) const {
   const std::complex<double> s(0.0, omega);

@@ -8,6 +8,7 @@
 
 #include <Eigen/Dense>
 
+#include "core/internal/finite_transfer_function.h"
 #include "ctid/core/error.h"
 #include "estimation/internal/scaled_least_squares.h"
 #include "refined_iv/internal/covariance_sums.h"
@@ -201,8 +202,11 @@ std::vector<ModalEstimate> modal_estimates(const AdditiveModel& model,
   // where the view has no split (e.g. a repeated pole).
   auto view_modes =
       [&](const Eigen::VectorXd& t) -> std::optional<std::vector<std::pair<int, ModalParameters>>> {
-    const std::optional<AdditiveModel> view = AdditiveModel::split_transfer_function(
-        AdditiveModel::from_parameters(model.orders(), t).to_transfer_function());
+    if (!t.allFinite()) return std::nullopt;
+    const std::optional<TransferFunction> g =
+        internal::transfer_function_if_finite(AdditiveModel::from_parameters(model.orders(), t));
+    const std::optional<AdditiveModel> view =
+        g ? AdditiveModel::split_transfer_function(*g) : std::nullopt;
     if (!view) return std::nullopt;
     return modes_of(*view);
   };
