@@ -7,6 +7,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "core/internal/finite_transfer_function.h"
 #include "ctid/core/error.h"
 #include "support/paper_systems.h"
 
@@ -107,6 +108,21 @@ TEST(AdditiveModel, SplitOfAnOverflowingPoleIsNone) {
   EXPECT_FALSE(AdditiveModel::split_transfer_function(g).has_value());
   EXPECT_THAT([&] { AdditiveModel::from_transfer_function(g); },
               ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("not finite")));
+}
+
+// The sum of the submodels as a value: the transfer function where its coefficients are
+// finite, none where they overflow (to_transfer_function throws there).
+TEST(AdditiveModel, TransferFunctionIfFiniteIsNoneOnOverflow) {
+  const AdditiveModel g = testing::open_loop_four_modes();
+  const std::optional<TransferFunction> sum = internal::transfer_function_if_finite(g);
+  ASSERT_TRUE(sum.has_value());
+  EXPECT_EQ(sum->denominator(), g.to_transfer_function().denominator());
+  EXPECT_EQ(sum->numerator(), g.to_transfer_function().numerator());
+  const AdditiveModel huge({{Polynomial({1.0, 1e200}), Polynomial({1.0}), 0},
+                            {Polynomial({1.0, 1e200}), Polynomial({1.0}), 0}});
+  EXPECT_FALSE(internal::transfer_function_if_finite(huge).has_value());
+  EXPECT_THAT([&] { (void)huge.to_transfer_function(); },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("overflows")));
 }
 
 TEST(AdditiveModel, ModalParametersClosedForm) {
