@@ -38,6 +38,7 @@
 
 #include "ctid/filtering/filter_bank.h"
 
+#include "ctid/estimation/mimo_modes.h"
 #include "ctid/estimation/residual_correlation.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/validation.h"

@@ -2,6 +2,7 @@
 // closed loop, delay scans, mode relocation, automatic initialisation, covariance. Options are
 // keyword arguments.
 #include "common.h"
+#include "ctid/estimation/mimo_modes.h"
 #include "ctid/identification/mode_tracking.h"
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/clsrivc.h"

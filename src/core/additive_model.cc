@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
+#include "core/internal/finite_transfer_function.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 
@@ -94,13 +97,105 @@ AdditiveModel AdditiveModel::from_parameters(const std::vector<SubmodelOrder>& o
   return model;
 }
 
+namespace {
+
+// The Polynomial operators' results, or none where their coefficients would not be finite (the
+// operators throw there): from_transfer_function's arithmetic, without the exception.
+std::optional<Polynomial> finite_scaled(double s, const Polynomial& p) {
+  if (!std::isfinite(s)) return std::nullopt;
+  if (s == 0.0) return Polynomial();
+  const Eigen::VectorXd c = s * p.coefficients();
+  if (!c.allFinite() || (c.size() > 1 && c(c.size() - 1) == 0.0)) return std::nullopt;
+  return s * p;
+}
+
+std::optional<Polynomial> finite_sum(const Polynomial& a, const Polynomial& b) {
+  const Eigen::Index n = std::max(a.coefficients().size(), b.coefficients().size());
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(n);
+  c.head(a.coefficients().size()) += a.coefficients();
+  c.head(b.coefficients().size()) += b.coefficients();
+  if (!c.allFinite()) return std::nullopt;
+  return a + b;
+}
+
+std::optional<Polynomial> finite_product(const Polynomial& a, const Polynomial& b) {
+  if (a.is_zero() || b.is_zero()) return Polynomial();
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(a.coefficients().size() + b.coefficients().size() - 1);
+  for (Eigen::Index i = 0; i < a.coefficients().size(); ++i) {
+    c.segment(i, b.coefficients().size()) += a.coefficients()(i) * b.coefficients();
+  }
+  if (!c.allFinite()) return std::nullopt;
+  return a * b;
+}
+
+// Polynomial(c) when c is finite with a non-zero leading coefficient.
+std::optional<Polynomial> exact_polynomial(const Eigen::VectorXd& c) {
+  if (!c.allFinite() || c.size() == 0 || c(c.size() - 1) == 0.0) return std::nullopt;
+  return Polynomial(c);
+}
+
+std::optional<Polynomial> trimmed_polynomial(const Eigen::VectorXd& c) {
+  if (!c.allFinite()) return std::nullopt;
+  return Polynomial::trimmed(c);
+}
+
+// The derivative of a polynomial, or none where k a_k is not finite.
+std::optional<Polynomial> finite_derivative(const Polynomial& p) {
+  for (int k = 1; k <= p.degree(); ++k) {
+    if (!std::isfinite(k * p[k])) return std::nullopt;
+  }
+  return p.derivative();
+}
+
+// The first pole (in order) that another one repeats, if any.
+std::optional<std::complex<double>> repeated_pole(const Eigen::VectorXcd& poles) {
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    for (Eigen::Index j = i + 1; j < poles.size(); ++j) {
+      if (!(std::abs(poles(i) - poles(j)) > 1e-6 * std::max(std::abs(poles(i)), 1e-300))) {
+        return poles(i);
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+// B + d p^l A: the submodel's numerator with the direct term d joined to it (biproper), or
+// none where that overflows.
+std::optional<Polynomial> with_direct_term(const Submodel& s, double d) {
+  const std::optional<Polynomial> scaled = finite_scaled(d, integrator_factor(s.integrators));
+  const std::optional<Polynomial> product = scaled ? finite_product(*scaled, s.a) : std::nullopt;
+  return product ? finite_sum(s.b, *product) : std::nullopt;
+}
+
+}  // namespace
+
 AdditiveModel AdditiveModel::from_transfer_function(const TransferFunction& g,
                                                     double imag_tolerance) {
-  require(g.is_proper(), "cannot split an improper transfer function into submodels");
-  require(g.denominator().degree() >= 1, "a constant transfer function has no submodels");
+  std::string failure;
+  std::optional<AdditiveModel> model = split_transfer_function(g, imag_tolerance, &failure);
+  require(model.has_value(), failure);
+  return std::move(*model);
+}
+
+std::optional<AdditiveModel> AdditiveModel::split_transfer_function(const TransferFunction& g,
+                                                                    double imag_tolerance,
+                                                                    std::string* failure) {
+  const auto fail = [failure](auto&&... parts) -> std::optional<AdditiveModel> {
+    if (failure != nullptr) *failure = internal::concat(parts...);
+    return std::nullopt;
+  };
+  if (!g.is_proper()) return fail("cannot split an improper transfer function into submodels");
+  if (g.denominator().degree() < 1) return fail("a constant transfer function has no submodels");
   const Polynomial& den = g.denominator();
   const double d = g.numerator().coefficient(den.degree()) / den.leading();
-  const Polynomial remainder = g.numerator() - d * den;
+  const std::optional<Polynomial> direct_part = finite_scaled(d, den);
+  const std::optional<Polynomial> remainder_or =
+      direct_part ? finite_sum(g.numerator(), -*direct_part) : std::nullopt;
+  const std::optional<Polynomial> den_derivative_or = finite_derivative(den);
+  if (!remainder_or || !den_derivative_or) {
+    return fail("the transfer function's coefficients overflow its partial-fraction split");
+  }
+  const Polynomial& remainder = *remainder_or;
 
   // Poles at the origin are the exact zero low-order coefficients of D.
   int l = 0;
@@ -108,15 +203,17 @@ AdditiveModel AdditiveModel::from_transfer_function(const TransferFunction& g,
   Eigen::VectorXd reduced_coeffs = den.coefficients().tail(den.degree() + 1 - l);
   const Polynomial reduced(reduced_coeffs);  // D = s^l D'
   const Eigen::VectorXcd poles = reduced.roots();
-  const Polynomial den_derivative = den.derivative();
+  const Polynomial& den_derivative = *den_derivative_or;
 
-  for (Eigen::Index i = 0; i < poles.size(); ++i) {
-    for (Eigen::Index j = i + 1; j < poles.size(); ++j) {
-      require(std::abs(poles(i) - poles(j)) > 1e-6 * std::max(std::abs(poles(i)), 1e-300),
-              "the transfer function has a repeated pole near ", poles(i).real(), " + ",
-              poles(i).imag(), "j; partial fractions into additive submodels need distinct poles");
-    }
+  if (const std::optional<std::complex<double>> repeated = repeated_pole(poles)) {
+    return fail("the transfer function has a repeated pole near ", repeated->real(), " + ",
+                repeated->imag(),
+                "j; partial fractions into additive submodels need distinct poles");
   }
+  const auto overflow = [&fail](const std::complex<double>& pole) {
+    return fail("the partial fraction of pole ", pole.real(), " + ", pole.imag(),
+                "j is not finite");
+  };
 
   struct Piece {
     double magnitude;
@@ -131,7 +228,9 @@ AdditiveModel AdditiveModel::from_transfer_function(const TransferFunction& g,
       for (int j = 1; j <= k; ++j) acc -= reduced[j] * p(k - j);
       p(k) = acc / reduced[0];
     }
-    pieces.push_back({0.0, {Polynomial::constant(1.0), Polynomial::trimmed(p), l}});
+    const std::optional<Polynomial> b = trimmed_polynomial(p);
+    if (!b) return overflow(0.0);
+    pieces.push_back({0.0, {Polynomial::constant(1.0), *b, l}});
   }
   std::vector<bool> used(static_cast<size_t>(poles.size()), false);
   for (Eigen::Index i = 0; i < poles.size(); ++i) {
@@ -143,10 +242,11 @@ AdditiveModel AdditiveModel::from_transfer_function(const TransferFunction& g,
     if (std::abs(pole.imag()) <= imag_tolerance * magnitude) {
       // r/(s - p) = (-r/p) / (1 - s/p).
       const double p = pole.real();
-      pieces.push_back(
-          {magnitude,
-           {Polynomial({1.0, -1.0 / p}),
-            Polynomial::trimmed(Eigen::VectorXd::Constant(1, -residue.real() / p)), 0}});
+      const std::optional<Polynomial> a = exact_polynomial(Eigen::Vector2d(1.0, -1.0 / p));
+      const std::optional<Polynomial> b =
+          trimmed_polynomial(Eigen::VectorXd::Constant(1, -residue.real() / p));
+      if (!a || !b) return overflow(pole);
+      pieces.push_back({magnitude, {*a, *b, 0}});
       continue;
     }
     // Pair with the conjugate.
@@ -160,21 +260,26 @@ AdditiveModel AdditiveModel::from_transfer_function(const TransferFunction& g,
         partner = j;
       }
     }
-    require(partner >= 0 && best <= 1e-6 * magnitude, "complex pole ", pole.real(), " + ",
-            pole.imag(), "j has no conjugate partner");
+    if (!(partner >= 0 && best <= 1e-6 * magnitude)) {
+      return fail("complex pole ", pole.real(), " + ", pole.imag(), "j has no conjugate partner");
+    }
     used[static_cast<size_t>(partner)] = true;
     // r/(s-p) + conj(r)/(s-conj p) = (2Re(r) s - 2Re(r conj p)) / (s^2 - 2Re(p) s + |p|^2).
     const double m2 = std::norm(pole);
     Eigen::Vector2d b(-2.0 * (residue * std::conj(pole)).real() / m2, 2.0 * residue.real() / m2);
-    pieces.push_back(
-        {magnitude,
-         {Polynomial({1.0, -2.0 * pole.real() / m2, 1.0 / m2}), Polynomial::trimmed(b), 0}});
+    const std::optional<Polynomial> a =
+        exact_polynomial(Eigen::Vector3d(1.0, -2.0 * pole.real() / m2, 1.0 / m2));
+    const std::optional<Polynomial> numerator = trimmed_polynomial(b);
+    if (!a || !numerator) return overflow(pole);
+    pieces.push_back({magnitude, {*a, *numerator, 0}});
   }
   std::stable_sort(pieces.begin(), pieces.end(),
                    [](const Piece& x, const Piece& y) { return x.magnitude < y.magnitude; });
   if (d != 0.0) {
     Submodel& first = pieces.front().submodel;
-    first.b = first.b + d * integrator_factor(first.integrators) * first.a;
+    std::optional<Polynomial> b = with_direct_term(first, d);
+    if (!b) return fail("the direct term ", d, " overflows the first submodel's numerator");
+    first.b = std::move(*b);
   }
   std::vector<Submodel> submodels;
   for (Piece& piece : pieces) {
@@ -188,7 +293,7 @@ AdditiveModel AdditiveModel::from_transfer_function(const TransferFunction& g,
     model.orders_.push_back({s.n(), std::max(s.m(), 0), s.integrators});
   }
   model.input_delay_ = g.input_delay();
-  validate_submodels(model.submodels_, model.orders_);
+  validate_submodels(model.submodels_, model.orders_);  // holds by construction
   return model;
 }
 
@@ -223,15 +328,35 @@ AdditiveModel AdditiveModel::with_parameters(const Eigen::VectorXd& theta) const
 }
 
 TransferFunction AdditiveModel::to_transfer_function() const {
+  std::optional<TransferFunction> g = internal::transfer_function_if_finite(*this);
+  if (!g) {  // the message only when it is needed (require would format the model every time)
+    throw InvalidArgument(internal::concat("the transfer function of ", to_string(),
+                                           " overflows: its coefficients are not finite"));
+  }
+  return std::move(*g);
+}
+
+namespace internal {
+
+std::optional<TransferFunction> transfer_function_if_finite(const AdditiveModel& model) {
   Polynomial num;
   Polynomial den = Polynomial::constant(1.0);
-  for (const Submodel& s : submodels_) {
-    const Polynomial a = integrator_factor(s.integrators) * s.a;
-    num = num * a + s.b * den;
-    den = den * a;
+  for (const Submodel& s : model.submodels()) {
+    const std::optional<Polynomial> a = finite_product(integrator_factor(s.integrators), s.a);
+    if (!a) return std::nullopt;
+    const std::optional<Polynomial> left = finite_product(num, *a);
+    const std::optional<Polynomial> right = finite_product(s.b, den);
+    const std::optional<Polynomial> sum = left && right ? finite_sum(*left, *right) : std::nullopt;
+    const std::optional<Polynomial> next = finite_product(den, *a);
+    if (!sum || !next) return std::nullopt;
+    num = *sum;
+    den = *next;
   }
-  return TransferFunction(num, den, input_delay_);
+  if (den.is_zero()) return std::nullopt;
+  return TransferFunction(num, den, model.input_delay());
 }
+
+}  // namespace internal
 
 std::complex<double> AdditiveModel::frequency_response(double omega) const {
   const std::complex<double> s(0.0, omega);

@@ -51,6 +51,65 @@ Verdict feedback_verdict(const FeedbackIdentificationResult& r, const SampledDat
   return verdict;
 }
 
+// A candidate's screening refinement: output error from `start` continued over growing
+// parts of the record (the first part is dominated by the transient, whose cost has fewer
+// local minima; each stage starts where the shorter one ended), then over the whole record.
+OutputErrorResult continued_refinement(const SampledData& data, const DelayedFeedbackLoop& start,
+                                       int n, int m, double delay,
+                                       const FeedbackIdentificationOptions& options,
+                                       const OutputErrorOptions& screen) {
+  DelayedFeedbackLoop current = start;
+  for (double fraction : options.continuation_fractions) {
+    const auto samples = static_cast<Eigen::Index>(std::lround(fraction * data.size()));
+    if (samples <= 2 * (n + m) + 1 || samples >= data.size() ||
+        static_cast<double>(samples - 1) * data.sample_time() <= delay)
+      continue;
+    const SampledData part(data.sample_time(), data.input().head(samples),
+                           data.output().head(samples));
+    const OutputErrorResult stage = refine_output_error(part, current, screen);
+    if (std::isfinite(stage.residual_rms)) current = stage.loop;
+  }
+  return refine_output_error(data, current, screen);
+}
+
+// The finalists: the best screened candidate (r.best_candidate, of cost `best`) and up to
+// extra_finalists runner-ups within finalist_ratio of it, each continued to convergence; the
+// smallest final cost wins. Returns it.
+double refine_finalists(FeedbackIdentificationResult& r, const SampledData& data,
+                        const FeedbackIdentificationOptions& options, double best) {
+  std::vector<std::size_t> finalists{*r.best_candidate};
+  {
+    std::vector<std::size_t> others;
+    for (std::size_t i = 0; i < r.candidates.size(); ++i)
+      if (i != finalists[0] && r.candidates[i].refined_rms <= options.finalist_ratio * best)
+        others.push_back(i);
+    std::sort(others.begin(), others.end(), [&](std::size_t x, std::size_t y) {
+      return r.candidates[x].refined_rms < r.candidates[y].refined_rms;
+    });
+    for (std::size_t k = 0;
+         k < others.size() && k < static_cast<std::size_t>(options.extra_finalists); ++k)
+      finalists.push_back(others[k]);
+  }
+  for (std::size_t i : finalists) {
+    SeparationCandidateReport& c = r.candidates[i];
+    if (!c.refinement.converged() &&
+        options.output_error.max_iterations > options.screening_iterations) {
+      OutputErrorOptions rest = options.output_error;
+      rest.max_iterations = options.output_error.max_iterations - options.screening_iterations;
+      OutputErrorResult more = refine_output_error(data, c.refinement.loop, rest);
+      if (std::isfinite(more.residual_rms) && more.residual_rms <= c.refined_rms) {
+        more.iterations += c.refinement.iterations;
+        c.refinement = std::move(more);
+        c.refined_rms = c.refinement.residual_rms;
+      }
+    }
+  }
+  for (std::size_t i : finalists)
+    if (r.candidates[i].refined_rms < r.candidates[*r.best_candidate].refined_rms)
+      r.best_candidate = i;
+  return r.candidates[*r.best_candidate].refined_rms;
+}
+
 }  // namespace
 
 void FeedbackIdentificationOptions::check_relations(const std::string& path) const {
@@ -143,20 +202,7 @@ FeedbackIdentificationResult identify_delayed_feedback(
   for (std::size_t i = 0; i < r.candidates.size(); ++i) {
     SeparationCandidateReport& c = r.candidates[i];
     if (options.refine && std::isfinite(c.start_rms)) {
-      // Continuation over the record length: the first part is dominated by the transient,
-      // whose cost has fewer local minima; each stage starts where the shorter one ended.
-      DelayedFeedbackLoop current = c.start;
-      for (double fraction : options.continuation_fractions) {
-        const auto samples = static_cast<Eigen::Index>(std::lround(fraction * data.size()));
-        if (samples <= 2 * (n + m) + 1 || samples >= data.size() ||
-            static_cast<double>(samples - 1) * data.sample_time() <= delay)
-          continue;
-        const SampledData part(data.sample_time(), data.input().head(samples),
-                               data.output().head(samples));
-        const OutputErrorResult stage = refine_output_error(part, current, screen);
-        if (std::isfinite(stage.residual_rms)) current = stage.loop;
-      }
-      c.refinement = refine_output_error(data, current, screen);
+      c.refinement = continued_refinement(data, c.start, n, m, delay, options, screen);
       c.refined_rms = std::isfinite(c.refinement.residual_rms) ? c.refinement.residual_rms : inf;
     }
     if (c.refined_rms < best || !r.best_candidate) {
@@ -164,41 +210,7 @@ FeedbackIdentificationResult identify_delayed_feedback(
       r.best_candidate = i;
     }
   }
-  if (options.refine && std::isfinite(best)) {
-    // The finalists: the best screened candidate and up to extra_finalists runner-ups within
-    // finalist_ratio of it, each continued to convergence; the smallest final cost wins.
-    std::vector<std::size_t> finalists{*r.best_candidate};
-    {
-      std::vector<std::size_t> others;
-      for (std::size_t i = 0; i < r.candidates.size(); ++i)
-        if (i != finalists[0] && r.candidates[i].refined_rms <= options.finalist_ratio * best)
-          others.push_back(i);
-      std::sort(others.begin(), others.end(), [&](std::size_t x, std::size_t y) {
-        return r.candidates[x].refined_rms < r.candidates[y].refined_rms;
-      });
-      for (std::size_t k = 0;
-           k < others.size() && k < static_cast<std::size_t>(options.extra_finalists); ++k)
-        finalists.push_back(others[k]);
-    }
-    for (std::size_t i : finalists) {
-      SeparationCandidateReport& c = r.candidates[i];
-      if (!c.refinement.converged() &&
-          options.output_error.max_iterations > options.screening_iterations) {
-        OutputErrorOptions rest = options.output_error;
-        rest.max_iterations = options.output_error.max_iterations - options.screening_iterations;
-        OutputErrorResult more = refine_output_error(data, c.refinement.loop, rest);
-        if (std::isfinite(more.residual_rms) && more.residual_rms <= c.refined_rms) {
-          more.iterations += c.refinement.iterations;
-          c.refinement = std::move(more);
-          c.refined_rms = c.refinement.residual_rms;
-        }
-      }
-    }
-    for (std::size_t i : finalists)
-      if (r.candidates[i].refined_rms < r.candidates[*r.best_candidate].refined_rms)
-        r.best_candidate = i;
-    best = r.candidates[*r.best_candidate].refined_rms;
-  }
+  if (options.refine && std::isfinite(best)) best = refine_finalists(r, data, options, best);
   const SeparationCandidateReport& chosen = r.candidates[*r.best_candidate];
   const bool refined = options.refine && std::isfinite(chosen.start_rms);
   r.loop = refined ? chosen.refinement.loop : chosen.start;

@@ -188,8 +188,12 @@ MimoFrf welch_frf(const MimoData& data, const WelchOptions& options) {
   return result;
 }
 
-MimoFrf periodic_frf(const std::vector<MimoData>& experiments, const PeriodicFrfOptions& options) {
-  options.validate();
+namespace {
+
+// periodic_frf's checks of the experiments (at least one per input, alike in channels, sample
+// time and length, whole periods); the number of periods each holds after the transient.
+int checked_periodic_experiments(const std::vector<MimoData>& experiments,
+                                 const PeriodicFrfOptions& options) {
   require(!experiments.empty(), "periodic_frf: no experiment given");
   const MimoData& first = experiments.front();
   const int n_u = first.input_count();
@@ -216,6 +220,19 @@ MimoFrf periodic_frf(const std::vector<MimoData>& experiments, const PeriodicFrf
   require(periods >= 2, "periodic_frf: too few samples: ", total, " samples hold ", total / n,
           " periods of ", n, "; after dropping transient_periods = ", options.transient_periods,
           " at least 2 must remain");
+  return periods;
+}
+
+}  // namespace
+
+MimoFrf periodic_frf(const std::vector<MimoData>& experiments, const PeriodicFrfOptions& options) {
+  options.validate();
+  const int periods = checked_periodic_experiments(experiments, options);
+  const MimoData& first = experiments.front();
+  const int n_u = first.input_count();
+  const int n_y = first.output_count();
+  const auto n_e = static_cast<int>(experiments.size());
+  const int n = options.period_length;
 
   // u[p][e]: N x n_u spectra of period p of experiment e; y likewise.
   Eigen::FFT<double> fft;

@@ -14,9 +14,10 @@
 #include "core/internal/signal_range.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/estimation/mimo_modes.h"
 #include "ctid/estimation/verdict.h"
-#include "refined_iv/internal/mimo_layout.h"
-#include "refined_iv/internal/scaled_least_squares.h"
+#include "estimation/internal/mimo_layout.h"
+#include "estimation/internal/scaled_least_squares.h"
 
 namespace ctid {
 
@@ -653,28 +654,11 @@ Eigen::MatrixXd covariance_of(const Layout& layout, const Problem& p, const Para
   return scale.asDiagonal() * (r_inv * qs * r_inv) * scale.asDiagonal();
 }
 
+// The model of the parameters (the layout's, shared with mimo_srivc).
 MimoAdditiveModel to_model(const Layout& layout, const Parameters& theta) {
-  std::vector<MimoSubmodel> submodels;
-  for (int i = 0; i < layout.size(); ++i) {
-    MimoSubmodel s{Polynomial(theta.a[static_cast<size_t>(i)]), {}};
-    const int m = layout.orders[static_cast<size_t>(i)].m;
-    for (int j = 0; j < layout.outputs; ++j) {
-      for (int k = 0; k < layout.inputs; ++k) {
-        Eigen::VectorXd b(m + 1);
-        for (int r = 0; r <= m; ++r) b(r) = theta.u(layout.u_column(i, k, r), j);
-        s.b.push_back(Polynomial::trimmed(b));  // an estimate may be exactly zero
-      }
-    }
-    submodels.push_back(std::move(s));
-  }
-  Eigen::MatrixXd direct;
-  if (layout.direct) {
-    direct.resize(layout.outputs, layout.inputs);
-    for (int j = 0; j < layout.outputs; ++j) {
-      for (int k = 0; k < layout.inputs; ++k) direct(j, k) = theta.u(layout.d_at + k, j);
-    }
-  }
-  return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels), direct);
+  std::vector<Polynomial> a;
+  for (const Eigen::VectorXd& c : theta.a) a.emplace_back(c);
+  return internal::model_from_columns(layout, a, theta.u);
 }
 
 // Submodels of equal orders listed from the slowest up (as mimo_srivc lists them).

@@ -225,6 +225,64 @@ const char* parse_row_fast(const char* p, const char* end, size_t fields, char d
   return nullptr;
 }
 
+// parse_csv's header row: every name present, unquoted inside, given once, and not all of
+// them numbers (a file without a header).
+void check_csv_header(const std::vector<std::string_view>& fields, const std::string& source,
+                      int line_number) {
+  bool all_numbers = true;
+  for (size_t i = 0; i < fields.size(); ++i) {
+    const std::string_view name = fields[i];
+    require(!name.empty(), source, ":", line_number, ": header field ", i + 1,
+            " is empty; every column needs a name");
+    require(name.find('"') == std::string_view::npos, source, ":", line_number, ": column name '",
+            echo(name), "' holds a double quote; quote a name whole (\"name\") or not at all");
+    for (size_t j = 0; j < i; ++j) {
+      require(fields[j] != name, source, ":", line_number, ": column name '", echo(name),
+              "' appears twice in the header");
+    }
+    all_numbers = all_numbers && parse_number(name).has_value();
+  }
+  require(!all_numbers, source, ":", line_number,
+          ": the first line holds numbers, not column names; a CSV file must start with "
+          "a header row such as 't,u,y'");
+}
+
+// parse_csv's slow path for one data row of `fields` (as many as the header's): each value
+// appended to `values`, a cell that is not a finite number as NaN with its column's problem.
+void parse_csv_row_slowly(const std::vector<std::string_view>& fields, char delimiter,
+                          const std::string& source, int line_number, CsvTable& table,
+                          std::vector<double>& values) {
+  for (size_t i = 0; i < fields.size(); ++i) {
+    // A cell that is not a finite number is an error of its column, thrown only if the
+    // column is used (CsvTable::column): exports carry notes and empty columns.
+    const auto problem = [&](const std::string& what) {
+      table.unreadable.try_emplace(
+          table.names[i],
+          ctid::internal::concat(source, ":", line_number, ": column '", echo(table.names[i]),
+                                 "' (field ", i + 1, "): ", what));
+      values.push_back(std::numeric_limits<double>::quiet_NaN());
+    };
+    if (fields[i].empty()) {
+      problem("empty field; expected a number");
+      continue;
+    }
+    std::optional<double> value = parse_number(fields[i]);
+    if (!value && delimiter != ',' && fields[i].find(',') != std::string_view::npos) {
+      // A decimal comma, as spreadsheets in many locales write beside ';' or tabs.
+      std::string with_point(fields[i]);
+      std::replace(with_point.begin(), with_point.end(), ',', '.');
+      value = parse_number(with_point);
+    }
+    if (!value) {
+      problem("malformed number '" + echo(fields[i]) + "'" + dialect_hint(fields[i], delimiter));
+    } else if (!std::isfinite(*value)) {
+      problem("value '" + echo(fields[i]) + "' is not finite; every value must be a finite number");
+    } else {
+      values.push_back(*value);
+    }
+  }
+}
+
 }  // namespace
 
 CsvTable parse_csv(std::string_view text, const std::string& source) {
@@ -286,23 +344,7 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
     }
     if (header_line == 0) {
       header_line = line_number;
-      bool all_numbers = true;
-      for (size_t i = 0; i < fields.size(); ++i) {
-        const std::string_view name = fields[i];
-        require(!name.empty(), source, ":", line_number, ": header field ", i + 1,
-                " is empty; every column needs a name");
-        require(name.find('"') == std::string_view::npos, source, ":", line_number,
-                ": column name '", echo(name),
-                "' holds a double quote; quote a name whole (\"name\") or not at all");
-        for (size_t j = 0; j < i; ++j) {
-          require(fields[j] != name, source, ":", line_number, ": column name '", echo(name),
-                  "' appears twice in the header");
-        }
-        all_numbers = all_numbers && parse_number(name).has_value();
-      }
-      require(!all_numbers, source, ":", line_number,
-              ": the first line holds numbers, not column names; a CSV file must start with "
-              "a header row such as 't,u,y'");
+      check_csv_header(fields, source, line_number);
       for (const auto& name : fields) table.names.emplace_back(name);
       width = fields.size();
       // Room for the rows the rest of the text holds if they are as long as ~20 bytes a value.
@@ -314,36 +356,7 @@ CsvTable parse_csv(std::string_view text, const std::string& source) {
     // that needs strtod). Messages are built here only.
     require(fields.size() == width, source, ":", line_number, ": expected ", width, " fields (",
             join_names(table.names), ") but found ", fields.size());
-    for (size_t i = 0; i < fields.size(); ++i) {
-      // A cell that is not a finite number is an error of its column, thrown only if the
-      // column is used (CsvTable::column): exports carry notes and empty columns.
-      const auto problem = [&](const std::string& what) {
-        table.unreadable.try_emplace(
-            table.names[i],
-            ctid::internal::concat(source, ":", line_number, ": column '", echo(table.names[i]),
-                                   "' (field ", i + 1, "): ", what));
-        values.push_back(std::numeric_limits<double>::quiet_NaN());
-      };
-      if (fields[i].empty()) {
-        problem("empty field; expected a number");
-        continue;
-      }
-      std::optional<double> value = parse_number(fields[i]);
-      if (!value && delimiter != ',' && fields[i].find(',') != std::string_view::npos) {
-        // A decimal comma, as spreadsheets in many locales write beside ';' or tabs.
-        std::string with_point(fields[i]);
-        std::replace(with_point.begin(), with_point.end(), ',', '.');
-        value = parse_number(with_point);
-      }
-      if (!value) {
-        problem("malformed number '" + echo(fields[i]) + "'" + dialect_hint(fields[i], delimiter));
-      } else if (!std::isfinite(*value)) {
-        problem("value '" + echo(fields[i]) +
-                "' is not finite; every value must be a finite number");
-      } else {
-        values.push_back(*value);
-      }
-    }
+    parse_csv_row_slowly(fields, delimiter, source, line_number, table, values);
   }
   require(header_line != 0, source,
           ": file is empty; expected a header row of column names such as 't,u,y'");

@@ -11,6 +11,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "ctid/estimation/mimo_modes.h"
 #include "ctid/io/fields_json.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/result_json.h"

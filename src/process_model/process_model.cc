@@ -437,19 +437,18 @@ void best_gain(const Problem& problem, Eigen::VectorXd& p) {
   }
 }
 
-}  // namespace
+// estimate_process_model's bounds (positive time constants, Zeta >= 1e-6, 0 <= Td <= the
+// record), narrowed by the options' settings, with the held parameters and the given values.
+struct ProcessSettings {
+  Eigen::VectorXd lower;
+  Eigen::VectorXd upper;
+  std::vector<bool> held;
+  std::vector<std::optional<double>> given;
+};
 
-ProcessModelResult estimate_process_model(const SampledData& data,
-                                          const ProcessStructure& structure,
-                                          const ProcessModelOptions& options) {
-  validate_process_model(structure, options);
-  const std::vector<std::string> names = structure.parameter_names();
+ProcessSettings process_settings(const std::vector<std::string>& names,
+                                 const ProcessModelOptions& options, double h, double duration) {
   const auto count = static_cast<int>(names.size());
-  const double h = data.sample_time();
-  const int n = data.size();
-  const double duration = (n - 1) * h;
-
-  // Bounds, held values and user starts.
   Eigen::VectorXd lower =
       Eigen::VectorXd::Constant(count, -std::numeric_limits<double>::infinity());
   Eigen::VectorXd upper = Eigen::VectorXd::Constant(count, std::numeric_limits<double>::infinity());
@@ -470,23 +469,13 @@ ProcessModelResult estimate_process_model(const SampledData& data,
     held[static_cast<std::size_t>(i)] = s.fixed;
     given[static_cast<std::size_t>(i)] = s.value;
   }
-  const int free = static_cast<int>(std::count(held.begin(), held.end(), false));
-  require(n >= 10 * std::max(free, 1), "the record has ", n, " samples; process model ",
-          structure.name(), " with ", free,
-          " free parameters needs at least 10 per free parameter (", 10 * std::max(free, 1), ")");
-  const int td = index_of(names, "Td");
-  require(td < 0 || !given[static_cast<std::size_t>(td)] ||
-              *given[static_cast<std::size_t>(td)] < duration,
-          "the dead time Td = ", td >= 0 ? given[static_cast<std::size_t>(td)].value_or(0.0) : 0.0,
-          " s is not shorter than the record (", duration, " s)");
+  return {std::move(lower), std::move(upper), std::move(held), std::move(given)};
+}
 
-  Problem problem{structure, data, Eigen::VectorXd::Zero(count), {}, lower, upper};
-  for (int i = 0; i < count; ++i) {
-    if (!held[static_cast<std::size_t>(i)]) problem.free_index.push_back(i);
-  }
-
-  // The default start: time constants a tenth, a twentieth, ... of the record, Zeta 0.7, no
-  // zero; the gain by least squares.
+// The default start: time constants a tenth, a twentieth, ... of the record, Zeta 0.7, no
+// zero, gain 1.
+Eigen::VectorXd default_process_start(const std::vector<std::string>& names, double duration) {
+  const auto count = static_cast<int>(names.size());
   Eigen::VectorXd fallback = Eigen::VectorXd::Zero(count);
   fallback(0) = 1.0;
   for (int i = 0; i < count; ++i) {
@@ -496,15 +485,13 @@ ProcessModelResult estimate_process_model(const SampledData& data,
     if (name == "Tp3") fallback(i) = duration / 40.0;
     if (name == "Zeta") fallback(i) = 0.7;
   }
-  const auto apply_given = [&](Eigen::VectorXd p, bool gain) {
-    if (gain && !given[0]) best_gain(problem, p);
-    for (int i = 0; i < count; ++i) {
-      if (given[static_cast<std::size_t>(i)]) p(i) = *given[static_cast<std::size_t>(i)];
-    }
-    return clamp_into(p, lower, upper);
-  };
+  return fallback;
+}
 
-  // Delays to try: the given one, or whole samples 0..max (at most 64 of them, evenly spaced).
+// Delays to try: the given one, or whole samples 0..max (at most 64 of them, evenly spaced).
+std::vector<double> delays_to_try(int td, const std::vector<std::optional<double>>& given,
+                                  const Eigen::VectorXd& upper, const ProcessModelOptions& options,
+                                  int n, double h) {
   std::vector<double> delays{0.0};
   if (td >= 0 && given[static_cast<std::size_t>(td)]) {
     delays = {*given[static_cast<std::size_t>(td)]};
@@ -517,91 +504,18 @@ ProcessModelResult estimate_process_model(const SampledData& data,
     delays.clear();
     for (int d = 0; d <= max_samples; d += stride) delays.push_back(d * h);
   }
+  return delays;
+}
 
-  const bool all_given =
-      std::all_of(given.begin(), given.end(), [](const auto& g) { return g.has_value(); });
-  struct Candidate {
-    Eigen::VectorXd p;
-    double cost;
-    std::string method;
-  };
-  std::vector<Candidate> candidates;
-  if (all_given) {
-    Eigen::VectorXd p = apply_given(fallback, false);
-    problem.full = p;
-    candidates.push_back({p, sum_of_squares(problem, p), "user"});
-  } else {
-    const bool user_part =
-        std::any_of(given.begin(), given.end(), [](const auto& g) { return g.has_value(); });
-    const SubmodelOrder order{structure.poles, structure.zero ? 1 : 0,
-                              structure.integrator ? 1 : 0};
-    const bool srivc_possible = structure.poles + (structure.integrator ? 1 : 0) >= 1;
-    for (const double delay : delays) {
-      Eigen::VectorXd base = fallback;
-      if (td >= 0) base(td) = delay;
-      std::vector<std::pair<Eigen::VectorXd, std::string>> tries{{base, "default"}};
-      if (srivc_possible) {
-        try {
-          RefinedIvOptions iv;
-          iv.input_delay = static_cast<int>(std::lround(delay / h));
-          iv.compute_covariance = false;
-          iv.max_iterations = 30;
-          const EstimationResult r = srivc(data, order, iv);
-          if (r.parameters.allFinite() && r.model.size() == 1) {
-            tries.emplace_back(from_rational(structure, r.model[0], base), "srivc");
-          }
-        } catch (const std::exception&) {
-          // Orders the record cannot support at this delay: the default start stands.
-        }
-      }
-      for (auto& [p, method] : tries) {
-        if (td >= 0) p(td) = delay;
-        Eigen::VectorXd q = apply_given(p, true);
-        problem.full = q;
-        candidates.push_back(
-            {q, sum_of_squares(problem, q), user_part ? "user+" + method : method});
-      }
-    }
-  }
-  std::stable_sort(candidates.begin(), candidates.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
-  if (candidates.size() > 3) candidates.resize(3);
-
-  Refined best;
-  Candidate best_start = candidates.front();
-  int iterations = 0;
-  for (const Candidate& c : candidates) {
-    problem.full = c.p;
-    Refined r = refine(problem, c.p, options.max_iterations);
-    iterations += r.iterations;
-    if (r.sum_of_squares < best.sum_of_squares || best.parameters.size() == 0) {
-      best = std::move(r);
-      best_start = c;
-    }
-  }
-
-  ProcessModelResult result;
-  result.structure = structure.name();
-  result.parameter_names = names;
-  result.start = best_start.p;
-  result.start_method = best_start.method;
-  for (int i = 0; i < count; ++i) {
-    if (held[static_cast<std::size_t>(i)])
-      result.fixed_parameters.push_back(names[static_cast<std::size_t>(i)]);
-  }
-  result.termination = best.termination;
-  result.iterations = iterations;
-  result.message = "Levenberg-Marquardt on the output error from the best of " +
-                   std::to_string(candidates.size()) + " starts (" + best_start.method +
-                   "): " + best.message;
-  Eigen::VectorXd p = best.parameters;
-  problem.full = p;
-
-  // Gauss–Newton covariance sigma^2 (J^T J)^{-1} over the free parameters, J by central
-  // differences of the simulated output.
-  const double ssr = best.sum_of_squares;
-  result.mean_squared_error = ssr / n;
-  result.noise_variance = n > free ? ssr / (n - free) : std::numeric_limits<double>::quiet_NaN();
+// Gauss–Newton covariance sigma^2 (J^T J)^{-1} over the free parameters at p, J by central
+// differences of the simulated output (one-sided at Td = 0); NaN when the output cannot be
+// differenced; zero for held parameters.
+Eigen::MatrixXd gauss_newton_covariance(const Problem& problem, const Eigen::VectorXd& p, int td,
+                                        double ssr, double noise_variance) {
+  const auto count = static_cast<int>(p.size());
+  const auto free = static_cast<int>(problem.free_index.size());
+  const int n = problem.data.size();
+  const double h = problem.data.sample_time();
   Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(count, count);
   if (free > 0 && std::isfinite(ssr)) {
     Eigen::MatrixXd jac(n, free);
@@ -631,31 +545,23 @@ ProcessModelResult estimate_process_model(const SampledData& data,
         for (int b = 0; b < free; ++b) {
           covariance(problem.free_index[static_cast<std::size_t>(a)],
                      problem.free_index[static_cast<std::size_t>(b)]) =
-              result.noise_variance * inverse(a, b);
+              noise_variance * inverse(a, b);
         }
       }
     } else {
       covariance.setConstant(std::numeric_limits<double>::quiet_NaN());
     }
   }
-  Eigen::VectorXd start = result.start;
-  sort_time_constants(structure, p, &covariance);
-  sort_time_constants(structure, start, nullptr);
-  result.start = start;
-  result.parameters = p;
-  result.covariance = covariance;
-  result.standard_errors = covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-  for (int i = 0; i < count; ++i) {
-    if (std::isnan(covariance(i, i))) result.standard_errors(i) = covariance(i, i);
-  }
+  return covariance;
+}
 
-  problem.full = p;
-  const Eigen::VectorXd& y = data.output();
-  const Eigen::VectorXd y_model = problem.output(p);
-  result.fit_percent = fit_percent(y, y_model);
-  result.start_fit_percent = fit_percent(y, problem.output(result.start));
-
-  // The verdict: finite, fit not worse than the start, standard errors below the values.
+// The verdict: finite, fit not worse than the start, standard errors below the values, no
+// time constant at its lower bound.
+void judge_process_model(ProcessModelResult& result, const std::vector<std::string>& names,
+                         const std::vector<bool>& held, const Eigen::VectorXd& p, double ssr,
+                         double h) {
+  const auto count = static_cast<int>(names.size());
+  const int free = static_cast<int>(std::count(held.begin(), held.end(), false));
   check_finite(result.verdict, p.allFinite() && std::isfinite(ssr), "the estimate");
   check_fit(result.verdict, result.fit_percent, result.start_fit_percent);
   std::vector<std::string> free_names;
@@ -679,6 +585,189 @@ ProcessModelResult estimate_process_model(const SampledData& data,
                           {verdict_advice::lower_order});
     }
   }
+}
+
+// A start of estimate_process_model: parameters, their output error and where they came from.
+struct ProcessStart {
+  Eigen::VectorXd p;
+  double cost;
+  std::string method;
+};
+
+// The start of matching order from SRIVC at whole-sample `delay` (the other parameters as in
+// `base`); none when the record cannot support those orders at this delay or the fit is not
+// finite.
+std::optional<Eigen::VectorXd> srivc_process_start(const SampledData& data,
+                                                   const ProcessStructure& structure, double delay,
+                                                   const Eigen::VectorXd& base) {
+  const SubmodelOrder order{structure.poles, structure.zero ? 1 : 0, structure.integrator ? 1 : 0};
+  try {
+    RefinedIvOptions iv;
+    iv.input_delay = static_cast<int>(std::lround(delay / data.sample_time()));
+    iv.compute_covariance = false;
+    iv.max_iterations = 30;
+    const EstimationResult r = srivc(data, order, iv);
+    if (r.parameters.allFinite() && r.model.size() == 1) {
+      return from_rational(structure, r.model[0], base);
+    }
+  } catch (const std::exception&) {
+    // Orders the record cannot support at this delay: the default start stands.
+  }
+  return std::nullopt;
+}
+
+// Levenberg-Marquardt from every start: the best refinement (the first of equal ones), its
+// start and the iterations spent on all of them.
+struct ProcessRefinement {
+  Refined best;
+  ProcessStart start;
+  int iterations = 0;
+};
+
+ProcessRefinement refine_starts(Problem& problem, const std::vector<ProcessStart>& starts,
+                                int max_iterations) {
+  ProcessRefinement out{Refined(), starts.front(), 0};
+  for (const ProcessStart& c : starts) {
+    problem.full = c.p;
+    Refined r = refine(problem, c.p, max_iterations);
+    out.iterations += r.iterations;
+    if (r.sum_of_squares < out.best.sum_of_squares || out.best.parameters.size() == 0) {
+      out.best = std::move(r);
+      out.start = c;
+    }
+  }
+  return out;
+}
+
+// Standard errors from the covariance's diagonal (negative rounding clipped to 0, NaN kept).
+Eigen::VectorXd standard_errors_of(const Eigen::MatrixXd& covariance) {
+  Eigen::VectorXd se = covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  for (Eigen::Index i = 0; i < covariance.rows(); ++i) {
+    if (std::isnan(covariance(i, i))) se(i) = covariance(i, i);
+  }
+  return se;
+}
+
+}  // namespace
+
+ProcessModelResult estimate_process_model(const SampledData& data,
+                                          const ProcessStructure& structure,
+                                          const ProcessModelOptions& options) {
+  validate_process_model(structure, options);
+  const std::vector<std::string> names = structure.parameter_names();
+  const auto count = static_cast<int>(names.size());
+  const double h = data.sample_time();
+  const int n = data.size();
+  const double duration = (n - 1) * h;
+
+  // Bounds, held values and user starts.
+  const ProcessSettings settings = process_settings(names, options, h, duration);
+  const Eigen::VectorXd& lower = settings.lower;
+  const Eigen::VectorXd& upper = settings.upper;
+  const std::vector<bool>& held = settings.held;
+  const std::vector<std::optional<double>>& given = settings.given;
+  const int free = static_cast<int>(std::count(held.begin(), held.end(), false));
+  require(n >= 10 * std::max(free, 1), "the record has ", n, " samples; process model ",
+          structure.name(), " with ", free,
+          " free parameters needs at least 10 per free parameter (", 10 * std::max(free, 1), ")");
+  const int td = index_of(names, "Td");
+  require(td < 0 || !given[static_cast<std::size_t>(td)] ||
+              *given[static_cast<std::size_t>(td)] < duration,
+          "the dead time Td = ", td >= 0 ? given[static_cast<std::size_t>(td)].value_or(0.0) : 0.0,
+          " s is not shorter than the record (", duration, " s)");
+
+  Problem problem{structure, data, Eigen::VectorXd::Zero(count), {}, lower, upper};
+  for (int i = 0; i < count; ++i) {
+    if (!held[static_cast<std::size_t>(i)]) problem.free_index.push_back(i);
+  }
+
+  // The default start (the gain by least squares).
+  const Eigen::VectorXd fallback = default_process_start(names, duration);
+  const auto apply_given = [&](Eigen::VectorXd p, bool gain) {
+    if (gain && !given[0]) best_gain(problem, p);
+    for (int i = 0; i < count; ++i) {
+      if (given[static_cast<std::size_t>(i)]) p(i) = *given[static_cast<std::size_t>(i)];
+    }
+    return clamp_into(p, lower, upper);
+  };
+
+  const std::vector<double> delays = delays_to_try(td, given, upper, options, n, h);
+
+  const bool all_given =
+      std::all_of(given.begin(), given.end(), [](const auto& g) { return g.has_value(); });
+  using Candidate = ProcessStart;
+  std::vector<Candidate> candidates;
+  if (all_given) {
+    Eigen::VectorXd p = apply_given(fallback, false);
+    problem.full = p;
+    candidates.push_back({p, sum_of_squares(problem, p), "user"});
+  } else {
+    const bool user_part =
+        std::any_of(given.begin(), given.end(), [](const auto& g) { return g.has_value(); });
+    const bool srivc_possible = structure.poles + (structure.integrator ? 1 : 0) >= 1;
+    for (const double delay : delays) {
+      Eigen::VectorXd base = fallback;
+      if (td >= 0) base(td) = delay;
+      std::vector<std::pair<Eigen::VectorXd, std::string>> tries{{base, "default"}};
+      if (srivc_possible) {
+        if (std::optional<Eigen::VectorXd> s = srivc_process_start(data, structure, delay, base)) {
+          tries.emplace_back(std::move(*s), "srivc");
+        }
+      }
+      for (auto& [p, method] : tries) {
+        if (td >= 0) p(td) = delay;
+        Eigen::VectorXd q = apply_given(p, true);
+        problem.full = q;
+        candidates.push_back(
+            {q, sum_of_squares(problem, q), user_part ? "user+" + method : method});
+      }
+    }
+  }
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+  if (candidates.size() > 3) candidates.resize(3);
+
+  ProcessRefinement refined = refine_starts(problem, candidates, options.max_iterations);
+  const Refined& best = refined.best;
+  const Candidate& best_start = refined.start;
+  const int iterations = refined.iterations;
+
+  ProcessModelResult result;
+  result.structure = structure.name();
+  result.parameter_names = names;
+  result.start = best_start.p;
+  result.start_method = best_start.method;
+  for (int i = 0; i < count; ++i) {
+    if (held[static_cast<std::size_t>(i)])
+      result.fixed_parameters.push_back(names[static_cast<std::size_t>(i)]);
+  }
+  result.termination = best.termination;
+  result.iterations = iterations;
+  result.message = "Levenberg-Marquardt on the output error from the best of " +
+                   std::to_string(candidates.size()) + " starts (" + best_start.method +
+                   "): " + best.message;
+  Eigen::VectorXd p = best.parameters;
+  problem.full = p;
+
+  const double ssr = best.sum_of_squares;
+  result.mean_squared_error = ssr / n;
+  result.noise_variance = n > free ? ssr / (n - free) : std::numeric_limits<double>::quiet_NaN();
+  Eigen::MatrixXd covariance = gauss_newton_covariance(problem, p, td, ssr, result.noise_variance);
+  Eigen::VectorXd start = result.start;
+  sort_time_constants(structure, p, &covariance);
+  sort_time_constants(structure, start, nullptr);
+  result.start = start;
+  result.parameters = p;
+  result.covariance = covariance;
+  result.standard_errors = standard_errors_of(covariance);
+
+  problem.full = p;
+  const Eigen::VectorXd& y = data.output();
+  const Eigen::VectorXd y_model = problem.output(p);
+  result.fit_percent = fit_percent(y, y_model);
+  result.start_fit_percent = fit_percent(y, problem.output(result.start));
+
+  judge_process_model(result, names, held, p, ssr, h);
   return result;
 }
 

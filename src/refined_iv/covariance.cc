@@ -4,12 +4,14 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <Eigen/Dense>
 
+#include "core/internal/finite_transfer_function.h"
 #include "ctid/core/error.h"
+#include "estimation/internal/scaled_least_squares.h"
 #include "refined_iv/internal/covariance_sums.h"
-#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
 
@@ -196,17 +198,21 @@ std::vector<ModalEstimate> modal_estimates(const AdditiveModel& model,
     }
     return out;
   }
-  // Unfactored: modes of the partial-fraction view, Jacobian by central differences.
-  auto view_of = [&](const Eigen::VectorXd& t) {
-    return AdditiveModel::from_transfer_function(
-        AdditiveModel::from_parameters(model.orders(), t).to_transfer_function());
+  // Unfactored: modes of the partial-fraction view, Jacobian by central differences. None
+  // where the view has no split (e.g. a repeated pole).
+  auto view_modes =
+      [&](const Eigen::VectorXd& t) -> std::optional<std::vector<std::pair<int, ModalParameters>>> {
+    if (!t.allFinite()) return std::nullopt;
+    const std::optional<TransferFunction> g =
+        internal::transfer_function_if_finite(AdditiveModel::from_parameters(model.orders(), t));
+    const std::optional<AdditiveModel> view =
+        g ? AdditiveModel::split_transfer_function(*g) : std::nullopt;
+    if (!view) return std::nullopt;
+    return modes_of(*view);
   };
-  std::vector<std::pair<int, ModalParameters>> base;
-  try {
-    base = modes_of(view_of(theta));
-  } catch (const InvalidArgument&) {
-    return out;
-  }
+  const std::optional<std::vector<std::pair<int, ModalParameters>>> base_or = view_modes(theta);
+  if (!base_or) return out;
+  const std::vector<std::pair<int, ModalParameters>>& base = *base_or;
   const Eigen::Index p = theta.size();
   const Eigen::Index q = static_cast<Eigen::Index>(3 * base.size());
   Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(q, p);
@@ -217,22 +223,23 @@ std::vector<ModalEstimate> modal_estimates(const AdditiveModel& model,
     Eigen::VectorXd minus = theta;
     plus(k) += step;
     minus(k) -= step;
-    try {
-      const auto mp = modes_of(view_of(plus));
-      const auto mm = modes_of(view_of(minus));
-      if (mp.size() != base.size() || mm.size() != base.size()) {
-        ok = false;
-        break;
-      }
-      for (size_t r = 0; r < base.size(); ++r) {
-        const auto idx = static_cast<Eigen::Index>(3 * r);
-        jac(idx, k) =
-            (mp[r].second.natural_frequency - mm[r].second.natural_frequency) / (2 * step);
-        jac(idx + 1, k) = (mp[r].second.damping_ratio - mm[r].second.damping_ratio) / (2 * step);
-        jac(idx + 2, k) = (mp[r].second.gain - mm[r].second.gain) / (2 * step);
-      }
-    } catch (const InvalidArgument&) {
+    const auto mp_or = view_modes(plus);
+    const auto mm_or = mp_or ? view_modes(minus) : std::nullopt;
+    if (!mp_or || !mm_or) {
       ok = false;
+      continue;
+    }
+    const auto& mp = *mp_or;
+    const auto& mm = *mm_or;
+    if (mp.size() != base.size() || mm.size() != base.size()) {
+      ok = false;
+      break;
+    }
+    for (size_t r = 0; r < base.size(); ++r) {
+      const auto idx = static_cast<Eigen::Index>(3 * r);
+      jac(idx, k) = (mp[r].second.natural_frequency - mm[r].second.natural_frequency) / (2 * step);
+      jac(idx + 1, k) = (mp[r].second.damping_ratio - mm[r].second.damping_ratio) / (2 * step);
+      jac(idx + 2, k) = (mp[r].second.gain - mm[r].second.gain) / (2 * step);
     }
   }
   Eigen::MatrixXd c;

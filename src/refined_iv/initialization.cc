@@ -16,8 +16,8 @@
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/refined_iv/srivc.h"
+#include "estimation/internal/scaled_least_squares.h"
 #include "refined_iv/internal/refined_iv_engine.h"
-#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
 
@@ -155,18 +155,49 @@ std::optional<SampledData> screening_piece(const SampledData& record,
   return record.segment(0, length);
 }
 
+// initial_transfer_function's closed-loop data: a reference, and the controller at its sample
+// time.
+void check_start_controller(const SampledData& data, const DiscreteTransferFunction& controller) {
+  const double h = data.sample_time();
+  require(data.has_reference(),
+          "initial_transfer_function: a controller is given but the data has no reference r");
+  require(std::abs(controller.sample_time() - h) <= 1e-9 * h,
+          "initial_transfer_function: the controller's sample time ", controller.sample_time(),
+          " differs from the data's ", h);
+}
+
+// Refines one open-loop candidate by SRIVC with `refine` (or judges it as it is) and keeps it
+// in `kept` if its output error is below `cost_so_far`.
+void refine_open_loop_start(const SampledData& data, const SubmodelOrder& order,
+                            const InitializationOptions& options, double delay,
+                            RefinedIvOptions& refine, AdditiveModel model, double& cost_so_far,
+                            std::optional<TransferFunction>& kept) {
+  if (options.refinement_iterations > 0) {
+    refine.initial_model = model;
+    const EstimationResult r = srivc(data, order, refine);
+    if (std::isfinite(r.mean_squared_error) && r.mean_squared_error < cost_so_far) {
+      cost_so_far = r.mean_squared_error;
+      kept = r.transfer_function.with_input_delay(0.0);
+    }
+  } else {
+    // Judge the (stabilised) model by its output error.
+    bool reflected = false;
+    const Polynomial a = internal::reflect_unstable_roots(model[0].a, reflected);
+    model = AdditiveModel({Submodel{a, model[0].b, order.integrators}}, delay);
+    const double cost = output_error(model, data);
+    if (std::isfinite(cost) && cost < cost_so_far) {
+      cost_so_far = cost;
+      kept = model.to_transfer_function().with_input_delay(0.0);
+    }
+  }
+}
+
 // initial_transfer_function on `data`, the piece already chosen (options validated).
 TransferFunction screened_transfer_function(const SampledData& data, const SubmodelOrder& order,
                                             const InitializationOptions& options) {
   const double h = data.sample_time();
   const DiscreteTransferFunction* controller = options.controller ? &*options.controller : nullptr;
-  if (controller != nullptr) {
-    require(data.has_reference(),
-            "initial_transfer_function: a controller is given but the data has no reference r");
-    require(std::abs(controller->sample_time() - h) <= 1e-9 * h,
-            "initial_transfer_function: the controller's sample time ", controller->sample_time(),
-            " differs from the data's ", h);
-  }
+  if (controller != nullptr) check_start_controller(data, *controller);
   const double delay = options.input_delay * h;
   double best_cost = std::numeric_limits<double>::infinity();
   std::optional<TransferFunction> best;
@@ -185,28 +216,9 @@ TransferFunction screened_transfer_function(const SampledData& data, const Submo
   refine.tolerance = 1e-8;
   refine.input_delay = options.input_delay;
   refine.compute_covariance = false;
-  // Refines one candidate by SRIVC (or judges it as it is) and keeps it if its output error
-  // is the lowest so far.
-  const auto consider_open_loop = [&](AdditiveModel model, double& cost_so_far,
+  const auto consider_open_loop = [&](const AdditiveModel& model, double& cost_so_far,
                                       std::optional<TransferFunction>& kept) {
-    if (options.refinement_iterations > 0) {
-      refine.initial_model = model;
-      const EstimationResult r = srivc(data, order, refine);
-      if (std::isfinite(r.mean_squared_error) && r.mean_squared_error < cost_so_far) {
-        cost_so_far = r.mean_squared_error;
-        kept = r.transfer_function.with_input_delay(0.0);
-      }
-    } else {
-      // Judge the (stabilised) model by its output error.
-      bool reflected = false;
-      const Polynomial a = internal::reflect_unstable_roots(model[0].a, reflected);
-      model = AdditiveModel({Submodel{a, model[0].b, order.integrators}}, delay);
-      const double cost = output_error(model, data);
-      if (std::isfinite(cost) && cost < cost_so_far) {
-        cost_so_far = cost;
-        kept = model.to_transfer_function().with_input_delay(0.0);
-      }
-    }
+    refine_open_loop_start(data, order, options, delay, refine, model, cost_so_far, kept);
   };
   // Closed loop: the candidate made one the controller stabilises, refined by CLSRIVC (whose
   // instrument needs S_uo r, so a stabilised start is what lets it run at all); the refined

@@ -24,8 +24,8 @@
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/discretization.h"
+#include "estimation/internal/scaled_least_squares.h"
 #include "refined_iv/internal/refined_iv_engine.h"
-#include "refined_iv/internal/scaled_least_squares.h"
 
 namespace ctid {
 
@@ -373,11 +373,7 @@ EstimationResult srivc_irregular(const IrregularRecord& record, const SubmodelOr
   result.parameters = theta;
   result.model = AdditiveModel::from_parameters(orders, theta, 0.0);
   result.transfer_function = result.model.to_transfer_function();
-  try {
-    result.additive_view = AdditiveModel::from_transfer_function(result.transfer_function);
-  } catch (const InvalidArgument&) {
-    result.additive_view.reset();
-  }
+  result.additive_view = AdditiveModel::split_transfer_function(result.transfer_function);
   const d::FilteredSignals f =
       d::filter_signals(record, order, theta, options.output_interpolation);
   const Eigen::VectorXd residual = record.output - f.model_output;

@@ -25,10 +25,10 @@
 #include "ctid/refined_iv/initialization.h"
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/simulate.h"
-#include "internal/mimo_layout.h"
+#include "estimation/internal/mimo_layout.h"
+#include "estimation/internal/scaled_least_squares.h"
 #include "internal/mimo_srivc_parts.h"
 #include "internal/refined_iv_engine.h"
-#include "internal/scaled_least_squares.h"
 
 namespace ctid::mimo_srivc_parts {
 
@@ -177,30 +177,6 @@ Eigen::MatrixXd model_outputs(const Layout& layout, const Eigen::MatrixXd& u, co
   return fitted;
 }
 
-// Numerators fitted by least squares to every output for the given denominators.
-// The model of denominators `a` whose numerators and D are the coefficients `b` of the
-// numerator columns (u_count x outputs, one column per output).
-MimoAdditiveModel model_from_columns(const Layout& layout, const std::vector<Polynomial>& a,
-                                     const Eigen::MatrixXd& b) {
-  std::vector<MimoSubmodel> submodels;
-  for (int i = 0; i < layout.size(); ++i) {
-    MimoSubmodel sub{
-        a[static_cast<size_t>(i)], {}, layout.orders[static_cast<size_t>(i)].integrators};
-    const int m = layout.orders[static_cast<size_t>(i)].m;
-    for (int j = 0; j < layout.outputs; ++j) {
-      for (int k = 0; k < layout.inputs; ++k) {
-        // An estimate may be exactly zero (a numerator the data do not need).
-        sub.b.push_back(
-            Polynomial::trimmed(Eigen::VectorXd(b.block(layout.u_column(i, k, 0), j, m + 1, 1))));
-      }
-    }
-    submodels.push_back(std::move(sub));
-  }
-  Eigen::MatrixXd direct;
-  if (layout.direct) direct = b.middleRows(layout.d_at, layout.inputs).transpose();
-  return MimoAdditiveModel(layout.inputs, layout.outputs, std::move(submodels), direct);
-}
-
 // The iterate of denominators `a` whose numerators, D and free responses are the
 // coefficients `b` of every column (u_count x outputs).
 Iterate iterate_from_columns(const Layout& layout, const std::vector<Polynomial>& a,
@@ -208,6 +184,7 @@ Iterate iterate_from_columns(const Layout& layout, const std::vector<Polynomial>
   return {model_from_columns(layout, a, b), b.bottomRows(layout.free_count)};
 }
 
+// Numerators fitted by least squares to every output for the given denominators.
 Iterate fit_numerators(const Layout& layout, const MimoData& data,
                        const std::vector<Polynomial>& a) {
   const Eigen::MatrixXd u = numerator_regressors(layout, data, a);

@@ -24,10 +24,10 @@
 #include "ctid/refined_iv/initialization.h"
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/simulate.h"
-#include "internal/mimo_layout.h"
+#include "estimation/internal/mimo_layout.h"
+#include "estimation/internal/scaled_least_squares.h"
 #include "internal/mimo_srivc_parts.h"
 #include "internal/refined_iv_engine.h"
-#include "internal/scaled_least_squares.h"
 
 namespace ctid::mimo_srivc_parts {
 

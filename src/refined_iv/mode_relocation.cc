@@ -18,7 +18,7 @@
 #include "ctid/frequency/peaks.h"
 #include "ctid/frequency/periodogram.h"
 #include "ctid/refined_iv/additive_srivc.h"
-#include "refined_iv/internal/scaled_least_squares.h"
+#include "estimation/internal/scaled_least_squares.h"
 
 namespace ctid {
 
@@ -143,6 +143,94 @@ struct Candidate {
   Eigen::VectorXd beta;
 };
 
+// One round's candidates (at most trials_per_round, best first): for every residual peak at no
+// mode the model already has, the searched mode put in place of each movable submodel, the
+// numerators refitted by least squares and scored by their output error.
+std::vector<Candidate> relocation_candidates(
+    const SampledData& data, const std::vector<SubmodelOrder>& orders, const AdditiveModel& model,
+    const Eigen::VectorXd& u, const ModeRelocationOptions& relocation,
+    const std::vector<bool>& excited, const std::vector<int>& movable_submodels, int search_m) {
+  const double h = data.sample_time();
+  const Eigen::VectorXd& y = data.output();
+  const std::vector<Polynomial> denominators = denominators_of(model);
+  const ProjectedFit base = projected_fit(denominators, orders, u, y, h, data.input_hold());
+  // Orthonormal basis of the current regressors (columns scaled first for the rank).
+  const Eigen::VectorXd norms = internal::column_scales(base.x);
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(base.x * norms.cwiseInverse().asDiagonal());
+  const Eigen::MatrixXd q =
+      (qr.householderQ() * Eigen::MatrixXd::Identity(base.x.rows(), base.x.cols()))
+          .leftCols(qr.rank());
+
+  std::vector<Candidate> candidates;
+  // A peak at a mode the model already has is that mode's misfit, for the iteration to fix;
+  // a second submodel there would make the equations of (29) nearly singular.
+  const double line = 2.0 * M_PI / (static_cast<double>(data.size()) * h);
+  std::vector<double> present;
+  for (int i = 0; i < model.size(); ++i) {
+    if (const std::optional<ModalParameters> m = model.modal_parameters(i)) {
+      present.push_back(m->natural_frequency);
+    }
+  }
+  for (const PeriodogramPeak& peak : residual_peaks(base.fit.residual, excited, h, relocation)) {
+    const bool taken = std::any_of(present.begin(), present.end(), [&](double w) {
+      return std::abs(w - peak.frequency) < relocation.search_half_width * line;
+    });
+    if (taken) continue;
+    const ModeStart start =
+        search_mode(peak, q, base.fit.residual, u, h, data.input_hold(), search_m, relocation);
+    if (start.reduction <= 0.0) continue;
+    for (int moved : movable_submodels) {
+      const auto mi = static_cast<size_t>(moved);
+      std::vector<Polynomial> moved_denominators = denominators;
+      moved_denominators[mi] = mode_denominator(start.frequency, start.damping);
+      const ProjectedFit fit =
+          projected_fit(moved_denominators, orders, u, y, h, data.input_hold());
+      Candidate c;
+      c.submodel = moved;
+      c.peak = peak;
+      c.start = start;
+      c.mean_squared_error = fit.mean_squared_error;
+      c.beta.resize(model.parameter_count());
+      Eigen::Index pos = 0;
+      Eigen::Index col = 0;
+      for (size_t i = 0; i < orders.size(); ++i) {
+        const Polynomial& a = moved_denominators[i];
+        for (int k = 1; k <= orders[i].n; ++k) c.beta(pos++) = k <= a.degree() ? a[k] : 0.0;
+        for (int k = 0; k <= orders[i].m; ++k) c.beta(pos++) = fit.fit.coefficients(col++);
+      }
+      if (c.beta.allFinite()) candidates.push_back(std::move(c));
+    }
+  }
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) {
+                     return a.mean_squared_error < b.mean_squared_error;
+                   });
+  if (candidates.size() > static_cast<size_t>(relocation.trials_per_round)) {
+    candidates.resize(static_cast<size_t>(relocation.trials_per_round));
+  }
+  return candidates;
+}
+
+// The summary of a relocation run: relocations kept, trials, rounds, the output errors before
+// and after, and where each kept move took its submodel.
+std::string relocation_message(const ModeRelocationResult& out) {
+  std::ostringstream message;
+  message << out.relocations << " relocation(s) kept of " << out.trials.size() << " tried in "
+          << out.rounds << " round(s); mean squared output error "
+          << format_brief(out.initial_mean_squared_error) << " -> "
+          << format_brief(out.estimate.mean_squared_error)
+          << " (numerators re-fitted: " << format_brief(out.initial_projected_mean_squared_error)
+          << " -> " << format_brief(out.projected_mean_squared_error) << ")";
+  for (const RelocationTrial& t : out.trials) {
+    if (t.accepted) {
+      message << "; submodel " << t.submodel + 1 << " moved from "
+              << format_brief(t.moved_from / (2.0 * M_PI)) << " Hz to "
+              << format_brief(t.start_frequency / (2.0 * M_PI)) << " Hz";
+    }
+  }
+  return message.str();
+}
+
 }  // namespace
 
 ModeRelocationResult additive_srivc_relocated(const SampledData& data,
@@ -171,7 +259,6 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
   out.initial_score = current_score;
   out.score = current_score;
   const double h = data.sample_time();
-  const Eigen::VectorXd& y = data.output();
   std::vector<int> movable_submodels;
   for (size_t i = 0; i < orders.size(); ++i) {
     if (movable(orders[i])) movable_submodels.push_back(static_cast<int>(i));
@@ -187,63 +274,9 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
     ++out.rounds;
     const Eigen::VectorXd u = delay_samples(data.input(), current.input_delay);
     const AdditiveModel& model = current.model;
-    const std::vector<Polynomial> denominators = denominators_of(model);
-    const ProjectedFit base = projected_fit(denominators, orders, u, y, h, data.input_hold());
-    // Orthonormal basis of the current regressors (columns scaled first for the rank).
-    const Eigen::VectorXd norms = internal::column_scales(base.x);
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(base.x *
-                                                         norms.cwiseInverse().asDiagonal());
-    const Eigen::MatrixXd q =
-        (qr.householderQ() * Eigen::MatrixXd::Identity(base.x.rows(), base.x.cols()))
-            .leftCols(qr.rank());
-
-    std::vector<Candidate> candidates;
-    // A peak at a mode the model already has is that mode's misfit, for the iteration to fix;
-    // a second submodel there would make the equations of (29) nearly singular.
     const double line = 2.0 * M_PI / (static_cast<double>(data.size()) * h);
-    std::vector<double> present;
-    for (int i = 0; i < model.size(); ++i) {
-      if (const std::optional<ModalParameters> m = model.modal_parameters(i)) {
-        present.push_back(m->natural_frequency);
-      }
-    }
-    for (const PeriodogramPeak& peak : residual_peaks(base.fit.residual, excited, h, relocation)) {
-      const bool taken = std::any_of(present.begin(), present.end(), [&](double w) {
-        return std::abs(w - peak.frequency) < relocation.search_half_width * line;
-      });
-      if (taken) continue;
-      const ModeStart start =
-          search_mode(peak, q, base.fit.residual, u, h, data.input_hold(), search_m, relocation);
-      if (start.reduction <= 0.0) continue;
-      for (int moved : movable_submodels) {
-        const auto mi = static_cast<size_t>(moved);
-        std::vector<Polynomial> moved_denominators = denominators;
-        moved_denominators[mi] = mode_denominator(start.frequency, start.damping);
-        const ProjectedFit fit =
-            projected_fit(moved_denominators, orders, u, y, h, data.input_hold());
-        Candidate c;
-        c.submodel = moved;
-        c.peak = peak;
-        c.start = start;
-        c.mean_squared_error = fit.mean_squared_error;
-        c.beta.resize(model.parameter_count());
-        Eigen::Index pos = 0;
-        Eigen::Index col = 0;
-        for (size_t i = 0; i < orders.size(); ++i) {
-          const Polynomial& a = moved_denominators[i];
-          for (int k = 1; k <= orders[i].n; ++k) c.beta(pos++) = k <= a.degree() ? a[k] : 0.0;
-          for (int k = 0; k <= orders[i].m; ++k) c.beta(pos++) = fit.fit.coefficients(col++);
-        }
-        if (c.beta.allFinite()) candidates.push_back(std::move(c));
-      }
-    }
-    std::stable_sort(candidates.begin(), candidates.end(),
-                     [](const Candidate& a, const Candidate& b) {
-                       return a.mean_squared_error < b.mean_squared_error;
-                     });
-    if (candidates.size() > static_cast<size_t>(relocation.trials_per_round)) {
-      candidates.resize(static_cast<size_t>(relocation.trials_per_round));
-    }
+    const std::vector<Candidate> candidates = relocation_candidates(
+        data, orders, model, u, relocation, excited, movable_submodels, search_m);
 
     std::optional<EstimationResult> kept;
     size_t kept_trial = 0;
@@ -303,21 +336,7 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
     out.estimate = additive_srivc(data, orders, o);
   }
   out.projected_mean_squared_error = projected_mse(out.estimate, orders, data);
-  std::ostringstream message;
-  message << out.relocations << " relocation(s) kept of " << out.trials.size() << " tried in "
-          << out.rounds << " round(s); mean squared output error "
-          << format_brief(out.initial_mean_squared_error) << " -> "
-          << format_brief(out.estimate.mean_squared_error)
-          << " (numerators re-fitted: " << format_brief(out.initial_projected_mean_squared_error)
-          << " -> " << format_brief(out.projected_mean_squared_error) << ")";
-  for (const RelocationTrial& t : out.trials) {
-    if (t.accepted) {
-      message << "; submodel " << t.submodel + 1 << " moved from "
-              << format_brief(t.moved_from / (2.0 * M_PI)) << " Hz to "
-              << format_brief(t.start_frequency / (2.0 * M_PI)) << " Hz";
-    }
-  }
-  out.message = message.str();
+  out.message = relocation_message(out);
   return out;
 }
 

@@ -639,11 +639,8 @@ void set_estimate(Run& run) {
   result.model = AdditiveModel::from_parameters(run.layout.orders, run.beta, run.tau);
   result.transfer_function = result.model.to_transfer_function();
   if (run.problem.unfactored) {
-    try {
-      result.additive_view = AdditiveModel::from_transfer_function(result.transfer_function);
-    } catch (const InvalidArgument&) {
-      result.additive_view.reset();
-    }
+    // None when the poles do not split (e.g. a repeated pole).
+    result.additive_view = AdditiveModel::split_transfer_function(result.transfer_function);
   } else {
     result.additive_view = result.model;
   }

@@ -271,11 +271,7 @@ EstimationResult unstable_clsrivc_from(const SampledData& data,
   result.parameters = theta;
   result.model = AdditiveModel::from_parameters({o}, theta, 0.0);
   result.transfer_function = result.model.to_transfer_function();
-  result.additive_view.reset();
-  try {
-    result.additive_view = AdditiveModel::from_transfer_function(result.transfer_function);
-  } catch (const InvalidArgument&) {
-  }
+  result.additive_view = AdditiveModel::split_transfer_function(result.transfer_function);
   const bool loop_stable = pass.has_value() && !stale;
   if (loop_stable) {
     result.closed_loop_fit_percent = unstable_loop_fit(data, *pass);

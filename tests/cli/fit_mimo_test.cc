@@ -15,6 +15,7 @@
 #include "cli/run_ctid.h"
 #include "ctid/core/mimo_data.h"
 #include "ctid/core/mimo_model.h"
+#include "ctid/estimation/mimo_modes.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_data_csv.h"

@@ -1,10 +1,13 @@
 #include "ctid/core/additive_model.h"
 
 #include <cmath>
+#include <optional>
+#include <string>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "core/internal/finite_transfer_function.h"
 #include "ctid/core/error.h"
 #include "support/paper_systems.h"
 
@@ -74,6 +77,52 @@ TEST(AdditiveModel, RepeatedPolesAreRejected) {
   const TransferFunction g(Polynomial({1.0}), Polynomial({1.0, 2.0, 1.0}));
   EXPECT_THAT([&] { AdditiveModel::from_transfer_function(g); },
               ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("repeated pole")));
+}
+
+// The split as a value (decision 0045): none, with the reason from_transfer_function throws,
+// for a repeated pole, an improper or a constant model; the same model where it splits.
+TEST(AdditiveModel, SplitIsAValueWhereThePolesDoNotSplit) {
+  std::string why;
+  EXPECT_FALSE(AdditiveModel::split_transfer_function(
+                   TransferFunction(Polynomial({1.0}), Polynomial({1.0, 2.0, 1.0})), 1e-8, &why)
+                   .has_value());
+  EXPECT_THAT(why, HasSubstr("repeated pole"));
+  EXPECT_FALSE(
+      AdditiveModel::split_transfer_function(
+          TransferFunction(Polynomial({1.0, 1.0, 1.0}), Polynomial({1.0, 1.0})), 1e-8, &why)
+          .has_value());
+  EXPECT_THAT(why, HasSubstr("improper"));
+  EXPECT_FALSE(
+      AdditiveModel::split_transfer_function(TransferFunction(Polynomial({2.0}), Polynomial({1.0})))
+          .has_value());
+  const TransferFunction g = testing::open_loop_four_modes().to_transfer_function();
+  const std::optional<AdditiveModel> split = AdditiveModel::split_transfer_function(g);
+  ASSERT_TRUE(split.has_value());
+  EXPECT_EQ(split->parameters(), AdditiveModel::from_transfer_function(g).parameters());
+  EXPECT_EQ(split->size(), AdditiveModel::from_transfer_function(g).size());
+}
+
+// A pole so close to the origin that 1 / p overflows: none, where the thrown split names it.
+TEST(AdditiveModel, SplitOfAnOverflowingPoleIsNone) {
+  const TransferFunction g(Polynomial({1.0}), Polynomial({1e-320, 1.0}));
+  EXPECT_FALSE(AdditiveModel::split_transfer_function(g).has_value());
+  EXPECT_THAT([&] { AdditiveModel::from_transfer_function(g); },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("not finite")));
+}
+
+// The sum of the submodels as a value: the transfer function where its coefficients are
+// finite, none where they overflow (to_transfer_function throws there).
+TEST(AdditiveModel, TransferFunctionIfFiniteIsNoneOnOverflow) {
+  const AdditiveModel g = testing::open_loop_four_modes();
+  const std::optional<TransferFunction> sum = internal::transfer_function_if_finite(g);
+  ASSERT_TRUE(sum.has_value());
+  EXPECT_EQ(sum->denominator(), g.to_transfer_function().denominator());
+  EXPECT_EQ(sum->numerator(), g.to_transfer_function().numerator());
+  const AdditiveModel huge({{Polynomial({1.0, 1e200}), Polynomial({1.0}), 0},
+                            {Polynomial({1.0, 1e200}), Polynomial({1.0}), 0}});
+  EXPECT_FALSE(internal::transfer_function_if_finite(huge).has_value());
+  EXPECT_THAT([&] { (void)huge.to_transfer_function(); },
+              ::testing::ThrowsMessage<InvalidArgument>(HasSubstr("overflows")));
 }
 
 TEST(AdditiveModel, ModalParametersClosedForm) {

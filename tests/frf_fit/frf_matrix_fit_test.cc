@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "ctid/estimation/mimo_modes.h"
 #include "support/mimo_systems.h"
 #include "support/paper_systems.h"
 #include "support/sanitizers.h"

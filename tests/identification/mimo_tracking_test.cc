@@ -15,6 +15,7 @@
 
 #include "ctid/core/error.h"
 #include "ctid/core/state_space.h"
+#include "ctid/estimation/mimo_modes.h"
 #include "ctid/identification/mode_tracking.h"
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/excitation.h"

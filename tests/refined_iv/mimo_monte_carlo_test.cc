@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "ctid/estimation/mimo_modes.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"

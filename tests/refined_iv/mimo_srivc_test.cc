@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "ctid/estimation/mimo_modes.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/simulation/excitation.h"

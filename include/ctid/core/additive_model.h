@@ -92,6 +92,13 @@ class AdditiveModel {
   /// distinct non-zero poles (repeated poles throw InvalidArgument).
   static AdditiveModel from_transfer_function(const TransferFunction& g,
                                               double imag_tolerance = 1e-8);
+  /// from_transfer_function's split as a value: none when the poles cannot be split (a repeated
+  /// pole, a complex pole without its conjugate, coefficients that overflow) or `g` is improper
+  /// or constant, with the reason in `failure` if given. Callers that steer on whether a model
+  /// splits use this; from_transfer_function throws the same reason (decision 0045).
+  static std::optional<AdditiveModel> split_transfer_function(const TransferFunction& g,
+                                                              double imag_tolerance = 1e-8,
+                                                              std::string* failure = nullptr);
 
   const std::vector<Submodel>& submodels() const { return submodels_; }
   int size() const { return static_cast<int>(submodels_.size()); }

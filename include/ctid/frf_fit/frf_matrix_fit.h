@@ -23,10 +23,10 @@
 #include "ctid/core/additive_model.h"
 #include "ctid/core/fields.h"
 #include "ctid/core/mimo_model.h"
+#include "ctid/estimation/mimo_modes.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/verdict.h"
 #include "ctid/frequency/mimo_frf.h"
-#include "ctid/refined_iv/mimo_srivc.h"
 
 namespace ctid {
 

@@ -19,6 +19,7 @@
 #include "ctid/core/mimo_data.h"
 #include "ctid/core/mimo_model.h"
 #include "ctid/core/sampled_data.h"
+#include "ctid/estimation/mimo_modes.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/verdict.h"
 #include "ctid/identification/identification.h"

@@ -1,6 +1,6 @@
 // The pieces of mimo_srivc (the shared-pole refined IV estimator of several inputs and
 // outputs) that its files share: mimo_srivc.cc (the columns, the iteration and the estimate),
-// mimo_srivc_start.cc (the start), mimo_srivc_modes.cc (covariance, modes) and
+// mimo_srivc_start.cc (the start), mimo_srivc_modes.cc (covariance) and
 // mimo_rank_one.cc (the rank-one residue refit). Private to refined_iv.
 #pragma once
 
@@ -14,7 +14,8 @@
 
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/mimo_srivc.h"
-#include "refined_iv/internal/mimo_layout.h"
+#include "estimation/internal/mimo_layout.h"
+#include "estimation/internal/mimo_modes.h"
 
 namespace ctid::mimo_srivc_parts {
 
@@ -87,9 +88,8 @@ std::vector<Polynomial> denominators(const MimoAdditiveModel& model);
 // Rows of submodel i's coefficients in Iterate::free.
 int free_row(const Layout& layout, int i);
 // The model of denominators `a` whose numerators and D are the coefficients `b` of the
-// numerator columns.
-MimoAdditiveModel model_from_columns(const Layout& layout, const std::vector<Polynomial>& a,
-                                     const Eigen::MatrixXd& b);
+// numerator columns (estimation's, shared with frf_matrix_fit).
+using internal::model_from_columns;
 // Numerators fitted by least squares to every output for the given denominators.
 Iterate fit_numerators(const Layout& layout, const MimoData& data,
                        const std::vector<Polynomial>& a);
@@ -168,10 +168,10 @@ Iterate automatic_start(const Layout& layout, const MimoData& data, Hold interpo
 Eigen::MatrixXd mimo_covariance(const Layout& layout, const MimoData& data, const Iterate& x,
                                 const Eigen::MatrixXd& u, const Eigen::MatrixXd& residuals,
                                 NoiseAssumption noise, int max_ar_order);
-// The root with a non-negative imaginary part of 1 + a1 s + a2 s^2.
-std::complex<double> upper_pole(double a1, double a2);
-std::vector<MimoMode> modes_of(const Layout& layout, const MimoAdditiveModel& model,
-                               const Eigen::MatrixXd& covariance);
+// The modes (estimation's, shared with frf_matrix_fit): the upper pole of a second-order
+// denominator and every second-order submodel as a MimoMode.
+using internal::modes_of;
+using internal::upper_pole;
 Layout model_layout(const Layout& layout);
 Eigen::MatrixXd model_block(const Layout& layout, const Eigen::MatrixXd& joint);
 

@@ -1,7 +1,8 @@
-// Where the parameters of a MimoAdditiveModel sit, shared by the time-domain (mimo_srivc) and
-// the FRF-matrix (frf_matrix_fit) estimators and the layout of their covariance: every
-// submodel's a_i1..a_in in one block, then per output j its numerator coefficients (submodel
-// i, input k, power r) and D[j, .] last. Private to refined_iv.
+// Where the parameters of a MimoAdditiveModel sit, shared by the time-domain (mimo_srivc,
+// refined_iv) and the FRF-matrix (frf_matrix_fit, frf_fit) estimators, by the modes computed
+// from either (mimo_modes) and by the layout of their covariance: every submodel's a_i1..a_in
+// in one block, then per output j its numerator coefficients (submodel i, input k, power r)
+// and D[j, .] last. Private to the estimator modules (decision 0045).
 #pragma once
 
 #include <cstddef>
@@ -9,9 +10,12 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "ctid/core/additive_model.h"
 #include "ctid/core/error.h"
 #include "ctid/core/mimo_model.h"
+#include "ctid/core/polynomial.h"
 
 namespace ctid::internal {
 
@@ -99,5 +103,11 @@ inline void check_initial_model(const MimoLayout& layout, const MimoAdditiveMode
             start[i].integrators, " integrators; the structure asks for ", l);
   }
 }
+
+/// The model of denominators `a` whose numerators and D are the coefficients `b` of the
+/// numerator columns (at least model_columns() x outputs, one column per output; rows past the
+/// model's columns are not read). A numerator estimated as exactly zero is trimmed.
+MimoAdditiveModel model_from_columns(const MimoLayout& layout, const std::vector<Polynomial>& a,
+                                     const Eigen::MatrixXd& b);
 
 }  // namespace ctid::internal

@@ -1,7 +1,7 @@
 // Least squares on regressors with columns scaled to unit norm first (column-pivoted QR), so
 // that columns of very different size (filtered derivatives of different order) do not spoil
-// the rank decision. Private to refined_iv: the initialisation, mode relocation and the
-// covariance use the same scaling.
+// the rank decision. Private to the estimator modules: refined_iv's initialisation, mode
+// relocation and covariance, and frf_fit's numerator fits use the same scaling.
 #pragma once
 
 #include <Eigen/Dense>
