@@ -68,6 +68,27 @@ TEST_F(FieldFlags, OmaFitFrfAndFeedbackHaveAFlagForEveryOption) {
       "feedback", {"recursive.initial_theta", "recursive.initial_covariance_matrix"});
 }
 
+// The page that lists a command's flags names every generated one.
+template <HasFields S>
+void expect_documented(const std::string& page, const std::set<std::string>& exceptions = {}) {
+  const std::set<std::string> flags =
+      long_flags(testing::slurp(std::string(CTID_SOURCE_DIR) + "/" + page));
+  for (const FieldFlag& f : field_flags<S>()) {
+    if (exceptions.count(f.path) > 0) continue;
+    EXPECT_EQ(flags.count("--" + f.flag), 1u)
+        << page << " does not name --" << f.flag << " (" << S::type_name << "." << f.path << ")";
+  }
+}
+
+TEST(FieldFlagsDocs, EveryGeneratedFlagIsDocumented) {
+  expect_documented<IdentificationOptions>("docs/cli-estimation.md");
+  expect_documented<OmaOptions>("docs/oma.md");
+  expect_documented<FrfMatrixFitOptions>("docs/frf-fit.md");
+  expect_documented<FeedbackIdentificationOptions>(
+      "docs/algorithms/feedback-delay.md",
+      {"recursive.initial_theta", "recursive.initial_covariance_matrix"});
+}
+
 // Today's spellings where a field's name differs from its flag.
 TEST_F(FieldFlags, FieldsCarryTheSpellingsTheCommandsHaveUsed) {
   const auto spelt = [](const std::vector<FieldFlag>& all, const std::string& path) {
