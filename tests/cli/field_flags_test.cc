@@ -63,6 +63,8 @@ TEST_F(FieldFlags, FitHasAFlagForEveryIdentificationAndProcessOption) {
 TEST_F(FieldFlags, OmaFitFrfAndFeedbackHaveAFlagForEveryOption) {
   expect_every_field_a_flag<OmaOptions>("oma");
   expect_every_field_a_flag<FrfMatrixFitOptions>("fit-frf");
+  // The default shown is the struct's (docs/frf-fit.md quotes it).
+  EXPECT_THAT(ctid({"fit-frf", "--help"}).out, HasSubstr("--start-iterations INT=50"));
   // An Eigen vector and matrix have no command-line form (Python and JSON give them).
   expect_every_field_a_flag<FeedbackIdentificationOptions>(
       "feedback", {"recursive.initial_theta", "recursive.initial_covariance_matrix"});
@@ -115,8 +117,9 @@ TEST_F(FieldFlags, FieldsCarryTheSpellingsTheCommandsHaveUsed) {
 // validate() refuses the value, and the message names the flag.
 TEST_F(FieldFlags, AValueOnTheCommandLineReachesItsField) {
   write("d.csv", "t,u,y\n0,0,0\n0.1,1,0\n0.2,0,1\n0.3,1,0\n");
-  expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--noise-model-max-order", "0"}), "fit",
-                   "--noise-model-max-order is 0; it must be >= 1");
+  expect_bad_input(
+      ctid({"fit", "d.csv", "--poles", "2", "--zeros", "1", "--noise-model-max-order", "0"}), "fit",
+      "--noise-model-max-order is 0; it must be >= 1");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--relocation-min-peak-to-floor", "0.5"}),
                    "fit", "--relocation-min-peak-to-floor is 0.5; it must be finite and > 1");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--relocation-damping-ratios", "0.1,2"}),
@@ -129,9 +132,9 @@ TEST_F(FieldFlags, AValueOnTheCommandLineReachesItsField) {
 TEST_F(FieldFlags, AnEnumerationTakesItsNamesAndAnOptionalOneReachesItsField) {
   write("d.csv", "t,u,y\n0,0,0\n0.1,1,0\n0.2,0,1\n0.3,1,0\n");
   // An enumeration's words are checked as the command line is read.
-  expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--noise", "pink"}), "fit",
+  expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--zeros", "1", "--noise", "pink"}), "fit",
                    "--noise is 'pink'; it must be white or coloured");
-  expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--relocation-criterion", "aic"}), "fit",
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--relocation-criterion", "aic"}), "fit",
                    "--relocation-criterion is 'aic'; it must be projected_output_error or "
                    "output_error");
   // iv.hold (optional) must agree with output_error.hold (--hold, foh by default).
