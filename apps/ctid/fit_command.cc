@@ -397,6 +397,8 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   options.tolerance = f.options.refined_iv.tolerance;
   options.output_interpolation = output_interpolation(f);
   options.noise = noise_assumption(f);
+  options.noise_model_max_order = f.options.refined_iv.noise_model_max_order;
+  options.compute_covariance = f.options.refined_iv.compute_covariance;
   options.direct_term = f.direct_term;
   options.input_delays = f.input_delays;
   options.rank_one_residues = f.rank_one;
