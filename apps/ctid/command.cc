@@ -19,6 +19,7 @@
 #include "ctid/core/format.h"
 #include "ctid/io/file.h"
 #include "ctid/io/json.h"
+#include "field_flags.h"
 
 namespace ctid::cli {
 namespace {
@@ -138,7 +139,10 @@ std::string with_flag_names(const std::string& message, const CLI::App& app) {
       components.push_back(message.substr(at + 1, end - at - 1));
       at = end;
     }
-    const std::string flag = flag_for(components, app);
+    // A generated flag is found by its field's path; others by the field's name.
+    std::string flag = recorded_field_flag(
+        app, message.substr(start, found + kMark.size() - 1 - start), components);
+    if (flag.empty()) flag = flag_for(components, app);
     if (flag.empty()) continue;
     out.append(message, from, start - from);
     out += flag;

@@ -18,9 +18,18 @@
 #include "ctid/identification/feedback_loop.h"
 #include "ctid/io/feedback_result_json.h"
 #include "ctid/io/sampled_data_csv.h"
+#include "field_flags.h"
 #include "progress.h"
 
 namespace ctid::cli {
+
+// --step1 has been spelt batch or rls on the command line.
+template <>
+struct CommandLineWords<Step1Method> {
+  static std::vector<std::pair<std::string, Step1Method>> words() {
+    return {{"batch", Step1Method::batch}, {"rls", Step1Method::recursive}};
+  }
+};
 namespace {
 
 struct FeedbackFlags {
@@ -36,10 +45,7 @@ struct FeedbackFlags {
   double delay = std::numeric_limits<double>::quiet_NaN();
   std::string delay_scan;
   int scan_points = 13;
-  std::string step1 = "batch";
-  std::string separation = "both";
-  std::string hold = "foh";
-  double filter_pole = 1.0;
+  FeedbackIdentificationOptions options;  ///< every field a flag (field_flags.h) but two
 };
 
 void run_feedback(const FeedbackFlags& f) {
@@ -62,13 +68,7 @@ void run_feedback(const FeedbackFlags& f) {
   const SampledData data = io::read_sampled_data(f.data, columns);
 
   const DelayedFeedbackStructure structure{f.forward_order, f.feedback_order};
-  FeedbackIdentificationOptions options;
-  options.regressors.filter_pole = f.filter_pole;
-  options.step1 = f.step1 == "rls" ? Step1Method::recursive : Step1Method::batch;
-  options.separation = f.separation == "gcd"         ? SeparationMethod::gcd
-                       : f.separation == "kronecker" ? SeparationMethod::kronecker
-                                                     : SeparationMethod::both;
-  options.output_error.hold = f.hold == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
+  const FeedbackIdentificationOptions& options = f.options;
 
   io::DelayedFeedbackResult document;
   FeedbackIdentificationResult& r = document.identification;
@@ -148,17 +148,10 @@ Command add_feedback_command(CLI::App& parent) {
   delay->excludes(delay_scan);
   app->add_option("--scan-points", f.scan_points, "Grid points of --delay-scan")
       ->capture_default_str();
-  app->add_option("--step1", f.step1, "Step 1 solver")
-      ->check(CLI::IsMember({"batch", "rls"}))
-      ->capture_default_str();
-  app->add_option("--separation", f.separation, "Separation candidates")
-      ->check(CLI::IsMember({"kronecker", "gcd", "both"}))
-      ->capture_default_str();
-  app->add_option("--hold", f.hold, "Input between samples in the output-error model")
-      ->check(CLI::IsMember({"zoh", "foh"}))
-      ->capture_default_str();
-  app->add_option("--filter-pole", f.filter_pole, "Pole a > 0 of the step-1 filter 1/(s+a)^q")
-      ->capture_default_str();
+  FieldFlagSettings settings;
+  // An Eigen vector and matrix: given from Python or JSON, not on the command line.
+  settings.none = {"recursive.initial_theta", "recursive.initial_covariance_matrix"};
+  add_field_flags(*app, f.options, settings);
   app->add_option("--input-column", f.input_column, "Input column")->capture_default_str();
   app->add_option("--output-column", f.output_column, "Output column")->capture_default_str();
   app->add_option("--time-column", f.time_column, "Time column")->capture_default_str();

@@ -30,6 +30,7 @@
 #include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
 #include "data_flags.h"
+#include "field_flags.h"
 #include "plot_support.h"
 #include "progress.h"
 #include "structure_flags.h"
@@ -47,7 +48,9 @@ struct FitFlags {
   std::vector<std::string> submodels;
   int modes = 0;
 
-  int delay = 0;
+  // Every field a flag (field_flags.h) but those read in another form below: the controller,
+  // delay_scan, delay_range, record_input_delays, two_stage, the start and initial_model.
+  IdentificationOptions options;
   std::string delay_scan;
   std::string delay_range;
   std::string record_delays;         // D1,D2,...
@@ -55,19 +58,10 @@ struct FitFlags {
   bool rank_one = false;             // several inputs and outputs: Res_i = psi_i L_i^T
 
   std::string controller;
-  bool two_stage = false;  // closed loop, unknown controller (decision 0043)
-  std::string sensitivity_model = "automatic";
-  int sensitivity_order = TwoStageOptions{}.sensitivity_order;
+  bool two_stage = false;             // closed loop, unknown controller (decision 0043)
+  TwoStageOptions two_stage_options;  // with --two-stage
   std::string initial;
   std::string start = "auto";
-  int start_screening = RefinedIvOptions{}.start_screening_samples;
-  int max_iterations = RefinedIvOptions{}.max_iterations;
-  double tolerance = RefinedIvOptions{}.tolerance;
-  std::string interpolation = "foh";
-  std::string noise = "coloured";
-  std::string initial_conditions = "zero";
-  bool history = false;
-  bool relocate_modes = false;
   bool direct_term = false;  // several inputs/outputs: estimate D
   bool irregular = false;    // fit on the time stamps as logged (decision 0034)
 
@@ -231,13 +225,9 @@ void print_delay_scan(std::ostream& out, const InputDelayScanResult& scan) {
   if (!scan.note.empty()) out << "warning: " << scan.note << "\n";
 }
 
-// --interpolation and --noise as the estimators' enumerations (SISO and several channels).
-Hold output_interpolation(const FitFlags& f) {
-  return f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
-}
-NoiseAssumption noise_assumption(const FitFlags& f) {
-  return enum_from_name<NoiseAssumption>(f.noise).value();
-}
+// --interpolation and --noise (SISO and several channels).
+Hold output_interpolation(const FitFlags& f) { return f.options.refined_iv.output_interpolation; }
+NoiseAssumption noise_assumption(const FitFlags& f) { return f.options.refined_iv.noise; }
 
 // Stage 1 of --two-stage and what the estimate assumes (decision 0043).
 void print_two_stage(std::ostream& out, const TwoStageResult& stage) {
@@ -249,22 +239,12 @@ void print_two_stage(std::ostream& out, const TwoStageResult& stage) {
 
 // The flags as IdentificationOptions (the controller and --initial read from their files).
 IdentificationOptions identification_options(const FitFlags& f) {
-  IdentificationOptions options;
+  IdentificationOptions options = f.options;
   if (!f.controller.empty()) options.controller = io::read_discrete_transfer_function(f.controller);
   if (!f.delay_scan.empty()) options.delay_scan = parse_delay_range(f.delay_scan);
   if (!f.delay_range.empty()) options.delay_range = parse_delay_interval(f.delay_range);
-  options.relocate_modes = f.relocate_modes;
-  if (f.two_stage)
-    options.two_stage = TwoStageOptions{
-        enum_from_name<SensitivityModel>(f.sensitivity_model).value(), f.sensitivity_order};
+  if (f.two_stage) options.two_stage = f.two_stage_options;
   RefinedIvOptions& refined = options.refined_iv;
-  refined.max_iterations = f.max_iterations;
-  refined.tolerance = f.tolerance;
-  refined.output_interpolation = output_interpolation(f);
-  refined.noise = noise_assumption(f);
-  refined.initial_conditions = enum_from_name<InitialConditions>(f.initial_conditions).value();
-  refined.record_history = f.history;
-  refined.input_delay = f.delay;
   if (!f.record_delays.empty()) {
     refined.record_input_delays =
         parse_counts(f.record_delays, "--record-delays '" + f.record_delays + "'");
@@ -272,7 +252,6 @@ IdentificationOptions identification_options(const FitFlags& f) {
   if (!f.initial.empty() && f.start != "auto") {
     usage_error("give --start or --initial, not both");
   }
-  refined.start_screening_samples = f.start_screening;
   if (f.start == "lssvf") {
     refined.start = StartMethod::lssvf;
   } else if (f.start == "frf") {
@@ -415,14 +394,16 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   }
   MimoIdentificationOptions options;
   MimoRefinedIvOptions& refined = options.refined_iv;
-  refined.max_iterations = f.max_iterations;
-  refined.tolerance = f.tolerance;
+  refined.max_iterations = f.options.refined_iv.max_iterations;
+  refined.tolerance = f.options.refined_iv.tolerance;
   refined.output_interpolation = output_interpolation(f);
   refined.noise = noise_assumption(f);
+  refined.noise_model_max_order = f.options.refined_iv.noise_model_max_order;
+  refined.compute_covariance = f.options.refined_iv.compute_covariance;
   refined.direct_term = f.direct_term;
   refined.input_delays = f.input_delays;
   refined.rank_one_residues = f.rank_one;
-  refined.initial_conditions = enum_from_name<InitialConditions>(f.initial_conditions).value();
+  refined.initial_conditions = f.options.refined_iv.initial_conditions;
   refined.validate();  // named as MimoRefinedIvOptions, before the data is read
   const std::string start_file = f.initial.empty() ? (f.start == "auto" ? "" : f.start) : f.initial;
   const std::string start_flag = f.initial.empty() ? "--start" : "--initial";
@@ -515,7 +496,8 @@ void check_irregular_flags(const FitFlags& f, const CLI::App& app) {
     if (app.count(flag) > 0) usage_error(std::string(flag) + why);
   }
   if (f.model == "additive") usage_error("--model additive" + why);
-  if (f.initial_conditions != "zero") usage_error("--initial-conditions estimate" + why);
+  if (f.options.refined_iv.initial_conditions != InitialConditions::zero)
+    usage_error("--initial-conditions estimate" + why);
   if (f.data.files.size() > 1) usage_error("several data files" + why);
 }
 
@@ -591,7 +573,7 @@ ProcessParameterSetting& setting_for(ProcessModelOptions& options, const std::st
 
 ProcessModelOptions process_options(const FitFlags& f) {
   ProcessModelOptions options;
-  options.max_iterations = f.max_iterations;
+  options.max_iterations = f.options.refined_iv.max_iterations;  // one --max-iterations
   if (f.max_delay >= 0.0) options.max_delay = f.max_delay;
   for (const std::string& entry : f.process_start) {
     const auto [name, text] = parameter_entry(entry, "--process-start", "NAME=VALUE, e.g. Tp1=2");
@@ -896,10 +878,6 @@ Command add_fit_command(CLI::App& parent) {
                   "Additive: K second-order modes (--submodel 2,0 K times; with "
                   "--input-columns/--output-columns --submodel 2,1: complex residues)")
       ->group("Structure");
-  app->add_option("--delay", f.delay, "Known input delay in samples")
-      ->capture_default_str()
-      ->check(non_negative_number())
-      ->group("Structure");
   app->add_option("--input-delays", f.input_delays,
                   "Several inputs: the known delay of each input in samples, D1,D2,... (one per "
                   "--input-columns entry; fractions allowed)")
@@ -910,15 +888,15 @@ Command add_fit_command(CLI::App& parent) {
                 "Several inputs and outputs: restrict every mode's residues to one shape times "
                 "one participation vector (rank one)")
       ->group("Structure");
-  app->add_option("--delay-scan", f.delay_scan,
+  app->add_option(flag_of<IdentificationOptions>("delay_scan"), f.delay_scan,
                   "Estimate the delay: fit every delay MIN:MAX (samples), keep the smallest "
                   "output error")
       ->group("Structure");
-  app->add_option("--record-delays", f.record_delays,
+  app->add_option(flag_of<IdentificationOptions>("refined_iv.record_input_delays"), f.record_delays,
                   "Several files: whole samples by which each file's input lags more than the "
                   "model's delay (D1,D2,..., one per file)")
       ->group("Structure");
-  app->add_option("--delay-range", f.delay_range,
+  app->add_option(flag_of<IdentificationOptions>("delay_range"), f.delay_range,
                   "Estimate the delay as a continuous parameter in MIN:MAX (seconds): the "
                   "whole samples are scanned, then the delay is refined with its standard error")
       ->group("Structure");
@@ -948,71 +926,43 @@ Command add_fit_command(CLI::App& parent) {
       ->check(non_negative_number())
       ->group("Process model");
 
-  app->add_option("--controller,-c", f.controller,
+  app->add_option(flag_of<IdentificationOptions>("controller") + ",-c", f.controller,
                   "Discrete controller JSON (discrete_transfer_function in q): closed loop")
       ->check(CLI::ExistingFile)
       ->group("Closed loop");
-  app->add_flag("--two-stage", f.two_stage,
+  app->add_flag(flag_of<IdentificationOptions>("two_stage"), f.two_stage,
                 "Closed loop with an unknown controller: model r -> u (discrete, refined IV), then "
                 "fit the "
                 "plant from the simulated noise-free input (needs the reference column; "
                 "decision 0043)")
       ->excludes("--controller")
       ->group("Closed loop");
-  app->add_option("--sensitivity-model", f.sensitivity_model,
-                  "--two-stage: model of r -> u: automatic (by AIC), fir or rational")
-      ->check(CLI::IsMember({"automatic", "fir", "rational"}))
-      ->needs("--two-stage")
-      ->group("Closed loop");
-  app->add_option("--sensitivity-order", f.sensitivity_order,
-                  "--two-stage: FIR taps or rational order of the model of r -> u (0: by AIC); "
-                  "with --sensitivity-model fir or rational")
-      ->check(CLI::Range(0, kMaxSensitivityOrder))
-      ->needs("--two-stage")
-      ->group("Closed loop");
+  FieldFlagSettings two_stage;
+  two_stage.group = "Closed loop";
+  two_stage.needs = flag_of<IdentificationOptions>("two_stage");
+  two_stage.path = "IdentificationOptions.two_stage";
+  add_field_flags(*app, f.two_stage_options, two_stage);
 
-  app->add_option("--start", f.start,
+  app->add_option(flag_of<IdentificationOptions>("refined_iv.start"), f.start,
                   "Start: auto (LSSVF grid and FRF peaks, best output error), lssvf, frf, or a "
                   "model/result JSON")
       ->capture_default_str()
       ->group("Iteration");
-  app->add_option("--start-screening", f.start_screening,
-                  "A record longer than this many samples finds the automatic start on its "
-                  "first max(this, N/32) samples, then fits the whole record; 0: the whole "
-                  "record")
-      ->check(non_negative_number())
-      ->capture_default_str()
-      ->group("Iteration");
-  app->add_option("--initial", f.initial, "Starting model or result JSON (same as --start FILE)")
+  app->add_option(flag_of<IdentificationOptions>("refined_iv.initial_model"), f.initial,
+                  "Starting model or result JSON (same as --start FILE)")
       ->check(CLI::ExistingFile)
       ->group("Iteration");
-  app->add_option("--max-iterations", f.max_iterations, "Iteration limit")
-      ->capture_default_str()
-      ->group("Iteration");
-  app->add_option("--tolerance", f.tolerance,
-                  "Stop when the relative parameter change falls below this")
-      ->capture_default_str()
-      ->group("Iteration");
-  app->add_option("--interpolation", f.interpolation,
-                  "Output interpolation between samples before filtering: zoh or foh")
-      ->check(CLI::IsMember({"zoh", "foh"}))
-      ->capture_default_str()
-      ->group("Iteration");
-  app->add_option("--noise", f.noise,
-                  "Noise assumed by the covariance: white or coloured (sandwich, AR model of the "
-                  "residuals)")
-      ->check(CLI::IsMember({"white", "coloured"}))
-      ->capture_default_str()
-      ->group("Iteration");
-  app->add_option("--initial-conditions", f.initial_conditions,
-                  "State at the first sample: zero (at rest, as in the paper) or estimate (each "
-                  "submodel's free response is estimated with the parameters; for records that "
-                  "start mid-motion)")
-      ->check(CLI::IsMember({"zero", "estimate"}))
-      ->capture_default_str()
-      ->group("Iteration");
-  app->add_flag("--history", f.history, "Record every iteration's parameters in the result")
-      ->group("Iteration");
+  FieldFlagSettings settings;
+  settings.group = "Iteration";
+  // Read from files or as MIN:MAX, D1,D2,... and auto|lssvf|frf|FILE above; two_stage's own.
+  settings.by_hand = {"controller",
+                      "delay_scan",
+                      "delay_range",
+                      "two_stage",
+                      "refined_iv.initial_model",
+                      "refined_iv.start",
+                      "refined_iv.record_input_delays"};
+  add_field_flags(*app, f.options, settings);
   app->add_flag("--irregular", f.irregular,
                 "Fit on the time stamps as logged (jitter, gaps, duplicate stamps), the filters "
                 "discretised on each interval for --input-hold; unfactored, open loop, one "
@@ -1022,12 +972,6 @@ Command add_fit_command(CLI::App& parent) {
                 "Several inputs/outputs: estimate a direct term D besides the modes (e.g. "
                 "accelerations from forces, with --submodel 2,1)")
       ->group("Structure");
-  app->add_flag("--relocate-modes", f.relocate_modes,
-                "Additive, open loop: after the fit, move second-order submodels to peaks of "
-                "the residual spectrum and keep moves that fit better (finds weak, lightly "
-                "damped modes a wrong start missed)")
-      ->group("Iteration");
-
   app->add_option("--output,-o", f.output, "Result JSON to write (everything in the estimate)")
       ->group("Output");
   app->add_option("--model-output", f.model_output,

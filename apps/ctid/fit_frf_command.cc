@@ -25,6 +25,7 @@
 #include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
+#include "field_flags.h"
 #include "plot_support.h"
 #include "progress.h"
 
@@ -35,12 +36,9 @@ struct FitFrfFlags {
   std::string file;
   int modes = 0;
   std::vector<std::string> submodels;  // N,M
-  bool direct = false;
-  std::string band;  // LO:HI [Hz]
-  std::string weighting = "uniform";
+  FrfMatrixFitOptions options;         ///< every field a flag (field_flags.h) but the band's
+  std::string band;                    // LO:HI [Hz]: min_frequency, max_frequency
   std::string initial;
-  int max_iterations = FrfMatrixFitOptions{}.max_iterations;
-  double tolerance = FrfMatrixFitOptions{}.tolerance;
   std::string output;
   std::string plot;  // DIR
   bool force = false;
@@ -113,11 +111,8 @@ ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
   const std::vector<SubmodelOrder> orders = orders_of(f, app);
   FrfIdentificationOptions options;
   FrfMatrixFitOptions& fit = options.frf_fit;
+  fit = f.options;
   std::tie(fit.min_frequency, fit.max_frequency) = band_of(f.band);
-  fit.direct_term = f.direct;
-  fit.weighting = f.weighting == "variance" ? FrfWeighting::variance : FrfWeighting::uniform;
-  fit.max_iterations = f.max_iterations;
-  fit.tolerance = f.tolerance;
   fit.validate();  // named as FrfMatrixFitOptions, before the FRF is read
   std::filesystem::path package;
   if (!f.plot.empty()) {
@@ -207,27 +202,18 @@ Command add_fit_frf_command(CLI::App& parent) {
       ->take_all()
       ->allow_extra_args(false)
       ->group("Structure");
-  app->add_flag("--direct", f.direct, "Estimate a direct term D (outputs x inputs)")
-      ->group("Structure");
-  app->add_option("--band", f.band, "Fit only the lines in LO:HI Hz (either side may be empty)")
-      ->group("Fit");
-  app->add_option("--weighting", f.weighting,
-                  "uniform (every entry alike) or variance (1 / the FRF's variance column)")
-      ->check(CLI::IsMember({"uniform", "variance"}))
-      ->capture_default_str()
+  app->add_option(flag_of<FrfMatrixFitOptions>("min_frequency"), f.band,
+                  "Fit only the lines in LO:HI Hz (either side may be empty)")
       ->group("Fit");
   app->add_option("--initial", f.initial,
                   "Start from this model instead of vector fitting: a mimo_additive_model, or "
                   "the model of a mimo_estimation_result (ctid fit -o) or frf_matrix_fit_result")
       ->check(CLI::ExistingFile)
       ->group("Fit");
-  app->add_option("--max-iterations", f.max_iterations, "Levenberg-Marquardt iteration limit")
-      ->capture_default_str()
-      ->group("Fit");
-  app->add_option("--tolerance", f.tolerance,
-                  "Stop when the relative change of the denominators falls below this")
-      ->capture_default_str()
-      ->group("Fit");
+  FieldFlagSettings settings;
+  settings.group = "Fit";
+  settings.by_hand = {"min_frequency", "max_frequency"};  // --band LO:HI in Hz, above
+  add_field_flags(*app, f.options, settings);
   app->add_option("--output,-o", f.output, "Result JSON to write (frf_matrix_fit_result)")
       ->group("Output");
   app->add_option("--plot", f.plot,

@@ -27,6 +27,7 @@
 #include "ctid/io/npy.h"
 #include "ctid/io/report_json.h"
 #include "data_flags.h"
+#include "field_flags.h"
 #include "plot_support.h"
 
 namespace ctid::cli {
@@ -38,16 +39,8 @@ struct OmaFlags {
   std::vector<std::string> reference_columns;
   std::string time_column = "t";
   double sample_time = 0.0;
-  std::string method = "ssi-cov";
-  int max_order = OmaOptions{}.max_order;
-  int block_rows = 0;
-  std::vector<double> modes_near;
-  int uncertainty_blocks = OmaOptions{}.uncertainty_blocks;
-  std::string uncertainty = std::string(enum_name(OmaOptions{}.uncertainty));
-  int segment_length = 0;
-  double peak_prominence_db = OmaOptions{}.peak_prominence_db;
-  double efdd_mac = OmaOptions{}.efdd_mac;
-  DataFlags prep;  ///< its preprocessing flags only (--rows, --time, --detrend, ...)
+  OmaOptions options;  ///< every field a flag (field_flags.h) but reference_channels
+  DataFlags prep;      ///< its preprocessing flags only (--rows, --time, --detrend, ...)
   std::string output;
   std::string plot;  // DIR for stabilisation.png
   bool force = false;
@@ -154,25 +147,7 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
     package = require_plotting();
     prepare_plot_directory(f.plot, {"stabilisation.png"}, f.force);
   }
-  OmaOptions options;
-  const auto method = enum_from_name<OmaMethod>(f.method);
-  if (!method) {
-    usage_error("--method is '" + f.method + "'; it must be " + enum_names<OmaMethod>());
-  }
-  options.method = *method;
-  options.max_order = f.max_order;
-  options.block_rows = f.block_rows;
-  options.modes_near_hz = f.modes_near;
-  options.uncertainty_blocks = f.uncertainty_blocks;
-  const auto uncertainty = enum_from_name<OmaUncertainty>(f.uncertainty);
-  if (!uncertainty) {
-    usage_error("--uncertainty is '" + f.uncertainty + "'; it must be " +
-                enum_names<OmaUncertainty>());
-  }
-  options.uncertainty = *uncertainty;
-  options.segment_length = f.segment_length;
-  options.peak_prominence_db = f.peak_prominence_db;
-  options.efdd_mac = f.efdd_mac;
+  OmaOptions options = f.options;
   std::vector<std::string> names;
   double h = 0.0;
   double t0 = 0.0;
@@ -233,43 +208,15 @@ Command add_oma_command(CLI::App& parent) {
                   "Response channels: names or ranges A:B (file order), e.g. y1:y8")
       ->delimiter(',')
       ->required();
-  app->add_option("--reference-columns", f.reference_columns,
+  app->add_option(flag_of<OmaOptions>("reference_channels"), f.reference_columns,
                   "Reference channels (a subset of the outputs; default: all)")
       ->delimiter(',');
   app->add_option("--time-column", f.time_column, "Uniform time column")->capture_default_str();
   app->add_option("--sample-time,-T", f.sample_time, "Sample time [s] (overrides the time column)")
       ->check(CLI::PositiveNumber);
-  app->add_option("--method", f.method,
-                  "Method: ssi-cov (frequency, damping, shape with standard errors), ssi-data "
-                  "(the same from the data Hankel matrix instead of its correlations), fdd "
-                  "(frequency and shape from peaks of the spectral matrix) or efdd (fdd with "
-                  "damping)")
-      ->capture_default_str();
-  app->add_option("--max-order", f.max_order, "Largest model order (orders 2, 4, ..., this)")
-      ->capture_default_str();
-  app->add_option("--block-rows", f.block_rows, "Hankel block rows p (0: automatic)")
-      ->capture_default_str();
-  app->add_option("--modes-near", f.modes_near,
-                  "Pick the modes nearest these frequencies [Hz] instead of automatically")
-      ->delimiter(',');
-  app->add_option("--uncertainty-blocks", f.uncertainty_blocks,
-                  "Blocks for the standard errors (0: none)")
-      ->capture_default_str();
-  app->add_option("--uncertainty", f.uncertainty,
-                  "Standard errors: perturbation (first-order perturbation of the SSI-cov "
-                  "estimate; ssi-data uses segments) or segments (the spread of the modes of "
-                  "each block)")
-      ->capture_default_str();
-  app->add_option("--segment-length", f.segment_length,
-                  "fdd, efdd: samples per Welch segment (0: a power of two near N/8)")
-      ->capture_default_str();
-  app->add_option("--peak-prominence-db", f.peak_prominence_db,
-                  "fdd, efdd: how far [dB] a peak of the first singular value stands above its "
-                  "valleys")
-      ->capture_default_str();
-  app->add_option("--efdd-mac", f.efdd_mac,
-                  "efdd: MAC with the peak's shape that bounds each mode's bell")
-      ->capture_default_str();
+  FieldFlagSettings settings;
+  settings.by_hand = {"reference_channels"};  // names of columns, above
+  add_field_flags(*app, f.options, settings);
   f.prep.add_preprocessing_to(*app, false);
   app->add_option("--output,-o", f.output, "JSON file for the oma_result document")
       ->group("Output");

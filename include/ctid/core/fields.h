@@ -154,7 +154,8 @@ Finite(Rule) -> Finite<Rule>;
 
 // --- Fields --------------------------------------------------------------------------------
 
-/// One field: its name, where it lives (a member of the struct or of a base), its rule, its doc.
+/// One field: its name, where it lives (a member of the struct or of a base), its rule, its doc,
+/// and its command-line spelling when that is not the name with '_' -> '-' (flag_spelling).
 template <class Owner, class T, class Rule>
 struct Field {
   using value_type = T;
@@ -162,17 +163,28 @@ struct Field {
   T Owner::*member;
   Rule rule;
   std::string_view doc;
+  std::string_view flag{};
+  bool flag_given = false;
+
+  /// This field spelt `spelling` on the command line (without "--"): a long flag, or for a
+  /// field whose type has fields() of its own the prefix of their flags ("" adds none).
+  constexpr Field with_flag(std::string_view spelling) const {
+    Field spelt = *this;
+    spelt.flag = spelling;
+    spelt.flag_given = true;
+    return spelt;
+  }
 };
 
 template <class Owner, class T, class Rule>
 constexpr Field<Owner, T, Rule> field(std::string_view name, T Owner::*member, Rule rule,
                                       std::string_view doc) {
-  return {name, member, rule, doc};
+  return {name, member, rule, doc, {}, false};
 }
 template <class Owner, class T>
 constexpr Field<Owner, T, AnyValue> field(std::string_view name, T Owner::*member,
                                           std::string_view doc) {
-  return {name, member, AnyValue{}, doc};
+  return {name, member, AnyValue{}, doc, {}, false};
 }
 
 /// A struct that lists its fields.
@@ -202,7 +214,13 @@ constexpr auto join_fields(const std::tuple<A...>& a, const std::tuple<B...>& b)
   return std::tuple_cat(a, b);
 }
 
-// --- Validation ----------------------------------------------------------------------------
+// --- Command-line spellings ---------------------------------------------------------------
+// One vocabulary (docs/decisions/0046): a field's name is its Python keyword and JSON key; its
+// flag is "--" + flag_spelling. A field whose type (or optional type) has fields() of its own
+// gives its fields' flags, prefixed by its spelling and '-' when it carries one, unprefixed
+// otherwise; an optional one also has a flag of its own that switches it on. A struct with
+// `static constexpr std::string_view flag_form` (e.g. "MIN:MAX") is one flag, its fields given
+// in order in that form.
 
 template <class T>
 struct is_vector : std::false_type {};
@@ -212,6 +230,66 @@ template <class T>
 struct is_optional : std::false_type {};
 template <class T>
 struct is_optional<std::optional<T>> : std::true_type {};
+
+/// T without std::optional around it.
+template <class T>
+struct without_optional {
+  using type = T;
+};
+template <class T>
+struct without_optional<std::optional<T>> {
+  using type = T;
+};
+
+/// A struct whose fields get flags of their own (not one flag in a `flag_form`).
+template <class T>
+concept HasFieldFlags = HasFields<T> && !requires {
+  T::flag_form;
+};
+
+/// The spelling a field carries, or its name with '_' -> '-'.
+template <class F>
+std::string flag_spelling(const F& f) {
+  std::string spelling(f.flag_given ? f.flag : f.name);
+  for (char& c : spelling) c = c == '_' ? '-' : c;
+  return spelling;
+}
+
+/// One flag of a struct's fields: the field's dotted path below the struct
+/// ("refined_iv.max_iterations"), the long flag without "--" ("max-iterations") and its doc.
+struct FieldFlag {
+  std::string path;
+  std::string flag;
+  std::string_view doc;
+};
+
+template <HasFields S>
+void collect_field_flags(std::vector<FieldFlag>& out, const std::string& path_prefix,
+                         const std::string& flag_prefix) {
+  for_each_field<S>([&](const auto& f) {
+    using T = typename std::decay_t<decltype(f)>::value_type;
+    using Inner = typename without_optional<T>::type;
+    const std::string path = path_prefix + std::string(f.name);
+    if constexpr (HasFieldFlags<Inner>) {
+      if constexpr (is_optional<T>::value)
+        out.push_back({path, flag_prefix + flag_spelling(f), f.doc});
+      const std::string prefix = f.flag_given && !f.flag.empty() ? flag_spelling(f) + "-" : "";
+      collect_field_flags<Inner>(out, path + ".", flag_prefix + prefix);
+    } else {
+      out.push_back({path, flag_prefix + flag_spelling(f), f.doc});
+    }
+  });
+}
+
+/// Every flag of S's fields, in the listed order (nested fields in place).
+template <HasFields S>
+std::vector<FieldFlag> field_flags() {
+  std::vector<FieldFlag> out;
+  collect_field_flags<S>(out, "", "");
+  return out;
+}
+
+// --- Validation ----------------------------------------------------------------------------
 
 template <HasFields S>
 void validate_fields(const S& object, const std::string& path);

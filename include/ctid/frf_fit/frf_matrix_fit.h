@@ -73,11 +73,15 @@ struct FrfMatrixFitOptions {
               "Relative parameter change and cost decrease that stop the iteration."),
         field("start_iterations", &O::start_iterations, AtLeast{1},
               "Pole-relocation iterations of the vector-fitting start."),
-        field("direct_term", &O::direct_term, "Estimate a direct term D as well."),
+        field("direct_term", &O::direct_term, "Estimate a direct term D as well.")
+            .with_flag("direct"),
         field("weighting", &O::weighting, "Weighting of the FRF entries: uniform or variance."),
-        field("min_frequency", &O::min_frequency, AtLeast{0}, "Lowest line fitted [rad/s]."),
+        // Both from one flag, --band LO:HI in Hz.
+        field("min_frequency", &O::min_frequency, AtLeast{0}, "Lowest line fitted [rad/s].")
+            .with_flag("band"),
         field("max_frequency", &O::max_frequency, AtLeast{0},
-              "Highest line fitted [rad/s] (0: no upper limit)."),
+              "Highest line fitted [rad/s] (0: no upper limit).")
+            .with_flag("band"),
         field("compute_covariance", &O::compute_covariance,
               "Compute the covariance and the modes' standard errors."),
     };

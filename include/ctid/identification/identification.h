@@ -89,6 +89,8 @@ struct DelayRange {
   int max = 0;
 
   static constexpr std::string_view type_name = "DelayRange";
+  /// On the command line one flag, "--delay-scan 0:10".
+  static constexpr std::string_view flag_form = "MIN:MAX";
   static constexpr auto fields() {
     return std::tuple{
         field("min", &DelayRange::min, AtLeast{0}, "Smallest delay tried [samples]."),
@@ -106,6 +108,8 @@ struct DelayInterval {
   double max = 0.0;
 
   static constexpr std::string_view type_name = "DelayInterval";
+  /// On the command line one flag, "--delay-range 0:0.5".
+  static constexpr std::string_view flag_form = "MIN:MAX";
   static constexpr auto fields() {
     return std::tuple{
         field("min", &DelayInterval::min, Finite{AtLeast{0.0}}, "Smallest delay [s]."),
@@ -182,7 +186,8 @@ struct IdentificationOptions {
               "DelayInterval [s] in which the delay is estimated as a continuous parameter."),
         field("relocate_modes", &O::relocate_modes,
               "Move second-order submodels to residual peaks after the fit (additive, open loop)."),
-        field("relocation", &O::relocation, "ModeRelocationOptions of relocate_modes."),
+        field("relocation", &O::relocation, "ModeRelocationOptions of relocate_modes.")
+            .with_flag("relocation"),
         field("refined_iv", &O::refined_iv, "RefinedIvOptions of the estimator."),
         field("two_stage", &O::two_stage,
               "TwoStageOptions of the two-stage method (unknown controller), or none."),

@@ -117,7 +117,8 @@ struct OmaOptions {
         field("max_order", &S::max_order, AtLeast{2}, "Largest model order (states)."),
         field("block_rows", &S::block_rows, AtLeast{0}, "Hankel block rows p; 0: automatic."),
         field("reference_channels", &S::reference_channels, Each{AtLeast{0}},
-              "Reference channels (0-based); empty: all."),
+              "Reference channels (0-based); empty: all.")
+            .with_flag("reference-columns"),
         field("max_damping", &S::max_damping, Between{0, 1, false, true},
               "Largest damping ratio of a structural mode."),
         field("frequency_tolerance", &S::frequency_tolerance, GreaterThan{0},
@@ -131,7 +132,8 @@ struct OmaOptions {
         field("min_support_fraction", &S::min_support_fraction, Between{0, 1, false, true},
               "Share of orders a cluster needs to be a mode."),
         field("modes_near_hz", &S::modes_near_hz, Each{Finite{GreaterThan{0}}},
-              "Frequencies [Hz] to pick near."),
+              "Frequencies [Hz] to pick near.")
+            .with_flag("modes-near"),
         field("uncertainty_blocks", &S::uncertainty_blocks, AtLeast{0},
               "Blocks for the standard errors; 0: none."),
         field("uncertainty", &S::uncertainty,

@@ -129,21 +129,27 @@ struct RefinedIvOptions {
         field("tolerance", &O::tolerance, Between{0.0, 1.0},
               "Stop when the relative parameter change falls below this."),
         field("initial_model", &O::initial_model,
-              "Starting AdditiveModel, or none: found from the data."),
+              "Starting AdditiveModel, or none: found from the data.")
+            .with_flag("initial"),
         field("start", &O::start, "How the start is found from the data without initial_model."),
         field("start_screening_samples", &O::start_screening_samples, AtLeast{0},
               "Longer records find the start on their first max(this, N/32) samples; 0: the "
-              "whole record."),
+              "whole record.")
+            .with_flag("start-screening"),
         field("output_interpolation", &O::output_interpolation,
-              "How the measured output is continued between samples before filtering."),
-        field("input_delay", &O::input_delay, AtLeast{0}, "Known input delay [samples]."),
+              "How the measured output is continued between samples before filtering.")
+            .with_flag("interpolation"),
+        field("input_delay", &O::input_delay, AtLeast{0}, "Known input delay [samples].")
+            .with_flag("delay"),
         field("input_delay_fraction", &O::input_delay_fraction, Between{0.0, 1.0, true, false},
               "Known fraction of a sample added to input_delay, in [0, 1)."),
         field("record_input_delays", &O::record_input_delays, Each{AtLeast{0}},
-              "Per record, whole samples added to input_delay (several records); empty: none."),
+              "Per record, whole samples added to input_delay (several records); empty: none.")
+            .with_flag("record-delays"),
         field("delay_estimated", &O::delay_estimated,
               "The delay was estimated: its sensitivity joins the covariance."),
-        field("record_history", &O::record_history, "Keep one IterationRecord per iteration."),
+        field("record_history", &O::record_history, "Keep one IterationRecord per iteration.")
+            .with_flag("history"),
         field("step_control", &O::step_control,
               "Halve steps after which the equations are singular or non-finite."),
         field("max_step_halvings", &O::max_step_halvings, AtLeast{0},
