@@ -28,6 +28,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "command.h"
@@ -727,22 +728,7 @@ ExitStatus run_on_scheduler(const BatchFlags& f) {
   ::setenv("CTID_EXECUTABLE", self_executable().string().c_str(), 1);
   std::vector<std::string> words{python_executable()};
   words.insert(words.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& word : words) argv.push_back(word.data());
-  argv.push_back(nullptr);
-  std::cout.flush();
-  const pid_t pid = ::fork();
-  if (pid < 0) throw ComputationError("cannot start " + words.front());
-  if (pid == 0) {
-    ::execv(words.front().c_str(), argv.data());
-    ::_exit(127);
-  }
-  int raw = 0;
-  while (::waitpid(pid, &raw, 0) < 0 && errno == EINTR) {
-  }
-  if (!WIFEXITED(raw)) throw ComputationError("python3 -m ctid.batch was ended by a signal");
-  if (WEXITSTATUS(raw) == 127) throw ComputationError("could not run " + words.front());
-  return static_cast<ExitStatus>(WEXITSTATUS(raw));
+  return static_cast<ExitStatus>(run_python(std::move(words), "python3 -m ctid.batch"));
 }
 
 ExitStatus run_batch(const BatchFlags& f) {

@@ -147,15 +147,16 @@ ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
     const bool errors =
         !result.modes.empty() && std::isfinite(result.modes.front().natural_frequency_se);
     std::cout << (errors ? "modes (± one standard error):\n" : "modes:\n");
-    for (const MimoMode& m : result.modes) {
-      std::cout << "  mode " << m.submodel + 1
+    for (std::size_t i = 0; i < result.modes.size(); ++i) {
+      const MimoMode& m = result.modes[i];
+      std::cout << "  mode " << i + 1  // modes counted from 1, whatever submodels precede
                 << ": f_n = " << plus_minus(m.natural_frequency * hz, m.natural_frequency_se * hz)
                 << " Hz, zeta = " << plus_minus(m.damping_ratio, m.damping_ratio_se)
                 << ", rank-one share " << format_brief(m.rank_one_share) << "\n";
     }
-    for (int j = 0; j < frf.output_count(); ++j) {
+    for (int j = 0; j < result.fit_percent.rows(); ++j) {  // none when the fit did not run
       std::cout << "  fit " << frf.output_names[static_cast<std::size_t>(j)] << ":";
-      for (int k = 0; k < frf.input_count(); ++k) {
+      for (int k = 0; k < result.fit_percent.cols(); ++k) {
         std::cout << " " << format_brief(result.fit_percent(j, k)) << " % ("
                   << frf.input_names[static_cast<std::size_t>(k)] << ")";
       }

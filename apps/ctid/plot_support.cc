@@ -4,9 +4,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <iostream>
 #include <numbers>
 #include <random>
 #include <sstream>
@@ -83,6 +85,25 @@ std::optional<std::filesystem::path> find_python_package() {
 std::filesystem::path require_plotting() { return require_python_package("--plot"); }
 
 std::string python_executable() { return kPython; }
+
+int run_python(std::vector<std::string> words, const std::string& what) {
+  std::vector<char*> argv;
+  for (std::string& word : words) argv.push_back(word.data());
+  argv.push_back(nullptr);
+  std::cout.flush();
+  const pid_t pid = ::fork();
+  if (pid < 0) throw ComputationError("cannot start " + words.front());
+  if (pid == 0) {
+    ::execv(words.front().c_str(), argv.data());
+    ::_exit(127);
+  }
+  int raw = 0;
+  while (::waitpid(pid, &raw, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(raw)) throw ComputationError(what + " was ended by a signal");
+  if (WEXITSTATUS(raw) == 127) throw ComputationError("could not run " + words.front());
+  return WEXITSTATUS(raw);
+}
 
 std::filesystem::path require_python_package(const std::string& flag) {
   if (::access(kPython, X_OK) != 0) {

@@ -37,6 +37,11 @@ std::filesystem::path require_python_package(const std::string& flag);
 /// The Python interpreter the CLI runs (/usr/bin/python3).
 std::string python_executable();
 
+/// Runs `words` (python_executable() and its arguments) as a child process that shares this
+/// process's streams, and returns its exit status. Throws ComputationError naming `what`
+/// ("python3 -m ctid.batch") when it cannot start or is ended by a signal.
+int run_python(std::vector<std::string> words, const std::string& what);
+
 /// One figure: `python3 -m ctid.plot kind input output [--title title] [arguments...]`.
 struct PlotJob {
   std::string kind;

@@ -2,15 +2,13 @@
 // -o). A thin launcher: the page is written by the Python package (python3 -m ctid.report,
 // python/ctid/report.py), found as --plot finds it (plot_support.h), with stdout and stderr
 // passed through and its exit status returned. docs/report.md.
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "command.h"
@@ -37,22 +35,7 @@ ExitStatus run_report(const ReportFlags& f) {
   ::setenv("PYTHONPATH", package.string().c_str(), 1);
   ::setenv("MPLBACKEND", "Agg", 1);
   ::setenv("CTID_REPORT_PROG", "ctid report", 1);  // the name its messages and page give
-  std::vector<char*> argv;
-  for (std::string& word : words) argv.push_back(word.data());
-  argv.push_back(nullptr);
-  std::cout.flush();
-  const pid_t pid = ::fork();
-  if (pid < 0) throw ComputationError("cannot start " + words.front());
-  if (pid == 0) {
-    ::execv(words.front().c_str(), argv.data());
-    ::_exit(127);
-  }
-  int raw = 0;
-  while (::waitpid(pid, &raw, 0) < 0 && errno == EINTR) {
-  }
-  if (!WIFEXITED(raw)) throw ComputationError("python3 -m ctid.report was ended by a signal");
-  if (WEXITSTATUS(raw) == 127) throw ComputationError("could not run " + words.front());
-  return static_cast<ExitStatus>(WEXITSTATUS(raw));
+  return static_cast<ExitStatus>(run_python(std::move(words), "python3 -m ctid.report"));
 }
 
 Command add_report_command(CLI::App& parent) {

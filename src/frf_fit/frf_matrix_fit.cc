@@ -328,6 +328,38 @@ Start vector_fitting(const Problem& p, int count, int max_iterations,
 // submodel with room for it whole, each real pole into the first with room (preferring one with
 // an odd number of places left). A pair that finds no room for itself becomes two real poles
 // at its magnitude. Each submodel's A_i = prod (1 - s / p).
+// The FRF fit's own advice where the lines do not determine the modes.
+constexpr std::string_view kBandAdvice =
+    "a band (--band) holding every mode with lines on both sides of its peak";
+
+// The result when the start cannot stand in anti-monic denominators (1 + a p cannot hold a
+// pole at the origin or at infinity): a numerical outcome of the start, with more poles than
+// the lines show, so a verdict, not an exception.
+FrfMatrixFitResult unusable_start(FrfMatrixFitResult result, Eigen::Index lines) {
+  result.termination = Termination::no_solution;
+  result.message = "vector fitting placed a pole at the origin or at infinity";
+  result.verdict.fail("the vector-fitting start placed a pole at the origin or at infinity: the " +
+                          std::to_string(lines) +
+                          " lines do not show as many modes as the structure has",
+                      {verdict_advice::lower_order, kBandAdvice});
+  return result;
+}
+
+// Whether every start pole can stand in an anti-monic denominator 1 + a1 p (+ a2 p^2): finite
+// and away from the origin, so that -1/q and 1/|q|^2 are finite.
+bool start_poles_usable(const Poles& poles) {
+  const auto usable = [](Complex q) {
+    return std::isfinite(q.real()) && std::isfinite(q.imag()) && std::isfinite(1.0 / std::norm(q));
+  };
+  for (const Complex& q : poles.pairs) {
+    if (!usable(q)) return false;
+  }
+  for (double q : poles.reals) {
+    if (!usable(Complex(q, 0.0))) return false;
+  }
+  return true;
+}
+
 std::vector<Eigen::VectorXd> group_poles(const Layout& layout, const Poles& poles) {
   struct Item {
     Complex pole;
@@ -869,6 +901,7 @@ FrfMatrixFitResult frf_matrix_fit(const MimoFrf& frf, const std::vector<Submodel
   } else {
     const Start start = vector_fitting(p, layout.a_count, options.start_iterations, report(0));
     result.start_iterations = start.iterations;
+    if (!start_poles_usable(start.poles)) return unusable_start(std::move(result), p.lines());
     theta.a = group_poles(layout, start.poles);
   }
   theta.u = fit_numerators(layout, p, theta.a);
@@ -919,11 +952,21 @@ FrfMatrixFitResult frf_matrix_fit(const MimoFrf& frf, const std::vector<Submodel
   if (options.compute_covariance) {
     double reciprocal_condition = 0.0;
     result.covariance = covariance_of(layout, p, best, e, &reciprocal_condition);
-    check_conditioning(result.verdict, reciprocal_condition);
+    // In the FRF fit's own terms (issue 35): the Jacobian of the weighted residuals over the
+    // lines, not the instrument-regressor equations of a time-domain estimator.
+    if (!std::isnan(reciprocal_condition) &&
+        !(reciprocal_condition >= verdict_thresholds::reciprocal_condition)) {
+      result.verdict.fail(internal::concat("the FRF fit's Jacobian over the ", p.lines(),
+                                           " lines is numerically singular (reciprocal condition ",
+                                           format_brief(reciprocal_condition),
+                                           "): the lines do not determine every modal parameter"),
+                          {verdict_advice::lower_order, kBandAdvice});
+    }
   }
   result.modes = mimo_modes(model, orders, result.covariance);
-  for (const MimoMode& mode : result.modes) {
-    const std::string name = internal::concat("mode ", mode.submodel + 1);
+  for (std::size_t i = 0; i < result.modes.size(); ++i) {
+    const MimoMode& mode = result.modes[i];
+    const std::string name = internal::concat("mode ", i + 1);  // as ctid fit-frf prints it
     check_standard_errors(result.verdict, {name + " natural frequency", name + " damping ratio"},
                           Eigen::Vector2d(mode.natural_frequency, mode.damping_ratio),
                           Eigen::Vector2d(mode.natural_frequency_se, mode.damping_ratio_se));

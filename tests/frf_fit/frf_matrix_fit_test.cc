@@ -135,6 +135,24 @@ TEST(FrfMatrixFit, RealPolesAndModesTogetherAreRecoveredExactly) {
   EXPECT_NEAR(r.model->numerator(1, 2, 1)[0], 0.8, 1e-9);
 }
 
+TEST(FrfMatrixFit, AModeTheDataDoNotHoldIsRefusedInTheFitsOwnTerms) {
+  // Two modes in the data, three in the structure: the third has no residue to fit, and vector
+  // fitting puts a pole at the origin. That is a verdict in the FRF fit's own words (the
+  // lines, a band), not an exception and not a time-domain estimator's wording.
+  const MimoAdditiveModel modes = eight_mode_structure(3, 2, true);
+  const MimoAdditiveModel truth(2, 3, {modes[0], modes[3]});
+  const FrfMatrixFitResult r =
+      frf_matrix_fit(frf_of(truth, grid(0.1, 10.0, 200)), std::vector<SubmodelOrder>(3, {2, 1, 0}));
+  EXPECT_FALSE(r.verdict.usable);
+  EXPECT_EQ(r.termination, Termination::no_solution);
+  EXPECT_FALSE(r.model.has_value());
+  const std::string summary = r.verdict.summary();
+  EXPECT_THAT(summary, HasSubstr("the vector-fitting start placed a pole at the origin or at "
+                                 "infinity: the 200 lines do not show as many modes"));
+  EXPECT_THAT(summary, HasSubstr("a band (--band)"));
+  EXPECT_THAT(summary, ::testing::Not(HasSubstr("instrument-regressor")));
+}
+
 TEST(FrfMatrixFit, BandLimitsTheLinesFitted) {
   const MimoAdditiveModel truth = four_mode_beam(2, 3, 4);
   FrfMatrixFitOptions options;
