@@ -201,12 +201,12 @@ def _cover(low, high, model):
 
 
 def _as_model(model):
-    """(AdditiveModel or TransferFunction, parameters or None, covariance or None)."""
+    """(AdditiveModel or TransferFunction, covariance or None)."""
     if isinstance(model, _ctid.EstimationResult):
         cov = np.asarray(model.covariance)
-        return model.model, np.asarray(model.parameters), (cov if cov.size else None)
+        return model.model, (cov if cov.size else None)
     if isinstance(model, (_ctid.AdditiveModel, _ctid.TransferFunction)):
-        return model, None, None
+        return model, None
     raise TypeError(
         "expected an EstimationResult, AdditiveModel or TransferFunction, got "
         + type(model).__name__
@@ -239,7 +239,7 @@ def frequency_response_band(model, omegas, covariance=None, confidence=0.95):
     ``(response, magnitude_sigma, phase_sigma_rad, z)``; the sigmas are None without a
     covariance. See the module docstring for the propagation.
     """
-    base, _, cov = _as_model(model)
+    base, cov = _as_model(model)
     if covariance is not None:
         cov = np.asarray(covariance, dtype=float)
     omegas = np.asarray(omegas, dtype=float)
@@ -277,7 +277,7 @@ def bode(model, frf=None, covariance=None, omegas=None, confidence=0.95, title=N
     "model, sampled (zoh|foh)", the labels of ``more``; bands: "<confidence>% band". Returns
     the Figure (saved to ``filename`` if given).
     """
-    base, _, _ = _as_model(model)
+    base, _ = _as_model(model)
     factor, axis_label = _frequency_axis(frequency_unit, "bode")
     if omegas is None:
         omegas = _default_omegas(base, frf)
@@ -300,7 +300,7 @@ def bode(model, frf=None, covariance=None, omegas=None, confidence=0.95, title=N
     ax_phase.semilogx(x, phase, color="C0", label="model")
     shown = [_db(response)]
     for k, (label, other) in enumerate(more or []):
-        other_base, _, _ = _as_model(other)
+        other_base, _ = _as_model(other)
         g = np.asarray(_ctid.frequency_response(other_base, omegas))
         ax_mag.semilogx(x, _db(g), color=f"C{k + 3}", label=label)
         ax_phase.semilogx(x, _model_phase(g), color=f"C{k + 3}", label=label)
@@ -825,7 +825,7 @@ def modes(model, omegas=None, frf=None, title=None, filename=None, frequency_uni
     Returns the Figure.
     """
     factor, axis_label = _frequency_axis(frequency_unit, "modes")
-    base, _, _ = _as_model(model)
+    base, _ = _as_model(model)
     if not isinstance(base, _ctid.AdditiveModel):
         raise TypeError("modes: needs an additive model")
     if omegas is None:
@@ -865,7 +865,7 @@ def validation(data, simulated, title=None, filename=None, ax=None):
     its exact ZOH response. Lines: "measured", "simulated". Returns the Figure.
     """
     if not isinstance(simulated, np.ndarray) and not isinstance(simulated, (list, tuple)):
-        base, _, _ = _as_model(simulated)
+        base, _ = _as_model(simulated)
         if isinstance(base, _ctid.AdditiveModel):
             simulated = _ctid.model_output(base, data.input, data.sample_time)
         else:
@@ -913,7 +913,7 @@ def compare(data, models, labels=None, options=None, title=None, filename=None, 
             output = np.asarray(model, dtype=float)
             fit = _ctid.fit_percent(measured[inside], output[inside])
         else:
-            base, _, _ = _as_model(model)
+            base, _ = _as_model(model)
             output = np.asarray(_ctid.validation_output(base, data, options))
             fit = _ctid.validate_model(base, data, options).fit_percent
         ax.plot(t, output, color=f"C{i}", lw=1, label=f"{label}: fit {fit:.2f} %")
