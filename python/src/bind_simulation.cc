@@ -27,7 +27,8 @@ void bind_simulation(py::module_& m) {
         py::arg("a"), py::arg("b"), py::arg("sample_time"),
         "Exact ZOH discretisation of dx = A x + B u (augmented matrix exponential).");
   m.def("discretize_zoh", py::overload_cast<const StateSpace&, double>(&discretize_zoh),
-        py::arg("model"), py::arg("sample_time"), "ZOH equivalent (Phi, Gamma, C, D) of a realisation.");
+        py::arg("model"), py::arg("sample_time"),
+        "ZOH equivalent (Phi, Gamma, C, D) of a realisation.");
   m.def("discretize_foh", &discretize_foh, py::arg("a"), py::arg("b"), py::arg("sample_time"),
         "Exact FOH (triangle-hold) discretisation.");
 
@@ -37,7 +38,8 @@ void bind_simulation(py::module_& m) {
   m.def("simulate_discrete", &simulate_discrete, py::arg("discrete"), py::arg("u"),
         "Response from rest of a discrete realisation.");
   m.def("zoh_equivalent", py::overload_cast<const TransferFunction&, double>(&zoh_equivalent),
-        py::arg("g"), py::arg("sample_time"), "Exact discrete model from u_k to y_k (delay as states).");
+        py::arg("g"), py::arg("sample_time"),
+        "Exact discrete model from u_k to y_k (delay as states).");
   m.def("zoh_equivalent", py::overload_cast<const AdditiveModel&, double>(&zoh_equivalent),
         py::arg("g"), py::arg("sample_time"), "Exact discrete model of an additive model.");
   m.def("simulate",
@@ -47,7 +49,8 @@ void bind_simulation(py::module_& m) {
   m.def("simulate",
         py::overload_cast<const AdditiveModel&, const Eigen::VectorXd&, double>(&simulate),
         py::arg("g"), py::arg("u"), py::arg("sample_time"), "The same for an additive model.");
-  m.def("simulate_submodels", &simulate_submodels, py::arg("g"), py::arg("u"), py::arg("sample_time"),
+  m.def("simulate_submodels", &simulate_submodels, py::arg("g"), py::arg("u"),
+        py::arg("sample_time"),
         "Column i: response of submodel i (rows sum to simulate(g, u, h)).");
 
   // Sampled-data closed loop.
