@@ -35,6 +35,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/io/batch_manifest.h"
+#include "ctid/io/batch_summary.h"
 #include "ctid/io/file.h"
 #include "ctid/io/json.h"
 #include "ctid/study/monte_carlo.h"
@@ -60,12 +61,6 @@ struct BatchFlags {
   std::string scheduler;
   bool quiet = false;
 };
-
-// The files the batch itself writes in OUT; no record may take their names.
-constexpr const char* kSummaryCsv = "summary.csv";
-constexpr const char* kSummaryJson = "summary.json";
-constexpr const char* kTimings = "timings.json";
-constexpr const char* kSummaryHeader = "name,data,status,";
 
 // fit's flags that the batch sets itself (or that write files the batch does not manage).
 const std::map<std::string, std::string>& reserved_flags() {
@@ -271,7 +266,7 @@ void check_outputs_are_not_inputs(const BatchFlags& f, const std::vector<Task>& 
                 "; writing it would destroy that file, so nothing was run (choose another --out "
                 "folder or another name; --force does not change this)");
   };
-  for (const char* own : {kSummaryCsv, kSummaryJson, kTimings}) {
+  for (const char* own : {io::kBatchSummaryCsv, io::kBatchSummaryJson, io::kBatchTimings}) {
     check(join_path(f.out, own), "the batch's own file");
   }
   for (const Task& task : tasks) {
@@ -473,15 +468,6 @@ double run_task(const std::string& exe, const Task& task) {
   return seconds;
 }
 
-// ---- the summary ----
-
-std::string csv_cell(const std::string& text) {
-  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (const char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
-}
-
 // The bytes of `text` as lowercase hex ("caf\xe9" -> "636166e9").
 std::string hex_of(const std::string& text) {
   constexpr char kHex[] = "0123456789abcdef";
@@ -494,207 +480,16 @@ std::string hex_of(const std::string& text) {
   return out;
 }
 
-// A JSON value as a cell: numbers exactly as the document holds them, null empty.
-std::string cell_of(const json& value) {
-  if (value.is_null()) return "";
-  if (value.is_string()) return value.get<std::string>();
-  if (value.is_boolean()) return value.get<bool>() ? "true" : "false";
-  if (value.is_number_float()) return format_round_trip(value.get<double>());
-  return value.dump();
-}
-
-json number_or_null(const json& object, const char* key) {
-  const auto it = object.find(key);
-  return it != object.end() && it->is_number() ? *it : json(nullptr);
-}
-
-struct Row {
-  json fields =
-      json::object();  // name, data, status, usable, fit_percent, estimator, seconds, message
-  json modes = json::array();  // {frequency_hz, frequency_se_hz, damping, damping_se}
-};
-
-Row summary_row(const Task& task, const json& timings) {
-  Row row;
-  row.fields["name"] = task.name;
-  std::string data;
-  for (const std::string& file : task.data) data += (data.empty() ? "" : ";") + file;
-  row.fields["data"] = data;
-  row.fields["status"] = "failed";
-  row.fields["usable"] = nullptr;
-  row.fields["fit_percent"] = nullptr;
-  row.fields["estimator"] = nullptr;
-  row.fields["seconds"] = timings.contains(task.name) ? timings[task.name] : json(nullptr);
-  row.fields["message"] = "";
-  const auto read = [](const std::string& file) -> std::optional<json> {
-    try {
-      return io::read_json(file);
-    } catch (const std::exception&) {
-      return std::nullopt;
-    }
-  };
-  if (fs::exists(task.output)) {
-    const std::optional<json> document = read(task.output);
-    if (!document || !document->is_object() || !document->contains("verdict")) {
-      row.fields["message"] = task.output + " is not a ctid fit result document";
-      return row;
-    }
-    const json& verdict = (*document)["verdict"];
-    const bool usable = verdict.is_object() && verdict.value("usable", false);
-    row.fields["status"] = usable ? "ok" : "no_usable_model";
-    row.fields["usable"] = usable;
-    row.fields["fit_percent"] = number_or_null(*document, "fit_percent");
-    if (document->contains("estimator")) row.fields["estimator"] = (*document)["estimator"];
-    const bool mimo = document->value("type", "") == "mimo_estimation_result";
-    if (mimo) {
-      // Several outputs: one fit per output, reported as their mean; the modes are given in
-      // rad/s (MimoMode).
-      row.fields["estimator"] = "mimo_srivc";
-      const auto fits = document->find("fit_percent");
-      if (fits != document->end() && fits->is_array() && !fits->empty()) {
-        double sum = 0.0;
-        bool finite = true;
-        for (const json& fit : *fits) {
-          finite = finite && fit.is_number();
-          if (fit.is_number()) sum += fit.get<double>();
-        }
-        if (finite) row.fields["fit_percent"] = sum / static_cast<double>(fits->size());
-      }
-    }
-    if (!usable && verdict.is_object()) {
-      std::string reasons;
-      if (verdict.contains("reasons") && verdict["reasons"].is_array()) {
-        for (const json& reason : verdict["reasons"]) {
-          if (reason.is_string())
-            reasons += (reasons.empty() ? "" : "; ") + reason.get<std::string>();
-        }
-      }
-      row.fields["message"] = reasons;
-    }
-    const auto modes = document->find("modes");
-    if (modes != document->end() && modes->is_array()) {
-      for (const json& mode : *modes) {
-        if (!mode.is_object()) continue;
-        if (mimo) {
-          const auto hz = [&](const char* key) {
-            const json value = number_or_null(mode, key);
-            return value.is_null() ? value : json(value.get<double>() / (2.0 * std::numbers::pi));
-          };
-          row.modes.push_back({{"frequency_hz", hz("natural_frequency")},
-                               {"frequency_se_hz", hz("natural_frequency_se")},
-                               {"damping", number_or_null(mode, "damping_ratio")},
-                               {"damping_se", number_or_null(mode, "damping_ratio_se")}});
-          continue;
-        }
-        json entry = {
-            {"frequency_hz", number_or_null(mode, "natural_frequency_hz")},
-            {"frequency_se_hz", number_or_null(mode, "natural_frequency_hz_standard_error")},
-            {"damping", number_or_null(mode, "damping_ratio")},
-            {"damping_se", number_or_null(mode, "damping_ratio_standard_error")}};
-        row.modes.push_back(std::move(entry));
-      }
-    }
-    return row;
-  }
-  if (fs::exists(task.error_output)) {
-    const std::optional<json> error = read(task.error_output);
-    row.fields["message"] = error && error->is_object() && (*error)["message"].is_string()
-                                ? (*error)["message"].get<std::string>()
-                                : task.error_output + " cannot be read";
-    return row;
-  }
-  row.fields["status"] = "not_run";
-  return row;
-}
-
-// Whether the batch may replace `file`: missing, or a summary it wrote.
-bool ours_or_missing(const std::string& file, bool is_json) {
-  if (!fs::exists(file)) return true;
-  try {
-    if (is_json) {
-      const json document = io::read_json(file);
-      return document.is_object() && document.value("type", "") == "ctid_batch_summary";
-    }
-    return io::read_text_file(file).rfind(kSummaryHeader, 0) == 0;
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
-void check_own_files(const BatchFlags& f) {
-  if (f.force) return;
-  for (const char* name : {kSummaryCsv, kSummaryJson}) {
-    const std::string file = join_path(f.out, name);
-    if (!ours_or_missing(file, name == kSummaryJson)) {
-      usage_error(file +
-                  ": file exists and is not a ctid batch summary; pass --force to replace it");
-    }
-  }
-}
-
-json read_timings(const std::string& file) {
-  try {
-    if (fs::exists(file)) {
-      json timings = io::read_json(file);
-      if (timings.is_object()) return timings;
-    }
-  } catch (const std::exception&) {
-  }
-  return json::object();
-}
-
-struct Counts {
-  int ok = 0;
-  int no_usable_model = 0;
-  int failed = 0;
-  int not_run = 0;
-};
-
-Counts write_summary(const BatchFlags& f, const std::vector<Task>& tasks) {
-  const json timings = read_timings(join_path(f.out, kTimings));
-  std::vector<Row> rows;
-  std::size_t most_modes = 0;
-  Counts counts;
+// The files of the records, as the summary reads them.
+std::vector<io::BatchRecordFiles> record_files(const std::vector<Task>& tasks) {
+  std::vector<io::BatchRecordFiles> files;
   for (const Task& task : tasks) {
-    rows.push_back(summary_row(task, timings));
-    most_modes = std::max(most_modes, rows.back().modes.size());
-    const std::string status = rows.back().fields["status"].get<std::string>();
-    (status == "ok"                ? counts.ok
-     : status == "no_usable_model" ? counts.no_usable_model
-     : status == "failed"          ? counts.failed
-                                   : counts.not_run) += 1;
+    files.push_back({task.name, task.data, task.output, task.error_output});
   }
-  std::string csv = "name,data,status,usable,fit_percent,estimator";
-  for (std::size_t k = 1; k <= most_modes; ++k) {
-    const std::string mode = "mode" + std::to_string(k);
-    csv += "," + mode + "_frequency_hz," + mode + "_frequency_se_hz," + mode + "_damping," + mode +
-           "_damping_se";
-  }
-  csv += ",seconds,message\n";
-  json records = json::array();
-  for (const Row& row : rows) {
-    for (const char* key : {"name", "data", "status", "usable", "fit_percent", "estimator"}) {
-      csv += (std::string(key) == "name" ? "" : ",") + csv_cell(cell_of(row.fields[key]));
-    }
-    for (std::size_t k = 0; k < most_modes; ++k) {
-      for (const char* key : {"frequency_hz", "frequency_se_hz", "damping", "damping_se"}) {
-        csv += "," + (k < row.modes.size() ? csv_cell(cell_of(row.modes[k][key])) : "");
-      }
-    }
-    csv += "," + csv_cell(cell_of(row.fields["seconds"])) + "," +
-           csv_cell(cell_of(row.fields["message"])) + "\n";
-    json record = row.fields;
-    record["modes"] = row.modes;
-    records.push_back(std::move(record));
-  }
-  const json summary = {{"type", "ctid_batch_summary"}, {"records", records}};
-  io::write_text_file(join_path(f.out, kSummaryCsv), csv, io::Overwrite::yes);
-  io::write_text_file(join_path(f.out, kSummaryJson), io::json_text(summary) + "\n",
-                      io::Overwrite::yes);
-  return counts;
+  return files;
 }
 
-ExitStatus exit_status(const BatchFlags& f, const Counts& counts) {
+ExitStatus exit_status(const BatchFlags& f, const io::BatchCounts& counts) {
   if (!f.strict) return kExitOk;
   if (counts.failed > 0 || counts.not_run > 0) return kExitFailure;
   return counts.no_usable_model > 0 ? kExitNoUsableModel : kExitOk;
@@ -740,7 +535,8 @@ ExitStatus run_batch(const BatchFlags& f) {
   }
   const std::vector<Task> tasks = expand(f);
   if (f.plan) {
-    if (fs::is_directory(f.out)) check_own_files(f);  // as a run would, before it runs
+    // As a run would, before it runs.
+    if (fs::is_directory(f.out) && !f.force) io::check_batch_summary_files(f.out);
     json plan = json::array();
     for (const Task& task : tasks) {
       const bool done = !f.force && (fs::exists(task.output) ||
@@ -770,12 +566,12 @@ ExitStatus run_batch(const BatchFlags& f) {
     return kExitOk;
   }
   prepare_out(f);
-  check_own_files(f);
+  if (!f.force) io::check_batch_summary_files(f.out);
   // Temporaries of records killed with -9 are swept once here; the records skip the sweep
   // (one scan of OUT per record would make a large batch quadratic).
   io::remove_dead_temporaries_in(f.out);
-  ::setenv("CTID_NO_TEMPORARY_SWEEP", "1", 1);
   if (!f.summarize) {
+    ::setenv("CTID_NO_TEMPORARY_SWEEP", "1", 1);  // for the children: not in a host process
     std::vector<int> pending;
     for (int i = 0; i < static_cast<int>(tasks.size()); ++i) {
       const Task& task = tasks[static_cast<std::size_t>(i)];
@@ -796,20 +592,19 @@ ExitStatus run_batch(const BatchFlags& f) {
     });
     progress.clear();
     if (!pending.empty()) {
-      const std::string timings_file = join_path(f.out, kTimings);
-      json timings = read_timings(timings_file);
+      std::map<std::string, double> times;
       for (std::size_t k = 0; k < pending.size(); ++k) {
-        timings[tasks[static_cast<std::size_t>(pending[k])].name] = seconds[k];
+        times[tasks[static_cast<std::size_t>(pending[k])].name] = seconds[k];
       }
-      io::write_text_file(timings_file, io::json_text(timings) + "\n", io::Overwrite::yes);
+      io::record_batch_timings(f.out, times);
     }
   }
-  const Counts counts = write_summary(f, tasks);
+  const io::BatchCounts counts = io::write_batch_summary(f.out, record_files(tasks));
   if (!f.quiet) {
     std::cout << "ctid batch: " << counts.ok << " ok, " << counts.no_usable_model
               << " no usable model, " << counts.failed << " failed";
     if (counts.not_run > 0) std::cout << ", " << counts.not_run << " not run";
-    std::cout << "; summary in " << join_path(f.out, kSummaryCsv) << "\n";
+    std::cout << "; summary in " << join_path(f.out, io::kBatchSummaryCsv) << "\n";
   }
   return exit_status(f, counts);
 }

@@ -96,6 +96,7 @@
 #include "ctid/study/study_output.h"
 
 #include "ctid/io/batch_manifest.h"
+#include "ctid/io/batch_summary.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/excitation_spec.h"

@@ -7,22 +7,25 @@
                                    [--spec SPEC.json] [--glob PATTERN] [--retry-failed]
                                    [--force] [--strict] [--quiet]
 
-The manifest is read in one place, the C++ command line: ``ctid batch ... --plan`` gives the
-records' ``ctid fit`` argument vectors. Each record then runs as a ``ctid fit`` process:
-one after another (``jobs=1``), on a local thread pool (``jobs>1``, default every core), or as
-one Dask task per record (``client``, a ``distributed.Client``), the worker reading the record
-itself. Workers therefore need the files and the ``ctid`` executable at the same paths as the
-client (a shared file system) and run in the client's working directory, so relative paths in
-the manifest mean the same everywhere. A record that fails leaves ``OUT/<name>.error.json``
-with its message; nothing a record does stops the batch. A Dask cluster that loses its scheduler
-midway raises ``ClusterLost`` (``python3 -m ctid.batch``: one error line, exit 1); the finished
-records are kept and the next run fits the rest. ``ctid batch ... --summarize`` then
-writes ``summary.csv`` and ``summary.json``, whose rows are returned. The documents are the
-bytes a single ``ctid fit DATA FLAGS -o OUT/<name>.json`` writes (docs/batch.md).
+The manifest is read in one place, ctid's C++ command line, which this package holds
+(decision 0052): ``ctid batch ... --plan``, run inside this process, gives the records' ``ctid
+fit`` argument vectors. Each record then runs as its own process, ``python3 -m ctid fit ...``
+(the same commands, bytes and exit statuses as the ``ctid`` binary, and a crash on one file
+never ends the batch): one after another (``jobs=1``), on a local thread pool (``jobs>1``,
+default every core), or as one Dask task per record (``client``, a ``distributed.Client``), the
+worker reading the record itself. Workers therefore need this package and the files at the same
+paths as the client (a shared file system) and run in the client's working directory, so
+relative paths in the manifest mean the same everywhere. No ``ctid`` binary is needed. A record
+that fails leaves ``OUT/<name>.error.json`` with its message; nothing a record does stops the
+batch. A Dask cluster that loses its scheduler midway raises ``ClusterLost``
+(``python3 -m ctid.batch``: one error line, exit 1); the finished records are kept and the next
+run fits the rest. ``ctid batch ... --summarize``, also run inside this process, then writes
+``summary.csv`` and ``summary.json``, whose rows are returned. The documents are the bytes a
+single ``ctid fit DATA FLAGS -o OUT/<name>.json`` writes (docs/batch.md).
 
-The executable is the ``ctid_executable`` argument, else ``$CTID_EXECUTABLE``, else
-``$CTID_BUILD_DIR/apps/ctid/ctid``, else the build tree or install this package belongs to,
-else ``ctid`` on the PATH.
+The records run ``python3 -m ctid fit`` with the interpreter running the record, unless an
+executable is named: the ``ctid_executable`` argument, else ``$CTID_EXECUTABLE`` (``ctid batch
+--scheduler`` sets it to itself).
 """
 
 from __future__ import annotations
@@ -33,7 +36,6 @@ import itertools
 import json
 import os
 import pathlib
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -52,32 +54,34 @@ class ClusterLost(ConnectionError):
     the finished records are kept and running the batch again fits the rest."""
 
 
-def find_executable(ctid_executable=None) -> str:
-    """The ``ctid`` command line to run, searched as the module docstring says."""
-    tried = []
-    candidates = []
-    if ctid_executable is not None:
-        candidates.append(("ctid_executable", pathlib.Path(ctid_executable)))
-    if os.environ.get("CTID_EXECUTABLE"):
-        candidates.append(("$CTID_EXECUTABLE", pathlib.Path(os.environ["CTID_EXECUTABLE"])))
-    if os.environ.get("CTID_BUILD_DIR"):
-        candidates.append(("$CTID_BUILD_DIR",
-                           pathlib.Path(os.environ["CTID_BUILD_DIR"]) / "apps" / "ctid" / "ctid"))
-    package = pathlib.Path(__file__).resolve().parent
-    candidates.append(("build tree", package.parents[1] / "apps" / "ctid" / "ctid"))
-    candidates.append(("install", package.parents[3] / "bin" / "ctid"))
-    for label, path in candidates:
+def find_executable(ctid_executable=None):
+    """The ``ctid`` executable the records run: the ``ctid_executable`` argument, else
+    ``$CTID_EXECUTABLE``; None when neither is given, meaning ``python3 -m ctid`` (this
+    package's own command line). A named file that is not an executable raises
+    FileNotFoundError naming where the name came from."""
+    for label, given in (("ctid_executable", ctid_executable),
+                         ("$CTID_EXECUTABLE", os.environ.get("CTID_EXECUTABLE"))):
+        if given is None or given == "":
+            continue
+        path = pathlib.Path(given)
         if path.is_file() and os.access(path, os.X_OK):
             return str(path)
-        tried.append(f"{label} {path}")
-        if label == "ctid_executable":
-            break  # an explicit choice is not silently replaced
-    if ctid_executable is None:
-        found = shutil.which("ctid")
-        if found:
-            return found
-        tried.append("ctid on the PATH")
-    raise FileNotFoundError("the ctid command line was not found; tried " + "; ".join(tried))
+        # An explicit choice is not silently replaced.
+        raise FileNotFoundError(f"the ctid command line was not found: {label} {path} is not "
+                                "an executable file")
+    return None
+
+
+def _record_command(executable):
+    """The argument vector before a record's ``fit ...`` words, and the environment to run it
+    in: the named executable, or this interpreter with this package first on its path."""
+    if executable is not None:
+        return [executable], None
+    package_parent = str(pathlib.Path(__file__).resolve().parents[1])
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(
+        [package_parent] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p])
+    return [sys.executable, "-m", "ctid"], env
 
 
 def _invalid(message):
@@ -145,8 +149,23 @@ def _source_arguments(records, spec, scratch, glob=False):
     return args
 
 
-def _run_batch_command(executable, args):
-    completed = subprocess.run([executable, "batch", *args], capture_output=True, text=True)
+class _Completed:
+    """What a run of ``ctid batch`` inside this process printed, and its exit status."""
+
+    def __init__(self, returncode, stdout, stderr):
+        self.returncode = returncode
+        self.stdout = stdout
+        self.stderr = stderr
+
+
+def _run_batch_command(args):
+    """``ctid batch ARGS`` (--plan or --summarize) run inside this process (decision 0052)."""
+    from . import _ctid
+
+    status, out, err = _ctid._command_line_captured(
+        ["batch", *[os.fsencode(arg) for arg in args]])
+    completed = _Completed(status, out.decode("utf-8", "surrogateescape"),
+                           err.decode("utf-8", "replace"))
     if completed.returncode == 2:
         raise _invalid(_last_line(completed.stderr))
     if completed.returncode not in (0, 1, 3) or (completed.returncode == 1 and
@@ -156,11 +175,9 @@ def _run_batch_command(executable, args):
     return completed
 
 
-def plan(records, spec=None, *, out_dir, ctid_executable=None, retry_failed=False,
-         force=False):
+def plan(records, spec=None, *, out_dir, retry_failed=False, force=False):
     """The tasks of a batch as ``ctid batch ... --plan`` gives them: dicts with name, data,
     args (after the executable), output, error_output and done (finished before)."""
-    executable = find_executable(ctid_executable)
     with tempfile.TemporaryDirectory(prefix="ctid-batch-") as scratch:
         args = _source_arguments(records, spec, scratch)
         args += ["--out", os.fspath(out_dir), "--plan"]
@@ -168,7 +185,7 @@ def plan(records, spec=None, *, out_dir, ctid_executable=None, retry_failed=Fals
             args.append("--retry-failed")
         if force:
             args.append("--force")
-        completed = _run_batch_command(executable, args)
+        completed = _run_batch_command(args)
     return _tasks_of(completed.stdout)
 
 
@@ -243,8 +260,9 @@ def _child_dies_with_parent():
     return preexec
 
 
-def run_task(task, executable, cwd=None):
-    """Runs one record's ``ctid fit`` (in `cwd`) and returns {"name", "seconds", "error"}:
+def run_task(task, executable=None, cwd=None):
+    """Runs one record's ``ctid fit`` (in `cwd`) with `executable`, or ``python3 -m ctid``
+    when it is None, and returns {"name", "seconds", "error"}:
     error None when the fit wrote its document, else the error document, which is also written
     to the task's error_output when possible. Never raises."""
     start = time.monotonic()
@@ -254,7 +272,8 @@ def run_task(task, executable, cwd=None):
         error_output = workdir / task["error_output"]
         if error_output.exists():
             error_output.unlink()  # a retried or forced record
-        completed = subprocess.run([executable, *task["args"]], cwd=workdir,
+        command, env = _record_command(executable)
+        completed = subprocess.run([*command, *task["args"]], cwd=workdir, env=env,
                                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                    text=True, errors="replace",
                                    preexec_fn=_child_dies_with_parent())
@@ -377,8 +396,7 @@ def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, 
     with tempfile.TemporaryDirectory(prefix="ctid-batch-") as scratch:
         source = _source_arguments(records, spec, scratch, glob)
         flags = (["--retry-failed"] if retry_failed else []) + (["--force"] if force else [])
-        planned = _tasks_of(_run_batch_command(
-            executable, [*source, "--out", out_dir, "--plan", *flags]).stdout)
+        planned = _tasks_of(_run_batch_command([*source, "--out", out_dir, "--plan", *flags]).stdout)
         os.makedirs(out_dir, exist_ok=True)
         pending = [task for task in planned if not task["done"]]
         outcomes, lost = _run_all(pending, executable, client, jobs)
@@ -388,7 +406,7 @@ def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, 
         summarize = [*source, "--out", out_dir, "--summarize", "--quiet"]
         if strict:
             summarize.append("--strict")
-        completed = _run_batch_command(executable, summarize)
+        completed = _run_batch_command(summarize)
     rows = json.loads((pathlib.Path(out_dir) / _SUMMARY_ROWS).read_text())["records"]
     return rows, completed.returncode
 
@@ -433,7 +451,8 @@ def main(argv=None):
     parser.add_argument("--force", action="store_true")
     parser.add_argument("--strict", action="store_true")
     parser.add_argument("--quiet", "-q", action="store_true")
-    parser.add_argument("--ctid", dest="ctid_executable", help="the ctid executable to run")
+    parser.add_argument("--ctid", dest="ctid_executable",
+                        help="a ctid executable for the records (default: python3 -m ctid)")
     options = parser.parse_args(argv)
     if (options.manifest is None) == (options.glob is None):
         print("ctid.batch: error: give a manifest or --glob PATTERN, not both", file=sys.stderr)

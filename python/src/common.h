@@ -32,6 +32,7 @@ void bind_process_model(py::module_& m);
 void bind_delayed_feedback(py::module_& m);
 void bind_study(py::module_& m);
 void bind_io(py::module_& m);
+void bind_command_line(py::module_& m);
 void bind_response(py::module_& m);
 
 inline std::string join(const std::vector<std::string>& names) {

@@ -48,4 +48,5 @@ PYBIND11_MODULE(_ctid, m) {
   ctid::python::bind_study(m);
   ctid::python::bind_io(m);
   ctid::python::bind_response(m);
+  ctid::python::bind_command_line(m);
 }

@@ -184,6 +184,48 @@ def test_the_scheduler_flag_runs_the_batch_on_the_cluster(cli, batch, dask_clien
     assert _documents(out) == _documents(batch["serial"])
 
 
+def test_fit_many_needs_no_ctid_binary(batch, tmp_path, monkeypatch):
+    """Issue 32: the records run as python3 -m ctid fit, the package's own command line, so a
+    machine with the package and no ctid binary anywhere gives the serial batch's bytes."""
+    for variable in ("CTID_EXECUTABLE", "CTID_BUILD_DIR"):
+        monkeypatch.delenv(variable, raising=False)
+    monkeypatch.setenv("PATH", str(tmp_path / "empty"))
+    assert ctid.batch.find_executable() is None
+    manifest = tmp_path / "some.json"
+    original = json.loads(pathlib.Path(batch["manifest"]).read_text())
+    records = original["records"]
+    chosen = [dict(r, data=str(pathlib.Path(batch["root"]) / r["data"])) for r in records[:3]]
+    chosen.append(next(dict(r, data=str(pathlib.Path(batch["root"]) / r["data"]))
+                       for r in records if r["name"] == "bad_nan"))
+    manifest.write_text(json.dumps({"spec": original.get("spec", {}), "records": chosen}))
+    rows = ctid.batch.fit_many(manifest, out_dir=tmp_path / "no-binary", jobs=2)
+    assert [row["status"] for row in rows] == ["ok", "ok", "ok", "failed"], rows
+    assert "is not finite" in rows[3]["message"]
+    serial = _documents(batch["serial"])
+    for name, content in _documents(tmp_path / "no-binary").items():
+        assert content == serial[name], name
+
+
+def test_python_m_ctid_is_the_command_line(cli, batch, tmp_path):
+    """python3 -m ctid ARGS runs the commands of the binary: the same document bytes, the same
+    message and exit status for bad usage."""
+    import sys
+    data = pathlib.Path(batch["root"]) / "records" / "r001.csv"
+    outputs = {}
+    for label, command in (("binary", [str(cli)]), ("package", [sys.executable, "-m", "ctid"])):
+        out = tmp_path / f"{label}.json"
+        done = subprocess.run([*command, "fit", str(data), "--modes", "2", "-o", str(out), "-q"],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        outputs[label] = out.read_bytes()
+        bad = subprocess.run([*command, "fit", str(data), "--mdoes", "2"], capture_output=True,
+                             text=True)
+        outputs[label + " usage"] = (bad.returncode, bad.stderr)
+    assert outputs["binary"] == outputs["package"]
+    assert outputs["binary usage"] == outputs["package usage"]
+    assert outputs["binary usage"][0] == 2 and "--modes" in outputs["binary usage"][1]
+
+
 def test_fit_many_with_record_dicts_on_threads(cli, batch, tmp_path, monkeypatch):
     monkeypatch.chdir(batch["root"])
     records = [{"data": "records/r000.csv"}, {"name": "two", "data": "records/r001.csv",

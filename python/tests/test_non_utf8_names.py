@@ -186,7 +186,7 @@ def test_fit_many_runs_a_record_whose_path_is_not_utf8(cli, folder):
     assert rows[0]["data"].endswith(ESCAPED_DATA)
     tasks = ctid.batch.plan(os.fsdecode(os.path.join(folder, b"caf\xe9.cs*")),
                             spec=os.fsdecode(os.path.join(folder, b"spec.json")),
-                            out_dir=out, ctid_executable=cli)
+                            out_dir=out)
     assert os.fsencode(tasks[0]["args"][1]) == os.path.join(folder, DATA)
     assert tasks[0]["done"]
 
