@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "command.h"
+#include "command_line.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/io/batch_manifest.h"
@@ -359,23 +360,18 @@ std::vector<Task> expand(const BatchFlags& f) {
 
 // ---- running one record ----
 
-fs::path self_executable() {
-  std::error_code error;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", error);
-  if (error) throw ComputationError("cannot find the ctid executable (/proc/self/exe)");
-  return exe;
-}
-
 struct ChildResult {
   int exit_status = -1;  // 128 + signal when killed
   std::string err;       // the child's stderr (its last 64 KiB)
 };
 
-// Runs `program args...` with stdout on /dev/null and stderr captured. The child is sent
+// Runs `command args...` with stdout on /dev/null and stderr captured. The child is sent
 // SIGTERM if this thread ends first (a killed batch takes its fits with it, and their
 // temporary files are removed by their signal handler).
-ChildResult run_child(const std::string& program, const std::vector<std::string>& args) {
-  std::vector<std::string> words{program};
+ChildResult run_child(const std::vector<std::string>& command,
+                      const std::vector<std::string>& args) {
+  const std::string program = command.front();
+  std::vector<std::string> words = command;
   words.insert(words.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (std::string& word : words) argv.push_back(word.data());
@@ -448,10 +444,10 @@ void remove_file(const std::string& path) {
 }
 
 // Runs one record; returns its wall time in seconds.
-double run_task(const std::string& exe, const Task& task) {
+double run_task(const std::vector<std::string>& command, const Task& task) {
   remove_file(task.error_output);  // a retried or forced record
   const auto start = std::chrono::steady_clock::now();
-  const ChildResult child = run_child(exe, task.args);
+  const ChildResult child = run_child(command, task.args);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const bool wrote = fs::exists(task.output);
@@ -520,7 +516,10 @@ ExitStatus run_on_scheduler(const BatchFlags& f) {
   if (f.strict) args.push_back("--strict");
   if (f.quiet) args.push_back("--quiet");
   ::setenv("PYTHONPATH", package.string().c_str(), 1);
-  ::setenv("CTID_EXECUTABLE", self_executable().string().c_str(), 1);
+  // The records run with this executable; from python3 -m ctid, the runner's own default.
+  if (const std::vector<std::string> self = self_command(); self.size() == 1) {
+    ::setenv("CTID_EXECUTABLE", self.front().c_str(), 1);
+  }
   std::vector<std::string> words{python_executable()};
   words.insert(words.end(), args.begin(), args.end());
   return static_cast<ExitStatus>(run_python(std::move(words), "python3 -m ctid.batch"));
@@ -580,14 +579,14 @@ ExitStatus run_batch(const BatchFlags& f) {
         pending.push_back(i);
       }
     }
-    const std::string exe = self_executable().string();
+    const std::vector<std::string> command = self_command();
     std::vector<double> seconds(pending.size(), 0.0);
     Progress progress("ctid batch", f.quiet);
     std::atomic<int> done{0};
     const int total = static_cast<int>(pending.size());
     parallel_for(total, resolve_thread_count(f.jobs), [&](int k) {
       const auto index = static_cast<std::size_t>(pending[static_cast<std::size_t>(k)]);
-      seconds[static_cast<std::size_t>(k)] = run_task(exe, tasks[index]);
+      seconds[static_cast<std::size_t>(k)] = run_task(command, tasks[index]);
       progress.update("records", ++done, total);
     });
     progress.clear();

@@ -4,16 +4,19 @@
 #include <signal.h>
 
 #include <csignal>
+#include <filesystem>
 #include <iostream>
 #include <streambuf>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "command.h"
 #include "command_line.h"
+#include "ctid/core/error.h"
 #include "ctid/io/file.h"
 #include "ctid/io/json.h"
 #include "output_paths.h"
@@ -94,8 +97,24 @@ void escape_stdout() {
 }  // namespace
 
 namespace ctid::cli {
+namespace {
+std::vector<std::string>& self_command_storage() {
+  static std::vector<std::string> self;
+  return self;
+}
+}  // namespace
 
-int run_command_line(const std::vector<std::string>& args, ProcessScope scope) {
+std::vector<std::string> self_command() {
+  if (!self_command_storage().empty()) return self_command_storage();
+  std::error_code error;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (error) throw ComputationError("cannot find the ctid executable (/proc/self/exe)");
+  return {exe.string()};
+}
+
+int run_command_line(const std::vector<std::string>& args, ProcessScope scope,
+                     std::vector<std::string> self) {
+  self_command_storage() = std::move(self);
   if (scope == ProcessScope::whole) {
     install_signal_handlers();
     escape_stdout();

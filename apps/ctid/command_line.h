@@ -19,6 +19,13 @@ enum class ProcessScope {
 };
 
 /// Runs `ctid ARGS...` (`args` without the program name) and returns its exit status.
-int run_command_line(const std::vector<std::string>& args, ProcessScope scope);
+/// `self` is the argument vector that starts this command line in a new process, which
+/// `ctid batch` runs its records with: empty for this process's own executable (the binary);
+/// `python3 -m ctid` gives {interpreter, "-m", "ctid"}.
+int run_command_line(const std::vector<std::string>& args, ProcessScope scope,
+                     std::vector<std::string> self = {});
+
+/// The argument vector that starts this command line in a new process (see run_command_line).
+std::vector<std::string> self_command();
 
 }  // namespace ctid::cli

@@ -38,13 +38,14 @@ class CapturedStreams {
 void bind_command_line(py::module_& m) {
   m.def(
       "_command_line",
-      [](const std::vector<std::string>& args) {
+      [](const std::vector<std::string>& args, const std::vector<std::string>& self) {
         py::gil_scoped_release release;
-        return cli::run_command_line(args, cli::ProcessScope::whole);
+        return cli::run_command_line(args, cli::ProcessScope::whole, self);
       },
-      py::arg("args"),
+      py::arg("args"), py::arg("self"),
       "Runs `ctid ARGS...` as this process's command line (python3 -m ctid): signal handlers "
-      "and std::cout are taken over. Returns the exit status.");
+      "and std::cout are taken over; `self` starts it again in a new process (the records of "
+      "ctid batch). Returns the exit status.");
   m.def(
       "_command_line_captured",
       [](const std::vector<std::string>& args) {

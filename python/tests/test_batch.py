@@ -224,6 +224,18 @@ def test_python_m_ctid_is_the_command_line(cli, batch, tmp_path):
     assert outputs["binary"] == outputs["package"]
     assert outputs["binary usage"] == outputs["package usage"]
     assert outputs["binary usage"][0] == 2 and "--modes" in outputs["binary usage"][1]
+    # Its batch runs the records with python3 -m ctid (there is no ctid binary to start).
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"modes": 1}))
+    out = tmp_path / "batch"
+    done = subprocess.run([sys.executable, "-m", "ctid", "batch", "--glob",
+                           str(pathlib.Path(batch["root"]) / "records" / "r00[04].csv"),
+                           "--spec", str(spec), "--out", str(out), "-q"],
+                          capture_output=True, text=True,
+                          env=dict(os.environ, PATH=str(tmp_path / "empty")))
+    assert done.returncode == 0, done.stderr
+    serial = _documents(batch["serial"])
+    assert _documents(out) == {name: serial[name] for name in ("r000.json", "r004.json")}
 
 
 def test_fit_many_with_record_dicts_on_threads(cli, batch, tmp_path, monkeypatch):
