@@ -112,7 +112,8 @@ class FitFlagsReference {
 };
 
 // The words a flag adds to fit's argument vector ("--modes=2"; "--submodel=2,0" "--submodel=2,1";
-// "--history"; nothing for a flag set to false or a value left empty).
+// "--history"; "--compute-covariance=false", which turns off a flag that is on by default;
+// nothing for a value left empty).
 std::vector<std::string> flag_words(const std::string& key, const FlagValue& given,
                                     const CLI::Option& option, const std::string& context) {
   const bool is_flag = option.get_expected_max() == 0 || option.get_type_size_max() == 0;
@@ -125,12 +126,11 @@ std::vector<std::string> flag_words(const std::string& key, const FlagValue& giv
   };
   if (v.is_null()) return {};
   if (is_flag) {
-    if (v.is_boolean())
-      return v.get<bool>() ? std::vector<std::string>{flag} : std::vector<std::string>{};
+    if (v.is_boolean()) return {v.get<bool>() ? flag : flag + "=false"};
     if (given.from_csv && v.is_string()) {
       const std::string text = v.get<std::string>();
       if (text == "true" || text == "1" || text == "yes") return {flag};
-      if (text == "false" || text == "0" || text == "no") return {};
+      if (text == "false" || text == "0" || text == "no") return {flag + "=false"};
     }
     bad(flag + " is a flag without value: write true or false");
   }

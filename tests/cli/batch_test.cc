@@ -205,6 +205,21 @@ TEST_F(BatchCommand, PlanListsTheFitCommandsAndRunsNothing) {
   EXPECT_FALSE(fs::exists(path("out")));
 }
 
+// A flag that is on by default (fit's --compute-covariance) is turned off by false in a spec
+// and by "false" in a CSV cell: the documents are those of `ctid fit --compute-covariance=false`.
+TEST_F(BatchCommand, FalseTurnsOffAFlagThatIsOnByDefault) {
+  write("spec.json", R"({"modes": 1, "compute-covariance": false})");
+  auto r =
+      ctid({"batch", "--glob", "records/a1.csv", "--spec", "spec.json", "--out", "json", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  expect_single_fit("json", "a1", {"records/a1.csv", "--modes=1", "--compute-covariance=false"});
+  EXPECT_TRUE(io::read_json(path("json/a1.json").string())["standard_errors"].empty());
+  write("m.csv", "name,data,modes,compute-covariance\na1,records/a1.csv,1,no\n");
+  r = ctid({"batch", "m.csv", "--out", "csv", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(slurp(path("csv/a1.json")), slurp(path("json/a1.json")));
+}
+
 TEST_F(BatchCommand, BadManifestsExitTwoWithOneLine) {
   write("broken.json", R"({"records": [{"data": "records/a1.csv"},)");
   expect_bad_input(ctid({"batch", "broken.json", "--out", "out"}), "batch", "broken.json");
