@@ -1,4 +1,4 @@
-// Python binding of the front door (identification/identification.h, mimo.h):
+// Python binding of the front door (identification/identification.h, mimo.h, mode_tracking.h):
 // ctid.identify(data, structure, options=None, **keywords) runs what `ctid fit` runs, and
 // ctid.identify(mimo_data, orders, ...) what `ctid fit --input-columns/--output-columns` runs and
 // ctid.identify(mimo_frf, orders, ...) what `ctid fit-frf` runs.
@@ -7,10 +7,88 @@
 #include "ctid/identification/frf_matrix.h"
 #include "ctid/identification/identification.h"
 #include "ctid/identification/mimo.h"
+#include "ctid/identification/mode_tracking.h"
 #include "ctid/identification/structure_scan.h"
 #include "fields.h"
 
 namespace ctid::python {
+
+namespace {
+
+// --- Mode tracking (issue 17; identification/mode_tracking.h) ------------------------------------
+void bind_mode_tracking(py::module_& m) {
+  bind_options<TrackingOptions>(
+      m, "Options of track_modes: window and step [s], identify() options, matching gates.");
+  bind_enum<WindowStart>(m, "WindowStart", "Where a tracking window's fit started.");
+  bind_result<TrackingWindow>(
+      m, "One tracking window: where it lies, how its fit started and ended, its modes.")
+      .def("converged", &TrackingWindow::converged, "termination == converged.")
+      .def("brief_report", &TrackingWindow::brief_report,
+           "One line: termination, iterations and, unless converged, why.");
+  bind_result<ModeTrack>(m, "A mode followed across windows (per window; NaN where unmatched).");
+  bind_result<TrackingResult>(m, "Every window of track_modes and the tracks of their modes.");
+  m.def(
+      "track_modes",
+      [](const SampledData& data, const ModelStructure& structure,
+         const std::optional<TrackingOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<TrackingOptions>("track_modes", options, kwargs);
+        py::gil_scoped_release release;
+        return track_modes(data, structure, o);
+      },
+      py::arg("data"), py::arg("structure"), py::arg("options") = py::none(),
+      "Fit `structure` to consecutive windows of `data` (each started from the previous "
+      "window's model) and match their modes into tracks, as `ctid track` does. Options are one "
+      "TrackingOptions or its fields as keywords (window [s] is required).");
+  m.def(
+      "assign_modes",
+      [](const std::vector<ModalParameters>& tracks, const std::vector<ModalParameters>& modes,
+         const std::optional<TrackingOptions>& options, const py::kwargs& kwargs) {
+        return assign_modes(tracks, modes,
+                            options_from<TrackingOptions>("assign_modes", options, kwargs));
+      },
+      py::arg("tracks"), py::arg("modes"), py::arg("options") = py::none(),
+      "The track of each mode (-1: none) under the matching of track_modes.");
+
+  // Several outputs: shared-pole windows, matching by frequency, damping and MAC.
+  bind_options<MimoTrackingOptions>(
+      m,
+      "Options of track_mimo_modes: window and step [s], mimo_srivc options, matching gates "
+      "and the MAC term.");
+  bind_result<MimoTrackingWindow>(
+      m, "One window of track_mimo_modes: its fit, its modes (with shapes) and their MAC.")
+      .def("converged", &MimoTrackingWindow::converged, "termination == converged.")
+      .def("brief_report", &MimoTrackingWindow::brief_report,
+           "One line: termination, iterations and, unless converged, why.");
+  bind_result<MimoModeTrack>(
+      m, "A mode followed across windows of several outputs, with the MAC of each window.");
+  bind_result<MimoTrackingResult>(
+      m, "Every window of track_mimo_modes and the tracks of their modes.");
+  m.def(
+      "track_mimo_modes",
+      [](const MimoData& data, const std::vector<SubmodelOrder>& orders,
+         const std::optional<MimoTrackingOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<MimoTrackingOptions>("track_mimo_modes", options, kwargs);
+        py::gil_scoped_release release;
+        return track_mimo_modes(data, orders, o);
+      },
+      py::arg("data"), py::arg("orders"), py::arg("options") = py::none(),
+      "Fit the shared-pole submodels `orders` to consecutive windows of a record of several "
+      "outputs (each started from the previous window's model, initial state estimated) and "
+      "match their modes into tracks by frequency, damping and MAC, as `ctid track` with "
+      "several --output-columns does. Options are one MimoTrackingOptions or its fields as "
+      "keywords (window [s] is required).");
+  m.def(
+      "assign_mimo_modes",
+      [](const std::vector<MimoMode>& tracks, const std::vector<MimoMode>& modes,
+         const std::optional<MimoTrackingOptions>& options, const py::kwargs& kwargs) {
+        return assign_mimo_modes(
+            tracks, modes, options_from<MimoTrackingOptions>("assign_mimo_modes", options, kwargs));
+      },
+      py::arg("tracks"), py::arg("modes"), py::arg("options") = py::none(),
+      "The track of each mode (-1: none) under the matching of track_mimo_modes.");
+}
+
+}  // namespace
 
 void bind_identification(py::module_& m) {
   bind_enum<ModelKind>(m, "ModelKind", "One transfer function or a sum of submodels.");
@@ -116,6 +194,7 @@ void bind_identification(py::module_& m) {
       py::arg("data"), py::arg("candidates"), py::arg("options") = py::none(),
       "Fit every candidate structure on the first part of the record, score it on the held-out "
       "end (fit, YIC, RT2, AIC, BIC) and recommend one, as `ctid structure` does.");
+  bind_mode_tracking(m);  // mode tracking (issue 17)
 }
 
 }  // namespace ctid::python

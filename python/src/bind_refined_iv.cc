@@ -3,7 +3,6 @@
 // keyword arguments.
 #include "common.h"
 #include "ctid/estimation/mimo_modes.h"
-#include "ctid/identification/mode_tracking.h"
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/clsrivc.h"
 #include "ctid/refined_iv/covariance.h"
@@ -220,80 +219,6 @@ void bind_covariance(py::module_& m) {
         py::arg("unfactored") = false, "Modal parameters with delta-method standard errors.");
 }
 
-// --- Mode tracking (issue 17; identification/mode_tracking.h) ------------------------------------
-void bind_mode_tracking(py::module_& m) {
-  bind_options<TrackingOptions>(
-      m, "Options of track_modes: window and step [s], identify() options, matching gates.");
-  bind_enum<WindowStart>(m, "WindowStart", "Where a tracking window's fit started.");
-  bind_result<TrackingWindow>(
-      m, "One tracking window: where it lies, how its fit started and ended, its modes.")
-      .def("converged", &TrackingWindow::converged, "termination == converged.")
-      .def("brief_report", &TrackingWindow::brief_report,
-           "One line: termination, iterations and, unless converged, why.");
-  bind_result<ModeTrack>(m, "A mode followed across windows (per window; NaN where unmatched).");
-  bind_result<TrackingResult>(m, "Every window of track_modes and the tracks of their modes.");
-  m.def(
-      "track_modes",
-      [](const SampledData& data, const ModelStructure& structure,
-         const std::optional<TrackingOptions>& options, const py::kwargs& kwargs) {
-        const auto o = options_from<TrackingOptions>("track_modes", options, kwargs);
-        py::gil_scoped_release release;
-        return track_modes(data, structure, o);
-      },
-      py::arg("data"), py::arg("structure"), py::arg("options") = py::none(),
-      "Fit `structure` to consecutive windows of `data` (each started from the previous "
-      "window's model) and match their modes into tracks, as `ctid track` does. Options are one "
-      "TrackingOptions or its fields as keywords (window [s] is required).");
-  m.def(
-      "assign_modes",
-      [](const std::vector<ModalParameters>& tracks, const std::vector<ModalParameters>& modes,
-         const std::optional<TrackingOptions>& options, const py::kwargs& kwargs) {
-        return assign_modes(tracks, modes,
-                            options_from<TrackingOptions>("assign_modes", options, kwargs));
-      },
-      py::arg("tracks"), py::arg("modes"), py::arg("options") = py::none(),
-      "The track of each mode (-1: none) under the matching of track_modes.");
-
-  // Several outputs: shared-pole windows, matching by frequency, damping and MAC.
-  bind_options<MimoTrackingOptions>(
-      m,
-      "Options of track_mimo_modes: window and step [s], mimo_srivc options, matching gates "
-      "and the MAC term.");
-  bind_result<MimoTrackingWindow>(
-      m, "One window of track_mimo_modes: its fit, its modes (with shapes) and their MAC.")
-      .def("converged", &MimoTrackingWindow::converged, "termination == converged.")
-      .def("brief_report", &MimoTrackingWindow::brief_report,
-           "One line: termination, iterations and, unless converged, why.");
-  bind_result<MimoModeTrack>(
-      m, "A mode followed across windows of several outputs, with the MAC of each window.");
-  bind_result<MimoTrackingResult>(
-      m, "Every window of track_mimo_modes and the tracks of their modes.");
-  m.def(
-      "track_mimo_modes",
-      [](const MimoData& data, const std::vector<SubmodelOrder>& orders,
-         const std::optional<MimoTrackingOptions>& options, const py::kwargs& kwargs) {
-        const auto o = options_from<MimoTrackingOptions>("track_mimo_modes", options, kwargs);
-        py::gil_scoped_release release;
-        return track_mimo_modes(data, orders, o);
-      },
-      py::arg("data"), py::arg("orders"), py::arg("options") = py::none(),
-      "Fit the shared-pole submodels `orders` to consecutive windows of a record of several "
-      "outputs (each started from the previous window's model, initial state estimated) and "
-      "match their modes into tracks by frequency, damping and MAC, as `ctid track` with "
-      "several --output-columns does. Options are one MimoTrackingOptions or its fields as "
-      "keywords (window [s] is required).");
-  m.def(
-      "assign_mimo_modes",
-      [](const std::vector<MimoMode>& tracks, const std::vector<MimoMode>& modes,
-         const std::optional<MimoTrackingOptions>& options, const py::kwargs& kwargs) {
-        return assign_mimo_modes(
-            tracks, modes, options_from<MimoTrackingOptions>("assign_mimo_modes", options, kwargs));
-      },
-      py::arg("tracks"), py::arg("modes"), py::arg("options") = py::none(),
-      "The track of each mode (-1: none) under the matching of track_mimo_modes.");
-}
-// --- end of mode tracking ----------------------------------------------------------------------
-
 // --- Recursive SRIVC (issue 17): options, the estimator class, the free function ----------
 void bind_recursive_srivc(py::module_& m) {
   bind_enum<CovarianceHistory>(m, "CovarianceHistory",
@@ -354,7 +279,6 @@ void bind_refined_iv(py::module_& m) {
   bind_refined_iv_estimators(m);
   bind_initialization(m);
   bind_covariance(m);
-  bind_mode_tracking(m);  // mode tracking (issue 17)
   bind_recursive_srivc(m);
 }
 
