@@ -61,6 +61,8 @@ TEST_F(CliTest, FeedbackBadInputIsOneLineAndExitTwo) {
 }
 
 TEST_F(CliTest, FeedbackRecoversTheLoopAndWritesJson) {
+  CTID_SKIP_UNDER_SANITIZERS(
+      "FeedbackPipeline runs the estimation and FeedbackResultJson the document under them");
   io::write_sampled_data(path("loop.csv"), informative_record());
   const auto r = ctid({"feedback", path("loop.csv").string(), "--forward-order", "3",
                        "--feedback-order", "3", "--delay", "0.5", "--output", "result.json"});
