@@ -27,6 +27,7 @@
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/provenance.h"
 #include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
 #include "data_flags.h"
@@ -426,10 +427,12 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   progress.clear();
 
   nlohmann::json document = io::to_json(result);
-  document["data"] = {
-      {"file", f.data.files.front()},      {"samples", data.size()},
-      {"sample_time", data.sample_time()}, {"inputs", data.input_names()},
-      {"outputs", data.output_names()},    {"input_hold", enum_name(data.input_hold())}};
+  document["data"] = io::to_json(io::DataProvenance{.files = {f.data.files.front()},
+                                                    .samples = data.size(),
+                                                    .sample_time = data.sample_time(),
+                                                    .inputs = data.input_names(),
+                                                    .outputs = data.output_names(),
+                                                    .input_hold = data.input_hold()});
   const io::Overwrite overwrite = f.force ? io::Overwrite::yes : io::Overwrite::no;
   if (!f.output.empty()) io::write_json(f.output, document, overwrite);
   if (!f.model_output.empty()) {
@@ -522,11 +525,12 @@ ExitStatus run_irregular_fit(const FitFlags& f, const CLI::App& app) {
     nlohmann::json document = io::to_json(result);
     document["estimator"] = estimator;
     document["loop"] = "open";
-    document["data"] = {
-        {"file", f.data.files.front()},   {"samples", samples},
-        {"sample_time", median},          {"time_stamps", "irregular"},
-        {"duplicate_stamps", duplicates}, {"input_hold", enum_name(record.input_hold)},
-        {"detrend", f.data.detrend}};
+    document["data"] = io::to_json(io::DataProvenance{.files = {f.data.files.front()},
+                                                      .samples = samples,
+                                                      .sample_time = median,
+                                                      .input_hold = record.input_hold,
+                                                      .duplicate_stamps = duplicates,
+                                                      .detrend = f.data.detrend});
     io::write_json(f.output, document, overwrite);
   }
   if (!f.model_output.empty()) {
@@ -662,11 +666,11 @@ ExitStatus run_process_fit(const FitFlags& f, const CLI::App& app) {
     nlohmann::json document = io::fields_to_json(result);
     document["type"] = "process_model_result";
     document["model"] = io::to_json(io::ContinuousModel(model));
-    document["data"] = {{"file", f.data.files.front()},
-                        {"samples", data.size()},
-                        {"sample_time", data.sample_time()},
-                        {"input_hold", enum_name(data.input_hold())},
-                        {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
+    document["data"] = io::to_json(io::DataProvenance{.files = {f.data.files.front()},
+                                                      .samples = data.size(),
+                                                      .sample_time = data.sample_time(),
+                                                      .input_hold = data.input_hold(),
+                                                      .preprocessing = f.data.preprocessing});
     io::write_json(f.output, document, overwrite);
   }
   if (!f.model_output.empty())
@@ -775,17 +779,15 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
     nlohmann::json document = io::to_json(result);
     document["estimator"] = estimator;
     document["loop"] = identified.closed_loop ? "closed" : "open";
-    document["data"] = {{"file", f.data.files.front()},
-                        {"samples", samples},
-                        {"sample_time", data.sample_time()},
-                        {"input_hold", enum_name(data.input_hold())},
-                        {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
+    io::DataProvenance provenance{.files = f.data.files,
+                                  .samples = samples,
+                                  .sample_time = data.sample_time(),
+                                  .input_hold = data.input_hold(),
+                                  .preprocessing = f.data.preprocessing};
     if (records.size() > 1) {
-      document["data"]["files"] = f.data.files;
-      std::vector<int> sizes;
-      for (const SampledData& record : records) sizes.push_back(record.size());
-      document["data"]["record_samples"] = sizes;
+      for (const SampledData& record : records) provenance.record_samples.push_back(record.size());
     }
+    document["data"] = io::to_json(provenance);
     if (controller) document["controller"] = io::to_json(*controller);
     if (identified.two_stage) document["two_stage"] = io::fields_to_json(*identified.two_stage);
     if (scanned) document["delay_scan"] = io::delay_scan_summary_to_json(*scanned);

@@ -24,6 +24,7 @@
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/provenance.h"
 #include "ctid/io/report_json.h"
 #include "field_flags.h"
 #include "plot_support.h"
@@ -130,10 +131,11 @@ ExitStatus run_fit_frf(const FitFrfFlags& f, const CLI::App& app) {
   progress.clear();
 
   nlohmann::json document = io::to_json(result);
-  document["data"] = {{"file", f.file},
-                      {"lines", frf.frequencies.size()},
-                      {"inputs", frf.input_names},
-                      {"outputs", frf.output_names}};
+  document["data"] =
+      io::to_json(io::DataProvenance{.files = {f.file},
+                                     .lines = static_cast<long long>(frf.frequencies.size()),
+                                     .inputs = frf.input_names,
+                                     .outputs = frf.output_names});
   if (!f.output.empty()) {
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }

@@ -26,6 +26,7 @@
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/provenance.h"
 #include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
 #include "ctid/io/uff58.h"
@@ -198,11 +199,11 @@ void write_output(const FrfFlags& f, const io::CsvTable& table, nlohmann::json& 
     return;
   }
   document["method"] = periodic ? "periodic" : "welch";
-  document["data"] = {{"file", f.data.file},
-                      {"samples", samples},
-                      {"sample_time", sample_time},
-                      {"input_hold", enum_name(input_hold)},
-                      {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
+  document["data"] = io::to_json(io::DataProvenance{.files = {f.data.file},
+                                                    .samples = samples,
+                                                    .sample_time = sample_time,
+                                                    .input_hold = input_hold,
+                                                    .preprocessing = f.data.preprocessing});
   if (peaks_of != nullptr) document["peaks_of"] = peaks_of;
   nlohmann::json listed = nlohmann::json::array();
   for (const ResonancePeak& p : peaks) listed.push_back(io::fields_to_json(p));

@@ -25,6 +25,7 @@
 #include "ctid/io/json.h"
 #include "ctid/io/mimo_data_csv.h"
 #include "ctid/io/npy.h"
+#include "ctid/io/provenance.h"
 #include "ctid/io/report_json.h"
 #include "data_flags.h"
 #include "field_flags.h"
@@ -178,8 +179,8 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
   }
   const OmaResult result = identify_output_only(y, h, options, names);
   nlohmann::json document = io::to_json(result);
-  document["data"] = {{"file", f.file}};
-  if (preprocessing) document["data"]["preprocessing"] = io::fields_to_json(*preprocessing);
+  document["data"] =
+      io::to_json(io::DataProvenance{.files = {f.file}, .preprocessing = preprocessing});
   if (!f.output.empty()) {
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }

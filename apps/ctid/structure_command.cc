@@ -18,6 +18,7 @@
 #include "ctid/identification/structure_scan.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/provenance.h"
 #include "ctid/io/report_json.h"
 #include "data_flags.h"
 #include "plot_support.h"
@@ -175,8 +176,8 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
       scan_structures(data, candidates, options, progress.callback("structure"));
   progress.clear();
   nlohmann::json document = io::to_json(result);
-  document["data"] = {
-      {"file", f.data.file}, {"samples", data.size()}, {"sample_time", data.sample_time()}};
+  document["data"] = io::to_json(io::DataProvenance{
+      .files = {f.data.file}, .samples = data.size(), .sample_time = data.sample_time()});
   if (!f.output.empty()) {
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }

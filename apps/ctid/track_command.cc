@@ -23,6 +23,7 @@
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/provenance.h"
 #include "ctid/io/result_json.h"
 #include "ctid/io/tracking_json.h"
 #include "data_flags.h"
@@ -276,12 +277,12 @@ ExitStatus run_mimo_track(const TrackFlags& f, const CLI::App& app) {
   progress.clear();
 
   nlohmann::json document = io::to_json(result);
-  document["data"] = {{"file", f.data.file},
-                      {"samples", data.size()},
-                      {"sample_time", data.sample_time()},
-                      {"start_time", data.start_time()},
-                      {"inputs", data.input_names()},
-                      {"outputs", data.output_names()}};
+  document["data"] = io::to_json(io::DataProvenance{.files = {f.data.file},
+                                                    .samples = data.size(),
+                                                    .sample_time = data.sample_time(),
+                                                    .start_time = data.start_time(),
+                                                    .inputs = data.input_names(),
+                                                    .outputs = data.output_names()});
   document["structure"] = io::fields_to_json(structure);
   document["options"] = io::fields_to_json(options);
   return report(f, app, result, data, std::move(document), package);
@@ -316,11 +317,11 @@ ExitStatus run_track(const TrackFlags& f, const CLI::App& app) {
   progress.clear();
 
   nlohmann::json document = io::to_json(result);
-  document["data"] = {{"file", f.data.file},
-                      {"samples", data.size()},
-                      {"sample_time", data.sample_time()},
-                      {"start_time", data.start_time()},
-                      {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
+  document["data"] = io::to_json(io::DataProvenance{.files = {f.data.file},
+                                                    .samples = data.size(),
+                                                    .sample_time = data.sample_time(),
+                                                    .start_time = data.start_time(),
+                                                    .preprocessing = f.data.preprocessing});
   document["structure"] = io::fields_to_json(structure);
   document["options"] = io::fields_to_json(options);
   return report(f, app, result, data, std::move(document), package);

@@ -30,6 +30,7 @@
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
+#include "ctid/io/provenance.h"
 #include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
 #include "data_flags.h"
@@ -244,11 +245,11 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
   if (!f.output.empty()) {
     nlohmann::json document = io::to_json(reports.front());
     document["model_file"] = f.model;
-    document["data"] = {{"file", f.data.file},
-                        {"samples", data.size()},
-                        {"sample_time", data.sample_time()},
-                        {"input_hold", enum_name(data.input_hold())},
-                        {"preprocessing", io::fields_to_json(f.data.preprocessing)}};
+    document["data"] = io::to_json(io::DataProvenance{.files = {f.data.file},
+                                                      .samples = data.size(),
+                                                      .sample_time = data.sample_time(),
+                                                      .input_hold = data.input_hold(),
+                                                      .preprocessing = f.data.preprocessing});
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
   if (!f.quiet) {

@@ -108,6 +108,7 @@
 #include "ctid/io/mimo_frf_file.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/npy.h"
+#include "ctid/io/provenance.h"
 #include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
 #include "ctid/io/sampled_data_csv.h"
