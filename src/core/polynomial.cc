@@ -2,11 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
+#include <string>
+#include <utility>
 
 #include <Eigen/Eigenvalues>
 
 #include "core/internal/balance.h"
+#include "core/internal/polynomial_if_finite.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 
@@ -19,10 +23,22 @@ std::string power_of_s(Eigen::Index k) {
   return k == 0 ? "1" : k == 1 ? "s" : "s^" + std::to_string(k);
 }
 
+// What require_finite says of coefficient k.
+std::string coefficient_not_finite(const Eigen::VectorXd& c, Eigen::Index k) {
+  return internal::concat("polynomial coefficient ", k, " (of ", power_of_s(k), ") is ", c(k),
+                          "; coefficients must be finite");
+}
+
+// The coefficients of the product of two non-zero polynomials, untrimmed.
+Eigen::VectorXd product_coefficients(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(a.size() + b.size() - 1);
+  for (Eigen::Index i = 0; i < a.size(); ++i) c.segment(i, b.size()) += a(i) * b;
+  return c;
+}
+
 void require_finite(const Eigen::VectorXd& c) {
   for (Eigen::Index k = 0; k < c.size(); ++k) {
-    require(std::isfinite(c(k)), "polynomial coefficient ", k, " (of ", power_of_s(k), ") is ",
-            c(k), "; coefficients must be finite");
+    if (!std::isfinite(c(k))) throw InvalidArgument(coefficient_not_finite(c, k));
   }
 }
 
@@ -64,21 +80,10 @@ Polynomial Polynomial::trimmed(Eigen::VectorXd ascending, double tolerance) {
 }
 
 Polynomial Polynomial::from_roots(const Eigen::VectorXcd& roots, double leading) {
-  require(std::isfinite(leading) && leading != 0.0, "leading coefficient is ", leading,
-          "; it must be finite and non-zero");
-  Eigen::VectorXcd c = Eigen::VectorXcd::Zero(roots.size() + 1);
-  c(0) = 1.0;
-  // Multiply by (x - r) one root at a time: c_new[k] = c[k-1] - r c[k].
-  for (Eigen::Index i = 0; i < roots.size(); ++i) {
-    require(std::isfinite(roots(i).real()) && std::isfinite(roots(i).imag()), "root ", i,
-            " is not finite");
-    for (Eigen::Index k = i + 1; k > 0; --k) c(k) = c(k - 1) - roots(i) * c(k);
-    c(0) = -roots(i) * c(0);
-  }
-  const double size = c.cwiseAbs().maxCoeff();
-  require(c.imag().cwiseAbs().maxCoeff() <= 1e-9 * size,
-          "roots must come in complex-conjugate pairs for a real polynomial");
-  return Polynomial(Eigen::VectorXd(leading * c.real()));
+  std::string failure;
+  std::optional<Polynomial> p = internal::polynomial_from_roots(roots, leading, &failure);
+  if (!p) throw InvalidArgument(failure);
+  return std::move(*p);
 }
 
 Polynomial Polynomial::constant(double value) { return Polynomial({value}); }
@@ -155,14 +160,10 @@ Polynomial Polynomial::monic() const {
 }
 
 Polynomial Polynomial::anti_monic() const {
-  require(!is_zero() && coefficients_(0) != 0.0, "polynomial ", to_string(),
-          " has a zero constant coefficient and cannot be made anti-monic");
-  Eigen::VectorXd c = coefficients_ / coefficients_(0);
-  require(c.allFinite(), "polynomial ", to_string(), ": its constant coefficient is ",
-          coefficients_(0),
-          ", so small against the others that dividing by it overflows; if the polynomial has a "
-          "root at s = 0, give it as such");
-  return Polynomial(std::move(c));
+  std::string failure;
+  std::optional<Polynomial> p = internal::anti_monic_if_finite(*this, &failure);
+  if (!p) throw InvalidArgument(failure);
+  return std::move(*p);
 }
 
 Polynomial Polynomial::scaled_argument(double scale) const {
@@ -188,11 +189,7 @@ Polynomial operator-(const Polynomial& a, const Polynomial& b) { return a + (-b)
 
 Polynomial operator*(const Polynomial& a, const Polynomial& b) {
   if (a.is_zero() || b.is_zero()) return Polynomial();
-  Eigen::VectorXd c = Eigen::VectorXd::Zero(a.coefficients_.size() + b.coefficients_.size() - 1);
-  for (Eigen::Index i = 0; i < a.coefficients_.size(); ++i) {
-    c.segment(i, b.coefficients_.size()) += a.coefficients_(i) * b.coefficients_;
-  }
-  return Polynomial::trimmed(c);
+  return Polynomial::trimmed(product_coefficients(a.coefficients_, b.coefficients_));
 }
 
 Polynomial operator*(double s, const Polynomial& p) {
@@ -244,5 +241,67 @@ PolynomialDivision divide(const Polynomial& a, const Polynomial& b) {
   }
   return {Polynomial::trimmed(q), Polynomial::trimmed(Eigen::VectorXd(r.head(std::max(nb, 0))))};
 }
+
+namespace internal {
+
+std::optional<Polynomial> polynomial_from_roots(const Eigen::VectorXcd& roots, double leading,
+                                                std::string* failure) {
+  require(std::isfinite(leading) && leading != 0.0, "leading coefficient is ", leading,
+          "; it must be finite and non-zero");
+  const auto fail = [failure](std::string reason) -> std::optional<Polynomial> {
+    if (failure != nullptr) *failure = std::move(reason);
+    return std::nullopt;
+  };
+  Eigen::VectorXcd c = Eigen::VectorXcd::Zero(roots.size() + 1);
+  c(0) = 1.0;
+  // Multiply by (x - r) one root at a time: c_new[k] = c[k-1] - r c[k].
+  for (Eigen::Index i = 0; i < roots.size(); ++i) {
+    if (!std::isfinite(roots(i).real()) || !std::isfinite(roots(i).imag())) {
+      return fail(concat("root ", i, " is not finite"));
+    }
+    for (Eigen::Index k = i + 1; k > 0; --k) c(k) = c(k - 1) - roots(i) * c(k);
+    c(0) = -roots(i) * c(0);
+  }
+  const double size = c.cwiseAbs().maxCoeff();
+  if (!(c.imag().cwiseAbs().maxCoeff() <= 1e-9 * size)) {
+    return fail("roots must come in complex-conjugate pairs for a real polynomial");
+  }
+  Eigen::VectorXd real = leading * c.real();
+  for (Eigen::Index k = 0; k < real.size(); ++k) {
+    if (!std::isfinite(real(k))) return fail(coefficient_not_finite(real, k));
+  }
+  return Polynomial(std::move(real));
+}
+
+std::optional<Polynomial> product_if_finite(const Polynomial& a, const Polynomial& b) {
+  if (a.is_zero() || b.is_zero()) return Polynomial();
+  Eigen::VectorXd c = product_coefficients(a.coefficients(), b.coefficients());
+  if (!c.allFinite()) return std::nullopt;
+  return Polynomial::trimmed(std::move(c));
+}
+
+std::optional<Polynomial> anti_monic_if_finite(const Polynomial& p, std::string* failure) {
+  const Eigen::VectorXd& coefficients = p.coefficients();
+  if (p.is_zero() || coefficients(0) == 0.0) {
+    if (failure != nullptr) {
+      *failure = concat("polynomial ", p.to_string(),
+                        " has a zero constant coefficient and cannot be made anti-monic");
+    }
+    return std::nullopt;
+  }
+  Eigen::VectorXd c = coefficients / coefficients(0);
+  if (!c.allFinite()) {
+    if (failure != nullptr) {
+      *failure =
+          concat("polynomial ", p.to_string(), ": its constant coefficient is ", coefficients(0),
+                 ", so small against the others that dividing by it overflows; if the "
+                 "polynomial has a root at s = 0, give it as such");
+    }
+    return std::nullopt;
+  }
+  return Polynomial(std::move(c));
+}
+
+}  // namespace internal
 
 }  // namespace ctid

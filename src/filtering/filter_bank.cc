@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -58,24 +59,9 @@ void balance(FilterRealization& f) {
   f.c = f.c * t.asDiagonal();
 }
 
-}  // namespace
-
-void FilterRealization::validate() const {
-  require(a.rows() == a.cols(), "FilterRealization: A must be square, got ", a.rows(), " x ",
-          a.cols());
-  require(b.size() == a.rows(), "FilterRealization: b has ", b.size(), " entries, expected ",
-          a.rows());
-  require(c.cols() == a.rows(), "FilterRealization: C has ", c.cols(), " columns, expected ",
-          a.rows());
-  require(d.size() == c.rows(), "FilterRealization: d has ", d.size(), " entries, expected ",
-          c.rows());
-  require(a.allFinite() && b.allFinite() && c.allFinite() && d.allFinite(),
-          "FilterRealization: an entry is not finite");
-}
-
-FilterRealization derivative_filters(const Polynomial& denominator) {
+// The realisation behind derivative_filters, for deg D >= 1.
+FilterRealization realize_derivative_filters(const Polynomial& denominator) {
   const int n = denominator.degree();
-  require(n >= 1, "derivative_filters: the denominator must have degree >= 1, got ", n);
   const Eigen::VectorXd& c = denominator.coefficients();
   int lowest = 0;
   while (c(lowest) == 0.0) ++lowest;
@@ -108,6 +94,37 @@ FilterRealization derivative_filters(const Polynomial& denominator) {
   f.c.row(n) = -scaled.transpose() / c(n);
   f.d(n) = 1.0 / c(n);
   balance(f);
+  return f;
+}
+
+}  // namespace
+
+void FilterRealization::validate() const {
+  require(a.rows() == a.cols(), "FilterRealization: A must be square, got ", a.rows(), " x ",
+          a.cols());
+  require(b.size() == a.rows(), "FilterRealization: b has ", b.size(), " entries, expected ",
+          a.rows());
+  require(c.cols() == a.rows(), "FilterRealization: C has ", c.cols(), " columns, expected ",
+          a.rows());
+  require(d.size() == c.rows(), "FilterRealization: d has ", d.size(), " entries, expected ",
+          c.rows());
+  require(finite(), "FilterRealization: an entry is not finite");
+}
+
+bool FilterRealization::finite() const {
+  return a.allFinite() && b.allFinite() && c.allFinite() && d.allFinite();
+}
+
+FilterRealization derivative_filters(const Polynomial& denominator) {
+  const int n = denominator.degree();
+  require(n >= 1, "derivative_filters: the denominator must have degree >= 1, got ", n);
+  return realize_derivative_filters(denominator);
+}
+
+std::optional<FilterRealization> finite_derivative_filters(const Polynomial& denominator) {
+  if (denominator.degree() < 1) return std::nullopt;
+  FilterRealization f = realize_derivative_filters(denominator);
+  if (!f.finite()) return std::nullopt;
   return f;
 }
 

@@ -8,9 +8,13 @@
 #include <deque>
 #include <limits>
 #include <optional>
+#include <string>
+#include <utility>
 
 #include <Eigen/Dense>
 
+#include "core/internal/finite_transfer_function.h"
+#include "core/internal/polynomial_if_finite.h"
 #include "ctid/core/error.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/filtering/filter_bank.h"
@@ -34,8 +38,12 @@ SubmodelOrder unfactored_order(const std::vector<SubmodelOrder>& orders) {
   return total;
 }
 
-TransferFunction lssvf(const SampledData& data, const SubmodelOrder& order, double bandwidth,
-                       int input_delay) {
+namespace {
+
+// LSSVF's parameters [a_1 .. a_n, b_0 .. b_m] at one bandwidth; none when the state-variable
+// filter's coefficients or its realisation are not finite (a bandwidth far below 1).
+std::optional<Eigen::VectorXd> lssvf_parameters(const SampledData& data, const SubmodelOrder& order,
+                                                double bandwidth, int input_delay) {
   require(order.n >= 0 && order.m >= 0 && order.integrators >= 0 &&
               order.n + order.integrators >= 1 && order.m <= order.n + order.integrators,
           "lssvf: impossible orders n = ", order.n, ", m = ", order.m,
@@ -43,34 +51,76 @@ TransferFunction lssvf(const SampledData& data, const SubmodelOrder& order, doub
   require(std::isfinite(bandwidth) && bandwidth > 0.0, "lssvf: bandwidth is ", bandwidth,
           "; it must be positive");
   const int d = order.n + order.integrators;
+  if (!std::isfinite(1.0 / bandwidth)) return std::nullopt;
   const Polynomial one_pole{1.0, 1.0 / bandwidth};
-  Polynomial f{1.0};
-  for (int k = 0; k < d; ++k) f = f * one_pole;
+  std::optional<Polynomial> f = Polynomial{1.0};
+  for (int k = 0; k < d && f; ++k) f = internal::product_if_finite(*f, one_pole);
+  if (!f) return std::nullopt;
   const double h = data.sample_time();
-  const Eigen::MatrixXd fy = filter_derivatives(f, data.output(), h, Hold::first_order_hold);
+  const std::optional<FilterRealization> bank = finite_derivative_filters(*f);
+  if (!bank) return std::nullopt;
+  const Eigen::MatrixXd fy = SampledFilter(*bank, h, Hold::first_order_hold).apply(data.output());
   const Eigen::MatrixXd fu =
-      filter_derivatives(f, delay_samples(data.input(), input_delay), h, data.input_hold());
+      SampledFilter(*bank, h, data.input_hold()).apply(delay_samples(data.input(), input_delay));
   const int l = order.integrators;
   Eigen::MatrixXd x(data.size(), order.n + order.m + 1);
   for (int k = 1; k <= order.n; ++k) x.col(k - 1) = -fy.col(k + l);
   x.rightCols(order.m + 1) = fu.leftCols(order.m + 1);
-  const Eigen::VectorXd theta = internal::scaled_least_squares(x, fy.col(l)).coefficients;
+  return internal::scaled_least_squares(x, fy.col(l)).coefficients;
+}
+
+// B / (p^l A) of LSSVF's parameters; throws InvalidArgument naming a coefficient that is not
+// finite.
+TransferFunction lssvf_model(const Eigen::VectorXd& theta, const SubmodelOrder& order) {
   Eigen::VectorXd a(order.n + 1);
   a(0) = 1.0;
   a.tail(order.n) = theta.head(order.n);
   return TransferFunction(Polynomial::trimmed(theta.tail(order.m + 1)),
-                          Polynomial::monomial(l) * Polynomial::trimmed(a));
+                          Polynomial::monomial(order.integrators) * Polynomial::trimmed(a));
 }
 
-Polynomial mode_from_peak(const ResonancePeak& peak) {
+// The coefficients of mode_from_peak's polynomial, ascending.
+Eigen::VectorXd mode_coefficients(const ResonancePeak& peak) {
   const double zeta =
       std::isfinite(peak.damping_ratio) ? std::clamp(peak.damping_ratio, 1e-3, 0.5) : 0.05;
   const double w = peak.frequency / std::sqrt(1.0 - 2.0 * zeta * zeta);  // resonance -> w_n
-  return Polynomial{1.0, 2.0 * zeta / w, 1.0 / (w * w)};
+  Eigen::VectorXd c(3);
+  c << 1.0, 2.0 * zeta / w, 1.0 / (w * w);
+  return c;
 }
 
-std::optional<TransferFunction> frf_peak_start(const SampledData& data, const SubmodelOrder& order,
-                                               int input_delay) {
+}  // namespace
+
+TransferFunction lssvf(const SampledData& data, const SubmodelOrder& order, double bandwidth,
+                       int input_delay) {
+  const std::optional<Eigen::VectorXd> theta =
+      lssvf_parameters(data, order, bandwidth, input_delay);
+  require(theta.has_value(), "lssvf: the state-variable filter (1 + p/", bandwidth, ")^",
+          order.n + order.integrators, " has no finite realisation; use a larger bandwidth");
+  return lssvf_model(*theta, order);
+}
+
+Polynomial mode_from_peak(const ResonancePeak& peak) { return Polynomial(mode_coefficients(peak)); }
+
+namespace internal {
+
+std::optional<TransferFunction> lssvf_if_finite(const SampledData& data, const SubmodelOrder& order,
+                                                double bandwidth, int input_delay) {
+  const std::optional<Eigen::VectorXd> theta =
+      lssvf_parameters(data, order, bandwidth, input_delay);
+  if (!theta || !theta->allFinite()) return std::nullopt;
+  return lssvf_model(*theta, order);
+}
+
+std::optional<Polynomial> mode_from_peak_if_finite(const ResonancePeak& peak) {
+  Eigen::VectorXd c = mode_coefficients(peak);
+  if (!c.allFinite() || c(2) == 0.0) return std::nullopt;
+  return Polynomial(std::move(c));
+}
+
+std::optional<TransferFunction> frf_peak_start_if_formed(const SampledData& data,
+                                                         const SubmodelOrder& order,
+                                                         int input_delay, std::string* failure) {
   const int pairs = order.n / 2;
   if (data.size() < 16) return std::nullopt;
   WelchOptions welch;
@@ -83,13 +133,39 @@ std::optional<TransferFunction> frf_peak_start(const SampledData& data, const Su
     peaks = resonance_peaks(frf, options);
     if (static_cast<int>(peaks.size()) < pairs) return std::nullopt;
   }
-  Polynomial a{1.0};
-  for (const ResonancePeak& peak : peaks) a = a * mode_from_peak(peak);
-  if (order.n % 2 == 1) a = a * Polynomial{1.0, 1.0 / frf.frequencies(0)};
-  const TransferFunction poles_only(Polynomial{1.0}, Polynomial::monomial(order.integrators) * a);
-  return group_into_submodels(poles_only, {order}, data, input_delay)
-      .to_transfer_function()
-      .with_input_delay(0.0);
+  const auto fail = [failure](std::string reason) -> std::optional<TransferFunction> {
+    if (failure != nullptr) *failure = std::move(reason);
+    return std::nullopt;
+  };
+  std::optional<Polynomial> a = Polynomial{1.0};
+  for (const ResonancePeak& peak : peaks) {
+    const std::optional<Polynomial> mode = mode_from_peak_if_finite(peak);
+    if (mode) a = product_if_finite(*a, *mode);
+    if (!mode || !a) {
+      return fail(concat("frf_peak_start: the peak at ", peak.frequency,
+                         " rad/s gives no finite denominator"));
+    }
+  }
+  if (order.n % 2 == 1) a = product_if_finite(*a, Polynomial{1.0, 1.0 / frf.frequencies(0)});
+  if (!a) return fail("frf_peak_start: the peaks give no finite denominator");
+  const TransferFunction poles_only(Polynomial{1.0}, Polynomial::monomial(order.integrators) * *a);
+  const std::optional<AdditiveModel> grouped =
+      grouped_submodels(poles_only, {order}, data, input_delay, failure);
+  if (!grouped) return std::nullopt;
+  std::optional<TransferFunction> g = transfer_function_if_finite(*grouped);
+  if (!g) return fail("frf_peak_start: the start's transfer function overflows");
+  return g->with_input_delay(0.0);
+}
+
+}  // namespace internal
+
+std::optional<TransferFunction> frf_peak_start(const SampledData& data, const SubmodelOrder& order,
+                                               int input_delay) {
+  std::string failure;
+  std::optional<TransferFunction> start =
+      internal::frf_peak_start_if_formed(data, order, input_delay, &failure);
+  if (!start && !failure.empty()) throw InvalidArgument(failure);
+  return start;
 }
 
 namespace {
@@ -192,6 +268,20 @@ void refine_open_loop_start(const SampledData& data, const SubmodelOrder& order,
   }
 }
 
+// consider(start): the candidate and its refinements (whole SRIVC and CLSRIVC runs) kept if
+// they are better; false when a refinement run stopped with InvalidArgument. The refined IV
+// engine still ends a run that way on a degenerate iterate, so this is the one catch left here
+// (decision 0045): the start itself is formed as a value.
+template <typename Consider>
+bool refined_candidate(const Consider& consider, const TransferFunction& start) {
+  try {
+    consider(start);
+    return true;
+  } catch (const InvalidArgument&) {
+    return false;
+  }
+}
+
 // initial_transfer_function on `data`, the piece already chosen (options validated).
 TransferFunction screened_transfer_function(const SampledData& data, const SubmodelOrder& order,
                                             const InitializationOptions& options) {
@@ -274,23 +364,17 @@ TransferFunction screened_transfer_function(const SampledData& data, const Submo
       for (double w = nyquist / 128.0; w <= nyquist * 1.0001; w *= 2.0) grid.push_back(w);
     }
     for (double lambda : grid) {
-      try {
-        consider(lssvf(data, order, lambda, options.input_delay));
-      } catch (const InvalidArgument&) {
-        continue;  // a bandwidth that gives a degenerate start is skipped
-      }
+      // A bandwidth that gives a degenerate start is skipped.
+      const std::optional<TransferFunction> start =
+          internal::lssvf_if_finite(data, order, lambda, options.input_delay);
+      if (start) refined_candidate(consider, *start);
     }
   }
   if (options.method != StartMethod::lssvf) {
-    bool found = false;
-    try {
-      const std::optional<TransferFunction> start =
-          frf_peak_start(data, order, options.input_delay);
-      found = start.has_value();
-      if (found) consider(*start);
-    } catch (const InvalidArgument&) {
-      found = false;  // an FRF that gives a degenerate start is not a candidate
-    }
+    // An FRF with too few peaks, or whose peaks give a degenerate start, is not a candidate.
+    const std::optional<TransferFunction> start =
+        internal::frf_peak_start_if_formed(data, order, options.input_delay);
+    const bool found = start.has_value() && refined_candidate(consider, *start);
     require(found || options.method != StartMethod::frf,
             "initial_transfer_function: the record's FRF has fewer resonance peaks than the ",
             order.n / 2, " pole pairs of the structure; use another start (lssvf or a model)");
@@ -310,23 +394,16 @@ TransferFunction initial_transfer_function(const SampledData& record, const Subm
   return screened_transfer_function(piece ? *piece : record, order, options);
 }
 
-AdditiveModel group_into_submodels(const TransferFunction& g,
-                                   const std::vector<SubmodelOrder>& orders,
-                                   const SampledData& data, int input_delay) {
-  require(!orders.empty(), "group_into_submodels: the structure has no submodels");
-  const Polynomial& den = g.denominator();
-  int origin = 0;
-  while (origin <= den.degree() && den[origin] == 0.0) ++origin;
-  int n_total = 0;
-  int l_total = 0;
-  for (const SubmodelOrder& o : orders) {
-    n_total += o.n;
-    l_total += o.integrators;
-  }
-  const int nonzero = den.degree() - origin;
-  require(nonzero == n_total && origin == l_total, "group_into_submodels: the model has ", nonzero,
-          " non-zero poles and ", origin, " at the origin; the structure asks for ", n_total,
-          " and ", l_total);
+namespace {
+
+// The failure of a step of grouped_submodels: `reason` in `failure` if given, and none.
+std::nullopt_t grouping_failed(std::string* failure, std::string reason) {
+  if (failure != nullptr) *failure = std::move(reason);
+  return std::nullopt;
+}
+
+// g's non-zero poles, unstable ones reflected, one of each pair, slowest first.
+std::vector<std::complex<double>> poles_to_group(const Polynomial& den, int nonzero) {
   std::vector<std::complex<double>> poles;
   if (nonzero > 0) {
     const Polynomial reduced(den.coefficients().tail(nonzero + 1));
@@ -341,6 +418,18 @@ AdditiveModel group_into_submodels(const TransferFunction& g,
             [](const std::complex<double>& a, const std::complex<double>& b) {
               return std::abs(a) < std::abs(b);
             });
+  return poles;
+}
+
+// Units go to submodels from the slowest up, each to the first listed submodel with room
+// for it whole, a real pole preferring a submodel with an odd number of poles left: the
+// grouping does not depend on the order the submodels are listed in (a first-order and a
+// second-order submodel get the real pole and the pair either way). A pair that fits
+// nowhere whole is split into two real poles of its magnitude. The anti-monic denominators;
+// none when the poles do not fit or make no finite denominator.
+std::optional<std::vector<Polynomial>> grouped_denominators(
+    const std::vector<std::complex<double>>& poles, const std::vector<SubmodelOrder>& orders,
+    std::string* failure) {
   // Units: a complex pair (two poles) or one real pole.
   std::deque<std::vector<std::complex<double>>> units;
   for (const auto& z : poles) {
@@ -350,13 +439,6 @@ AdditiveModel group_into_submodels(const TransferFunction& g,
       units.push_back({std::complex<double>(z.real(), 0.0)});
     }
   }
-  const Eigen::VectorXd u = delay_samples(data.input(), input_delay);
-  const double h = data.sample_time();
-  // Units go to submodels from the slowest up, each to the first listed submodel with room
-  // for it whole, a real pole preferring a submodel with an odd number of poles left: the
-  // grouping does not depend on the order the submodels are listed in (a first-order and a
-  // second-order submodel get the real pole and the pair either way). A pair that fits
-  // nowhere whole is split into two real poles of its magnitude.
   std::vector<std::vector<std::complex<double>>> assigned(orders.size());
   auto room = [&](size_t i) { return orders[i].n - static_cast<int>(assigned[i].size()); };
   while (!units.empty()) {
@@ -374,7 +456,9 @@ AdditiveModel group_into_submodels(const TransferFunction& g,
       if (!chosen) chosen = i;
     }
     if (!chosen) {
-      require(size == 2, "group_into_submodels: ran out of room for a real pole");
+      if (size != 2) {
+        return grouping_failed(failure, "group_into_submodels: ran out of room for a real pole");
+      }
       const double m = -std::abs(unit[0]);
       units.push_front({std::complex<double>(m, 0.0)});
       units.push_front({std::complex<double>(m, 0.0)});
@@ -383,38 +467,99 @@ AdditiveModel group_into_submodels(const TransferFunction& g,
     assigned[*chosen].insert(assigned[*chosen].end(), unit.begin(), unit.end());
   }
   std::vector<Polynomial> denominators;
-  int columns = 0;
   for (size_t i = 0; i < orders.size(); ++i) {
-    const SubmodelOrder& o = orders[i];
     const std::vector<std::complex<double>>& mine = assigned[i];
-    require(static_cast<int>(mine.size()) == o.n, "group_into_submodels: ran out of poles");
+    if (static_cast<int>(mine.size()) != orders[i].n) {
+      return grouping_failed(failure, "group_into_submodels: ran out of poles");
+    }
     Polynomial a{1.0};
     if (!mine.empty()) {
       Eigen::VectorXcd roots(static_cast<Eigen::Index>(mine.size()));
       for (size_t k = 0; k < mine.size(); ++k) roots(static_cast<Eigen::Index>(k)) = mine[k];
-      a = Polynomial::from_roots(roots).anti_monic();
+      const std::optional<Polynomial> product =
+          internal::polynomial_from_roots(roots, 1.0, failure);
+      if (!product) return std::nullopt;
+      const std::optional<Polynomial> anti_monic =
+          internal::anti_monic_if_finite(*product, failure);
+      if (!anti_monic) return std::nullopt;
+      a = *anti_monic;
     }
     denominators.push_back(a);
-    columns += o.m + 1;
   }
+  return denominators;
+}
+
+}  // namespace
+
+namespace internal {
+
+std::optional<AdditiveModel> grouped_submodels(const TransferFunction& g,
+                                               const std::vector<SubmodelOrder>& orders,
+                                               const SampledData& data, int input_delay,
+                                               std::string* failure) {
+  require(!orders.empty(), "group_into_submodels: the structure has no submodels");
+  const Polynomial& den = g.denominator();
+  int origin = 0;
+  while (origin <= den.degree() && den[origin] == 0.0) ++origin;
+  int n_total = 0;
+  int l_total = 0;
+  for (const SubmodelOrder& o : orders) {
+    n_total += o.n;
+    l_total += o.integrators;
+  }
+  const int nonzero = den.degree() - origin;
+  if (nonzero != n_total || origin != l_total) {
+    return grouping_failed(
+        failure,
+        concat("group_into_submodels: the model has ", nonzero, " non-zero poles and ", origin,
+               " at the origin; the structure asks for ", n_total, " and ", l_total));
+  }
+  const std::optional<std::vector<Polynomial>> denominators =
+      grouped_denominators(poles_to_group(den, nonzero), orders, failure);
+  if (!denominators) return std::nullopt;
+  int columns = 0;
+  for (const SubmodelOrder& o : orders) columns += o.m + 1;
+  const Eigen::VectorXd u = delay_samples(data.input(), input_delay);
+  const double h = data.sample_time();
   // Numerators by output-error least squares with the denominators fixed.
   Eigen::MatrixXd x(data.size(), columns);
   int at = 0;
   for (size_t i = 0; i < orders.size(); ++i) {
-    const Polynomial d = Polynomial::monomial(orders[i].integrators) * denominators[i];
-    const Eigen::MatrixXd f = filter_derivatives(d, u, h, data.input_hold());
+    const Polynomial d = Polynomial::monomial(orders[i].integrators) * (*denominators)[i];
+    const std::optional<FilterRealization> bank = finite_derivative_filters(d);
+    if (!bank) {
+      return grouping_failed(
+          failure, d.degree() < 1 ? concat("derivative_filters: the denominator must have "
+                                           "degree >= 1, got ",
+                                           d.degree())
+                                  : std::string("FilterRealization: an entry is not finite"));
+    }
+    const Eigen::MatrixXd f = SampledFilter(*bank, h, data.input_hold()).apply(u);
     x.middleCols(at, orders[i].m + 1) = f.leftCols(orders[i].m + 1);
     at += orders[i].m + 1;
   }
-  const Eigen::VectorXd b = internal::scaled_least_squares(x, data.output()).coefficients;
+  const Eigen::VectorXd b = scaled_least_squares(x, data.output()).coefficients;
   Eigen::VectorXd beta(n_total + columns);
   int pos = 0;
   at = 0;
   for (size_t i = 0; i < orders.size(); ++i) {
-    for (int k = 1; k <= orders[i].n; ++k) beta(pos++) = denominators[i][k];
+    for (int k = 1; k <= orders[i].n; ++k) beta(pos++) = (*denominators)[i][k];
     for (int k = 0; k <= orders[i].m; ++k) beta(pos++) = b(at++);
   }
+  if (!beta.allFinite()) return grouping_failed(failure, "parameter vector has a non-finite entry");
   return AdditiveModel::from_parameters(orders, beta, input_delay * h);
+}
+
+}  // namespace internal
+
+AdditiveModel group_into_submodels(const TransferFunction& g,
+                                   const std::vector<SubmodelOrder>& orders,
+                                   const SampledData& data, int input_delay) {
+  std::string failure;
+  std::optional<AdditiveModel> model =
+      internal::grouped_submodels(g, orders, data, input_delay, &failure);
+  if (!model) throw InvalidArgument(failure);
+  return std::move(*model);
 }
 
 AdditiveModel initial_additive_model(const SampledData& record,

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <optional>
 #include <utility>
 
 #include <Eigen/Dense>
@@ -100,27 +101,31 @@ std::optional<std::vector<Polynomial>> common_denominator_start(const Layout& la
   Eigen::VectorXd a(n + 1);
   a(0) = 1.0;
   a.tail(n) = a_tail;
-  try {
-    // A's poles grouped into the submodels that have poles besides integrators.
-    std::vector<SubmodelOrder> with_poles;
-    for (SubmodelOrder o : layout.orders) {
-      if (o.n == 0) continue;
-      o.m = std::min(o.m, o.n);
-      o.integrators = 0;
-      with_poles.push_back(o);
-    }
-    const AdditiveModel grouped = group_into_submodels(
-        TransferFunction(Polynomial{1.0}, Polynomial(a)), with_poles, data.channel(0, 0));
-    std::vector<Polynomial> denominators;
-    int next = 0;
-    for (const SubmodelOrder& o : layout.orders) {
-      denominators.push_back(o.n == 0 ? Polynomial{1.0}
-                                      : grouped.submodels()[static_cast<size_t>(next++)].a);
-    }
-    return denominators;
-  } catch (const InvalidArgument&) {
-    return std::nullopt;  // poles that do not fit the structure: not a candidate
+  if (a(n) == 0.0) return std::nullopt;  // A lost its leading coefficient: not a candidate
+  // A's poles grouped into the submodels that have poles besides integrators; none when they
+  // do not fit the structure: not a candidate.
+  std::vector<SubmodelOrder> with_poles;
+  int biproper = 0;
+  for (SubmodelOrder o : layout.orders) {
+    if (o.n == 0) continue;
+    o.m = std::min(o.m, o.n);
+    o.integrators = 0;
+    if (o.m == o.n) ++biproper;
+    with_poles.push_back(o);
   }
+  // An additive model has at most one biproper submodel, so group_into_submodels has no
+  // grouping for a structure with more.
+  if (biproper > 1) return std::nullopt;
+  const std::optional<AdditiveModel> grouped = internal::grouped_submodels(
+      TransferFunction(Polynomial{1.0}, Polynomial(a)), with_poles, data.channel(0, 0), 0);
+  if (!grouped) return std::nullopt;
+  std::vector<Polynomial> denominators;
+  int next = 0;
+  for (const SubmodelOrder& o : layout.orders) {
+    denominators.push_back(o.n == 0 ? Polynomial{1.0}
+                                    : grouped->submodels()[static_cast<size_t>(next++)].a);
+  }
+  return denominators;
 }
 
 // Denominators from the most prominent peaks of the summed-power FRF over every channel
@@ -139,7 +144,8 @@ std::optional<std::vector<Polynomial>> frf_peak_denominators(const Layout& layou
       return std::nullopt;
     }
   }
-  if (modes == 0 || data.size() < segment_length) return std::nullopt;
+  // A Welch segment needs at least 8 samples (WelchOptions), the record at least one segment.
+  if (modes == 0 || segment_length < 8 || data.size() < segment_length) return std::nullopt;
   WelchOptions welch;
   welch.segment_length = segment_length;
   PeakOptions options;
@@ -153,7 +159,13 @@ std::optional<std::vector<Polynomial>> frf_peak_denominators(const Layout& layou
   std::vector<Polynomial> a;
   auto peak = peaks.begin();
   for (const SubmodelOrder& o : layout.orders) {
-    a.push_back(o.n == 0 ? Polynomial{1.0} : mode_from_peak(*peak++));
+    if (o.n == 0) {
+      a.push_back(Polynomial{1.0});
+      continue;
+    }
+    std::optional<Polynomial> mode = internal::mode_from_peak_if_finite(*peak++);
+    if (!mode) return std::nullopt;  // a peak that gives no finite mode (at frequency 0)
+    a.push_back(std::move(*mode));
   }
   return a;
 }
@@ -201,16 +213,12 @@ Iterate automatic_start(const Layout& layout, const MimoData& data, Hold interpo
     lengths.push_back(fine_segment_length(data.size()));
   }
   for (int length : lengths) {
-    try {
-      const std::optional<std::vector<Polynomial>> a = frf_peak_denominators(layout, data, length);
-      if (a) {
-        Iterate candidate = fit_numerators(layout, data, *a);
-        const double cost = relative_output_error(layout, data, candidate);
-        if (std::isfinite(cost)) candidates.emplace_back(cost, std::move(candidate));
-      }
-    } catch (const InvalidArgument&) {
-      // an FRF that gives no start is not a candidate
-    }
+    // An FRF that gives no start is not a candidate.
+    const std::optional<std::vector<Polynomial>> a = frf_peak_denominators(layout, data, length);
+    if (!a) continue;
+    Iterate candidate = fit_numerators(layout, data, *a);
+    const double cost = relative_output_error(layout, data, candidate);
+    if (std::isfinite(cost)) candidates.emplace_back(cost, std::move(candidate));
   }
   require(!candidates.empty(), "mimo_srivc: no start found from the data (neither the ",
           "common-denominator least squares at any filter bandwidth nor the FRF peaks gave a ",

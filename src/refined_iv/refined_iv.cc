@@ -14,6 +14,7 @@
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 
+#include "core/internal/polynomial_if_finite.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
@@ -78,7 +79,8 @@ Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loo
   return verdict;
 }
 
-Polynomial reflect_unstable_roots(const Polynomial& a, bool& reflected) {
+std::optional<Polynomial> reflect_unstable_roots_if_finite(const Polynomial& a, bool& reflected,
+                                                           std::string* failure) {
   reflected = false;
   if (a.degree() < 1) return a;
   Eigen::VectorXcd roots = a.roots();
@@ -89,19 +91,27 @@ Polynomial reflect_unstable_roots(const Polynomial& a, bool& reflected) {
     }
   }
   if (!reflected) return a;
-  return Polynomial::from_roots(roots).anti_monic();
+  const std::optional<Polynomial> moved = polynomial_from_roots(roots, 1.0, failure);
+  if (!moved) return std::nullopt;
+  return anti_monic_if_finite(*moved, failure);
+}
+
+Polynomial reflect_unstable_roots(const Polynomial& a, bool& reflected) {
+  std::string failure;
+  std::optional<Polynomial> r = reflect_unstable_roots_if_finite(a, reflected, &failure);
+  if (!r) throw InvalidArgument(failure);
+  return std::move(*r);
 }
 
 bool controller_stabilises(const std::vector<SubmodelOrder>& orders, const Eigen::VectorXd& beta,
                            const DiscreteTransferFunction& controller, double h, int input_delay) {
-  try {
-    // An empty reference: only the loop's poles are checked, nothing is filtered.
-    return srivc_engine::sensitivity_filtered_reference(
-               srivc_engine::Layout(orders), beta, controller, Eigen::VectorXd(), h, input_delay)
-        .has_value();
-  } catch (const InvalidArgument&) {
-    return false;  // a degenerate model (e.g. A lost its leading coefficient) has no loop
-  }
+  const std::optional<std::vector<StateSpace>> plant =
+      srivc_engine::sampled_loop_plant(srivc_engine::Layout(orders), beta, h);
+  if (!plant) return false;  // a degenerate model (e.g. A lost its leading coefficient) has no loop
+  // An empty reference: only the loop's poles are checked, nothing is filtered.
+  return srivc_engine::sensitivity_filtered_reference(*plant, controller, Eigen::VectorXd(),
+                                                      input_delay)
+      .has_value();
 }
 
 Eigen::VectorXd parameters_for_orders(const AdditiveModel& model,
@@ -394,12 +404,20 @@ void stack_signals(Run& run) {
 }
 
 // S_uo r of every record (closed loop) at b; false when the loop is unstable.
+// A degenerate b (no realisation: A lost its leading coefficient) still ends the run with
+// InvalidArgument, as it always has: the engine does not yet report it as a termination
+// (decision 0045).
 bool update_source(Run& run, const Eigen::VectorXd& b) {
+  const std::optional<std::vector<StateSpace>> plant = sampled_loop_plant(run.layout, b, run.h);
+  if (!plant) {
+    throw InvalidArgument(run.name + ": the model at an iterate is degenerate (a parameter is " +
+                          "not finite or A lost its leading coefficient), so the loop has no " +
+                          "realisation; give a start or another structure");
+  }
   std::vector<Eigen::VectorXd> updated;  // all records or none: a failure keeps the last
   for (size_t r = 0; r < run.records.size(); ++r) {
-    std::optional<Eigen::VectorXd> s =
-        sensitivity_filtered_reference(run.layout, b, *run.problem.controller,
-                                       run.records[r]->reference(), run.h, run.delay_of(r));
+    std::optional<Eigen::VectorXd> s = sensitivity_filtered_reference(
+        *plant, *run.problem.controller, run.records[r]->reference(), run.delay_of(r));
     if (!s) return false;
     updated.push_back(std::move(*s));
   }

@@ -81,32 +81,50 @@ Eigen::VectorXd numerator_of(const Layout& layout, const Eigen::VectorXd& beta, 
 
 namespace {
 
-// Realisation of B/(p^l A): the bank of 1/(p^l A) with the outputs combined by b.
-FilterRealization submodel_realization(const Polynomial& a, const Eigen::VectorXd& b, int l) {
-  const FilterRealization bank = derivative_filters(Polynomial::monomial(l) * a);
-  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank.outputs());
+// B/(p^l A) of submodel i at beta realised (the bank of 1/(p^l A) with its outputs combined by
+// b) and discretised under ZOH with the fraction of the delay (one more state); none when the
+// submodel is degenerate: a parameter that is not finite, no poles left, more numerator
+// coefficients than the bank has outputs, or an entry of the realisation that is not finite
+// (A lost its leading coefficient, so the realisation overflows).
+std::optional<StateSpace> sampled_loop_submodel(const Layout& layout, const Eigen::VectorXd& beta,
+                                                int i, double h) {
+  const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+  if (!beta.segment(layout.offset[static_cast<size_t>(i)], o.n + o.m + 1).allFinite()) {
+    return std::nullopt;
+  }
+  const Eigen::VectorXd b = numerator_of(layout, beta, i);
+  const std::optional<FilterRealization> bank = finite_derivative_filters(
+      Polynomial::monomial(o.integrators) * denominator_of(layout, beta, i));
+  if (!bank || b.size() > bank->outputs()) return std::nullopt;
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank->outputs());
   w.head(b.size()) = b;
-  return combine_outputs(bank, w);
+  const FilterRealization f = combine_outputs(*bank, w);
+  if (!f.finite()) return std::nullopt;
+  return discretize_zoh(StateSpace{f.a, f.b, f.c.row(0), f.d(0)}, h, layout.delay_fraction);
 }
 
 }  // namespace
 
-// delay; std::nullopt when the loop is unstable or ill-posed.
-std::optional<Eigen::VectorXd> sensitivity_filtered_reference(
-    const Layout& layout, const Eigen::VectorXd& beta, const DiscreteTransferFunction& controller,
-    const Eigen::VectorXd& r, double h, int delay) {
-  // Plant: submodels side by side, each with the fraction of the delay (one more state).
+std::optional<std::vector<StateSpace>> sampled_loop_plant(const Layout& layout,
+                                                          const Eigen::VectorXd& beta, double h) {
   std::vector<StateSpace> parts;
+  for (int i = 0; i < layout.size(); ++i) {
+    std::optional<StateSpace> part = sampled_loop_submodel(layout, beta, i, h);
+    if (!part) return std::nullopt;
+    parts.push_back(std::move(*part));
+  }
+  return parts;
+}
+
+std::optional<Eigen::VectorXd> sensitivity_filtered_reference(
+    const std::vector<StateSpace>& parts, const DiscreteTransferFunction& controller,
+    const Eigen::VectorXd& r, int delay) {
+  // Plant: the submodels side by side.
   double dg = 0.0;
   int ng = 0;
-  for (int i = 0; i < layout.size(); ++i) {
-    const FilterRealization f =
-        submodel_realization(denominator_of(layout, beta, i), numerator_of(layout, beta, i),
-                             layout.orders[static_cast<size_t>(i)].integrators);
-    parts.push_back(
-        discretize_zoh(StateSpace{f.a, f.b, f.c.row(0), f.d(0)}, h, layout.delay_fraction));
-    dg += parts.back().d;
-    ng += parts.back().order();
+  for (const StateSpace& part : parts) {
+    dg += part.d;
+    ng += part.order();
   }
   const StateSpace c = controller.to_state_space();
   const int nc = c.order();

@@ -49,8 +49,13 @@ std::optional<UnstableLoopPass> unstable_loop_pass(const Polynomial& a, const Ei
                                                    int integrators, const Polynomial& af,
                                                    const DiscreteTransferFunction& controller,
                                                    const Eigen::VectorXd& r, double h) {
-  const FilterRealization first = derivative_filters(Polynomial::monomial(integrators) * a);
-  const FilterRealization second = derivative_filters(af);
+  // A degenerate model (A lost its leading coefficient) has no finite realisation.
+  const std::optional<FilterRealization> first_bank =
+      finite_derivative_filters(Polynomial::monomial(integrators) * a);
+  const std::optional<FilterRealization> second_bank = finite_derivative_filters(af);
+  if (!first_bank || !second_bank) return std::nullopt;
+  const FilterRealization& first = *first_bank;
+  const FilterRealization& second = *second_bank;
   Eigen::VectorXd w = Eigen::VectorXd::Zero(first.outputs());
   w.head(b.size()) = b;
   const int s1 = first.order();
@@ -69,6 +74,7 @@ std::optional<UnstableLoopPass> unstable_loop_pass(const Polynomial& a, const Ei
   cf.leftCols(s1) = second.d * cy;
   cf.rightCols(s2) = second.c;
   const Eigen::VectorXd df = second.d * dy;
+  if (!am.allFinite() || !bm.allFinite()) return std::nullopt;  // b not finite, or overflow
   const ZohDiscretization z = discretize_zoh(am, bm, h);
   const StateSpace c = controller.to_state_space();
   const int ng = s1 + s2;
@@ -176,12 +182,12 @@ std::optional<UnstableLoopPass> unstable_loop_pass_at(const SubmodelOrder& o,
                                                       const DiscreteTransferFunction& controller,
                                                       const SampledData& data) {
   const Polynomial a = unstable_loop_denominator(o, theta);
-  try {
-    return unstable_loop_pass(a, theta.tail(o.m + 1), o.integrators, unstable_loop_prefilter(a),
-                              controller, data.reference(), data.sample_time());
-  } catch (const InvalidArgument&) {
-    return std::nullopt;  // a degenerate model (A lost its leading coefficient)
-  }
+  bool reflected = false;
+  // A degenerate model (A lost its leading coefficient) has no prefilter.
+  const std::optional<Polynomial> af = internal::reflect_unstable_roots_if_finite(a, reflected);
+  if (!af) return std::nullopt;
+  return unstable_loop_pass(a, theta.tail(o.m + 1), o.integrators, *af, controller,
+                            data.reference(), data.sample_time());
 }
 
 double unstable_loop_fit(const SampledData& data, const UnstableLoopPass& pass) {

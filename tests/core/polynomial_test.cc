@@ -2,10 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
+#include <optional>
+#include <string>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "core/internal/polynomial_if_finite.h"
 #include "ctid/core/error.h"
 
 namespace ctid::polynomial_test {
@@ -137,6 +141,64 @@ TEST(Polynomial, MonicAntiMonicAndString) {
       ::testing::ThrowsMessage<InvalidArgument>(
           ::testing::HasSubstr("its constant coefficient is 1e-310")));
   EXPECT_EQ(Polynomial({1.0, -1.0, 2.0}).to_string("p"), "2 p^2 - p + 1");
+}
+
+// The message `make` throws (empty if it does not throw).
+template <typename Make>
+std::string thrown_message(const Make& make) {
+  try {
+    make();
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// from_roots, the product and anti_monic as values (decision 0045): the same polynomial where
+// the throwing functions give one, and none with the very reason they throw where they do not.
+TEST(PolynomialValues, FromRootsIsTheSamePolynomialOrNoneWithTheReasonItThrows) {
+  Eigen::VectorXcd roots(3);
+  roots << -1.0, std::complex<double>(-2.0, 3.0), std::complex<double>(-2.0, -3.0);
+  const std::optional<Polynomial> p = internal::polynomial_from_roots(roots, 2.0);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_EQ(*p, Polynomial::from_roots(roots, 2.0));
+
+  Eigen::VectorXcd not_finite = roots;
+  not_finite(1) = std::complex<double>(std::nan(""), 0.0);
+  Eigen::VectorXcd unpaired(1);
+  unpaired << std::complex<double>(-1.0, 1.0);
+  Eigen::VectorXcd overflowing(2);
+  overflowing << -1e200, -1e200;  // constant coefficient 1e400
+  for (const Eigen::VectorXcd& bad : {not_finite, unpaired, overflowing}) {
+    std::string failure;
+    EXPECT_FALSE(internal::polynomial_from_roots(bad, 1.0, &failure).has_value());
+    EXPECT_FALSE(failure.empty());
+    EXPECT_EQ(failure, thrown_message([&] { Polynomial::from_roots(bad); }));
+  }
+}
+
+TEST(PolynomialValues, AntiMonicIsTheSamePolynomialOrNoneWithTheReasonItThrows) {
+  const Polynomial p{4.0, 2.0, 1.0};
+  ASSERT_TRUE(internal::anti_monic_if_finite(p).has_value());
+  EXPECT_EQ(*internal::anti_monic_if_finite(p), p.anti_monic());
+  for (const Polynomial& bad : {Polynomial{0.0, 1.0}, Polynomial{1e-300, 0.0, 1e10}}) {
+    std::string failure;
+    EXPECT_FALSE(internal::anti_monic_if_finite(bad, &failure).has_value());
+    EXPECT_THAT(failure, ::testing::HasSubstr("constant coefficient"));
+    EXPECT_EQ(failure, thrown_message([&] { bad.anti_monic(); }));
+  }
+}
+
+TEST(PolynomialValues, ProductIsTheSamePolynomialOrNoneWhereItOverflows) {
+  const Polynomial a{1.0, 3.0};
+  const Polynomial b{2.0, 0.5, 1.0};
+  ASSERT_TRUE(internal::product_if_finite(a, b).has_value());
+  EXPECT_EQ(*internal::product_if_finite(a, b), a * b);
+  EXPECT_TRUE(internal::product_if_finite(a, Polynomial())->is_zero());
+  const Polynomial big{1.0, 1e200};
+  EXPECT_FALSE(internal::product_if_finite(big, big).has_value());
+  EXPECT_THAT(thrown_message([&] { (void)(big * big); }),
+              ::testing::HasSubstr("coefficients must be finite"));
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -333,6 +334,29 @@ TEST(FractionalDelayFilter, RejectsAFractionOutsideZeroToOne) {
       EXPECT_THAT(error.what(), ::testing::HasSubstr("[0, 1)"));
     }
   }
+}
+
+// derivative_filters as a value (decision 0045): the same realisation where there is a finite
+// one; none for a constant denominator and for one whose leading coefficient is so small
+// against the others that the realisation overflows (A lost its leading coefficient), where
+// derivative_filters throws or gives entries that validate() refuses.
+TEST(FiniteDerivativeFilters, IsTheSameRealisationOrNoneWhereThereIsNoFiniteOne) {
+  const Polynomial d{1.0, 0.3, 0.02, 1e-3};
+  const std::optional<FilterRealization> f = finite_derivative_filters(d);
+  ASSERT_TRUE(f.has_value());
+  const FilterRealization g = derivative_filters(d);
+  EXPECT_EQ(f->a, g.a);
+  EXPECT_EQ(f->b, g.b);
+  EXPECT_EQ(f->c, g.c);
+  EXPECT_EQ(f->d, g.d);
+  EXPECT_TRUE(f->finite());
+
+  EXPECT_FALSE(finite_derivative_filters(Polynomial{2.0}).has_value());
+  EXPECT_THROW(derivative_filters(Polynomial{2.0}), InvalidArgument);
+  const Polynomial lost{1.0, 1e10, 1e-300};  // a_1 / a_2 = 1e310 overflows
+  EXPECT_FALSE(finite_derivative_filters(lost).has_value());
+  EXPECT_FALSE(derivative_filters(lost).finite());
+  EXPECT_THROW(derivative_filters(lost).validate(), InvalidArgument);
 }
 
 }  // namespace

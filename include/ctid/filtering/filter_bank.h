@@ -5,6 +5,8 @@
 // (outputs), discretised exactly, and every filter starts at rest at the first sample.
 #pragma once
 
+#include <optional>
+
 #include <Eigen/Core>
 
 #include "ctid/core/hold.h"
@@ -22,6 +24,8 @@ struct FilterRealization {
 
   int order() const { return static_cast<int>(a.rows()); }
   int outputs() const { return static_cast<int>(c.rows()); }
+  /// Whether every entry of A, b, C and d is finite.
+  bool finite() const;
   /// Throws InvalidArgument if the sizes disagree or an entry is not finite.
   void validate() const;
 };
@@ -30,6 +34,12 @@ struct FilterRealization {
 /// 1/D in the time scale of the non-zero roots of D, then diagonally balanced. D may have
 /// roots at the origin (D = p^l A for integrator submodels, Remark 5). Requires deg D >= 1.
 FilterRealization derivative_filters(const Polynomial& denominator);
+
+/// derivative_filters as a value (decision 0045): none when deg D < 1 or an entry of the
+/// realisation is not finite (D's leading coefficient so small against the others that the
+/// realisation overflows). For callers that steer on whether a model's filters exist, e.g. an
+/// iterate whose A lost its leading coefficient; the same realisation when there is one.
+std::optional<FilterRealization> finite_derivative_filters(const Polynomial& denominator);
 
 /// Series connection: the first filter's outputs combined with `weights` (one per output of
 /// `first`) drive `second`; the result has the outputs of `second`. E.g.

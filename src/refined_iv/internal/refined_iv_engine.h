@@ -3,6 +3,7 @@
 #pragma once
 
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -10,6 +11,7 @@
 #include "ctid/core/additive_model.h"
 #include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/sampled_data.h"
+#include "ctid/frequency/frf.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/refined_iv.h"
 #include "ctid/refined_iv/refined_iv_options.h"
@@ -64,6 +66,36 @@ Eigen::VectorXd unfactored_parameters(const TransferFunction& g, const SubmodelO
 /// Anti-monic polynomial with the right-half-plane roots of `a` mirrored; `reflected` tells
 /// whether anything changed.
 Polynomial reflect_unstable_roots(const Polynomial& a, bool& reflected);
+/// reflect_unstable_roots as a value (decision 0045): none, with the reason in `failure` if
+/// given, when the mirrored roots make no anti-monic polynomial (a root that is not finite,
+/// coefficients that overflow: a degenerate A that lost its leading coefficient).
+std::optional<Polynomial> reflect_unstable_roots_if_finite(const Polynomial& a, bool& reflected,
+                                                           std::string* failure = nullptr);
+
+/// The start formations of initialization.h as values (decision 0045), for the start screen
+/// that steers on whether a candidate exists:
+/// - lssvf, or none when its parameters are not finite or its filter has no finite
+///   realisation (a bandwidth that gives a degenerate start);
+/// - mode_from_peak, or none when the peak gives no finite mode (a peak at frequency 0);
+/// - frf_peak_start, or none when the FRF has too few peaks (failure left as it is) or its
+///   peaks give no finite start or do not fit the order (the reason in `failure` if given).
+std::optional<TransferFunction> lssvf_if_finite(const SampledData& data, const SubmodelOrder& order,
+                                                double bandwidth, int input_delay);
+std::optional<Polynomial> mode_from_peak_if_finite(const ResonancePeak& peak);
+std::optional<TransferFunction> frf_peak_start_if_formed(const SampledData& data,
+                                                         const SubmodelOrder& order,
+                                                         int input_delay,
+                                                         std::string* failure = nullptr);
+
+/// group_into_submodels as a value (decision 0045): none, with the reason it throws in
+/// `failure` if given, when g's poles do not fit the structure (the counts differ: a start whose
+/// A lost its leading coefficient) or make no finite denominators or filters. Throws
+/// InvalidArgument, as group_into_submodels does, for a structure that is not an additive
+/// model's (empty, more than one biproper submodel or submodel with integrators, ...).
+std::optional<AdditiveModel> grouped_submodels(const TransferFunction& g,
+                                               const std::vector<SubmodelOrder>& orders,
+                                               const SampledData& data, int input_delay,
+                                               std::string* failure = nullptr);
 
 /// Whether `controller` stabilises the sampled loop with the model `beta` (laid out for
 /// `orders`, ZOH with `input_delay` samples): every closed-loop pole inside the unit circle and

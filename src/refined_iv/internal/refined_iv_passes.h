@@ -16,6 +16,7 @@
 #include "ctid/core/hold.h"
 #include "ctid/core/polynomial.h"
 #include "ctid/core/sampled_data.h"
+#include "ctid/core/state_space.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/refined_iv_options.h"
@@ -159,11 +160,19 @@ double relative_change(const Layout& layout, const Eigen::VectorXd& from,
 Polynomial denominator_of(const Layout& layout, const Eigen::VectorXd& beta, int i);
 Eigen::VectorXd numerator_of(const Layout& layout, const Eigen::VectorXd& beta, int i);
 
-/// S_uo(q) r with S_uo = C_d / (1 + G_d C_d); std::nullopt when the loop is unstable or
-/// ill-posed.
+/// The model at beta as the loop's sampled plant: each submodel B_i/(p^l A_i) realised and
+/// discretised under ZOH with the fraction of the delay. None when a submodel is degenerate (a
+/// parameter not finite, no poles left, or A_i lost its leading coefficient so that its
+/// realisation overflows): the value controller_stabilises and the engine steer on (decision
+/// 0045).
+std::optional<std::vector<StateSpace>> sampled_loop_plant(const Layout& layout,
+                                                          const Eigen::VectorXd& beta, double h);
+
+/// S_uo(q) r with S_uo = C_d / (1 + G_d C_d), G_d the plant of sampled_loop_plant followed by
+/// `delay` whole samples; std::nullopt when the loop is unstable or ill-posed.
 std::optional<Eigen::VectorXd> sensitivity_filtered_reference(
-    const Layout& layout, const Eigen::VectorXd& beta, const DiscreteTransferFunction& controller,
-    const Eigen::VectorXd& r, double h, int delay);
+    const std::vector<StateSpace>& plant, const DiscreteTransferFunction& controller,
+    const Eigen::VectorXd& r, int delay);
 
 /// One pass over the records at beta: the sums of eq. (29), the stacked residual, the
 /// instrument's sums for the covariance and the output error's sum of squares, each when asked.

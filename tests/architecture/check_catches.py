@@ -1,0 +1,71 @@
+"""Catch check (decision 0045, section 2): in src/refined_iv a numerical outcome is a value the
+code steers on, never an InvalidArgument caught from a deep call. Every `catch` left there is
+listed below with its reason, by file and enclosing function (found as check_sizes.py finds
+functions); a catch anywhere else in the layer, or a listed one that is gone, is reported.
+
+    python3 tests/architecture/check_catches.py SOURCE_DIR
+Prints one line per problem and exits 1 if there is one.
+"""
+import pathlib
+import re
+import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from check_sizes import blank_comments_and_literals, long_functions  # noqa: E402
+
+FOLDER = "src/refined_iv"
+
+# "path:function": (number of catches, reason).
+ALLOWED = {
+    "src/refined_iv/input_delay_scan.cc:scan_input_delay":
+        (1, "the estimator passed in refuses a delay by throwing; the scan records it and "
+            "rethrows the first message with its context when every delay is refused"),
+    "src/refined_iv/initialization.cc:refined_candidate":
+        (1, "a candidate's refinement is a whole SRIVC or CLSRIVC run, and the engine still "
+            "ends a run on a degenerate iterate with InvalidArgument"),
+    "src/refined_iv/refined_iv.cc:closed_loop_additive_from_data":
+        (3, "each candidate is a whole engine run (start, iteration, estimate), any of whose "
+            "phases still throws on a start that cannot be formed or a degenerate iterate"),
+    "src/refined_iv/unstable_clsrivc.cc:unstable_clsrivc_starts":
+        (1, "the first stage is a whole SRIVC run and a start screen of its own"),
+}
+
+
+def catches(text):
+    """{function: count} of the catch clauses in text, by enclosing outermost function."""
+    code = blank_comments_and_literals(text)
+    spans = long_functions(text)
+    found = {}
+    for m in re.finditer(r"\bcatch\s*\(", code):
+        line = code.count("\n", 0, m.start()) + 1
+        owner = "?"
+        for first, name, length in spans:
+            if first <= line < first + length:
+                owner = name.split("::")[-1]
+        found[owner] = found.get(owner, 0) + 1
+    return found
+
+
+def main(args):
+    root = pathlib.Path(args[0] if args else ".")
+    problems = []
+    seen = set()
+    for path in sorted((root / FOLDER).rglob("*.cc")):
+        rel = path.relative_to(root).as_posix()
+        for function, count in catches(path.read_text(encoding="utf-8")).items():
+            key = f"{rel}:{function}"
+            seen.add(key)
+            allowed = ALLOWED.get(key, (0, ""))[0]
+            if count != allowed:
+                problems.append(f"{key}: {count} catch clause(s), {allowed} allowed (steer on a "
+                                "returned value instead, decision 0045)")
+    for key in sorted(set(ALLOWED) - seen):
+        problems.append(f"{key}: listed but has no catch any more; remove it from ALLOWED")
+    for problem in problems:
+        print(problem)
+    print(f"check_catches: {len(problems)} problem(s)")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

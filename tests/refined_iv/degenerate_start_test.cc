@@ -1,0 +1,195 @@
+// A degenerate model or start is a value where it is found (decision 0045, section 2): the
+// loop of a model whose A lost its leading coefficient, a bandwidth whose LSSVF start is not
+// finite, a peak that gives no mode and poles that do not fit the structure each give the
+// verdict or fallback they gave when a deep call threw InvalidArgument and refined_iv caught
+// it, now without an exception.
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "ctid/core/error.h"
+#include "ctid/refined_iv/initialization.h"
+#include "ctid/refined_iv/unstable_clsrivc.h"
+#include "ctid/simulation/closed_loop.h"
+#include "ctid/simulation/excitation.h"
+#include "ctid/simulation/simulate.h"
+#include "refined_iv/internal/refined_iv_engine.h"
+#include "refined_iv/internal/refined_iv_passes.h"
+
+namespace ctid::degenerate_start_test {
+namespace {
+
+using ::testing::HasSubstr;
+
+constexpr double kH = 0.01;
+
+// The message `run` throws (empty if it does not throw).
+template <typename Run>
+std::string thrown_message(const Run& run) {
+  try {
+    run();
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// [a_1, a_2, b_0] of 1 / (1 + a_1 p + a_2 p^2): a lightly damped mode, and one whose A lost
+// its leading coefficient (a_2 = 1e-300: its roots -1e305 and about -1e-5 are finite, but the
+// realisation of 1/A overflows, a_1 omega / a_2 with omega = 1e150 its time scale).
+Eigen::VectorXd mode_parameters() { return Eigen::Vector3d(0.02, 1.0 / 400.0, 1.0); }
+Eigen::VectorXd degenerate_parameters() { return Eigen::Vector3d(1e5, 1e-300, 1.0); }
+
+DiscreteTransferFunction proportional(double gain) {
+  return DiscreteTransferFunction(Polynomial{gain}, Polynomial{1.0}, kH);
+}
+
+TEST(DegenerateLoop, ControllerStabilisesIsFalseForAModelWithoutARealisation) {
+  const std::vector<SubmodelOrder> orders{SubmodelOrder{2, 0, 0}};
+  const internal::srivc_engine::Layout layout(orders);
+  // The test behind it is real: a small gain holds the mode, the plant is realised.
+  EXPECT_TRUE(internal::srivc_engine::sampled_loop_plant(layout, mode_parameters(), kH));
+  EXPECT_TRUE(internal::controller_stabilises(orders, mode_parameters(), proportional(0.3), kH, 0));
+  // A lost its leading coefficient, or a parameter is not finite: no plant, no loop.
+  Eigen::VectorXd not_finite = mode_parameters();
+  not_finite(2) = std::nan("");
+  for (const Eigen::VectorXd& beta : {degenerate_parameters(), not_finite}) {
+    EXPECT_FALSE(internal::srivc_engine::sampled_loop_plant(layout, beta, kH).has_value());
+    bool stabilises = true;
+    EXPECT_NO_THROW(stabilises =
+                        internal::controller_stabilises(orders, beta, proportional(0.3), kH, 0));
+    EXPECT_FALSE(stabilises);
+  }
+}
+
+TEST(DegenerateLoop, ReflectingAsAValueIsTheSamePolynomial) {
+  // The failures (a root that is not finite, coefficients that overflow) are from_roots' and
+  // anti_monic's, as values in tests/core/polynomial_test.cc.
+  const Polynomial a = Polynomial{1.0, 0.0, -1.0};  // roots +-1
+  bool reflected = false;
+  const std::optional<Polynomial> stable = internal::reflect_unstable_roots_if_finite(a, reflected);
+  ASSERT_TRUE(stable.has_value());
+  EXPECT_TRUE(reflected);
+  EXPECT_EQ(*stable, internal::reflect_unstable_roots(a, reflected));
+  EXPECT_NEAR(stable->coefficient(1), 2.0, 1e-12);  // (1 + p)^2
+}
+
+// Closed-loop data of the mode under u = 0.3 (r - y), white reference.
+SampledData closed_loop_record() {
+  const AdditiveModel plant =
+      AdditiveModel::from_parameters({SubmodelOrder{2, 0, 0}}, mode_parameters());
+  const Eigen::VectorXd r = white_noise(2000, 1.0, 7);
+  const ClosedLoopSimulation loop = simulate_closed_loop(plant, proportional(0.3), r);
+  return SampledData(kH, loop.input, loop.output, r);
+}
+
+TEST(DegenerateLoop, UnstableClsrivcFromADegenerateStartIsTheLoopVerdict) {
+  // The start's loop cannot be formed: before, unstable_loop_pass_at caught the realisation's
+  // InvalidArgument; now the realisation is none. Either way the controller "does not
+  // stabilise" it and the fit says so in its termination and verdict.
+  RefinedIvOptions options;
+  options.initial_model =
+      AdditiveModel::from_parameters({SubmodelOrder{2, 0, 0}}, degenerate_parameters());
+  std::optional<EstimationResult> fit;
+  ASSERT_NO_THROW(fit.emplace(
+      unstable_clsrivc(closed_loop_record(), proportional(0.3), SubmodelOrder{2, 0, 0}, options)));
+  const EstimationResult& r = *fit;
+  EXPECT_EQ(r.termination, Termination::closed_loop_unstable);
+  EXPECT_EQ(r.iterations, 0);
+  EXPECT_FALSE(r.verdict.usable);
+  EXPECT_THAT(r.message, HasSubstr("does not stabilise the initial model"));
+}
+
+// Open-loop data of the mode, white input.
+SampledData open_loop_record(std::uint64_t seed) {
+  const AdditiveModel plant =
+      AdditiveModel::from_parameters({SubmodelOrder{2, 0, 0}}, mode_parameters());
+  const Eigen::VectorXd u = white_noise(4000, 1.0, seed);
+  return SampledData(kH, u, simulate(plant, u, kH));
+}
+
+TEST(DegenerateStart, LssvfIsNoneAtABandwidthWhoseFilterOverflows) {
+  const SampledData data = open_loop_record(3);
+  const SubmodelOrder order{2, 0, 0};
+  const std::optional<TransferFunction> start = internal::lssvf_if_finite(data, order, 20.0, 0);
+  ASSERT_TRUE(start.has_value());
+  const TransferFunction thrown = lssvf(data, order, 20.0);
+  EXPECT_EQ(start->numerator(), thrown.numerator());
+  EXPECT_EQ(start->denominator(), thrown.denominator());
+  // (1 + p / 1e-200)^2: its coefficient 1e400 overflows.
+  EXPECT_FALSE(internal::lssvf_if_finite(data, order, 1e-200, 0).has_value());
+  EXPECT_THAT(thrown_message([&] { lssvf(data, order, 1e-200); }),
+              HasSubstr("has no finite realisation"));
+}
+
+TEST(DegenerateStart, ABandwidthWithoutAStartIsSkippedWithoutAnException) {
+  const SampledData data = open_loop_record(4);
+  const SubmodelOrder order{2, 0, 0};
+  InitializationOptions one;
+  one.method = StartMethod::lssvf;
+  one.filter_bandwidths = {20.0};
+  InitializationOptions with_degenerate = one;
+  with_degenerate.filter_bandwidths = {1e-200, 20.0};
+  const TransferFunction expected = initial_transfer_function(data, order, one);
+  TransferFunction start = expected;
+  ASSERT_NO_THROW(start = initial_transfer_function(data, order, with_degenerate));
+  EXPECT_EQ(start.numerator(), expected.numerator());
+  EXPECT_EQ(start.denominator(), expected.denominator());
+  // With no bandwidth giving a start, the screen names it (as before).
+  with_degenerate.filter_bandwidths = {1e-200};
+  EXPECT_THAT(thrown_message([&] { initial_transfer_function(data, order, with_degenerate); }),
+              HasSubstr("no candidate start gave a finite model"));
+}
+
+TEST(DegenerateStart, APeakAtFrequencyZeroGivesNoMode) {
+  ResonancePeak peak;
+  peak.frequency = 2.0;
+  peak.damping_ratio = 0.1;
+  ASSERT_TRUE(internal::mode_from_peak_if_finite(peak).has_value());
+  EXPECT_EQ(*internal::mode_from_peak_if_finite(peak), mode_from_peak(peak));
+  peak.frequency = 0.0;
+  EXPECT_FALSE(internal::mode_from_peak_if_finite(peak).has_value());
+  EXPECT_THROW(mode_from_peak(peak), InvalidArgument);
+}
+
+TEST(DegenerateStart, FrfPeakStartIsTheSameStartOrNoneWithoutAReasonForTooFewPeaks) {
+  const SampledData data = open_loop_record(5);
+  std::string failure;
+  const std::optional<TransferFunction> start =
+      internal::frf_peak_start_if_formed(data, SubmodelOrder{2, 0, 0}, 0, &failure);
+  ASSERT_TRUE(start.has_value());
+  EXPECT_TRUE(failure.empty());
+  const std::optional<TransferFunction> thrown = frf_peak_start(data, SubmodelOrder{2, 0, 0});
+  ASSERT_TRUE(thrown.has_value());
+  EXPECT_EQ(start->denominator(), thrown->denominator());
+  EXPECT_EQ(start->numerator(), thrown->numerator());
+  // One mode in the data, three pairs asked for: too few peaks, no reason to report.
+  EXPECT_FALSE(internal::frf_peak_start_if_formed(data, SubmodelOrder{6, 0, 0}, 0, &failure));
+  EXPECT_TRUE(failure.empty());
+}
+
+TEST(DegenerateStart, PolesThatDoNotFitTheStructureAreNoneWithTheReasonGroupingThrows) {
+  const SampledData data = open_loop_record(6);
+  const TransferFunction third_order(Polynomial{1.0},
+                                     Polynomial{1.0, 0.5, 0.1, 0.01});  // three poles
+  const std::vector<SubmodelOrder> two_poles{SubmodelOrder{2, 0, 0}};
+  std::string failure;
+  EXPECT_FALSE(internal::grouped_submodels(third_order, two_poles, data, 0, &failure));
+  EXPECT_THAT(failure, HasSubstr("non-zero poles"));
+  EXPECT_EQ(failure, thrown_message([&] { group_into_submodels(third_order, two_poles, data); }));
+  // Poles that fit give the same model either way.
+  const std::vector<SubmodelOrder> three_poles{SubmodelOrder{1, 0, 0}, SubmodelOrder{2, 0, 0}};
+  const std::optional<AdditiveModel> grouped =
+      internal::grouped_submodels(third_order, three_poles, data, 0);
+  ASSERT_TRUE(grouped.has_value());
+  EXPECT_EQ(grouped->parameters(),
+            group_into_submodels(third_order, three_poles, data).parameters());
+}
+
+}  // namespace
+}  // namespace ctid::degenerate_start_test
