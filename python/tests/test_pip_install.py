@@ -49,3 +49,17 @@ def test_pip_install_into_a_fresh_venv_imports_ctid_from_anywhere(tmp_path):
     listing = subprocess.run([str(venv / "bin" / "pip"), "show", "ctid"], capture_output=True,
                              text=True, env=env, timeout=60)
     assert "Name: ctid" in listing.stdout
+    # The installed package is also the command line (decision 0052), with no ctid binary on
+    # the PATH: python -m ctid simulate writes the record the binary would.
+    model = elsewhere / "g.json"
+    model.write_text('{"type": "transfer_function", "numerator_ascending": [4.0], '
+                     '"denominator_ascending": [4.0, 0.8, 1.0], "input_delay": 0.0}')
+    (elsewhere / "u.csv").write_text("t,u\n" + "".join(f"{k * 0.05!r},1\n" for k in range(200)))
+    simulated = subprocess.run(
+        [str(venv / "bin" / "python"), "-m", "ctid", "simulate", "-m", str(model), "-i",
+         str(elsewhere / "u.csv"), "-o", str(elsewhere / "y.csv"), "-q"],
+        cwd=elsewhere, capture_output=True, text=True, timeout=120,
+        env=dict(env, PATH=str(venv / "bin")))
+    assert simulated.returncode == 0, simulated.stderr
+    last_row = (elsewhere / "y.csv").read_text().strip().split("\n")[-1].split(",")
+    assert abs(float(last_row[-1]) - float(last)) < 1e-9
