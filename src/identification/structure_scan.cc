@@ -75,161 +75,163 @@ std::string describe(const ModelStructure& structure) {
   return out;
 }
 
-}  // namespace
+// Where the record is split: the first `fitted` samples are fitted, the last `held_out` scored.
+struct ScanSplit {
+  int fitted = 0;
+  int held_out = 0;
+};
 
-StructureScanResult scan_structures(const SampledData& data,
-                                    const std::vector<ModelStructure>& candidates,
-                                    const StructureScanOptions& options,
-                                    const std::function<void(int, int)>& progress) {
-  options.validate();
-  require(!candidates.empty(), "scan_structures: no candidate structure given");
-  for (std::size_t i = 0; i < candidates.size(); ++i) {
-    candidates[i].validate();
-  }
-  const int total = data.size();
-  const int held_out = static_cast<int>(std::floor(options.validation_fraction * total));
+ScanSplit split_for_scan(int total, double validation_fraction) {
+  const int held_out = static_cast<int>(std::floor(validation_fraction * total));
   const int fitted = total - held_out;
   require(fitted >= 8, "scan_structures: too few samples: ", fitted,
           " samples remain for estimation after holding out validation_fraction = ",
-          options.validation_fraction, " of ", total);
-  require(options.validation_fraction == 0.0 || held_out >= 8,
-          "scan_structures: too few samples: validation_fraction = ", options.validation_fraction,
-          " of ", total, " samples holds out ", held_out, "; at least 8 are needed");
-  const SampledData estimation = data.segment(0, fitted);
-  const double h = data.sample_time();
+          validation_fraction, " of ", total);
+  require(validation_fraction == 0.0 || held_out >= 8,
+          "scan_structures: too few samples: validation_fraction = ", validation_fraction, " of ",
+          total, " samples holds out ", held_out, "; at least 8 are needed");
+  return {fitted, held_out};
+}
 
-  StructureScanResult result;
-  result.estimation_samples = fitted;
-  result.validation_samples = held_out;
-  // Mean squared output error on the estimation part, per candidate.
-  std::vector<double> estimation_error(candidates.size(), kNan);
-  // The candidates are fitted in parallel (core/parallel.h), each into its own slot, so the
-  // table is the serial one whatever the number of threads.
-  result.fits.resize(candidates.size());
-  std::mutex progress_mutex;
-  int done = 0;
-  parallel_for(static_cast<int>(candidates.size()), 0, [&](int index) {
-    const auto slot = static_cast<std::size_t>(index);
-    const ModelStructure& structure = candidates[slot];
-    StructureFit fit;
-    fit.structure = structure;
-    fit.yic = fit.rt2 = fit.aic = fit.bic = kNan;
-    fit.estimation_fit = fit.validation_fit = fit.validation_error = kNan;
-    try {
-      const IdentificationResult r = identify(estimation, structure, options.identification);
-      const EstimationResult& e = r.estimate;
-      fit.parameters = static_cast<int>(e.parameters.size());
-      fit.termination = e.termination;
-      fit.message = e.brief_report();
-      fit.iterations = e.iterations;
-      fit.transfer_function = e.transfer_function;
-      // Simulated over the whole record from its first sample: from rest, or, when the fits
-      // estimate initial conditions, from the state fitted on the estimation part alone, so
-      // the held-out part is still a prediction.
-      Eigen::VectorXd simulated;
-      if (options.identification.refined_iv.initial_conditions == InitialConditions::estimate) {
-        ValidationOptions from_state;
-        from_state.initial_state = InitialState::estimate;
-        from_state.window_start = data.start_time();
-        from_state.window_end = data.start_time() + (fitted - 1) * h;
-        simulated = validation_output(e.model, data, from_state);
-      } else {
-        simulated = model_output(e.model, data.input(), h, data.input_hold());
-      }
-      const Eigen::VectorXd y_est = data.output().head(fitted);
-      const Eigen::VectorXd e_est = y_est - simulated.head(fitted);
-      fit.estimation_fit = fit_percent(y_est, simulated.head(fitted));
-      fit.validation_fit = held_out > 0
-                               ? fit_percent(data.output().tail(held_out), simulated.tail(held_out))
-                               : fit.estimation_fit;
-      fit.validation_error =
-          held_out > 0
-              ? (data.output().tail(held_out) - simulated.tail(held_out)).squaredNorm() / held_out
-              : e_est.squaredNorm() / fitted;
-      const double error_variance = e_est.squaredNorm() / fitted;
-      estimation_error[slot] = error_variance;
-      const double output_variance = variance_about_mean(y_est);
-      fit.rt2 = 1.0 - error_variance / output_variance;
-      fit.aic = fitted * std::log(error_variance) + 2.0 * fit.parameters;
-      fit.bic = fitted * std::log(error_variance) + fit.parameters * std::log(double(fitted));
-      if (e.covariance.rows() == fit.parameters && fit.parameters > 0) {
-        double relative = 0.0;
-        for (int i = 0; i < fit.parameters; ++i) {
-          relative += e.covariance(i, i) / (e.parameters(i) * e.parameters(i));
-        }
-        fit.yic = std::log(error_variance / output_variance) + std::log(relative / fit.parameters);
-      }
-      // The verdict already asks for finite parameters and stable poles (integrators aside).
-      fit.usable = e.verdict.usable && std::isfinite(fit.validation_fit) &&
-                   std::isfinite(fit.estimation_fit) && std::isfinite(fit.validation_error);
-      fit.reasons = e.verdict.reasons;
-    } catch (const InvalidArgument& error) {
-      fit.message = error.what();
-      fit.usable = false;
+// The model's output over the whole record from its first sample: from rest, or, when the
+// fits estimate initial conditions, from the state fitted on the estimation part alone, so
+// the held-out part is still a prediction.
+Eigen::VectorXd scan_simulation(const AdditiveModel& model, const SampledData& data, int fitted,
+                                const StructureScanOptions& options) {
+  if (options.identification.refined_iv.initial_conditions == InitialConditions::estimate) {
+    ValidationOptions from_state;
+    from_state.initial_state = InitialState::estimate;
+    from_state.window_start = data.start_time();
+    from_state.window_end = data.start_time() + (fitted - 1) * data.sample_time();
+    return validation_output(model, data, from_state);
+  }
+  return model_output(model, data.input(), data.sample_time(), data.input_hold());
+}
+
+// The scores of a fit (fit percentages, held-out error, RT2, AIC, BIC, YIC); returns the mean
+// squared output error on the estimation part.
+double score_fit(StructureFit& fit, const EstimationResult& e, const SampledData& data,
+                 const Eigen::VectorXd& simulated, ScanSplit split) {
+  const int fitted = split.fitted;
+  const int held_out = split.held_out;
+  const Eigen::VectorXd y_est = data.output().head(fitted);
+  const Eigen::VectorXd e_est = y_est - simulated.head(fitted);
+  fit.estimation_fit = fit_percent(y_est, simulated.head(fitted));
+  fit.validation_fit = held_out > 0
+                           ? fit_percent(data.output().tail(held_out), simulated.tail(held_out))
+                           : fit.estimation_fit;
+  fit.validation_error =
+      held_out > 0
+          ? (data.output().tail(held_out) - simulated.tail(held_out)).squaredNorm() / held_out
+          : e_est.squaredNorm() / fitted;
+  const double error_variance = e_est.squaredNorm() / fitted;
+  const double output_variance = variance_about_mean(y_est);
+  fit.rt2 = 1.0 - error_variance / output_variance;
+  fit.aic = fitted * std::log(error_variance) + 2.0 * fit.parameters;
+  fit.bic = fitted * std::log(error_variance) + fit.parameters * std::log(double(fitted));
+  if (e.covariance.rows() == fit.parameters && fit.parameters > 0) {
+    double relative = 0.0;
+    for (int i = 0; i < fit.parameters; ++i) {
+      relative += e.covariance(i, i) / (e.parameters(i) * e.parameters(i));
     }
-    result.fits[slot] = std::move(fit);
-    if (progress) {
-      const std::lock_guard<std::mutex> lock(progress_mutex);
-      progress(++done, static_cast<int>(candidates.size()));
+    fit.yic = std::log(error_variance / output_variance) + std::log(relative / fit.parameters);
+  }
+  return error_variance;
+}
+
+// One candidate fitted on the estimation part and scored; `estimation_error` receives its mean
+// squared output error on that part (NaN when the fit failed).
+StructureFit fit_candidate(const SampledData& data, const SampledData& estimation,
+                           const ModelStructure& structure, const StructureScanOptions& options,
+                           ScanSplit split, double& estimation_error) {
+  StructureFit fit;
+  fit.structure = structure;
+  fit.yic = fit.rt2 = fit.aic = fit.bic = kNan;
+  fit.estimation_fit = fit.validation_fit = fit.validation_error = kNan;
+  try {
+    const IdentificationResult r = identify(estimation, structure, options.identification);
+    const EstimationResult& e = r.estimate;
+    fit.parameters = static_cast<int>(e.parameters.size());
+    fit.termination = e.termination;
+    fit.message = e.brief_report();
+    fit.iterations = e.iterations;
+    fit.transfer_function = e.transfer_function;
+    const Eigen::VectorXd simulated = scan_simulation(e.model, data, split.fitted, options);
+    estimation_error = score_fit(fit, e, data, simulated, split);
+    // The verdict already asks for finite parameters and stable poles (integrators aside).
+    fit.usable = e.verdict.usable && std::isfinite(fit.validation_fit) &&
+                 std::isfinite(fit.estimation_fit) && std::isfinite(fit.validation_error);
+    fit.reasons = e.verdict.reasons;
+  } catch (const InvalidArgument& error) {
+    fit.message = error.what();
+    fit.usable = false;
+  }
+  return fit;
+}
+
+// The usable fit j < i in parameters whose structure fit i contains and whose `error` is the
+// lowest among those that fit i's exceeds by more than the noise's tolerance; none if none.
+std::optional<std::size_t> contained_better_fit(const std::vector<StructureFit>& fits,
+                                                const std::vector<bool>& usable_fit,
+                                                const std::vector<double>& error, std::size_t i,
+                                                double noise_tolerance) {
+  std::optional<std::size_t> better;
+  for (std::size_t j = 0; j < fits.size(); ++j) {
+    if (j == i || !usable_fit[j] || fits[j].parameters >= fits[i].parameters ||
+        !contains(fits[i].structure, fits[j].structure) ||
+        !(error[i] > (1.0 + noise_tolerance) * error[j])) {
+      continue;
     }
-  });
+    if (!better || error[j] < error[*better]) better = j;
+  }
+  return better;
+}
 
-  const int scored = held_out > 0 ? held_out : fitted;
-  const double noise_tolerance = 2.0 * std::sqrt(2.0 / scored);
-  const double tolerance = options.error_tolerance.value_or(noise_tolerance);
-
-  // A fit that matches the estimation data worse than a usable fit of a structure it contains
-  // stopped short of its optimum (at its optimum it fits at least as well): not usable
-  // (decision 0016). The refined IV optimum is not exactly the least output error one, so
-  // "worse" is beyond the noise's tolerance, whatever error_tolerance the parsimony uses.
+// A fit that matches the estimation data worse than a usable fit of a structure it contains
+// stopped short of its optimum (at its optimum it fits at least as well): not usable
+// (decision 0016). The refined IV optimum is not exactly the least output error one, so
+// "worse" is beyond the noise's tolerance, whatever error_tolerance the parsimony uses. And a
+// fit that predicts the held-out data worse, beyond the same tolerance, than a usable fit of a
+// structure it contains is over-fitted: its extra parameters model the estimation record's
+// noise (decision 0016).
+void judge_against_contained(std::vector<StructureFit>& fits,
+                             const std::vector<double>& estimation_error, double noise_tolerance,
+                             int held_out) {
   std::vector<bool> usable_fit;
-  for (const StructureFit& fit : result.fits) usable_fit.push_back(fit.usable);
-  for (std::size_t i = 0; i < result.fits.size(); ++i) {
-    StructureFit& fit = result.fits[i];
+  std::vector<double> validation_error;
+  for (const StructureFit& fit : fits) {
+    usable_fit.push_back(fit.usable);
+    validation_error.push_back(fit.validation_error);
+  }
+  for (std::size_t i = 0; i < fits.size(); ++i) {
+    StructureFit& fit = fits[i];
     if (!usable_fit[i]) continue;
-    std::optional<std::size_t> better;  // the contained fit with the lowest estimation error
-    for (std::size_t j = 0; j < result.fits.size(); ++j) {
-      if (j == i || !usable_fit[j] || result.fits[j].parameters >= fit.parameters ||
-          !contains(fit.structure, result.fits[j].structure) ||
-          !(estimation_error[i] > (1.0 + noise_tolerance) * estimation_error[j])) {
-        continue;
-      }
-      if (!better || estimation_error[j] < estimation_error[*better]) better = j;
-    }
+    const std::optional<std::size_t> better =
+        contained_better_fit(fits, usable_fit, estimation_error, i, noise_tolerance);
     if (better) {
       fit.usable = false;
       fit.reasons.push_back("its estimation error " + format_significant(estimation_error[i], 4) +
                             " is larger than that of a structure it contains, " +
-                            describe(result.fits[*better].structure) + " (" +
+                            describe(fits[*better].structure) + " (" +
                             format_significant(estimation_error[*better], 4) +
                             "): the fit stopped short of its optimum");
       continue;
     }
-    // Over-fitted: on held-out data it predicts worse, beyond the noise's tolerance, than a
-    // usable fit of a structure it contains; its extra parameters model the estimation
-    // record's noise (decision 0016).
     if (held_out == 0) continue;
-    std::optional<std::size_t> simpler;  // the contained fit with the lowest held-out error
-    for (std::size_t j = 0; j < result.fits.size(); ++j) {
-      if (j == i || !usable_fit[j] || result.fits[j].parameters >= fit.parameters ||
-          !contains(fit.structure, result.fits[j].structure) ||
-          !(fit.validation_error > (1.0 + noise_tolerance) * result.fits[j].validation_error)) {
-        continue;
-      }
-      if (!simpler || result.fits[j].validation_error < result.fits[*simpler].validation_error) {
-        simpler = j;
-      }
-    }
+    const std::optional<std::size_t> simpler =
+        contained_better_fit(fits, usable_fit, validation_error, i, noise_tolerance);
     if (!simpler) continue;
     fit.usable = false;
-    fit.reasons.push_back("its held-out error " + format_significant(fit.validation_error, 4) +
-                          " is larger than that of a structure it contains, " +
-                          describe(result.fits[*simpler].structure) + " (" +
-                          format_significant(result.fits[*simpler].validation_error, 4) +
-                          "): over-fitted");
+    fit.reasons.push_back(
+        "its held-out error " + format_significant(fit.validation_error, 4) +
+        " is larger than that of a structure it contains, " + describe(fits[*simpler].structure) +
+        " (" + format_significant(fits[*simpler].validation_error, 4) + "): over-fitted");
   }
+}
 
-  // Recommendation: parsimony within error_tolerance of the best usable held-out error.
+// Recommendation: parsimony within `tolerance` of the best usable held-out error (ties: lower
+// YIC), with the sentence that says why.
+void recommend(StructureScanResult& result, double tolerance) {
   double best = std::numeric_limits<double>::infinity();
   double best_fit = kNan;
   for (const StructureFit& fit : result.fits) {
@@ -250,7 +252,7 @@ StructureScanResult scan_structures(const SampledData& data,
     const bool tie_better_yic = fit.parameters == kept.parameters && fit.yic < kept.yic;
     if (fewer || tie_better_yic) result.recommended = static_cast<int>(i);
   }
-  const std::string where = held_out > 0 ? "held-out" : "estimation";
+  const std::string where = result.validation_samples > 0 ? "held-out" : "estimation";
   if (result.recommended < 0) {
     result.rule = "no candidate gave a usable fit";
   } else {
@@ -258,15 +260,19 @@ StructureScanResult scan_structures(const SampledData& data,
                   format_significant(100.0 * tolerance, 2) + " % of the best (fit " +
                   format_significant(best_fit, 4) + " %)";
   }
+}
 
-  // Stabilisation diagram: each fit against the fit before it in the list.
+// Stabilisation diagram: the pole pairs of each fit, each against the fit before it in the list.
+std::vector<StabilisationPoint> stabilisation_diagram(const std::vector<StructureFit>& fits,
+                                                      const StructureScanOptions& options) {
+  std::vector<StabilisationPoint> points;
   std::vector<std::vector<std::complex<double>>> poles;
-  for (const StructureFit& fit : result.fits) poles.push_back(upper_poles(fit.transfer_function));
-  for (std::size_t i = 0; i < result.fits.size(); ++i) {
+  for (const StructureFit& fit : fits) poles.push_back(upper_poles(fit.transfer_function));
+  for (std::size_t i = 0; i < fits.size(); ++i) {
     const std::vector<std::complex<double>> none;
     const std::vector<std::complex<double>>& previous = i == 0 ? none : poles[i - 1];
     int order = 0;  // poles besides integrators
-    for (const SubmodelOrder& o : result.fits[i].structure.orders) order += o.n;
+    for (const SubmodelOrder& o : fits[i].structure.orders) order += o.n;
     for (const std::complex<double>& s : poles[i]) {
       StabilisationPoint point;
       point.fit = static_cast<int>(i);
@@ -284,9 +290,51 @@ StructureScanResult scan_structures(const SampledData& data,
           }
         }
       }
-      result.stabilisation.push_back(point);
+      points.push_back(point);
     }
   }
+  return points;
+}
+
+}  // namespace
+
+StructureScanResult scan_structures(const SampledData& data,
+                                    const std::vector<ModelStructure>& candidates,
+                                    const StructureScanOptions& options,
+                                    const std::function<void(int, int)>& progress) {
+  options.validate();
+  require(!candidates.empty(), "scan_structures: no candidate structure given");
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    candidates[i].validate();
+  }
+  const ScanSplit split = split_for_scan(data.size(), options.validation_fraction);
+  const SampledData estimation = data.segment(0, split.fitted);
+
+  StructureScanResult result;
+  result.estimation_samples = split.fitted;
+  result.validation_samples = split.held_out;
+  // Mean squared output error on the estimation part, per candidate.
+  std::vector<double> estimation_error(candidates.size(), kNan);
+  // The candidates are fitted in parallel (core/parallel.h), each into its own slot, so the
+  // table is the serial one whatever the number of threads.
+  result.fits.resize(candidates.size());
+  std::mutex progress_mutex;
+  int done = 0;
+  parallel_for(static_cast<int>(candidates.size()), 0, [&](int index) {
+    const auto slot = static_cast<std::size_t>(index);
+    result.fits[slot] =
+        fit_candidate(data, estimation, candidates[slot], options, split, estimation_error[slot]);
+    if (progress) {
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      progress(++done, static_cast<int>(candidates.size()));
+    }
+  });
+
+  const int scored = split.held_out > 0 ? split.held_out : split.fitted;
+  const double noise_tolerance = 2.0 * std::sqrt(2.0 / scored);
+  judge_against_contained(result.fits, estimation_error, noise_tolerance, split.held_out);
+  recommend(result, options.error_tolerance.value_or(noise_tolerance));
+  result.stabilisation = stabilisation_diagram(result.fits, options);
   return result;
 }
 

@@ -20,12 +20,7 @@ MAX_FILE_LINES = 1000
 
 # Exceptions, each with its reason (docs/decisions/0045-modal-types-in-estimation-and-size-limits.md).
 # Keys: "path" for a file's length, "path:function" for a function's.
-ALLOWED = {
-    # Decision 0045: src/identification is being reworked beside this change (issue 32's
-    # front door); the structure scan's driver is split when that work lands.
-    "src/identification/structure_scan.cc:scan_structures":
-        "decision 0045: split with the identification rework of issue 32",
-}
+ALLOWED = {}
 
 CONTROL = re.compile(r"\b(if|for|while|switch|catch)\s*\(")
 SIGNATURE_END = re.compile(r"\)\s*(?:const\s*|noexcept\s*|override\s*|final\s*|->[^{};]*)*$")
