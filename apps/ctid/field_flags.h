@@ -117,6 +117,8 @@ std::string help_text(std::string_view doc);
 template <class T>
 CLI::Option* add_value(CLI::App& app, const std::string& flag, T& value, const std::string& doc) {
   if constexpr (std::is_same_v<T, bool>) {
+    // A default-true flag is turned off by --no-NAME as well as by --NAME=false.
+    if (value) return app.add_flag(flag + ",!--no-" + flag.substr(2), value, doc);
     return app.add_flag(flag, value, doc);
   } else if constexpr (is_number<T> || std::is_same_v<T, std::string>) {
     return app.add_option(flag, value, doc)->capture_default_str();

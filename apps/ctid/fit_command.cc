@@ -54,17 +54,18 @@ struct FitFlags {
   IdentificationOptions options;
   std::string delay_scan;
   std::string delay_range;
-  std::string record_delays;         // D1,D2,...
-  std::vector<double> input_delays;  // several inputs: one per input, samples
-  bool rank_one = false;             // several inputs and outputs: Res_i = psi_i L_i^T
+  std::string record_delays;  // D1,D2,...
+  // Several inputs and outputs: the shared-pole estimator's own fields a flag each (--direct,
+  // --input-delays, --rank-one, --siso-engine); those it shares with RefinedIvOptions come
+  // from the flags above (assign_shared_fields).
+  MimoRefinedIvOptions mimo;
 
   std::string controller;
   bool two_stage = false;             // closed loop, unknown controller (decision 0043)
   TwoStageOptions two_stage_options;  // with --two-stage
   std::string initial;
   std::string start = "auto";
-  bool direct_term = false;  // several inputs/outputs: estimate D
-  bool irregular = false;    // fit on the time stamps as logged (decision 0034)
+  bool irregular = false;  // fit on the time stamps as logged (decision 0034)
 
   // Process models (decision 0040): --process P1D and its parameters' settings.
   std::string process;
@@ -225,10 +226,6 @@ void print_delay_scan(std::ostream& out, const InputDelayScanResult& scan) {
   }
   if (!scan.note.empty()) out << "warning: " << scan.note << "\n";
 }
-
-// --interpolation and --noise (SISO and several channels).
-Hold output_interpolation(const FitFlags& f) { return f.options.refined_iv.output_interpolation; }
-NoiseAssumption noise_assumption(const FitFlags& f) { return f.options.refined_iv.noise; }
 
 // Stage 1 of --two-stage and what the estimate assumes (decision 0043).
 void print_two_stage(std::ostream& out, const TwoStageResult& stage) {
@@ -394,28 +391,20 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
     prepare_plot_directory(f.plot, mimo_figure_names(second_order), f.force);
   }
   MimoIdentificationOptions options;
-  MimoRefinedIvOptions& refined = options.refined_iv;
-  refined.max_iterations = f.options.refined_iv.max_iterations;
-  refined.tolerance = f.options.refined_iv.tolerance;
-  refined.output_interpolation = output_interpolation(f);
-  refined.noise = noise_assumption(f);
-  refined.noise_model_max_order = f.options.refined_iv.noise_model_max_order;
-  refined.compute_covariance = f.options.refined_iv.compute_covariance;
-  refined.direct_term = f.direct_term;
-  refined.input_delays = f.input_delays;
-  refined.rank_one_residues = f.rank_one;
-  refined.initial_conditions = f.options.refined_iv.initial_conditions;
-  refined.validate();  // named as MimoRefinedIvOptions, before the data is read
+  options.refined_iv = f.mimo;
+  assign_shared_fields(options.refined_iv, f.options.refined_iv);
+  options.refined_iv.validate();  // named as MimoRefinedIvOptions, before the data is read
   const std::string start_file = f.initial.empty() ? (f.start == "auto" ? "" : f.start) : f.initial;
   const std::string start_flag = f.initial.empty() ? "--start" : "--initial";
   std::optional<MimoAdditiveModel>& start = options.initial_model;
   if (!start_file.empty()) {
-    start = read_mimo_start(start_file, start_flag, structure.orders, f.direct_term);
+    start = read_mimo_start(start_file, start_flag, structure.orders, f.mimo.direct_term);
   }
   const MimoData data = f.data.load_mimo(app);
   if (start) check_start_channels(*start, start_file, start_flag, data);
-  if (!f.input_delays.empty() && static_cast<int>(f.input_delays.size()) != data.input_count()) {
-    usage_error(internal::concat("--input-delays has ", f.input_delays.size(),
+  const std::vector<double>& input_delays = f.mimo.input_delays;
+  if (!input_delays.empty() && static_cast<int>(input_delays.size()) != data.input_count()) {
+    usage_error(internal::concat("--input-delays has ", input_delays.size(),
                                  " values but the data have ", data.input_count(), " inputs (",
                                  listed(data.input_names()), "): give one delay per input"));
   }
@@ -698,6 +687,9 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
         "--rank-one goes with --input-columns / --output-columns (a single channel's residue is "
         "always rank one)");
   }
+  if (app.count("--siso-engine") > 0) {
+    usage_error("--siso-engine goes with --input-columns / --output-columns");
+  }
   if (app.count("--input-delays") > 0) {
     usage_error(
         "--input-delays goes with --input-columns / --output-columns (one delay per input); "
@@ -880,16 +872,11 @@ Command add_fit_command(CLI::App& parent) {
                   "Additive: K second-order modes (--submodel 2,0 K times; with "
                   "--input-columns/--output-columns --submodel 2,1: complex residues)")
       ->group("Structure");
-  app->add_option("--input-delays", f.input_delays,
-                  "Several inputs: the known delay of each input in samples, D1,D2,... (one per "
-                  "--input-columns entry; fractions allowed)")
-      ->delimiter(',')
-      ->check(non_negative_number())
-      ->group("Structure");
-  app->add_flag("--rank-one", f.rank_one,
-                "Several inputs and outputs: restrict every mode's residues to one shape times "
-                "one participation vector (rank one)")
-      ->group("Structure");
+  FieldFlagSettings mimo;
+  mimo.group = "Several inputs and outputs";
+  // Given by IdentificationOptions' flags below (one --max-iterations, --noise, ...).
+  mimo.by_hand = shared_field_names<MimoRefinedIvOptions, RefinedIvOptions>();
+  add_field_flags(*app, f.mimo, mimo);
   app->add_option(flag_of<IdentificationOptions>("delay_scan"), f.delay_scan,
                   "Estimate the delay: fit every delay MIN:MAX (samples), keep the smallest "
                   "output error")
@@ -970,10 +957,6 @@ Command add_fit_command(CLI::App& parent) {
                 "discretised on each interval for --input-hold; unfactored, open loop, one "
                 "input and output (docs/decisions/0034)")
       ->group("Data");
-  app->add_flag("--direct", f.direct_term,
-                "Several inputs/outputs: estimate a direct term D besides the modes (e.g. "
-                "accelerations from forces, with --submodel 2,1)")
-      ->group("Structure");
   app->add_option("--output,-o", f.output, "Result JSON to write (everything in the estimate)")
       ->group("Output");
   app->add_option("--model-output", f.model_output,

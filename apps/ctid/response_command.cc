@@ -17,6 +17,7 @@
 #include "ctid/io/json.h"
 #include "ctid/io/result_json.h"
 #include "ctid/simulation/time_response.h"
+#include "field_flags.h"
 #include "plot_support.h"
 
 namespace ctid::cli {
@@ -24,11 +25,11 @@ namespace {
 
 struct ResponseFlags {
   std::string model;
+  // Every field a flag (field_flags.h) but kind, the command's name, and final_time and
+  // sample_time, added below to keep their short forms -t and -T.
+  TimeResponseOptions options;
   double final_time = 0.0;
-  int points = TimeResponseOptions{}.points;
   double sample_time = 0.0;
-  double settling_band = TimeResponseOptions{}.settling_band;
-  double confidence = TimeResponseOptions{}.confidence;
   std::string output;
   std::string plot;
   bool force = false;
@@ -55,13 +56,11 @@ void check_document_type(const std::string& file, const std::string& command) {
 }
 
 TimeResponseOptions options_from(const ResponseFlags& f, ResponseKind kind) {
-  TimeResponseOptions options;
+  TimeResponseOptions options = f.options;
   options.kind = kind;
   if (f.final_time_option->count() > 0) options.final_time = f.final_time;
   if (f.sample_time_option->count() > 0) options.sample_time = f.sample_time;
-  options.points = f.points;
-  options.settling_band = f.settling_band;
-  options.confidence = f.confidence;
+  options.validate();  // named by its flags
   return options;
 }
 
@@ -117,12 +116,12 @@ void print_summary(const ResponseFlags& f, const io::FittedModel& fitted, const 
   const bool band = r.standard_deviation.size() > 0;
   std::cout << "ctid " << command << ": " << f.model << "\n"
             << "model: " << fitted.model.to_string() << "\n";
-  print_characteristics(r.characteristics, f.settling_band);
+  print_characteristics(r.characteristics, f.options.settling_band);
   if (band) {
     std::cout << "± one standard error by the delta method from the parameter covariance";
     if (fitted.delay_standard_error > 0.0) std::cout << " and the delay's standard error";
     std::cout << "; band: ± " << format_brief(r.z) << " standard deviations ("
-              << format_number(100.0 * f.confidence) << " %)\n";
+              << format_number(100.0 * f.options.confidence) << " %)\n";
   } else {
     std::cout << "no standard errors: " << f.model << " holds no parameter covariance\n";
   }
@@ -189,23 +188,19 @@ Command add_response_command(CLI::App& parent, ResponseKind kind) {
       "Exit status: 0 ran, 2 bad usage or input, 1 other error.");
   app->add_option("model", f.model, "Result or model JSON")->required()->check(CLI::ExistingFile);
   f.final_time_option =
-      app->add_option("--final-time,-t", f.final_time,
+      app->add_option(flag_of<TimeResponseOptions>("final_time") + ",-t", f.final_time,
                       "Last time [s] (default: 1.5 settling times, or 10 time constants of the "
                       "slowest pole when the response does not settle)")
           ->check(positive_number());
-  f.points_option = app->add_option("--points", f.points, "Points of the grid, both ends included")
-                        ->check(CLI::Range(2, kMaxTimeResponsePoints))
-                        ->capture_default_str();
-  f.sample_time_option = app->add_option("--sample-time,-T", f.sample_time,
-                                         "Spacing of the grid [s] (instead of --points)")
-                             ->check(positive_number());
-  app->add_option("--settling-band", f.settling_band,
-                  "Half-width of the settling band, a fraction of the final value")
-      ->check(CLI::Range(0.0, 1.0))
-      ->capture_default_str();
-  app->add_option("--confidence", f.confidence, "Coverage of the pointwise band (Gaussian)")
-      ->check(CLI::Range(0.0, 1.0))
-      ->capture_default_str();
+  f.sample_time_option =
+      app->add_option(flag_of<TimeResponseOptions>("sample_time") + ",-T", f.sample_time,
+                      "Spacing of the grid [s] (instead of --points)")
+          ->check(positive_number());
+  FieldFlagSettings settings;
+  settings.by_hand = {"final_time", "sample_time"};
+  settings.none = {"kind"};  // the command: step or impulse
+  add_field_flags(*app, f.options, settings);
+  f.points_option = app->get_option("--points");
   app->add_option("--output,-o", f.output, "CSV to write: t, y[, y_std, lower, upper]")
       ->group("Output");
   app->add_option("--plot", f.plot, "Directory for " + name + ".png")->group("Output");

@@ -21,6 +21,7 @@
 #include "ctid/io/provenance.h"
 #include "ctid/io/report_json.h"
 #include "data_flags.h"
+#include "field_flags.h"
 #include "plot_support.h"
 #include "progress.h"
 
@@ -33,17 +34,23 @@ struct StructureFlags {
   std::string poles;        // A:B
   std::string zeros;        // M or A:B; empty: poles - 1
   std::string integrators;  // L or A:B; empty: 0
+  // Every field a flag (field_flags.h) but the controller and delay_scan, read from a file and
+  // as A:B below, and those no scan takes from the command line (kNoScanFlag).
+  StructureScanOptions options;
   std::string controller;
-  int delay = 0;
   std::string delay_scan;  // A:B samples
-  std::string initial_conditions = "zero";
-  double validation_fraction = StructureScanOptions{}.validation_fraction;
-  std::optional<double> error_tolerance;
   std::string output;
   std::string plot;
   bool force = false;
   bool quiet = false;
 };
+
+// Fields of StructureScanOptions with no flag: one start model does not suit structures of
+// other orders, and a continuous delay, a two-stage fit and per-record delays are not scanned
+// (decision 0051).
+const std::vector<std::string> kNoScanFlag = {
+    "identification.refined_iv.initial_model", "identification.delay_range",
+    "identification.two_stage", "identification.refined_iv.record_input_delays"};
 
 // "A:B" (or "A") as an inclusive range of counts >= `least`.
 std::pair<int, int> parse_range(const std::string& text, const std::string& flag, int least = 1) {
@@ -156,19 +163,14 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
     package = require_plotting();
     prepare_plot_directory(f.plot, {"stabilisation.png"}, f.force);
   }
-  StructureScanOptions options;
-  options.validation_fraction = f.validation_fraction;
-  options.error_tolerance = f.error_tolerance;
+  StructureScanOptions options = f.options;
   if (!f.controller.empty()) {
     options.identification.controller = io::read_discrete_transfer_function(f.controller);
   }
-  options.identification.refined_iv.input_delay = f.delay;
   if (!f.delay_scan.empty()) {
     const auto [d_low, d_high] = parse_range(f.delay_scan, "--delay-scan", 0);
     options.identification.delay_scan = DelayRange{d_low, d_high};
   }
-  options.identification.refined_iv.initial_conditions =
-      enum_from_name<InitialConditions>(f.initial_conditions).value();
   options.validate();
   const SampledData data = f.data.load(app, !f.controller.empty());
   Progress progress("ctid structure", f.quiet);
@@ -224,30 +226,18 @@ Command add_structure_command(CLI::App& parent) {
                   "Unfactored: poles at the origin l, L or MIN:MAX (default 0; with l >= 1 "
                   "--poles may start at 0, a pure integrator)")
       ->group("Structures");
-  app->add_option("--controller,-c", f.controller,
+  app->add_option(flag_of<StructureScanOptions>("identification.controller") + ",-c", f.controller,
                   "Discrete controller JSON: closed loop (the data need the reference)")
       ->check(CLI::ExistingFile)
       ->group("Structures");
-  app->add_option("--delay", f.delay, "Known input delay in samples")
-      ->capture_default_str()
-      ->group("Structures");
-  app->add_option("--delay-scan", f.delay_scan,
+  app->add_option(flag_of<StructureScanOptions>("identification.delay_scan"), f.delay_scan,
                   "Scan the input delay MIN:MAX (samples) in every structure; each keeps its best")
       ->group("Structures");
-  app->add_option("--initial-conditions", f.initial_conditions,
-                  "zero (at rest) or estimate: every fit estimates its initial state, and the "
-                  "held-out part is simulated from the state fitted on the estimation part")
-      ->check(CLI::IsMember({"zero", "estimate"}))
-      ->capture_default_str()
-      ->group("Structures");
-  app->add_option("--validation-fraction", f.validation_fraction,
-                  "Share of the record at its end held out for validation (0: none)")
-      ->capture_default_str()
-      ->group("Choice");
-  app->add_option("--error-tolerance", f.error_tolerance,
-                  "Relative increase of the held-out mean squared error traded for fewer "
-                  "parameters (default 2 sqrt(2 / held-out samples))")
-      ->group("Choice");
+  FieldFlagSettings settings;
+  settings.group = "Choice and fits";
+  settings.by_hand = {"identification.controller", "identification.delay_scan"};
+  settings.none = kNoScanFlag;
+  add_field_flags(*app, f.options, settings);
   app->add_option("--output,-o", f.output, "Scan JSON to write")->group("Output");
   app->add_option("--plot", f.plot, "Directory for stabilisation.png (the stabilisation diagram)")
       ->group("Output");

@@ -27,6 +27,7 @@
 #include "ctid/io/result_json.h"
 #include "ctid/io/tracking_json.h"
 #include "data_flags.h"
+#include "field_flags.h"
 #include "plot_support.h"
 #include "progress.h"
 #include "structure_flags.h"
@@ -37,9 +38,6 @@ namespace {
 struct TrackFlags {
   DataFlags data;
 
-  double window = 0.0;
-  std::optional<double> step;
-
   std::string model;
   int poles = 0;
   int zeros = 0;
@@ -47,19 +45,21 @@ struct TrackFlags {
   std::vector<std::string> submodels;
   int modes = 0;
 
-  int delay = 0;
+  // Every field a flag (field_flags.h) but those read in another form below (the controller,
+  // the start and initial_model) and those a window's fit does not take from the command line
+  // (kNoFlag). Each window's initial state is estimated by default, as the several-output
+  // estimator's (MimoTrackingOptions).
+  TrackingOptions options = [] {
+    TrackingOptions o;
+    o.identification.refined_iv.initial_conditions = InitialConditions::estimate;
+    return o;
+  }();
+  // Several outputs: MimoTrackingOptions' own fields a flag each (--mac-weight, --min-mac,
+  // --direct, --rank-one, ...); those it shares with TrackingOptions come from the flags above.
+  MimoTrackingOptions mimo;
   std::string controller;
   std::string start = "auto";
-  int max_iterations = RefinedIvOptions{}.max_iterations;
-  double tolerance = RefinedIvOptions{}.tolerance;
-  std::string interpolation = "foh";
-  std::string noise = "coloured";
-  std::string initial_conditions = "estimate";
-  bool no_warm_start = false;
-  double max_frequency_jump = TrackingOptions{}.max_frequency_jump;
-  double damping_weight = TrackingOptions{}.damping_weight;
-  double mac_weight = MimoTrackingOptions{}.mac_weight;
-  double min_mac = MimoTrackingOptions{}.min_mac;
+  std::string initial;
 
   std::string output;
   std::string table;
@@ -70,25 +70,21 @@ struct TrackFlags {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
+// Fields of TrackingOptions with no flag: a delay scan, a continuous delay, a two-stage fit and
+// per-record delays are whole-record questions, not one window's (decision 0051).
+const std::vector<std::string> kNoFlag = {"identification.delay_scan", "identification.delay_range",
+                                          "identification.two_stage",
+                                          "identification.refined_iv.record_input_delays"};
+
 TrackingOptions tracking_options(const TrackFlags& f) {
-  TrackingOptions options;
-  options.window = f.window;
-  options.step = f.step;
-  options.warm_start = !f.no_warm_start;
-  options.max_frequency_jump = f.max_frequency_jump;
-  options.damping_weight = f.damping_weight;
+  TrackingOptions options = f.options;
   IdentificationOptions& identification = options.identification;
   if (!f.controller.empty()) {
     identification.controller = io::read_discrete_transfer_function(f.controller);
   }
   RefinedIvOptions& refined = identification.refined_iv;
-  refined.input_delay = f.delay;
-  refined.max_iterations = f.max_iterations;
-  refined.tolerance = f.tolerance;
-  refined.output_interpolation =
-      f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
-  refined.noise = enum_from_name<NoiseAssumption>(f.noise).value();
-  refined.initial_conditions = enum_from_name<InitialConditions>(f.initial_conditions).value();
+  if (!f.initial.empty() && f.start != "auto") usage_error("give --start or --initial, not both");
+  if (!f.initial.empty()) refined.initial_model = io::read_fitted_model(f.initial).model;
   if (f.start == "lssvf") {
     refined.start = StartMethod::lssvf;
   } else if (f.start == "frf") {
@@ -165,11 +161,11 @@ std::string unusable_warning(const Result& r) {
 
 // The checks of the windows and of the output paths both paths share.
 void check_windows_and_outputs(const TrackFlags& f) {
-  if (f.step && !(*f.step > 0.0)) {
-    usage_error("--step is " + format_number(*f.step) + " s; it must be > 0");
-  }
-  if (!(f.window > 0.0))
-    usage_error("--window is " + format_number(f.window) + " s; it must be > 0");
+  const std::optional<double>& step = f.options.step;
+  if (step && !(*step > 0.0))
+    usage_error("--step is " + format_number(*step) + " s; it must be > 0");
+  const double window = f.options.window;
+  if (!(window > 0.0)) usage_error("--window is " + format_number(window) + " s; it must be > 0");
   const bool force = f.force;
   if (!f.table.empty()) {
     // The table may not be the data or the JSON output (the frame checks --output alone).
@@ -235,15 +231,15 @@ ExitStatus run_mimo_track(const TrackFlags& f, const CLI::App& app) {
         "with --input-columns / --output-columns give the modes (--modes K or --submodel N,M "
         "repeated); an unfactored model has no shared modes");
   }
-  for (const char* flag : {"--controller", "--delay"}) {
+  for (const char* flag : {"--controller", "--delay", "--relocate-modes", "--history"}) {
     if (app.count(flag) > 0) {
       usage_error(std::string(flag) +
                   " is not available with --input-columns / --output-columns (the shared-pole "
                   "estimator is open loop, without input delays here)");
     }
   }
-  if (f.start != "auto") {
-    usage_error("--start " + f.start +
+  if (f.start != "auto" || !f.initial.empty()) {
+    usage_error((f.initial.empty() ? "--start " + f.start : "--initial") +
                 " is for one input and output; with --input-columns / --output-columns every "
                 "window without a warm start starts automatically");
   }
@@ -253,21 +249,9 @@ ExitStatus run_mimo_track(const TrackFlags& f, const CLI::App& app) {
     package = require_plotting();
     prepare_plot_directory(f.plot, {"tracking.png"}, f.force);
   }
-  MimoTrackingOptions options;
-  options.window = f.window;
-  options.step = f.step;
-  options.warm_start = !f.no_warm_start;
-  options.max_frequency_jump = f.max_frequency_jump;
-  options.damping_weight = f.damping_weight;
-  options.mac_weight = f.mac_weight;
-  options.min_mac = f.min_mac;
-  options.refined_iv.max_iterations = f.max_iterations;
-  options.refined_iv.tolerance = f.tolerance;
-  options.refined_iv.output_interpolation =
-      f.interpolation == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
-  options.refined_iv.noise = enum_from_name<NoiseAssumption>(f.noise).value();
-  options.refined_iv.initial_conditions =
-      enum_from_name<InitialConditions>(f.initial_conditions).value();
+  MimoTrackingOptions options = f.mimo;
+  assign_shared_fields(options, f.options);
+  assign_shared_fields(options.refined_iv, f.options.identification.refined_iv);
   options.validate();
   const MimoData data = f.data.load_mimo(app);
 
@@ -290,6 +274,11 @@ ExitStatus run_mimo_track(const TrackFlags& f, const CLI::App& app) {
 
 ExitStatus run_track(const TrackFlags& f, const CLI::App& app) {
   if (f.data.mimo_asked(app)) return run_mimo_track(f, app);
+  for (const char* flag : {"--direct", "--input-delays", "--rank-one", "--siso-engine"}) {
+    if (app.count(flag) > 0) {
+      usage_error(std::string(flag) + " goes with --input-columns / --output-columns");
+    }
+  }
   const ModelStructure structure = model_structure(f, app);
   check_windows_and_outputs(f);
   const bool force = f.force;
@@ -356,12 +345,6 @@ Command add_track_command(CLI::App& parent) {
 
   f.data.add_to(*app, "data", true);
   f.data.add_mimo_columns(*app);
-  app->add_option("--window", f.window, "Window length in seconds")->required()->group("Windows");
-  app->add_option("--step", f.step,
-                  "Seconds between window starts (default: the window length; smaller "
-                  "overlaps the windows)")
-      ->group("Windows");
-
   app->add_option("--model", f.model,
                   "Model kind: unfactored or additive (default: from the "
                   "structure flags)")
@@ -383,62 +366,36 @@ Command add_track_command(CLI::App& parent) {
       ->group("Structure");
   app->add_option("--modes", f.modes, "Additive: K second-order modes (--submodel 2,0 K times)")
       ->group("Structure");
-  app->add_option("--delay", f.delay, "Known input delay in samples")
-      ->capture_default_str()
-      ->check(non_negative_number())
-      ->group("Structure");
-  app->add_option("--controller,-c", f.controller,
+  app->add_option(flag_of<TrackingOptions>("identification.controller") + ",-c", f.controller,
                   "Discrete controller JSON (discrete_transfer_function in q): closed loop")
       ->check(CLI::ExistingFile)
       ->group("Structure");
-
-  app->add_option("--start", f.start,
+  app->add_option(flag_of<TrackingOptions>("identification.refined_iv.start"), f.start,
                   "Start of the first window (and of windows after an unusable one): auto, "
                   "lssvf, frf, or a model/result JSON")
       ->capture_default_str()
       ->group("Iteration");
-  app->add_flag("--no-warm-start", f.no_warm_start,
-                "Start every window as the first (no warm start from the previous window)")
+  app->add_option(flag_of<TrackingOptions>("identification.refined_iv.initial_model"), f.initial,
+                  "Starting model or result JSON of the first window (same as --start FILE)")
+      ->check(CLI::ExistingFile)
       ->group("Iteration");
-  app->add_option("--max-iterations", f.max_iterations, "Iteration limit of each window")
-      ->capture_default_str()
-      ->group("Iteration");
-  app->add_option("--tolerance", f.tolerance,
-                  "Stop when the relative parameter change falls below this")
-      ->capture_default_str()
-      ->group("Iteration");
-  app->add_option("--interpolation", f.interpolation,
-                  "Output interpolation between samples before filtering: zoh or foh")
-      ->check(CLI::IsMember({"zoh", "foh"}))
-      ->capture_default_str()
-      ->group("Iteration");
-  app->add_option("--noise", f.noise, "Noise assumed by the covariance: white or coloured")
-      ->check(CLI::IsMember({"white", "coloured"}))
-      ->capture_default_str()
-      ->group("Iteration");
-  app->add_option("--initial-conditions", f.initial_conditions,
-                  "State at each window's first sample: estimate (windows start mid-motion) or "
-                  "zero (at rest)")
-      ->check(CLI::IsMember({"zero", "estimate"}))
-      ->capture_default_str()
-      ->group("Iteration");
-
-  app->add_option("--max-frequency-jump", f.max_frequency_jump,
-                  "Largest relative frequency difference of a mode and the track it joins")
-      ->capture_default_str()
-      ->group("Matching");
-  app->add_option("--damping-weight", f.damping_weight,
-                  "Weight of the damping-ratio difference in the matching cost")
-      ->capture_default_str()
-      ->group("Matching");
-  app->add_option("--mac-weight", f.mac_weight,
-                  "Several outputs: weight of 1 - MAC of the mode shapes in the matching cost")
-      ->capture_default_str()
-      ->group("Matching");
-  app->add_option("--min-mac", f.min_mac,
-                  "Several outputs: smallest MAC of a mode and the track it joins (0..1)")
-      ->capture_default_str()
-      ->group("Matching");
+  FieldFlagSettings settings;
+  settings.group = "Iteration";
+  settings.by_hand = {"identification.controller", "identification.refined_iv.start",
+                      "identification.refined_iv.initial_model"};
+  settings.none = kNoFlag;
+  add_field_flags(*app, f.options, settings);
+  app->get_option("--window")->required();
+  FieldFlagSettings mimo;
+  mimo.group = "Several outputs";
+  // Given by TrackingOptions' flags above (one --window, --max-iterations, ...).
+  mimo.by_hand = shared_field_names<MimoTrackingOptions, TrackingOptions>();
+  for (const std::string& name : shared_field_names<MimoRefinedIvOptions, RefinedIvOptions>()) {
+    mimo.by_hand.push_back("refined_iv." + name);
+  }
+  // The start of several outputs' first window: --start and --initial are one channel's.
+  mimo.by_hand.push_back("initial_model");
+  add_field_flags(*app, f.mimo, mimo);
 
   app->add_option("--output,-o", f.output, "Tracking JSON to write (the whole result)")
       ->group("Output");

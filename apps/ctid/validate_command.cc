@@ -34,18 +34,19 @@
 #include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
 #include "data_flags.h"
+#include "field_flags.h"
 #include "plot_support.h"
 
 namespace ctid::cli {
 namespace {
 
-constexpr int kMaxLag = 20;
-
 struct ValidateFlags {
   std::string model;
   std::vector<std::string> more_models;
   DataFlags data;
-  std::string initial_state = "zero";
+  // Every field a flag (field_flags.h); --window START:END gives window_start and window_end
+  // at once.
+  ValidationOptions options;
   std::string window;
   std::string output;
   std::string plot;
@@ -188,11 +189,15 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
     usage_error("--output writes the report of one model; " + std::to_string(files.size()) +
                 " models were given");
   }
-  ValidationOptions options;
-  options.max_lag = kMaxLag;
-  options.initial_state =
-      f.initial_state == "estimate" ? InitialState::estimate : InitialState::zero;
-  if (!f.window.empty()) parse_window(f.window, options);
+  ValidationOptions options = f.options;
+  if (!f.window.empty()) {
+    if (options.window_start || options.window_end) {
+      usage_error("give --window START:END or --window-start/--window-end, not both");
+    }
+    parse_window(f.window, options);
+  }
+  const bool windowed = options.window_start || options.window_end;
+  options.validate();  // named by its flags, before anything is read
 
   const std::optional<DelayedFeedbackLoop> loop = loop_in(f.model);
   if (loop) {
@@ -203,7 +208,7 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
       usage_error("--plot draws continuous-time models; " + f.model +
                   " holds a closed loop with delayed feedback");
     }
-    if (options.initial_state == InitialState::estimate || !f.window.empty()) {
+    if (options.initial_state == InitialState::estimate || windowed) {
       usage_error("--initial-state estimate and --window apply to continuous-time models; " +
                   f.model + " holds a closed loop with delayed feedback");
     }
@@ -232,14 +237,17 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
   try {
     if (loop) {
       const Hold hold = f.hold == "zoh" ? Hold::zero_order_hold : Hold::first_order_hold;
-      reports.push_back(validate_model(*loop, data, hold, f.substeps, kMaxLag));
+      reports.push_back(validate_model(*loop, data, hold, f.substeps, options.max_lag));
     } else {
       for (const auto& each : fitted) reports.push_back(validate_model(each.model, data, options));
     }
   } catch (const InvalidArgument& error) {
     // A window outside the record is the user's input: name the file and the flag.
-    if (f.window.empty()) throw;
-    usage_error(f.data.file + ": " + error.what() + " (--window " + f.window + ")");
+    if (!windowed) throw;
+    usage_error(
+        f.data.file + ": " + error.what() + " (" +
+        (f.window.empty() ? std::string("--window-start/--window-end") : "--window " + f.window) +
+        ")");
   }
 
   if (!f.output.empty()) {
@@ -260,7 +268,8 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
       std::cout << "preprocessing: " << f.data.preprocessing.summary() << "\n";
     }
     if (!loop) {
-      std::cout << "initial state: " << f.initial_state << " (residual statistics below)\n";
+      std::cout << "initial state: " << enum_name(options.initial_state)
+                << " (residual statistics below)\n";
       print_table(files, reports);
     }
     for (std::size_t i = 0; i < reports.size(); ++i) {
@@ -315,11 +324,7 @@ Command add_validate_command(CLI::App& parent) {
   f.data.add_to(*app, "data", false);
   app->add_option("models", f.more_models, "More model JSON files to compare on the same data")
       ->check(CLI::ExistingFile);
-  app->add_option("--initial-state", f.initial_state,
-                  "Simulate from rest (zero) or from the least-squares initial state over the "
-                  "window (estimate)")
-      ->check(CLI::IsMember({"zero", "estimate"}))
-      ->capture_default_str();
+  add_field_flags(*app, f.options);
   app->add_option("--window", f.window,
                   "Score only START:END (seconds on the record's time axis, inclusive; either "
                   "may be empty); the simulation still starts at the record's first sample");

@@ -8,10 +8,16 @@
 #include "cli/run_ctid.h"
 #include "ctid/core/fields.h"
 #include "ctid/delayed_feedback/identification.h"
+#include "ctid/estimation/validation.h"
 #include "ctid/frf_fit/frf_matrix_fit.h"
 #include "ctid/identification/identification.h"
+#include "ctid/identification/mimo.h"
+#include "ctid/identification/mode_tracking.h"
+#include "ctid/identification/structure_scan.h"
 #include "ctid/oma/oma.h"
 #include "ctid/process_model/process_model.h"
+#include "ctid/refined_iv/mimo_srivc.h"
+#include "ctid/simulation/time_response.h"
 
 namespace ctid::cli::field_flags_test {
 namespace {
@@ -30,6 +36,14 @@ std::set<std::string> long_flags(const std::string& help) {
   return flags;
 }
 
+// `path` is one of `exceptions` or a field inside one ("two_stage.sensitivity_order").
+bool excepted(const std::set<std::string>& exceptions, const std::string& path) {
+  for (const std::string& e : exceptions) {
+    if (path == e || path.rfind(e + ".", 0) == 0) return true;
+  }
+  return false;
+}
+
 class FieldFlags : public CliTest {
  protected:
   // Every field of S but `exceptions` (path -> why) has its flag in `command --help`.
@@ -41,7 +55,7 @@ class FieldFlags : public CliTest {
     const std::set<std::string> flags = long_flags(help.out);
     int checked = 0;
     for (const FieldFlag& f : field_flags<S>()) {
-      if (exceptions.count(f.path) > 0) continue;
+      if (excepted(exceptions, f.path)) continue;
       EXPECT_EQ(flags.count("--" + f.flag), 1u) << "ctid " << command << " has no --" << f.flag
                                                 << " for " << S::type_name << "." << f.path;
       ++checked;
@@ -70,13 +84,78 @@ TEST_F(FieldFlags, OmaFitFrfAndFeedbackHaveAFlagForEveryOption) {
       "feedback", {"recursive.initial_theta", "recursive.initial_covariance_matrix"});
 }
 
-// The page that lists a command's flags names every generated one.
+// What a window of `ctid track` or a fit of `ctid structure` does not take from the command
+// line (decision 0051): questions of the whole record, and one start for structures of
+// several orders.
+const std::set<std::string> kWholeRecord = {
+    "identification.delay_scan", "identification.delay_range", "identification.two_stage",
+    "identification.refined_iv.record_input_delays"};
+
+TEST_F(FieldFlags, TrackStructureValidateStepAndImpulseHaveAFlagForEveryOption) {
+  // Several inputs and outputs: the shared-pole estimator's own fields, beside fit's others.
+  expect_every_field_a_flag<MimoRefinedIvOptions>("fit");
+  expect_every_field_a_flag<TrackingOptions>("track", kWholeRecord);
+  expect_every_field_a_flag<MimoTrackingOptions>("track");
+  std::set<std::string> scan = {"identification.refined_iv.initial_model"};
+  for (const std::string& path : kWholeRecord) {
+    if (path != "identification.delay_scan") scan.insert(path);
+  }
+  expect_every_field_a_flag<StructureScanOptions>("structure", scan);
+  expect_every_field_a_flag<ValidationOptions>("validate");
+  // The kind is the command's name.
+  expect_every_field_a_flag<TimeResponseOptions>("step", {"kind"});
+  expect_every_field_a_flag<TimeResponseOptions>("impulse", {"kind"});
+  // Today's spellings stay: a default-true flag is turned off by --no-NAME too.
+  const auto track = ctid({"track", "--help"}).out;
+  EXPECT_THAT(track, HasSubstr("--no-warm-start"));
+  EXPECT_THAT(ctid({"step", "--help"}).out, HasSubstr("-t,--final-time"));
+}
+
+// The settings two estimators share pass by their fields() lists (core/fields.h): every
+// field of RefinedIvOptions that MimoRefinedIvOptions has by name and type, no other.
+TEST(SharedFields, TheSharedSettingsPassByName) {
+  const std::vector<std::string> shared =
+      shared_field_names<MimoRefinedIvOptions, RefinedIvOptions>();
+  EXPECT_EQ(shared, (std::vector<std::string>{"max_iterations", "tolerance", "output_interpolation",
+                                              "compute_covariance", "noise",
+                                              "noise_model_max_order", "initial_conditions"}));
+  RefinedIvOptions siso;
+  siso.max_iterations = 7;
+  siso.tolerance = 1e-6;
+  siso.output_interpolation = Hold::zero_order_hold;
+  siso.compute_covariance = false;
+  siso.noise = NoiseAssumption::white;
+  siso.noise_model_max_order = 3;
+  siso.initial_conditions = InitialConditions::estimate;
+  MimoRefinedIvOptions mimo;
+  mimo.direct_term = true;
+  mimo.input_delays = {1.5};
+  assign_shared_fields(mimo, siso);
+  EXPECT_EQ(mimo.max_iterations, 7);
+  EXPECT_EQ(mimo.tolerance, 1e-6);
+  EXPECT_EQ(mimo.output_interpolation, Hold::zero_order_hold);
+  EXPECT_FALSE(mimo.compute_covariance);
+  EXPECT_EQ(mimo.noise, NoiseAssumption::white);
+  EXPECT_EQ(mimo.noise_model_max_order, 3);
+  EXPECT_EQ(mimo.initial_conditions, InitialConditions::estimate);
+  // Its own fields keep their values.
+  EXPECT_TRUE(mimo.direct_term);
+  EXPECT_EQ(mimo.input_delays, std::vector<double>{1.5});
+  EXPECT_TRUE(mimo.siso_engine);
+}
+
+// The page that lists a command's flags names every generated one (the estimator's flags of
+// track and structure are fit's, listed on fit's page).
 template <HasFields S>
-void expect_documented(const std::string& page, const std::set<std::string>& exceptions = {}) {
-  const std::set<std::string> flags =
+void expect_documented(const std::string& page, const std::set<std::string>& exceptions = {},
+                       const std::string& also = "") {
+  std::set<std::string> flags =
       long_flags(testing::slurp(std::string(CTID_SOURCE_DIR) + "/" + page));
+  if (!also.empty()) {
+    flags.merge(long_flags(testing::slurp(std::string(CTID_SOURCE_DIR) + "/" + also)));
+  }
   for (const FieldFlag& f : field_flags<S>()) {
-    if (exceptions.count(f.path) > 0) continue;
+    if (excepted(exceptions, f.path)) continue;
     EXPECT_EQ(flags.count("--" + f.flag), 1u)
         << page << " does not name --" << f.flag << " (" << S::type_name << "." << f.path << ")";
   }
@@ -89,6 +168,12 @@ TEST(FieldFlagsDocs, EveryGeneratedFlagIsDocumented) {
   expect_documented<FeedbackIdentificationOptions>(
       "docs/algorithms/feedback-delay.md",
       {"recursive.initial_theta", "recursive.initial_covariance_matrix"});
+  expect_documented<MimoRefinedIvOptions>("docs/cli-estimation.md");
+  expect_documented<TrackingOptions>("docs/cli.md", kWholeRecord, "docs/cli-estimation.md");
+  expect_documented<MimoTrackingOptions>("docs/cli.md", {}, "docs/cli-estimation.md");
+  expect_documented<StructureScanOptions>("docs/cli-estimation.md", kWholeRecord);
+  expect_documented<ValidationOptions>("docs/cli-estimation.md");
+  expect_documented<TimeResponseOptions>("docs/cli.md", {"kind"});
 }
 
 // Today's spellings where a field's name differs from its flag.
@@ -111,6 +196,10 @@ TEST_F(FieldFlags, FieldsCarryTheSpellingsTheCommandsHaveUsed) {
   EXPECT_EQ(spelt(field_flags<FrfMatrixFitOptions>(), "direct_term"), "direct");
   EXPECT_EQ(spelt(field_flags<FeedbackIdentificationOptions>(), "output_error.hold"), "hold");
   EXPECT_EQ(spelt(field_flags<FeedbackIdentificationOptions>(), "iv.hold"), "iv-hold");
+  EXPECT_EQ(spelt(field_flags<MimoRefinedIvOptions>(), "direct_term"), "direct");
+  EXPECT_EQ(spelt(field_flags<MimoRefinedIvOptions>(), "rank_one_residues"), "rank-one");
+  EXPECT_EQ(spelt(field_flags<MimoTrackingOptions>(), "initial_model"), "initial");
+  EXPECT_EQ(spelt(field_flags<MimoIdentificationOptions>(), "initial_model"), "initial");
 }
 
 // A number, a nested struct's field and a generated flag of each command reach their fields:
@@ -124,6 +213,21 @@ TEST_F(FieldFlags, AValueOnTheCommandLineReachesItsField) {
                    "fit", "--relocation-min-peak-to-floor is 0.5; it must be finite and > 1");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--relocation-damping-ratios", "0.1,2"}),
                    "fit", "--relocation-damping-ratios[1] is 2; it must be in (0, 1)");
+  expect_bad_input(ctid({"structure", "d.csv", "--modes", "1:2", "--frequency-tolerance", "0"}),
+                   "structure", "--frequency-tolerance is 0; it must be finite and > 0");
+  // Several channels: a shared setting reaches the shared-pole estimator through fit's one
+  // flag, and an own one through its own.
+  expect_bad_input(ctid({"fit", "d.csv", "--input-columns", "u", "--output-columns", "y", "--modes",
+                         "1", "--max-iterations", "0"}),
+                   "fit", "--max-iterations is 0; it must be >= 1");
+  expect_bad_input(ctid({"track", "d.csv", "--input-columns", "u", "--output-columns", "y",
+                         "--modes", "1", "--window", "1", "--min-mac", "2"}),
+                   "track", "--min-mac is 2; it must be in [0, 1]");
+  const std::string model = testing::CliTest::example("gonzalez_6_1_open_loop.json");
+  expect_bad_input(ctid({"validate", model, "d.csv", "--max-lag", "0"}), "validate",
+                   "--max-lag is 0; it must be >= 1");
+  expect_bad_input(ctid({"step", model, "--confidence", "1"}), "step",
+                   "--confidence is 1; it must be in (0, 1)");
   write("h.csv", "frequency_hz\n1\n");
   expect_bad_input(ctid({"fit-frf", "h.csv", "--modes", "2", "--start-iterations", "0"}), "fit-frf",
                    "--start-iterations is 0; it must be >= 1");

@@ -214,6 +214,36 @@ constexpr auto join_fields(const std::tuple<A...>& a, const std::tuple<B...>& b)
   return std::tuple_cat(a, b);
 }
 
+/// Sets every field of `to` that `from` has under the same name and type to `from`'s value:
+/// the settings two options structs share (RefinedIvOptions' max_iterations, noise, ... in
+/// MimoRefinedIvOptions) pass from one to the other by their fields() lists, not restated.
+template <HasFields To, HasFields From>
+void assign_shared_fields(To& to, const From& from) {
+  for_each_field<To>([&](const auto& t) {
+    using T = typename std::decay_t<decltype(t)>::value_type;
+    for_each_field<From>([&](const auto& s) {
+      if constexpr (std::is_same_v<T, typename std::decay_t<decltype(s)>::value_type>) {
+        if (t.name == s.name) to.*(t.member) = from.*(s.member);
+      }
+    });
+  });
+}
+
+/// The names of To's fields that From has too, with the same type (assign_shared_fields).
+template <HasFields To, HasFields From>
+std::vector<std::string> shared_field_names() {
+  std::vector<std::string> names;
+  for_each_field<To>([&](const auto& t) {
+    using T = typename std::decay_t<decltype(t)>::value_type;
+    for_each_field<From>([&](const auto& s) {
+      if constexpr (std::is_same_v<T, typename std::decay_t<decltype(s)>::value_type>) {
+        if (t.name == s.name) names.emplace_back(t.name);
+      }
+    });
+  });
+  return names;
+}
+
 // --- Command-line spellings ---------------------------------------------------------------
 // One vocabulary (docs/decisions/0046): a field's name is its Python keyword and JSON key; its
 // flag is "--" + flag_spelling. A field whose type (or optional type) has fields() of its own

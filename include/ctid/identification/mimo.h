@@ -32,7 +32,8 @@ struct MimoIdentificationOptions {
     return std::tuple{
         field("refined_iv", &O::refined_iv, "MimoRefinedIvOptions of the shared-pole estimator."),
         field("initial_model", &O::initial_model,
-              "Start of the iteration (orders and channels as the fit's); none: automatic."),
+              "Start of the iteration (orders and channels as the fit's); none: automatic.")
+            .with_flag("initial"),
     };
   }
   /// Throws InvalidArgument naming the first bad field by its full path, its value and the rule.

@@ -272,7 +272,8 @@ struct MimoTrackingOptions {
         field("refined_iv", &O::refined_iv,
               "MimoRefinedIvOptions of every window (initial conditions estimated by default)."),
         field("initial_model", &O::initial_model,
-              "Start of the first window; none: the automatic start."),
+              "Start of the first window; none: the automatic start.")
+            .with_flag("initial"),
         field("warm_start", &O::warm_start,
               "Start each window from the previous window's model when that fit was usable."),
         field("retry_unusable", &O::retry_unusable,

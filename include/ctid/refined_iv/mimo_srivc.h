@@ -73,8 +73,10 @@ struct MimoRefinedIvOptions {
         field("tolerance", &O::tolerance, Between{0.0, 1.0},
               "Relative parameter change that stops the iteration."),
         field("output_interpolation", &O::output_interpolation,
-              "Interpolation of the measured outputs before filtering."),
-        field("direct_term", &O::direct_term, "Estimate a direct term D as well."),
+              "Interpolation of the measured outputs before filtering.")
+            .with_flag("interpolation"),
+        field("direct_term", &O::direct_term, "Estimate a direct term D as well.")
+            .with_flag("direct"),
         field("compute_covariance", &O::compute_covariance,
               "Compute the covariance and the modes' standard errors."),
         field("noise", &O::noise, "Noise assumption of the covariance (per output)."),
@@ -85,7 +87,8 @@ struct MimoRefinedIvOptions {
         field("input_delays", &O::input_delays, Each{Finite{AtLeast{0.0}}},
               "Known delay of every input [samples, may be fractional]; empty: none."),
         field("rank_one_residues", &O::rank_one_residues,
-              "Restrict every mode's residue matrix to rank one (shape x participation)."),
+              "Restrict every mode's residue matrix to rank one (shape x participation).")
+            .with_flag("rank-one"),
         field("initial_conditions", &O::initial_conditions,
               "State at the first sample: zero, or each output's free responses estimated."),
     };
