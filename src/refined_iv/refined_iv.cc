@@ -395,20 +395,6 @@ bool reflect_all(Run& run, Eigen::VectorXd& b) {
   return true;
 }
 
-// Whether the passes can filter at b: every submodel's bank of 1/(p^l A), and of 1/A when it
-// has poles, has a finite realisation, and in closed loop the sampled loop plant exists. These
-// are the conditions under which evaluate and update_source used to throw; a degenerate b (A
-// lost its leading coefficient) fails them, and the engine never steps onto such a b.
-bool realisable(const Run& run, const Eigen::VectorXd& b) {
-  for (int i = 0; i < run.layout.size(); ++i) {
-    const SubmodelOrder& o = run.layout.orders[static_cast<size_t>(i)];
-    const Polynomial a = denominator_of(run.layout, b, i);
-    if (!finite_derivative_filters(Polynomial::monomial(o.integrators) * a)) return false;
-    if (o.n > 0 && !finite_derivative_filters(a)) return false;
-  }
-  return !run.closed_loop || sampled_loop_plant(run.layout, b, run.h).has_value();
-}
-
 // The stop at a degenerate iterate: the run keeps its last iterate (decision 0050).
 void stop_degenerate(Run& run, const std::string& where) {
   run.degenerate = true;
@@ -556,7 +542,7 @@ StepOutcome take_step(Run& run, const ScaledEquations& e, const Eigen::MatrixXd&
                      " produced a non-finite parameter; the last finite iterate is returned";
     return StepOutcome::stopped;
   }
-  if (!reflect_all(run, next) || !realisable(run, next)) {
+  if (!reflect_all(run, next) || !realisable(run.layout, run.closed_loop, run.h, next)) {
     stop_degenerate(run, "the model at iteration " + std::to_string(iteration));
     return StepOutcome::stopped;
   }
@@ -601,7 +587,7 @@ StepOutcome iteration_step(Run& run, StepControl& control, int iteration) {
   if (options.step_control && control.accepted.size() > 0 &&
       control.halvings < options.max_step_halvings && (!e.finite || !(e.rcond > 1e-14))) {
     const Eigen::VectorXd halved = 0.5 * (control.accepted + run.beta);
-    if (!realisable(run, halved)) {
+    if (!realisable(run.layout, run.closed_loop, run.h, halved)) {
       stop_degenerate(run, "the halved step at iteration " + std::to_string(iteration));
       return StepOutcome::stopped;
     }
@@ -861,7 +847,8 @@ std::optional<EstimationResult> run_refined_iv_if_started(const RefinedIvProblem
 
   se::Run run(problem, options, name, std::move(layout), std::move(checks), *beta,
               data.sample_time());
-  if (!se::reflect_all(run, run.beta) || !se::realisable(run, run.beta)) {
+  if (!se::reflect_all(run, run.beta) ||
+      !se::realisable(run.layout, run.closed_loop, run.h, run.beta)) {
     if (failure != nullptr) {
       *failure = name +
                  ": the start is degenerate (A lost its leading coefficient or its filters have "

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/initialization.h"
 #include "ctid/refined_iv/srivc.h"
 #include "ctid/refined_iv/unstable_clsrivc.h"
@@ -66,6 +67,29 @@ TEST(DegenerateLoop, ControllerStabilisesIsFalseForAModelWithoutARealisation) {
                         internal::controller_stabilises(orders, beta, proportional(0.3), kH, 0));
     EXPECT_FALSE(stabilises);
   }
+}
+
+TEST(DegenerateLoop, RealisableFailsExactlyWhereTheIterationsFiltersCannotBeFormed) {
+  // The engine steps onto no iterate that fails this check (decision 0050); its passes filter
+  // with derivative_filters held by a SampledFilter, which throw where the check fails.
+  using internal::srivc_engine::denominator_of;
+  using internal::srivc_engine::realisable;
+  const internal::srivc_engine::Layout mode(std::vector<SubmodelOrder>{SubmodelOrder{2, 0, 0}});
+  for (const bool closed_loop : {false, true}) {
+    EXPECT_TRUE(realisable(mode, closed_loop, kH, mode_parameters()));
+    EXPECT_FALSE(realisable(mode, closed_loop, kH, degenerate_parameters()));
+  }
+  EXPECT_NO_THROW(SampledFilter(derivative_filters(denominator_of(mode, mode_parameters(), 0)), kH,
+                                Hold::zero_order_hold));
+  EXPECT_THROW(SampledFilter(derivative_filters(denominator_of(mode, degenerate_parameters(), 0)),
+                             kH, Hold::zero_order_hold),
+               InvalidArgument);
+  // A first-order A whose a_1 is zero has no pole left: derivative_filters refuses it.
+  const internal::srivc_engine::Layout pole(std::vector<SubmodelOrder>{SubmodelOrder{1, 0, 0}});
+  EXPECT_TRUE(realisable(pole, false, kH, Eigen::Vector2d(0.5, 1.0)));
+  EXPECT_FALSE(realisable(pole, false, kH, Eigen::Vector2d(0.0, 1.0)));
+  EXPECT_THROW(derivative_filters(denominator_of(pole, Eigen::Vector2d(0.0, 1.0), 0)),
+               InvalidArgument);
 }
 
 TEST(DegenerateLoop, ReflectingAsAValueIsTheSamePolynomial) {
