@@ -282,9 +282,12 @@ bool refined_candidate(const Consider& consider, const TransferFunction& start) 
   }
 }
 
-// initial_transfer_function on `data`, the piece already chosen (options validated).
-TransferFunction screened_transfer_function(const SampledData& data, const SubmodelOrder& order,
-                                            const InitializationOptions& options) {
+// initial_transfer_function on `data`, the piece already chosen (options validated), as a value:
+// none, with the reason in `failure` if given, when no candidate start can be formed.
+std::optional<TransferFunction> screened_transfer_function(const SampledData& data,
+                                                           const SubmodelOrder& order,
+                                                           const InitializationOptions& options,
+                                                           std::string* failure) {
   const double h = data.sample_time();
   const DiscreteTransferFunction* controller = options.controller ? &*options.controller : nullptr;
   if (controller != nullptr) check_start_controller(data, *controller);
@@ -375,23 +378,41 @@ TransferFunction screened_transfer_function(const SampledData& data, const Submo
     const std::optional<TransferFunction> start =
         internal::frf_peak_start_if_formed(data, order, options.input_delay);
     const bool found = start.has_value() && refined_candidate(consider, *start);
-    require(found || options.method != StartMethod::frf,
-            "initial_transfer_function: the record's FRF has fewer resonance peaks than the ",
-            order.n / 2, " pole pairs of the structure; use another start (lssvf or a model)");
+    if (!found && options.method == StartMethod::frf) {
+      if (failure != nullptr) {
+        *failure = internal::concat(
+            "initial_transfer_function: the record's FRF has fewer resonance ", "peaks than the ",
+            order.n / 2, " pole pairs of the structure; use ", "another start (lssvf or a model)");
+      }
+      return std::nullopt;
+    }
   }
   if (!best && unstabilised) return *unstabilised;
-  require(best.has_value(), "initial_transfer_function: no candidate start gave a finite model;",
-          " give an initial model");
-  return *best;
+  if (!best && failure != nullptr) {
+    *failure =
+        "initial_transfer_function: no candidate start gave a finite model; give an "
+        "initial model";
+  }
+  return best;
 }
 
 }  // namespace
 
-TransferFunction initial_transfer_function(const SampledData& record, const SubmodelOrder& order,
-                                           const InitializationOptions& options) {
+std::optional<TransferFunction> internal::initial_transfer_function_if_formed(
+    const SampledData& record, const SubmodelOrder& order, const InitializationOptions& options,
+    std::string* failure) {
   options.validate();
   const std::optional<SampledData> piece = screening_piece(record, options);
-  return screened_transfer_function(piece ? *piece : record, order, options);
+  return screened_transfer_function(piece ? *piece : record, order, options, failure);
+}
+
+TransferFunction initial_transfer_function(const SampledData& record, const SubmodelOrder& order,
+                                           const InitializationOptions& options) {
+  std::string failure;
+  std::optional<TransferFunction> g =
+      internal::initial_transfer_function_if_formed(record, order, options, &failure);
+  if (!g) throw InvalidArgument(failure);
+  return std::move(*g);
 }
 
 namespace {
@@ -570,15 +591,17 @@ AdditiveModel initial_additive_model(const SampledData& record,
       options);
 }
 
-AdditiveModel additive_model_from_start(const TransferFunction& g, const SampledData& record,
-                                        const std::vector<SubmodelOrder>& orders,
-                                        const InitializationOptions& options) {
+std::optional<AdditiveModel> internal::additive_model_from_start_if_formed(
+    const TransferFunction& g, const SampledData& record, const std::vector<SubmodelOrder>& orders,
+    const InitializationOptions& options, std::string* failure) {
   options.validate();
   const SubmodelOrder total = unfactored_order(orders);
   // The numerators are fitted on the piece the start was screened on.
   const std::optional<SampledData> piece = screening_piece(record, options);
   const SampledData& data = piece ? *piece : record;
-  if (!options.controller) return group_into_submodels(g, orders, data, options.input_delay);
+  if (!options.controller) {
+    return internal::grouped_submodels(g, orders, data, options.input_delay, failure);
+  }
   // Closed loop: the numerators are fitted to g's own response to u rather than to y, so the
   // grouped model stays the stabilised start g (refitting them to y would bring back the
   // pull toward -1/C_d the start was screened against); the gain is halved if needed.
@@ -587,11 +610,22 @@ AdditiveModel additive_model_from_start(const TransferFunction& g, const Sampled
       {total}, internal::unfactored_parameters(g, total), options.input_delay * h);
   const SampledData own(h, data.input(),
                         model_output(unfactored, data.input(), h, data.input_hold()));
-  const AdditiveModel grouped =
-      group_into_submodels(g, orders, own.with_input_hold(data.input_hold()), options.input_delay);
+  const std::optional<AdditiveModel> grouped = internal::grouped_submodels(
+      g, orders, own.with_input_hold(data.input_hold()), options.input_delay, failure);
+  if (!grouped) return std::nullopt;
   const std::optional<Eigen::VectorXd> beta =
-      stabilised(grouped.parameters(), orders, *options.controller, h, options.input_delay);
-  return beta ? grouped.with_parameters(*beta) : grouped;
+      stabilised(grouped->parameters(), orders, *options.controller, h, options.input_delay);
+  return beta ? grouped->with_parameters(*beta) : *grouped;
+}
+
+AdditiveModel additive_model_from_start(const TransferFunction& g, const SampledData& record,
+                                        const std::vector<SubmodelOrder>& orders,
+                                        const InitializationOptions& options) {
+  std::string failure;
+  std::optional<AdditiveModel> model =
+      internal::additive_model_from_start_if_formed(g, record, orders, options, &failure);
+  if (!model) throw InvalidArgument(failure);
+  return std::move(*model);
 }
 
 }  // namespace ctid

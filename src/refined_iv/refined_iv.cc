@@ -272,11 +272,13 @@ DataChecks check_excitation(const RefinedIvProblem& problem, const Layout& layou
 }
 
 // The starting point: options.initial_model laid out for the structure (grouped into its
-// submodels when it is not of that structure), or the start screened from the longest record.
-Eigen::VectorXd starting_point(const RefinedIvProblem& problem, const RefinedIvOptions& options,
-                               const Layout& layout, size_t longest_index, ScreenedStart* shared) {
+// submodels when it is not of that structure), or the start screened from the longest record;
+// none, with the reason in `failure`, when no start can be formed.
+std::optional<Eigen::VectorXd> starting_point(const RefinedIvProblem& problem,
+                                              const RefinedIvOptions& options, const Layout& layout,
+                                              size_t longest_index, ScreenedStart* shared,
+                                              std::string* failure) {
   const SampledData& data = *problem.records[longest_index];
-  Eigen::VectorXd beta;
   if (options.initial_model) {
     const AdditiveModel& given = *options.initial_model;
     bool fits = given.size() == layout.size();
@@ -284,40 +286,37 @@ Eigen::VectorXd starting_point(const RefinedIvProblem& problem, const RefinedIvO
       const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
       fits = given[i].n() == o.n && given[i].integrators == o.integrators && given[i].m() <= o.m;
     }
-    if (fits) {
-      beta = parameters_for_orders(given, layout.orders);
-    } else if (layout.size() == 1) {
-      beta = unfactored_parameters(given.to_transfer_function().with_input_delay(0.0),
-                                   layout.orders[0]);
-    } else {
-      beta = parameters_for_orders(
-          group_into_submodels(given.to_transfer_function().with_input_delay(0.0), layout.orders,
-                               data, record_delay(options, longest_index)),
-          layout.orders);
-    }
-  } else {
-    ScreenedStart own_start;
-    InitializationOptions init;
-    init.input_delay = record_delay(options, longest_index);
-    init.method = options.start;
-    init.screening_samples = options.start_screening_samples;
-    // Closed loop: only starts the controller stabilises (decision 0011); an open-loop start
-    // it does not stabilise would stop the iteration before its first step.
-    if (problem.controller != nullptr) init.controller = *problem.controller;
-    ScreenedStart& start = shared != nullptr ? *shared : own_start;
-    if (!start.g) {
-      const SubmodelOrder total =
-          layout.size() == 1 ? layout.orders[0] : unfactored_order(layout.orders);
-      start.g = initial_transfer_function(data, total, init);
-    }
+    if (fits) return parameters_for_orders(given, layout.orders);
     if (layout.size() == 1) {
-      beta = unfactored_parameters(*start.g, layout.orders[0]);
-    } else {
-      beta = parameters_for_orders(additive_model_from_start(*start.g, data, layout.orders, init),
-                                   layout.orders);
+      return unfactored_parameters(given.to_transfer_function().with_input_delay(0.0),
+                                   layout.orders[0]);
     }
+    const std::optional<AdditiveModel> grouped =
+        grouped_submodels(given.to_transfer_function().with_input_delay(0.0), layout.orders, data,
+                          record_delay(options, longest_index), failure);
+    if (!grouped) return std::nullopt;
+    return parameters_for_orders(*grouped, layout.orders);
   }
-  return beta;
+  ScreenedStart own_start;
+  InitializationOptions init;
+  init.input_delay = record_delay(options, longest_index);
+  init.method = options.start;
+  init.screening_samples = options.start_screening_samples;
+  // Closed loop: only starts the controller stabilises (decision 0011); an open-loop start
+  // it does not stabilise would stop the iteration before its first step.
+  if (problem.controller != nullptr) init.controller = *problem.controller;
+  ScreenedStart& start = shared != nullptr ? *shared : own_start;
+  if (!start.g) {
+    const SubmodelOrder total =
+        layout.size() == 1 ? layout.orders[0] : unfactored_order(layout.orders);
+    start.g = initial_transfer_function_if_formed(data, total, init, failure);
+    if (!start.g) return std::nullopt;
+  }
+  if (layout.size() == 1) return unfactored_parameters(*start.g, layout.orders[0]);
+  const std::optional<AdditiveModel> grouped =
+      additive_model_from_start_if_formed(*start.g, data, layout.orders, init, failure);
+  if (!grouped) return std::nullopt;
+  return parameters_for_orders(*grouped, layout.orders);
 }
 
 // What the phases of one estimate share: the problem, the layout, the stacked signals, the
@@ -350,6 +349,7 @@ struct Run {
   Eigen::VectorXd initial_states;
   Eigen::VectorXd states_at;  // the iterate whose realisations they refer to
   bool loop_unstable = false;
+  bool degenerate = false;  // stopped before a degenerate iterate (decision 0050)
 
   Run(const RefinedIvProblem& pr, const RefinedIvOptions& op, const std::string& n, Layout l,
       DataChecks c, const Eigen::VectorXd& start, double sample_time)
@@ -376,19 +376,32 @@ struct Run {
   int delay_of(size_t r) const { return record_delay(options, r); }
 };
 
-// Right-half-plane roots of every A_i in b reflected, counted in the result.
-void reflect_all(Run& run, Eigen::VectorXd& b) {
+// Right-half-plane roots of every A_i in b reflected, counted in the result; false, with b
+// partly changed, when a mirrored A is not finite (a degenerate iterate, decision 0050).
+bool reflect_all(Run& run, Eigen::VectorXd& b) {
   const Layout& layout = run.layout;
   for (int i = 0; i < layout.size(); ++i) {
     const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
     if (o.n < 1) continue;
     bool reflected = false;
-    const Polynomial a = reflect_unstable_roots(denominator_of(layout, b, i), reflected);
+    const std::optional<Polynomial> a =
+        reflect_unstable_roots_if_finite(denominator_of(layout, b, i), reflected);
+    if (!a) return false;
     if (reflected) {
       ++run.result.unstable_reflections;
-      for (int k = 1; k <= o.n; ++k) b(layout.offset[static_cast<size_t>(i)] + k - 1) = a[k];
+      for (int k = 1; k <= o.n; ++k) b(layout.offset[static_cast<size_t>(i)] + k - 1) = (*a)[k];
     }
   }
+  return true;
+}
+
+// The stop at a degenerate iterate: the run keeps its last iterate (decision 0050).
+void stop_degenerate(Run& run, const std::string& where) {
+  run.degenerate = true;
+  run.result.termination = Termination::non_finite;
+  run.result.message = run.name + ": " + where +
+                       " is degenerate (A lost its leading coefficient or its filters have no "
+                       "finite realisation); the last finite iterate is returned";
 }
 
 // Each record's delayed input and its output, and the outputs stacked.
@@ -403,17 +416,11 @@ void stack_signals(Run& run) {
   }
 }
 
-// S_uo r of every record (closed loop) at b; false when the loop is unstable.
-// A degenerate b (no realisation: A lost its leading coefficient) still ends the run with
-// InvalidArgument, as it always has: the engine does not yet report it as a termination
-// (decision 0045).
+// S_uo r of every record (closed loop) at b; false when the loop is unstable. The engine holds
+// only iterates that are realisable, so the loop's plant exists at every b it is given.
 bool update_source(Run& run, const Eigen::VectorXd& b) {
   const std::optional<std::vector<StateSpace>> plant = sampled_loop_plant(run.layout, b, run.h);
-  if (!plant) {
-    throw InvalidArgument(run.name + ": the model at an iterate is degenerate (a parameter is " +
-                          "not finite or A lost its leading coefficient), so the loop has no " +
-                          "realisation; give a start or another structure");
-  }
+  if (!plant) return false;
   std::vector<Eigen::VectorXd> updated;  // all records or none: a failure keeps the last
   for (size_t r = 0; r < run.records.size(); ++r) {
     std::optional<Eigen::VectorXd> s = sensitivity_filtered_reference(
@@ -535,7 +542,10 @@ StepOutcome take_step(Run& run, const ScaledEquations& e, const Eigen::MatrixXd&
                      " produced a non-finite parameter; the last finite iterate is returned";
     return StepOutcome::stopped;
   }
-  reflect_all(run, next);
+  if (!reflect_all(run, next) || !realisable(run.layout, run.closed_loop, run.h, next)) {
+    stop_degenerate(run, "the model at iteration " + std::to_string(iteration));
+    return StepOutcome::stopped;
+  }
   const double change = relative_change(layout, run.beta, next);
   result.off_diagonal_norm = off.norm() / std::max(next.norm(), 1e-300);
   result.relative_change = change;
@@ -576,7 +586,12 @@ StepOutcome iteration_step(Run& run, StepControl& control, int iteration) {
   const ScaledEquations e = scaled_equations(sums, result);
   if (options.step_control && control.accepted.size() > 0 &&
       control.halvings < options.max_step_halvings && (!e.finite || !(e.rcond > 1e-14))) {
-    run.beta = 0.5 * (control.accepted + run.beta);
+    const Eigen::VectorXd halved = 0.5 * (control.accepted + run.beta);
+    if (!realisable(run.layout, run.closed_loop, run.h, halved)) {
+      stop_degenerate(run, "the halved step at iteration " + std::to_string(iteration));
+      return StepOutcome::stopped;
+    }
+    run.beta = halved;
     ++control.halvings;
     ++result.step_halvings;
     return StepOutcome::halved;
@@ -798,13 +813,21 @@ void judge(Run& run) {
   }
   result.checks = std::move(checks);
   result.verdict = refined_iv_verdict(result, run.closed_loop, run.loop_unstable);
+  if (run.degenerate) {
+    result.verdict.fail(
+        "the iteration stopped before a degenerate model (A lost its leading "
+        "coefficient), so the estimate is an iterate that did not converge",
+        {verdict_advice::better_start, verdict_advice::lower_order});
+  }
 }
 
 }  // namespace
 }  // namespace srivc_engine
 
-EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
-                                           const RefinedIvOptions& options, ScreenedStart* shared) {
+std::optional<EstimationResult> run_refined_iv_if_started(const RefinedIvProblem& problem,
+                                                          const RefinedIvOptions& options,
+                                                          ScreenedStart* shared,
+                                                          std::string* failure) {
   namespace se = srivc_engine;
   options.validate();
   const std::string name = problem.name;
@@ -817,12 +840,22 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
   se::check_orders(layout, name);
   se::check_samples(problem, options, layout, data, name);
   DataChecks checks = se::check_excitation(problem, layout, name);
-  const Eigen::VectorXd beta = se::starting_point(problem, options, layout, longest_index, shared);
-  require(beta.allFinite(), name, ": the initial model has a non-finite parameter");
+  const std::optional<Eigen::VectorXd> beta =
+      se::starting_point(problem, options, layout, longest_index, shared, failure);
+  if (!beta) return std::nullopt;
+  require(beta->allFinite(), name, ": the initial model has a non-finite parameter");
 
-  se::Run run(problem, options, name, std::move(layout), std::move(checks), beta,
+  se::Run run(problem, options, name, std::move(layout), std::move(checks), *beta,
               data.sample_time());
-  se::reflect_all(run, run.beta);
+  if (!se::reflect_all(run, run.beta) ||
+      !se::realisable(run.layout, run.closed_loop, run.h, run.beta)) {
+    if (failure != nullptr) {
+      *failure = name +
+                 ": the start is degenerate (A lost its leading coefficient or its filters have "
+                 "no finite realisation); give a start or another structure";
+    }
+    return std::nullopt;
+  }
   se::stack_signals(run);
   run.initial_states = Eigen::VectorXd::Zero(run.layout.augmented - run.p);
   run.states_at = run.beta;
@@ -834,6 +867,15 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
   se::set_statistics(run);
   se::judge(run);
   return std::move(run.result);
+}
+
+EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
+                                           const RefinedIvOptions& options, ScreenedStart* shared) {
+  std::string failure;
+  std::optional<EstimationResult> result =
+      run_refined_iv_if_started(problem, options, shared, &failure);
+  if (!result) throw InvalidArgument(failure);
+  return std::move(*result);
 }
 
 namespace {
@@ -860,10 +902,10 @@ EstimationResult closed_loop_additive_from_data(const RefinedIvProblem& problem,
     RefinedIvOptions own = options;
     own.start = method;
     ScreenedStart start;  // screened once for both fits from this method
-    try {
-      candidates.push_back(run_refined_iv_from_start(problem, own, &start));
-    } catch (const InvalidArgument&) {
-      // e.g. too few resonance peaks for the FRF start: the other candidates remain
+    // A method that forms no start (e.g. too few resonance peaks for the FRF start) gives no
+    // candidate: the other candidates remain.
+    if (std::optional<EstimationResult> r = run_refined_iv_if_started(problem, own, &start)) {
+      candidates.push_back(std::move(*r));
     }
     RefinedIvProblem unfactored = problem;
     unfactored.orders = {unfactored_order(problem.orders)};
@@ -872,18 +914,14 @@ EstimationResult closed_loop_additive_from_data(const RefinedIvProblem& problem,
     quick.compute_covariance = false;
     quick.record_history = false;
     std::optional<AdditiveModel> whole;  // one submodel, grouped by the engine
-    try {
-      EstimationResult g = run_refined_iv_from_start(unfactored, quick, &start);
-      if (g.parameters.allFinite() && g.iterations > 0) whole = std::move(g.model);
-    } catch (const InvalidArgument&) {
-    }
+    std::optional<EstimationResult> g = run_refined_iv_if_started(unfactored, quick, &start);
+    if (g && g->parameters.allFinite() && g->iterations > 0) whole = std::move(g->model);
     if (!whole) continue;
     RefinedIvOptions split = options;
     split.initial_model = std::move(whole);
-    try {
-      candidates.push_back(run_refined_iv_from_start(problem, split));
-    } catch (const InvalidArgument&) {
-      // the unfactored fit's poles cannot be grouped into the submodels
+    // None when the unfactored fit's poles cannot be grouped into the submodels.
+    if (std::optional<EstimationResult> r = run_refined_iv_if_started(problem, split)) {
+      candidates.push_back(std::move(*r));
     }
   }
   // No candidate at all: the plain run, which names what went wrong.

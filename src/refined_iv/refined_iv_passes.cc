@@ -116,6 +116,16 @@ std::optional<std::vector<StateSpace>> sampled_loop_plant(const Layout& layout,
   return parts;
 }
 
+bool realisable(const Layout& layout, bool closed_loop, double h, const Eigen::VectorXd& beta) {
+  for (int i = 0; i < layout.size(); ++i) {
+    const SubmodelOrder& o = layout.orders[static_cast<size_t>(i)];
+    const Polynomial a = denominator_of(layout, beta, i);
+    if (!finite_derivative_filters(Polynomial::monomial(o.integrators) * a)) return false;
+    if (o.n > 0 && !finite_derivative_filters(a)) return false;
+  }
+  return !closed_loop || sampled_loop_plant(layout, beta, h).has_value();
+}
+
 std::optional<Eigen::VectorXd> sensitivity_filtered_reference(
     const std::vector<StateSpace>& parts, const DiscreteTransferFunction& controller,
     const Eigen::VectorXd& r, int delay) {

@@ -21,13 +21,14 @@ ALLOWED = {
         (1, "the estimator passed in refuses a delay by throwing; the scan records it and "
             "rethrows the first message with its context when every delay is refused"),
     "src/refined_iv/initialization.cc:refined_candidate":
-        (1, "a candidate's refinement is a whole SRIVC or CLSRIVC run, and the engine still "
-            "ends a run on a degenerate iterate with InvalidArgument"),
-    "src/refined_iv/refined_iv.cc:closed_loop_additive_from_data":
-        (3, "each candidate is a whole engine run (start, iteration, estimate), any of whose "
-            "phases still throws on a start that cannot be formed or a degenerate iterate"),
+        (1, "a candidate's refinement is a whole SRIVC or CLSRIVC run on the screening piece, "
+            "and the engine refuses a piece with too few samples or too little excitation for "
+            "the order by throwing, as it refuses a caller's record, and a degenerate start "
+            "given as the initial model is refused the same way"),
     "src/refined_iv/unstable_clsrivc.cc:unstable_clsrivc_starts":
-        (1, "the first stage is a whole SRIVC run and a start screen of its own"),
+        (1, "the first stage is a whole SRIVC run of r -> u, which the engine refuses by "
+            "throwing when r excites too little for the loop's order, and a start screen of "
+            "its own"),
 }
 
 

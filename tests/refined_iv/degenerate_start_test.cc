@@ -13,7 +13,9 @@
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
+#include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/initialization.h"
+#include "ctid/refined_iv/srivc.h"
 #include "ctid/refined_iv/unstable_clsrivc.h"
 #include "ctid/simulation/closed_loop.h"
 #include "ctid/simulation/excitation.h"
@@ -65,6 +67,29 @@ TEST(DegenerateLoop, ControllerStabilisesIsFalseForAModelWithoutARealisation) {
                         internal::controller_stabilises(orders, beta, proportional(0.3), kH, 0));
     EXPECT_FALSE(stabilises);
   }
+}
+
+TEST(DegenerateLoop, RealisableFailsExactlyWhereTheIterationsFiltersCannotBeFormed) {
+  // The engine steps onto no iterate that fails this check (decision 0050); its passes filter
+  // with derivative_filters held by a SampledFilter, which throw where the check fails.
+  using internal::srivc_engine::denominator_of;
+  using internal::srivc_engine::realisable;
+  const internal::srivc_engine::Layout mode(std::vector<SubmodelOrder>{SubmodelOrder{2, 0, 0}});
+  for (const bool closed_loop : {false, true}) {
+    EXPECT_TRUE(realisable(mode, closed_loop, kH, mode_parameters()));
+    EXPECT_FALSE(realisable(mode, closed_loop, kH, degenerate_parameters()));
+  }
+  EXPECT_NO_THROW(SampledFilter(derivative_filters(denominator_of(mode, mode_parameters(), 0)), kH,
+                                Hold::zero_order_hold));
+  EXPECT_THROW(SampledFilter(derivative_filters(denominator_of(mode, degenerate_parameters(), 0)),
+                             kH, Hold::zero_order_hold),
+               InvalidArgument);
+  // A first-order A whose a_1 is zero has no pole left: derivative_filters refuses it.
+  const internal::srivc_engine::Layout pole(std::vector<SubmodelOrder>{SubmodelOrder{1, 0, 0}});
+  EXPECT_TRUE(realisable(pole, false, kH, Eigen::Vector2d(0.5, 1.0)));
+  EXPECT_FALSE(realisable(pole, false, kH, Eigen::Vector2d(0.0, 1.0)));
+  EXPECT_THROW(derivative_filters(denominator_of(pole, Eigen::Vector2d(0.0, 1.0), 0)),
+               InvalidArgument);
 }
 
 TEST(DegenerateLoop, ReflectingAsAValueIsTheSamePolynomial) {
@@ -189,6 +214,95 @@ TEST(DegenerateStart, PolesThatDoNotFitTheStructureAreNoneWithTheReasonGroupingT
   ASSERT_TRUE(grouped.has_value());
   EXPECT_EQ(grouped->parameters(),
             group_into_submodels(third_order, three_poles, data).parameters());
+}
+
+// The engine's start phase as a value (decision 0050): a start that cannot be formed is none
+// with its reason, and the throwing run throws that reason.
+internal::RefinedIvProblem open_loop_problem(const SampledData& data, const SubmodelOrder& order) {
+  internal::RefinedIvProblem problem;
+  problem.records = {&data};
+  problem.orders = {order};
+  problem.unfactored = true;
+  problem.name = "srivc";
+  return problem;
+}
+
+TEST(DegenerateStart, TooFewPeaksForTheFrfStartIsNoStartAndTheThrowingRunNamesIt) {
+  const SampledData data = open_loop_record(8);
+  // One mode in the data, two pairs asked for.
+  const internal::RefinedIvProblem problem = open_loop_problem(data, SubmodelOrder{4, 0, 0});
+  RefinedIvOptions options;
+  options.start = StartMethod::frf;
+  std::string failure;
+  std::optional<EstimationResult> fit;
+  ASSERT_NO_THROW(fit = internal::run_refined_iv_if_started(problem, options, nullptr, &failure));
+  EXPECT_FALSE(fit.has_value());
+  EXPECT_THAT(failure, HasSubstr("fewer resonance peaks than the 2 pole pairs"));
+  EXPECT_EQ(failure, thrown_message([&] { srivc(data, SubmodelOrder{4, 0, 0}, options); }));
+  // The same structure from LSSVF has a start, and the run is the public estimator's.
+  options.start = StartMethod::lssvf;
+  fit = internal::run_refined_iv_if_started(problem, options, nullptr, &failure);
+  ASSERT_TRUE(fit.has_value());
+  EXPECT_EQ(fit->parameters, srivc(data, SubmodelOrder{4, 0, 0}, options).parameters);
+}
+
+TEST(DegenerateStart, ADegenerateInitialModelIsNoStartInsteadOfAFilterException) {
+  const SampledData data = open_loop_record(9);
+  const internal::RefinedIvProblem problem = open_loop_problem(data, SubmodelOrder{2, 0, 0});
+  RefinedIvOptions options;
+  options.initial_model =
+      AdditiveModel::from_parameters({SubmodelOrder{2, 0, 0}}, degenerate_parameters());
+  std::string failure;
+  std::optional<EstimationResult> fit;
+  ASSERT_NO_THROW(fit = internal::run_refined_iv_if_started(problem, options, nullptr, &failure));
+  EXPECT_FALSE(fit.has_value());
+  EXPECT_THAT(failure, HasSubstr("srivc: the start is degenerate"));
+  EXPECT_EQ(failure, thrown_message([&] { srivc(data, SubmodelOrder{2, 0, 0}, options); }));
+  // A start that is not degenerate runs.
+  options.initial_model =
+      AdditiveModel::from_parameters({SubmodelOrder{2, 0, 0}}, mode_parameters());
+  fit = internal::run_refined_iv_if_started(problem, options, nullptr, &failure);
+  ASSERT_TRUE(fit.has_value());
+  EXPECT_EQ(fit->termination, Termination::converged);
+}
+
+// Closed-loop data of two overdamped submodels: their FRF has no resonance peak, so the FRF
+// start method forms no start for the additive estimator from the data.
+SampledData overdamped_closed_loop_record() {
+  const AdditiveModel plant = AdditiveModel::from_parameters(
+      {SubmodelOrder{1, 0, 0}, SubmodelOrder{1, 0, 0}}, Eigen::Vector4d(0.5, 1.0, 0.05, 0.5));
+  const Eigen::VectorXd r = white_noise(3000, 1.0, 11);
+  const ClosedLoopSimulation loop = simulate_closed_loop(plant, proportional(0.3), r);
+  return SampledData(kH, loop.input, loop.output, r);
+}
+
+TEST(DegenerateStart, AClosedLoopAdditiveStartMethodWithoutAStartGivesNoCandidate) {
+  const SampledData data = overdamped_closed_loop_record();
+  const DiscreteTransferFunction controller = proportional(0.3);
+  internal::RefinedIvProblem problem;
+  problem.records = {&data};
+  problem.orders = {SubmodelOrder{1, 0, 0}, SubmodelOrder{1, 0, 0}};
+  problem.controller = &controller;
+  problem.name = "clsrivc";
+  RefinedIvOptions frf_only;
+  frf_only.start = StartMethod::frf;
+  std::string failure;
+  EXPECT_FALSE(internal::run_refined_iv_if_started(problem, frf_only, nullptr, &failure));
+  EXPECT_THAT(failure, HasSubstr("fewer resonance peaks"));
+  // From both methods, the FRF's gives no candidate and the LSSVF's are kept: the estimate is
+  // the one from LSSVF alone, chosen among the same fits.
+  RefinedIvOptions automatic;
+  RefinedIvOptions lssvf_only;
+  lssvf_only.start = StartMethod::lssvf;
+  std::optional<EstimationResult> both;
+  ASSERT_NO_THROW(both.emplace(internal::run_refined_iv(problem, automatic)));
+  const EstimationResult alone = internal::run_refined_iv(problem, lssvf_only);
+  EXPECT_EQ(both->parameters, alone.parameters);
+  EXPECT_EQ(both->message, alone.message);
+  EXPECT_THAT(both->message, HasSubstr("fits from different starts"));
+  // With the FRF's start method alone there is no candidate, and the plain run names why.
+  EXPECT_THAT(thrown_message([&] { internal::run_refined_iv(problem, frf_only); }),
+              HasSubstr("fewer resonance peaks"));
 }
 
 }  // namespace

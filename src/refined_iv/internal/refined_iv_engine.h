@@ -13,6 +13,7 @@
 #include "ctid/core/sampled_data.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/refined_iv/estimation_result.h"
+#include "ctid/refined_iv/initialization.h"
 #include "ctid/refined_iv/refined_iv.h"
 #include "ctid/refined_iv/refined_iv_options.h"
 
@@ -30,7 +31,16 @@ struct ScreenedStart {
 
 /// The refined IV iteration from options.initial_model or, without one, from the start
 /// initialization.h finds in the data; `shared`, when given, is screened here and stored only
-/// when it holds no start yet.
+/// when it holds no start yet. As a value (decision 0050): none, with the reason in
+/// `failure` if given, when no start can be formed (no candidate in the data, a start whose
+/// poles do not group into the submodels, a degenerate start). A degenerate iterate ends the
+/// run as Termination::non_finite with the last finite iterate and a failed verdict. Bad input
+/// (records, structure, options) throws InvalidArgument.
+std::optional<EstimationResult> run_refined_iv_if_started(const RefinedIvProblem& problem,
+                                                          const RefinedIvOptions& options,
+                                                          ScreenedStart* shared = nullptr,
+                                                          std::string* failure = nullptr);
+/// run_refined_iv_if_started with a start that cannot be formed thrown as InvalidArgument.
 EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
                                            const RefinedIvOptions& options,
                                            ScreenedStart* shared = nullptr);
@@ -86,6 +96,17 @@ std::optional<TransferFunction> frf_peak_start_if_formed(const SampledData& data
                                                          const SubmodelOrder& order,
                                                          int input_delay,
                                                          std::string* failure = nullptr);
+
+/// initial_transfer_function and additive_model_from_start as values (decision 0050): none,
+/// with the reason they throw in `failure` if given, when no candidate start can be formed
+/// (too few resonance peaks for the FRF start, no finite candidate) or the start's poles do
+/// not group into the submodels. Bad options still throw InvalidArgument.
+std::optional<TransferFunction> initial_transfer_function_if_formed(
+    const SampledData& record, const SubmodelOrder& order, const InitializationOptions& options,
+    std::string* failure = nullptr);
+std::optional<AdditiveModel> additive_model_from_start_if_formed(
+    const TransferFunction& g, const SampledData& record, const std::vector<SubmodelOrder>& orders,
+    const InitializationOptions& options, std::string* failure = nullptr);
 
 /// group_into_submodels as a value (decision 0045): none, with the reason it throws in
 /// `failure` if given, when g's poles do not fit the structure (the counts differ: a start whose

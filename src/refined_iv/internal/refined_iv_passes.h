@@ -168,6 +168,13 @@ Eigen::VectorXd numerator_of(const Layout& layout, const Eigen::VectorXd& beta, 
 std::optional<std::vector<StateSpace>> sampled_loop_plant(const Layout& layout,
                                                           const Eigen::VectorXd& beta, double h);
 
+/// Whether the passes can filter at beta (decision 0050): every submodel's bank of 1/(p^l A_i),
+/// and of 1/A_i when it has poles, has a finite realisation, and in closed loop the loop's
+/// sampled plant exists. These are the conditions under which evaluate and the closed-loop
+/// source used to throw InvalidArgument; a degenerate beta (A_i lost its leading coefficient)
+/// fails them, and the engine never steps onto such a beta.
+bool realisable(const Layout& layout, bool closed_loop, double h, const Eigen::VectorXd& beta);
+
 /// S_uo(q) r with S_uo = C_d / (1 + G_d C_d), G_d the plant of sampled_loop_plant followed by
 /// `delay` whole samples; std::nullopt when the loop is unstable or ill-posed.
 std::optional<Eigen::VectorXd> sensitivity_filtered_reference(
