@@ -181,6 +181,99 @@ SampledData without_fit_trend(const ValidateFlags& f, const std::vector<std::str
   return remove_trend(data, scaled);
 }
 
+// The model of a document with several inputs or outputs: a `ctid fit --input-columns`
+// result or a mimo_additive_model file; nullopt for every other document.
+std::optional<MimoAdditiveModel> mimo_model_in(const std::string& file) {
+  const nlohmann::json document = io::read_json(file);
+  const auto type = document.is_object() ? document.find("type") : document.end();
+  if (type == document.end() || !type->is_string()) return std::nullopt;
+  if (*type == io::kMimoEstimationResultType) {
+    const auto model = document.find("model");
+    if (model == document.end() || model->is_null()) {
+      usage_error(file + ": the result holds no model (its fit computed none)");
+    }
+    return io::mimo_additive_model_from_json(*model, file + ": model");
+  }
+  if (*type == io::kMimoAdditiveModelType) return io::mimo_additive_model_from_json(document, file);
+  return std::nullopt;
+}
+
+// One row per output: the fits from rest and from the estimated state and the residual tests.
+void print_mimo_table(const MimoData& data, const MimoValidationReport& report, int max_lag) {
+  std::size_t width = 6;
+  for (const std::string& name : data.output_names()) width = std::max(width, name.size() + 2);
+  std::cout << padded("output", width) << padded("fit zero state", 17)
+            << padded("fit estimated state", 22) << padded("max |r_ee|", 12) << "max |r_eu|\n";
+  for (int j = 0; j < data.output_count(); ++j) {
+    std::cout << padded(data.output_names()[static_cast<std::size_t>(j)], width)
+              << padded(percent(report.fit_zero_state(j)), 17)
+              << padded(percent(report.fit_estimated_state(j)), 22)
+              << padded(format_brief(report.max_residual_autocorrelation(j)), 12)
+              << format_brief(report.max_cross_correlation(j)) << "\n";
+  }
+  std::cout << "residual tests: lags 1-" << max_lag << " (whiteness) and -" << max_lag << ".."
+            << max_lag << " over every input (cross-correlation) against "
+            << format_brief(report.whiteness_bound) << " (99 %)\n";
+}
+
+// A model with several inputs or outputs against a record of as many columns
+// (--input-columns, --output-columns): validate_model(MimoAdditiveModel, MimoData), output by
+// output.
+void run_validate_mimo(const ValidateFlags& f, const CLI::App& app, const MimoAdditiveModel& model,
+                       const ValidationOptions& options, bool several, bool windowed) {
+  const std::string channels = std::to_string(model.inputs()) + " input(s) and " +
+                               std::to_string(model.outputs()) + " output(s)";
+  if (several) usage_error(f.model + " has " + channels + "; it is validated alone");
+  if (!f.plot.empty()) {
+    usage_error("--plot draws models of one input and one output; " + f.model + " has " + channels);
+  }
+  if (f.data.detrend == "fit") {
+    usage_error("--detrend fit takes the trend of a one-channel fit; " + f.model + " has " +
+                channels + " (give --detrend mean, linear or none)");
+  }
+  if (!f.data.mimo_asked(app)) {
+    usage_error(f.model + " has " + channels +
+                ": name the record's columns with --input-columns and --output-columns");
+  }
+  const MimoData data = f.data.load_mimo(app);
+  if (data.input_count() != model.inputs() || data.output_count() != model.outputs()) {
+    usage_error(internal::concat(f.model, " has ", channels, "; ", f.data.file, " gives ",
+                                 data.input_count(), " input column(s) and ", data.output_count(),
+                                 " output column(s)"));
+  }
+  MimoValidationReport report;
+  try {
+    report = validate_model(model, data, options);
+  } catch (const InvalidArgument& error) {
+    if (!windowed) throw;
+    usage_error(
+        f.data.file + ": " + error.what() + " (" +
+        (f.window.empty() ? std::string("--window-start/--window-end") : "--window " + f.window) +
+        ")");
+  }
+  if (!f.output.empty()) {
+    nlohmann::json document = io::fields_to_json(report);
+    document["type"] = "mimo_validation_report";
+    document["model_file"] = f.model;
+    document["data"] = io::to_json(io::DataProvenance{.files = {f.data.file},
+                                                      .samples = data.size(),
+                                                      .sample_time = data.sample_time(),
+                                                      .inputs = data.input_names(),
+                                                      .outputs = data.output_names(),
+                                                      .input_hold = data.input_hold()});
+    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  }
+  if (f.quiet) return;
+  std::cout << "ctid validate: " << f.model << " (" << channels << ") on " << f.data.file
+            << " (N = " << data.size() << ", h = " << format_number(data.sample_time())
+            << " s), scored " << format_number(report.window_start) << " to "
+            << format_number(report.window_end) << " s (" << report.window_samples << " samples)\n";
+  std::cout << "initial state: " << enum_name(options.initial_state)
+            << " (residual statistics below)\n";
+  print_mimo_table(data, report, options.max_lag);
+  if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
+}
+
 void run_validate(const ValidateFlags& f, const CLI::App& app) {
   std::vector<std::string> files{f.model};
   files.insert(files.end(), f.more_models.begin(), f.more_models.end());
@@ -199,6 +292,18 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
   const bool windowed = options.window_start || options.window_end;
   options.validate();  // named by its flags, before anything is read
 
+  if (const std::optional<MimoAdditiveModel> mimo = mimo_model_in(f.model)) {
+    run_validate_mimo(f, app, *mimo, options, several, windowed);
+    return;
+  }
+  if (f.data.mimo_asked(app)) {
+    usage_error(
+        "--input-columns / --output-columns validate a model of several inputs or "
+        "outputs; " +
+        f.model +
+        " has one input and one output (use --input-column and "
+        "--output-column)");
+  }
   const std::optional<DelayedFeedbackLoop> loop = loop_in(f.model);
   if (loop) {
     if (several) {
@@ -322,6 +427,7 @@ Command add_validate_command(CLI::App& parent) {
   app->add_option("model", f.model, "Model or result JSON")->required()->check(CLI::ExistingFile);
   f.data.detrend_fit = true;
   f.data.add_to(*app, "data", false);
+  f.data.add_mimo_columns(*app);
   app->add_option("models", f.more_models, "More model JSON files to compare on the same data")
       ->check(CLI::ExistingFile);
   add_field_flags(*app, f.options);

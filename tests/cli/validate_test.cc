@@ -4,13 +4,18 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <random>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "cli/run_ctid.h"
+#include "ctid/core/mimo_data.h"
+#include "ctid/core/mimo_model.h"
+#include "ctid/estimation/validation.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/json.h"
+#include "ctid/io/mimo_data_csv.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/report_json.h"
 
@@ -255,6 +260,55 @@ TEST_F(CraneValidation, PlotOfSeveralModelsDrawsOneComparisonFigure) {
   EXPECT_GT(bytes.size(), 10000u);
   EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
   EXPECT_FALSE(std::filesystem::exists(path("fig") / "bode.png"));
+}
+
+// A model of two inputs and two outputs (issue 35): its exact response is fitted to 100 % on
+// every output, the document holds what validate_model(MimoAdditiveModel, MimoData) gives in
+// this process, and the flags that do not apply to it are one-line errors naming it.
+TEST_F(ValidateCommand, ModelOfSeveralInputsAndOutputsIsJudgedOutputByOutput) {
+  const MimoAdditiveModel model(
+      2, 2, {MimoSubmodel{Polynomial({1.0, 0.04, 0.04}), {{2.0}, {1.0}, {0.5}, {-1.0}}, 0}});
+  const int n = 600;
+  const double h = 0.01;
+  std::mt19937 generator(7);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd u(n, 2);
+  for (Eigen::Index i = 0; i < u.size(); ++i) u.data()[i] = normal(generator);
+  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(n, 2);
+  for (int j = 0; j < 2; ++j) {
+    for (int k = 0; k < 2; ++k) y.col(j) += model_output(model.channel(j, k), u.col(k), h);
+  }
+  const MimoData data(h, u, y);
+  io::write_mimo_data(path("mimo.csv"), data);
+  io::write_json(path("mimo_model.json"), io::to_json(model));
+
+  const auto r = ctid({"validate", "mimo_model.json", "mimo.csv", "--input-columns", "u1,u2",
+                       "--output-columns", "y1,y2", "-o", "mimo_report.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("2 input(s) and 2 output(s)"));
+  const nlohmann::json document = report("mimo_report.json");
+  EXPECT_EQ(document["type"], "mimo_validation_report");
+  io::MimoCsvColumns columns;
+  columns.inputs = {"u1", "u2"};
+  columns.outputs = {"y1", "y2"};
+  const MimoValidationReport expected =
+      validate_model(model, io::read_mimo_data(path("mimo.csv"), columns), ValidationOptions{});
+  for (int j = 0; j < 2; ++j) {
+    EXPECT_GT(expected.fit_zero_state(j), 99.999);
+    EXPECT_EQ(document["fit_zero_state"][j].get<double>(), expected.fit_zero_state(j));
+    EXPECT_EQ(document["max_cross_correlation"][j].get<double>(),
+              expected.max_cross_correlation(j));
+  }
+  EXPECT_EQ(document["data"]["outputs"], nlohmann::json({"y1", "y2"}));
+
+  expect_bad_input(ctid({"validate", "mimo_model.json", "mimo.csv"}),
+                   "mimo_model.json has 2 input(s) and 2 output(s): name the record's columns");
+  expect_bad_input(ctid({"validate", "mimo_model.json", "mimo.csv", "--input-columns", "u1",
+                         "--output-columns", "y1,y2"}),
+                   "mimo.csv gives 1 input column(s) and 2 output column(s)");
+  expect_bad_input(ctid({"validate", "mimo_model.json", "mimo.csv", "--input-columns", "u1,u2",
+                         "--output-columns", "y1,y2", "--plot", "fig"}),
+                   "--plot draws models of one input and one output");
 }
 
 }  // namespace
