@@ -8,12 +8,15 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "command.h"
 #include "ctid/core/format.h"
+#include "ctid/identification/identification.h"
 #include "ctid/io/csv.h"
+#include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
 #include "ctid/io/result_json.h"
 #include "ctid/simulation/time_response.h"
@@ -46,13 +49,26 @@ void check_document_type(const std::string& file, const std::string& command) {
   const auto type = document.is_object() ? document.find("type") : document.end();
   if (type == document.end() || !type->is_string()) return;  // the model reader says why
   const std::string name = type->get<std::string>();
-  for (const char* known : {"estimation_result", "mode_relocation_result",
-                            "input_delay_scan_result", "transfer_function", "additive_model"}) {
+  for (const char* known :
+       {"estimation_result", "mode_relocation_result", "input_delay_scan_result",
+        "process_model_result", "transfer_function", "additive_model"}) {
     if (name == known) return;
   }
   usage_error(file + " is a " + name + " document; ctid " + command +
               " reads a ctid fit result (estimation_result, mode_relocation_result, "
-              "input_delay_scan_result) or a transfer_function / additive_model file");
+              "input_delay_scan_result, process_model_result) or a transfer_function / "
+              "additive_model file");
+}
+
+// The estimate of a `ctid fit --process` result; nullopt for every other document.
+std::optional<ProcessModelResult> process_result_in(const std::string& file) {
+  nlohmann::json document = io::read_json(file);
+  const auto type = document.is_object() ? document.find("type") : document.end();
+  if (type == document.end() || *type != "process_model_result") return std::nullopt;
+  for (const char* written_beside : {"type", "model", "data"}) document.erase(written_beside);
+  ProcessModelResult result;
+  io::fields_from_json(document, result, file);
+  return result;
 }
 
 TimeResponseOptions options_from(const ResponseFlags& f, ResponseKind kind) {
@@ -111,15 +127,22 @@ io::CsvTable response_table(const TimeResponse& r) {
   return table;
 }
 
-void print_summary(const ResponseFlags& f, const io::FittedModel& fitted, const TimeResponse& r,
+// What the band comes from, after "by the delta method from ".
+struct ResponseSource {
+  std::string model;  // the model as text
+  std::string covariance = "the parameter covariance";
+  bool delay_error = false;  // the delay's standard error joins it
+};
+
+void print_summary(const ResponseFlags& f, const ResponseSource& source, const TimeResponse& r,
                    const std::string& command) {
   const bool band = r.standard_deviation.size() > 0;
   std::cout << "ctid " << command << ": " << f.model << "\n"
-            << "model: " << fitted.model.to_string() << "\n";
+            << "model: " << source.model << "\n";
   print_characteristics(r.characteristics, f.options.settling_band);
   if (band) {
-    std::cout << "± one standard error by the delta method from the parameter covariance";
-    if (fitted.delay_standard_error > 0.0) std::cout << " and the delay's standard error";
+    std::cout << "± one standard error by the delta method from " << source.covariance;
+    if (source.delay_error) std::cout << " and the delay's standard error";
     std::cout << "; band: ± " << format_brief(r.z) << " standard deviations ("
               << format_number(100.0 * f.options.confidence) << " %)\n";
   } else {
@@ -143,19 +166,29 @@ void run_response(const ResponseFlags& f, ResponseKind kind) {
     usage_error("--points and --sample-time both set the grid; give one");
   }
   check_document_type(f.model, command);
-  const io::FittedModel fitted = io::read_fitted_model(f.model);
   std::filesystem::path package;
   if (!f.plot.empty()) {
     package = require_plotting();
     prepare_plot_directory(f.plot, {command + ".png"}, f.force);
   }
-  const TimeResponse r = time_response(fitted.model, fitted.covariance, options_from(f, kind),
-                                       fitted.delay_standard_error);
+  ResponseSource source;
+  TimeResponse r;
+  if (const std::optional<ProcessModelResult> process = process_result_in(f.model)) {
+    r = time_response(*process, options_from(f, kind));
+    source.model = process->structure + ": " + process->transfer_function().to_string();
+    source.covariance = "the covariance of the process parameters";
+  } else {
+    const io::FittedModel fitted = io::read_fitted_model(f.model);
+    r = time_response(fitted.model, fitted.covariance, options_from(f, kind),
+                      fitted.delay_standard_error);
+    source.model = fitted.model.to_string();
+    source.delay_error = fitted.delay_standard_error > 0.0;
+  }
   const io::CsvTable table = response_table(r);
   if (!f.output.empty()) {
     io::write_csv(f.output, table, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
-  if (!f.quiet) print_summary(f, fitted, r, command);
+  if (!f.quiet) print_summary(f, source, r, command);
   if (!f.plot.empty()) {
     const TemporaryDirectory scratch;
     const std::filesystem::path csv = scratch.path() / "response.csv";

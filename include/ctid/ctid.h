@@ -81,6 +81,7 @@
 #include "ctid/frf_fit/frf_matrix_fit.h"
 
 #include "ctid/process_model/process_model.h"
+#include "ctid/process_model/process_response.h"
 
 #include "ctid/identification/feedback_loop.h"
 #include "ctid/identification/frf_matrix.h"

@@ -364,4 +364,8 @@ void validate_identification(const ProcessStructure& structure,
   validate_process_model(structure, options);
 }
 
+TimeResponse time_response(const ProcessModelResult& result, const TimeResponseOptions& options) {
+  return process_time_response(result, options);
+}
+
 }  // namespace ctid

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "cli/run_ctid.h"
+#include "ctid/core/format.h"
 #include "ctid/io/json.h"
 #include "support/sanitizers.h"
 
@@ -16,6 +17,7 @@ namespace {
 
 using ::testing::HasSubstr;
 using testing::line_count;
+using testing::slurp;
 using ::testing::StartsWith;
 
 class FitProcess : public testing::CliTest {
@@ -63,6 +65,15 @@ TEST_F(FitProcess, RecoversAP2DExactlyAndWritesAResultAndAModel) {
   const auto v = ctid({"validate", "m.json", data});
   ASSERT_EQ(v.status, 0) << v.err;
   EXPECT_THAT(v.out, HasSubstr("fit: 100.00 %"));
+
+  // `ctid step` on the result (issue 36): the band from the process parameters' covariance,
+  // the DC gain the estimated K.
+  const auto step = ctid({"step", "r.json", "-o", "step.csv"});
+  ASSERT_EQ(step.status, 0) << step.err;
+  EXPECT_THAT(step.out, HasSubstr("model: P2D: "));
+  EXPECT_THAT(step.out, HasSubstr("the covariance of the process parameters"));
+  EXPECT_THAT(step.out, HasSubstr("DC gain: " + format_brief(doc["parameters"][0].get<double>())));
+  EXPECT_THAT(slurp(path("step.csv")), StartsWith("t,y,y_std,lower,upper"));
 }
 
 TEST_F(FitProcess, AHeldParameterIsPrintedAsHeldAndKeepsItsValue) {

@@ -21,6 +21,7 @@
 #include "ctid/core/sampled_data.h"
 #include "ctid/identification/two_stage.h"
 #include "ctid/process_model/process_model.h"
+#include "ctid/process_model/process_response.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/input_delay_scan.h"
 #include "ctid/refined_iv/irregular_srivc.h"
@@ -283,5 +284,12 @@ ProcessModelResult identify(const SampledData& data, const ProcessStructure& str
 /// identify(data, ProcessStructure, ...) checks the same, so a caller may check before reading
 /// the data.
 void validate_identification(const ProcessStructure& structure, const ProcessModelOptions& options);
+
+/// The step or impulse response of a process-model estimate with its band and the step
+/// characteristics' standard errors, by the delta method in the process parameters
+/// (process_model/process_response.h): what `ctid step` and `ctid impulse` print for a
+/// `ctid fit --process` result.
+TimeResponse time_response(const ProcessModelResult& result,
+                           const TimeResponseOptions& options = {});
 
 }  // namespace ctid
