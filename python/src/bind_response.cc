@@ -52,6 +52,14 @@ TimeResponse response_of(const char* function, ResponseKind kind, const py::obje
                          const py::kwargs& kwargs) {
   TimeResponseOptions o = options_from<TimeResponseOptions>(function, options, kwargs);
   o.kind = kind;
+  if (py::isinstance<ProcessModelResult>(model)) {
+    if (covariance || delay_standard_error) {
+      throw py::type_error(std::string(function) +
+                           "(): a ProcessModelResult carries its own covariance; give neither "
+                           "covariance= nor delay_standard_error=");
+    }
+    return time_response(model.cast<const ProcessModelResult&>(), o);
+  }
   const io::FittedModel f = fitted_from(model, covariance, delay_standard_error, function);
   return time_response(f.model, f.covariance, o, f.delay_standard_error);
 }
@@ -70,7 +78,8 @@ void bind_response(py::module_& m) {
 
   const char* model_doc =
       "model: EstimationResult (its covariance and delay standard error give the standard "
-      "errors and the band), AdditiveModel or TransferFunction (with covariance= of its "
+      "errors and the band), ProcessModelResult (the band by the delta method in its "
+      "process parameters), AdditiveModel or TransferFunction (with covariance= of its "
       "parameters, if any). Options as keywords (final_time, points, sample_time, "
       "settling_band, confidence) or options=TimeResponseOptions(...). Returns a TimeResponse.";
   for (const auto& [name, kind] : {std::pair{"step_response", ResponseKind::step},

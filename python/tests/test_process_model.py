@@ -57,6 +57,22 @@ def test_p1d_recovered_exactly_from_an_independent_simulation(record):
     assert g.input_delay == pytest.approx(TD, rel=1e-8)
 
 
+def test_step_response_of_a_process_result_has_its_closed_forms(record):
+    """ctid.step_response(ProcessModelResult): rise time Tp1 ln 9 and settling time
+    Td + Tp1 ln 50 of the estimate, a band from the process parameters' covariance."""
+    r = ctid.process_model(record, "P1D")
+    k, t, td = r.parameters
+    response = ctid.step_response(r, final_time=10 * t, points=2001)
+    c = response.characteristics
+    assert c.dc_gain.value == pytest.approx(k, rel=1e-12)
+    assert c.rise_time.value == pytest.approx(t * np.log(9.0), rel=1e-5)
+    assert c.settling_time.value == pytest.approx(td + t * np.log(50.0), rel=1e-5)
+    assert c.dc_gain.standard_error == pytest.approx(r.standard_errors[0], rel=1e-6)
+    assert len(response.standard_deviation) == len(response.time)
+    with pytest.raises(TypeError, match="carries its own covariance"):
+        ctid.step_response(r, covariance=np.eye(3))
+
+
 def test_held_parameter_and_bounds(record):
     held = ctid.process_model(record, "P1D", fixed={"Tp1": 1.2})
     assert held.parameter("Tp1") == 1.2
