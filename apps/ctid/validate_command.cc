@@ -181,6 +181,15 @@ SampledData without_fit_trend(const ValidateFlags& f, const std::vector<std::str
   return remove_trend(data, scaled);
 }
 
+// A window outside the record is the user's input: the validation's refusal with the file
+// and the flag that set the window.
+[[noreturn]] void window_error(const ValidateFlags& f, const InvalidArgument& error) {
+  usage_error(
+      f.data.file + ": " + error.what() + " (" +
+      (f.window.empty() ? std::string("--window-start/--window-end") : "--window " + f.window) +
+      ")");
+}
+
 // The model of a document with several inputs or outputs: a `ctid fit --input-columns`
 // result or a mimo_additive_model file; nullopt for every other document.
 std::optional<MimoAdditiveModel> mimo_model_in(const std::string& file) {
@@ -246,10 +255,7 @@ void run_validate_mimo(const ValidateFlags& f, const CLI::App& app, const MimoAd
     report = validate_model(model, data, options);
   } catch (const InvalidArgument& error) {
     if (!windowed) throw;
-    usage_error(
-        f.data.file + ": " + error.what() + " (" +
-        (f.window.empty() ? std::string("--window-start/--window-end") : "--window " + f.window) +
-        ")");
+    window_error(f, error);
   }
   if (!f.output.empty()) {
     nlohmann::json document = io::fields_to_json(report);
@@ -347,12 +353,8 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
       for (const auto& each : fitted) reports.push_back(validate_model(each.model, data, options));
     }
   } catch (const InvalidArgument& error) {
-    // A window outside the record is the user's input: name the file and the flag.
     if (!windowed) throw;
-    usage_error(
-        f.data.file + ": " + error.what() + " (" +
-        (f.window.empty() ? std::string("--window-start/--window-end") : "--window " + f.window) +
-        ")");
+    window_error(f, error);
   }
 
   if (!f.output.empty()) {
