@@ -44,8 +44,8 @@ struct ResponseFlags {
 
 // The documents a model with (maybe) a covariance is read from; anything else is refused by
 // name before it is parsed as a model.
-void check_document_type(const std::string& file, const std::string& command) {
-  const nlohmann::json document = io::read_json(file);
+void check_document_type(const nlohmann::json& document, const std::string& file,
+                         const std::string& command) {
   const auto type = document.is_object() ? document.find("type") : document.end();
   if (type == document.end() || !type->is_string()) return;  // the model reader says why
   const std::string name = type->get<std::string>();
@@ -61,13 +61,14 @@ void check_document_type(const std::string& file, const std::string& command) {
 }
 
 // The estimate of a `ctid fit --process` result; nullopt for every other document.
-std::optional<ProcessModelResult> process_result_in(const std::string& file) {
-  nlohmann::json document = io::read_json(file);
+std::optional<ProcessModelResult> process_result_in(const nlohmann::json& document,
+                                                    const std::string& file) {
   const auto type = document.is_object() ? document.find("type") : document.end();
   if (type == document.end() || *type != "process_model_result") return std::nullopt;
-  for (const char* written_beside : {"type", "model", "data"}) document.erase(written_beside);
+  nlohmann::json fields = document;
+  for (const char* written_beside : {"type", "model", "data"}) fields.erase(written_beside);
   ProcessModelResult result;
-  io::fields_from_json(document, result, file);
+  io::fields_from_json(fields, result, file);
   return result;
 }
 
@@ -165,7 +166,8 @@ void run_response(const ResponseFlags& f, ResponseKind kind) {
   if (f.points_option->count() > 0 && f.sample_time_option->count() > 0) {
     usage_error("--points and --sample-time both set the grid; give one");
   }
-  check_document_type(f.model, command);
+  const nlohmann::json document = io::read_json(f.model);  // read once, judged by its type
+  check_document_type(document, f.model, command);
   std::filesystem::path package;
   if (!f.plot.empty()) {
     package = require_plotting();
@@ -173,12 +175,12 @@ void run_response(const ResponseFlags& f, ResponseKind kind) {
   }
   ResponseSource source;
   TimeResponse r;
-  if (const std::optional<ProcessModelResult> process = process_result_in(f.model)) {
+  if (const std::optional<ProcessModelResult> process = process_result_in(document, f.model)) {
     r = time_response(*process, options_from(f, kind));
     source.model = process->structure + ": " + process->transfer_function().to_string();
     source.covariance = "the covariance of the process parameters";
   } else {
-    const io::FittedModel fitted = io::read_fitted_model(f.model);
+    const io::FittedModel fitted = io::fitted_model_from_json(document, f.model);
     r = time_response(fitted.model, fitted.covariance, options_from(f, kind),
                       fitted.delay_standard_error);
     source.model = fitted.model.to_string();
