@@ -149,23 +149,15 @@ def _source_arguments(records, spec, scratch, glob=False):
     return args
 
 
-class _Completed:
-    """What a run of ``ctid batch`` inside this process printed, and its exit status."""
-
-    def __init__(self, returncode, stdout, stderr):
-        self.returncode = returncode
-        self.stdout = stdout
-        self.stderr = stderr
-
-
 def _run_batch_command(args):
     """``ctid batch ARGS`` (--plan or --summarize) run inside this process (decision 0052)."""
     from . import _ctid
 
     status, out, err = _ctid._command_line_captured(
         ["batch", *[os.fsencode(arg) for arg in args]])
-    completed = _Completed(status, out.decode("utf-8", "surrogateescape"),
-                           err.decode("utf-8", "replace"))
+    completed = subprocess.CompletedProcess(["batch", *args], status,
+                                            out.decode("utf-8", "surrogateescape"),
+                                            err.decode("utf-8", "replace"))
     if completed.returncode == 2:
         raise _invalid(_last_line(completed.stderr))
     if completed.returncode not in (0, 1, 3) or (completed.returncode == 1 and
