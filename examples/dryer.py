@@ -56,12 +56,12 @@ def main():
     est, val = parts(data, ctid.Detrend.mean)
 
     options = ctid.StructureScanOptions()
-    options.identification.delay_scan = ctid.DelayRange(min=0, max=MAX_DELAY)
+    options.identification.delay_scan_samples = ctid.DelayRange(min=0, max=MAX_DELAY)
     candidates = [ctid.ModelStructure.unfactored(n, 0) for n in range(1, MAX_POLES + 1)]
     scan = ctid.scan_structures(est, candidates, options)
     chosen = scan.fits[scan.recommended]
 
-    fit_options = ctid.IdentificationOptions(delay_scan=ctid.DelayRange(min=0, max=MAX_DELAY))
+    fit_options = ctid.IdentificationOptions(delay_scan_samples=ctid.DelayRange(min=0, max=MAX_DELAY))
     rows = {}
     models = {}
     from_state = ctid.ValidationOptions(initial_state=ctid.InitialState.estimate)

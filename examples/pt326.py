@@ -38,15 +38,15 @@ def main():
     h = estimation.sample_time
 
     print(f"PT326 air heater, N = {estimation.size()} + {validation.size()}, h = {h} s")
-    print(f"  delay scan 0..{MAX_DELAY} samples: best {r.input_delay} samples "
-          f"({r.input_delay * h:.1f} s); {r.message}")
-    print(f"  model  {b0:.4f} / ({a1:.4f} p + 1) e^(-{r.input_delay * h:.1f} p)")
+    print(f"  delay scan 0..{MAX_DELAY} samples: best {r.input_delay_samples} samples "
+          f"({r.input_delay_samples * h:.1f} s); {r.message}")
+    print(f"  model  {b0:.4f} / ({a1:.4f} p + 1) e^(-{r.input_delay_samples * h:.1f} p)")
     print(f"  gain   {b0:.4f} +- {se_b0:.4f},  time constant {a1:.4f} +- {se_a1:.4f} s")
     print(f"  fit    {r.fit_percent:.1f} % (estimation), {report.fit_percent:.1f} % (validation)")
 
     figure, ax = plt.subplots(figsize=(6.0, 3.5))
     ax.semilogy(scan.delays, scan.mean_squared_errors, "o-")
-    ax.axvline(r.input_delay, color="C1", ls="--", label=f"best: {r.input_delay} samples")
+    ax.axvline(r.input_delay_samples, color="C1", ls="--", label=f"best: {r.input_delay_samples} samples")
     ax.set_xlabel("input delay [samples of 0.1 s]")
     ax.set_ylabel("output-error MSE")
     ax.grid(True, which="both", alpha=0.3)
@@ -63,7 +63,7 @@ def main():
     # Structure selection without knowing the order: 1..4 poles, n - 1 zeros, at the delay.
     candidates = [ctid.ModelStructure.unfactored(n, n - 1) for n in range(1, 5)]
     options = ctid.StructureScanOptions()
-    options.identification.refined_iv.input_delay = r.input_delay
+    options.identification.refined_iv.input_delay_samples = r.input_delay_samples
     structures = ctid.scan_structures(estimation, candidates, options)
     chosen = structures.fits[structures.recommended].structure.orders[0]
     print(f"  structure scan 1..4 poles: recommended {chosen.n} pole(s) ({structures.rule})")
@@ -75,7 +75,7 @@ def main():
         o = structure.orders[0]
         return f"{o.n} pole{'s' if o.n > 1 else ''}, {o.m} zero{'s' if o.m != 1 else ''}"
 
-    d = r.input_delay
+    d = r.input_delay_samples
     results = _common.markdown_table(["", "ours", "published"], [
         ["structure", "first order, m = 0", "first order, nb = 1 (nn = [1 1 5])"],
         ["delay", f"**{d} samples ({d * h:.1f} s)**", "5 samples"],
@@ -103,7 +103,7 @@ def main():
     summary = {
         "example": "pt326", "sample_time": h,
         "delays": list(scan.delays), "mean_squared_errors": list(scan.mean_squared_errors),
-        "delay_samples": r.input_delay, "termination": r.termination.name,
+        "delay_samples": r.input_delay_samples, "termination": r.termination.name,
         "time_constant_s": a1, "time_constant_se_s": se_a1, "gain": b0, "gain_se": se_b0,
         "fit_estimation_percent": r.fit_percent, "fit_validation_percent": report.fit_percent,
         "validation_max_residual_autocorrelation": report.max_residual_autocorrelation,

@@ -43,7 +43,7 @@ run fit_additive_cl "$ctid" fit closed.csv --submodel 2,0 --submodel 2,0 \
   -c "$models/gonzalez_6_2_pid.json" --force -o fit_additive_cl.json
 cp "$data/contsid_aerothermal_pt326/pt326_est.csv" pt326_est.csv
 run fit_pt326 "$ctid" fit pt326_est.csv --poles 1 --zeros 0 \
-  --input-column u_heater_voltage --output-column y_outlet_temperature --time-column t_s --delay-scan 0:8 --force -o fit_pt326.json
+  --input-column u_heater_voltage --output-column y_outlet_temperature --time-column t_s --delay-scan-samples 0:8 --force -o fit_pt326.json
 run validate_modes "$ctid" validate fit_modes.json open.csv --force -o validate_modes.json
 run frf_welch "$ctid" frf open.csv --force -o frf_welch.csv
 run frf_periodic "$ctid" frf open.csv --period 2048 --force -o frf_periodic.csv

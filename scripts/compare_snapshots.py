@@ -39,6 +39,17 @@ RENAMED = {
         ("feedback.numerator", "identification.loop.feedback.numerator_ascending"),
         ("feedback.denominator", "identification.loop.feedback.denominator_ascending"),
     ],
+    # Decision 0055: counts of samples say so in their names (the options echoed by `ctid track`).
+    "track.json": [
+        ("options.identification.refined_iv.input_delay_fraction",
+         "options.identification.refined_iv.input_delay_fraction"),
+        ("options.identification.refined_iv.input_delay",
+         "options.identification.refined_iv.input_delay_samples"),
+        ("options.identification.refined_iv.record_input_delays",
+         "options.identification.refined_iv.record_delay_samples"),
+        ("options.identification.delay_scan", "options.identification.delay_scan_samples"),
+    ],
+    "track_mimo.json": [("options.refined_iv.input_delays", "options.refined_iv.input_delays_samples")],
 }
 # Lines of the text outputs that may differ in wording (not in numbers), as prefixes.
 REWORDED_PREFIXES = ("termination:",)

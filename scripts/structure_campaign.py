@@ -14,7 +14,7 @@ scans K-2..K+2 modes (at least 1). Variants (combinable):
   --scan-integrators the candidates are K-2..K+2 modes each with 0 and with 1 integrator, so the
                      scan has to find the integrator (or find that there is none)
   --delay            the system has an input delay of 1-5 samples; every fit scans the whole
-                     delays 0-8 (IdentificationOptions.delay_scan)
+                     delays 0-8 (IdentificationOptions.delay_scan_samples)
   --closed-loop      the data come from a sampled loop with a proportional controller with a
                      6 dB gain margin designed from the drawn system (white-noise reference,
                      the output noise fed back); the scan is told the controller
@@ -223,7 +223,7 @@ def scan_once(ctid, modes, seed, samples=4000, snr=20.0, h=0.01, variant=Variant
     if controller is not None:
         options.identification.controller = controller
     if variant.delay:
-        options.identification.delay_scan = ctid.DelayRange(min=SCANNED_DELAYS[0],
+        options.identification.delay_scan_samples = ctid.DelayRange(min=SCANNED_DELAYS[0],
                                                             max=SCANNED_DELAYS[1])
     scan = ctid.scan_structures(data, structures, options)
     truth = (modes, int(variant.integrator), delay)

@@ -230,8 +230,34 @@ int edit_distance(const std::string& a, const std::string& b) {
   return d[n][m];
 }
 
+namespace {
+
+// Flags renamed when a count of samples came to say so in its name (decision 0055): the old
+// spelling is refused with the new one, never read in another unit.
+std::string renamed_flag(const CLI::App& app, const std::string& typed) {
+  static const std::vector<std::pair<std::string, std::string>> renamed{
+      {"delay", "input-delay-samples"},
+      {"delay-scan", "delay-scan-samples"},
+      {"record-delays", "record-delay-samples"},
+      {"input-delays", "input-delays-samples"}};
+  for (const auto& [old_name, new_name] : renamed) {
+    if (typed == old_name && app.get_option_no_throw("--" + new_name) != nullptr) {
+      return "--" + old_name + " is now --" + new_name +
+             ", a count of samples (a delay in seconds is --delay-range, or the model's "
+             "input_delay)";
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
 std::string closest_name(const CLI::App& app, const std::vector<std::string>& unexpected) {
   for (const std::string& word : unexpected) {
+    if (word.rfind("--", 0) == 0) {
+      const std::string renamed = renamed_flag(app, word.substr(2, word.find('=') - 2));
+      if (!renamed.empty()) return renamed;
+    }
     const bool flag = word.rfind("--", 0) == 0;
     if (!flag && !word.empty() && word.front() == '-') continue;  // a short flag or a number
     // The flag's name, without "--" and without "=VALUE".

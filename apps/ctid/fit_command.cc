@@ -50,13 +50,13 @@ struct FitFlags {
   int modes = 0;
 
   // Every field a flag (field_flags.h) but those read in another form below: the controller,
-  // delay_scan, delay_range, record_input_delays, two_stage, the start and initial_model.
+  // delay_scan, delay_range, record_delay_samples, two_stage, the start and initial_model.
   IdentificationOptions options;
   std::string delay_scan;
   std::string delay_range;
   std::string record_delays;  // D1,D2,...
   // Several inputs and outputs: the shared-pole estimator's own fields a flag each (--direct,
-  // --input-delays, --rank-one, --siso-engine); those it shares with RefinedIvOptions come
+  // --input-delays-samples, --rank-one, --siso-engine); those it shares with RefinedIvOptions come
   // from the flags above (assign_shared_fields).
   MimoRefinedIvOptions mimo;
 
@@ -84,11 +84,11 @@ struct FitFlags {
 DelayRange parse_delay_range(const std::string& text) {
   const auto colon = text.find(':');
   if (colon == std::string::npos) {
-    usage_error("--delay-scan '" + text + "': expected MIN:MAX in samples, e.g. 0:10");
+    usage_error("--delay-scan-samples '" + text + "': expected MIN:MAX in samples, e.g. 0:10");
   }
   DelayRange range;
-  range.min = parse_count(text.substr(0, colon), "--delay-scan minimum");
-  range.max = parse_count(text.substr(colon + 1), "--delay-scan maximum");
+  range.min = parse_count(text.substr(0, colon), "--delay-scan-samples minimum");
+  range.max = parse_count(text.substr(colon + 1), "--delay-scan-samples maximum");
   return range;
 }
 
@@ -179,8 +179,8 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
     out << "input delay: " << plus_minus(r.model.input_delay(), r.delay_standard_error) << " s ("
         << format_brief(r.model.input_delay() / h) << " samples)\n";
   } else {
-    out << "input delay: " << format_brief(r.input_delay + r.input_delay_fraction) << " samples ("
-        << format_number(r.model.input_delay()) << " s)\n";
+    out << "input delay: " << format_brief(r.input_delay_samples + r.input_delay_fraction)
+        << " samples (" << format_number(r.model.input_delay()) << " s)\n";
   }
   for (int i = 0; i < r.model.size(); ++i) {
     out << "submodel " << i + 1 << ": " << r.model[i].to_string() << "\n";
@@ -220,7 +220,7 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
 void print_delay_scan(std::ostream& out, const InputDelayScanResult& scan) {
   out << "delay scan (samples, output-error MSE, termination, verdict):\n";
   for (std::size_t k = 0; k < scan.delays.size(); ++k) {
-    out << (scan.delays[k] == scan.best.input_delay ? "* " : "  ") << scan.delays[k] << "  "
+    out << (scan.delays[k] == scan.best.input_delay_samples ? "* " : "  ") << scan.delays[k] << "  "
         << format_brief(scan.mean_squared_errors[k]) << "  " << to_string(scan.terminations[k])
         << "  " << (scan.usable[k] ? "usable" : "not usable") << "\n";
   }
@@ -239,13 +239,13 @@ void print_two_stage(std::ostream& out, const TwoStageResult& stage) {
 IdentificationOptions identification_options(const FitFlags& f) {
   IdentificationOptions options = f.options;
   if (!f.controller.empty()) options.controller = io::read_discrete_transfer_function(f.controller);
-  if (!f.delay_scan.empty()) options.delay_scan = parse_delay_range(f.delay_scan);
+  if (!f.delay_scan.empty()) options.delay_scan_samples = parse_delay_range(f.delay_scan);
   if (!f.delay_range.empty()) options.delay_range = parse_delay_interval(f.delay_range);
   if (f.two_stage) options.two_stage = f.two_stage_options;
   RefinedIvOptions& refined = options.refined_iv;
   if (!f.record_delays.empty()) {
-    refined.record_input_delays =
-        parse_counts(f.record_delays, "--record-delays '" + f.record_delays + "'");
+    refined.record_delay_samples =
+        parse_counts(f.record_delays, "--record-delay-samples '" + f.record_delays + "'");
   }
   if (!f.initial.empty() && f.start != "auto") {
     usage_error("give --start or --initial, not both");
@@ -366,12 +366,14 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
         "with --input-columns / --output-columns give the modes (--modes K or "
         "--submodel N,M repeated); an unfactored model has no shared modes");
   }
-  for (const char* flag : {"--controller", "--two-stage", "--delay", "--delay-scan",
-                           "--delay-range", "--record-delays", "--relocate-modes", "--history"}) {
+  for (const char* flag :
+       {"--controller", "--two-stage", "--input-delay-samples", "--delay-scan-samples",
+        "--delay-range", "--record-delay-samples", "--relocate-modes", "--history"}) {
     if (app.count(flag) > 0) {
-      usage_error(std::string(flag) +
-                  " is not available with --input-columns / --output-columns yet (the "
-                  "shared-pole estimator is open loop; known per-input delays: --input-delays)");
+      usage_error(
+          std::string(flag) +
+          " is not available with --input-columns / --output-columns yet (the "
+          "shared-pole estimator is open loop; known per-input delays: --input-delays-samples)");
     }
   }
   if (!f.initial.empty() && f.start != "auto") usage_error("give --start or --initial, not both");
@@ -402,9 +404,9 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
   }
   const MimoData data = f.data.load_mimo(app);
   if (start) check_start_channels(*start, start_file, start_flag, data);
-  const std::vector<double>& input_delays = f.mimo.input_delays;
+  const std::vector<double>& input_delays = f.mimo.input_delays_samples;
   if (!input_delays.empty() && static_cast<int>(input_delays.size()) != data.input_count()) {
-    usage_error(internal::concat("--input-delays has ", input_delays.size(),
+    usage_error(internal::concat("--input-delays-samples has ", input_delays.size(),
                                  " values but the data have ", data.input_count(), " inputs (",
                                  listed(data.input_names()), "): give one delay per input"));
   }
@@ -482,9 +484,10 @@ void check_irregular_flags(const FitFlags& f, const CLI::App& app) {
       " does not go with --irregular (an unfactored open-loop SISO SRIVC on the time stamps; "
       "docs/decisions/0034)";
   if (f.data.mimo_asked(app)) usage_error("--input-columns / --output-columns" + why);
-  for (const char* flag : {"--controller", "--two-stage", "--submodel", "--modes", "--delay",
-                           "--delay-scan", "--delay-range", "--record-delays", "--relocate-modes",
-                           "--rank-one", "--input-delays", "--direct", "--plot"}) {
+  for (const char* flag :
+       {"--controller", "--two-stage", "--submodel", "--modes", "--input-delay-samples",
+        "--delay-scan-samples", "--delay-range", "--record-delay-samples", "--relocate-modes",
+        "--rank-one", "--input-delays-samples", "--direct", "--plot"}) {
     if (app.count(flag) > 0) usage_error(std::string(flag) + why);
   }
   if (f.model == "additive") usage_error("--model additive" + why);
@@ -632,14 +635,30 @@ ExitStatus run_process_fit(const FitFlags& f, const CLI::App& app) {
       "dead time is estimated, its settings are --process-start/--process-fix/--process-bound)";
   if (f.irregular) usage_error("--irregular" + why);
   if (f.data.mimo_asked(app)) usage_error("--input-columns / --output-columns" + why);
-  for (const char* flag : {"--model",           "--poles",          "--zeros",
-                           "--integrators",     "--submodel",       "--modes",
-                           "--delay",           "--delay-scan",     "--delay-range",
-                           "--record-delays",   "--controller",     "--start",
-                           "--start-screening", "--initial",        "--tolerance",
-                           "--interpolation",   "--noise",          "--initial-conditions",
-                           "--history",         "--relocate-modes", "--rank-one",
-                           "--input-delays",    "--direct",         "--plot"}) {
+  for (const char* flag : {"--model",
+                           "--poles",
+                           "--zeros",
+                           "--integrators",
+                           "--submodel",
+                           "--modes",
+                           "--input-delay-samples",
+                           "--delay-scan-samples",
+                           "--delay-range",
+                           "--record-delay-samples",
+                           "--controller",
+                           "--start",
+                           "--start-screening",
+                           "--initial",
+                           "--tolerance",
+                           "--interpolation",
+                           "--noise",
+                           "--initial-conditions",
+                           "--history",
+                           "--relocate-modes",
+                           "--rank-one",
+                           "--input-delays-samples",
+                           "--direct",
+                           "--plot"}) {
     if (app.count(flag) > 0) usage_error(std::string(flag) + why);
   }
   if (f.data.files.size() > 1) usage_error("several data files" + why);
@@ -690,10 +709,11 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   if (app.count("--siso-engine") > 0) {
     usage_error("--siso-engine goes with --input-columns / --output-columns");
   }
-  if (app.count("--input-delays") > 0) {
+  if (app.count("--input-delays-samples") > 0) {
     usage_error(
-        "--input-delays goes with --input-columns / --output-columns (one delay per input); "
-        "with one input give --delay");
+        "--input-delays-samples goes with --input-columns / --output-columns (one delay per "
+        "input); "
+        "with one input give --input-delay-samples");
   }
   if (app.count("--direct") > 0) {
     usage_error(
@@ -701,10 +721,10 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
         "carries its direct term in a biproper submodel: --submodel N,N)");
   }
   const ModelStructure structure = model_structure(f, app);
-  if (static_cast<int>(app.count("--delay") > 0) + static_cast<int>(!f.delay_scan.empty()) +
-          static_cast<int>(!f.delay_range.empty()) >
+  if (static_cast<int>(app.count("--input-delay-samples") > 0) +
+          static_cast<int>(!f.delay_scan.empty()) + static_cast<int>(!f.delay_range.empty()) >
       1) {
-    usage_error("give one of --delay, --delay-scan and --delay-range");
+    usage_error("give one of --input-delay-samples, --delay-scan-samples and --delay-range");
   }
   std::filesystem::path package;
   if (!f.plot.empty()) {
@@ -719,9 +739,9 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   validate_identification(structure, options);  // before the data is read
   const std::optional<DiscreteTransferFunction>& controller = options.controller;
   if (!f.record_delays.empty() &&
-      options.refined_iv.record_input_delays.size() != f.data.files.size()) {
-    usage_error("--record-delays gives " +
-                std::to_string(options.refined_iv.record_input_delays.size()) + " delays for " +
+      options.refined_iv.record_delay_samples.size() != f.data.files.size()) {
+    usage_error("--record-delay-samples gives " +
+                std::to_string(options.refined_iv.record_delay_samples.size()) + " delays for " +
                 std::to_string(f.data.files.size()) + " data files; give one per file");
   }
   const std::vector<SampledData> records =
@@ -877,11 +897,12 @@ Command add_fit_command(CLI::App& parent) {
   // Given by IdentificationOptions' flags below (one --max-iterations, --noise, ...).
   mimo.by_hand = shared_field_names<MimoRefinedIvOptions, RefinedIvOptions>();
   add_field_flags(*app, f.mimo, mimo);
-  app->add_option(flag_of<IdentificationOptions>("delay_scan"), f.delay_scan,
+  app->add_option(flag_of<IdentificationOptions>("delay_scan_samples"), f.delay_scan,
                   "Estimate the delay: fit every delay MIN:MAX (samples), keep the smallest "
                   "output error")
       ->group("Structure");
-  app->add_option(flag_of<IdentificationOptions>("refined_iv.record_input_delays"), f.record_delays,
+  app->add_option(flag_of<IdentificationOptions>("refined_iv.record_delay_samples"),
+                  f.record_delays,
                   "Several files: whole samples by which each file's input lags more than the "
                   "model's delay (D1,D2,..., one per file)")
       ->group("Structure");
@@ -945,12 +966,12 @@ Command add_fit_command(CLI::App& parent) {
   settings.group = "Iteration";
   // Read from files or as MIN:MAX, D1,D2,... and auto|lssvf|frf|FILE above; two_stage's own.
   settings.by_hand = {"controller",
-                      "delay_scan",
+                      "delay_scan_samples",
                       "delay_range",
                       "two_stage",
                       "refined_iv.initial_model",
                       "refined_iv.start",
-                      "refined_iv.record_input_delays"};
+                      "refined_iv.record_delay_samples"};
   add_field_flags(*app, f.options, settings);
   app->add_flag("--irregular", f.irregular,
                 "Fit on the time stamps as logged (jitter, gaps, duplicate stamps), the filters "

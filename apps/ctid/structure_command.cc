@@ -50,7 +50,7 @@ struct StructureFlags {
 // (decision 0051).
 const std::vector<std::string> kNoScanFlag = {
     "identification.refined_iv.initial_model", "identification.delay_range",
-    "identification.two_stage", "identification.refined_iv.record_input_delays"};
+    "identification.two_stage", "identification.refined_iv.record_delay_samples"};
 
 // "A:B" (or "A") as an inclusive range of counts >= `least`.
 std::pair<int, int> parse_range(const std::string& text, const std::string& flag, int least = 1) {
@@ -118,8 +118,8 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
   if (modes && (!f.zeros.empty() || !f.integrators.empty())) {
     usage_error("--zeros and --integrators go with --poles");
   }
-  if (!f.delay_scan.empty() && app.count("--delay") > 0) {
-    usage_error("give --delay or --delay-scan, not both");
+  if (!f.delay_scan.empty() && app.count("--input-delay-samples") > 0) {
+    usage_error("give --input-delay-samples or --delay-scan-samples, not both");
   }
   std::vector<ModelStructure> candidates;
   const auto [l_low, l_high] =
@@ -168,8 +168,8 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
     options.identification.controller = io::read_discrete_transfer_function(f.controller);
   }
   if (!f.delay_scan.empty()) {
-    const auto [d_low, d_high] = parse_range(f.delay_scan, "--delay-scan", 0);
-    options.identification.delay_scan = DelayRange{d_low, d_high};
+    const auto [d_low, d_high] = parse_range(f.delay_scan, "--delay-scan-samples", 0);
+    options.identification.delay_scan_samples = DelayRange{d_low, d_high};
   }
   options.validate();
   const SampledData data = f.data.load(app, !f.controller.empty());
@@ -230,12 +230,12 @@ Command add_structure_command(CLI::App& parent) {
                   "Discrete controller JSON: closed loop (the data need the reference)")
       ->check(CLI::ExistingFile)
       ->group("Structures");
-  app->add_option(flag_of<StructureScanOptions>("identification.delay_scan"), f.delay_scan,
+  app->add_option(flag_of<StructureScanOptions>("identification.delay_scan_samples"), f.delay_scan,
                   "Scan the input delay MIN:MAX (samples) in every structure; each keeps its best")
       ->group("Structures");
   FieldFlagSettings settings;
   settings.group = "Choice and fits";
-  settings.by_hand = {"identification.controller", "identification.delay_scan"};
+  settings.by_hand = {"identification.controller", "identification.delay_scan_samples"};
   settings.none = kNoScanFlag;
   add_field_flags(*app, f.options, settings);
   app->add_option("--output,-o", f.output, "Scan JSON to write")->group("Output");

@@ -72,9 +72,9 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 // Fields of TrackingOptions with no flag: a delay scan, a continuous delay, a two-stage fit and
 // per-record delays are whole-record questions, not one window's (decision 0051).
-const std::vector<std::string> kNoFlag = {"identification.delay_scan", "identification.delay_range",
-                                          "identification.two_stage",
-                                          "identification.refined_iv.record_input_delays"};
+const std::vector<std::string> kNoFlag = {"identification.delay_scan_samples",
+                                          "identification.delay_range", "identification.two_stage",
+                                          "identification.refined_iv.record_delay_samples"};
 
 TrackingOptions tracking_options(const TrackFlags& f) {
   TrackingOptions options = f.options;
@@ -231,7 +231,8 @@ ExitStatus run_mimo_track(const TrackFlags& f, const CLI::App& app) {
         "with --input-columns / --output-columns give the modes (--modes K or --submodel N,M "
         "repeated); an unfactored model has no shared modes");
   }
-  for (const char* flag : {"--controller", "--delay", "--relocate-modes", "--history"}) {
+  for (const char* flag :
+       {"--controller", "--input-delay-samples", "--relocate-modes", "--history"}) {
     if (app.count(flag) > 0) {
       usage_error(std::string(flag) +
                   " is not available with --input-columns / --output-columns (the shared-pole "
@@ -274,7 +275,7 @@ ExitStatus run_mimo_track(const TrackFlags& f, const CLI::App& app) {
 
 ExitStatus run_track(const TrackFlags& f, const CLI::App& app) {
   if (f.data.mimo_asked(app)) return run_mimo_track(f, app);
-  for (const char* flag : {"--direct", "--input-delays", "--rank-one", "--siso-engine"}) {
+  for (const char* flag : {"--direct", "--input-delays-samples", "--rank-one", "--siso-engine"}) {
     if (app.count(flag) > 0) {
       usage_error(std::string(flag) + " goes with --input-columns / --output-columns");
     }

@@ -129,7 +129,8 @@ void bind_identification(py::module_& m) {
       py::arg("data"), py::arg("structure"), py::arg("options") = py::none(),
       "Estimate `structure` from `data` as `ctid fit` does: SRIVC / CLSRIVC (unfactored) or the "
       "additive iteration (29), closed loop when options.controller is set, over "
-      "options.delay_scan or with the delay estimated in options.delay_range, then mode relocation "
+      "options.delay_scan_samples or with the delay estimated in options.delay_range, then mode "
+      "relocation "
       "if options.relocate_modes. Options are one "
       "IdentificationOptions or its fields as keywords.");
   m.def(

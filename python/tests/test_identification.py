@@ -79,16 +79,16 @@ def expect_same_as_cli(result, document):
     assert document["termination"] == e.termination.name
     assert document["message"] == e.message
     assert document["iterations"] == e.iterations
-    assert document["input_delay_samples"] == e.input_delay
+    assert document["input_delay_samples"] == e.input_delay_samples
 
 
 def test_delay_scan_equals_ctid_fit(cli, open_loop):
     data, csv = open_loop
     result = ctid.identify(data, ctid.ModelStructure.modes(2),
-                           delay_scan=ctid.DelayRange(min=0, max=3))
-    document = fit(cli, csv, "--modes", "2", "--delay-scan", "0:3")
+                           delay_scan_samples=ctid.DelayRange(min=0, max=3))
+    document = fit(cli, csv, "--modes", "2", "--delay-scan-samples", "0:3")
     expect_same_as_cli(result, document)
-    assert result.estimate.input_delay == 2
+    assert result.estimate.input_delay_samples == 2
     scan = result.delay_scan
     assert document["delay_scan"]["delays"] == list(scan.delays)
     assert bits(document["delay_scan"]["mean_squared_errors"]) == bits(scan.mean_squared_errors)
@@ -109,7 +109,7 @@ def test_delay_range_estimates_a_fractional_delay_as_ctid_fit_does(cli, tmp_path
                            delay_range=ctid.DelayInterval(min=0.0, max=5 * H))
     e = result.estimate
     assert abs(e.model.input_delay - 2.6 * H) < 1e-9 * 2.6 * H
-    assert (e.input_delay, round(e.input_delay_fraction, 6)) == (2, 0.6)
+    assert (e.input_delay_samples, round(e.input_delay_fraction, 6)) == (2, 0.6)
     assert e.delay_standard_error > 0
     np.testing.assert_allclose(e.parameters, [0.25, 0.25, 3.0], rtol=1e-9)
     document = fit(cli, csv, "--modes", "1", "--delay-range", f"0:{5 * H!r}")
@@ -147,11 +147,11 @@ def test_several_records_equal_ctid_fit_on_several_files(cli, tmp_path):
 def test_unfactored_with_options_equals_ctid_fit(cli, open_loop):
     data, csv = open_loop
     options = ctid.IdentificationOptions(refined_iv=ctid.RefinedIvOptions(
-        input_delay=2, max_iterations=50, noise=ctid.NoiseAssumption.white,
+        input_delay_samples=2, max_iterations=50, noise=ctid.NoiseAssumption.white,
         output_interpolation=ctid.Hold.zero_order_hold))
     result = ctid.identify(data, ctid.ModelStructure.unfactored(4, 2), options)
     assert result.estimator == ctid.RefinedIvEstimator.srivc
-    document = fit(cli, csv, "--poles", "4", "--zeros", "2", "--delay", "2", "--max-iterations",
+    document = fit(cli, csv, "--poles", "4", "--zeros", "2", "--input-delay-samples", "2", "--max-iterations",
                    "50", "--noise", "white", "--interpolation", "zoh")
     expect_same_as_cli(result, document)
 
@@ -189,10 +189,10 @@ def test_two_stage_equals_ctid_fit_and_needs_no_controller(cli, closed_loop):
 
 def test_relocation_equals_ctid_fit(cli, open_loop):
     data, csv = open_loop
-    refined = ctid.RefinedIvOptions(input_delay=2)
+    refined = ctid.RefinedIvOptions(input_delay_samples=2)
     result = ctid.identify(data, ctid.ModelStructure.modes(2), relocate_modes=True,
                            refined_iv=refined)
-    document = fit(cli, csv, "--modes", "2", "--delay", "2", "--relocate-modes")
+    document = fit(cli, csv, "--modes", "2", "--input-delay-samples", "2", "--relocate-modes")
     expect_same_as_cli(result, document)
     report = document["mode_relocation"]
     assert report["message"] == result.mode_relocation.message
@@ -202,7 +202,7 @@ def test_relocation_equals_ctid_fit(cli, open_loop):
 
 def test_identify_is_the_direct_estimator_bit_for_bit(open_loop, closed_loop):
     data, _ = open_loop
-    refined = ctid.RefinedIvOptions(input_delay=2)
+    refined = ctid.RefinedIvOptions(input_delay_samples=2)
     a = ctid.identify(data, ctid.ModelStructure.additive(MODES), refined_iv=refined).estimate
     b = ctid.additive_srivc(data, MODES, refined)
     assert bits(a.parameters) == bits(b.parameters)
@@ -216,8 +216,8 @@ def test_identify_is_the_direct_estimator_bit_for_bit(open_loop, closed_loop):
 def test_options_and_structure_are_checked_with_the_field_path(open_loop):
     data, _ = open_loop
     modes = ctid.ModelStructure.modes(2)
-    with pytest.raises(ctid.InvalidArgument, match=r"IdentificationOptions\.delay_scan\.max is 1"):
-        ctid.identify(data, modes, delay_scan=ctid.DelayRange(min=3, max=1))
+    with pytest.raises(ctid.InvalidArgument, match=r"IdentificationOptions\.delay_scan_samples\.max is 1"):
+        ctid.identify(data, modes, delay_scan_samples=ctid.DelayRange(min=3, max=1))
     with pytest.raises(ctid.InvalidArgument,
                        match=r"IdentificationOptions\.refined_iv\.max_iterations is 0"):
         ctid.identify(data, modes, refined_iv=ctid.RefinedIvOptions(max_iterations=0))
@@ -233,14 +233,14 @@ def test_options_and_structure_are_checked_with_the_field_path(open_loop):
 
 def test_classes_follow_the_cpp_field_lists():
     assert ctid.IdentificationOptions.fields == (
-        "controller", "delay_scan", "delay_range", "relocate_modes", "relocation", "refined_iv",
+        "controller", "delay_scan_samples", "delay_range", "relocate_modes", "relocation", "refined_iv",
         "two_stage")
     assert ctid.IdentificationResult.fields == (
         "estimator", "closed_loop", "estimate", "delay_scan", "mode_relocation", "two_stage")
     assert ctid.ModelStructure.fields == ("kind", "orders")
     assert ctid.DelayRange.fields == ("min", "max")
     options = ctid.IdentificationOptions()
-    assert options.controller is None and options.delay_scan is None
+    assert options.controller is None and options.delay_scan_samples is None
     assert not options.relocate_modes
     assert options.refined_iv == ctid.RefinedIvOptions()
     options.refined_iv.max_iterations = 7  # nested options are edited in place

@@ -184,7 +184,7 @@ def test_known_input_delays_from_python_and_through_the_model_document():
     for j in range(3):
         for k in range(2):
             y[:, j] += ctid.model_output(truth.channel(j, k), u[:, k], h)
-    options = ctid.MimoRefinedIvOptions(input_delays=[0.0, 2.5])
+    options = ctid.MimoRefinedIvOptions(input_delays_samples=[0.0, 2.5])
     r = ctid.mimo_srivc(ctid.MimoData(h, u, y), [ctid.SubmodelOrder(2, 0, 0)] * 2,
                         options=options)
     assert r.converged(), r.message
@@ -201,6 +201,6 @@ def test_known_input_delays_from_python_and_through_the_model_document():
                 "input_delays": list(r.model.input_delays)}
     back = plot.mimo_model_from_json(document)
     assert np.array_equal(back.input_delays, r.model.input_delays)
-    with pytest.raises(ValueError, match="input_delays has 1 entries but the data have 2"):
+    with pytest.raises(ValueError, match="input_delays_samples has 1 entries but the data have 2"):
         ctid.mimo_srivc(ctid.MimoData(h, u, y), [ctid.SubmodelOrder(2, 0, 0)] * 2,
-                        options=ctid.MimoRefinedIvOptions(input_delays=[1.0]))
+                        options=ctid.MimoRefinedIvOptions(input_delays_samples=[1.0]))

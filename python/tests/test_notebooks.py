@@ -44,13 +44,13 @@ def test_the_dryer_notebook_fits_and_validates_as_ctid_does_here(monkeypatch):
     estimation = data.preprocess(end_row=500, detrend=ctid.Detrend.mean).data
     validation = data.preprocess(first_row=500, detrend=ctid.Detrend.mean).data
     fit = ctid.identify(estimation, ctid.ModelStructure.unfactored(2, 0),
-                        ctid.IdentificationOptions(delay_scan=ctid.DelayRange(min=0, max=10)))
+                        ctid.IdentificationOptions(delay_scan_samples=ctid.DelayRange(min=0, max=10)))
     expected = ctid.validate_model(fit.estimate.model, validation).fit_percent
     found = re.search(r"validation fit from rest: ([0-9.]+) %", printed)
     assert found, printed
     assert found.group(1) == f"{expected:.3f}"
     assert expected > 80.0  # docs/examples/dryer.md: the detrended fit validates above 80 %
-    assert f"input delay: {fit.estimate.input_delay} samples; usable: True" in printed
+    assert f"input delay: {fit.estimate.input_delay_samples} samples; usable: True" in printed
     # The figure cell drew one image.
     images = [output for cell in notebook.cells for output in cell.get("outputs", [])
               if "image/png" in output.get("data", {})]

@@ -50,7 +50,7 @@ def pages(cli, tmp_path_factory):
     folder = tmp_path_factory.mktemp("report")
     fit = folder / "fit.json"
     done = _run(cli, "fit", DRYER, *DRYER_COLUMNS, "--rows", "0:500", "--poles", "2",
-                "--zeros", "0", "--delay", "2", "-o", fit, "-q")
+                "--zeros", "0", "--input-delay-samples", "2", "-o", fit, "-q")
     assert done.returncode == 0, done.stderr
     validation = folder / "validation.json"
     done = _run(cli, "validate", fit, DRYER, *DRYER_COLUMNS, "--rows", "500:1000", "-o",

@@ -40,9 +40,9 @@ def test_true_structure_is_usable_and_at_least_as_good_as_its_start():
 
 def test_delay_scan_reports_usability_per_delay():
     result = ctid.identify(noisy_record(), ctid.ModelStructure.modes(2),
-                           delay_scan=ctid.DelayRange(min=0, max=2))
+                           delay_scan_samples=ctid.DelayRange(min=0, max=2))
     scan = result.delay_scan
     assert list(scan.delays) == [0, 1, 2]
     assert len(scan.usable) == 3
-    assert result.estimate.input_delay == 0
+    assert result.estimate.input_delay_samples == 0
     assert scan.choice_clear is True

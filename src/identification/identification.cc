@@ -58,12 +58,14 @@ void DelayInterval::check_relations(const std::string& path) const {
 }
 
 void IdentificationOptions::check_relations(const std::string& path) const {
-  const bool known = refined_iv.input_delay != 0 || refined_iv.input_delay_fraction != 0.0;
-  require(!delay_scan || !known, path, ".refined_iv.input_delay is ", refined_iv.input_delay,
-          " and ", path, ".delay_scan is set; give a known delay or a scan, not both");
-  require(!delay_range || !known, path, ".refined_iv.input_delay is ", refined_iv.input_delay,
-          " and ", path, ".delay_range is set; give a known delay or a range, not both");
-  require(!delay_range || !delay_scan, path, ".delay_scan and ", path,
+  const bool known = refined_iv.input_delay_samples != 0 || refined_iv.input_delay_fraction != 0.0;
+  require(!delay_scan_samples || !known, path, ".refined_iv.input_delay_samples is ",
+          refined_iv.input_delay_samples, " and ", path,
+          ".delay_scan_samples is set; give a known delay or a scan, not both");
+  require(!delay_range || !known, path, ".refined_iv.input_delay_samples is ",
+          refined_iv.input_delay_samples, " and ", path,
+          ".delay_range is set; give a known delay or a range, not both");
+  require(!delay_range || !delay_scan_samples, path, ".delay_scan_samples and ", path,
           ".delay_range are both set; a range already scans its whole samples");
   require(!two_stage || !controller, path, ".two_stage and ", path,
           ".controller are both set; the two-stage method is for an unknown controller (with a "
@@ -115,7 +117,7 @@ EstimationResult estimate_delay(std::span<const SampledData> records, const Dela
   auto at = [&](double tau, const std::optional<AdditiveModel>& start, bool final_fit) {
     const DelaySplit split = split_delay(tau, h);
     RefinedIvOptions o = base;
-    o.input_delay = split.samples;
+    o.input_delay_samples = split.samples;
     o.input_delay_fraction = split.fraction;
     if (start) o.initial_model = start;
     o.compute_covariance = final_fit && base.compute_covariance;
@@ -199,10 +201,11 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   require(total_samples >= 3 * parameters, "identify: ", total_samples,
           " samples are too few for the structure's ", parameters,
           " parameters; at least 3 per parameter are needed (a lower order or fewer modes)");
-  require(!options.delay_scan || options.delay_scan->max <= shortest / 2,
-          "IdentificationOptions.delay_scan.max is ",
-          options.delay_scan ? options.delay_scan->max : 0, " samples; the shortest record has ",
-          shortest, " samples and a scanned delay may be at most half of it (", shortest / 2, ")");
+  require(!options.delay_scan_samples || options.delay_scan_samples->max <= shortest / 2,
+          "IdentificationOptions.delay_scan_samples.max is ",
+          options.delay_scan_samples ? options.delay_scan_samples->max : 0,
+          " samples; the shortest record has ", shortest,
+          " samples and a scanned delay may be at most half of it (", shortest / 2, ")");
   const bool closed_loop = options.controller.has_value();
   const RefinedIvEstimator estimator = choose_estimator(structure, closed_loop);
   const std::vector<SubmodelOrder>& orders = structure.orders;
@@ -220,26 +223,26 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   };
   auto estimate = [&](int delay) {
     RefinedIvOptions o = options.refined_iv;
-    o.input_delay = delay;
+    o.input_delay_samples = delay;
     return run(o);
   };
 
   std::optional<InputDelayScanResult> scanned;
   std::optional<EstimationResult> fitted;
-  if (options.delay_scan) {
-    scanned = scan_input_delay(estimate, options.delay_scan->min, options.delay_scan->max,
-                               progress.delay_scan);
+  if (options.delay_scan_samples) {
+    scanned = scan_input_delay(estimate, options.delay_scan_samples->min,
+                               options.delay_scan_samples->max, progress.delay_scan);
     fitted = scanned->best;
   } else if (options.delay_range) {
     fitted = estimate_delay(records, *options.delay_range, options.refined_iv, run, scanned,
                             progress.delay_scan);
   } else {
-    fitted = estimate(options.refined_iv.input_delay);
+    fitted = estimate(options.refined_iv.input_delay_samples);
   }
   std::optional<ModeRelocationResult> relocated;
   if (options.relocate_modes) {
     RefinedIvOptions o = options.refined_iv;
-    o.input_delay = fitted->input_delay;
+    o.input_delay_samples = fitted->input_delay_samples;
     o.input_delay_fraction = fitted->input_delay_fraction;
     o.initial_model = fitted->model;
     relocated = additive_srivc_relocated(data, orders, o, options.relocation, progress.relocation);
@@ -249,9 +252,10 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   // Decision 0038: an unusable unfactored closed-loop fit may be of a plant the engine cannot
   // hold (it reflects every unstable root); the fit with a stabilised prefilter replaces it
   // when that one is usable.
-  if (closed_loop && !structure.is_additive() && records.size() == 1 && !options.delay_scan &&
-      !options.delay_range && !options.relocate_modes && !fitted->verdict.usable &&
-      options.refined_iv.input_delay == 0 && options.refined_iv.input_delay_fraction == 0.0) {
+  if (closed_loop && !structure.is_additive() && records.size() == 1 &&
+      !options.delay_scan_samples && !options.delay_range && !options.relocate_modes &&
+      !fitted->verdict.usable && options.refined_iv.input_delay_samples == 0 &&
+      options.refined_iv.input_delay_fraction == 0.0) {
     try {
       EstimationResult held =
           unstable_clsrivc(data, *options.controller, orders[0], options.refined_iv);
@@ -343,8 +347,8 @@ IdentificationResult identify(const IrregularRecord& record, const ModelStructur
       "open-loop SRIVC (docs/decisions/0034)";
   require(!structure.is_additive(), "ModelStructure.kind is additive", why);
   require(!options.controller, "IdentificationOptions.controller is set (closed loop)", why);
-  require(!options.delay_scan && !options.delay_range,
-          "IdentificationOptions.delay_scan or delay_range is set", why);
+  require(!options.delay_scan_samples && !options.delay_range,
+          "IdentificationOptions.delay_scan_samples or delay_range is set", why);
   require(!options.relocate_modes, "IdentificationOptions.relocate_modes is true", why);
   require(!options.two_stage, "IdentificationOptions.two_stage is set", why);
   IdentificationResult result(

@@ -40,18 +40,9 @@ nlohmann::json modal_fields(const nlohmann::json& mode, const std::string& where
 // name: the header, values that restate the result, renamed fields and the context that
 // `ctid fit` adds.
 const std::vector<std::string>& estimation_extra_keys() {
-  static const std::vector<std::string> keys{"type",
-                                             "version",
-                                             "converged",
-                                             "parameter_names",
-                                             "input_delay_samples",
-                                             "data_checks",
-                                             "estimator",
-                                             "loop",
-                                             "data",
-                                             "controller",
-                                             "delay_scan",
-                                             "mode_relocation"};
+  static const std::vector<std::string> keys{
+      "type",      "version", "converged", "parameter_names", "input_delay", "data_checks",
+      "estimator", "loop",    "data",      "controller",      "delay_scan",  "mode_relocation"};
   return keys;
 }
 
@@ -148,12 +139,11 @@ void check_keys(const nlohmann::json& value, const std::vector<std::string>& fie
   }
 }
 
-// Written from the field list (so a new field reaches the document), under the documented
-// names: "input_delay_samples" for the delay in samples ("input_delay" is the model's, in
-// seconds), "data_checks" for the checks, and modes flat with frequencies in Hz beside.
+// Written from the field list (so a new field reaches the document), with the model's delay
+// in seconds as "input_delay" beside the fields' input_delay_samples, "data_checks" for the
+// checks, and modes flat with frequencies in Hz beside.
 nlohmann::json to_json(const EstimationResult& result) {
   nlohmann::json value = fields_to_json(result);
-  value["input_delay_samples"] = value.at("input_delay");
   value["input_delay"] = number_or_null(result.model.input_delay());
   value["data_checks"] = value.at("checks");
   value.erase("checks");
@@ -182,11 +172,10 @@ EstimationResult estimation_result_from_json(const nlohmann::json& value,
   nlohmann::json rest = nlohmann::json::object();
   for (const auto& [key, element] : value.items()) {
     if (std::find(fields.begin(), fields.end(), key) != fields.end() && key != "model" &&
-        key != "transfer_function" && key != "input_delay" && key != "modes") {
+        key != "transfer_function" && key != "modes") {
       rest[key] = element;
     }
   }
-  if (value.contains("input_delay_samples")) rest["input_delay"] = value.at("input_delay_samples");
   if (value.contains("data_checks")) rest["checks"] = value.at("data_checks");
   if (value.contains("modes")) {
     const nlohmann::json& modes = value.at("modes");

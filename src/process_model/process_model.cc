@@ -603,7 +603,7 @@ std::optional<Eigen::VectorXd> srivc_process_start(const SampledData& data,
   const SubmodelOrder order{structure.poles, structure.zero ? 1 : 0, structure.integrator ? 1 : 0};
   try {
     RefinedIvOptions iv;
-    iv.input_delay = static_cast<int>(std::lround(delay / data.sample_time()));
+    iv.input_delay_samples = static_cast<int>(std::lround(delay / data.sample_time()));
     iv.compute_covariance = false;
     iv.max_iterations = 30;
     const EstimationResult r = srivc(data, order, iv);

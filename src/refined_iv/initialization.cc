@@ -291,7 +291,7 @@ std::optional<TransferFunction> screened_transfer_function(const SampledData& da
   const double h = data.sample_time();
   const DiscreteTransferFunction* controller = options.controller ? &*options.controller : nullptr;
   if (controller != nullptr) check_start_controller(data, *controller);
-  const double delay = options.input_delay * h;
+  const double delay = options.input_delay_samples * h;
   double best_cost = std::numeric_limits<double>::infinity();
   std::optional<TransferFunction> best;
   // Closed loop, when the controller stabilises no candidate: the open-loop choice, so the
@@ -307,7 +307,7 @@ std::optional<TransferFunction> screened_transfer_function(const SampledData& da
   RefinedIvOptions refine;
   refine.max_iterations = std::max(options.refinement_iterations, 1);
   refine.tolerance = 1e-8;
-  refine.input_delay = options.input_delay;
+  refine.input_delay_samples = options.input_delay_samples;
   refine.compute_covariance = false;
   const auto consider_open_loop = [&](const AdditiveModel& model, double& cost_so_far,
                                       std::optional<TransferFunction>& kept) {
@@ -318,7 +318,7 @@ std::optional<TransferFunction> screened_transfer_function(const SampledData& da
   // model is kept only if the controller still stabilises it, else the stabilised start.
   const auto consider_closed_loop = [&](const Eigen::VectorXd& theta) {
     const std::optional<Eigen::VectorXd> start =
-        stabilised(theta, {order}, *controller, h, options.input_delay);
+        stabilised(theta, {order}, *controller, h, options.input_delay_samples);
     if (!start) return false;
     const AdditiveModel model = AdditiveModel::from_parameters({order}, *start, delay);
     keep(model, output_error(model, data));
@@ -332,7 +332,7 @@ std::optional<TransferFunction> screened_transfer_function(const SampledData& da
       refine.initial_model = model;  // so the inner run does not look for a start itself
       const EstimationResult r = internal::run_refined_iv(problem, refine);
       if (internal::controller_stabilises({order}, r.parameters, *controller, h,
-                                          options.input_delay)) {
+                                          options.input_delay_samples)) {
         keep(r.model, r.mean_squared_error);
       }
     }
@@ -369,14 +369,14 @@ std::optional<TransferFunction> screened_transfer_function(const SampledData& da
     for (double lambda : grid) {
       // A bandwidth that gives a degenerate start is skipped.
       const std::optional<TransferFunction> start =
-          internal::lssvf_if_finite(data, order, lambda, options.input_delay);
+          internal::lssvf_if_finite(data, order, lambda, options.input_delay_samples);
       if (start) refined_candidate(consider, *start);
     }
   }
   if (options.method != StartMethod::lssvf) {
     // An FRF with too few peaks, or whose peaks give a degenerate start, is not a candidate.
     const std::optional<TransferFunction> start =
-        internal::frf_peak_start_if_formed(data, order, options.input_delay);
+        internal::frf_peak_start_if_formed(data, order, options.input_delay_samples);
     const bool found = start.has_value() && refined_candidate(consider, *start);
     if (!found && options.method == StartMethod::frf) {
       if (failure != nullptr) {
@@ -600,21 +600,21 @@ std::optional<AdditiveModel> internal::additive_model_from_start_if_formed(
   const std::optional<SampledData> piece = screening_piece(record, options);
   const SampledData& data = piece ? *piece : record;
   if (!options.controller) {
-    return internal::grouped_submodels(g, orders, data, options.input_delay, failure);
+    return internal::grouped_submodels(g, orders, data, options.input_delay_samples, failure);
   }
   // Closed loop: the numerators are fitted to g's own response to u rather than to y, so the
   // grouped model stays the stabilised start g (refitting them to y would bring back the
   // pull toward -1/C_d the start was screened against); the gain is halved if needed.
   const double h = data.sample_time();
   const AdditiveModel unfactored = AdditiveModel::from_parameters(
-      {total}, internal::unfactored_parameters(g, total), options.input_delay * h);
+      {total}, internal::unfactored_parameters(g, total), options.input_delay_samples * h);
   const SampledData own(h, data.input(),
                         model_output(unfactored, data.input(), h, data.input_hold()));
   const std::optional<AdditiveModel> grouped = internal::grouped_submodels(
-      g, orders, own.with_input_hold(data.input_hold()), options.input_delay, failure);
+      g, orders, own.with_input_hold(data.input_hold()), options.input_delay_samples, failure);
   if (!grouped) return std::nullopt;
-  const std::optional<Eigen::VectorXd> beta =
-      stabilised(grouped->parameters(), orders, *options.controller, h, options.input_delay);
+  const std::optional<Eigen::VectorXd> beta = stabilised(
+      grouped->parameters(), orders, *options.controller, h, options.input_delay_samples);
   return beta ? grouped->with_parameters(*beta) : *grouped;
 }
 

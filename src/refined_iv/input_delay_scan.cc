@@ -76,12 +76,14 @@ InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>
           "scan_input_delay: every delay failed; the first error was: ", first_error);
   const double chosen = best->mean_squared_error;
   for (size_t k = 0; k < table.delays.size(); ++k) {
-    if (table.delays[k] == best->input_delay || table.usable[k] != best->verdict.usable) continue;
+    if (table.delays[k] == best->input_delay_samples || table.usable[k] != best->verdict.usable)
+      continue;
     if (table.mean_squared_errors[k] <= chosen * (1.0 + kDelayScanTieRatio)) {
       table.choice_clear = false;
       table.note = "the delay is not clear: " + std::to_string(table.delays[k]) +
                    " samples fit within " + format_brief(100.0 * kDelayScanTieRatio) +
-                   " % of the output error of the chosen " + std::to_string(best->input_delay);
+                   " % of the output error of the chosen " +
+                   std::to_string(best->input_delay_samples);
       break;
     }
   }
@@ -100,7 +102,7 @@ InputDelayScanResult additive_srivc_delay_scan(const SampledData& data,
   return scan_input_delay(
       [&](int d) {
         RefinedIvOptions o = options;
-        o.input_delay = d;
+        o.input_delay_samples = d;
         return additive_srivc(data, orders, o);
       },
       min_delay, max_delay);
@@ -112,7 +114,7 @@ InputDelayScanResult srivc_delay_scan(const SampledData& data, const SubmodelOrd
   return scan_input_delay(
       [&](int d) {
         RefinedIvOptions o = options;
-        o.input_delay = d;
+        o.input_delay_samples = d;
         return srivc(data, order, o);
       },
       min_delay, max_delay);

@@ -251,8 +251,8 @@ void check_inputs(const IrregularRecord& r, const SubmodelOrder& o,
   require(o.n + o.integrators >= 1, "srivc_irregular: the model has no poles");
   require(o.m <= o.n + o.integrators, "srivc_irregular: m = ", o.m,
           " > n + integrators = ", o.n + o.integrators, " (improper)");
-  require(options.input_delay == 0 && options.input_delay_fraction == 0.0 &&
-              options.record_input_delays.empty() && !options.delay_estimated,
+  require(options.input_delay_samples == 0 && options.input_delay_fraction == 0.0 &&
+              options.record_delay_samples.empty() && !options.delay_estimated,
           "srivc_irregular: an input delay is not supported on irregular stamps yet");
   require(options.initial_conditions == InitialConditions::zero,
           "srivc_irregular: initial_conditions = estimate is not supported on irregular "

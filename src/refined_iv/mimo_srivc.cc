@@ -653,10 +653,10 @@ MimoEstimationResult siso_result(const Layout& layout, const MimoData& data,
   siso.noise_model_max_order = options.noise_model_max_order;
   siso.compute_covariance = options.compute_covariance;
   siso.initial_conditions = options.initial_conditions;
-  if (!options.input_delays.empty()) {
+  if (!options.input_delays_samples.empty()) {
     const DelaySplit delay =
-        split_delay(options.input_delays.front() * data.sample_time(), data.sample_time());
-    siso.input_delay = delay.samples;
+        split_delay(options.input_delays_samples.front() * data.sample_time(), data.sample_time());
+    siso.input_delay_samples = delay.samples;
     siso.input_delay_fraction = delay.fraction;
   }
   if (initial_model) siso.initial_model = initial_model->channel(0, 0).with_input_delay(0.0);
@@ -838,9 +838,9 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
                                 const std::function<void(int, int)>& progress) {
   options.validate();
   mimo_srivc_parts::check_orders(orders, data, options.direct_term);
-  require(options.input_delays.empty() ||
-              static_cast<int>(options.input_delays.size()) == data.input_count(),
-          "mimo_srivc: input_delays has ", options.input_delays.size(),
+  require(options.input_delays_samples.empty() ||
+              static_cast<int>(options.input_delays_samples.size()) == data.input_count(),
+          "mimo_srivc: input_delays_samples has ", options.input_delays_samples.size(),
           " entries but the data have ", data.input_count(),
           " inputs (one delay per input, in samples)");
   mimo_srivc_parts::Layout layout(orders, data.input_count(), data.output_count(),
@@ -859,7 +859,7 @@ MimoEstimationResult mimo_srivc(const MimoData& data, const std::vector<Submodel
   // filters (layout.input_fractions); every step below runs on the shifted record.
   if (options.initial_conditions == InitialConditions::estimate) layout.add_free_responses();
   const mimo_srivc_parts::DelayedInputs delayed =
-      mimo_srivc_parts::delay_inputs(layout, data, options.input_delays);
+      mimo_srivc_parts::delay_inputs(layout, data, options.input_delays_samples);
   const MimoData& record = delayed.data ? *delayed.data : data;
   return mimo_srivc_parts::estimate(layout, record, options, initial_model, delayed.seconds,
                                     progress);

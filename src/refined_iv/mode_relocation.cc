@@ -128,7 +128,7 @@ std::vector<Polynomial> denominators_of(const AdditiveModel& model) {
 double projected_mse(const EstimationResult& r, const std::vector<SubmodelOrder>& orders,
                      const SampledData& data) {
   if (!r.parameters.allFinite()) return std::numeric_limits<double>::infinity();
-  const Eigen::VectorXd u = delay_samples(data.input(), r.input_delay);
+  const Eigen::VectorXd u = delay_samples(data.input(), r.input_delay_samples);
   const double mse = projected_fit(denominators_of(r.model), orders, u, data.output(),
                                    data.sample_time(), data.input_hold())
                          .mean_squared_error;
@@ -272,7 +272,7 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
   for (int round = 0; round < relocation.max_relocations && !movable_submodels.empty(); ++round) {
     if (!std::isfinite(current_score) || !current.parameters.allFinite()) break;
     ++out.rounds;
-    const Eigen::VectorXd u = delay_samples(data.input(), current.input_delay);
+    const Eigen::VectorXd u = delay_samples(data.input(), current.input_delay_samples);
     const AdditiveModel& model = current.model;
     const double line = 2.0 * M_PI / (static_cast<double>(data.size()) * h);
     const std::vector<Candidate> candidates = relocation_candidates(
@@ -294,8 +294,9 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
       trial.start_damping = c.start.damping;
       trial.start_mean_squared_error = c.mean_squared_error;
       RefinedIvOptions o = trial_options;
-      o.initial_model = AdditiveModel::from_parameters(orders, c.beta, current.input_delay * h);
-      o.input_delay = current.input_delay;
+      o.initial_model =
+          AdditiveModel::from_parameters(orders, c.beta, current.input_delay_samples * h);
+      o.input_delay_samples = current.input_delay_samples;
       EstimationResult r = additive_srivc(data, orders, o);
       trial.mean_squared_error = r.mean_squared_error;
       trial.projected_mean_squared_error = projected_mse(r, orders, data);
@@ -332,7 +333,7 @@ ModeRelocationResult additive_srivc_relocated(const SampledData& data,
     // it stops at once) fills in what the caller asked for.
     RefinedIvOptions o = options;
     o.initial_model = current.model;
-    o.input_delay = current.input_delay;
+    o.input_delay_samples = current.input_delay_samples;
     out.estimate = additive_srivc(data, orders, o);
   }
   out.projected_mean_squared_error = projected_mse(out.estimate, orders, data);

@@ -157,8 +157,8 @@ namespace {
 // Whole samples by which record r's input is delayed: the model's delay plus the record's own
 // (an acquisition that lags its input).
 int record_delay(const RefinedIvOptions& options, size_t r) {
-  return options.input_delay +
-         (options.record_input_delays.empty() ? 0 : options.record_input_delays[r]);
+  return options.input_delay_samples +
+         (options.record_delay_samples.empty() ? 0 : options.record_delay_samples[r]);
 }
 
 int total_samples(const std::vector<const SampledData*>& records) {
@@ -221,10 +221,10 @@ void check_orders(const Layout& layout, const std::string& name) {
 void check_samples(const RefinedIvProblem& problem, const RefinedIvOptions& options,
                    const Layout& layout, const SampledData& data, const std::string& name) {
   const std::vector<const SampledData*>& records = problem.records;
-  const int delay = options.input_delay;
+  const int delay = options.input_delay_samples;
   require(
-      options.record_input_delays.empty() || options.record_input_delays.size() == records.size(),
-      name, ": record_input_delays has ", options.record_input_delays.size(), " entries for ",
+      options.record_delay_samples.empty() || options.record_delay_samples.size() == records.size(),
+      name, ": record_delay_samples has ", options.record_delay_samples.size(), " entries for ",
       records.size(), " records; give one per record or none");
   const int n_samples = total_samples(records);
   const int unknowns = layout.augmented;  // with the free-response coefficients
@@ -299,7 +299,7 @@ std::optional<Eigen::VectorXd> starting_point(const RefinedIvProblem& problem,
   }
   ScreenedStart own_start;
   InitializationOptions init;
-  init.input_delay = record_delay(options, longest_index);
+  init.input_delay_samples = record_delay(options, longest_index);
   init.method = options.start;
   init.screening_samples = options.start_screening_samples;
   // Closed loop: only starts the controller stabilises (decision 0011); an open-loop start
@@ -359,7 +359,7 @@ struct Run {
         records(pr.records),
         layout(std::move(l)),
         checks(std::move(c)),
-        delay(op.input_delay),
+        delay(op.input_delay_samples),
         n_samples(total_samples(pr.records)),
         p(layout.parameters),
         unknowns(layout.augmented),
@@ -667,7 +667,7 @@ void iterate(Run& run, bool stopped) {
 void set_estimate(Run& run) {
   EstimationResult& result = run.result;
   result.parameters = run.beta;
-  result.input_delay = run.delay;
+  result.input_delay_samples = run.delay;
   result.input_delay_fraction = run.layout.delay_fraction;
   result.model = AdditiveModel::from_parameters(run.layout.orders, run.beta, run.tau);
   result.transfer_function = result.model.to_transfer_function();

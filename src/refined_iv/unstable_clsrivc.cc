@@ -425,7 +425,7 @@ EstimationResult unstable_clsrivc(const SampledData& data,
               order.m <= order.n + order.integrators,
           name, ": the order needs n >= 1 and 0 <= m <= n + integrators (n = ", order.n,
           ", m = ", order.m, ", integrators = ", order.integrators, ")");
-  require(options.input_delay == 0 && options.input_delay_fraction == 0.0, name,
+  require(options.input_delay_samples == 0 && options.input_delay_fraction == 0.0, name,
           ": an input delay is not supported");
   require(data.size() >= 3 * (order.n + order.m + 1) + 20, name, ": ", data.size(),
           " samples are too few");

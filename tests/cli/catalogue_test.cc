@@ -476,8 +476,8 @@ std::vector<Case> catalogue() {
        .message = {"count is 13000000; a structure has at most 1000 submodels"}});
   add({.name = "FitDelayScanBeyondTheRecord",
        .files = {d},
-       .args = fit1({"--delay-scan", "0:100000", "-q"}),
-       .message = {"--delay-scan (max) is 100000 samples", "at most half of it (150)"}});
+       .args = fit1({"--delay-scan-samples", "0:100000", "-q"}),
+       .message = {"--delay-scan-samples (max) is 100000 samples", "at most half of it (150)"}});
   // Issue 35: a file as MATLAB exports it (quoted names, a comma ending every line, CRLF, an
   // unused column that is text and then empty) reads as it is, and stamps in milliseconds are
   // converted by --time-unit.
@@ -544,12 +544,26 @@ std::vector<Case> catalogue() {
        .message = {"ctid fit: error: --max-iterations is 0; it must be >= 1"}});
   add({.name = "FitDelayScanReversed",
        .files = {d},
-       .args = fit1({"--delay-scan", "5:2"}),
-       .message = {"--delay-scan (max) is 2; it must be >= min (5)"}});
+       .args = fit1({"--delay-scan-samples", "5:2"}),
+       .message = {"--delay-scan-samples (max) is 2; it must be >= min (5)"}});
   add({.name = "FitDelayScanMalformed",
        .files = {d},
-       .args = fit1({"--delay-scan", "x"}),
-       .message = {"--delay-scan 'x': expected MIN:MAX"}});
+       .args = fit1({"--delay-scan-samples", "x"}),
+       .message = {"--delay-scan-samples 'x': expected MIN:MAX"}});
+  // Decision 0055: the flags that counted samples under a delay's name are refused, naming
+  // the new one, never read in seconds.
+  add({.name = "FitOldDelayFlagNamesTheNewOne",
+       .files = {d},
+       .args = fit1({"--delay", "3"}),
+       .message = {"--delay is now --input-delay-samples, a count of samples"}});
+  add({.name = "FitOldDelayScanFlagNamesTheNewOne",
+       .files = {d},
+       .args = fit1({"--delay-scan=0:3"}),
+       .message = {"--delay-scan is now --delay-scan-samples"}});
+  add({.name = "FitOldRecordDelaysFlagNamesTheNewOne",
+       .files = {d},
+       .args = fit1({"--record-delays", "1"}),
+       .message = {"--record-delays is now --record-delay-samples"}});
   add({.name = "FitDelayRangeLongerThanRecord",
        .files = {d},
        .args = fit1({"--delay-range", "0:100"}),

@@ -126,7 +126,8 @@ TEST_F(ConventionsOfRuns, SummariesOfEveryEstimatingCommand) {
   expect_conventional({"validate", "r.json", "d.csv"});
   expect_conventional({"structure", "d.csv", "--modes", "3:4"});
   expect_conventional({"frf", "d.csv", "-o", "frf.csv"});
-  expect_conventional({"fit", "d.csv", "--poles", "2", "--zeros", "1", "--delay-scan", "0:2"});
+  expect_conventional(
+      {"fit", "d.csv", "--poles", "2", "--zeros", "1", "--delay-scan-samples", "0:2"});
 
   // An integrator: its factor is printed apart from A's terms.
   write("i.json", kIntegrating);

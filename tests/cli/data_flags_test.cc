@@ -48,9 +48,21 @@ TEST_F(DataFlags, DryerValidatesFarBetterWithItsMeansRemoved) {
   double fit[2] = {0.0, 0.0};
   const char* detrend[2] = {"none", "mean"};
   for (int i = 0; i < 2; ++i) {
-    std::vector<std::string> args = {
-        "fit",       dryer,      "--poles",        "2",      "--zeros", "0",        "--delay", "3",
-        "--detrend", detrend[i], "--model-output", "m.json", "-o",      "fit.json", "--force"};
+    std::vector<std::string> args = {"fit",
+                                     dryer,
+                                     "--poles",
+                                     "2",
+                                     "--zeros",
+                                     "0",
+                                     "--input-delay-samples",
+                                     "3",
+                                     "--detrend",
+                                     detrend[i],
+                                     "--model-output",
+                                     "m.json",
+                                     "-o",
+                                     "fit.json",
+                                     "--force"};
     args.insert(args.end(), columns.begin(), columns.end());
     const auto fitted = ctid(args);
     ASSERT_EQ(fitted.status, 0) << fitted.err;
@@ -83,9 +95,9 @@ TEST_F(DataFlags, DetrendFitCarriesTheEstimationMeansToTheValidationRecord) {
   const std::vector<std::string> columns = {"--time-column",   "t_s_assumed_0.08",
                                             "--input-column",  "u_heater_voltage",
                                             "--output-column", "y_outlet_temperature"};
-  std::vector<std::string> fit = {"fit",       dryer,     "--poles", "2",       "--zeros",
-                                  "0",         "--delay", "3",       "--rows",  "0:600",
-                                  "--detrend", "mean",    "-o",      "fit.json"};
+  std::vector<std::string> fit = {
+      "fit", dryer,    "--poles", "2",         "--zeros", "0",  "--input-delay-samples",
+      "3",   "--rows", "0:600",   "--detrend", "mean",    "-o", "fit.json"};
   fit.insert(fit.end(), columns.begin(), columns.end());
   ASSERT_EQ(ctid(fit).status, 0);
   const nlohmann::json trend = io::read_json(path("fit.json"))["data"]["preprocessing"];

@@ -88,8 +88,8 @@ TEST_F(FieldFlags, OmaFitFrfAndFeedbackHaveAFlagForEveryOption) {
 // line (decision 0051): questions of the whole record, and one start for structures of
 // several orders.
 const std::set<std::string> kWholeRecord = {
-    "identification.delay_scan", "identification.delay_range", "identification.two_stage",
-    "identification.refined_iv.record_input_delays"};
+    "identification.delay_scan_samples", "identification.delay_range", "identification.two_stage",
+    "identification.refined_iv.record_delay_samples"};
 
 TEST_F(FieldFlags, TrackStructureValidateStepAndImpulseHaveAFlagForEveryOption) {
   // Several inputs and outputs: the shared-pole estimator's own fields, beside fit's others.
@@ -98,7 +98,7 @@ TEST_F(FieldFlags, TrackStructureValidateStepAndImpulseHaveAFlagForEveryOption) 
   expect_every_field_a_flag<MimoTrackingOptions>("track");
   std::set<std::string> scan = {"identification.refined_iv.initial_model"};
   for (const std::string& path : kWholeRecord) {
-    if (path != "identification.delay_scan") scan.insert(path);
+    if (path != "identification.delay_scan_samples") scan.insert(path);
   }
   expect_every_field_a_flag<StructureScanOptions>("structure", scan);
   expect_every_field_a_flag<ValidationOptions>("validate");
@@ -129,7 +129,7 @@ TEST(SharedFields, TheSharedSettingsPassByName) {
   siso.initial_conditions = InitialConditions::estimate;
   MimoRefinedIvOptions mimo;
   mimo.direct_term = true;
-  mimo.input_delays = {1.5};
+  mimo.input_delays_samples = {1.5};
   assign_shared_fields(mimo, siso);
   EXPECT_EQ(mimo.max_iterations, 7);
   EXPECT_EQ(mimo.tolerance, 1e-6);
@@ -140,7 +140,7 @@ TEST(SharedFields, TheSharedSettingsPassByName) {
   EXPECT_EQ(mimo.initial_conditions, InitialConditions::estimate);
   // Its own fields keep their values.
   EXPECT_TRUE(mimo.direct_term);
-  EXPECT_EQ(mimo.input_delays, std::vector<double>{1.5});
+  EXPECT_EQ(mimo.input_delays_samples, std::vector<double>{1.5});
   EXPECT_TRUE(mimo.siso_engine);
 }
 
@@ -186,7 +186,8 @@ TEST_F(FieldFlags, FieldsCarryTheSpellingsTheCommandsHaveUsed) {
   };
   const auto fit = field_flags<IdentificationOptions>();
   EXPECT_EQ(spelt(fit, "refined_iv.output_interpolation"), "interpolation");
-  EXPECT_EQ(spelt(fit, "refined_iv.input_delay"), "delay");
+  EXPECT_EQ(spelt(fit, "refined_iv.input_delay_samples"), "input-delay-samples");
+  EXPECT_EQ(spelt(fit, "delay_scan_samples"), "delay-scan-samples");
   EXPECT_EQ(spelt(fit, "refined_iv.record_history"), "history");
   EXPECT_EQ(spelt(fit, "refined_iv.initial_model"), "initial");
   EXPECT_EQ(spelt(fit, "refined_iv.start_screening_samples"), "start-screening");

@@ -125,7 +125,8 @@ TEST_F(FitIrregular, WhatItDoesNotTakeIsRefusedNamingTheFlag) {
                    "--input-columns / --output-columns does not go with --irregular");
   expect_bad_input(with({"--decimate", "2"}), "fit", "--decimate does not go with --irregular");
   expect_bad_input(with({"--resample", "0.05"}), "fit", "--resample does not go with");
-  expect_bad_input(with({"--delay-scan", "0:3"}), "fit", "--delay-scan does not go with");
+  expect_bad_input(with({"--delay-scan-samples", "0:3"}), "fit",
+                   "--delay-scan-samples does not go with");
   expect_bad_input(ctid({"fit", csv, "--irregular", "--modes", "1"}), "fit",
                    "--modes does not go with --irregular");
 }

@@ -89,8 +89,8 @@ TEST_F(FitMimoCommand, BadUsageNamesTheProblem) {
   };
   testing::expect_bad_input(ctid(with({"--poles", "4", "--zeros", "1"})), "fit",
                             "an unfactored model has no shared modes");
-  testing::expect_bad_input(ctid(with({"--modes", "2", "--delay", "2"})), "fit",
-                            "--delay is not available with --input-columns");
+  testing::expect_bad_input(ctid(with({"--modes", "2", "--input-delay-samples", "2"})), "fit",
+                            "--input-delay-samples is not available with --input-columns");
   testing::expect_bad_input(ctid(with({"--modes", "2", "--start", "frf"})), "fit",
                             "--start frf is for one input and output");
   testing::expect_bad_input(ctid({"fit", "d.csv", "--input-columns", "f1,f9", "--output-columns",
@@ -125,7 +125,7 @@ TEST_F(FitMimoCommand, KnownInputDelaysAreFittedAndWrittenWithTheModel) {
     all.insert(all.end(), extra.begin(), extra.end());
     return all;
   };
-  const auto r = ctid(with({"--input-delays", "0,3", "--model-output", "m.json"}));
+  const auto r = ctid(with({"--input-delays-samples", "0,3", "--model-output", "m.json"}));
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("input delays (known): f1 0 s (0 samples), f2 0.15 s (3 samples)"));
   EXPECT_THAT(r.out, HasSubstr("fit a3: 100 %"));
@@ -133,12 +133,14 @@ TEST_F(FitMimoCommand, KnownInputDelaysAreFittedAndWrittenWithTheModel) {
       io::mimo_additive_model_from_json(io::read_json(path("m.json")), "m.json");
   EXPECT_NEAR(back.input_delays()(1), 0.15, 1e-15);
   EXPECT_NEAR(back[1].a[1], g[1].a[1], 1e-9 * std::abs(g[1].a[1]));
-  testing::expect_bad_input(ctid(with({"--input-delays", "3"})), "fit",
-                            "--input-delays has 1 values but the data have 2 inputs (f1,f2)");
-  testing::expect_bad_input(ctid(with({"--input-delays", "0,-3"})), "fit", "--input-delays");
+  testing::expect_bad_input(
+      ctid(with({"--input-delays-samples", "3"})), "fit",
+      "--input-delays-samples has 1 values but the data have 2 inputs (f1,f2)");
+  testing::expect_bad_input(ctid(with({"--input-delays-samples", "0,-3"})), "fit",
+                            "--input-delays-samples");
   testing::expect_bad_input(ctid({"fit", "late.csv", "--input-column", "f1", "--output-column",
-                                  "a1", "--modes", "2", "--input-delays", "3"}),
-                            "fit", "--input-delays goes with --input-columns");
+                                  "a1", "--modes", "2", "--input-delays-samples", "3"}),
+                            "fit", "--input-delays-samples goes with --input-columns");
 }
 
 const std::vector<std::string> kColumns{"d.csv", "--input-columns", "f1,f2", "--output-columns",

@@ -269,7 +269,7 @@ TEST_F(FitCommand, DelayScanFindsTheDelayAndIntegratorsAreFitted) {
                        "--samples-per-bit", "5", "-T", "0.01", "-o", "d.csv", "-q"});
   ASSERT_EQ(s.status, 0) << s.err;
   const auto r = ctid({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--integrators", "1",
-                       "--delay-scan", "0:6", "-o", "r.json", "-q"});
+                       "--delay-scan-samples", "0:6", "-o", "r.json", "-q"});
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json j = read("r.json");
   EXPECT_EQ(j.at("input_delay_samples"), 3);
@@ -315,8 +315,8 @@ TEST_F(FitCommand, DelayRangeEstimatesAFractionalDelayWithItsStandardError) {
                          "--delay-range", "0.25"}),
                    "--delay-range '0.25': expected MIN:MAX in seconds");
   expect_bad_input(ctid({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--integrators", "1",
-                         "--delay", "1", "--delay-range", "0:0.5"}),
-                   "give one of --delay, --delay-scan and --delay-range");
+                         "--input-delay-samples", "1", "--delay-range", "0:0.5"}),
+                   "give one of --input-delay-samples, --delay-scan-samples and --delay-range");
 }
 
 // Rows [first, first + count) of a CSV file with a header line, as a new file.
@@ -359,10 +359,10 @@ TEST_F(FitCommand, SeveralFilesAreRecordsOfOneEstimateEachWithItsInitialState) {
   write("slow.csv", "t,u,y\n0,1,0\n0.1,0,1\n0.2,1,0\n");
   expect_bad_input(ctid({"fit", "a.csv", "slow.csv", "--modes", "2"}),
                    "slow.csv is sampled every 0.1 s but a.csv every 0.05 s");
-  expect_bad_input(ctid({"fit", "a.csv", "b.csv", "--modes", "2", "--record-delays", "0"}),
-                   "--record-delays gives 1 delays for 2 data files");
-  expect_bad_input(ctid({"fit", "a.csv", "b.csv", "--modes", "2", "--record-delays", "0,x"}),
-                   "--record-delays '0,x'");
+  expect_bad_input(ctid({"fit", "a.csv", "b.csv", "--modes", "2", "--record-delay-samples", "0"}),
+                   "--record-delay-samples gives 1 delays for 2 data files");
+  expect_bad_input(ctid({"fit", "a.csv", "b.csv", "--modes", "2", "--record-delay-samples", "0,x"}),
+                   "--record-delay-samples '0,x'");
   write("other.csv", "t,u,z\n0,1,0\n0.05,0,1\n0.1,1,0\n");
   expect_bad_input(ctid({"fit", "a.csv", "other.csv", "--modes", "2"}), "other.csv");
 }
@@ -547,10 +547,11 @@ TEST_F(FitCommand, BadInputExitsTwoWithOneLine) {
   expect_bad_input(ctid({"fit", "d.csv", "--poles", "0", "--zeros", "0"}), "");
   expect_bad_input(ctid({"fit", "d.csv", "--poles", "2", "--zeros", "5"}), "");
   expect_bad_input(ctid({"fit", "d.csv", "--submodel", "2,x"}), "--submodel '2,x'");
-  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--delay", "1", "--delay-scan", "0:3"}),
-                   "give one of --delay");
-  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--delay-scan", "5:2"}),
-                   "--delay-scan (max) is 2; it must be >= min (5)");
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--input-delay-samples", "1",
+                         "--delay-scan-samples", "0:3"}),
+                   "give one of --input-delay-samples");
+  expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--delay-scan-samples", "5:2"}),
+                   "--delay-scan-samples (max) is 2; it must be >= min (5)");
   expect_bad_input(ctid({"fit", "d.csv", "--modes", "2", "--max-iterations", "0"}),
                    "--max-iterations is 0");
   // Closed loop without a reference column.

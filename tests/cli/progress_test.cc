@@ -99,8 +99,8 @@ class CliProgressTest : public CliTest {
 
 TEST_F(CliProgressTest, DelayScanShowsProgressOnATerminalOnly) {
   const ScopedEnvironment now("CTID_PROGRESS_AFTER", "0");
-  const std::vector<std::string> fit{"fit",     "d.csv", "--poles",      "1",
-                                     "--zeros", "0",     "--delay-scan", "0:5"};
+  const std::vector<std::string> fit{
+      "fit", "d.csv", "--poles", "1", "--zeros", "0", "--delay-scan-samples", "0:5"};
   const auto terminal = ctid_on_terminal(fit);
   EXPECT_EQ(terminal.status, 0) << terminal.out;
   EXPECT_THAT(terminal.out, HasSubstr("\rctid fit: delay scan 1/6 (16 %)"));
@@ -129,8 +129,8 @@ TEST_F(CliProgressTest, DelayScanShowsProgressOnATerminalOnly) {
 TEST_F(CliProgressTest, ProgressWaitsForTheThreshold) {
   // An hour: no run of this test reaches it.
   const ScopedEnvironment later("CTID_PROGRESS_AFTER", "3600");
-  const auto r =
-      ctid_on_terminal({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--delay-scan", "0:5"});
+  const auto r = ctid_on_terminal(
+      {"fit", "d.csv", "--poles", "1", "--zeros", "0", "--delay-scan-samples", "0:5"});
   EXPECT_EQ(r.status, 0) << r.out;
   EXPECT_THAT(r.out, Not(HasSubstr("delay scan 1/6")));
   EXPECT_THAT(r.out, HasSubstr("ctid fit: srivc on d.csv"));

@@ -37,8 +37,8 @@ TEST_F(ResponseCommand, FitResultPrintsTheDeltaMethodDcGain) {
                   "0.05", "--noise-std", "0.1", "-o", "d.csv", "-q"})
                 .status,
             0);
-  const auto fit =
-      ctid({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--delay", "2", "-o", "r.json", "-q"});
+  const auto fit = ctid({"fit", "d.csv", "--poles", "1", "--zeros", "0", "--input-delay-samples",
+                         "2", "-o", "r.json", "-q"});
   ASSERT_EQ(fit.status, 0) << fit.err;
   const auto r = ctid({"step", "r.json", "-o", "s.csv"});
   ASSERT_EQ(r.status, 0) << r.err;

@@ -54,16 +54,16 @@ TEST_F(StructureCommand, ScansIntegratorsZerosAndTheDelay) {
                        "--samples-per-bit", "5", "-T", "0.01", "-o", "i.csv", "-q"});
   ASSERT_EQ(s.status, 0) << s.err;
   const auto r = ctid({"structure", "i.csv", "--poles", "0:2", "--integrators", "0:1", "--zeros",
-                       "0:1", "--delay-scan", "0:5", "--detrend", "none", "-o", "s.json"});
+                       "0:1", "--delay-scan-samples", "0:5", "--detrend", "none", "-o", "s.json"});
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("n=0 m=0 l=1"));
   EXPECT_THAT(r.out, HasSubstr("recommended: n=1 m=0 l=1"));
   const nlohmann::json j = io::read_json(path("s.json"));
   // (n, l) in {(0,1), (1,0), (1,1), (2,0), (2,1)}, each with m = 0 and m = 1: 10 structures.
   EXPECT_EQ(j.at("fits").size(), 10U);
-  expect_bad_input(
-      ctid({"structure", "i.csv", "--poles", "1:2", "--delay", "1", "--delay-scan", "0:3"}),
-      "give --delay or --delay-scan, not both");
+  expect_bad_input(ctid({"structure", "i.csv", "--poles", "1:2", "--input-delay-samples", "1",
+                         "--delay-scan-samples", "0:3"}),
+                   "give --input-delay-samples or --delay-scan-samples, not both");
   expect_bad_input(ctid({"structure", "i.csv", "--poles", "0:2"}), "integers >= 1");
   expect_bad_input(ctid({"structure", "i.csv", "--poles", "1:2", "--initial-conditions", "x"}),
                    "--initial-conditions");

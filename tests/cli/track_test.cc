@@ -178,8 +178,9 @@ TEST_F(TrackMimoCommand, RefusesWhatSeveralOutputsCannotDoWithOneLine) {
   };
   expect_bad_input(with({"--poles", "4", "--zeros", "1"}),
                    "an unfactored model has no shared modes");
-  expect_bad_input(with({"--modes", "2", "--delay", "1"}),
-                   "--delay is not available with --input-columns / --output-columns");
+  expect_bad_input(
+      with({"--modes", "2", "--input-delay-samples", "1"}),
+      "--input-delay-samples is not available with --input-columns / --output-columns");
   expect_bad_input(with({"--modes", "2", "--start", "lssvf"}),
                    "--start lssvf is for one input and output");
   expect_bad_input(with({"--modes", "2", "--min-mac", "1.5"}), "--min-mac is 1.5");

@@ -46,7 +46,7 @@ TEST(FractionalDelay, NoiseFreeOpenLoopRecoversTauAndTheModelExactly) {
   ASSERT_TRUE(e.converged()) << e.message;
   EXPECT_TRUE(e.verdict.usable) << e.verdict.summary();
   EXPECT_NEAR(e.model.input_delay(), tau, 1e-9 * tau);
-  EXPECT_EQ(e.input_delay, 3);
+  EXPECT_EQ(e.input_delay_samples, 3);
   EXPECT_NEAR(e.input_delay_fraction, 0.37, 1e-8);
   const Eigen::VectorXd got = normalised(e.transfer_function.with_input_delay(0.0));
   const Eigen::VectorXd want = normalised(plant(0.0));
@@ -140,10 +140,10 @@ TEST(FractionalDelay, RefusesBadRangesNamingThem) {
   o.delay_range = DelayInterval{0.0, 25.0};
   refused(o, "the record lasts only 20 s");
   o.delay_range = DelayInterval{0.0, 0.2};
-  o.delay_scan = DelayRange{0, 2};
+  o.delay_scan_samples = DelayRange{0, 2};
   refused(o, "are both set");
-  o.delay_scan.reset();
-  o.refined_iv.input_delay = 1;
+  o.delay_scan_samples.reset();
+  o.refined_iv.input_delay_samples = 1;
   refused(o, "give a known delay or a range, not both");
 }
 

@@ -111,12 +111,12 @@ TEST(FrontDoors, SeveralChannelsRefuseAsMimoSrivcDoes) {
       [&] { identify(data, std::vector<SubmodelOrder>{}); },
       ThrowsMessage<InvalidArgument>(HasSubstr("mimo_srivc: the structure has no submodels")));
   MimoIdentificationOptions options;
-  options.refined_iv.input_delays = {1.0};  // one delay for two inputs
+  options.refined_iv.input_delays_samples = {1.0};  // one delay for two inputs
   EXPECT_THAT(
       [&] {
         identify(data, std::vector<SubmodelOrder>(2, {2, 0, 0}), options);
       },
-      ThrowsMessage<InvalidArgument>(HasSubstr("input_delays has 1")));
+      ThrowsMessage<InvalidArgument>(HasSubstr("input_delays_samples has 1")));
 }
 
 MimoFrf frf_of(const MimoAdditiveModel& g, int lines) {

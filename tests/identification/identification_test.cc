@@ -35,7 +35,7 @@ void expect_same(const EstimationResult& a, const EstimationResult& b) {
   EXPECT_EQ(a.termination, b.termination);
   EXPECT_EQ(a.iterations, b.iterations);
   EXPECT_EQ(a.message, b.message);
-  EXPECT_EQ(a.input_delay, b.input_delay);
+  EXPECT_EQ(a.input_delay_samples, b.input_delay_samples);
   EXPECT_EQ(std::memcmp(&a.mean_squared_error, &b.mean_squared_error, sizeof(double)), 0);
 }
 
@@ -84,7 +84,7 @@ TEST_F(Identify, ChoosesTheEstimatorFromTheStructureAndTheLoop) {
 
 TEST_F(Identify, RunsTheDirectEstimatorBitForBit) {
   IdentificationOptions options;
-  options.refined_iv.input_delay = 2;
+  options.refined_iv.input_delay_samples = 2;
   const auto direct_options = options.refined_iv;
 
   const IdentificationResult a = identify(open, ModelStructure::modes(2), options);
@@ -99,7 +99,7 @@ TEST_F(Identify, RunsTheDirectEstimatorBitForBit) {
   expect_same(s.estimate, srivc(open, {4, 2, 0}, direct_options));
 
   options.controller = controller;
-  options.refined_iv.input_delay = 0;
+  options.refined_iv.input_delay_samples = 0;
   const IdentificationResult c = identify(closed, ModelStructure::unfactored(4, 2), options);
   EXPECT_EQ(c.estimator, RefinedIvEstimator::clsrivc);
   EXPECT_TRUE(c.closed_loop);
@@ -113,20 +113,20 @@ TEST_F(Identify, RunsTheDirectEstimatorBitForBit) {
 
 TEST_F(Identify, DelayScanKeepsTheBestDelayAndItsTable) {
   IdentificationOptions options;
-  options.delay_scan = DelayRange{0, 4};
+  options.delay_scan_samples = DelayRange{0, 4};
   const IdentificationResult result = identify(open, ModelStructure::modes(2), options);
   ASSERT_TRUE(result.delay_scan.has_value());
   const InputDelayScanResult direct = additive_srivc_delay_scan(open, truth.orders(), 0, 4);
   EXPECT_EQ(result.delay_scan->delays, direct.delays);
   EXPECT_EQ(result.delay_scan->terminations, direct.terminations);
-  EXPECT_EQ(result.estimate.input_delay, 2);
+  EXPECT_EQ(result.estimate.input_delay_samples, 2);
   expect_same(result.estimate, direct.best);
   expect_same(result.delay_scan->best, direct.best);
 }
 
 TEST_F(Identify, RelocationStartsFromTheEstimateAtItsDelay) {
   IdentificationOptions options;
-  options.delay_scan = DelayRange{1, 3};
+  options.delay_scan_samples = DelayRange{1, 3};
   options.relocate_modes = true;
   options.relocation.max_relocations = 1;
   const IdentificationResult result = identify(open, ModelStructure::modes(2), options);
@@ -134,18 +134,18 @@ TEST_F(Identify, RelocationStartsFromTheEstimateAtItsDelay) {
   ASSERT_TRUE(result.delay_scan.has_value());
 
   RefinedIvOptions start;
-  start.input_delay = result.delay_scan->best.input_delay;
+  start.input_delay_samples = result.delay_scan->best.input_delay_samples;
   start.initial_model = result.delay_scan->best.model;
   const ModeRelocationResult direct =
       additive_srivc_relocated(open, truth.orders(), start, options.relocation);
   expect_same(result.estimate, direct.estimate);
   EXPECT_EQ(result.mode_relocation->message, direct.message);
-  EXPECT_EQ(result.estimate.input_delay, 2);
+  EXPECT_EQ(result.estimate.input_delay_samples, 2);
 }
 
 TEST_F(Identify, ReportsProgressOfTheScanAndTheRelocationWithoutChangingTheResult) {
   IdentificationOptions options;
-  options.delay_scan = DelayRange{1, 3};
+  options.delay_scan_samples = DelayRange{1, 3};
   options.relocate_modes = true;
   options.relocation.max_relocations = 1;
   std::vector<std::pair<int, int>> scan;
@@ -190,13 +190,14 @@ TEST_F(Identify, RefusesBadStructuresAndOptionsNamingTheField) {
   expect_refused(open, modes, o,
                  "IdentificationOptions.refined_iv.max_iterations is 0; it must be >= 1");
   o = {};
-  o.delay_scan = DelayRange{5, 2};
+  o.delay_scan_samples = DelayRange{5, 2};
   expect_refused(open, modes, o,
-                 "IdentificationOptions.delay_scan.max is 2; it must be >= min (5)");
-  o.delay_scan = DelayRange{-1, 2};
-  expect_refused(open, modes, o, "IdentificationOptions.delay_scan.min is -1; it must be >= 0");
-  o.delay_scan = DelayRange{0, 2};
-  o.refined_iv.input_delay = 1;
+                 "IdentificationOptions.delay_scan_samples.max is 2; it must be >= min (5)");
+  o.delay_scan_samples = DelayRange{-1, 2};
+  expect_refused(open, modes, o,
+                 "IdentificationOptions.delay_scan_samples.min is -1; it must be >= 0");
+  o.delay_scan_samples = DelayRange{0, 2};
+  o.refined_iv.input_delay_samples = 1;
   expect_refused(open, modes, o, "give a known delay or a scan, not both");
 
   o = {};

@@ -233,7 +233,7 @@ TEST(IrregularSrivc, BadRecordsAreRefusedWithOneClearMessage) {
   constant.time.setConstant(1.0);
   expect_refused(constant, "spans no time");
   RefinedIvOptions delayed;
-  delayed.input_delay = 2;
+  delayed.input_delay_samples = 2;
   EXPECT_THROW((void)srivc_irregular(good, kOrder, delayed), InvalidArgument);
 }
 

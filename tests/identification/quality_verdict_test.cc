@@ -103,7 +103,7 @@ TEST(QualityVerdict, SubmodelOrderDoesNotChangeTheModel) {
 EstimationResult scan_entry(int delay, double mse, bool converged, bool usable) {
   EstimationResult r(AdditiveModel({{Polynomial{1.0, 1.0}, Polynomial{1.0}, 0}}),
                      TransferFunction(Polynomial{1.0}, Polynomial{1.0, 1.0}));
-  r.input_delay = delay;
+  r.input_delay_samples = delay;
   r.mean_squared_error = mse;
   r.termination = converged ? Termination::converged : Termination::iteration_limit;
   if (!usable) r.verdict.fail("constructed", {"nothing"});
@@ -118,7 +118,7 @@ TEST(QualityVerdict, DelayScanKeepsTheUsableFitWithTheLeastErrorWhetherOrNotItCo
       scan_entry(2, 1.0, false, true), scan_entry(3, 0.5, true, false)};
   const InputDelayScanResult scan =
       scan_input_delay([&](int d) { return entries[static_cast<size_t>(d)]; }, 0, 3);
-  EXPECT_EQ(scan.best.input_delay, 2);
+  EXPECT_EQ(scan.best.input_delay_samples, 2);
   EXPECT_TRUE(scan.choice_clear);
   EXPECT_EQ(scan.note, "");
   EXPECT_EQ(scan.usable, (std::vector<bool>{true, true, true, false}));
@@ -130,7 +130,7 @@ TEST(QualityVerdict, DelayScanSaysWhenTheChoiceIsNotClear) {
                                                  scan_entry(2, 3.0, true, true)};
   const InputDelayScanResult scan =
       scan_input_delay([&](int d) { return entries[static_cast<size_t>(d)]; }, 0, 2);
-  EXPECT_EQ(scan.best.input_delay, 1);
+  EXPECT_EQ(scan.best.input_delay_samples, 1);
   EXPECT_FALSE(scan.choice_clear);
   EXPECT_THAT(scan.note, HasSubstr("not clear: 0 samples"));
 }
@@ -140,7 +140,7 @@ TEST(QualityVerdict, DelayScanSaysWhenNoDelayIsUsable) {
                                                  scan_entry(1, 1.0, false, false)};
   const InputDelayScanResult scan =
       scan_input_delay([&](int d) { return entries[static_cast<size_t>(d)]; }, 0, 1);
-  EXPECT_EQ(scan.best.input_delay, 1);
+  EXPECT_EQ(scan.best.input_delay_samples, 1);
   EXPECT_FALSE(scan.best.verdict.usable);
   EXPECT_THAT(scan.note, HasSubstr("no delay gave a usable model"));
 }

@@ -119,7 +119,7 @@ TEST(SeveralRecords, ASecondRecordShrinksTheStandardErrors) {
 
 TEST(SeveralRecords, EachRecordMayLagItsInputByItsOwnWholeSamples) {
   // The second experiment's output lags its input by 3 more samples than the first's (its
-  // acquisition started late): with record_input_delays {0, 3} the model is exact.
+  // acquisition started late): with record_delay_samples {0, 3} the model is exact.
   const AdditiveModel truth = testing::closed_loop_two_modes();
   const Eigen::VectorXd ua = white_noise(900, 1.0, 50);
   const Eigen::VectorXd ub = white_noise(1100, 1.0, 51);
@@ -129,22 +129,22 @@ TEST(SeveralRecords, EachRecordMayLagItsInputByItsOwnWholeSamples) {
   IdentificationOptions options;
   options.refined_iv.initial_model =
       AdditiveModel::from_parameters(truth.orders(), truth.parameters() * 1.03, 0.0);
-  options.refined_iv.record_input_delays = {0, 3};
+  options.refined_iv.record_delay_samples = {0, 3};
   const EstimationResult e =
       identify(records, ModelStructure::additive(truth.orders()), options).estimate;
   ASSERT_TRUE(e.converged()) << e.message;
   EXPECT_LT(relative_error(e.parameters, truth.parameters()), 1e-9);
   EXPECT_EQ(e.model.input_delay(), 0.0);
-  options.refined_iv.record_input_delays.clear();
+  options.refined_iv.record_delay_samples.clear();
   const EstimationResult ignored =
       identify(records, ModelStructure::additive(truth.orders()), options).estimate;
   EXPECT_GT(relative_error(ignored.parameters, truth.parameters()), 1e-3);
-  options.refined_iv.record_input_delays = {1};
+  options.refined_iv.record_delay_samples = {1};
   try {
     identify(records, ModelStructure::additive(truth.orders()), options);
     ADD_FAILURE() << "no exception";
   } catch (const InvalidArgument& error) {
-    EXPECT_THAT(error.what(), HasSubstr("record_input_delays has 1 entries for 2 records"));
+    EXPECT_THAT(error.what(), HasSubstr("record_delay_samples has 1 entries for 2 records"));
   }
 }
 

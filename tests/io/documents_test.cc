@@ -54,7 +54,7 @@ EstimationResult example_estimate() {
   r.unstable_reflections = 2;
   r.sensitivity_fallbacks = 1;
   r.step_halvings = 5;
-  r.input_delay = 2;
+  r.input_delay_samples = 2;
   r.noise_variance = 0.5;
   r.mean_squared_error = std::sqrt(2.0);
   r.fit_percent = 97.5;
@@ -239,7 +239,7 @@ TEST(Documents, EstimationResultRoundTripsBitForBit) {
   EXPECT_TRUE(back.additive_view.has_value());
   EXPECT_EQ(back.termination, Termination::iteration_limit);
   EXPECT_EQ(back.step_halvings, 5);
-  EXPECT_EQ(back.input_delay, 2);
+  EXPECT_EQ(back.input_delay_samples, 2);
   EXPECT_TRUE(same_bits(back.mean_squared_error, r.mean_squared_error));
   ASSERT_EQ(back.modes.size(), 1u);
   EXPECT_EQ(back.modes[0].submodel, 1);

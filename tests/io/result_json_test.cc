@@ -45,7 +45,7 @@ EstimationResult example_result() {
   r.off_diagonal_norm = 0.125;
   r.unstable_reflections = 2;
   r.sensitivity_fallbacks = 1;
-  r.input_delay = 2;
+  r.input_delay_samples = 2;
   r.noise_variance = 0.5;
   r.fit_percent = 97.5;
   r.checks.persistently_exciting = false;

@@ -89,7 +89,7 @@ TEST(BeamSection7, NoiseFreeConvergesFromThePapersStartWithTheDelayEstimated) {
   const InputDelayScanResult scan =
       additive_srivc_delay_scan(beam_data(INFINITY, 0), kOrders, 2, 6, options);
   const EstimationResult& r = scan.best;
-  EXPECT_EQ(r.input_delay, kDelay);
+  EXPECT_EQ(r.input_delay_samples, kDelay);
   ASSERT_TRUE(r.converged()) << r.message;
   ASSERT_EQ(r.model.size(), 4);
   // Without covariance the result has no ModalEstimate list; read the modes off the model.
@@ -114,7 +114,7 @@ TEST(BeamSection7, SixtyDecibelsConvergesFromThePapersStartWithinThreeStandardEr
   const InputDelayScanResult scan = additive_srivc_delay_scan(
       beam_data(60.0, 7), kOrders, 3, 5, options_from(testing::beam_start_parameters()));
   const EstimationResult& r = scan.best;
-  EXPECT_EQ(r.input_delay, kDelay);
+  EXPECT_EQ(r.input_delay_samples, kDelay);
   ASSERT_TRUE(r.converged()) << r.message;
   ASSERT_EQ(r.modes.size(), 4U);
   for (const ModalParameters& truth : true_modes()) {
@@ -135,7 +135,7 @@ TEST(BeamSection7, ThirtyDecibelsWeakModesDegradeAndTheirStandardErrorsSaySo) {
   const std::vector<ModalParameters> truth = true_modes();
   for (std::uint64_t seed : {7U, 8U}) {
     RefinedIvOptions options = options_from(testing::beam_parameters());
-    options.input_delay = kDelay;
+    options.input_delay_samples = kDelay;
     const EstimationResult r = additive_srivc(beam_data(30.0, seed), kOrders, options);
     ASSERT_TRUE(r.converged()) << r.message;
     std::vector<double> relative_se;
@@ -160,7 +160,7 @@ TEST(BeamSection7, ThirtyDecibelsWeakModesDegradeAndTheirStandardErrorsSaySo) {
 // doc). Mode relocation moves them.
 ModeRelocationResult relocate(const SampledData& data) {
   RefinedIvOptions options = options_from(testing::beam_start_parameters());
-  options.input_delay = kDelay;
+  options.input_delay_samples = kDelay;
   return additive_srivc_relocated(data, kOrders, options);
 }
 
@@ -262,9 +262,9 @@ TEST(BeamSection7, DelayScanThenRelocationFromThePapersStart) {
   RefinedIvOptions options = options_from(testing::beam_start_parameters());
   options.compute_covariance = false;
   const InputDelayScanResult scan = additive_srivc_delay_scan(data, kOrders, 3, 5, options);
-  ASSERT_EQ(scan.best.input_delay, kDelay);
+  ASSERT_EQ(scan.best.input_delay_samples, kDelay);
   RefinedIvOptions from_scan = options_from(testing::beam_start_parameters());
-  from_scan.input_delay = scan.best.input_delay;
+  from_scan.input_delay_samples = scan.best.input_delay_samples;
   from_scan.initial_model = scan.best.model;
   const ModeRelocationResult r = additive_srivc_relocated(data, kOrders, from_scan);
   ASSERT_TRUE(r.estimate.converged()) << r.message;
@@ -281,7 +281,7 @@ TEST(BeamSection7, DelayScanThenRelocationFromThePapersStart) {
 // windows are numerically singular (it is 4x oversampled).
 TEST(BeamSection7, PaperMultisineWithoutDitherIsAccepted) {
   RefinedIvOptions options = options_from(testing::beam_start_parameters());
-  options.input_delay = kDelay;
+  options.input_delay_samples = kDelay;
   options.compute_covariance = false;
   const EstimationResult r = additive_srivc(beam_data(INFINITY, 0, 0.0), kOrders, options);
   EXPECT_TRUE(r.converged()) << r.message;

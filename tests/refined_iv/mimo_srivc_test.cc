@@ -345,7 +345,7 @@ TEST(MimoSrivc, PerInputDelaysInWholeSamplesAreRecoveredExactly) {
   for (int k = 0; k < 3; ++k) u.col(k) = white_noise(3000, 1.0, 70 + k);
   const MimoData data = delayed_record(truth, u, Hold::zero_order_hold);
   MimoRefinedIvOptions options;
-  options.input_delays = delays;
+  options.input_delays_samples = delays;
   const MimoEstimationResult r = mimo_srivc(data, four_modes(), options);
   ASSERT_TRUE(r.converged()) << r.message;
   EXPECT_TRUE(r.verdict.usable) << r.message;
@@ -368,7 +368,7 @@ TEST(MimoSrivc, FractionalInputDelaysWithADirectTermAreRecoveredExactly) {
     const MimoData data = delayed_record(truth, u, hold);
     MimoRefinedIvOptions options;
     options.direct_term = true;
-    options.input_delays = delays;
+    options.input_delays_samples = delays;
     const MimoEstimationResult r =
         mimo_srivc(data, std::vector<SubmodelOrder>(3, {2, 1, 0}), options);
     ASSERT_TRUE(r.converged()) << r.message;
@@ -388,11 +388,11 @@ TEST(MimoSrivc, OneDelayedInputAndOutputIsTheAdditiveEstimatorBitForBit) {
   y += white_noise(1500, 0.05 * std::sqrt(y.squaredNorm() / 1500.0), 6);
   const SampledData siso(kH, u, y);
   RefinedIvOptions options;
-  options.input_delay = 4;
+  options.input_delay_samples = 4;
   options.input_delay_fraction = 0.25;
   const EstimationResult additive = additive_srivc(siso, four_modes(), options);
   MimoRefinedIvOptions mimo_options;
-  mimo_options.input_delays = {4.25};
+  mimo_options.input_delays_samples = {4.25};
   const MimoEstimationResult mimo = mimo_srivc(MimoData(siso), four_modes(), mimo_options);
   ASSERT_EQ(additive.termination, mimo.termination);
   for (int i = 0; i < 4; ++i) {
@@ -609,14 +609,14 @@ TEST(MimoSrivc, BadInputGetsOneClearMessage) {
       ThrowsMessage<InvalidArgument>(HasSubstr(
           "submodel 1 of the initial model has 0 integrators; the structure asks for 1")));
   MimoRefinedIvOptions delays;
-  delays.input_delays = {1.0, 2.0, 3.0};
+  delays.input_delays_samples = {1.0, 2.0, 3.0};
   EXPECT_THAT([&] { mimo_srivc(data, four_modes(), delays); },
               ThrowsMessage<InvalidArgument>(
-                  HasSubstr("input_delays has 3 entries but the data have 2 inputs")));
-  delays.input_delays = {1.0, -2.0};
+                  HasSubstr("input_delays_samples has 3 entries but the data have 2 inputs")));
+  delays.input_delays_samples = {1.0, -2.0};
   EXPECT_THAT([&] { mimo_srivc(data, four_modes(), delays); },
               ThrowsMessage<InvalidArgument>(HasSubstr("input_delays")));
-  delays.input_delays = {0.0, 250.0};
+  delays.input_delays_samples = {0.0, 250.0};
   EXPECT_THAT([&] { mimo_srivc(data, four_modes(), delays); },
               ThrowsMessage<InvalidArgument>(HasSubstr("more than half of the record")));
   EXPECT_THAT([&] { truth.with_input_delays(Eigen::Vector3d(0.0, 0.0, 0.0)); },

@@ -185,7 +185,7 @@ TEST(RefinedIvDelay, ScanFindsTheInputDelay) {
   RefinedIvOptions options;
   options.initial_model = truth.with_input_delay(0.0);
   const InputDelayScanResult scan = additive_srivc_delay_scan(data, truth.orders(), 0, 8, options);
-  EXPECT_EQ(scan.best.input_delay, 4);
+  EXPECT_EQ(scan.best.input_delay_samples, 4);
   EXPECT_EQ(scan.delays.size(), 9u);
   EXPECT_NEAR(scan.best.model.input_delay(), 0.2, 1e-12);
 }

@@ -160,12 +160,12 @@ TEST(RefinedIv, KnownInputDelayIsHonoured) {
   const Eigen::VectorXd u = white_noise(2000, 1.0, 31);
   const SampledData data(0.05, u, simulate(truth, u, 0.05));
   RefinedIvOptions options;
-  options.input_delay = 3;
+  options.input_delay_samples = 3;
   options.initial_model = truth.with_parameters(perturbed(truth.parameters(), 32));
   const EstimationResult r = additive_srivc(data, truth.orders(), options);
   ASSERT_TRUE(r.converged()) << r.message;
   EXPECT_LT(relative_error(r.parameters, truth.parameters()), 1e-9);
-  EXPECT_EQ(r.input_delay, 3);
+  EXPECT_EQ(r.input_delay_samples, 3);
   EXPECT_NEAR(r.model.input_delay(), 0.15, 1e-12);
 }
 

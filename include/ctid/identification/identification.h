@@ -90,7 +90,7 @@ struct DelayRange {
   int max = 0;
 
   static constexpr std::string_view type_name = "DelayRange";
-  /// On the command line one flag, "--delay-scan 0:10".
+  /// On the command line one flag, "--delay-scan-samples 0:10".
   static constexpr std::string_view flag_form = "MIN:MAX";
   static constexpr auto fields() {
     return std::tuple{
@@ -153,13 +153,13 @@ struct IdentificationOptions {
   /// must then hold the reference); none: open loop.
   std::optional<DiscreteTransferFunction> controller;
   /// Scan these whole-sample input delays and keep the best output-error fit (converged fits
-  /// first); none: the known delay refined_iv.input_delay (which must then be 0 if set).
-  std::optional<DelayRange> delay_scan;
+  /// first); none: the known delay refined_iv.input_delay_samples (which must then be 0 if set).
+  std::optional<DelayRange> delay_scan_samples;
   /// Estimate the input delay as a continuous parameter in this interval [s]: the whole
-  /// samples in it are scanned as with delay_scan, then the output error is minimised over
+  /// samples in it are scanned as with delay_scan_samples, then the output error is minimised over
   /// the delay within a sample of the best (Brent's method, each point a converged fit), and
   /// the final fit reports the delay's standard error (EstimationResult::delay_standard_error,
-  /// its sensitivity in the covariance). None: a known delay or delay_scan.
+  /// its sensitivity in the covariance). None: a known delay or delay_scan_samples.
   std::optional<DelayInterval> delay_range;
   /// After the fit (at the delay the scan chose), move second-order submodels to peaks of
   /// the residual spectrum and keep moves that fit better (mode_relocation.h). Additive
@@ -181,8 +181,9 @@ struct IdentificationOptions {
     return std::tuple{
         field("controller", &O::controller,
               "Known discrete controller of closed-loop data, or none (open loop)."),
-        field("delay_scan", &O::delay_scan,
-              "DelayRange of input delays to scan, or none (the known refined_iv.input_delay)."),
+        field("delay_scan_samples", &O::delay_scan_samples,
+              "DelayRange of input delays to scan, or none (the known "
+              "refined_iv.input_delay_samples)."),
         field("delay_range", &O::delay_range,
               "DelayInterval [s] in which the delay is estimated as a continuous parameter."),
         field("relocate_modes", &O::relocate_modes,
@@ -208,7 +209,7 @@ struct IdentificationResult {
   bool closed_loop = false;
   /// The final estimate (after the delay scan and the relocation, when asked for).
   EstimationResult estimate;
-  /// Every delay tried, with IdentificationOptions::delay_scan.
+  /// Every delay tried, with IdentificationOptions::delay_scan_samples.
   std::optional<InputDelayScanResult> delay_scan;
   /// What the relocation tried and kept, with IdentificationOptions::relocate_modes.
   std::optional<ModeRelocationResult> mode_relocation;
@@ -234,7 +235,8 @@ struct IdentificationResult {
 /// Progress reports of identify() for a caller that shows them; each, if given, is called with
 /// (done, total) as the run goes.
 struct IdentificationProgress {
-  /// After each whole-sample delay of the delay scan (delay_scan, or the scan of delay_range).
+  /// After each whole-sample delay of the delay scan (delay_scan_samples, or the scan of
+  /// delay_range).
   std::function<void(int, int)> delay_scan;
   /// After each trial of the mode relocation (additive_srivc_relocated's progress).
   std::function<void(int, int)> relocation;

@@ -125,7 +125,7 @@ struct EstimationResult : Outcome {
   int sensitivity_fallbacks = 0;   ///< closed loop: S_uo r reused because the loop was unstable
   int step_halvings = 0;           ///< steps of (29) halved by RefinedIvOptions::step_control
 
-  int input_delay = 0;                ///< whole samples of the input delay
+  int input_delay_samples = 0;        ///< whole samples of the input delay
   double input_delay_fraction = 0.0;  ///< and its fraction of a sample: tau = (d + f) h
   /// Standard error of the delay tau [s] when it was estimated as a continuous parameter
   /// (IdentificationOptions::delay_range); 0 when it was given or chosen from whole samples.
@@ -178,9 +178,10 @@ struct EstimationResult : Outcome {
                   "Closed loop: S_uo r reused because the loop was unstable."),
             field("step_halvings", &S::step_halvings,
                   "Steps of (29) halved by RefinedIvOptions.step_control."),
-            field("input_delay", &S::input_delay, "Whole samples of the input delay."),
+            field("input_delay_samples", &S::input_delay_samples,
+                  "Whole samples of the input delay."),
             field("input_delay_fraction", &S::input_delay_fraction,
-                  "Fraction of a sample added to input_delay (tau = (d + f) h)."),
+                  "Fraction of a sample added to input_delay_samples (tau = (d + f) h)."),
             field("delay_standard_error", &S::delay_standard_error,
                   "Standard error of an estimated continuous delay [s]; 0 when given."),
             field("noise_variance", &S::noise_variance,

@@ -36,7 +36,7 @@ struct InitializationOptions {
   /// the whole record. 0: always the whole record.
   int screening_samples = 10000;
   /// Input delay in samples.
-  int input_delay = 0;
+  int input_delay_samples = 0;
   /// Which candidates are tried: auto (all), lssvf or frf.
   StartMethod method = StartMethod::automatic;
   /// The known controller u_k = C_d(q)(r_k - y_k) of closed-loop data (the data must hold the
@@ -65,7 +65,7 @@ struct InitializationOptions {
         field("screening_samples", &O::screening_samples, AtLeast{0},
               "Longer records screen the starts on their first max(this, N/32) samples; 0: "
               "the whole record."),
-        field("input_delay", &O::input_delay, AtLeast{0}, "Input delay [samples]."),
+        field("input_delay_samples", &O::input_delay_samples, AtLeast{0}, "Input delay [samples]."),
         field("method", &O::method, "Candidates tried: auto (all), lssvf or frf."),
         field("controller", &O::controller,
               "Known discrete controller of closed-loop data (starts it stabilises, refined by "

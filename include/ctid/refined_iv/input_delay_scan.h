@@ -60,7 +60,7 @@ InputDelayScanResult scan_input_delay(const std::function<EstimationResult(int)>
                                       int min_delay, int max_delay,
                                       const std::function<void(int, int)>& progress = {});
 
-/// additive_srivc over a delay range (options.input_delay is overridden).
+/// additive_srivc over a delay range (options.input_delay_samples is overridden).
 InputDelayScanResult additive_srivc_delay_scan(const SampledData& data,
                                                const std::vector<SubmodelOrder>& orders,
                                                int min_delay, int max_delay,

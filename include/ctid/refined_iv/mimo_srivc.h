@@ -51,9 +51,9 @@ struct MimoRefinedIvOptions {
   /// the shared-pole iteration on the single channel instead (same stationary point).
   bool siso_engine = true;
   /// Known delay of every input in samples (whole and fractional, each >= 0; the filters see
-  /// input k delayed exactly by input_delays[k] h, held as the record's input hold says), or
-  /// empty for none. The model's input_delays() are these times h.
-  std::vector<double> input_delays;
+  /// input k delayed exactly by input_delays_samples[k] h, held as the record's input hold says),
+  /// or empty for none. The model's input_delays() are these times h.
+  std::vector<double> input_delays_samples;
   /// Restrict each mode's residue matrix to rank one, Res_i = psi_i L_i^T (one shape, one
   /// participation vector): with the iteration's poles fixed, the numerators are refitted by
   /// alternating least squares. Standard errors stay those of the general residues
@@ -84,7 +84,7 @@ struct MimoRefinedIvOptions {
               "Largest AR order of each output's noise model."),
         field("siso_engine", &O::siso_engine,
               "One input and output, no direct term: run additive_srivc (bit-identical)."),
-        field("input_delays", &O::input_delays, Each{Finite{AtLeast{0.0}}},
+        field("input_delays_samples", &O::input_delays_samples, Each{Finite{AtLeast{0.0}}},
               "Known delay of every input [samples, may be fractional]; empty: none."),
         field("rank_one_residues", &O::rank_one_residues,
               "Restrict every mode's residue matrix to rank one (shape x participation).")

@@ -190,7 +190,7 @@ struct ModeRelocationResult {
   }
 };
 
-/// additive_srivc (open loop, options.input_delay fixed), then up to max_relocations rounds
+/// additive_srivc (open loop, options.input_delay_samples fixed), then up to max_relocations rounds
 /// of: peaks of the residual (numerators re-fitted) on the excited band; for each, the mode
 /// (frequency, damping) that explains most of it; candidate starts with one movable submodel
 /// (second order, no integrators) replaced by that mode and every numerator re-fitted; the
@@ -199,10 +199,10 @@ struct ModeRelocationResult {
 /// Deterministic. Throws InvalidArgument for bad options or data (as additive_srivc does).
 ///
 /// With a delay scan: run additive_srivc_delay_scan first, then this with
-/// options.input_delay = scan.best.input_delay and options.initial_model = scan.best.model
-/// (the plain run then stops at once); or pass a lambda calling this to scan_input_delay.
-/// `progress`, if given, is called after each trial with the trials run and the most there can
-/// be (max_relocations x trials_per_round; the relocation usually stops sooner).
+/// options.input_delay_samples = scan.best.input_delay_samples and options.initial_model =
+/// scan.best.model (the plain run then stops at once); or pass a lambda calling this to
+/// scan_input_delay. `progress`, if given, is called after each trial with the trials run and the
+/// most there can be (max_relocations x trials_per_round; the relocation usually stops sooner).
 ModeRelocationResult additive_srivc_relocated(const SampledData& data,
                                               const std::vector<SubmodelOrder>& orders,
                                               const RefinedIvOptions& options = {},

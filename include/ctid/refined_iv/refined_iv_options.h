@@ -83,16 +83,16 @@ struct RefinedIvOptions {
   int start_screening_samples = 10000;
   /// Interpolation of the measured output between samples before filtering.
   Hold output_interpolation = Hold::first_order_hold;
-  /// Known input delay in whole samples (>= 0); the model's input_delay is set to
-  /// (input_delay + input_delay_fraction) * h.
-  int input_delay = 0;
-  /// Known fraction of a sample added to input_delay, in [0, 1): the filters see the input
+  /// Known input delay in whole samples (>= 0); the model's input_delay [s] is set to
+  /// (input_delay_samples + input_delay_fraction) * h.
+  int input_delay_samples = 0;
+  /// Known fraction of a sample added to input_delay_samples, in [0, 1): the filters see the input
   /// delayed exactly (held as the record's input_hold says, SampledFilter).
   double input_delay_fraction = 0.0;
   /// Several records (identify on a list): whole samples by which each record's input lags
-  /// more than input_delay says (an acquisition started late), one entry per record, each
-  /// >= 0; empty: none. The model's delay stays input_delay.
-  std::vector<int> record_input_delays;
+  /// more than input_delay_samples says (an acquisition started late), one entry per record,
+  /// each >= 0; empty: none. The model's delay stays input_delay_samples.
+  std::vector<int> record_delay_samples;
   /// The delay was estimated from these data (IdentificationOptions::delay_range): the output
   /// sensitivity to it joins the covariance, whose parameter block then accounts for it, and
   /// EstimationResult::delay_standard_error reports its standard error.
@@ -139,13 +139,13 @@ struct RefinedIvOptions {
         field("output_interpolation", &O::output_interpolation,
               "How the measured output is continued between samples before filtering.")
             .with_flag("interpolation"),
-        field("input_delay", &O::input_delay, AtLeast{0}, "Known input delay [samples].")
-            .with_flag("delay"),
+        field("input_delay_samples", &O::input_delay_samples, AtLeast{0},
+              "Known input delay [whole samples]."),
         field("input_delay_fraction", &O::input_delay_fraction, Between{0.0, 1.0, true, false},
-              "Known fraction of a sample added to input_delay, in [0, 1)."),
-        field("record_input_delays", &O::record_input_delays, Each{AtLeast{0}},
-              "Per record, whole samples added to input_delay (several records); empty: none.")
-            .with_flag("record-delays"),
+              "Known fraction of a sample added to input_delay_samples, in [0, 1)."),
+        field("record_delay_samples", &O::record_delay_samples, Each{AtLeast{0}},
+              "Per record, whole samples added to input_delay_samples (several records); empty: "
+              "none."),
         field("delay_estimated", &O::delay_estimated,
               "The delay was estimated: its sensitivity joins the covariance."),
         field("record_history", &O::record_history, "Keep one IterationRecord per iteration.")
