@@ -7,6 +7,8 @@
 
 #include <Eigen/Dense>
 
+#include "ctid/core/parallel.h"
+
 namespace ctid::oma_detail {
 
 Eigen::Index ssi_data_samples_needed(int block_rows, Eigen::Index outputs,
@@ -62,35 +64,61 @@ Eigen::MatrixXd reduce_past_columns(const Eigen::MatrixXd& stacked, Eigen::Index
   return top;
 }
 
-}  // namespace
-
-Eigen::MatrixXd ssi_data_past_columns(const Eigen::MatrixXd& y, const std::vector<int>& references,
-                                      int block_rows) {
-  const Eigen::Index p = block_rows;
-  const Eigen::Index columns = y.rows() - 2 * p + 1;  // j: columns of H, rows of H^T
-  const Eigen::Index width = p * static_cast<Eigen::Index>(references.size()) + p * y.cols();
-  const Eigen::Index past = p * static_cast<Eigen::Index>(references.size());
-  const DataHankel h{y, references, p, y.colwise().mean(),
-                     1.0 / std::sqrt(static_cast<double>(columns))};
-  // The rows of H^T go through the reduction a chunk at a time, each chunk stacked under the
-  // [R11 R12] of the rows before it, so memory stays at a few times width^2 whatever N is.
+// The rows [begin, end) of H^T reduced a chunk at a time, each chunk stacked under the [R11 R12]
+// of the rows before it, so memory stays at a few times width^2 whatever N is.
+Eigen::MatrixXd reduce_stripe(const DataHankel& h, Eigen::Index begin, Eigen::Index end,
+                              Eigen::Index width) {
+  const Eigen::Index past = h.p * static_cast<Eigen::Index>(h.references.size());
   const Eigen::Index chunk = std::max<Eigen::Index>(4 * width, 4096);
   Eigen::MatrixXd top(0, width);
-  for (Eigen::Index start = 0; start < columns; start += chunk) {
-    const Eigen::Index rows = std::min(chunk, columns - start);
+  for (Eigen::Index start = begin; start < end; start += chunk) {
+    const Eigen::Index rows = std::min(chunk, end - start);
     Eigen::MatrixXd stacked(top.rows() + rows, width);
     stacked.topRows(top.rows()) = top;
     hankel_rows(h, start, rows, stacked);
     top = reduce_past_columns(stacked, past);
   }
-  return top.transpose();
+  return top;
+}
+
+}  // namespace
+
+Eigen::Index ssi_data_stripes(Eigen::Index hankel_columns, Eigen::Index width) {
+  return std::clamp<Eigen::Index>(hankel_columns / (kSsiDataStripeWidths * width), 1,
+                                  kSsiDataMaxStripes);
+}
+
+Eigen::MatrixXd ssi_data_past_columns(const Eigen::MatrixXd& y, const std::vector<int>& references,
+                                      int block_rows, int threads) {
+  const Eigen::Index p = block_rows;
+  const Eigen::Index columns = y.rows() - 2 * p + 1;  // j: columns of H, rows of H^T
+  const Eigen::Index past = p * static_cast<Eigen::Index>(references.size());
+  const Eigen::Index width = past + p * y.cols();
+  const DataHankel h{y, references, p, y.colwise().mean(),
+                     1.0 / std::sqrt(static_cast<double>(columns))};
+  // Stripes of rows reduced independently (on threads), then merged pairwise in a fixed tree:
+  // the stripes depend on the size of H alone, so the bits do not depend on the thread count.
+  const Eigen::Index stripes = ssi_data_stripes(columns, width);
+  std::vector<Eigen::MatrixXd> tops(static_cast<std::size_t>(stripes));
+  parallel_for(static_cast<int>(stripes), threads, [&](int s) {
+    tops[static_cast<std::size_t>(s)] =
+        reduce_stripe(h, columns * s / stripes, columns * (s + 1) / stripes, width);
+  });
+  for (std::size_t step = 1; step < tops.size(); step *= 2) {
+    for (std::size_t s = 0; s + step < tops.size(); s += 2 * step) {
+      Eigen::MatrixXd stacked(tops[s].rows() + tops[s + step].rows(), width);
+      stacked << tops[s], tops[s + step];
+      tops[s] = reduce_past_columns(stacked, past);
+    }
+  }
+  return tops.front().transpose();
 }
 
 SsiFactor ssi_data_factor(const Eigen::MatrixXd& y, const std::vector<int>& references,
-                          int block_rows, int max_order) {
+                          int block_rows, int max_order, int threads) {
   const Eigen::Index p = block_rows;
   const Eigen::Index l = y.cols();
-  const Eigen::MatrixXd lower = ssi_data_past_columns(y, references, block_rows);
+  const Eigen::MatrixXd lower = ssi_data_past_columns(y, references, block_rows, threads);
   // The projection of the future outputs on the past references is L21 Q1^T; Q1 has orthonormal
   // rows, so its left singular vectors and singular values are those of L21.
   const Eigen::MatrixXd l21 = lower.bottomRows(p * l);

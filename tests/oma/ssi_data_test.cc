@@ -84,6 +84,19 @@ TEST(SsiData, PastColumnsAreThoseOfOneHouseholderQrOfTheWholeHankelMatrix) {
   }
 }
 
+// The stripes of H^T depend on its size alone, so one thread and several give the same bits.
+TEST(SsiData, PastColumnsHaveTheSameBitsOnOneThreadAndSeveral) {
+  const ChainModel model;
+  const Eigen::MatrixXd y = model.simulate(9000, 0.1, 8);
+  const std::vector<int> refs = {0, 2};
+  const int p = 8;
+  ASSERT_GT(oma_detail::ssi_data_stripes(y.rows() - 2 * p + 1, p * 6), 2);
+  const Eigen::MatrixXd one = oma_detail::ssi_data_past_columns(y, refs, p, 1);
+  for (int threads : {2, 3, 8}) {
+    EXPECT_EQ(oma_detail::ssi_data_past_columns(y, refs, p, threads), one) << threads;
+  }
+}
+
 // A free decay y_k = C A^k x_0 (no noise): the future rows lie in the row space of the past
 // ones, so the projection is O times the states exactly. With the mean removed the record is of
 // order 9 (a constant added); every order from 10 is cut to that rank and the four modes come
