@@ -19,8 +19,7 @@ Eigen::Index ssi_data_samples_needed(int block_rows, Eigen::Index outputs,
 
 namespace {
 
-// The rows [start, start + rows) of H^T, mean removed and scaled, into the bottom rows of `out`.
-// H^T row t: y_ref(t)..y_ref(t+p-1), then y(t+p)..y(t+2p-1).
+// The record and what turns it into rows of H^T.
 struct DataHankel {
   const Eigen::MatrixXd& y;
   const std::vector<int>& references;
@@ -29,6 +28,8 @@ struct DataHankel {
   double scale;
 };
 
+// The rows [start, start + rows) of H^T, mean removed and scaled, into the bottom rows of `out`.
+// H^T row t: y_ref(t)..y_ref(t+p-1), then y(t+p)..y(t+2p-1).
 void hankel_rows(const DataHankel& h, Eigen::Index start, Eigen::Index rows, Eigen::MatrixXd& out) {
   const Eigen::Index p = h.p;
   const Eigen::Index l = h.y.cols();
