@@ -50,18 +50,19 @@ void hankel_rows(const DataHankel& h, Eigen::Index start, Eigen::Index rows, Eig
   }
 }
 
-// Householder reflections that zero the first `past` columns of `stacked` below the diagonal,
-// applied to the whole of it; returns the rows that stay nonzero in those columns ([R11 R12]).
-// R22 (future on future) is never needed, so the future columns are only transformed.
-Eigen::MatrixXd reduce_past_columns(const Eigen::MatrixXd& stacked, Eigen::Index past) {
+// Householder reflections that zero the first `past` columns of `stacked` below the diagonal
+// (in place), applied to the rest of it; returns the rows that stay nonzero in those columns
+// ([R11 R12]). R22 (future on future) is never needed, so the future columns are only transformed.
+Eigen::MatrixXd reduce_past_columns(Eigen::MatrixXd& stacked, Eigen::Index past) {
   const Eigen::Index keep = std::min(stacked.rows(), past);
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(stacked.leftCols(past));
-  Eigen::MatrixXd future = stacked.rightCols(stacked.cols() - past);
-  future.applyOnTheLeft(qr.householderQ().adjoint());
+  const Eigen::Index future = stacked.cols() - past;
+  Eigen::Ref<Eigen::MatrixXd> left = stacked.leftCols(past);
+  const Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(left);
+  stacked.rightCols(future).applyOnTheLeft(qr.householderQ().adjoint());
   Eigen::MatrixXd top(keep, stacked.cols());
   top.leftCols(past) = qr.matrixQR().topRows(keep);
   top.leftCols(past).triangularView<Eigen::StrictlyLower>().setZero();
-  top.rightCols(stacked.cols() - past) = future.topRows(keep);
+  top.rightCols(future) = stacked.rightCols(future).topRows(keep);
   return top;
 }
 
