@@ -15,6 +15,7 @@
 #include "core/internal/signal_range.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/core/parallel.h"
 #include "ctid/oma/fdd.h"
 #include "ctid/oma/ssi_cov.h"
 #include "ctid/oma/ssi_data.h"
@@ -94,10 +95,10 @@ struct RecordSsi {
 };
 
 RecordSsi record_ssi(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
-                     const OmaOptions& o, bool with_errors) {
+                     const OmaOptions& o, bool with_errors, int threads = 0) {
   RecordSsi out;
   if (o.method == OmaMethod::ssi_data) {
-    out.factor = oma_detail::ssi_data_factor(y, refs, p, o.max_order);
+    out.factor = oma_detail::ssi_data_factor(y, refs, p, o.max_order, threads);
     return out;
   }
   const Eigen::MatrixXd hankel =
@@ -212,9 +213,13 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
   const std::size_t m = modes.size();
   std::vector<std::vector<double>> f(m), z(m);
   std::vector<std::vector<Eigen::VectorXcd>> shapes(m);
-  for (int b = 0; b < nb; ++b) {
-    const Eigen::MatrixXd block = y.middleRows(b * length, length);
-    const auto factor = record_ssi(block, refs, p, o, false).factor;
+  // The blocks' factors on threads (each block on one), the matching in block order.
+  std::vector<oma_detail::SsiFactor> factors(static_cast<std::size_t>(nb));
+  parallel_for(nb, 0, [&](int b) {
+    factors[static_cast<std::size_t>(b)] =
+        record_ssi(y.middleRows(b * length, length), refs, p, o, false, 1).factor;
+  });
+  for (const oma_detail::SsiFactor& factor : factors) {
     for (std::size_t i = 0; i < m; ++i) {
       const auto poles = oma_detail::ssi_poles(factor, modes[i].order, h, o.max_damping);
       const Eigen::VectorXcd ref = shape_of(modes[i]);

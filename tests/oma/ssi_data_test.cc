@@ -1,8 +1,8 @@
-// Data-driven SSI: the LQ factor equals the data Hankel matrix's Gram matrix (chunked QR
-// included), a noise-free free decay gives the model's modes to rounding (the projection of the
-// future on the past is exact there), a simulated ambient record of the chain gives every mode
-// within its reported standard errors, records with no resonance give a verdict, and too short a
-// record is refused naming what is wrong.
+// Data-driven SSI: the past columns of the LQ factor are those of one Householder QR of the whole
+// data Hankel matrix (chunked reduction included), a noise-free free decay gives the model's
+// modes to rounding (the projection of the future on the past is exact there), a simulated ambient
+// record of the chain gives every mode within its reported standard errors, records with no
+// resonance give a verdict, and too short a record is refused naming what is wrong.
 #include "ctid/oma/ssi_data.h"
 
 #include <cmath>
@@ -31,28 +31,88 @@ OmaOptions data_options() {
   return o;
 }
 
-// L L^T = H H^T with H built here as written in the papers (p block rows of past references over
-// p block rows of future outputs, mean removed, 1/sqrt(j)); 9000 samples run the QR in chunks.
-TEST(SsiData, TriangleIsTheLqFactorOfTheDataHankelMatrix) {
-  const ChainModel model;
-  const Eigen::MatrixXd y = model.simulate(9000, 0.1, 4);
-  const std::vector<int> refs = {1, 3};
-  const int p = 6;
+// H built here as written in the papers (p block rows of past references over p block rows of
+// future outputs, mean removed, 1/sqrt(j)).
+Eigen::MatrixXd paper_hankel(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p) {
   const Eigen::Index j = y.rows() - 2 * p + 1;
+  const auto r = static_cast<Eigen::Index>(refs.size());
+  const Eigen::Index l = y.cols();
   const Eigen::MatrixXd centred = y.rowwise() - y.colwise().mean();
-  Eigen::MatrixXd hankel(p * (2 + 4), j);
-  for (int i = 0; i < p; ++i) {
-    for (int b = 0; b < 2; ++b) hankel.row(i * 2 + b) = centred.col(refs[b]).segment(i, j);
-    for (int c = 0; c < 4; ++c) hankel.row(p * 2 + i * 4 + c) = centred.col(c).segment(p + i, j);
+  Eigen::MatrixXd hankel(p * (r + l), j);
+  for (Eigen::Index i = 0; i < p; ++i) {
+    for (Eigen::Index b = 0; b < r; ++b) {
+      hankel.row(i * r + b) = centred.col(refs[static_cast<std::size_t>(b)]).segment(i, j);
+    }
+    for (Eigen::Index c = 0; c < l; ++c)
+      hankel.row(p * r + i * l + c) = centred.col(c).segment(p + i, j);
   }
-  hankel /= std::sqrt(static_cast<double>(j));
-  const Eigen::MatrixXd lower = oma_detail::ssi_data_triangle(y, refs, p);
-  ASSERT_EQ(lower.rows(), hankel.rows());
-  ASSERT_EQ(lower.cols(), hankel.rows());
-  EXPECT_TRUE(lower.isLowerTriangular(0.0));
-  const Eigen::MatrixXd gram = hankel * hankel.transpose();
-  EXPECT_LT((lower * lower.transpose() - gram).cwiseAbs().maxCoeff(),
-            1e-12 * gram.cwiseAbs().maxCoeff());
+  return hankel / std::sqrt(static_cast<double>(j));
+}
+
+// The past columns [L11; L21] against one plain Householder QR of the whole H^T (H^T = Q R,
+// L = R^T): equal up to the sign of each column, and their products with themselves equal the
+// blocks of H H^T they stand for. 9000 samples run the reduction in several stripes and chunks;
+// the cases differ in channels, references and block rows.
+TEST(SsiData, PastColumnsAreThoseOfOneHouseholderQrOfTheWholeHankelMatrix) {
+  struct Case {
+    int dofs;
+    std::vector<int> refs;
+    int p;
+    unsigned seed;
+  };
+  for (const Case& c : {Case{4, {1, 3}, 6, 4}, Case{4, {0, 1, 2, 3}, 9, 5}, Case{6, {2}, 14, 6}}) {
+    SCOPED_TRACE(c.p);
+    const ChainModel model(c.dofs);
+    const int order = 2 * c.dofs;
+    const Eigen::MatrixXd y = model.simulate(9000, 0.1, c.seed);
+    const Eigen::MatrixXd hankel = paper_hankel(y, c.refs, c.p);
+    const Eigen::Index past = c.p * static_cast<Eigen::Index>(c.refs.size());
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(hankel.transpose());
+    const Eigen::MatrixXd whole = qr.matrixQR()
+                                      .topRows(hankel.rows())
+                                      .triangularView<Eigen::Upper>()
+                                      .toDenseMatrix()
+                                      .transpose();
+    const Eigen::MatrixXd lower = oma_detail::ssi_data_past_columns(y, c.refs, c.p);
+    ASSERT_EQ(lower.rows(), hankel.rows());
+    ASSERT_EQ(lower.cols(), past);
+    EXPECT_TRUE(lower.topRows(past).isLowerTriangular(0.0));
+    const double size = whole.cwiseAbs().maxCoeff();
+    EXPECT_LT((lower.cwiseAbs() - whole.leftCols(past).cwiseAbs()).cwiseAbs().maxCoeff(),
+              1e-10 * size);
+    const Eigen::MatrixXd gram = hankel * hankel.transpose();
+    EXPECT_LT((lower * lower.topRows(past).transpose() - gram.leftCols(past)).cwiseAbs().maxCoeff(),
+              1e-12 * gram.cwiseAbs().maxCoeff());
+    // Issue 38's rounding rule: the poles of order 2 x dofs (every mode) from the SVD of the whole
+    // QR's L21 and from ssi_data_factor agree to 1e-9 relative, shapes included.
+    const Eigen::MatrixXd l21 = whole.block(past, 0, c.p * c.dofs, past);
+    const Eigen::BDCSVD<Eigen::MatrixXd> svd(l21, Eigen::ComputeThinU);
+    const auto reference = oma_detail::ssi_poles(
+        oma_detail::observability_factor(svd.matrixU(), svd.singularValues(), c.dofs, order), order,
+        model.h, 0.2);
+    const auto poles = oma_detail::ssi_poles(oma_detail::ssi_data_factor(y, c.refs, c.p, order),
+                                             order, model.h, 0.2);
+    ASSERT_EQ(poles.size(), reference.size());
+    ASSERT_FALSE(poles.empty());
+    for (std::size_t i = 0; i < poles.size(); ++i) {
+      EXPECT_NEAR(poles[i].frequency_hz / reference[i].frequency_hz, 1.0, 1e-9);
+      EXPECT_NEAR(poles[i].damping_ratio / reference[i].damping_ratio, 1.0, 1e-9);
+      EXPECT_LT((poles[i].shape - reference[i].shape).cwiseAbs().maxCoeff(), 1e-9);
+    }
+  }
+}
+
+// The stripes of H^T depend on its size alone, so one thread and several give the same bits.
+TEST(SsiData, PastColumnsHaveTheSameBitsOnOneThreadAndSeveral) {
+  const ChainModel model;
+  const Eigen::MatrixXd y = model.simulate(9000, 0.1, 8);
+  const std::vector<int> refs = {0, 2};
+  const int p = 8;
+  ASSERT_GT(oma_detail::ssi_data_stripes(y.rows() - 2 * p + 1, p * 6), 2);
+  const Eigen::MatrixXd one = oma_detail::ssi_data_past_columns(y, refs, p, 1);
+  for (int threads : {2, 3, 8}) {
+    EXPECT_EQ(oma_detail::ssi_data_past_columns(y, refs, p, threads), one) << threads;
+  }
 }
 
 // A free decay y_k = C A^k x_0 (no noise): the future rows lie in the row space of the past
