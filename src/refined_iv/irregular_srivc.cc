@@ -33,7 +33,7 @@ void IrregularRecord::validate() const {
   require(input.size() == n && output.size() == n, "irregular record: ", n, " time stamps, ",
           input.size(), " input and ", output.size(), " output samples; the sizes must agree");
   require(n >= 2, "irregular record: ", n, " samples; at least 2 are needed");
-  check_time_stamps(time, "irregular record");
+  check_stamp_order(time, "irregular record");
   for (Eigen::Index k = 0; k < n; ++k) {
     require(std::isfinite(input(k)), "irregular record: input sample ", k, " is ", input(k));
     require(std::isfinite(output(k)), "irregular record: output sample ", k, " is ", output(k));

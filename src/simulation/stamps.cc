@@ -27,7 +27,7 @@ void check_simulation_inputs(const TransferFunction& g, const Eigen::VectorXd& t
                              const Eigen::VectorXd& u) {
   require(time.size() == u.size(), "simulate_on_stamps: ", time.size(), " time stamps and ",
           u.size(), " input samples; the sizes must agree");
-  check_time_stamps(time, "simulate_on_stamps");
+  check_stamp_order(time, "simulate_on_stamps");
   for (Eigen::Index k = 0; k < u.size(); ++k) {
     require(std::isfinite(u(k)), "simulate_on_stamps: input u[", k, "] is not finite (", u(k), ")");
   }
@@ -50,7 +50,7 @@ Eigen::VectorXd stamps_response(const TransferFunction& g, const Eigen::VectorXd
 
 }  // namespace
 
-void check_time_stamps(const Eigen::VectorXd& time, std::string_view context) {
+void check_stamp_order(const Eigen::VectorXd& time, std::string_view context) {
   for (Eigen::Index k = 0; k < time.size(); ++k) {
     require(std::isfinite(time(k)), context, ": time stamp ", k, " is ", time(k),
             "; every stamp must be finite");
@@ -118,7 +118,7 @@ Eigen::VectorXd simulate_on_stamps(const AdditiveModel& g, const Eigen::VectorXd
     check_simulation_inputs(part, time, u);
     y += stamps_response(part.with_input_delay(0.0), time, u, hold);
   }
-  if (g.size() == 0) check_time_stamps(time, "simulate_on_stamps");
+  if (g.size() == 0) check_stamp_order(time, "simulate_on_stamps");
   return y;
 }
 

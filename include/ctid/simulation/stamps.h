@@ -20,12 +20,12 @@ namespace ctid {
 /// Throws InvalidArgument, the message starting with `context`, for the first stamp that is
 /// not finite or that goes back before the one before it (naming both); equal stamps are
 /// allowed.
-void check_time_stamps(const Eigen::VectorXd& time, std::string_view context);
+void check_stamp_order(const Eigen::VectorXd& time, std::string_view context);
 
 /// Row k holds c z(t_k) + d x_k for dz/dt = a z + b x from z(t_0) = 0, x continued between
 /// the stamps as `hold` says: a is s x s, b has s entries, c is r x s, d has r entries (one
 /// input, r outputs). The discretisation of each distinct interval length is computed once
-/// per call. The stamps must be non-decreasing (not checked here: check_time_stamps).
+/// per call. The stamps must be non-decreasing (not checked here: check_stamp_order).
 Eigen::MatrixXd run_on_stamps(const Eigen::MatrixXd& a, const Eigen::VectorXd& b,
                               const Eigen::MatrixXd& c, const Eigen::VectorXd& d,
                               const Eigen::VectorXd& time, const Eigen::VectorXd& x, Hold hold);
