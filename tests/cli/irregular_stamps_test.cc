@@ -73,6 +73,21 @@ TEST_F(IrregularStamps, SimulateWritesTheModelAtTheStampsAsGiven) {
   }
 }
 
+TEST_F(IrregularStamps, AModelWithAnInputDelayIsSimulatedAndValidatedOnTheStamps) {
+  const std::string model = write("g.json", R"({"type": "transfer_function",
+      "numerator_ascending": [2, 0.3], "denominator_ascending": [1, 0.4, 0.25],
+      "input_delay": 0.137})");
+  const std::string in = write("in.csv", input_csv(400));
+  ASSERT_EQ(ctid({"simulate", "-m", model, "-i", in, "--irregular", "-o", "d.csv"}).status, 0);
+  const io::CsvTable given = io::read_csv(in);
+  const TransferFunction g(Polynomial{2.0, 0.3}, Polynomial{1.0, 0.4, 0.25}, 0.137);
+  EXPECT_EQ(io::read_csv(path("d.csv")).column("y"),
+            simulate_on_stamps(g, given.column("t"), given.column("u"), Hold::zero_order_hold));
+  const auto v = ctid({"validate", model, "d.csv", "--irregular", "-o", "r.json"});
+  ASSERT_EQ(v.status, 0) << v.err;
+  EXPECT_NEAR(io::read_json(path("r.json")).at("fit_percent").get<double>(), 100.0, 1e-9);
+}
+
 TEST_F(IrregularStamps, AModelFittedOnTheStampsValidatesAtAHundredPercent) {
   const std::string model = write("g.json", kModel);
   const std::string in = write("in.csv", input_csv());

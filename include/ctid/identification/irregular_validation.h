@@ -17,8 +17,8 @@ namespace ctid {
 /// rest, on the stamps t_k with window_start <= t_k <= window_end (a tolerance of 1e-6 of the
 /// median step). fit_zero_state is fit_percent; fit_estimated_state is NaN and states 0
 /// (InitialState::estimate is refused). Throws InvalidArgument for a bad record
-/// (IrregularRecord::validate), options.initial_state = estimate, a model with an input delay,
-/// an improper model, or a window outside the record or holding fewer than 2 stamps.
+/// (IrregularRecord::validate), options.initial_state = estimate, an improper model, or a
+/// window outside the record or holding fewer than 2 stamps.
 ValidationReport validate_model(const AdditiveModel& model, const IrregularRecord& record,
                                 const ValidationOptions& options = {});
 

@@ -32,9 +32,12 @@ Eigen::MatrixXd run_on_stamps(const Eigen::MatrixXd& a, const Eigen::VectorXd& b
 
 /// y(t_k) of G driven by the input u_k at the stamps t_k, held as `hold` says, from rest at
 /// t_0 (a biproper model's y_k includes D u_k). Equal stamps are allowed (the state does not
-/// move between them). Throws InvalidArgument for sizes that differ, a stamp that is not
-/// finite or goes backwards, a non-finite input, an improper model or a model with an input
-/// delay (not supported on irregular stamps; decision 0053).
+/// move between them). An input delay tau is exact: the held input u(t - tau) changes at
+/// t_j + tau, and those times are stepped to as well; it is zero before the record (with a
+/// FOH it ramps from 0 one first step t_1 - t_0 before t_0, as simulate's u_{-1} = 0 does), so
+/// on uniform stamps the result is the uniform simulation's, delay included (decision 0053).
+/// Throws InvalidArgument for sizes that differ, a stamp that is not finite or goes
+/// backwards, a non-finite input or an improper model.
 Eigen::VectorXd simulate_on_stamps(const TransferFunction& g, const Eigen::VectorXd& time,
                                    const Eigen::VectorXd& u, Hold hold = Hold::zero_order_hold);
 /// The sum of the submodels' responses.
