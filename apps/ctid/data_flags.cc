@@ -309,9 +309,9 @@ SampledData DataFlags::load_file(const std::string& path, const CLI::App& app,
 IrregularRecord DataFlags::load_irregular(const CLI::App& app) const {
   for (const char* flag :
        {"--resample", "--sample-time", "--rows", "--time", "--decimate", "--reference-column"}) {
-    if (app.count(flag) > 0) {
+    if (app.get_option_no_throw(flag) != nullptr && app.count(flag) > 0) {
       usage_error(std::string(flag) +
-                  " does not go with --irregular, which fits the time stamps as logged "
+                  " does not go with --irregular, which takes the time stamps as logged "
                   "(docs/decisions/0034)");
     }
   }

@@ -71,7 +71,8 @@ struct DataFlags {
   /// (core/mimo_preprocessing.h); --resample and --reference-column are usage errors.
   MimoData load_mimo(const CLI::App& app) const;
 
-  /// Reads `file` as a record at irregular time stamps (fit --irregular, decision 0034): the
+  /// Reads `file` as a record at irregular time stamps (fit and validate --irregular, decisions
+  /// 0034 and 0053): the
   /// time column as logged (duplicates and gaps kept), u and y, the input hold from
   /// --input-hold or the file's declaration. Of the preprocessing only --detrend none|mean
   /// and --scale-input/--scale-output apply; --resample, --sample-time, --rows, --time,

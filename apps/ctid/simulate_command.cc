@@ -36,6 +36,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
+#include "ctid/simulation/stamps.h"
 #include "data_flags.h"
 
 namespace ctid::cli {
@@ -74,7 +75,8 @@ struct SimulateFlags {
   double nsr = 0.0;
   bool quiet = false;
 
-  std::string hold;  ///< zoh or foh; empty: zoh for a model, foh for a delayed_feedback_loop
+  std::string hold;        ///< zoh or foh; empty: zoh for a model, foh for a delayed_feedback_loop
+  bool irregular = false;  ///< simulate at the input file's time stamps as given (0053)
   // Delayed-feedback loop only.
   // Not DelayedSimulationOptions{}.substeps (20): `ctid simulate` has documented 4
   // (docs/cli.md) since it was written, and changing it would change the data it writes.
@@ -358,9 +360,61 @@ void run_simulate_mimo(const SimulateFlags& f, CLI::App& app, const nlohmann::js
   }
 }
 
+// --irregular: the model at the time stamps of --input as they are (jitter, gaps, equal
+// stamps), the input continued by --hold, nothing resampled (docs/decisions/0053). What needs
+// a uniform grid is refused naming the flag.
+void run_simulate_irregular(const SimulateFlags& f, CLI::App& app, const nlohmann::json& document) {
+  const std::string why =
+      " does not go with --irregular (an open-loop model at the input file's time stamps; "
+      "docs/decisions/0053)";
+  if (io::is_delayed_feedback_loop(document) || io::is_delayed_feedback_result(document)) {
+    usage_error(f.model + " holds a delayed_feedback_loop;" + why.substr(1));
+  }
+  if (document.is_object() && document.value("type", "") == io::kMimoAdditiveModelType) {
+    usage_error(f.model + " holds a mimo_additive_model;" + why.substr(1));
+  }
+  for (const char* flag : {"--excitation", "--excitation-spec", "--controller", "--sample-time",
+                           "--noise-filter", "--nsr", "--substeps"}) {
+    if (app.count(flag) > 0) usage_error(std::string(flag) + why);
+  }
+  if (f.input.empty()) usage_error("--irregular needs --input, a file with a time column");
+  reject_unused_signal_flags(app, "--input (it applies to generated input)", std::nullopt);
+  const io::CsvTable table = io::read_table(f.input);
+  if (!table.has_column(f.time_column)) {
+    usage_error(internal::concat("--irregular needs the time stamps, but ", f.input,
+                                 " has no time column '", f.time_column,
+                                 "'; name it with --time-column"));
+  }
+  const Eigen::VectorXd& t = table.column(f.time_column);
+  const Eigen::VectorXd& u = table.column(f.input_column);
+  check_stamp_order(t, f.input + ": time column '" + f.time_column + "'");
+  const io::ContinuousModel model = read_model_or_result(document, f.model);
+  const Hold hold = f.hold == "foh" ? Hold::first_order_hold : Hold::zero_order_hold;
+  const Eigen::VectorXd noise_free =
+      std::visit([&](const auto& g) { return simulate_on_stamps(g, t, u, hold); }, model);
+  const Eigen::VectorXd v = output_noise(f.noise, noise_free, 1.0);
+  io::CsvTable written;
+  if (hold == Hold::first_order_hold) written.declarations.push_back({"input_hold", "foh", 0});
+  written.add_column("t", t);
+  written.add_column("u", u);
+  written.add_column("y", v.size() == 0 ? noise_free : Eigen::VectorXd(noise_free + v));
+  io::write_csv(f.output, written, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  if (!f.quiet) {
+    int duplicates = 0;
+    for (Eigen::Index k = 1; k < t.size(); ++k) duplicates += t(k) == t(k - 1) ? 1 : 0;
+    std::cout << "wrote " << t.size() << " samples (t,u,y at the time stamps of " << f.input << ", "
+              << duplicates << " duplicate" << (duplicates == 1 ? "" : "s") << ", open loop, input "
+              << (hold == Hold::first_order_hold ? "foh" : "zoh") << ") to " << f.output << "\n";
+  }
+}
+
 void run_simulate(const SimulateFlags& f, CLI::App& app) {
   const std::filesystem::path output = f.output;
   const nlohmann::json document = io::read_json(f.model);
+  if (f.irregular) {
+    run_simulate_irregular(f, app, document);
+    return;
+  }
   if (io::is_delayed_feedback_loop(document) || io::is_delayed_feedback_result(document)) {
     run_simulate_loop(f, app, document);
     return;
@@ -483,6 +537,12 @@ Command add_simulate_command(CLI::App& parent) {
   app->add_option("--time-column", f.time_column,
                   "Time column of --input; if present, its uniform step is the sample time")
       ->capture_default_str()
+      ->group("Input from a file");
+
+  app->add_flag("--irregular", f.irregular,
+                "Simulate at the time stamps of --input as they are (jitter, gaps, equal "
+                "stamps), the input continued by --hold; open loop, nothing resampled "
+                "(docs/decisions/0053)")
       ->group("Input from a file");
 
   auto* excitation = app->add_option("--excitation,-e", f.excitation,

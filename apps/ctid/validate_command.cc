@@ -26,6 +26,7 @@
 #include "ctid/core/preprocessing.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/identification/feedback_loop.h"
+#include "ctid/identification/irregular_validation.h"
 #include "ctid/io/feedback_result_json.h"
 #include "ctid/io/fields_json.h"
 #include "ctid/io/json.h"
@@ -52,6 +53,7 @@ struct ValidateFlags {
   std::string plot;
   std::string hold = "foh";
   int substeps = OutputErrorOptions{}.substeps;
+  bool irregular = false;  ///< judge the model on the record's time stamps as logged (0053)
   bool force = false;
   bool quiet = false;
 };
@@ -280,6 +282,68 @@ void run_validate_mimo(const ValidateFlags& f, const CLI::App& app, const MimoAd
   if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
 }
 
+// What --irregular does not take, each refused naming the flag (decision 0053).
+void check_validate_irregular_flags(const ValidateFlags& f, const CLI::App& app, bool several) {
+  const std::string why =
+      " does not go with --irregular (a SISO model simulated from rest at the record's time "
+      "stamps; docs/decisions/0053)";
+  if (several) usage_error("several models" + why);
+  if (f.data.mimo_asked(app)) usage_error("--input-columns / --output-columns" + why);
+  for (const char* flag : {"--plot", "--hold", "--substeps"}) {
+    if (app.count(flag) > 0) usage_error(std::string(flag) + why);
+  }
+  if (f.options.initial_state == InitialState::estimate) {
+    usage_error("--initial-state estimate" + why);
+  }
+  if (f.data.detrend == "fit") usage_error("--detrend fit" + why);
+  if (mimo_model_in(f.model))
+    usage_error(f.model + " has several inputs or outputs;" + why.substr(1));
+  if (loop_in(f.model)) {
+    usage_error(f.model + " holds a closed loop with delayed feedback;" + why.substr(1));
+  }
+}
+
+// --irregular: validate_model on the stamps as logged (identification/irregular_validation.h).
+void run_validate_irregular(const ValidateFlags& f, const CLI::App& app,
+                            const ValidationOptions& options, bool windowed) {
+  const io::FittedModel fitted = io::read_fitted_model(f.model);
+  const IrregularRecord record = f.data.load_irregular(app);
+  ValidationReport report;
+  try {
+    report = validate_model(fitted.model, record, options);
+  } catch (const InvalidArgument& error) {
+    if (!windowed) throw;
+    window_error(f, error);
+  }
+  const auto samples = static_cast<int>(record.time.size());
+  const double median = record.median_step();
+  int duplicates = 0;
+  for (Eigen::Index k = 1; k < record.time.size(); ++k) {
+    duplicates += record.time(k) == record.time(k - 1) ? 1 : 0;
+  }
+  if (!f.output.empty()) {
+    nlohmann::json document = io::to_json(report);
+    document["model_file"] = f.model;
+    document["data"] = io::to_json(io::DataProvenance{.files = {f.data.file},
+                                                      .samples = samples,
+                                                      .sample_time = median,
+                                                      .input_hold = record.input_hold,
+                                                      .duplicate_stamps = duplicates,
+                                                      .detrend = f.data.detrend});
+    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  }
+  if (f.quiet) return;
+  std::cout << "ctid validate: " << f.model << " on " << f.data.file << " (N = " << samples
+            << ", irregular time stamps, " << duplicates << " duplicate"
+            << (duplicates == 1 ? "" : "s") << ", steps " << format_brief(median)
+            << " s median, input " << enum_name(record.input_hold) << ")\n"
+            << "initial state: zero; scored " << format_number(report.window_start) << " to "
+            << format_number(report.window_end) << " s (" << report.window_samples
+            << " stamps); correlation lags count samples, not time\n";
+  print_statistics(report);
+  if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
+}
+
 void run_validate(const ValidateFlags& f, const CLI::App& app) {
   std::vector<std::string> files{f.model};
   files.insert(files.end(), f.more_models.begin(), f.more_models.end());
@@ -297,6 +361,11 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
   }
   const bool windowed = options.window_start || options.window_end;
   options.validate();  // named by its flags, before anything is read
+  if (f.irregular) {
+    check_validate_irregular_flags(f, app, several);
+    run_validate_irregular(f, app, options, windowed);
+    return;
+  }
 
   if (const std::optional<MimoAdditiveModel> mimo = mimo_model_in(f.model)) {
     run_validate_mimo(f, app, *mimo, options, several, windowed);
@@ -436,6 +505,11 @@ Command add_validate_command(CLI::App& parent) {
   app->add_option("models", f.more_models, "More model JSON files to compare on the same data")
       ->check(CLI::ExistingFile);
   add_field_flags(*app, f.options);
+  app->add_flag("--irregular", f.irregular,
+                "Judge the model on the record's time stamps as logged (jitter, gaps, equal "
+                "stamps), simulated from rest with the input hold of --input-hold or the file; "
+                "one input and output, nothing resampled (docs/decisions/0053)")
+      ->group("Data");
   app->add_option("--window", f.window,
                   "Score only START:END (seconds on the record's time axis, inclusive; either "
                   "may be empty); the simulation still starts at the record's first sample");

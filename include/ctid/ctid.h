@@ -27,6 +27,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
+#include "ctid/simulation/stamps.h"
 #include "ctid/simulation/time_response.h"
 
 #include "ctid/frequency/frf.h"
@@ -86,6 +87,7 @@
 #include "ctid/identification/feedback_loop.h"
 #include "ctid/identification/frf_matrix.h"
 #include "ctid/identification/identification.h"
+#include "ctid/identification/irregular_validation.h"
 #include "ctid/identification/mimo.h"
 #include "ctid/identification/mode_tracking.h"
 #include "ctid/identification/output_only.h"

@@ -6,6 +6,7 @@
 #include "common.h"
 #include "ctid/identification/frf_matrix.h"
 #include "ctid/identification/identification.h"
+#include "ctid/identification/irregular_validation.h"
 #include "ctid/identification/mimo.h"
 #include "ctid/identification/mode_tracking.h"
 #include "ctid/identification/structure_scan.h"
@@ -196,6 +197,18 @@ void bind_identification(py::module_& m) {
       "Fit every candidate structure on the first part of the record, score it on the held-out "
       "end (fit, YIC, RT2, AIC, BIC) and recommend one, as `ctid structure` does.");
   bind_mode_tracking(m);  // mode tracking (issue 17)
+  m.def(
+      "validate_on_stamps",
+      [](const AdditiveModel& model, const Eigen::VectorXd& time, const Eigen::VectorXd& input,
+         const Eigen::VectorXd& output, Hold input_hold, const ValidationOptions& options) {
+        const IrregularRecord record{time, input, output, input_hold};
+        return validate_model(model, record, options);
+      },
+      py::arg("model"), py::arg("time"), py::arg("input"), py::arg("output"),
+      py::arg("input_hold") = Hold::zero_order_hold, py::arg("options") = ValidationOptions{},
+      "validate_model on irregular time stamps as logged (non-decreasing, equal stamps "
+      "allowed): the model simulated from rest at the stamps with input_hold and scored on "
+      "options' window; correlation lags count samples (docs/decisions/0053).");
 }
 
 }  // namespace ctid::python

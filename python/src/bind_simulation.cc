@@ -8,6 +8,7 @@
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
+#include "ctid/simulation/stamps.h"
 #include "fields.h"
 
 namespace ctid::python {
@@ -52,6 +53,20 @@ void bind_simulation(py::module_& m) {
   m.def("simulate_submodels", &simulate_submodels, py::arg("g"), py::arg("u"),
         py::arg("sample_time"),
         "Column i: response of submodel i (rows sum to simulate(g, u, h)).");
+
+  // At irregular time stamps (decision 0053).
+  m.def("simulate_on_stamps",
+        py::overload_cast<const TransferFunction&, const Eigen::VectorXd&, const Eigen::VectorXd&,
+                          Hold>(&simulate_on_stamps),
+        py::arg("g"), py::arg("time"), py::arg("u"), py::arg("hold") = Hold::zero_order_hold,
+        "y(t_k) of G driven by u_k at the stamps t_k (non-decreasing, equal stamps allowed), "
+        "held as `hold` says, from rest at t_0; nothing resampled.");
+  m.def(
+      "simulate_on_stamps",
+      py::overload_cast<const AdditiveModel&, const Eigen::VectorXd&, const Eigen::VectorXd&, Hold>(
+          &simulate_on_stamps),
+      py::arg("g"), py::arg("time"), py::arg("u"), py::arg("hold") = Hold::zero_order_hold,
+      "The same for an additive model.");
 
   // Sampled-data closed loop.
   py::class_<ClosedLoopSimulation>(m, "ClosedLoopSimulation",

@@ -50,3 +50,33 @@ def test_a_stamp_that_goes_back_is_refused():
     t[50] = t[48]
     with pytest.raises(ValueError, match="time stamp 50 .* goes back"):
         ctid.srivc_irregular(t, u, y, ctid.SubmodelOrder(2, 1))
+
+
+# (2 + 0.3 s) / (1 + 0.4 s + 0.25 s^2), the system jittered_record simulates.
+def true_model():
+    return ctid.TransferFunction([2.0, 0.3], [1.0, 0.4, 0.25])
+
+
+def test_simulate_on_stamps_is_the_exact_response_at_the_stamps():
+    t, u, y = jittered_record()
+    simulated = ctid.simulate_on_stamps(true_model(), t, u, ctid.Hold.zero_order_hold)
+    assert np.max(np.abs(simulated - y)) < 1e-10 * np.max(np.abs(y))
+
+
+def test_simulate_on_uniform_stamps_is_simulate():
+    u = np.random.default_rng(2).standard_normal(300)
+    t = 0.5 + 0.05 * np.arange(300)
+    expected = ctid.simulate(true_model(), u, 0.05)
+    assert np.max(np.abs(ctid.simulate_on_stamps(true_model(), t, u) - expected)) < 1e-12
+
+
+def test_validate_on_stamps_scores_a_noise_free_record_at_a_hundred_percent():
+    t, u, y = jittered_record()
+    model = ctid.AdditiveModel([ctid.Submodel(ctid.Polynomial([1.0, 0.4, 0.25]),
+                                              ctid.Polynomial([2.0, 0.3]))])
+    report = ctid.validate_on_stamps(model, t, u, y, ctid.Hold.zero_order_hold)
+    assert abs(report.fit_percent - 100.0) < 1e-8
+    assert report.window_samples == len(t)
+    with pytest.raises(ValueError, match="time stamp 7 .* goes back before stamp 6"):
+        t[7] = t[5] - 0.01
+        ctid.validate_on_stamps(model, t, u, y)

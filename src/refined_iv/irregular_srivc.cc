@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -23,7 +22,7 @@
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/srivc.h"
-#include "ctid/simulation/discretization.h"
+#include "ctid/simulation/stamps.h"
 #include "estimation/internal/scaled_least_squares.h"
 #include "refined_iv/internal/refined_iv_engine.h"
 
@@ -34,16 +33,8 @@ void IrregularRecord::validate() const {
   require(input.size() == n && output.size() == n, "irregular record: ", n, " time stamps, ",
           input.size(), " input and ", output.size(), " output samples; the sizes must agree");
   require(n >= 2, "irregular record: ", n, " samples; at least 2 are needed");
+  check_stamp_order(time, "irregular record");
   for (Eigen::Index k = 0; k < n; ++k) {
-    require(std::isfinite(time(k)), "irregular record: time stamp ", k, " is ", time(k),
-            "; every stamp must be finite");
-    // (require evaluates its message parts: time(k - 1) only from k = 1)
-    if (k > 0) {
-      require(time(k) >= time(k - 1), "irregular record: time stamp ", k, " (",
-              format_number(time(k)), " s) goes back before stamp ", k - 1, " (",
-              format_number(time(k - 1)),
-              " s); stamps must not decrease (equal stamps are allowed)");
-    }
     require(std::isfinite(input(k)), "irregular record: input sample ", k, " is ", input(k));
     require(std::isfinite(output(k)), "irregular record: output sample ", k, " is ", output(k));
   }
@@ -64,54 +55,11 @@ double IrregularRecord::median_step() const {
 
 namespace irregular_srivc_detail {
 
-// One interval's exact recursion z+ = phi z + g0 x_k + g1 x_k+1 (g1 = 0 for the ZOH).
-struct IntervalStep {
-  Eigen::MatrixXd phi;
-  Eigen::VectorXd g0;
-  Eigen::VectorXd g1;
-};
-
 // Runs `filter` over x at the stamps t from rest at the first stamp: row k is C z(t_k) +
-// d x_k. A zero-length interval leaves the state where it is. The discretisation of each
-// distinct interval length is computed once per call (loggers repeat a few step lengths).
+// d x_k (simulation/stamps.h).
 Eigen::MatrixXd run_on_stamps(const FilterRealization& filter, const Eigen::VectorXd& t,
                               const Eigen::VectorXd& x, Hold hold) {
-  const Eigen::Index n = t.size();
-  const int s = filter.order();
-  // At most kCached lengths are kept (stamps with fine jitter rarely repeat a length).
-  constexpr size_t kCached = 4096;
-  std::map<double, IntervalStep> steps;
-  IntervalStep uncached;
-  auto step_for = [&](double h) -> const IntervalStep& {
-    auto found = steps.find(h);
-    if (found != steps.end()) return found->second;
-    IntervalStep step;
-    if (hold == Hold::zero_order_hold) {
-      ZohDiscretization d = discretize_zoh(filter.a, filter.b, h);
-      step = {std::move(d.phi), d.gamma.col(0), Eigen::VectorXd::Zero(s)};
-    } else {
-      FohDiscretization d = discretize_foh(filter.a, filter.b, h);
-      step = {std::move(d.phi), d.gamma0.col(0), d.gamma1.col(0)};
-    }
-    if (steps.size() >= kCached) {
-      uncached = std::move(step);
-      return uncached;
-    }
-    return steps.emplace(h, std::move(step)).first->second;
-  };
-  Eigen::MatrixXd out(n, filter.outputs());
-  Eigen::VectorXd z = Eigen::VectorXd::Zero(s);
-  Eigen::VectorXd next(s);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    if (k > 0 && t(k) > t(k - 1)) {
-      const IntervalStep& step = step_for(t(k) - t(k - 1));
-      next.noalias() = step.phi * z;
-      next += step.g0 * x(k - 1) + step.g1 * x(k);
-      z.swap(next);
-    }
-    out.row(k) = (filter.c * z + filter.d * x(k)).transpose();
-  }
-  return out;
+  return ctid::run_on_stamps(filter.a, filter.b, filter.c, filter.d, t, x, hold);
 }
 
 // The filtered signals of (30) at theta = [a_1..a_n, b_0..b_m]: the instrument psi (10), the
