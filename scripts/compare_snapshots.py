@@ -112,11 +112,27 @@ def is_number(value):
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
+def renamed_paths(old, new, name):
+    """old's {path: value} under the names RENAMED gives them (paths new also has are kept)."""
+    renamed = {}
+    for path, value in old.items():
+        if path in new:  # both sides already in the same schema: nothing to rename
+            renamed[path] = value
+            continue
+        for old_prefix, new_prefix in RENAMED.get(name, []):
+            if path.startswith(old_prefix):
+                path = None if new_prefix is None else new_prefix + path[len(old_prefix):]
+                break
+        if path is not None:
+            renamed[path] = value
+    return renamed
+
+
 def compare_json_relative(before, after, name, largest):
     old_document = json.loads(before.read_text())
-    old = dict(flatten(old_document))
     new = dict(flatten(json.loads(after.read_text())))
-    scales = dict(list_scales(old_document))
+    old = renamed_paths(dict(flatten(old_document)), new, name)
+    scales = renamed_paths(dict(list_scales(old_document)), new, name)
     problems = []
     for path, value in old.items():
         if path.rsplit(".", 1)[-1] == TIMING_KEY:
@@ -155,20 +171,8 @@ def compare_text_relative(before, after, name, largest):
 
 
 def compare_json(before, after, name):
-    old = dict(flatten(json.loads(before.read_text())))
     new = dict(flatten(json.loads(after.read_text())))
-    renamed = {}
-    for path, value in old.items():
-        if path in new:  # both sides already in the same schema: nothing to rename
-            renamed[path] = value
-            continue
-        for old_prefix, new_prefix in RENAMED.get(name, []):
-            if path.startswith(old_prefix):
-                path = None if new_prefix is None else new_prefix + path[len(old_prefix):]
-                break
-        if path is not None:
-            renamed[path] = value
-    old = renamed
+    old = renamed_paths(dict(flatten(json.loads(before.read_text()))), new, name)
     problems = []
     for path, value in old.items():
         if path.rsplit(".", 1)[-1] == TIMING_KEY:
