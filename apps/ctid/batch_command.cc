@@ -181,9 +181,13 @@ void check_flag_name(const FitFlagsReference& fit, const std::string& key,
     // closest_name words it for the command line ("did you mean --modes?"); a manifest
     // names the flag without dashes.
     std::string hint = closest_name(fit.fit(), {"--" + key});
-    if (const auto dashes = hint.find("--"); dashes != std::string::npos) {
-      hint =
-          hint.substr(0, dashes) + "'" + hint.substr(dashes + 2, hint.size() - dashes - 3) + "'?";
+    const std::string guess = "did you mean --";
+    if (hint.rfind(guess, 0) == 0) {
+      hint = "did you mean '" + hint.substr(guess.size(), hint.size() - guess.size() - 1) + "'?";
+    } else {
+      // A renamed flag ("--delay is now --input-delay-samples, ..."): the names without dashes.
+      for (auto dashes = hint.find("--"); dashes != std::string::npos; dashes = hint.find("--"))
+        hint.erase(dashes, 2);
     }
     usage_error(context + ": field '" + key + "' is not a ctid fit flag" +
                 (hint.empty() ? " (see 'ctid fit --help')" : "; " + hint));

@@ -26,7 +26,7 @@ ONE_MODE = {"type": "additive_model", "input_delay": 0.0, "submodels": [
     {"denominator_ascending": [1.0, 0.04, 0.04], "numerator_ascending": [2.0]}]}
 RECORDS = 8
 # A delay scan makes each fit last a few tenths of a second, so that a kill lands mid-record.
-SPEC = {"modes": 1, "delay-scan": "0:6"}
+SPEC = {"modes": 1, "delay-scan-samples": "0:6"}
 
 
 def _documents(folder):

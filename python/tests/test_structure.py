@@ -156,7 +156,7 @@ def test_no_usable_fit_is_worse_than_a_structure_it_contains():
     data = ctid.SampledData(h, table[:, names.index("u_heater_voltage")],
                             table[:, names.index("y_outlet_temperature")])
     options = ctid.StructureScanOptions()
-    options.identification.refined_iv.input_delay = 5
+    options.identification.refined_iv.input_delay_samples = 5
     candidates = [ctid.ModelStructure.unfactored(n, n - 1) for n in range(1, 5)]
     scan = ctid.scan_structures(data, candidates, options)
     tolerance = 2 * math.sqrt(2 / scan.validation_samples)

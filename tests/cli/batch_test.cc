@@ -228,6 +228,11 @@ TEST_F(BatchCommand, BadManifestsExitTwoWithOneLine) {
   auto r = ctid({"batch", "typo.json", "--out", "out"});
   expect_bad_input(r, "batch", "field 'mdoes' is not a ctid fit flag");
   EXPECT_THAT(r.err, HasSubstr("did you mean 'modes'?"));
+  // A flag renamed by decision 0055 is named with its new spelling, in the manifest's words.
+  write("renamed.json", R"({"spec": {"delay": 1}, "records": [{"data": "records/a1.csv"}]})");
+  r = ctid({"batch", "renamed.json", "--out", "out"});
+  expect_bad_input(r, "batch", "field 'delay' is not a ctid fit flag");
+  EXPECT_THAT(r.err, HasSubstr("delay is now input-delay-samples, a count of samples"));
 
   // Names the user wrote must differ (a name derived from a path steps aside instead).
   write("twice.json", R"({"spec": {"modes": 1}, "records": [{"data": "records/a1.csv", )"
