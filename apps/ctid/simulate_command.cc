@@ -400,8 +400,7 @@ void run_simulate_irregular(const SimulateFlags& f, CLI::App& app, const nlohman
   written.add_column("y", v.size() == 0 ? noise_free : Eigen::VectorXd(noise_free + v));
   io::write_csv(f.output, written, f.force ? io::Overwrite::yes : io::Overwrite::no);
   if (!f.quiet) {
-    int duplicates = 0;
-    for (Eigen::Index k = 1; k < t.size(); ++k) duplicates += t(k) == t(k - 1) ? 1 : 0;
+    const int duplicates = duplicate_stamps(t);
     std::cout << "wrote " << t.size() << " samples (t,u,y at the time stamps of " << f.input << ", "
               << duplicates << " duplicate" << (duplicates == 1 ? "" : "s") << ", open loop, input "
               << (hold == Hold::first_order_hold ? "foh" : "zoh") << ") to " << f.output << "\n";

@@ -34,6 +34,7 @@
 #include "ctid/io/provenance.h"
 #include "ctid/io/report_json.h"
 #include "ctid/io/result_json.h"
+#include "ctid/simulation/stamps.h"
 #include "data_flags.h"
 #include "field_flags.h"
 #include "plot_support.h"
@@ -317,10 +318,7 @@ void run_validate_irregular(const ValidateFlags& f, const CLI::App& app,
   }
   const auto samples = static_cast<int>(record.time.size());
   const double median = record.median_step();
-  int duplicates = 0;
-  for (Eigen::Index k = 1; k < record.time.size(); ++k) {
-    duplicates += record.time(k) == record.time(k - 1) ? 1 : 0;
-  }
+  const int duplicates = duplicate_stamps(record.time);
   if (!f.output.empty()) {
     nlohmann::json document = io::to_json(report);
     document["model_file"] = f.model;

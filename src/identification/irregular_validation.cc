@@ -59,7 +59,8 @@ ValidationReport validate_model(const AdditiveModel& model, const IrregularRecor
           "validate_model: initial_state = estimate is not supported on irregular time stamps; "
           "the model is simulated from rest (docs/decisions/0053)");
   const StampWindow w = stamp_window(record, options);
-  const Eigen::VectorXd rest = validation_output(model, record);
+  const Eigen::VectorXd rest =
+      simulate_on_stamps(model, record.time, record.input, record.input_hold);
   // residual_report reads the samples only; the median step stands in for a sample time.
   const SampledData scored(record.median_step(), record.input.segment(w.first, w.count),
                            record.output.segment(w.first, w.count));

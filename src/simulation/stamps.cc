@@ -169,6 +169,12 @@ void check_stamp_order(const Eigen::VectorXd& time, std::string_view context) {
   }
 }
 
+int duplicate_stamps(const Eigen::VectorXd& time) {
+  int duplicates = 0;
+  for (Eigen::Index k = 1; k < time.size(); ++k) duplicates += time(k) == time(k - 1) ? 1 : 0;
+  return duplicates;
+}
+
 Eigen::MatrixXd run_on_stamps(const Eigen::MatrixXd& a, const Eigen::VectorXd& b,
                               const Eigen::MatrixXd& c, const Eigen::VectorXd& d,
                               const Eigen::VectorXd& time, const Eigen::VectorXd& x, Hold hold) {

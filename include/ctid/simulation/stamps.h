@@ -22,6 +22,9 @@ namespace ctid {
 /// allowed.
 void check_stamp_order(const Eigen::VectorXd& time, std::string_view context);
 
+/// How many stamps equal the one before them (a logger's duplicates).
+int duplicate_stamps(const Eigen::VectorXd& time);
+
 /// Row k holds c z(t_k) + d x_k for dz/dt = a z + b x from z(t_0) = 0, x continued between
 /// the stamps as `hold` says: a is s x s, b has s entries, c is r x s, d has r entries (one
 /// input, r outputs). The discretisation of each distinct interval length is computed once
