@@ -39,6 +39,7 @@
 
 #include "ctid/filtering/filter_bank.h"
 
+#include "ctid/estimation/arma.h"
 #include "ctid/estimation/mimo_modes.h"
 #include "ctid/estimation/residual_correlation.h"
 #include "ctid/estimation/termination.h"

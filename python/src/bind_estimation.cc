@@ -1,6 +1,7 @@
 // Python bindings of the shared estimation base: the Termination of every iterative method, model
 // output, fit, the quality verdict and the residual tests of a model on data (validation.h).
 #include "common.h"
+#include "ctid/estimation/arma.h"
 #include "ctid/estimation/residual_correlation.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/validation.h"
@@ -28,6 +29,15 @@ void bind_estimation(py::module_& m) {
       py::arg("residual"), py::arg("input"), py::arg("max_lag"),
       "(r_ee at lags 0..max_lag, r_eu at lags -max_lag..max_lag), means removed "
       "(estimation/residual_correlation.h).");
+  bind_result<ArmaModel>(m, "ARMA noise model D v = C e with standard errors (arma.h).");
+  m.def("fit_arma", &fit_arma, py::arg("v"), py::arg("ar_order"), py::arg("ma_order"),
+        py::arg("record_starts") = std::vector<Eigen::Index>{},
+        "ARMA(p, q) of v by prediction-error minimisation from the Hannan-Rissanen estimate.");
+  m.def("fit_arma_by_criterion", &fit_arma_by_criterion, py::arg("v"), py::arg("max_order"),
+        py::arg("record_starts") = std::vector<Eigen::Index>{},
+        "ARMA orders in 0..max_order each with the smallest BIC, fitted.");
+  m.def("arma_innovations", &arma_innovations, py::arg("model"), py::arg("v"),
+        py::arg("record_starts") = std::vector<Eigen::Index>{}, "e = (D/C) v from rest.");
   bind_enum<InitialState>(m, "InitialState", "Where validate_model's simulation starts.");
   bind_options<ValidationOptions>(m, "Options of validate_model: initial state and window.");
   bind_result<ValidationReport>(m, "Residual statistics of a model.")
