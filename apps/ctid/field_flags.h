@@ -144,6 +144,20 @@ CLI::Option* add_value(CLI::App& app, const std::string& flag, T& value, const s
               },
               doc + " (" + command_line_list<Inner>() + "; default: none)")
           ->type_name("WORD");
+    } else if constexpr (requires(std::string_view w) { Inner::from_flag(w); }) {
+      // A struct spelt as one word (its flag_form), read by its own from_flag.
+      return app
+          .add_option_function<std::string>(
+              flag,
+              [flag, &value](const std::string& word) {
+                try {
+                  value = Inner::from_flag(word);
+                } catch (const std::invalid_argument& e) {
+                  throw CLI::ValidationError(flag + ": " + e.what());
+                }
+              },
+              doc + " (default: none)")
+          ->type_name(std::string(Inner::flag_form));
     } else {
       return nullptr;
     }

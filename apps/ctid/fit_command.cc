@@ -165,6 +165,23 @@ void print_engineering_quantities(std::ostream& out, const EstimationResult& r) 
 }
 
 // `step` names h: "h" for a uniform record, "median step" for irregular time stamps.
+// RIVC's noise model: D v = C e with each coefficient +- one standard error.
+void print_noise_model(std::ostream& out, const ArmaModel& m) {
+  const int p = m.ar_order();
+  const int q = m.ma_order();
+  auto coefficients = [&](const Eigen::VectorXd& c, int first) {
+    std::string text = "[";
+    for (Eigen::Index i = 1; i < c.size(); ++i) {
+      text += (i > 1 ? ", " : "") + plus_minus(c(i), m.standard_errors(first + i - 1));
+    }
+    return text + "]";
+  };
+  out << "noise model: ARMA(" << p << ", " << q
+      << "), D v = C e with d_1.. = " << coefficients(m.ar, 0)
+      << ", c_1.. = " << coefficients(m.ma, p) << ", innovation variance "
+      << format_brief(m.innovation_variance) << "\n";
+}
+
 void print_summary(std::ostream& out, const EstimationResult& r, const std::string& estimator,
                    double h, int samples, const std::string& file, const std::string& preprocessing,
                    const char* step = "h") {
@@ -210,6 +227,7 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
   if (!std::isnan(r.closed_loop_fit_percent)) {
     out << "closed-loop fit from r: " << format_brief(r.closed_loop_fit_percent) << " %\n";
   }
+  if (r.noise_model) print_noise_model(out, *r.noise_model);
   if (r.unstable_reflections > 0 || r.sensitivity_fallbacks > 0) {
     out << "unstable iterates reflected: " << r.unstable_reflections
         << "; iterates the controller did not stabilise: " << r.sensitivity_fallbacks << "\n";
@@ -367,9 +385,9 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
         "with --input-columns / --output-columns give the modes (--modes K or "
         "--submodel N,M repeated); an unfactored model has no shared modes");
   }
-  for (const char* flag :
-       {"--controller", "--two-stage", "--input-delay-samples", "--delay-scan-samples",
-        "--delay-range", "--record-delay-samples", "--relocate-modes", "--history"}) {
+  for (const char* flag : {"--controller", "--two-stage", "--input-delay-samples",
+                           "--delay-scan-samples", "--delay-range", "--record-delay-samples",
+                           "--relocate-modes", "--history", "--noise-model"}) {
     if (app.count(flag) > 0) {
       usage_error(
           std::string(flag) +

@@ -231,8 +231,8 @@ ExitStatus run_mimo_track(const TrackFlags& f, const CLI::App& app) {
         "with --input-columns / --output-columns give the modes (--modes K or --submodel N,M "
         "repeated); an unfactored model has no shared modes");
   }
-  for (const char* flag :
-       {"--controller", "--input-delay-samples", "--relocate-modes", "--history"}) {
+  for (const char* flag : {"--controller", "--input-delay-samples", "--relocate-modes", "--history",
+                           "--noise-model"}) {
     if (app.count(flag) > 0) {
       usage_error(std::string(flag) +
                   " is not available with --input-columns / --output-columns (the shared-pole "

@@ -44,6 +44,17 @@ void bind_refined_iv_estimators(py::module_& m) {
                          "How a start is found from the data (initialization.h).");
   bind_enum<InitialConditions>(m, "InitialConditions",
                                "State assumed at the first sample: zero or estimate.");
+  bind_options<NoiseModelOrders>(
+      m,
+      "Orders of the ARMA noise model of RIVC: NoiseModelOrders(ar=P, ma=Q), "
+      "NoiseModelOrders(automatic=True), or the words 'P,Q' and 'auto'.")
+      .def(py::init([](const std::string& word) {
+             std::optional<NoiseModelOrders> orders = NoiseModelOrders::from_flag(word);
+             if (!orders) throw py::value_error("noise model 'none': give None instead");
+             return *orders;
+           }),
+           py::arg("word"), "From 'P,Q' or 'auto'.");
+  py::implicitly_convertible<std::string, NoiseModelOrders>();
   bind_options<RefinedIvOptions>(m, "Options of srivc, clsrivc, additive_srivc, additive_clsrivc.");
 
   bind_options<MimoRefinedIvOptions>(m, "Options of mimo_srivc.");

@@ -72,11 +72,15 @@ void IdentificationOptions::check_relations(const std::string& path) const {
           "known one, CLSRIVC uses it)");
 }
 
-RefinedIvEstimator choose_estimator(const ModelStructure& structure, bool closed_loop) {
+RefinedIvEstimator choose_estimator(const ModelStructure& structure, bool closed_loop,
+                                    bool noise_model) {
+  using E = RefinedIvEstimator;
   if (structure.is_additive()) {
-    return closed_loop ? RefinedIvEstimator::additive_clsrivc : RefinedIvEstimator::additive_srivc;
+    if (noise_model) return closed_loop ? E::additive_clrivc : E::additive_rivc;
+    return closed_loop ? E::additive_clsrivc : E::additive_srivc;
   }
-  return closed_loop ? RefinedIvEstimator::clsrivc : RefinedIvEstimator::srivc;
+  if (noise_model) return closed_loop ? E::clrivc : E::rivc;
+  return closed_loop ? E::clsrivc : E::srivc;
 }
 
 void validate_identification(const ModelStructure& structure,
@@ -207,7 +211,8 @@ IdentificationResult identify_records(std::span<const SampledData> records,
           " samples; the shortest record has ", shortest,
           " samples and a scanned delay may be at most half of it (", shortest / 2, ")");
   const bool closed_loop = options.controller.has_value();
-  const RefinedIvEstimator estimator = choose_estimator(structure, closed_loop);
+  const RefinedIvEstimator estimator =
+      choose_estimator(structure, closed_loop, options.refined_iv.noise_model.has_value());
   const std::vector<SubmodelOrder>& orders = structure.orders;
   const SampledData& data = records.front();
 
@@ -253,8 +258,9 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   // hold (it reflects every unstable root); the fit with a stabilised prefilter replaces it
   // when that one is usable.
   if (closed_loop && !structure.is_additive() && records.size() == 1 &&
-      !options.delay_scan_samples && !options.delay_range && !options.relocate_modes &&
-      !fitted->verdict.usable && options.refined_iv.input_delay_samples == 0 &&
+      !options.refined_iv.noise_model && !options.delay_scan_samples && !options.delay_range &&
+      !options.relocate_modes && !fitted->verdict.usable &&
+      options.refined_iv.input_delay_samples == 0 &&
       options.refined_iv.input_delay_fraction == 0.0) {
     try {
       EstimationResult held =
@@ -351,6 +357,8 @@ IdentificationResult identify(const IrregularRecord& record, const ModelStructur
           "IdentificationOptions.delay_scan_samples or delay_range is set", why);
   require(!options.relocate_modes, "IdentificationOptions.relocate_modes is true", why);
   require(!options.two_stage, "IdentificationOptions.two_stage is set", why);
+  require(!options.refined_iv.noise_model, "IdentificationOptions.refined_iv.noise_model is set",
+          why);
   IdentificationResult result(
       srivc_irregular(record, structure.orders.front(), options.refined_iv));
   result.estimator = RefinedIvEstimator::srivc_irregular;

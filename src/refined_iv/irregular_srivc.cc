@@ -205,6 +205,9 @@ void check_inputs(const IrregularRecord& r, const SubmodelOrder& o,
   require(options.initial_conditions == InitialConditions::zero,
           "srivc_irregular: initial_conditions = estimate is not supported on irregular "
           "stamps yet");
+  require(!options.noise_model,
+          "srivc_irregular: noise_model is set; a discrete ARMA noise model needs a uniform "
+          "sample time, so irregular stamps are fitted without one");
   const int p = o.n + o.m + 1;
   const auto n = static_cast<int>(r.time.size());
   const int needed = std::max(3 * p, p + 20);

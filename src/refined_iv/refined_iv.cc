@@ -17,6 +17,7 @@
 #include "core/internal/polynomial_if_finite.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/estimation/arma.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/estimation/verdict.h"
 #include "ctid/filtering/filter_bank.h"
@@ -234,6 +235,13 @@ void check_samples(const RefinedIvProblem& problem, const RefinedIvOptions& opti
           " samples (input delay ", delay, ") are too few for ", unknowns,
           " parameters and initial conditions; at least ",
           std::max(3 * unknowns, unknowns + 20) + lost, " are needed");
+  if (options.noise_model) {
+    const NoiseModelOrders& o = *options.noise_model;
+    const int orders = o.automatic ? 0 : o.ar + o.ma;
+    const int needed = 10 * orders + 20;
+    require(n_samples >= needed, name, ": ", n_samples, " samples cannot hold an ARMA(", o.ar, ", ",
+            o.ma, ") noise model; it needs at least ", needed, " (lower noise_model's orders)");
+  }
   const double h = data.sample_time();
   if (problem.controller != nullptr) {
     require(data.has_reference(), name, ": closed-loop estimation needs a measured reference r");
@@ -350,6 +358,9 @@ struct Run {
   Eigen::VectorXd states_at;  // the iterate whose realisations they refer to
   bool loop_unstable = false;
   bool degenerate = false;  // stopped before a degenerate iterate (decision 0050)
+  // RIVC (options.noise_model): the ARMA model of the output error at the current iterate,
+  // whose D/C the passes apply (workspace.prefilter).
+  std::optional<ArmaModel> noise;
 
   Run(const RefinedIvProblem& pr, const RefinedIvOptions& op, const std::string& n, Layout l,
       DataChecks c, const Eigen::VectorXd& start, double sample_time)
@@ -414,6 +425,41 @@ void stack_signals(Run& run) {
     run.y.segment(at, run.records[r]->size()) = run.records[r]->output();
     at += run.records[r]->size();
   }
+}
+
+// The first sample of each record after the first in the stacked residual.
+std::vector<Eigen::Index> record_starts(const Run& run) {
+  std::vector<Eigen::Index> starts;
+  for (size_t r = 1; r < run.signals.size(); ++r) starts.push_back(run.signals[r].offset);
+  return starts;
+}
+
+// RIVC: the ARMA model of the output error y - G u at the current iterate (orders chosen by
+// the criterion at the first iterate when automatic, then kept), and its D/C as the passes'
+// prefilter. An output error below rounding (noise-free data) has no noise to model: D = C = 1.
+void update_noise_model(Run& run) {
+  const NoiseModelOrders& orders = *run.options.noise_model;
+  Eigen::VectorXd residual;
+  evaluate(run.layout, run.beta, run.initial_states, run.signals, run.source, run.h,
+           run.options.output_interpolation, run.workspace, nullptr, &residual, nullptr);
+  if (!residual.allFinite()) return;  // the pass that follows reports the iterate
+  const std::vector<Eigen::Index> starts = record_starts(run);
+  if (!(residual.norm() > 1e-12 * run.y.norm())) {
+    run.noise = fit_arma(Eigen::VectorXd::Zero(residual.size()),
+                         run.noise          ? run.noise->ar_order()
+                         : orders.automatic ? 0
+                                            : orders.ar,
+                         run.noise          ? run.noise->ma_order()
+                         : orders.automatic ? 0
+                                            : orders.ma,
+                         starts);
+  } else if (orders.automatic && !run.noise) {
+    run.noise = fit_arma_by_criterion(residual, orders.max_order, starts);
+  } else {
+    run.noise = fit_arma(residual, run.noise ? run.noise->ar_order() : orders.ar,
+                         run.noise ? run.noise->ma_order() : orders.ma, starts);
+  }
+  run.workspace.prefilter.emplace(*run.noise, run.layout);
 }
 
 // S_uo r of every record (closed loop) at b; false when the loop is unstable. The engine holds
@@ -573,6 +619,7 @@ StepOutcome iteration_step(Run& run, StepControl& control, int iteration) {
   const RefinedIvOptions& options = run.options;
   bool source_ok = true;
   if (run.closed_loop && iteration > 1) source_ok = update_source(run, run.beta);
+  if (options.noise_model) update_noise_model(run);
   Moments sums;
   double sse = 0.0;
   evaluate(run.layout, run.beta, run.initial_states, run.signals, run.source, run.h,
@@ -751,14 +798,22 @@ void set_statistics(Run& run) {
   const RefinedIvOptions& options = run.options;
   const Layout& layout = run.layout;
   EstimationResult& result = run.result;
+  // RIVC: the noise model at the estimate; the instrument (and the delay's column) are
+  // prefiltered by its D/C, and the covariance is the white one of the innovations.
+  const bool rivc = options.noise_model.has_value();
+  if (rivc && run.beta.allFinite()) update_noise_model(run);
+  const NoiseAssumption noise = rivc ? NoiseAssumption::white : options.noise;
   Eigen::VectorXd delay_col;
   const bool delay_column_used =
       options.compute_covariance && options.delay_estimated && run.beta.allFinite();
   if (delay_column_used) delay_col = delay_column(run);
+  if (delay_column_used && run.noise) {
+    delay_col = arma_innovations(*run.noise, delay_col, record_starts(run));
+  }
   InstrumentPass instrument;
   instrument.extra = delay_column_used ? &delay_col : nullptr;
   instrument.keep_checkpoints =
-      options.noise != NoiseAssumption::white && !run.problem.stored_instrument_covariance;
+      noise != NoiseAssumption::white && !run.problem.stored_instrument_covariance;
   Eigen::MatrixXd stored_psi;
   if (run.problem.stored_instrument_covariance) instrument.stored = &stored_psi;
   Eigen::VectorXd residual;
@@ -773,15 +828,21 @@ void set_statistics(Run& run) {
     result.initial_conditions =
         free_response_derivatives(layout, run.states_at, run.initial_states);
   set_start_fits(run);
+  if (run.noise) {
+    result.noise_model = *run.noise;
+    arma_spectrum(*result.noise_model, run.h);
+  }
   if (!(options.compute_covariance && instrument.gram.allFinite() && residual.allFinite())) return;
+  const Eigen::VectorXd noise_residual =
+      run.noise ? arma_innovations(*run.noise, residual, record_starts(run)) : residual;
   // With free responses the joint covariance of beta and their coefficients; its beta
   // block is the covariance of beta with the nuisance coefficients estimated alongside.
   const int joint_unknowns = run.unknowns + (delay_column_used ? 1 : 0);
   const Eigen::MatrixXd joint =
       run.problem.stored_instrument_covariance
-          ? instrumental_variable_covariance(stored_psi, residual, joint_unknowns, options.noise,
+          ? instrumental_variable_covariance(stored_psi, noise_residual, joint_unknowns, noise,
                                              options.noise_model_max_order)
-          : covariance_from_gram(instrument.gram, residual, joint_unknowns, options.noise,
+          : covariance_from_gram(instrument.gram, noise_residual, joint_unknowns, noise,
                                  options.noise_model_max_order,
                                  [&](const AutoregressiveModel& ar, const Eigen::VectorXd& scales) {
                                    return adjoint_instrument_sum(
@@ -824,10 +885,11 @@ void judge(Run& run) {
 }  // namespace
 }  // namespace srivc_engine
 
-std::optional<EstimationResult> run_refined_iv_if_started(const RefinedIvProblem& problem,
-                                                          const RefinedIvOptions& options,
-                                                          ScreenedStart* shared,
-                                                          std::string* failure) {
+namespace {
+
+std::optional<EstimationResult> run_from_start(const RefinedIvProblem& problem,
+                                               const RefinedIvOptions& options,
+                                               ScreenedStart* shared, std::string* failure) {
   namespace se = srivc_engine;
   options.validate();
   const std::string name = problem.name;
@@ -869,6 +931,41 @@ std::optional<EstimationResult> run_refined_iv_if_started(const RefinedIvProblem
   return std::move(run.result);
 }
 
+// RIVC and CLRIVC (options.noise_model): the simplified estimator from the start the options
+// give, then the iteration with the noise model from its estimate, as Young's RIVC is started
+// from SRIVC; the message says how many iterations the first stage took.
+std::optional<EstimationResult> run_with_noise_model(const RefinedIvProblem& problem,
+                                                     const RefinedIvOptions& options,
+                                                     ScreenedStart* shared, std::string* failure) {
+  options.validate();
+  RefinedIvOptions simplified = options;
+  simplified.noise_model.reset();
+  simplified.compute_covariance = false;
+  simplified.record_history = false;
+  simplified.delay_estimated = false;
+  std::optional<EstimationResult> first = run_from_start(problem, simplified, shared, failure);
+  if (!first) return std::nullopt;
+  RefinedIvOptions refined = options;
+  if (first->parameters.allFinite()) refined.initial_model = first->model;
+  std::optional<EstimationResult> result = run_from_start(problem, refined, nullptr, failure);
+  if (result) {
+    result->message += "; started from the estimate without a noise model (" +
+                       std::to_string(first->iterations) + " iterations, " +
+                       std::string(enum_name(first->termination)) + ")";
+  }
+  return result;
+}
+
+}  // namespace
+
+std::optional<EstimationResult> run_refined_iv_if_started(const RefinedIvProblem& problem,
+                                                          const RefinedIvOptions& options,
+                                                          ScreenedStart* shared,
+                                                          std::string* failure) {
+  if (options.noise_model) return run_with_noise_model(problem, options, shared, failure);
+  return run_from_start(problem, options, shared, failure);
+}
+
 EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
                                            const RefinedIvOptions& options, ScreenedStart* shared) {
   std::string failure;
@@ -876,86 +973,6 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
       run_refined_iv_if_started(problem, options, shared, &failure);
   if (!result) throw InvalidArgument(failure);
   return std::move(*result);
-}
-
-namespace {
-
-// The additive closed-loop estimator from the data alone (decision 0028). CLSRIVC can have
-// several stationary points on one closed-loop record, and the output error y - G u it is
-// started by leans toward -1/C_d, so one start is not enough: the additive iteration runs from
-// the additive start of each start method and from the split of the unfactored CLSRIVC fit of
-// each. Of the usable estimates (the verdict holds each to the loop the controller keeps
-// stable and to its closed-loop fit from r), the one kept has the best output-error fit
-// y - G u: with the noise fed back through the loop it tells the stationary points apart where
-// the closed-loop fit from r, in which r explains little of y, cannot (measured in decision
-// 0028).
-EstimationResult closed_loop_additive_from_data(const RefinedIvProblem& problem,
-                                                const RefinedIvOptions& options) {
-  std::vector<StartMethod> methods;
-  if (options.start == StartMethod::automatic) {
-    methods = {StartMethod::lssvf, StartMethod::frf};
-  } else {
-    methods = {options.start};
-  }
-  std::vector<EstimationResult> candidates;
-  for (StartMethod method : methods) {
-    RefinedIvOptions own = options;
-    own.start = method;
-    ScreenedStart start;  // screened once for both fits from this method
-    // A method that forms no start (e.g. too few resonance peaks for the FRF start) gives no
-    // candidate: the other candidates remain.
-    if (std::optional<EstimationResult> r = run_refined_iv_if_started(problem, own, &start)) {
-      candidates.push_back(std::move(*r));
-    }
-    RefinedIvProblem unfactored = problem;
-    unfactored.orders = {unfactored_order(problem.orders)};
-    unfactored.unfactored = true;
-    RefinedIvOptions quick = own;
-    quick.compute_covariance = false;
-    quick.record_history = false;
-    std::optional<AdditiveModel> whole;  // one submodel, grouped by the engine
-    std::optional<EstimationResult> g = run_refined_iv_if_started(unfactored, quick, &start);
-    if (g && g->parameters.allFinite() && g->iterations > 0) whole = std::move(g->model);
-    if (!whole) continue;
-    RefinedIvOptions split = options;
-    split.initial_model = std::move(whole);
-    // None when the unfactored fit's poles cannot be grouped into the submodels.
-    if (std::optional<EstimationResult> r = run_refined_iv_if_started(problem, split)) {
-      candidates.push_back(std::move(*r));
-    }
-  }
-  // No candidate at all: the plain run, which names what went wrong.
-  if (candidates.empty()) return run_refined_iv_from_start(problem, options);
-  // Usable first, by their output-error fit; if none is, the best closed-loop fit from r
-  // (NaN, a loop the controller does not hold, last). Ties keep the earlier candidate.
-  auto better = [](const EstimationResult& a, const EstimationResult& b) {
-    if (a.verdict.usable != b.verdict.usable) return a.verdict.usable;
-    auto score = [usable = a.verdict.usable](const EstimationResult& r) {
-      const double f = usable ? r.fit_percent : r.closed_loop_fit_percent;
-      return std::isnan(f) ? -HUGE_VAL : f;
-    };
-    return score(a) > score(b);
-  };
-  size_t best = 0;
-  for (size_t k = 1; k < candidates.size(); ++k) {
-    if (better(candidates[k], candidates[best])) best = k;
-  }
-  EstimationResult result = std::move(candidates[best]);
-  result.message += "; of " + std::to_string(candidates.size()) +
-                    " fits from different starts, the usable one with the best output-error fit "
-                    "was kept (with none usable, the best closed-loop fit from r)";
-  return result;
-}
-
-}  // namespace
-
-EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIvOptions& options) {
-  if (problem.controller != nullptr && !problem.unfactored && problem.orders.size() > 1 &&
-      !options.initial_model) {
-    options.validate();
-    return closed_loop_additive_from_data(problem, options);
-  }
-  return run_refined_iv_from_start(problem, options);
 }
 
 }  // namespace internal

@@ -466,6 +466,7 @@ void evaluate_record(const Layout& layout, const Eigen::VectorXd& beta,
   std::vector<SubmodelFilters> filters =
       record_filters(layout, beta, initial_states, record, h, output_interpolation,
                      source != nullptr, need_instrument, need_regressor, w);
+  if (w.prefilter) w.prefilter->reset();
   for (Eigen::Index k0 = 0; k0 < n; k0 += kBlock) {
     const Eigen::Index len = std::min(kBlock, n - k0);
     if (instrument != nullptr && instrument->keep_checkpoints && k0 % kSegment == 0) {
@@ -473,6 +474,11 @@ void evaluate_record(const Layout& layout, const Eigen::VectorXd& beta,
     }
     filter_block(layout, record, signals, source, k0, len, need_instrument, need_regressor, filters,
                  w);
+    if (w.prefilter && need_instrument) w.prefilter->instrument.apply(w.instrument.topRows(len));
+    if (w.prefilter && need_regressor) {
+      w.prefilter->regressor.apply(w.regressor.topRows(len));
+      w.prefilter->filtered.apply(w.filtered.topRows(len));
+    }
     if (moments != nullptr) {
       const auto z = w.instrument.topRows(len);
       const auto phi = w.regressor.topRows(len);

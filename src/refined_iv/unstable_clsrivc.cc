@@ -417,6 +417,9 @@ EstimationResult unstable_clsrivc(const SampledData& data,
                                   const SubmodelOrder& order, const RefinedIvOptions& options) {
   options.validate();
   const std::string name = "unstable_clsrivc";
+  require(!options.noise_model, name,
+          ": noise_model is set; the fit with a stabilised prefilter has no noise model (use "
+          "the closed-loop estimator, CLRIVC)");
   require(data.has_reference(), name, ": closed-loop estimation needs a measured reference r");
   require(std::abs(controller.sample_time() - data.sample_time()) <= 1e-9 * data.sample_time(),
           name, ": the controller's sample time ", controller.sample_time(),

@@ -128,9 +128,13 @@ enum class RefinedIvEstimator {
   additive_srivc,    ///< additive, open loop
   additive_clsrivc,  ///< additive, closed loop
   srivc_irregular,   ///< unfactored, open loop, on irregular time stamps (irregular_srivc.h)
+  rivc,              ///< unfactored, open loop, with an ARMA noise model
+  clrivc,            ///< unfactored, closed loop, with an ARMA noise model
+  additive_rivc,     ///< additive, open loop, with an ARMA noise model
+  additive_clrivc,   ///< additive, closed loop, with an ARMA noise model
 };
 
-inline constexpr std::array<Enumerator<RefinedIvEstimator>, 5> refined_iv_estimator_enumerators{{
+inline constexpr std::array<Enumerator<RefinedIvEstimator>, 9> refined_iv_estimator_enumerators{{
     {RefinedIvEstimator::srivc, "srivc", "SRIVC: unfactored, open loop (eq. 30, instrument (10))."},
     {RefinedIvEstimator::clsrivc, "clsrivc",
      "CLSRIVC: unfactored, closed loop (eq. 30, instrument (20))."},
@@ -140,13 +144,23 @@ inline constexpr std::array<Enumerator<RefinedIvEstimator>, 5> refined_iv_estima
      "Additive, closed loop (eq. 29, instrument (20))."},
     {RefinedIvEstimator::srivc_irregular, "srivc_irregular",
      "SRIVC on irregular time stamps: filters discretised on each interval (decision 0034)."},
+    {RefinedIvEstimator::rivc, "rivc",
+     "RIVC: unfactored, open loop, with an ARMA noise model (decision 0056)."},
+    {RefinedIvEstimator::clrivc, "clrivc",
+     "CLRIVC: unfactored, closed loop, with an ARMA noise model (decision 0056)."},
+    {RefinedIvEstimator::additive_rivc, "additive_rivc",
+     "Additive, open loop, with an ARMA noise model (decision 0056)."},
+    {RefinedIvEstimator::additive_clrivc, "additive_clrivc",
+     "Additive, closed loop, with an ARMA noise model (decision 0056)."},
 }};
 constexpr std::span<const Enumerator<RefinedIvEstimator>> enumerators(RefinedIvEstimator) {
   return refined_iv_estimator_enumerators;
 }
 
-/// The estimator for a structure: unfactored or additive, closed loop when a controller is known.
-RefinedIvEstimator choose_estimator(const ModelStructure& structure, bool closed_loop);
+/// The estimator for a structure: unfactored or additive, closed loop when a controller is known,
+/// with a noise model when one is asked for (RefinedIvOptions::noise_model).
+RefinedIvEstimator choose_estimator(const ModelStructure& structure, bool closed_loop,
+                                    bool noise_model = false);
 
 struct IdentificationOptions {
   /// The known discrete controller u_k = C_d(q)(r_k - y_k) of closed-loop data (the data

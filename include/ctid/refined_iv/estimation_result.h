@@ -17,6 +17,7 @@
 #include "ctid/core/additive_model.h"
 #include "ctid/core/fields.h"
 #include "ctid/core/transfer_function.h"
+#include "ctid/estimation/arma.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/verdict.h"
 
@@ -145,6 +146,9 @@ struct EstimationResult : Outcome {
   /// Reciprocal condition of the scaled instrument-regressor matrix of (29) at the last
   /// iteration (NaN if none was formed).
   double reciprocal_condition = std::numeric_limits<double>::quiet_NaN();
+  /// RefinedIvOptions::noise_model: the ARMA noise model C/D of the output error y - G u at
+  /// the estimate, with its standard errors and spectrum; none for SRIVC and CLSRIVC.
+  std::optional<ArmaModel> noise_model;
   /// Is the model worth using (estimation/verdict.h): checked after every estimate.
   Verdict verdict;
 
@@ -198,6 +202,8 @@ struct EstimationResult : Outcome {
                   "The same closed-loop fit of the start (NaN in open loop or if unstable)."),
             field("reciprocal_condition", &S::reciprocal_condition,
                   "Reciprocal condition of the scaled IV matrix of (29) at the last iteration."),
+            field("noise_model", &S::noise_model,
+                  "ArmaModel of the noise (RIVC, CLRIVC), or none (SRIVC, CLSRIVC)."),
             field("verdict", &S::verdict,
                   "Verdict: usable, reasons, advice (docs/decisions/0007-quality-verdict.md)."),
             field("checks", &S::checks, "DataChecks of Assumptions 1 and 4."),

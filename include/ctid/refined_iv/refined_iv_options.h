@@ -64,6 +64,36 @@ constexpr std::span<const Enumerator<InitialConditions>> enumerators(InitialCond
   return initial_conditions_enumerators;
 }
 
+/// The discrete-time ARMA noise model C(q^-1)/D(q^-1) that RIVC and CLRIVC estimate with the
+/// plant (the hybrid Box-Jenkins model, estimation/arma.h): its orders given, or chosen by the
+/// Bayesian information criterion on the residual of the start.
+struct NoiseModelOrders {
+  int ar = 1;              ///< p = deg D(q^-1), the autoregressive part
+  int ma = 0;              ///< q = deg C(q^-1), the moving-average part
+  bool automatic = false;  ///< orders in 0..max_order each, chosen by the criterion
+  int max_order = 3;       ///< automatic: the largest AR and MA order tried
+
+  static constexpr std::string_view type_name = "NoiseModelOrders";
+  /// On the command line one flag: "--noise-model 2,1", "--noise-model auto" or
+  /// "--noise-model none" (from_flag).
+  static constexpr std::string_view flag_form = "P,Q|auto|none";
+  static constexpr auto fields() {
+    using O = NoiseModelOrders;
+    return std::tuple{
+        field("ar", &O::ar, Between{0.0, 20.0, true, true}, "p = deg D(q^-1), the AR order."),
+        field("ma", &O::ma, Between{0.0, 20.0, true, true}, "q = deg C(q^-1), the MA order."),
+        field("automatic", &O::automatic,
+              "Orders in 0..max_order each, chosen by the Bayesian information criterion."),
+        field("max_order", &O::max_order, Between{0.0, 20.0, true, true},
+              "With automatic: the largest AR and MA order tried."),
+    };
+  }
+  /// The orders a command-line word gives: none for "none", automatic for "auto", p and q for
+  /// "P,Q". Throws InvalidArgument naming the word otherwise.
+  static std::optional<NoiseModelOrders> from_flag(std::string_view word);
+  void validate() const { validate_fields(*this); }
+};
+
 struct RefinedIvOptions {
   /// Upper bound on the iterations of (29)/(30). >= 1.
   int max_iterations = 100;
@@ -113,6 +143,12 @@ struct RefinedIvOptions {
   NoiseAssumption noise = NoiseAssumption::coloured;
   /// Largest AR order tried for the coloured-noise covariance (chosen by AIC). >= 1.
   int noise_model_max_order = 20;
+  /// The ARMA noise model estimated with the plant (RIVC open loop, CLRIVC closed loop; Young
+  /// and Garnier): the prefilters of the iteration are D/(C A) instead of 1/A, the covariance
+  /// is that of the prefiltered instrument with the innovations' variance (`noise` and
+  /// noise_model_max_order then do not apply), and EstimationResult::noise_model holds it.
+  /// None: the simplified estimators (SRIVC, CLSRIVC), bit for bit.
+  std::optional<NoiseModelOrders> noise_model;
   /// Compute covariance, standard errors and modal standard errors (skip to save time).
   bool compute_covariance = true;
   /// State at the first sample. `estimate` adds the free response of every submodel
@@ -157,6 +193,9 @@ struct RefinedIvOptions {
         field("noise", &O::noise, "Noise assumption of the covariance."),
         field("noise_model_max_order", &O::noise_model_max_order, AtLeast{1},
               "Largest AR order of the coloured-noise covariance (chosen by AIC)."),
+        field("noise_model", &O::noise_model,
+              "NoiseModelOrders of the ARMA noise model estimated with the plant (RIVC), or "
+              "none (SRIVC)."),
         field("compute_covariance", &O::compute_covariance,
               "Compute covariance, standard errors and modal standard errors."),
         field("initial_conditions", &O::initial_conditions,

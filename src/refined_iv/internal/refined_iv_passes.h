@@ -17,6 +17,7 @@
 #include "ctid/core/polynomial.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/core/state_space.h"
+#include "ctid/estimation/arma.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/refined_iv_options.h"
@@ -86,6 +87,25 @@ struct Moments {
   }
 };
 
+// RIVC's discrete prefilter D/C (RefinedIvOptions::noise_model) on the instrument, regressor
+// and filtered-output columns of every block after the continuous filters, from rest at each
+// record's first sample.
+struct NoisePrefilter {
+  InverseNoiseFilter instrument;
+  InverseNoiseFilter regressor;
+  InverseNoiseFilter filtered;
+
+  NoisePrefilter(const ArmaModel& model, const Layout& layout)
+      : instrument(model, layout.augmented),
+        regressor(model, layout.augmented),
+        filtered(model, layout.size()) {}
+  void reset() {
+    instrument.reset();
+    regressor.reset();
+    filtered.reset();
+  }
+};
+
 // Block buffers reused by every pass of one estimate.
 struct Workspace {
   Eigen::MatrixXd instrument;  // kBlock x p
@@ -97,6 +117,8 @@ struct Workspace {
   std::vector<Eigen::MatrixXd> source_out;
   std::vector<Eigen::MatrixXd> input_out;
   std::vector<Eigen::MatrixXd> output_out;
+  // RIVC: the prefilter the passes apply after the continuous filters; none for SRIVC.
+  std::optional<NoisePrefilter> prefilter;
 
   explicit Workspace(const Layout& layout)
       : instrument(kBlock, layout.augmented),
