@@ -156,3 +156,15 @@ def test_white_noise_model_is_plain_srivc():
     np.testing.assert_allclose(theirs["parameters"],
                                np.r_[srivc["denominator_ascending"][1:],
                                      srivc["numerator_ascending"]], rtol=1e-9)
+
+
+def test_noise_model_words_are_the_orders():
+    case = CASES["second_order_arma11"]
+    u, y = _box_jenkins_record(case["denominator"], case["numerator"], case["noise_ar"],
+                               case["noise_ma"], case["snr"], 1000, case["hold"], 52)
+    by_orders = _ctid_rivc(u, y, case, ctid.NoiseModelOrders(ar=1, ma=1))
+    by_words = _ctid_rivc(u, y, case, "1,1")
+    np.testing.assert_array_equal(np.asarray(by_words.parameters),
+                                  np.asarray(by_orders.parameters))
+    np.testing.assert_array_equal(np.asarray(by_words.noise_model.ma),
+                                  np.asarray(by_orders.noise_model.ma))
