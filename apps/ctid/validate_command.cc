@@ -24,6 +24,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/core/preprocessing.h"
+#include "ctid/estimation/prediction.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/identification/feedback_loop.h"
 #include "ctid/identification/irregular_validation.h"
@@ -55,6 +56,7 @@ struct ValidateFlags {
   std::string hold = "foh";
   int substeps = OutputErrorOptions{}.substeps;
   bool irregular = false;  ///< judge the model on the record's time stamps as logged (0053)
+  int horizon = 0;         ///< k-step-ahead prediction with the result's noise model; 0: none
   bool force = false;
   bool quiet = false;
 };
@@ -342,6 +344,28 @@ void run_validate_irregular(const ValidateFlags& f, const CLI::App& app,
   if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
 }
 
+// --horizon K: the noise model of a `ctid fit --noise-model` result, refused by name for
+// anything else.
+ArmaModel noise_model_in(const std::string& file) {
+  const nlohmann::json document = io::read_json(file);
+  const auto found = document.find("noise_model");
+  if (found == document.end() || found->is_null()) {
+    usage_error("--horizon predicts with a noise model; " + file +
+                " has none (fit with --noise-model P,Q or auto and -o RESULT.json, then "
+                "validate RESULT.json)");
+  }
+  ArmaModel noise;
+  io::fields_from_json(*found, noise, file + ": noise_model");
+  return noise;
+}
+
+void print_prediction(const PredictionReport& p, const ArmaModel& noise) {
+  std::cout << p.horizon << "-step-ahead prediction (noise model ARMA(" << noise.ar_order() << ", "
+            << noise.ma_order() << ")): fit " << format_fixed(p.fit_percent, 2) << " %, RMS error "
+            << format_brief(std::sqrt(p.mean_squared_error)) << " (simulation: fit "
+            << format_fixed(p.simulation_fit_percent, 2) << " %)\n";
+}
+
 void run_validate(const ValidateFlags& f, const CLI::App& app) {
   std::vector<std::string> files{f.model};
   files.insert(files.end(), f.more_models.begin(), f.more_models.end());
@@ -359,6 +383,13 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
   }
   const bool windowed = options.window_start || options.window_end;
   options.validate();  // named by its flags, before anything is read
+  if (f.horizon > 0 && (several || f.irregular || f.data.mimo_asked(app))) {
+    usage_error(
+        "--horizon predicts one model's output on one regularly sampled record; give one "
+        "result file, without --irregular or several columns");
+  }
+  std::optional<ArmaModel> noise;
+  if (f.horizon > 0) noise = noise_model_in(f.model);
   if (f.irregular) {
     check_validate_irregular_flags(f, app, several);
     run_validate_irregular(f, app, options, windowed);
@@ -424,8 +455,14 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
     window_error(f, error);
   }
 
+  std::optional<PredictionReport> predicted;
+  if (noise) predicted = predict_ahead(fitted.front().model, *noise, data, f.horizon);
   if (!f.output.empty()) {
     nlohmann::json document = io::to_json(reports.front());
+    if (predicted) {
+      document["prediction"] = io::fields_to_json(*predicted);
+      document["prediction"].erase("prediction");  // the series is the plot's, not the report's
+    }
     document["model_file"] = f.model;
     document["data"] = io::to_json(io::DataProvenance{.files = {f.data.file},
                                                       .samples = data.size(),
@@ -450,6 +487,7 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
       if (several) std::cout << files[i] << ":\n";
       print_statistics(reports[i]);
     }
+    if (predicted) print_prediction(*predicted, *noise);
   }
   if (!f.plot.empty()) {
     const std::string title =
@@ -508,6 +546,10 @@ Command add_validate_command(CLI::App& parent) {
                 "stamps), simulated from rest with the input hold of --input-hold or the file; "
                 "one input and output, nothing resampled (docs/decisions/0053)")
       ->group("Data");
+  app->add_option("--horizon", f.horizon,
+                  "K-step-ahead prediction with the noise model of a `ctid fit --noise-model` "
+                  "result (K >= 1 samples; decision 0056), beside the simulation")
+      ->check(CLI::Range(1, 1 << 30));
   app->add_option("--window", f.window,
                   "Score only START:END (seconds on the record's time axis, inclusive; either "
                   "may be empty); the simulation still starts at the record's first sample");

@@ -41,6 +41,7 @@
 
 #include "ctid/estimation/arma.h"
 #include "ctid/estimation/mimo_modes.h"
+#include "ctid/estimation/prediction.h"
 #include "ctid/estimation/residual_correlation.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/validation.h"

@@ -2,6 +2,7 @@
 // output, fit, the quality verdict and the residual tests of a model on data (validation.h).
 #include "common.h"
 #include "ctid/estimation/arma.h"
+#include "ctid/estimation/prediction.h"
 #include "ctid/estimation/residual_correlation.h"
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/validation.h"
@@ -38,6 +39,12 @@ void bind_estimation(py::module_& m) {
         "ARMA orders in 0..max_order each with the smallest BIC, fitted.");
   m.def("arma_innovations", &arma_innovations, py::arg("model"), py::arg("v"),
         py::arg("record_starts") = std::vector<Eigen::Index>{}, "e = (D/C) v from rest.");
+  bind_result<PredictionReport>(m,
+                                "k-step-ahead prediction of a Box-Jenkins model (prediction.h).");
+  m.def("predict_ahead", &predict_ahead, py::arg("model"), py::arg("noise_model"), py::arg("data"),
+        py::arg("horizon"),
+        "y_hat(t | t - k) = G u + (1 - H_k D/C)(y - G u): the k-step-ahead prediction with a "
+        "noise model (a RIVC result's noise_model).");
   bind_enum<InitialState>(m, "InitialState", "Where validate_model's simulation starts.");
   bind_options<ValidationOptions>(m, "Options of validate_model: initial state and window.");
   bind_result<ValidationReport>(m, "Residual statistics of a model.")

@@ -60,6 +60,30 @@ TEST_F(NoiseModelFlag, RivcWritesItsNoiseModelAndNoneIsSrivc) {
   EXPECT_TRUE(io::read_json(path("plain.json"))["noise_model"].is_null());
 }
 
+TEST_F(NoiseModelFlag, ValidateHorizonPredictsWithTheResultsNoiseModel) {
+  const std::string data = write("bj.csv", record_csv());
+  ASSERT_EQ(ctid({"fit", data, "--poles", "2", "--zeros", "0", "--noise-model", "1,0", "-o",
+                  "rivc.json", "-q"})
+                .status,
+            0);
+  const auto r = ctid({"validate", "rivc.json", data, "--horizon", "1", "-o", "v.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("1-step-ahead prediction (noise model ARMA(1, 0)): fit "));
+  const nlohmann::json v = io::read_json(path("v.json"));
+  EXPECT_EQ(v["prediction"]["horizon"], 1);
+  EXPECT_GT(v["prediction"]["fit_percent"].get<double>(),
+            v["prediction"]["simulation_fit_percent"].get<double>());
+  EXPECT_FALSE(v["prediction"].contains("prediction"));
+  ASSERT_EQ(ctid({"fit", data, "--poles", "2", "--zeros", "0", "-o", "plain.json", "-q"}).status,
+            0);
+  expect_bad_input(ctid({"validate", "plain.json", data, "--horizon", "2"}), "validate",
+                   "--horizon predicts with a noise model; plain.json has none");
+  expect_bad_input(ctid({"validate", "rivc.json", data, "--horizon", "5000"}), "validate",
+                   "the horizon 5000 must be at least 1 and below the record's 1500 samples");
+  expect_bad_input(ctid({"validate", "rivc.json", data, "plain.json", "--horizon", "2"}),
+                   "validate", "--horizon predicts one model's output");
+}
+
 TEST_F(NoiseModelFlag, BadWordsShortRecordsAndSeveralOutputsAreRefused) {
   const std::string data = write("bj.csv", record_csv());
   expect_bad_input(ctid({"fit", data, "--poles", "2", "--zeros", "0", "--noise-model", "2"}), "fit",

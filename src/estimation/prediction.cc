@@ -1,0 +1,55 @@
+#include "ctid/estimation/prediction.h"
+
+#include <algorithm>
+
+#include "ctid/core/error.h"
+#include "ctid/estimation/validation.h"
+
+namespace ctid {
+
+namespace {
+
+// y = (b / a) x from rest, a(0) = 1.
+Eigen::VectorXd prediction_filter(const Eigen::VectorXd& b, const Eigen::VectorXd& a,
+                                  const Eigen::VectorXd& x) {
+  Eigen::VectorXd y(x.size());
+  for (Eigen::Index t = 0; t < x.size(); ++t) {
+    double value = 0.0;
+    for (Eigen::Index i = 0; i < b.size() && i <= t; ++i) value += b(i) * x(t - i);
+    for (Eigen::Index j = 1; j < a.size() && j <= t; ++j) value -= a(j) * y(t - j);
+    y(t) = value;
+  }
+  return y;
+}
+
+}  // namespace
+
+PredictionReport predict_ahead(const AdditiveModel& model, const ArmaModel& noise,
+                               const SampledData& data, int horizon) {
+  const Eigen::Index n = data.size();
+  require(horizon >= 1 && horizon < n, "predict_ahead: the horizon ", horizon,
+          " must be at least 1 and below the record's ", n, " samples");
+  require(noise.ar.size() >= 1 && noise.ma.size() >= 1 && noise.ar(0) == 1.0 &&
+              noise.ma(0) == 1.0 && noise.ar.allFinite() && noise.ma.allFinite(),
+          "predict_ahead: the noise model's D and C must be finite and start with 1");
+  const Eigen::VectorXd simulated =
+      model_output(model, data.input(), data.sample_time(), data.input_hold());
+  const Eigen::VectorXd xi = data.output() - simulated;
+  // H_k: the first k terms of C/D's impulse response.
+  Eigen::VectorXd impulse = Eigen::VectorXd::Zero(horizon);
+  impulse(0) = 1.0;
+  const Eigen::VectorXd h = prediction_filter(noise.ma, noise.ar, impulse);
+  // H_k D, a polynomial in q^-1 of degree k - 1 + p.
+  Eigen::VectorXd hd = Eigen::VectorXd::Zero(horizon + noise.ar.size() - 1);
+  for (int i = 0; i < horizon; ++i) hd.segment(i, noise.ar.size()) += h(i) * noise.ar;
+  PredictionReport report;
+  report.horizon = horizon;
+  report.prediction = simulated + xi - prediction_filter(hd, noise.ma, xi);
+  const Eigen::VectorXd error = data.output() - report.prediction;
+  report.mean_squared_error = error.squaredNorm() / static_cast<double>(n);
+  report.fit_percent = fit_percent(data.output(), report.prediction);
+  report.simulation_fit_percent = fit_percent(data.output(), simulated);
+  return report;
+}
+
+}  // namespace ctid
