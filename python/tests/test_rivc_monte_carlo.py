@@ -113,3 +113,24 @@ def test_noise_model_words(word, ar, ma, automatic):
 def test_bad_noise_model_words_are_refused_by_name(word):
     with pytest.raises(ValueError, match="is not P,Q"):
         ctid.NoiseModelOrders(word)
+
+
+def test_undermodelling_is_named_on_the_dryer():
+    # The shipped hair dryer (DaISy, data/daisy_dryer_ljung), samples 1-500 without their means.
+    import pathlib
+    root = pathlib.Path(__file__).resolve().parents[2]
+    data = ctid.read_csv(str(root / "data/daisy_dryer_ljung/dryer.csv"), time="t_s_assumed_0.08",
+                         input="u_heater_voltage", output="y_outlet_temperature")
+    data = data.preprocess(end_row=500, detrend=ctid.Detrend.mean).data
+
+    def fit(poles, zeros, delay):
+        return ctid.srivc(data, ctid.SubmodelOrder(poles, zeros), input_delay_samples=delay,
+                          noise_model="2,2")
+
+    too_simple = fit(2, 0, 3)
+    assert not too_simple.verdict.usable
+    assert any("the plant structure is likely too simple" in r for r in too_simple.verdict.reasons)
+    assert too_simple.fit_percent < too_simple.start_fit_percent - 1.0
+    adequate = fit(2, 1, 2)
+    assert adequate.verdict.usable, adequate.verdict.summary()
+    assert abs(adequate.fit_percent - adequate.start_fit_percent) < 1.0

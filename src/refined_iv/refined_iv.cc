@@ -42,6 +42,19 @@ Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loo
   if (closed_loop) {
     check_fit(verdict, r.fit_percent, std::numeric_limits<double>::quiet_NaN());
     check_closed_loop_fit(verdict, r.closed_loop_fit_percent, r.start_closed_loop_fit_percent);
+  } else if (r.noise_model) {
+    // RIVC starts from the estimate without a noise model, whose output error is about the
+    // best the structure gives: a fit well below it is the noise model taking up what the
+    // plant misses (decision 0056), not a bad start.
+    check_fit(verdict, r.fit_percent, std::numeric_limits<double>::quiet_NaN());
+    if (std::isfinite(r.start_fit_percent) &&
+        r.fit_percent < r.start_fit_percent - verdict_thresholds::fit_tolerance_points) {
+      verdict.fail("the output-error fit " + format_brief(r.fit_percent) + " % is worse than " +
+                       format_brief(r.start_fit_percent) +
+                       " % without a noise model: the plant structure is likely too simple, and "
+                       "the noise model takes up what it misses",
+                   {verdict_advice::other_structure});
+    }
   } else {
     check_fit(verdict, r.fit_percent, r.start_fit_percent);
   }

@@ -68,6 +68,8 @@ inline constexpr std::string_view lower_order = "a lower order or fewer modes";
 inline constexpr std::string_view better_start =
     "a start nearer the data (an initial model, e.g. from the FRF peaks)";
 inline constexpr std::string_view more_data = "a longer or richer record";
+inline constexpr std::string_view other_structure =
+    "another plant structure (more poles or zeros, or another input delay)";
 }  // namespace verdict_advice
 
 /// Fails when `finite` is false ("<what> is not finite").
