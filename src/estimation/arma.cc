@@ -8,30 +8,14 @@
 
 #include "ctid/core/error.h"
 #include "ctid/core/polynomial.h"
+#include "estimation/internal/difference_equation.h"
 
 namespace ctid {
 
-namespace {
+namespace internal {
 
-// The records of v as [first, end) ranges.
-std::vector<std::pair<Eigen::Index, Eigen::Index>> arma_records(
-    Eigen::Index n, const std::vector<Eigen::Index>& starts) {
-  std::vector<std::pair<Eigen::Index, Eigen::Index>> out;
-  Eigen::Index first = 0;
-  for (Eigen::Index s : starts) {
-    require(s > first && s < n, "fit_arma: record start ", s, " is not after ", first,
-            " and before the end ", n);
-    out.emplace_back(first, s);
-    first = s;
-  }
-  out.emplace_back(first, n);
-  return out;
-}
-
-// y = (b / a) x from rest in every record, by the difference equation (a(0) = 1).
-Eigen::VectorXd arma_filter(const Eigen::VectorXd& b, const Eigen::VectorXd& a,
-                            const Eigen::VectorXd& x,
-                            const std::vector<std::pair<Eigen::Index, Eigen::Index>>& records) {
+Eigen::VectorXd filter_from_rest(const Eigen::VectorXd& b, const Eigen::VectorXd& a,
+                                 const Eigen::VectorXd& x, const RecordRanges& records) {
   Eigen::VectorXd y(x.size());
   for (const auto& [first, end] : records) {
     for (Eigen::Index t = first; t < end; ++t) {
@@ -44,9 +28,28 @@ Eigen::VectorXd arma_filter(const Eigen::VectorXd& b, const Eigen::VectorXd& a,
   return y;
 }
 
+}  // namespace internal
+
+namespace {
+
+using internal::RecordRanges;
+
+// The records of v as [first, end) ranges.
+RecordRanges arma_records(Eigen::Index n, const std::vector<Eigen::Index>& starts) {
+  RecordRanges out;
+  Eigen::Index first = 0;
+  for (Eigen::Index s : starts) {
+    require(s > first && s < n, "fit_arma: record start ", s, " is not after ", first,
+            " and before the end ", n);
+    out.emplace_back(first, s);
+    first = s;
+  }
+  out.emplace_back(first, n);
+  return out;
+}
+
 // x delayed by k samples within each record (zeros before its first sample).
-Eigen::VectorXd arma_shift(const Eigen::VectorXd& x, int k,
-                           const std::vector<std::pair<Eigen::Index, Eigen::Index>>& records) {
+Eigen::VectorXd arma_shift(const Eigen::VectorXd& x, int k, const RecordRanges& records) {
   Eigen::VectorXd out = Eigen::VectorXd::Zero(x.size());
   for (const auto& [first, end] : records) {
     if (end - first > k)
@@ -90,8 +93,7 @@ Eigen::VectorXd least_squares(const Eigen::MatrixXd& design, const Eigen::Vector
 
 // The Hannan-Rissanen estimate: a long AR model's residual as the innovations, then least
 // squares of v on its own past and that residual's past.
-void hannan_rissanen(const Eigen::VectorXd& v, int p, int q,
-                     const std::vector<std::pair<Eigen::Index, Eigen::Index>>& records,
+void hannan_rissanen(const Eigen::VectorXd& v, int p, int q, const RecordRanges& records,
                      Eigen::VectorXd& d, Eigen::VectorXd& c) {
   const Eigen::Index n = v.size();
   d = Eigen::VectorXd::Zero(p + 1);
@@ -148,14 +150,14 @@ ArmaModel fit_arma(const Eigen::VectorXd& v, int ar_order, int ma_order,
     return model;
   }
   hannan_rissanen(v, p, q, records, d, c);
-  Eigen::VectorXd e = arma_filter(d, c, v, records);
+  Eigen::VectorXd e = internal::filter_from_rest(d, c, v, records);
   double sse = e.squaredNorm();
   Eigen::MatrixXd jacobian(n, k);
   const Eigen::VectorXd one = Eigen::VectorXd::Ones(1);
   auto gradient = [&]() {
     // de/dd_i = q^-i (1/C) v; de/dc_j = -q^-j (1/C) e.
-    const Eigen::VectorXd w = arma_filter(one, c, v, records);
-    const Eigen::VectorXd s = arma_filter(one, c, e, records);
+    const Eigen::VectorXd w = internal::filter_from_rest(one, c, v, records);
+    const Eigen::VectorXd s = internal::filter_from_rest(one, c, e, records);
     for (int i = 1; i <= p; ++i) jacobian.col(i - 1) = arma_shift(w, i, records);
     for (int j = 1; j <= q; ++j) jacobian.col(p + j - 1) = -arma_shift(s, j, records);
   };
@@ -173,7 +175,7 @@ ArmaModel fit_arma(const Eigen::VectorXd& v, int ar_order, int ma_order,
       d_new.tail(p) += scale * step.head(p);
       c_new.tail(q) += scale * step.tail(q);
       if (!d_new.allFinite() || !invertible(c_new)) continue;
-      const Eigen::VectorXd e_new = arma_filter(d_new, c_new, v, records);
+      const Eigen::VectorXd e_new = internal::filter_from_rest(d_new, c_new, v, records);
       const double sse_new = e_new.squaredNorm();
       if (!(sse_new <= sse * (1.0 + 1e-14))) continue;
       d = std::move(d_new);
@@ -233,7 +235,7 @@ ArmaModel fit_arma_by_criterion(const Eigen::VectorXd& v, int max_order,
 
 Eigen::VectorXd arma_innovations(const ArmaModel& model, const Eigen::VectorXd& v,
                                  const std::vector<Eigen::Index>& record_starts) {
-  return arma_filter(model.ar, model.ma, v, arma_records(v.size(), record_starts));
+  return internal::filter_from_rest(model.ar, model.ma, v, arma_records(v.size(), record_starts));
 }
 
 void arma_spectrum(ArmaModel& model, double sample_time, int points) {

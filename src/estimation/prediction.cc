@@ -4,25 +4,9 @@
 
 #include "ctid/core/error.h"
 #include "ctid/estimation/validation.h"
+#include "estimation/internal/difference_equation.h"
 
 namespace ctid {
-
-namespace {
-
-// y = (b / a) x from rest, a(0) = 1.
-Eigen::VectorXd prediction_filter(const Eigen::VectorXd& b, const Eigen::VectorXd& a,
-                                  const Eigen::VectorXd& x) {
-  Eigen::VectorXd y(x.size());
-  for (Eigen::Index t = 0; t < x.size(); ++t) {
-    double value = 0.0;
-    for (Eigen::Index i = 0; i < b.size() && i <= t; ++i) value += b(i) * x(t - i);
-    for (Eigen::Index j = 1; j < a.size() && j <= t; ++j) value -= a(j) * y(t - j);
-    y(t) = value;
-  }
-  return y;
-}
-
-}  // namespace
 
 PredictionReport predict_ahead(const AdditiveModel& model, const ArmaModel& noise,
                                const SampledData& data, int horizon) {
@@ -38,13 +22,13 @@ PredictionReport predict_ahead(const AdditiveModel& model, const ArmaModel& nois
   // H_k: the first k terms of C/D's impulse response.
   Eigen::VectorXd impulse = Eigen::VectorXd::Zero(horizon);
   impulse(0) = 1.0;
-  const Eigen::VectorXd h = prediction_filter(noise.ma, noise.ar, impulse);
+  const Eigen::VectorXd h = internal::filter_from_rest(noise.ma, noise.ar, impulse);
   // H_k D, a polynomial in q^-1 of degree k - 1 + p.
   Eigen::VectorXd hd = Eigen::VectorXd::Zero(horizon + noise.ar.size() - 1);
   for (int i = 0; i < horizon; ++i) hd.segment(i, noise.ar.size()) += h(i) * noise.ar;
   PredictionReport report;
   report.horizon = horizon;
-  report.prediction = simulated + xi - prediction_filter(hd, noise.ma, xi);
+  report.prediction = simulated + xi - internal::filter_from_rest(hd, noise.ma, xi);
   const Eigen::VectorXd error = data.output() - report.prediction;
   report.mean_squared_error = error.squaredNorm() / static_cast<double>(n);
   report.fit_percent = fit_percent(data.output(), report.prediction);

@@ -457,20 +457,15 @@ void update_noise_model(Run& run) {
            run.options.output_interpolation, run.workspace, nullptr, &residual, nullptr);
   if (!residual.allFinite()) return;  // the pass that follows reports the iterate
   const std::vector<Eigen::Index> starts = record_starts(run);
+  // The orders in use: those chosen or given, none yet when they are still to be chosen.
+  const int ar = run.noise ? run.noise->ar_order() : orders.automatic ? 0 : orders.ar;
+  const int ma = run.noise ? run.noise->ma_order() : orders.automatic ? 0 : orders.ma;
   if (!(residual.norm() > 1e-12 * run.y.norm())) {
-    run.noise = fit_arma(Eigen::VectorXd::Zero(residual.size()),
-                         run.noise          ? run.noise->ar_order()
-                         : orders.automatic ? 0
-                                            : orders.ar,
-                         run.noise          ? run.noise->ma_order()
-                         : orders.automatic ? 0
-                                            : orders.ma,
-                         starts);
+    run.noise = fit_arma(Eigen::VectorXd::Zero(residual.size()), ar, ma, starts);
   } else if (orders.automatic && !run.noise) {
     run.noise = fit_arma_by_criterion(residual, orders.max_order, starts);
   } else {
-    run.noise = fit_arma(residual, run.noise ? run.noise->ar_order() : orders.ar,
-                         run.noise ? run.noise->ma_order() : orders.ma, starts);
+    run.noise = fit_arma(residual, ar, ma, starts);
   }
   run.workspace.prefilter.emplace(*run.noise, run.layout);
 }
