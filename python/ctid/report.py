@@ -239,6 +239,9 @@ def _estimation_section(path, document):
         ("noise variance", _number(document.get("noise_variance"))),
     ]
     parts.append("<h3>The iteration</h3>" + _table(None, summary, cls="pairs"))
+    noise = document.get("noise_model")
+    if isinstance(noise, dict):
+        parts.append(_noise_model_html(noise))
     warnings = (document.get("data_checks") or {}).get("warnings") or []
     if warnings:
         parts.append("<h3>Data checks</h3><ul>" +
@@ -250,6 +253,19 @@ def _estimation_section(path, document):
                                     "The model's submodels (modes) and their sum"))
     parts.append('<div class="figures">' + "".join(figures) + "</div>")
     return words, "".join(parts)
+
+
+def _noise_model_html(noise):
+    """RIVC's ARMA noise model D v = C e (decision 0056): each coefficient with its standard
+    error, and the innovation variance."""
+    ar, ma = list(noise.get("ar") or [1.0]), list(noise.get("ma") or [1.0])
+    names = [f"d{i}" for i in range(1, len(ar))] + [f"c{j}" for j in range(1, len(ma))]
+    errors = list(noise.get("standard_errors") or []) + [None] * len(names)
+    rows = [(name, _number(value), _number(error, 2))
+            for name, value, error in zip(names, ar[1:] + ma[1:], errors)]
+    rows.append(("innovation variance", _number(noise.get("innovation_variance")), "—"))
+    return (f"<h3>Noise model: ARMA({len(ar) - 1}, {len(ma) - 1}), D(q⁻¹) v = C(q⁻¹) e</h3>" +
+            _table(("coefficient", "value", "standard error"), rows))
 
 
 def _validation_section(path, document):
@@ -287,6 +303,10 @@ def _validation_section(path, document):
         ("largest residual-input correlation", _number(document.get("max_cross_correlation"), 3)),
         ("99 % bound", _number(document.get("whiteness_bound"), 3)),
     ]
+    prediction = document.get("prediction")
+    if isinstance(prediction, dict):
+        rows.append((f"{prediction.get('horizon')}-step-ahead prediction fit (noise model)",
+                     _percent(prediction.get("fit_percent"))))
     parts = ["<h3>Scores on the validation window</h3>" + _table(None, rows, cls="pairs")]
     if report.max_lag >= 1:
         figure = plotting.residual_correlation(report)

@@ -231,3 +231,21 @@ def test_an_fdd_page_draws_the_spectrum_and_claims_no_model_orders(tmp_path):
     page = report.render([str(path)])
     assert page.count('<img src="data:image/png;base64,') == 1
     assert "picked on it" in page and "Hankel block rows" not in page
+
+
+def test_a_rivc_fit_page_shows_its_noise_model_and_the_prediction(cli, tmp_path):
+    fit = tmp_path / "rivc.json"
+    done = _run(cli, "fit", DRYER, *DRYER_COLUMNS, "--rows", "0:500",
+                "--poles", "2", "--zeros", "1", "--input-delay-samples", "2", "--noise-model",
+                "2,1", "-o", fit, "-q")
+    assert done.returncode == 0, done.stderr
+    validation = tmp_path / "validation.json"
+    done = _run(cli, "validate", fit, DRYER, *DRYER_COLUMNS, "--rows", "500:1000",
+                "--horizon", "1", "-o", validation, "-q")
+    assert done.returncode == 0, done.stderr
+    page = report.render([str(fit), str(validation)])
+    document = json.loads(fit.read_text())
+    assert "<h3>Noise model: ARMA(2, 1), D(q⁻¹) v = C(q⁻¹) e</h3>" in page
+    assert ">d1<" in page and ">c1<" in page and "innovation variance" in page
+    assert document["estimator"] == "rivc"
+    assert "1-step-ahead prediction fit (noise model)" in page

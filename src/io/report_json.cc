@@ -59,7 +59,7 @@ ValidationReport validation_report_from_json(const nlohmann::json& value,
   return document_fields<ValidationReport>(
       value, kValidationReportType,
       {"autocorrelation_lags", "cross_correlation_lags", "residual_white",
-       "residual_uncorrelated_with_input", "bound_99", "model_file", "data"},
+       "residual_uncorrelated_with_input", "bound_99", "model_file", "data", "prediction"},
       source);
 }
 

@@ -10,6 +10,7 @@
 #include "cli/run_ctid.h"
 #include "ctid/core/additive_model.h"
 #include "ctid/io/json.h"
+#include "ctid/io/report_json.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
 
@@ -74,6 +75,8 @@ TEST_F(NoiseModelFlag, ValidateHorizonPredictsWithTheResultsNoiseModel) {
   EXPECT_GT(v["prediction"]["fit_percent"].get<double>(),
             v["prediction"]["simulation_fit_percent"].get<double>());
   EXPECT_FALSE(v["prediction"].contains("prediction"));
+  // The report reads back with its prediction (ctid report, read_result).
+  EXPECT_EQ(io::validation_report_from_json(v, "v.json").window_samples, 1500);
   ASSERT_EQ(ctid({"fit", data, "--poles", "2", "--zeros", "0", "-o", "plain.json", "-q"}).status,
             0);
   expect_bad_input(ctid({"validate", "plain.json", data, "--horizon", "2"}), "validate",

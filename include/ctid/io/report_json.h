@@ -37,7 +37,7 @@ inline constexpr const char* kFrfMatrixFitResultType = "frf_matrix_fit_result";
 /// "residual_white", "residual_uncorrelated_with_input" and "bound_99" (= whiteness_bound).
 nlohmann::json to_json(const ValidationReport& report);
 /// Reads it back; the restated keys and the context `ctid validate` writes ("model_file",
-/// "data") are accepted and not read.
+/// "data", and with --horizon "prediction") are accepted and not read.
 ValidationReport validation_report_from_json(const nlohmann::json& value,
                                              const std::string& source);
 
