@@ -54,6 +54,7 @@ __all__ = [
     "validation",
     "compare",
     "residual_correlation",
+    "noise_spectrum",
     "mse_against_n",
     "mode_tracking",
     "stabilisation",
@@ -993,6 +994,55 @@ def residual_correlation(residual, input=None, max_lag=25, confidence=0.99, titl
     ax_cross.set_ylabel("residual-input correlation")
     if title:
         ax_auto.set_title(title)
+    return _finish(figure, filename)
+
+
+def _averaged_periodogram(x, h, segment=256):
+    """(frequencies [Hz], one-sided power spectral density [unit^2/Hz]) of x by Hann-windowed
+    segments overlapping by half (Welch's method), normalised so that white noise of variance
+    s^2 reads 2 h s^2, the convention of ArmaModel.spectrum."""
+    x = np.asarray(x, dtype=float) - np.mean(x)
+    n = min(segment, x.size)
+    window = np.hanning(n)
+    spectra = [np.abs(np.fft.rfft(window * x[s:s + n])) ** 2
+               for s in range(0, x.size - n + 1, max(n // 2, 1))]
+    density = np.mean(spectra, axis=0) * h / np.sum(window ** 2)
+    density[1:] *= 2.0
+    if n % 2 == 0:
+        density[-1] /= 2.0  # the Nyquist line has no mirror
+    return np.fft.rfftfreq(n, h), density
+
+
+def noise_spectrum(result, data=None, title=None, filename=None, ax=None):
+    """The noise spectrum of a RIVC fit (``noise_model`` given, decision 0056): the ARMA
+    model's one-sided power spectral density 2 h sigma_e^2 |C/D|^2 against frequency [Hz],
+    line "noise model", on a log scale. With ``data`` (the SampledData it was fitted to, or
+    another record) the averaged periodogram of the output error y - G u is drawn beside it,
+    line "output error", so the fitted colour can be compared with the measured one.
+    ``result``: an EstimationResult with a noise model (or an ArmaModel whose spectrum is set;
+    ``data`` then needs a ``result`` with a model). Returns the Figure."""
+    noise = result if isinstance(result, _ctid.ArmaModel) else getattr(result, "noise_model", None)
+    if noise is None:
+        raise ValueError("noise_spectrum: the result has no noise model (fit with noise_model, "
+                         "ctid fit --noise-model)")
+    if len(noise.spectrum) == 0:
+        raise ValueError("noise_spectrum: the noise model has no spectrum (ctid.arma_spectrum)")
+    figure, axes = _axes_or_new(ax, 1, figsize=(7.0, 4.0))
+    if data is not None:
+        if isinstance(result, _ctid.ArmaModel):
+            raise TypeError("noise_spectrum: give the EstimationResult to draw the output error")
+        simulated = _ctid.model_output(result.model, data.input, data.sample_time,
+                                       data.input_hold)
+        f, density = _averaged_periodogram(np.asarray(data.output) - simulated, data.sample_time)
+        axes.semilogy(f[1:], density[1:], color="0.6", lw=1, label="output error")
+    axes.semilogy(noise.spectrum_frequencies, noise.spectrum, color="C0", lw=1.5,
+                  label="noise model")
+    axes.set_xlabel("frequency [Hz]")
+    axes.set_ylabel("power spectral density [unit²/Hz]")
+    axes.grid(True, which="both", alpha=0.3)
+    axes.legend(fontsize=8)
+    p, q = len(noise.ar) - 1, len(noise.ma) - 1
+    axes.set_title(title or f"noise model ARMA({p}, {q})")
     return _finish(figure, filename)
 
 

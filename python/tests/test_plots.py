@@ -305,3 +305,34 @@ def test_figures_draw_into_the_callers_axes(experiment, fitted):
         with pytest.raises(TypeError, match=r"ax: expected (a matplotlib Axes|a sequence of 2)"):
             draw(wrong)
     assert matplotlib.get_backend() == backend
+
+
+def test_noise_spectrum_draws_the_model_and_the_measured_output_error(tmp_path):
+    # 2 / (1 + 0.5 p + p^2) with AR(1) noise (pole 0.9), RIVC with the true orders.
+    g = ctid.AdditiveModel([ctid.Submodel(ctid.Polynomial([1.0, 0.5, 1.0]),
+                                          ctid.Polynomial([2.0]))])
+    h = 0.05
+    u = ctid.white_noise(8000, 1.0, seed=4)
+    filt = ctid.DiscreteTransferFunction(ctid.Polynomial([0.0, 1.0]),
+                                         ctid.Polynomial([-0.9, 1.0]), h)
+    data = ctid.SampledData(h, u, ctid.simulate(g, u, h) + ctid.colored_noise(filt, 8000, 0.01,
+                                                                              seed=5))
+    result = ctid.srivc(data, ctid.SubmodelOrder(2, 0), noise_model="1,0")
+    path = tmp_path / "noise.png"
+    figure = plotting.noise_spectrum(result, data, filename=path)
+    check_png(path)
+    ax = figure.axes[0]
+    model = line(ax, "noise model")
+    np.testing.assert_array_equal(model.get_xdata(), result.noise_model.spectrum_frequencies)
+    np.testing.assert_array_equal(model.get_ydata(), result.noise_model.spectrum)
+    # The closed form of the true noise: 2 h 0.01 / |1 - 0.9 e^{-i w h}|^2.
+    f = np.asarray(result.noise_model.spectrum_frequencies)
+    truth = 2 * h * 0.01 / np.abs(1 - 0.9 * np.exp(-2j * np.pi * f * h)) ** 2
+    assert np.all(np.abs(np.log(model.get_ydata() / truth)) < 0.15)
+    # The measured output error's periodogram, averaged over its lines, agrees with the model.
+    measured = line(ax, "output error")
+    at = np.interp(measured.get_xdata(), f, model.get_ydata())
+    assert abs(np.mean(np.log(measured.get_ydata() / at))) < 0.2
+    assert ax.get_xlabel() == "frequency [Hz]"
+    with pytest.raises(ValueError, match="has no noise model"):
+        plotting.noise_spectrum(ctid.srivc(data, ctid.SubmodelOrder(2, 0)))
