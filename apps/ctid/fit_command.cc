@@ -164,7 +164,6 @@ void print_engineering_quantities(std::ostream& out, const EstimationResult& r) 
   }
 }
 
-// `step` names h: "h" for a uniform record, "median step" for irregular time stamps.
 // RIVC's noise model: D v = C e with each coefficient +- one standard error.
 void print_noise_model(std::ostream& out, const ArmaModel& m) {
   const int p = m.ar_order();
@@ -182,6 +181,7 @@ void print_noise_model(std::ostream& out, const ArmaModel& m) {
       << format_brief(m.innovation_variance) << "\n";
 }
 
+// `step` names h: "h" for a uniform record, "median step" for irregular time stamps.
 void print_summary(std::ostream& out, const EstimationResult& r, const std::string& estimator,
                    double h, int samples, const std::string& file, const std::string& preprocessing,
                    const char* step = "h") {

@@ -9,6 +9,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/polynomial.h"
 #include "estimation/internal/difference_equation.h"
+#include "estimation/internal/scaled_least_squares.h"
 
 namespace ctid {
 
@@ -58,12 +59,11 @@ Eigen::VectorXd arma_shift(const Eigen::VectorXd& x, int k, const RecordRanges& 
   return out;
 }
 
-// Roots of 1 + c_1 x + ... + c_q x^q (x = q^-1) inside the unit disc mirrored outside it (so
-// that 1/C is stable); returns whether anything changed.
-bool make_invertible(Eigen::VectorXd& c) {
-  if (c.size() <= 1) return false;
+// Roots of 1 + c_1 x + ... + c_q x^q (x = q^-1) inside the unit disc mirrored outside it, so
+// that 1/C is stable.
+void make_invertible(Eigen::VectorXd& c) {
   const Polynomial poly = Polynomial::trimmed(c);
-  if (poly.degree() < 1) return false;
+  if (poly.degree() < 1) return;
   Eigen::VectorXcd roots = poly.roots();
   bool changed = false;
   for (Eigen::Index i = 0; i < roots.size(); ++i) {
@@ -72,11 +72,10 @@ bool make_invertible(Eigen::VectorXd& c) {
       changed = true;
     }
   }
-  if (!changed) return false;
+  if (!changed) return;
   const Eigen::VectorXd mirrored = Polynomial::from_roots(roots).anti_monic().coefficients();
   c.setZero();
   c.head(mirrored.size()) = mirrored;
-  return true;
 }
 
 bool invertible(const Eigen::VectorXd& c) {
@@ -84,11 +83,6 @@ bool invertible(const Eigen::VectorXd& c) {
   const Polynomial poly = Polynomial::trimmed(c);
   if (poly.degree() < 1) return true;
   return poly.roots().cwiseAbs().minCoeff() > 1.0 + 1e-10;
-}
-
-// Least squares of `rows` (the design) on `target` (minimum norm when rank deficient).
-Eigen::VectorXd least_squares(const Eigen::MatrixXd& design, const Eigen::VectorXd& target) {
-  return design.completeOrthogonalDecomposition().solve(target);
 }
 
 // The Hannan-Rissanen estimate: a long AR model's residual as the innovations, then least
@@ -107,13 +101,12 @@ void hannan_rissanen(const Eigen::VectorXd& v, int p, int q, const RecordRanges&
   if (long_order > 0) {
     Eigen::MatrixXd design(n, long_order);
     for (int i = 1; i <= long_order; ++i) design.col(i - 1) = -arma_shift(v, i, records);
-    const Eigen::VectorXd alpha = least_squares(design, v);
-    innovations = v - design * alpha;
+    innovations = internal::scaled_least_squares(design, v).residual;
   }
   Eigen::MatrixXd design(n, p + q);
   for (int i = 1; i <= p; ++i) design.col(i - 1) = -arma_shift(v, i, records);
   for (int j = 1; j <= q; ++j) design.col(p + j - 1) = arma_shift(innovations, j, records);
-  const Eigen::VectorXd theta = least_squares(design, v);
+  const Eigen::VectorXd theta = internal::scaled_least_squares(design, v).coefficients;
   d.tail(p) = theta.head(p);
   c.tail(q) = theta.tail(q);
   if (!c.allFinite()) c.tail(q).setZero();
@@ -165,7 +158,7 @@ ArmaModel fit_arma(const Eigen::VectorXd& v, int ar_order, int ma_order,
   constexpr double kTolerance = 1e-11;
   for (int iteration = 1; iteration <= kMaxIterations && k > 0; ++iteration) {
     gradient();
-    const Eigen::VectorXd step = -least_squares(jacobian, e);
+    const Eigen::VectorXd step = -internal::scaled_least_squares(jacobian, e).coefficients;
     if (!step.allFinite()) break;
     double scale = 1.0;
     bool accepted = false;
@@ -243,16 +236,14 @@ void arma_spectrum(ArmaModel& model, double sample_time, int points) {
           " and points = ", points, " must be > 0 and >= 2");
   model.spectrum_frequencies = Eigen::VectorXd::LinSpaced(points, 0.0, 0.5 / sample_time);
   model.spectrum.resize(points);
-  auto evaluate = [](const Eigen::VectorXd& coefficients, std::complex<double> x) {
-    std::complex<double> sum = 0.0;
-    for (Eigen::Index i = coefficients.size() - 1; i >= 0; --i) sum = sum * x + coefficients(i);
-    return sum;
-  };
+  // C and D as polynomials in x = q^-1, evaluated at x = e^{-i 2 pi f h}.
+  const Polynomial c = Polynomial::trimmed(model.ma);
+  const Polynomial d = Polynomial::trimmed(model.ar);
   for (int i = 0; i < points; ++i) {
     const std::complex<double> x =
         std::polar(1.0, -2.0 * M_PI * model.spectrum_frequencies(i) * sample_time);
-    model.spectrum(i) = 2.0 * sample_time * model.innovation_variance *
-                        std::norm(evaluate(model.ma, x)) / std::norm(evaluate(model.ar, x));
+    model.spectrum(i) =
+        2.0 * sample_time * model.innovation_variance * std::norm(c(x)) / std::norm(d(x));
   }
 }
 
