@@ -344,21 +344,6 @@ void run_validate_irregular(const ValidateFlags& f, const CLI::App& app,
   if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
 }
 
-// --horizon K: the noise model of a `ctid fit --noise-model` result, refused by name for
-// anything else.
-ArmaModel noise_model_in(const std::string& file) {
-  const nlohmann::json document = io::read_json(file);
-  const auto found = document.find("noise_model");
-  if (found == document.end() || found->is_null()) {
-    usage_error("--horizon predicts with a noise model; " + file +
-                " has none (fit with --noise-model P,Q or auto and -o RESULT.json, then "
-                "validate RESULT.json)");
-  }
-  ArmaModel noise;
-  io::fields_from_json(*found, noise, file + ": noise_model");
-  return noise;
-}
-
 void print_prediction(const PredictionReport& p, const ArmaModel& noise) {
   std::cout << p.horizon << "-step-ahead prediction (noise model ARMA(" << noise.ar_order() << ", "
             << noise.ma_order() << ")): fit " << format_fixed(p.fit_percent, 2) << " %, RMS error "
@@ -388,8 +373,11 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
         "--horizon predicts one model's output on one regularly sampled record; give one "
         "result file, without --irregular or several columns");
   }
-  std::optional<ArmaModel> noise;
-  if (f.horizon > 0) noise = noise_model_in(f.model);
+  if (f.horizon > 0 && (windowed || options.initial_state == InitialState::estimate)) {
+    usage_error(
+        "--horizon scores the prediction on the whole record from rest; it does not take "
+        "--window or --initial-state estimate");
+  }
   if (f.irregular) {
     check_validate_irregular_flags(f, app, several);
     run_validate_irregular(f, app, options, windowed);
@@ -409,6 +397,10 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
         "--output-column)");
   }
   const std::optional<DelayedFeedbackLoop> loop = loop_in(f.model);
+  if (loop && f.horizon > 0) {
+    usage_error("--horizon predicts with a noise model; " + f.model +
+                " holds a closed loop with delayed feedback");
+  }
   if (loop) {
     if (several) {
       usage_error(f.model + " holds a closed loop with delayed feedback; it is validated alone");
@@ -430,6 +422,11 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
       }
       fitted.push_back(io::read_fitted_model(file));
     }
+  }
+  if (f.horizon > 0 && !fitted.front().noise_model) {
+    usage_error("--horizon predicts with a noise model; " + f.model +
+                " has none (fit with --noise-model P,Q or auto and -o RESULT.json, then "
+                "validate RESULT.json)");
   }
   const bool modes = !several && !fitted.empty() && fitted.front().model.size() > 1;
   std::filesystem::path package;
@@ -456,7 +453,9 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
   }
 
   std::optional<PredictionReport> predicted;
-  if (noise) predicted = predict_ahead(fitted.front().model, *noise, data, f.horizon);
+  if (f.horizon > 0) {
+    predicted = predict_ahead(fitted.front().model, *fitted.front().noise_model, data, f.horizon);
+  }
   if (!f.output.empty()) {
     nlohmann::json document = io::to_json(reports.front());
     if (predicted) {
@@ -487,7 +486,7 @@ void run_validate(const ValidateFlags& f, const CLI::App& app) {
       if (several) std::cout << files[i] << ":\n";
       print_statistics(reports[i]);
     }
-    if (predicted) print_prediction(*predicted, *noise);
+    if (predicted) print_prediction(*predicted, *fitted.front().noise_model);
   }
   if (!f.plot.empty()) {
     const std::string title =

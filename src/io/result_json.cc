@@ -293,6 +293,10 @@ FittedModel fitted_model_from_json(const nlohmann::json& value, const std::strin
               source, ": delay_standard_error is ", fitted.delay_standard_error,
               "; it must be finite and >= 0");
     }
+    const auto noise = value.find("noise_model");
+    if (noise != value.end() && !noise->is_null()) {
+      fields_from_json(*noise, fitted.noise_model.emplace(), source + ": noise_model");
+    }
     return fitted;
   }
   const ContinuousModel model = continuous_model_from_json(value, source);

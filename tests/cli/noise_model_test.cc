@@ -85,6 +85,8 @@ TEST_F(NoiseModelFlag, ValidateHorizonPredictsWithTheResultsNoiseModel) {
                    "the horizon 5000 must be at least 1 and below the record's 1500 samples");
   expect_bad_input(ctid({"validate", "rivc.json", data, "plain.json", "--horizon", "2"}),
                    "validate", "--horizon predicts one model's output");
+  expect_bad_input(ctid({"validate", "rivc.json", data, "--horizon", "2", "--window", "10:"}),
+                   "validate", "--horizon scores the prediction on the whole record from rest");
 }
 
 TEST_F(NoiseModelFlag, BadWordsShortRecordsAndSeveralOutputsAreRefused) {

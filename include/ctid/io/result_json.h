@@ -98,6 +98,8 @@ struct FittedModel {
   /// Standard error of an estimated continuous input delay [s]; 0 when the delay was given,
   /// chosen from whole samples, or the document is a plain model file.
   double delay_standard_error = 0.0;
+  /// The ARMA noise model of a fit with a noise model (RIVC); none otherwise.
+  std::optional<ArmaModel> noise_model = std::nullopt;
 };
 
 /// One unfactored transfer function as a single additive submodel B/(p^l A) with A
