@@ -323,6 +323,16 @@ Eigen::VectorXd AdditiveModel::parameters() const {
   return theta;
 }
 
+std::vector<std::string> AdditiveModel::parameter_names() const {
+  std::vector<std::string> names;
+  for (size_t i = 0; i < orders_.size(); ++i) {
+    const std::string prefix = "theta" + std::to_string(i + 1) + ".";
+    for (int k = 1; k <= orders_[i].n; ++k) names.push_back(prefix + "a" + std::to_string(k));
+    for (int k = 0; k <= orders_[i].m; ++k) names.push_back(prefix + "b" + std::to_string(k));
+  }
+  return names;
+}
+
 AdditiveModel AdditiveModel::with_parameters(const Eigen::VectorXd& theta) const {
   return from_parameters(orders_, theta, input_delay_);
 }

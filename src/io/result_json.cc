@@ -42,7 +42,8 @@ nlohmann::json modal_fields(const nlohmann::json& mode, const std::string& where
 const std::vector<std::string>& estimation_extra_keys() {
   static const std::vector<std::string> keys{
       "type",      "version", "converged", "parameter_names", "input_delay", "data_checks",
-      "estimator", "loop",    "data",      "controller",      "delay_scan",  "mode_relocation"};
+      "estimator", "loop",    "data",      "controller",      "delay_scan",  "mode_relocation",
+      "two_stage", "polish"};
   return keys;
 }
 
@@ -94,14 +95,7 @@ nlohmann::json modal_json(const ModalEstimate& mode) {
 }
 
 std::vector<std::string> parameter_names(const AdditiveModel& model) {
-  std::vector<std::string> names;
-  const std::vector<SubmodelOrder> orders = model.orders();
-  for (size_t i = 0; i < orders.size(); ++i) {
-    const std::string prefix = "theta" + std::to_string(i + 1) + ".";
-    for (int k = 1; k <= orders[i].n; ++k) names.push_back(prefix + "a" + std::to_string(k));
-    for (int k = 0; k <= orders[i].m; ++k) names.push_back(prefix + "b" + std::to_string(k));
-  }
-  return names;
+  return model.parameter_names();
 }
 
 Termination termination_from_string(const std::string& name) {

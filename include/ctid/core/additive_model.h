@@ -109,6 +109,9 @@ class AdditiveModel {
 
   int parameter_count() const;
   Eigen::VectorXd parameters() const;
+  /// The name of each parameter, in parameters() order: "theta<i>.a<k>" and "theta<i>.b<k>",
+  /// submodels counted from 1 (theta1.a1, theta1.a2, theta1.b0, theta2.a1, ...).
+  std::vector<std::string> parameter_names() const;
   AdditiveModel with_parameters(const Eigen::VectorXd& theta) const;
 
   /// The sum as one transfer function (common denominator, input delay kept).
