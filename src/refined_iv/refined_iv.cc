@@ -128,43 +128,6 @@ bool controller_stabilises(const std::vector<SubmodelOrder>& orders, const Eigen
       .has_value();
 }
 
-Eigen::VectorXd parameters_for_orders(const AdditiveModel& model,
-                                      const std::vector<SubmodelOrder>& orders) {
-  require(model.size() == static_cast<int>(orders.size()), "initial model has ", model.size(),
-          " submodels; the structure asks for ", orders.size());
-  const srivc_engine::Layout layout(orders);
-  Eigen::VectorXd beta = Eigen::VectorXd::Zero(layout.parameters);
-  for (int i = 0; i < model.size(); ++i) {
-    const Submodel& s = model[i];
-    const SubmodelOrder& o = orders[static_cast<size_t>(i)];
-    require(s.n() == o.n && s.integrators == o.integrators && s.m() <= o.m, "initial submodel ",
-            i + 1, " has n = ", s.n(), ", m = ", s.m(), ", integrators = ", s.integrators,
-            "; the structure asks for n = ", o.n, ", m <= ", o.m,
-            ", integrators = ", o.integrators);
-    const int off = layout.offset[static_cast<size_t>(i)];
-    for (int k = 1; k <= o.n; ++k) beta(off + k - 1) = s.a[k];
-    for (int k = 0; k <= s.m(); ++k) beta(off + o.n + k) = s.b[k];
-  }
-  return beta;
-}
-
-Eigen::VectorXd unfactored_parameters(const TransferFunction& g, const SubmodelOrder& order) {
-  const Polynomial& den = g.denominator();
-  int l = 0;
-  while (l <= den.degree() && den[l] == 0.0) ++l;
-  require(
-      l == order.integrators && den.degree() - l == order.n && g.numerator().degree() <= order.m,
-      "initial transfer function has ", den.degree() - l, " non-zero poles, ", l,
-      " poles at the origin and numerator degree ", g.numerator().degree(),
-      "; the structure asks for n = ", order.n, ", integrators = ", order.integrators,
-      ", m <= ", order.m);
-  const double scale = den[l];
-  Eigen::VectorXd beta = Eigen::VectorXd::Zero(order.n + order.m + 1);
-  for (int k = 1; k <= order.n; ++k) beta(k - 1) = den[l + k] / scale;
-  for (int k = 0; k <= g.numerator().degree(); ++k) beta(order.n + k) = g.numerator()[k] / scale;
-  return beta;
-}
-
 namespace srivc_engine {
 namespace {
 
@@ -581,8 +544,11 @@ StepOutcome take_step(Run& run, const ScaledEquations& e, const Eigen::MatrixXd&
                       int iteration) {
   const Layout& layout = run.layout;
   EstimationResult& result = run.result;
+  const HeldCoefficients& held = run.problem.held_coefficients;
   const Eigen::MatrixXd solution =
-      e.sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(e.m.fullPivLu().solve(rhs));
+      held.empty() ? Eigen::MatrixXd(e.sp.cwiseInverse().asDiagonal() *
+                                     Eigen::MatrixXd(e.m.fullPivLu().solve(rhs)))
+                   : held_solution(e.m, e.sp, rhs, held);
   Eigen::VectorXd next(run.p);
   Eigen::MatrixXd off = solution.topRows(run.p);
   for (int i = 0; i < layout.size(); ++i) {
@@ -596,7 +562,9 @@ StepOutcome take_step(Run& run, const ScaledEquations& e, const Eigen::MatrixXd&
                      " produced a non-finite parameter; the last finite iterate is returned";
     return StepOutcome::stopped;
   }
-  if (!reflect_all(run, next) || !realisable(run.layout, run.closed_loop, run.h, next)) {
+  const bool reflected = reflect_all(run, next);
+  for (const auto& [j, value] : held) next(j) = value;  // a reflection keeps them
+  if (!reflected || !realisable(run.layout, run.closed_loop, run.h, next)) {
     stop_degenerate(run, "the model at iteration " + std::to_string(iteration));
     return StepOutcome::stopped;
   }
@@ -753,7 +721,7 @@ void refresh_free_responses(Run& run) {
   Moments sums;
   evaluate(run.layout, run.beta, run.initial_states, run.signals, run.source, run.h,
            run.options.output_interpolation, run.workspace, &sums, nullptr, nullptr);
-  if (std::optional<Eigen::MatrixXd> solution = solve_scaled(sums)) {
+  if (std::optional<Eigen::MatrixXd> solution = solve_scaled(sums, run.problem.held_coefficients)) {
     run.initial_states = free_response_coefficients(run.layout, *solution);
     run.states_at = run.beta;
   }
@@ -858,7 +826,10 @@ void set_statistics(Run& run) {
                                        run.source, run.h, options.output_interpolation,
                                        run.workspace, instrument, ar, scales);
                                  });
-  result.covariance = joint.topLeftCorner(run.p, run.p);
+  result.covariance =
+      run.problem.held_coefficients.empty()
+          ? Eigen::MatrixXd(joint.topLeftCorner(run.p, run.p))
+          : covariance_given_held(joint, run.problem.held_coefficients).topLeftCorner(run.p, run.p);
   if (delay_column_used) {
     result.delay_standard_error = std::sqrt(std::max(joint(run.unknowns, run.unknowns), 0.0));
   }
@@ -914,8 +885,14 @@ std::optional<EstimationResult> run_from_start(const RefinedIvProblem& problem,
       se::starting_point(problem, options, layout, longest_index, shared, failure);
   if (!beta) return std::nullopt;
   require(beta->allFinite(), name, ": the initial model has a non-finite parameter");
+  Eigen::VectorXd start = *beta;
+  for (const auto& [j, value] : problem.held_coefficients) {
+    require(problem.unfactored && j >= 0 && j < start.size(), name,
+            ": held coefficients are for an unfactored model's beta");
+    start(j) = value;
+  }
 
-  se::Run run(problem, options, name, std::move(layout), std::move(checks), *beta,
+  se::Run run(problem, options, name, std::move(layout), std::move(checks), start,
               data.sample_time());
   if (!se::reflect_all(run, run.beta) ||
       !se::realisable(run.layout, run.closed_loop, run.h, run.beta)) {

@@ -643,7 +643,7 @@ Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares) {
 
 // The solution of (29) from its sums with unit-norm columns, or nothing if they are not
 // finite or the equations are singular.
-std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums) {
+std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums, const HeldCoefficients& held) {
   if (!sums.all_finite()) return std::nullopt;
   const Eigen::VectorXd sz = norms_from_squares(sums.zz);
   const Eigen::VectorXd sp = norms_from_squares(sums.pp);
@@ -652,9 +652,60 @@ std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums) {
   const Eigen::FullPivLU<Eigen::MatrixXd> lu(m);
   if (!(lu.rcond() > 1e-14)) return std::nullopt;
   const Eigen::MatrixXd rhs = sz.cwiseInverse().asDiagonal() * sums.zy;
-  Eigen::MatrixXd solution = sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(lu.solve(rhs));
+  Eigen::MatrixXd solution =
+      held.empty()
+          ? Eigen::MatrixXd(sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(lu.solve(rhs)))
+          : held_solution(m, sp, rhs, held);
   if (!solution.allFinite()) return std::nullopt;
   return solution;
+}
+
+namespace {
+
+// The free and held indices of an n-vector.
+std::pair<std::vector<Eigen::Index>, std::vector<Eigen::Index>> free_and_held(
+    Eigen::Index n, const HeldCoefficients& held) {
+  std::vector<bool> is_held(static_cast<std::size_t>(n), false);
+  std::vector<Eigen::Index> h;
+  for (const auto& [j, value] : held) {
+    is_held[static_cast<std::size_t>(j)] = true;
+    h.push_back(j);
+  }
+  std::vector<Eigen::Index> f;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    if (!is_held[static_cast<std::size_t>(j)]) f.push_back(j);
+  }
+  return {f, h};
+}
+
+}  // namespace
+
+Eigen::MatrixXd held_solution(const Eigen::MatrixXd& m, const Eigen::VectorXd& sp,
+                              const Eigen::MatrixXd& rhs, const HeldCoefficients& held) {
+  const auto [f, h] = free_and_held(m.rows(), held);
+  Eigen::VectorXd vh(static_cast<Eigen::Index>(h.size()));
+  for (std::size_t k = 0; k < held.size(); ++k) {
+    vh(static_cast<Eigen::Index>(k)) = sp(held[k].first) * held[k].second;
+  }
+  const Eigen::MatrixXd mff = m(f, f);
+  const Eigen::VectorXd r = rhs(f, 0) - m(f, h) * vh;
+  const Eigen::VectorXd vf = mff.fullPivLu().solve(r);
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(m.rows(), 1);
+  for (std::size_t k = 0; k < f.size(); ++k) {
+    w(f[k], 0) = vf(static_cast<Eigen::Index>(k)) / sp(f[k]);
+  }
+  for (const auto& [j, value] : held) w(j, 0) = value;
+  return w;
+}
+
+Eigen::MatrixXd covariance_given_held(const Eigen::MatrixXd& p, const HeldCoefficients& held) {
+  const auto [f, h] = free_and_held(p.rows(), held);
+  const Eigen::MatrixXd phh = p(h, h);
+  const Eigen::MatrixXd pfh = p(f, h);
+  const Eigen::MatrixXd given = p(f, f) - pfh * phh.ldlt().solve(pfh.transpose());
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(p.rows(), p.cols());
+  out(f, f) = given;
+  return out;
 }
 
 }  // namespace srivc_engine

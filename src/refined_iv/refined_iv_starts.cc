@@ -1,6 +1,7 @@
 // The additive closed-loop estimator from the data alone (decision 0028): the refined IV
 // iteration run from several starts, the usable estimate with the best output-error fit kept.
-// Split from refined_iv.cc, whose driver runs one estimate from one start.
+// Split from refined_iv.cc, whose driver runs one estimate from one start; with it, the
+// conversions of a start model into beta (parameters_for_orders, unfactored_parameters).
 #include <cmath>
 #include <optional>
 #include <string>
@@ -90,6 +91,43 @@ EstimationResult run_refined_iv(const RefinedIvProblem& problem, const RefinedIv
     return closed_loop_additive_from_data(problem, options);
   }
   return run_refined_iv_from_start(problem, options);
+}
+
+Eigen::VectorXd parameters_for_orders(const AdditiveModel& model,
+                                      const std::vector<SubmodelOrder>& orders) {
+  require(model.size() == static_cast<int>(orders.size()), "initial model has ", model.size(),
+          " submodels; the structure asks for ", orders.size());
+  const srivc_engine::Layout layout(orders);
+  Eigen::VectorXd beta = Eigen::VectorXd::Zero(layout.parameters);
+  for (int i = 0; i < model.size(); ++i) {
+    const Submodel& s = model[i];
+    const SubmodelOrder& o = orders[static_cast<size_t>(i)];
+    require(s.n() == o.n && s.integrators == o.integrators && s.m() <= o.m, "initial submodel ",
+            i + 1, " has n = ", s.n(), ", m = ", s.m(), ", integrators = ", s.integrators,
+            "; the structure asks for n = ", o.n, ", m <= ", o.m,
+            ", integrators = ", o.integrators);
+    const int off = layout.offset[static_cast<size_t>(i)];
+    for (int k = 1; k <= o.n; ++k) beta(off + k - 1) = s.a[k];
+    for (int k = 0; k <= s.m(); ++k) beta(off + o.n + k) = s.b[k];
+  }
+  return beta;
+}
+
+Eigen::VectorXd unfactored_parameters(const TransferFunction& g, const SubmodelOrder& order) {
+  const Polynomial& den = g.denominator();
+  int l = 0;
+  while (l <= den.degree() && den[l] == 0.0) ++l;
+  require(
+      l == order.integrators && den.degree() - l == order.n && g.numerator().degree() <= order.m,
+      "initial transfer function has ", den.degree() - l, " non-zero poles, ", l,
+      " poles at the origin and numerator degree ", g.numerator().degree(),
+      "; the structure asks for n = ", order.n, ", integrators = ", order.integrators,
+      ", m <= ", order.m);
+  const double scale = den[l];
+  Eigen::VectorXd beta = Eigen::VectorXd::Zero(order.n + order.m + 1);
+  for (int k = 1; k <= order.n; ++k) beta(k - 1) = den[l + k] / scale;
+  for (int k = 0; k <= g.numerator().degree(); ++k) beta(order.n + k) = g.numerator()[k] / scale;
+  return beta;
 }
 
 }  // namespace ctid::internal

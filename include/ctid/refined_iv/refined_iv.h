@@ -4,6 +4,7 @@
 // from the data and the structure (docs/architecture.md).
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "ctid/core/additive_model.h"
@@ -28,6 +29,11 @@ struct RefinedIvProblem {
   /// The covariance from the whole N x p instrument held in memory, as before it was streamed
   /// (issue 14): the reference the streamed sums are tested against, not for estimation.
   bool stored_instrument_covariance = false;
+  /// Coefficients of beta held at known values, as (index in beta, value), for an unfactored
+  /// model (one column of (29)): the start takes them, each step solves the instrument
+  /// equations of the free coefficients only, and the covariance is that of the free ones given
+  /// the held (decision 0057). Empty: every coefficient free.
+  std::vector<std::pair<Eigen::Index, double>> held_coefficients;
 };
 
 /// The refined IV estimate of the problem: the iteration of González et al. (eq. 29 and 30)

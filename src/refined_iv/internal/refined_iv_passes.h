@@ -228,6 +228,20 @@ Eigen::VectorXd free_response_derivatives(const Layout& layout, const Eigen::Vec
 /// Column norms from their squares, 1 where a norm is zero or not finite.
 Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares);
 /// The solution of (29) from its sums with unit-norm columns, or nothing.
-std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums);
+/// Coefficients held at known values: (index in the augmented vector, value).
+using HeldCoefficients = std::vector<std::pair<Eigen::Index, double>>;
+
+std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums, const HeldCoefficients& held = {});
+
+/// The solution of the scaled equations m v = rhs (one column, v = sp w) with the held entries
+/// of w at their values: the equations of the free entries only, m_ff v_f = rhs_f - m_fh v_h
+/// (decision 0057); the held entries of the result are their values.
+Eigen::MatrixXd held_solution(const Eigen::MatrixXd& m, const Eigen::VectorXd& sp,
+                              const Eigen::MatrixXd& rhs, const HeldCoefficients& held);
+
+/// The covariance of the free entries given the held ones, P_ff - P_fh P_hh^-1 P_hf (for the
+/// white-noise instrument covariance this is (I_ff)^-1, the covariance of the estimator that
+/// knows them); the held rows and columns are zero.
+Eigen::MatrixXd covariance_given_held(const Eigen::MatrixXd& p, const HeldCoefficients& held);
 
 }  // namespace ctid::internal::srivc_engine
