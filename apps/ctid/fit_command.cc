@@ -73,7 +73,10 @@ struct FitFlags {
   std::vector<std::string> process_start;  // NAME=VALUE
   std::vector<std::string> process_fix;    // NAME=VALUE
   std::vector<std::string> process_bound;  // NAME=LO:HI (either side may be empty)
-  double max_delay = -1.0;                 // [s]; negative: the default
+  std::vector<std::string> fix;            // NAME=VALUE, held coefficients (decision 0057)
+  std::vector<std::string> bound;          // NAME=LO:HI
+  std::optional<double> dc_gain;
+  double max_delay = -1.0;  // [s]; negative: the default
 
   std::string output;
   std::string model_output;
@@ -254,6 +257,36 @@ void print_two_stage(std::ostream& out, const TwoStageResult& stage) {
   out << "\n  assumes " << stage.assumptions << "\n";
 }
 
+// The output-error polish beside the IV estimate (decision 0057): the polished model, its
+// delay, the criterion and the fit before and after, and why it ran when not asked for.
+void print_polish(std::ostream& out, const IdentificationResult& identified) {
+  const OutputErrorPolishResult& p = *identified.polish;
+  if (identified.restarted_from_polish) {
+    out << "the refined IV iteration had not converged; restarted from the output-error polish, "
+           "it did (the estimate above)\n";
+  }
+  out << "polish (" << p.criterion << "): " << p.model.with_input_delay(0.0).to_string()
+      << "; input delay "
+      << (p.delay_standard_error > 0.0 ? plus_minus(p.model.input_delay(), p.delay_standard_error)
+                                       : format_brief(p.model.input_delay()))
+      << " s";
+  out << "\n  criterion per sample " << format_brief(p.start_cost) << " -> " << format_brief(p.cost)
+      << ", fit " << format_brief(p.start_fit_percent) << " % -> " << format_brief(p.fit_percent)
+      << " %; " << p.brief_report()
+      << (p.stability_constraint_active ? "; the stability constraint acted" : "") << "\n";
+  auto listed = [](const std::vector<std::string>& names) {
+    std::string text;
+    for (const std::string& n : names) text += (text.empty() ? "" : ", ") + n;
+    return text;
+  };
+  if (!p.held_parameters.empty()) out << "  held: " << listed(p.held_parameters) << "\n";
+  if (!p.active_bounds.empty()) out << "  at a bound: " << listed(p.active_bounds) << "\n";
+  if (p.noise_model) print_noise_model(out, *p.noise_model);
+  if (!p.verdict.usable) out << "  polish: " << p.verdict.summary() << "\n";
+}
+
+void add_constraints(const FitFlags& f, CoefficientConstraints& constraints);
+
 // The flags as IdentificationOptions (the controller and --initial read from their files).
 IdentificationOptions identification_options(const FitFlags& f) {
   IdentificationOptions options = f.options;
@@ -281,6 +314,7 @@ IdentificationOptions identification_options(const FitFlags& f) {
     refined.initial_model = io::read_fitted_model(f.start).model;
   }
   if (!f.initial.empty()) refined.initial_model = io::read_fitted_model(f.initial).model;
+  add_constraints(f, options.constraints);
   return options;
 }
 
@@ -385,9 +419,10 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
         "with --input-columns / --output-columns give the modes (--modes K or "
         "--submodel N,M repeated); an unfactored model has no shared modes");
   }
-  for (const char* flag : {"--controller", "--two-stage", "--input-delay-samples",
-                           "--delay-scan-samples", "--delay-range", "--record-delay-samples",
-                           "--relocate-modes", "--history", "--noise-model"}) {
+  for (const char* flag :
+       {"--controller", "--two-stage", "--input-delay-samples", "--delay-scan-samples",
+        "--delay-range", "--record-delay-samples", "--relocate-modes", "--history", "--noise-model",
+        "--polish", "--fix", "--bound", "--dc-gain"}) {
     if (app.count(flag) > 0) {
       usage_error(
           std::string(flag) +
@@ -506,7 +541,8 @@ void check_irregular_flags(const FitFlags& f, const CLI::App& app) {
   for (const char* flag :
        {"--controller", "--two-stage", "--submodel", "--modes", "--input-delay-samples",
         "--delay-scan-samples", "--delay-range", "--record-delay-samples", "--relocate-modes",
-        "--rank-one", "--input-delays-samples", "--direct", "--plot"}) {
+        "--rank-one", "--input-delays-samples", "--direct", "--plot", "--polish", "--fix",
+        "--bound", "--dc-gain"}) {
     if (app.count(flag) > 0) usage_error(std::string(flag) + why);
   }
   if (f.model == "additive") usage_error("--model additive" + why);
@@ -615,6 +651,34 @@ ProcessModelOptions process_options(const FitFlags& f) {
   return options;
 }
 
+// --fix NAME=VALUE, --bound NAME=LO:HI and --dc-gain K as the coefficient constraints.
+void add_constraints(const FitFlags& f, CoefficientConstraints& constraints) {
+  auto setting = [&](const std::string& name) -> CoefficientSetting& {
+    for (CoefficientSetting& s : constraints.coefficients) {
+      if (s.name == name) return s;
+    }
+    constraints.coefficients.push_back(CoefficientSetting{name, {}, {}, {}});
+    return constraints.coefficients.back();
+  };
+  for (const std::string& entry : f.fix) {
+    constexpr const char* form = "NAME=VALUE, e.g. theta1.b0=2";
+    const auto [name, text] = parameter_entry(entry, "--fix", form);
+    setting(name).fixed = parameter_number(text, entry, "--fix", form);
+  }
+  for (const std::string& entry : f.bound) {
+    constexpr const char* form = "NAME=LOWER:UPPER (either may be empty), e.g. theta1.a1=0:2";
+    const auto [name, text] = parameter_entry(entry, "--bound", form);
+    const auto colon = text.find(':');
+    if (colon == std::string::npos) usage_error("--bound '" + entry + "': expected " + form);
+    CoefficientSetting& s = setting(name);
+    const std::string lo = text.substr(0, colon);
+    const std::string hi = text.substr(colon + 1);
+    if (!lo.empty()) s.lower = parameter_number(lo, entry, "--bound", form);
+    if (!hi.empty()) s.upper = parameter_number(hi, entry, "--bound", form);
+  }
+  constraints.dc_gain = f.dc_gain;
+}
+
 // The parameters in the engineer's units, each with its standard error.
 void print_process_summary(std::ostream& out, const ProcessModelResult& r, double h, int samples,
                            const std::string& file, Hold hold, const std::string& preprocessing) {
@@ -671,6 +735,10 @@ ExitStatus run_process_fit(const FitFlags& f, const CLI::App& app) {
                            "--initial-conditions",
                            "--history",
                            "--relocate-modes",
+                           "--polish",
+                           "--fix",
+                           "--bound",
+                           "--dc-gain",
                            "--rank-one",
                            "--input-delays-samples",
                            "--direct",
@@ -818,6 +886,10 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
     document["data"] = io::to_json(provenance);
     if (controller) document["controller"] = io::to_json(*controller);
     if (identified.two_stage) document["two_stage"] = io::fields_to_json(*identified.two_stage);
+    if (identified.polish) {
+      document["polish"] = io::fields_to_json(*identified.polish);
+      document["polish"]["restarted_from_polish"] = identified.restarted_from_polish;
+    }
     if (scanned) document["delay_scan"] = io::delay_scan_summary_to_json(*scanned);
     if (relocated) {
       document["mode_relocation"] = io::relocation_summary_to_json(*relocated);
@@ -837,6 +909,7 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
     if (scanned) print_delay_scan(std::cout, *scanned);
     if (relocated) std::cout << "mode relocation: " << relocated->message << "\n";
     if (identified.two_stage) print_two_stage(std::cout, *identified.two_stage);
+    if (identified.polish) print_polish(std::cout, identified);
   }
 
   if (!f.plot.empty()) {
@@ -987,8 +1060,24 @@ Command add_fit_command(CLI::App& parent) {
                       "two_stage",
                       "refined_iv.initial_model",
                       "refined_iv.start",
-                      "refined_iv.record_delay_samples"};
+                      "refined_iv.record_delay_samples",
+                      "constraints"};
   add_field_flags(*app, f.options, settings);
+  app->add_option("--fix", f.fix,
+                  "Coefficients held at a value, NAME=VALUE (theta1.a1, theta1.b0, ..., tau), "
+                  "comma-separated or repeated; in the iteration (unfactored) and the polish, "
+                  "which it implies")
+      ->delimiter(',')
+      ->group("Constraints");
+  app->add_option("--bound", f.bound,
+                  "Bounds of coefficients, NAME=LOWER:UPPER (either may be empty), "
+                  "comma-separated or repeated; in the polish, which it implies")
+      ->delimiter(',')
+      ->group("Constraints");
+  app->add_option("--dc-gain", f.dc_gain,
+                  "Known static gain G(0), held to rounding; in the iteration (unfactored) and "
+                  "the polish, which it implies")
+      ->group("Constraints");
   app->add_flag("--irregular", f.irregular,
                 "Fit on the time stamps as logged (jitter, gaps, duplicate stamps), the filters "
                 "discretised on each interval for --input-hold; unfactored, open loop, one "

@@ -47,10 +47,14 @@ struct StructureFlags {
 
 // Fields of StructureScanOptions with no flag: one start model does not suit structures of
 // other orders, and a continuous delay, a two-stage fit and per-record delays are not scanned
-// (decision 0051).
-const std::vector<std::string> kNoScanFlag = {
-    "identification.refined_iv.initial_model", "identification.delay_range",
-    "identification.two_stage", "identification.refined_iv.record_delay_samples"};
+// (decision 0051); the polish and the constraints named by coefficient are ctid fit's (0057).
+const std::vector<std::string> kNoScanFlag = {"identification.refined_iv.initial_model",
+                                              "identification.delay_range",
+                                              "identification.two_stage",
+                                              "identification.refined_iv.record_delay_samples",
+                                              "identification.polish",
+                                              "identification.polish_options",
+                                              "identification.constraints"};
 
 // "A:B" (or "A") as an inclusive range of counts >= `least`.
 std::pair<int, int> parse_range(const std::string& text, const std::string& flag, int least = 1) {

@@ -72,9 +72,11 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 // Fields of TrackingOptions with no flag: a delay scan, a continuous delay, a two-stage fit and
 // per-record delays are whole-record questions, not one window's (decision 0051).
-const std::vector<std::string> kNoFlag = {"identification.delay_scan_samples",
-                                          "identification.delay_range", "identification.two_stage",
-                                          "identification.refined_iv.record_delay_samples"};
+const std::vector<std::string> kNoFlag = {
+    "identification.delay_scan_samples", "identification.delay_range", "identification.two_stage",
+    "identification.refined_iv.record_delay_samples",
+    // The polish and the constraints are ctid fit's (decision 0057).
+    "identification.polish", "identification.polish_options", "identification.constraints"};
 
 TrackingOptions tracking_options(const TrackFlags& f) {
   TrackingOptions options = f.options;

@@ -83,6 +83,7 @@
 
 #include "ctid/frf_fit/frf_matrix_fit.h"
 
+#include "ctid/output_error/output_error_polish.h"
 #include "ctid/process_model/process_model.h"
 #include "ctid/process_model/process_response.h"
 

@@ -242,6 +242,9 @@ def _estimation_section(path, document):
     noise = document.get("noise_model")
     if isinstance(noise, dict):
         parts.append(_noise_model_html(noise))
+    polish = document.get("polish")
+    if isinstance(polish, dict):
+        parts.append(_polish_html(polish, names))
     warnings = (document.get("data_checks") or {}).get("warnings") or []
     if warnings:
         parts.append("<h3>Data checks</h3><ul>" +
@@ -266,6 +269,33 @@ def _noise_model_html(noise):
     rows.append(("innovation variance", _number(noise.get("innovation_variance")), "—"))
     return (f"<h3>Noise model: ARMA({len(ar) - 1}, {len(ma) - 1}), D(q⁻¹) v = C(q⁻¹) e</h3>" +
             _table(("coefficient", "value", "standard error"), rows))
+
+
+def _polish_html(polish, names):
+    """The output-error polish beside the IV estimate (decision 0057): its criterion and fit
+    before and after, the polished coefficients with their standard errors, what was held."""
+    values = list(polish.get("parameters") or [])
+    errors = list(polish.get("standard_errors") or []) + [None] * len(values)
+    labels = list(names)
+    if len(values) > len(labels) and polish.get("delay_standard_error"):
+        labels.append("tau [s]")
+    held = set(polish.get("held_parameters") or [])
+    rows = [(name + (" (held)" if name in held else ""), _number(value), _number(error, 2))
+            for name, value, error in zip(labels, values, errors)]
+    summary = [
+        ("criterion", polish.get("criterion", "—")),
+        ("per sample", f"{_number(polish.get('start_cost'))} → {_number(polish.get('cost'))}"),
+        ("fit", f"{_percent(polish.get('start_fit_percent'))} → "
+                f"{_percent(polish.get('fit_percent'))}"),
+        ("stopped", polish.get("message") or polish.get("termination", "—")),
+    ]
+    bounds = polish.get("active_bounds") or []
+    if bounds:
+        summary.append(("at a bound", ", ".join(bounds)))
+    if polish.get("stability_constraint_active"):
+        summary.append(("stability", "the constraint acted"))
+    return ("<h3>Output-error polish</h3>" + _table(None, summary, cls="pairs") +
+            _table(("parameter", "polished value", "standard error"), rows))
 
 
 def _validation_section(path, document):

@@ -114,6 +114,17 @@ void bind_identification(py::module_& m) {
   bind_options<TwoStageOptions>(
       m, "The two-stage method for an unknown controller: the model of r -> u and its order.");
   bind_result<TwoStageResult>(m, "What stage 1 of the two-stage method chose and how well it fit.");
+  bind_options<CoefficientSetting>(
+      m, "A held value or bounds of one coefficient (theta1.a1, ..., tau).");
+  bind_options<CoefficientConstraints>(
+      m, "Held and bounded coefficients and a known DC gain (identify's constraints).");
+  bind_options<OutputErrorPolishOptions>(
+      m, "The output-error polish of identify (polish=True): delay, initial state, stability.");
+  bind_result<OutputErrorPolishResult>(
+      m, "The polished model beside the IV fit: criterion, parameters, covariance, fit, verdict.")
+      .def("converged", &OutputErrorPolishResult::converged, "termination == converged.")
+      .def("brief_report", &OutputErrorPolishResult::brief_report,
+           "One line: termination, iterations and, unless converged, why.");
   bind_options<IdentificationOptions>(
       m, "Options of identify: controller (closed loop), delay scan, mode relocation, estimator.");
   bind_result<IdentificationResult>(

@@ -249,3 +249,17 @@ def test_a_rivc_fit_page_shows_its_noise_model_and_the_prediction(cli, tmp_path)
     assert ">d1<" in page and ">c1<" in page and "innovation variance" in page
     assert document["estimator"] == "rivc"
     assert "1-step-ahead prediction fit (noise model)" in page
+
+
+def test_a_polished_fit_page_shows_the_polish_beside_the_iv_estimate(cli, tmp_path):
+    fit = tmp_path / "polished.json"
+    done = _run(cli, "fit", DRYER, *DRYER_COLUMNS, "--rows", "0:500", "--poles", "2",
+                "--zeros", "1", "--input-delay-samples", "2", "--dc-gain", "0.9",
+                "-o", fit, "-q")
+    assert done.returncode == 0, done.stderr
+    document = json.loads(fit.read_text())
+    page = report.render([str(fit)])
+    assert "<h3>Output-error polish</h3>" in page
+    assert "theta1.b0 (held)" in page and "tau [s]" in page
+    assert document["polish"]["parameters"][2] == 0.9
+    assert document["polish"]["cost"] <= document["polish"]["start_cost"]

@@ -95,6 +95,18 @@ void validate_identification(const ModelStructure& structure,
             "IdentificationOptions.relocate_modes is true but a controller is given; mode "
             "relocation is for open-loop data");
   }
+  if (options.polish_asked()) {
+    // The names the settings may use are the estimate's: one submodel per order.
+    Eigen::Index count = 0;
+    for (const SubmodelOrder& o : structure.orders) count += o.n + o.m + 1;
+    validate_constraints(
+        AdditiveModel::from_parameters(structure.orders, Eigen::VectorXd::Ones(count)),
+        options.constraints, options.polish_options.estimate_delay);
+  }
+  require(!options.polish_asked() || (!options.controller && !options.two_stage),
+          "IdentificationOptions.polish is true but the data are closed loop (",
+          options.controller ? "a controller" : "the two-stage method",
+          " is given); the output-error polish is for open-loop records");
 }
 
 namespace {
@@ -180,6 +192,76 @@ IdentificationResult identify_two_stage(std::span<const SampledData> records,
                                         const IdentificationOptions& options,
                                         const IdentificationProgress& progress);
 
+// The polish of `fitted` (decision 0057). Asked for (polish_asked()): with its options, the
+// initial state estimated when refined_iv estimates it, errors thrown. Otherwise (an iteration
+// that did not converge) at the fit's delay, and none when it cannot start: a start that is
+// not finite or whose output is not, a record under 10 samples per parameter.
+std::optional<OutputErrorPolishResult> polish_fit(const SampledData& record,
+                                                  const EstimationResult& fitted,
+                                                  const IdentificationOptions& options) {
+  // Open loop here: a reference the record carries is not the polish's business.
+  const SampledData data = record.has_reference()
+                               ? SampledData(record.sample_time(), record.input(), record.output(),
+                                             std::nullopt, record.start_time())
+                                     .with_input_hold(record.input_hold())
+                               : record;
+  OutputErrorPolishOptions o = options.polish_options;
+  o.estimate_initial_state = o.estimate_initial_state ||
+                             options.refined_iv.initial_conditions == InitialConditions::estimate;
+  if (options.polish_asked()) {
+    return polish_output_error(data, fitted.model, fitted.noise_model, o, options.constraints);
+  }
+  o.estimate_delay = false;
+  const int noise =
+      fitted.noise_model ? fitted.noise_model->ar_order() + fitted.noise_model->ma_order() : 0;
+  if (!fitted.model.parameters().allFinite() ||
+      data.size() < 10 * (fitted.model.parameter_count() + noise)) {
+    return std::nullopt;
+  }
+  try {
+    return polish_output_error(data, fitted.model, fitted.noise_model, o);
+  } catch (const InvalidArgument&) {
+    return std::nullopt;  // the start's output is not finite: nothing to polish from
+  }
+}
+
+// Decision 0057: the polish of `fitted`; without polish_asked() (an iteration that did not
+// converge), the iteration restarted from the polished model replaces `fitted` when it
+// converges to a usable model, and `restarted` says so.
+template <class Run>
+std::optional<OutputErrorPolishResult> polish_and_restart(const SampledData& data,
+                                                          EstimationResult& fitted,
+                                                          const IdentificationOptions& options,
+                                                          const Run& run, bool& restarted) {
+  std::optional<OutputErrorPolishResult> polished = polish_fit(data, fitted, options);
+  if (options.polish_asked() || !polished || !polished->verdict.usable) return polished;
+  RefinedIvOptions o = options.refined_iv;
+  o.input_delay_samples = fitted.input_delay_samples;
+  o.input_delay_fraction = fitted.input_delay_fraction;
+  o.initial_model = polished->model;
+  EstimationResult again = run(o);
+  again.message +=
+      "; restarted from the output-error polish of an iteration that had not "
+      "converged (" +
+      std::to_string(fitted.iterations) + " iterations)";
+  if (again.converged() && again.verdict.usable) {
+    fitted = std::move(again);
+    restarted = true;
+  }
+  return polished;
+}
+
+// Decision 0057: the coefficients an unfactored iteration holds, those the constraints
+// determine (none for an additive structure: its constraints act in the polish).
+std::vector<std::pair<Eigen::Index, double>> determined_coefficients(
+    const ModelStructure& structure, const CoefficientConstraints& constraints) {
+  if (structure.is_additive() || constraints.empty()) return {};
+  Eigen::Index count = 0;
+  for (const SubmodelOrder& o : structure.orders) count += o.n + o.m + 1;
+  return held_coefficients(
+      AdditiveModel::from_parameters(structure.orders, Eigen::VectorXd::Ones(count)), constraints);
+}
+
 IdentificationResult identify_records(std::span<const SampledData> records,
                                       const ModelStructure& structure,
                                       const IdentificationOptions& options,
@@ -190,6 +272,9 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   require(!options.relocate_modes || records.size() == 1,
           "IdentificationOptions.relocate_modes is true but ", records.size(),
           " records are given; mode relocation works on one record");
+  require(!options.polish_asked() || records.size() == 1,
+          "IdentificationOptions.polish is true but ", records.size(),
+          " records are given; the output-error polish works on one record");
   // What needs the records, checked before any work: the structure's parameters and the
   // scanned delays against the data (the estimator's own, finer check comes later).
   int shortest = records.front().size();
@@ -216,6 +301,8 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   const std::vector<SubmodelOrder>& orders = structure.orders;
   const SampledData& data = records.front();
 
+  const std::vector<std::pair<Eigen::Index, double>> known =
+      determined_coefficients(structure, options.constraints);
   // The estimators of srivc.h, on every record.
   auto run = [&](const RefinedIvOptions& o) {
     RefinedIvProblem problem;
@@ -224,6 +311,7 @@ IdentificationResult identify_records(std::span<const SampledData> records,
     problem.controller = closed_loop ? &*options.controller : nullptr;
     problem.unfactored = !structure.is_additive();
     problem.name = enum_name(estimator).data();  // the enumerator names are literals
+    problem.held_coefficients = known;
     return estimate_refined_iv(problem, o);
   };
   auto estimate = [&](int delay) {
@@ -259,7 +347,7 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   // when that one is usable.
   if (closed_loop && !structure.is_additive() && records.size() == 1 &&
       !options.refined_iv.noise_model && !options.delay_scan_samples && !options.delay_range &&
-      !options.relocate_modes && !fitted->verdict.usable &&
+      !options.relocate_modes && known.empty() && !fitted->verdict.usable &&
       options.refined_iv.input_delay_samples == 0 &&
       options.refined_iv.input_delay_fraction == 0.0) {
     try {
@@ -270,11 +358,19 @@ IdentificationResult identify_records(std::span<const SampledData> records,
       // an order it does not take (n = 0): the engine's fit stands
     }
   }
+  // Decision 0057: the output-error polish, asked for or of an iteration that did not converge.
+  bool restarted = false;
+  std::optional<OutputErrorPolishResult> polished;
+  if (!closed_loop && records.size() == 1 && (options.polish_asked() || !fitted->converged())) {
+    polished = polish_and_restart(data, *fitted, options, run, restarted);
+  }
   IdentificationResult result(std::move(*fitted));
   result.estimator = estimator;
   result.closed_loop = closed_loop;
   result.delay_scan = std::move(scanned);
   result.mode_relocation = std::move(relocated);
+  result.polish = std::move(polished);
+  result.restarted_from_polish = restarted;
   return result;
 }
 
@@ -357,6 +453,7 @@ IdentificationResult identify(const IrregularRecord& record, const ModelStructur
           "IdentificationOptions.delay_scan_samples or delay_range is set", why);
   require(!options.relocate_modes, "IdentificationOptions.relocate_modes is true", why);
   require(!options.two_stage, "IdentificationOptions.two_stage is set", why);
+  require(!options.polish_asked(), "IdentificationOptions.polish is true", why);
   require(!options.refined_iv.noise_model, "IdentificationOptions.refined_iv.noise_model is set",
           why);
   IdentificationResult result(

@@ -20,7 +20,8 @@ import sys
 PAPER_MODULES = ("refined_iv", "delayed_feedback")
 # Modules that hold estimators and nothing that chooses between them; the identification
 # layer above them is the front door.
-ESTIMATOR_MODULES = ("refined_iv", "delayed_feedback", "frf_fit", "oma", "process_model")
+ESTIMATOR_MODULES = ("refined_iv", "delayed_feedback", "frf_fit", "oma", "process_model",
+                     "output_error")
 FRONT_DOOR = "identification"
 # python/src files that may include estimator headers, each with the reason (decision 0044).
 PYTHON_ESTIMATOR_BINDINGS = {

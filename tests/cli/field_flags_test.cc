@@ -65,11 +65,13 @@ class FieldFlags : public CliTest {
 };
 
 TEST_F(FieldFlags, FitHasAFlagForEveryIdentificationAndProcessOption) {
-  expect_every_field_a_flag<IdentificationOptions>("fit");
+  // Constraints are set by name, NAME=VALUE, through --fix, --bound and --dc-gain.
+  expect_every_field_a_flag<IdentificationOptions>("fit", {"constraints"});
   // A process model's parameters are set by name, NAME=VALUE, through three flags.
   expect_every_field_a_flag<ProcessModelOptions>("fit", {"parameters"});
   const auto help = ctid({"fit", "--help"}).out;
-  for (const char* flag : {"--process-start", "--process-fix", "--process-bound"}) {
+  for (const char* flag :
+       {"--process-start", "--process-fix", "--process-bound", "--fix", "--bound", "--dc-gain"}) {
     EXPECT_THAT(help, HasSubstr(flag));
   }
 }
@@ -86,10 +88,14 @@ TEST_F(FieldFlags, OmaFitFrfAndFeedbackHaveAFlagForEveryOption) {
 
 // What a window of `ctid track` or a fit of `ctid structure` does not take from the command
 // line (decision 0051): questions of the whole record, and one start for structures of
-// several orders.
-const std::set<std::string> kWholeRecord = {
-    "identification.delay_scan_samples", "identification.delay_range", "identification.two_stage",
-    "identification.refined_iv.record_delay_samples"};
+// several orders; the polish and the constraints are ctid fit's (decision 0057).
+const std::set<std::string> kWholeRecord = {"identification.delay_scan_samples",
+                                            "identification.delay_range",
+                                            "identification.two_stage",
+                                            "identification.refined_iv.record_delay_samples",
+                                            "identification.polish",
+                                            "identification.polish_options",
+                                            "identification.constraints"};
 
 TEST_F(FieldFlags, TrackStructureValidateStepAndImpulseHaveAFlagForEveryOption) {
   // Several inputs and outputs: the shared-pole estimator's own fields, beside fit's others.
@@ -162,7 +168,13 @@ void expect_documented(const std::string& page, const std::set<std::string>& exc
 }
 
 TEST(FieldFlagsDocs, EveryGeneratedFlagIsDocumented) {
-  expect_documented<IdentificationOptions>("docs/cli-estimation.md");
+  // The constraints' flags are written by hand (NAME=VALUE): the page names them.
+  expect_documented<IdentificationOptions>("docs/cli-estimation.md", {"constraints"});
+  const std::string estimation =
+      testing::slurp(std::string(CTID_SOURCE_DIR) + "/docs/cli-estimation.md");
+  for (const char* flag : {"`--fix NAME=VALUE`", "`--bound NAME=LOWER:UPPER`", "`--dc-gain K`"}) {
+    EXPECT_THAT(estimation, HasSubstr(flag));
+  }
   expect_documented<OmaOptions>("docs/oma.md");
   expect_documented<FrfMatrixFitOptions>("docs/frf-fit.md");
   expect_documented<FeedbackIdentificationOptions>(

@@ -20,6 +20,7 @@
 #include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/identification/two_stage.h"
+#include "ctid/output_error/output_error_polish.h"
 #include "ctid/process_model/process_model.h"
 #include "ctid/process_model/process_response.h"
 #include "ctid/refined_iv/estimation_result.h"
@@ -181,6 +182,17 @@ struct IdentificationOptions {
   bool relocate_modes = false;
   /// Options of the relocation (used with relocate_modes).
   ModeRelocationOptions relocation;
+  /// After the fit, polish it by continuous-time output error (prediction error with a noise
+  /// model; output_error/output_error_polish.h, decision 0057) and report the polished model
+  /// beside it in IdentificationResult::polish. Open loop, one record. Without it the polish
+  /// still runs when the refined IV iteration does not converge (see identify()).
+  bool polish = false;
+  /// Options of the polish; the initial state is estimated when refined_iv estimates it too.
+  OutputErrorPolishOptions polish_options;
+  /// Known coefficients, bounds and a known DC gain (decision 0057). They imply the polish,
+  /// which imposes all of them; the refined IV iteration of an unfactored structure holds the
+  /// coefficients they determine (held values, and b0 = the DC gain) as well.
+  CoefficientConstraints constraints;
   /// Options of the estimator (iterations, tolerance, start, known delay, covariance, ...).
   RefinedIvOptions refined_iv;
   /// Closed loop with an unknown controller (two_stage.h, decision 0043): the map r -> u by
@@ -204,6 +216,12 @@ struct IdentificationOptions {
               "Move second-order submodels to residual peaks after the fit (additive, open loop)."),
         field("relocation", &O::relocation, "ModeRelocationOptions of relocate_modes.")
             .with_flag("relocation"),
+        field("polish", &O::polish,
+              "Polish the fit by output (prediction) error and report it beside (open loop)."),
+        field("polish_options", &O::polish_options, "OutputErrorPolishOptions of the polish.")
+            .with_flag("polish"),
+        field("constraints", &O::constraints,
+              "CoefficientConstraints: held and bounded coefficients, a known DC gain."),
         field("refined_iv", &O::refined_iv, "RefinedIvOptions of the estimator."),
         field("two_stage", &O::two_stage,
               "TwoStageOptions of the two-stage method (unknown controller), or none."),
@@ -212,6 +230,8 @@ struct IdentificationOptions {
   void check_relations(const std::string& path) const;
   /// Throws InvalidArgument naming the first bad field by its full path, its value and the rule.
   void validate() const { validate_fields(*this); }
+  /// The polish is asked for: polish, or a constraint (which the polish imposes).
+  bool polish_asked() const { return polish || !constraints.empty(); }
 };
 
 /// What identify() ran and found.
@@ -229,6 +249,12 @@ struct IdentificationResult {
   std::optional<ModeRelocationResult> mode_relocation;
   /// Stage 1 of the two-stage method, with IdentificationOptions::two_stage.
   std::optional<TwoStageResult> two_stage;
+  /// The output-error polish of the fit: with IdentificationOptions::polish, or when the
+  /// refined IV iteration did not converge (open loop, one record).
+  std::optional<OutputErrorPolishResult> polish;
+  /// The iteration had not converged, and its restart from the polished model did: `estimate`
+  /// is that restart.
+  bool restarted_from_polish = false;
 
   static constexpr std::string_view type_name = "IdentificationResult";
   static constexpr auto fields() {
@@ -242,6 +268,9 @@ struct IdentificationResult {
         field("mode_relocation", &R::mode_relocation,
               "ModeRelocationResult of the relocation, or none."),
         field("two_stage", &R::two_stage, "TwoStageResult of the two-stage method, or none."),
+        field("polish", &R::polish, "OutputErrorPolishResult of the polish, or none."),
+        field("restarted_from_polish", &R::restarted_from_polish,
+              "The estimate is the refined IV restarted from the polished model."),
     };
   }
 };
@@ -264,7 +293,11 @@ void validate_identification(const ModelStructure& structure, const Identificati
 /// delay scan if one is asked for (scan_input_delay), or with the delay estimated in
 /// delay_range (which must end before the record does), then with mode relocation if asked for
 /// (additive_srivc_relocated, started from that estimate at its delay, so the plain iteration
-/// stops at once and the scan is not repeated). Throws InvalidArgument for bad input (as the
+/// stops at once and the scan is not repeated). Then, open loop on one record, the
+/// output-error polish (decision 0057): with options.polish it is reported beside the fit;
+/// without it, it runs only when the iteration did not converge, from the last iterate at its
+/// delay, and the refined IV restarted from the polished model replaces the fit when that
+/// restart converges to a usable model. Throws InvalidArgument for bad input (as the
 /// estimators do); how the iteration ended is result.estimate.termination.
 IdentificationResult identify(const SampledData& data, const ModelStructure& structure,
                               const IdentificationOptions& options = {},
