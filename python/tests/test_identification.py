@@ -233,10 +233,11 @@ def test_options_and_structure_are_checked_with_the_field_path(open_loop):
 
 def test_classes_follow_the_cpp_field_lists():
     assert ctid.IdentificationOptions.fields == (
-        "controller", "delay_scan_samples", "delay_range", "relocate_modes", "relocation", "refined_iv",
-        "two_stage")
+        "controller", "delay_scan_samples", "delay_range", "relocate_modes", "relocation", "polish",
+        "polish_options", "constraints", "refined_iv", "two_stage")
     assert ctid.IdentificationResult.fields == (
-        "estimator", "closed_loop", "estimate", "delay_scan", "mode_relocation", "two_stage")
+        "estimator", "closed_loop", "estimate", "delay_scan", "mode_relocation", "two_stage",
+        "polish", "restarted_from_polish")
     assert ctid.ModelStructure.fields == ("kind", "orders")
     assert ctid.DelayRange.fields == ("min", "max")
     options = ctid.IdentificationOptions()
