@@ -251,11 +251,10 @@ std::optional<OutputErrorPolishResult> polish_and_restart(const SampledData& dat
   return polished;
 }
 
-// Decision 0057: the coefficients an unfactored iteration holds, those the constraints
-// determine (none for an additive structure: its constraints act in the polish).
+// Decision 0057: the coefficients the iteration holds, those the constraints determine.
 std::vector<std::pair<Eigen::Index, double>> determined_coefficients(
     const ModelStructure& structure, const CoefficientConstraints& constraints) {
-  if (structure.is_additive() || constraints.empty()) return {};
+  if (constraints.empty()) return {};
   Eigen::Index count = 0;
   for (const SubmodelOrder& o : structure.orders) count += o.n + o.m + 1;
   return held_coefficients(

@@ -548,7 +548,7 @@ StepOutcome take_step(Run& run, const ScaledEquations& e, const Eigen::MatrixXd&
   const Eigen::MatrixXd solution =
       held.empty() ? Eigen::MatrixXd(e.sp.cwiseInverse().asDiagonal() *
                                      Eigen::MatrixXd(e.m.fullPivLu().solve(rhs)))
-                   : held_solution(e.m, e.sp, rhs, held);
+                   : held_solution(e.m, e.sp, rhs, layout, held);
   Eigen::VectorXd next(run.p);
   Eigen::MatrixXd off = solution.topRows(run.p);
   for (int i = 0; i < layout.size(); ++i) {
@@ -721,7 +721,8 @@ void refresh_free_responses(Run& run) {
   Moments sums;
   evaluate(run.layout, run.beta, run.initial_states, run.signals, run.source, run.h,
            run.options.output_interpolation, run.workspace, &sums, nullptr, nullptr);
-  if (std::optional<Eigen::MatrixXd> solution = solve_scaled(sums, run.problem.held_coefficients)) {
+  if (std::optional<Eigen::MatrixXd> solution =
+          solve_scaled(sums, run.layout, run.problem.held_coefficients)) {
     run.initial_states = free_response_coefficients(run.layout, *solution);
     run.states_at = run.beta;
   }
@@ -887,8 +888,8 @@ std::optional<EstimationResult> run_from_start(const RefinedIvProblem& problem,
   require(beta->allFinite(), name, ": the initial model has a non-finite parameter");
   Eigen::VectorXd start = *beta;
   for (const auto& [j, value] : problem.held_coefficients) {
-    require(problem.unfactored && j >= 0 && j < start.size(), name,
-            ": held coefficients are for an unfactored model's beta");
+    require(j >= 0 && j < start.size(), name, ": held coefficient ", j, " is not in beta (",
+            start.size(), " coefficients)");
     start(j) = value;
   }
 

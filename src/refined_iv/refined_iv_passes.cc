@@ -643,7 +643,8 @@ Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares) {
 
 // The solution of (29) from its sums with unit-norm columns, or nothing if they are not
 // finite or the equations are singular.
-std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums, const HeldCoefficients& held) {
+std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums, const Layout& layout,
+                                            const HeldCoefficients& held) {
   if (!sums.all_finite()) return std::nullopt;
   const Eigen::VectorXd sz = norms_from_squares(sums.zz);
   const Eigen::VectorXd sp = norms_from_squares(sums.pp);
@@ -655,7 +656,7 @@ std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums, const HeldCoeff
   Eigen::MatrixXd solution =
       held.empty()
           ? Eigen::MatrixXd(sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(lu.solve(rhs)))
-          : held_solution(m, sp, rhs, held);
+          : held_solution(m, sp, rhs, layout, held);
   if (!solution.allFinite()) return std::nullopt;
   return solution;
 }
@@ -681,20 +682,24 @@ std::pair<std::vector<Eigen::Index>, std::vector<Eigen::Index>> free_and_held(
 }  // namespace
 
 Eigen::MatrixXd held_solution(const Eigen::MatrixXd& m, const Eigen::VectorXd& sp,
-                              const Eigen::MatrixXd& rhs, const HeldCoefficients& held) {
+                              const Eigen::MatrixXd& rhs, const Layout& layout,
+                              const HeldCoefficients& held) {
   const auto [f, h] = free_and_held(m.rows(), held);
-  Eigen::VectorXd vh(static_cast<Eigen::Index>(h.size()));
+  // wh(k, c): held coefficient k in column c, its value in its own submodel's column.
+  Eigen::MatrixXd wh = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(h.size()), rhs.cols());
   for (std::size_t k = 0; k < held.size(); ++k) {
-    vh(static_cast<Eigen::Index>(k)) = sp(held[k].first) * held[k].second;
+    int owner = 0;
+    while (owner + 1 < layout.size() && held[k].first >= layout.offset[owner + 1]) ++owner;
+    wh(static_cast<Eigen::Index>(k), std::min<Eigen::Index>(owner, rhs.cols() - 1)) =
+        held[k].second;
   }
-  const Eigen::MatrixXd mff = m(f, f);
-  const Eigen::VectorXd r = rhs(f, 0) - m(f, h) * vh;
-  const Eigen::VectorXd vf = mff.fullPivLu().solve(r);
-  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(m.rows(), 1);
+  const Eigen::MatrixXd vh = sp(h).asDiagonal() * wh;
+  const Eigen::MatrixXd vf = m(f, f).fullPivLu().solve(rhs(f, Eigen::all) - m(f, h) * vh);
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(m.rows(), rhs.cols());
   for (std::size_t k = 0; k < f.size(); ++k) {
-    w(f[k], 0) = vf(static_cast<Eigen::Index>(k)) / sp(f[k]);
+    w.row(f[k]) = vf.row(static_cast<Eigen::Index>(k)) / sp(f[k]);
   }
-  for (const auto& [j, value] : held) w(j, 0) = value;
+  for (std::size_t k = 0; k < h.size(); ++k) w.row(h[k]) = wh.row(static_cast<Eigen::Index>(k));
   return w;
 }
 

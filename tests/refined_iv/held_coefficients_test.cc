@@ -1,14 +1,13 @@
 // Held coefficients in the refined IV iteration (RefinedIvProblem::held_coefficients, decision
 // 0057): exact recovery from noise-free data; holding a coefficient at the free estimate's
 // value gives the free estimate back (the same stationary point) with the covariance of the
-// free coefficients given the held one; refusals.
+// free coefficients given the held one; the additive iteration holds them too.
 #include <cmath>
 #include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
 
-#include "ctid/core/error.h"
 #include "ctid/refined_iv/refined_iv.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
@@ -71,22 +70,33 @@ TEST(HeldCoefficients, HoldingTheFreeEstimateGivesItBackWithTheConditionalCovari
   }
 }
 
-TEST(HeldCoefficients, AreForAnUnfactoredModel) {
-  const SampledData data = record(5, 0.1);
+// Two modes 3 / (1 + 0.2 p + 0.5 p^2) + 0.4 / (1 + 0.05 p + 0.1 p^2): the additive iteration
+// (29), the coefficient held in its submodel's column and 0 in the other (Lemma 4.4).
+TEST(HeldCoefficients, TheAdditiveIterationHoldsThemInTheirOwnColumn) {
+  const AdditiveModel modes({Submodel{Polynomial({1.0, 0.2, 0.5}), Polynomial({3.0}), 0},
+                             Submodel{Polynomial({1.0, 0.05, 0.1}), Polynomial({0.4}), 0}});
+  const Eigen::VectorXd u = white_noise(3000, 1.0, 7);
+  const SampledData data(kH, u, simulate(modes, u, kH) + white_noise(3000, 0.2, 8));
   RefinedIvProblem problem;
   problem.records = {&data};
-  problem.orders = {SubmodelOrder{2, 1, 0}};
-  problem.unfactored = false;
+  problem.orders = modes.orders();
   problem.name = "additive_srivc";
-  problem.held_coefficients = {{0, 0.4}};
-  try {
-    estimate_refined_iv(problem);
-    ADD_FAILURE() << "held coefficients of an additive problem were accepted";
-  } catch (const InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find("held coefficients are for an unfactored model"),
-              std::string::npos)
-        << e.what();
+  const EstimationResult free = estimate_refined_iv(problem);
+  ASSERT_TRUE(free.converged()) << free.message;
+  for (const Eigen::Index j : {Eigen::Index{1}, Eigen::Index{5}}) {  // theta1.a2, theta2.b0
+    problem.held_coefficients = {{j, free.parameters(j)}};
+    const EstimationResult held = estimate_refined_iv(problem);
+    ASSERT_TRUE(held.converged()) << held.message;
+    EXPECT_EQ(held.parameters(j), free.parameters(j));
+    EXPECT_LT((held.parameters - free.parameters).norm() / free.parameters.norm(), 1e-8) << j;
+    EXPECT_EQ(held.standard_errors(j), 0.0);
   }
+  // Noise-free with the first mode's gain held at the truth: exact.
+  const SampledData exact(kH, u, simulate(modes, u, kH));
+  problem.records = {&exact};
+  problem.held_coefficients = {{2, 3.0}};
+  const EstimationResult r = estimate_refined_iv(problem);
+  EXPECT_LT((r.parameters - modes.parameters()).norm(), 1e-9);
 }
 
 }  // namespace

@@ -190,8 +190,8 @@ struct IdentificationOptions {
   /// Options of the polish; the initial state is estimated when refined_iv estimates it too.
   OutputErrorPolishOptions polish_options;
   /// Known coefficients, bounds and a known DC gain (decision 0057). They imply the polish,
-  /// which imposes all of them; the refined IV iteration of an unfactored structure holds the
-  /// coefficients they determine (held values, and b0 = the DC gain) as well.
+  /// which imposes all of them; the refined IV iteration holds the coefficients they determine
+  /// (held values, and the one b0 left free by a DC gain) as well.
   CoefficientConstraints constraints;
   /// Options of the estimator (iterations, tolerance, start, known delay, covariance, ...).
   RefinedIvOptions refined_iv;

@@ -29,10 +29,10 @@ struct RefinedIvProblem {
   /// The covariance from the whole N x p instrument held in memory, as before it was streamed
   /// (issue 14): the reference the streamed sums are tested against, not for estimation.
   bool stored_instrument_covariance = false;
-  /// Coefficients of beta held at known values, as (index in beta, value), for an unfactored
-  /// model (one column of (29)): the start takes them, each step solves the instrument
-  /// equations of the free coefficients only, and the covariance is that of the free ones given
-  /// the held (decision 0057). Empty: every coefficient free.
+  /// Coefficients of beta held at known values, as (index in beta, value): the start takes
+  /// them, each step solves the instrument equations of the free coefficients only (in every
+  /// column of (29)), and the covariance is that of the free ones given the held (decision
+  /// 0057). Empty: every coefficient free.
   std::vector<std::pair<Eigen::Index, double>> held_coefficients;
 };
 

@@ -231,13 +231,17 @@ Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares);
 /// Coefficients held at known values: (index in the augmented vector, value).
 using HeldCoefficients = std::vector<std::pair<Eigen::Index, double>>;
 
-std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums, const HeldCoefficients& held = {});
+std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums, const Layout& layout,
+                                            const HeldCoefficients& held = {});
 
-/// The solution of the scaled equations m v = rhs (one column, v = sp w) with the held entries
-/// of w at their values: the equations of the free entries only, m_ff v_f = rhs_f - m_fh v_h
-/// (decision 0057); the held entries of the result are their values.
+/// The solution of the scaled equations m v = rhs (v = sp w, a column per submodel of (29))
+/// with the held entries of w known: the equations of the free entries only,
+/// m_ff v_f = rhs_f - m_fh v_h (decision 0057). A held coefficient of submodel i is its value
+/// in column i and 0 in the others, as at a stationary point of (29) the solution is
+/// block-diagonal (Lemma 4.4).
 Eigen::MatrixXd held_solution(const Eigen::MatrixXd& m, const Eigen::VectorXd& sp,
-                              const Eigen::MatrixXd& rhs, const HeldCoefficients& held);
+                              const Eigen::MatrixXd& rhs, const Layout& layout,
+                              const HeldCoefficients& held);
 
 /// The covariance of the free entries given the held ones, P_ff - P_fh P_hh^-1 P_hf (for the
 /// white-noise instrument covariance this is (I_ff)^-1, the covariance of the estimator that
