@@ -1,7 +1,6 @@
 // `ctid fit --noise-model` (decision 0056): RIVC's estimator name, its summary line and the
 // result document's noise model; `none` writes exactly what no flag writes; a bad word, a
 // record too short for the orders and several outputs are refused in one line.
-#include <cstdio>
 #include <string>
 
 #include <gmock/gmock.h>
@@ -25,14 +24,7 @@ std::string record_csv(int n = 1500) {
   const AdditiveModel g({{Polynomial({1.0, 0.5, 1.0}), Polynomial({2.0}), 0}});
   const Eigen::VectorXd u = white_noise(n, 1.0, 3);
   const DiscreteTransferFunction h(Polynomial({0.0, 1.0}), Polynomial({-0.95, 1.0}), 0.05);
-  const Eigen::VectorXd y = simulate(g, u, 0.05) + colored_noise(h, n, 0.0004, 4);
-  std::string text = "t,u,y\n";
-  char line[120];
-  for (int k = 0; k < n; ++k) {
-    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g\n", 0.05 * k, u(k), y(k));
-    text += line;
-  }
-  return text;
+  return testing::tuy_csv(0.05, u, simulate(g, u, 0.05) + colored_noise(h, n, 0.0004, 4));
 }
 
 class NoiseModelFlag : public testing::CliTest {};

@@ -1,7 +1,6 @@
 // `ctid fit --polish` (decision 0057): the polish line of the summary and the result
 // document's `polish` object, which reads back through validate; an IV fit at a whole-sample
 // delay polished to the fractional delay; the refusals of closed loops and several files.
-#include <cstdio>
 #include <string>
 
 #include <gmock/gmock.h>
@@ -24,14 +23,7 @@ using ::testing::HasSubstr;
 std::string delayed_csv(int n = 1200) {
   const AdditiveModel g({{Polynomial({1.0, 0.4, 0.25}), Polynomial({2.0, 0.6}), 0}}, 0.17);
   const Eigen::VectorXd u = white_noise(n, 1.0, 5);
-  const Eigen::VectorXd y = simulate(g, u, 0.05);
-  std::string text = "t,u,y\n";
-  char line[120];
-  for (int k = 0; k < n; ++k) {
-    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g\n", 0.05 * k, u(k), y(k));
-    text += line;
-  }
-  return text;
+  return testing::tuy_csv(0.05, u, simulate(g, u, 0.05));
 }
 
 class PolishFlag : public testing::CliTest {};

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +16,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
 namespace ctid::cli::testing {
 
@@ -34,6 +36,18 @@ inline std::string quote(const std::string& word) {
     }
   }
   return quoted + "'";
+}
+
+/// "t,u,y" and one row per sample t = k h, every number to 17 significant digits (it reads
+/// back bit for bit).
+inline std::string tuy_csv(double h, const Eigen::VectorXd& u, const Eigen::VectorXd& y) {
+  std::string text = "t,u,y\n";
+  char line[120];
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g\n", h * static_cast<double>(k), u(k), y(k));
+    text += line;
+  }
+  return text;
 }
 
 inline std::string slurp(const std::filesystem::path& path) {
