@@ -104,7 +104,7 @@ void validate_identification(const ModelStructure& structure,
         options.constraints, options.polish_options.estimate_delay);
   }
   require(!options.polish_asked() || (!options.controller && !options.two_stage),
-          "IdentificationOptions.polish is true but the data are closed loop (",
+          "IdentificationOptions.polish (or a constraint) is set but the data are closed loop (",
           options.controller ? "a controller" : "the two-stage method",
           " is given); the output-error polish is for open-loop records");
 }
@@ -272,7 +272,7 @@ IdentificationResult identify_records(std::span<const SampledData> records,
           "IdentificationOptions.relocate_modes is true but ", records.size(),
           " records are given; mode relocation works on one record");
   require(!options.polish_asked() || records.size() == 1,
-          "IdentificationOptions.polish is true but ", records.size(),
+          "IdentificationOptions.polish (or a constraint) is set but ", records.size(),
           " records are given; the output-error polish works on one record");
   // What needs the records, checked before any work: the structure's parameters and the
   // scanned delays against the data (the estimator's own, finer check comes later).
@@ -452,7 +452,7 @@ IdentificationResult identify(const IrregularRecord& record, const ModelStructur
           "IdentificationOptions.delay_scan_samples or delay_range is set", why);
   require(!options.relocate_modes, "IdentificationOptions.relocate_modes is true", why);
   require(!options.two_stage, "IdentificationOptions.two_stage is set", why);
-  require(!options.polish_asked(), "IdentificationOptions.polish is true", why);
+  require(!options.polish_asked(), "IdentificationOptions.polish (or a constraint) is set", why);
   require(!options.refined_iv.noise_model, "IdentificationOptions.refined_iv.noise_model is set",
           why);
   IdentificationResult result(
