@@ -37,6 +37,8 @@ struct PolishProblem {
   Eigen::VectorXd offset{};
   Eigen::VectorXd lower{};  // of x
   Eigen::VectorXd upper{};
+  std::vector<Eigen::Index> free_index{};  // the entry of theta each entry of x is
+  std::vector<bool> user_bounded{};        // x(k) has a bound the constraints gave
   mutable int refused = 0;  // trial points refused as unstable (or a non-invertible C)
 
   Eigen::Index size() const { return beta_count + (estimate_delay ? 1 : 0) + ar + ma; }
@@ -129,8 +131,7 @@ Polynomial mirrored(const Polynomial& a, bool& changed) {
       changed = true;
     }
   }
-  const Polynomial monic = Polynomial::from_roots(r);
-  return Polynomial(monic.coefficients() / monic.coefficients()(0));
+  return Polynomial::from_roots(r).anti_monic();
 }
 
 AdditiveModel stabilised_start(const AdditiveModel& start, bool& changed) {
@@ -208,12 +209,12 @@ void validate_constraints(const AdditiveModel& model, const CoefficientConstrain
   options.validate();
   const std::vector<std::string> names = settable_names(model, delay_free);
   std::vector<std::string> seen;
+  std::string listed;
+  for (const std::string& n : names) listed += (listed.empty() ? "" : ", ") + n;
   for (const CoefficientSetting& s : options.coefficients) {
     if (s.name == "tau") {
       require(delay_free, "a setting of tau needs the delay estimated by the polish (it is held)");
     }
-    std::string listed;
-    for (const std::string& n : names) listed += (listed.empty() ? "" : ", ") + n;
     require(index_in(names, s.name) >= 0, "parameter '", s.name, "' is not in the model (its ",
             "parameters: ", listed, ")");
     require(std::find(seen.begin(), seen.end(), s.name) == seen.end(), "parameter '", s.name,
@@ -261,8 +262,8 @@ namespace {
 
 // theta = map x + offset from the settings: held parameters in offset, the DC gain's carrier
 // b0 = K - (the other b0), free parameters with their bounds (tau always within [0, max]).
-void set_constraints(PolishProblem& p, const AdditiveModel& model, const CoefficientConstraints& o,
-                     std::vector<bool>& user_bounded) {
+void set_constraints(PolishProblem& p, const AdditiveModel& model,
+                     const CoefficientConstraints& o) {
   const std::vector<std::string> names = settable_names(model, p.estimate_delay);
   const Eigen::Index n = p.size();
   const Eigen::Index carrier = o.dc_gain ? dc_gain_carrier(model, o, names) : -1;
@@ -281,7 +282,7 @@ void set_constraints(PolishProblem& p, const AdditiveModel& model, const Coeffic
   p.map = Eigen::MatrixXd::Zero(n, count);
   p.lower = Eigen::VectorXd::Constant(count, -std::numeric_limits<double>::infinity());
   p.upper = Eigen::VectorXd::Constant(count, std::numeric_limits<double>::infinity());
-  user_bounded.assign(static_cast<std::size_t>(count), false);
+  p.user_bounded.assign(static_cast<std::size_t>(count), false);
   for (Eigen::Index k = 0; k < count; ++k) {
     const Eigen::Index j = free[static_cast<std::size_t>(k)];
     p.map(j, k) = 1.0;
@@ -293,7 +294,7 @@ void set_constraints(PolishProblem& p, const AdditiveModel& model, const Coeffic
             j < static_cast<Eigen::Index>(names.size()) ? setting_of(o, j, names) : nullptr) {
       if (s->lower) p.lower(k) = std::max(p.lower(k), *s->lower);
       if (s->upper) p.upper(k) = std::min(p.upper(k), *s->upper);
-      user_bounded[static_cast<std::size_t>(k)] = s->lower || s->upper;
+      p.user_bounded[static_cast<std::size_t>(k)] = s->lower || s->upper;
     }
   }
   if (carrier >= 0) {
@@ -308,13 +309,13 @@ void set_constraints(PolishProblem& p, const AdditiveModel& model, const Coeffic
       }
     }
   }
+  p.free_index = std::move(free);
 }
 
 PolishProblem polish_problem(const SampledData& data, const AdditiveModel& start,
                              const std::optional<ArmaModel>& noise,
                              const OutputErrorPolishOptions& options,
-                             const CoefficientConstraints& constraints,
-                             std::vector<bool>& user_bounded) {
+                             const CoefficientConstraints& constraints) {
   PolishProblem p{.data = data};
   p.orders = start.orders();
   p.beta_count = start.parameter_count();
@@ -326,7 +327,7 @@ PolishProblem polish_problem(const SampledData& data, const AdditiveModel& start
   p.ma = noise ? noise->ma_order() : 0;
   p.initial_state = options.estimate_initial_state;
   p.keep_stable = options.keep_stable;
-  set_constraints(p, start, constraints, user_bounded);
+  set_constraints(p, start, constraints);
   return p;
 }
 
@@ -342,9 +343,7 @@ Eigen::VectorXd start_vector(const PolishProblem& p, const AdditiveModel& start,
   }
   Eigen::VectorXd x(p.free());
   for (Eigen::Index k = 0; k < p.free(); ++k) {
-    Eigen::Index j = 0;
-    p.map.col(k).cwiseAbs().maxCoeff(&j);  // its own entry (1) is the largest
-    x(k) = std::clamp(theta(j), p.lower(k), p.upper(k));
+    x(k) = std::clamp(theta(p.free_index[static_cast<std::size_t>(k)]), p.lower(k), p.upper(k));
   }
   return x;
 }
@@ -458,21 +457,19 @@ void judge_polish(OutputErrorPolishResult& r) {
 
 // The names of the held parameters and of the free ones at a bound they were given.
 void name_constraints(OutputErrorPolishResult& out, const PolishProblem& p,
-                      const AdditiveModel& model, const Eigen::VectorXd& x,
-                      const std::vector<bool>& user_bounded) {
+                      const AdditiveModel& model, const Eigen::VectorXd& x) {
   const std::vector<std::string> names = settable_names(model, p.estimate_delay);
   for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(names.size()); ++j) {
-    const bool free_entry =
-        (p.map.row(j).array() == 1.0).count() == 1 && (p.map.row(j).array() != 0.0).count() == 1;
-    if (!free_entry) out.held_parameters.push_back(names[static_cast<std::size_t>(j)]);
+    if (std::find(p.free_index.begin(), p.free_index.end(), j) == p.free_index.end()) {
+      out.held_parameters.push_back(names[static_cast<std::size_t>(j)]);
+    }
   }
   for (Eigen::Index k = 0; k < x.size(); ++k) {
-    if (!user_bounded[static_cast<std::size_t>(k)]) continue;
-    Eigen::Index j = 0;
-    p.map.col(k).cwiseAbs().maxCoeff(&j);
+    const auto kk = static_cast<std::size_t>(k);
+    if (!p.user_bounded[kk]) continue;
     const double scale = 1e-9 * std::max(1.0, std::abs(x(k)));
     if (x(k) <= p.lower(k) + scale || x(k) >= p.upper(k) - scale) {
-      out.active_bounds.push_back(names[static_cast<std::size_t>(j)]);
+      out.active_bounds.push_back(names[static_cast<std::size_t>(p.free_index[kk])]);
     }
   }
 }
@@ -514,8 +511,7 @@ OutputErrorPolishResult polish_output_error(const SampledData& data, const Addit
           "the output-error polish needs a finite start model");
   bool mirrored_start = false;
   const AdditiveModel first = options.keep_stable ? stabilised_start(start, mirrored_start) : start;
-  std::vector<bool> user_bounded;
-  const PolishProblem p = polish_problem(data, first, noise, options, constraints, user_bounded);
+  const PolishProblem p = polish_problem(data, first, noise, options, constraints);
   require(data.size() >= 10 * p.free(), "the output-error polish of ", p.free(),
           " free parameters needs ", 10 * p.free(), " samples (10 per parameter); the record has ",
           data.size());
@@ -549,7 +545,7 @@ OutputErrorPolishResult polish_output_error(const SampledData& data, const Addit
   out.initial_state = states;
   set_polish_statistics(out, p, solved, r0, y0, r1, y1, states.size());
   out.stability_constraint_active = mirrored_start || p.refused > refused_at_start;
-  name_constraints(out, p, first, solved.x, user_bounded);
+  name_constraints(out, p, first, solved.x);
   judge_polish(out);
   return out;
 }

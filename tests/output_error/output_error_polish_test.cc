@@ -194,6 +194,24 @@ TEST(OutputErrorPolish, HeldCoefficientsAndActiveBoundsAreReported) {
   EXPECT_LE(r.cost, r.start_cost);
 }
 
+// A bounded b0 after the DC gain's carrier (theta1.b0 carries the gain, theta2.b0 is bounded):
+// the bound that acts is named as theta2.b0's.
+TEST(OutputErrorPolish, ABoundedB0BesideTheDcGainCarrierIsNamedAsItself) {
+  const AdditiveModel truth = two_modes();
+  const SampledData data = record(truth, 2000, 81, white_noise(2000, 0.05, 82));
+  OutputErrorPolishOptions options;
+  options.estimate_delay = false;
+  CoefficientConstraints constraints;
+  constraints.dc_gain = 3.4;
+  constraints.coefficients = {{"theta2.b0", std::nullopt, std::nullopt, 0.35}};  // truth 0.4
+  const OutputErrorPolishResult r =
+      polish_output_error(data, perturbed(truth, 0.05, 0.0), std::nullopt, options, constraints);
+  EXPECT_EQ(r.held_parameters, std::vector<std::string>{"theta1.b0"});
+  EXPECT_EQ(r.active_bounds, std::vector<std::string>{"theta2.b0"});
+  EXPECT_DOUBLE_EQ(r.parameters(5), 0.35);
+  EXPECT_NEAR(r.parameters(2) + r.parameters(5), 3.4, 1e-14);
+}
+
 // An unstable plant 1 / (1 - 10 p) (pole at +0.1 rad/s) over 20 s: the free fit is unstable,
 // the constrained one stable, and it says so.
 TEST(OutputErrorPolish, EnforcedStabilityOnARecordWhoseFreeFitIsUnstable) {
