@@ -83,6 +83,18 @@ RefinedIvEstimator choose_estimator(const ModelStructure& structure, bool closed
   return closed_loop ? E::clsrivc : E::srivc;
 }
 
+namespace {
+
+// A model of the structure (every coefficient 1): the estimate's parameter layout and names,
+// against which constraints are checked and resolved before any fit (decision 0057).
+AdditiveModel layout_model(const ModelStructure& structure) {
+  Eigen::Index count = 0;
+  for (const SubmodelOrder& o : structure.orders) count += o.n + o.m + 1;
+  return AdditiveModel::from_parameters(structure.orders, Eigen::VectorXd::Ones(count));
+}
+
+}  // namespace
+
 void validate_identification(const ModelStructure& structure,
                              const IdentificationOptions& options) {
   structure.validate();
@@ -96,12 +108,8 @@ void validate_identification(const ModelStructure& structure,
             "relocation is for open-loop data");
   }
   if (options.polish_asked()) {
-    // The names the settings may use are the estimate's: one submodel per order.
-    Eigen::Index count = 0;
-    for (const SubmodelOrder& o : structure.orders) count += o.n + o.m + 1;
-    validate_constraints(
-        AdditiveModel::from_parameters(structure.orders, Eigen::VectorXd::Ones(count)),
-        options.constraints, options.polish_options.estimate_delay);
+    validate_constraints(layout_model(structure), options.constraints,
+                         options.polish_options.estimate_delay);
   }
   require(!options.polish_asked() || (!options.controller && !options.two_stage),
           "IdentificationOptions.polish (or a constraint) is set but the data are closed loop (",
@@ -255,10 +263,7 @@ std::optional<OutputErrorPolishResult> polish_and_restart(const SampledData& dat
 std::vector<std::pair<Eigen::Index, double>> determined_coefficients(
     const ModelStructure& structure, const CoefficientConstraints& constraints) {
   if (constraints.empty()) return {};
-  Eigen::Index count = 0;
-  for (const SubmodelOrder& o : structure.orders) count += o.n + o.m + 1;
-  return held_coefficients(
-      AdditiveModel::from_parameters(structure.orders, Eigen::VectorXd::Ones(count)), constraints);
+  return held_coefficients(layout_model(structure), constraints);
 }
 
 IdentificationResult identify_records(std::span<const SampledData> records,
