@@ -231,9 +231,12 @@ void print_summary(std::ostream& out, const EstimationResult& r, const std::stri
     out << "closed-loop fit from r: " << format_brief(r.closed_loop_fit_percent) << " %\n";
   }
   if (r.noise_model) print_noise_model(out, *r.noise_model);
-  if (r.unstable_reflections > 0 || r.sensitivity_fallbacks > 0) {
-    out << "unstable iterates reflected: " << r.unstable_reflections
-        << "; iterates the controller did not stabilise: " << r.sensitivity_fallbacks << "\n";
+  if (r.sensitivity_fallbacks > 0) {
+    out << "iterates the controller did not stabilise: " << r.sensitivity_fallbacks << "\n";
+  }
+  // Decision 0058: enforced stability and coefficients at a bound.
+  for (const std::string& note : r.verdict.active_constraints) {
+    out << "constraint acted: " << note << "\n";
   }
   for (const std::string& warning : r.checks.warnings) out << "warning: " << warning << "\n";
 }

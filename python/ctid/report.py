@@ -198,6 +198,9 @@ def _estimation_section(path, document):
         words.append(f"The fitted model is NOT usable as it is: {reasons}")
         if verdict.get("advice"):
             words.append(f"What to try: {verdict['advice']}")
+    acted = verdict.get("active_constraints") or []
+    if acted:  # decision 0058: enforced stability, coefficients at a bound
+        words.append("Constraints acted on this estimate: " + "; ".join(acted) + ".")
     parts = []
     tf = document.get("transfer_function", {})
     if isinstance(tf, dict) and "numerator_ascending" in tf:

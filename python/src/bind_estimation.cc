@@ -13,7 +13,8 @@ namespace ctid::python {
 
 void bind_estimation(py::module_& m) {
   bind_enum<Termination>(m, "Termination", "Why an iterative method stopped (termination.h).");
-  bind_result<Verdict>(m, "Is an estimate worth using: usable, reasons, advice (verdict.h).")
+  bind_result<Verdict>(
+      m, "Is an estimate worth using: usable, reasons, advice, active_constraints (verdict.h).")
       .def("summary", &Verdict::summary,
            "'no usable model: <reasons>. Try: <advice>.' (empty when usable).");
   m.def("model_output", &model_output, py::arg("model"), py::arg("input"), py::arg("sample_time"),

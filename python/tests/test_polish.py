@@ -82,3 +82,27 @@ def test_a_known_dc_gain_and_a_held_coefficient_hold_in_the_iv_fit_and_the_polis
         ctid.identify(ctid.SampledData(H, u, y), ctid.ModelStructure.unfactored(2, 1),
                       constraints=ctid.CoefficientConstraints(
                           coefficients=[ctid.CoefficientSetting(name="theta9.a1", fixed=1.0)]))
+
+
+def test_a_bound_acts_in_the_iv_fit_as_holding_the_coefficient_there():
+    """Decision 0058: b0 = 2 bounded above by 1.6 ends at 1.6, the fit of b0 held at 1.6."""
+    u, y = _record(6)
+    data = ctid.SampledData(H, u, y)
+    structure = ctid.ModelStructure.unfactored(2, 1)
+    no_delay = ctid.OutputErrorPolishOptions(estimate_delay=False)
+
+    def fit(setting):
+        return ctid.identify(data, structure, polish_options=no_delay,
+                             constraints=ctid.CoefficientConstraints(coefficients=[setting]))
+
+    bounded = fit(ctid.CoefficientSetting(name="theta1.b0", upper=1.6))
+    held = fit(ctid.CoefficientSetting(name="theta1.b0", fixed=1.6))
+    assert bounded.estimate.parameters[2] == 1.6
+    np.testing.assert_allclose(bounded.estimate.parameters, held.estimate.parameters,
+                               rtol=1e-12)
+    def at_bounds(fitted):  # enforced stability may be listed too
+        return [n for n in fitted.estimate.verdict.active_constraints if "bound" in n]
+
+    assert at_bounds(bounded) == ["theta1.b0 is at its bound 1.6"]
+    assert at_bounds(held) == []
+    assert "theta1.b0 is at a bound" in bounded.polish.verdict.active_constraints

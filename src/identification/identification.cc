@@ -307,6 +307,10 @@ IdentificationResult identify_records(std::span<const SampledData> records,
 
   const std::vector<std::pair<Eigen::Index, double>> known =
       determined_coefficients(structure, options.constraints);
+  const std::vector<std::tuple<Eigen::Index, double, double>> bounds =
+      options.constraints.empty()
+          ? std::vector<std::tuple<Eigen::Index, double, double>>{}
+          : bounded_coefficients(layout_model(structure), options.constraints);
   // The estimators of srivc.h, on every record.
   auto run = [&](const RefinedIvOptions& o) {
     RefinedIvProblem problem;
@@ -316,6 +320,7 @@ IdentificationResult identify_records(std::span<const SampledData> records,
     problem.unfactored = !structure.is_additive();
     problem.name = enum_name(estimator).data();  // the enumerator names are literals
     problem.held_coefficients = known;
+    problem.bounded_coefficients = bounds;
     return estimate_refined_iv(problem, o);
   };
   auto estimate = [&](int delay) {
@@ -351,7 +356,7 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   // when that one is usable.
   if (closed_loop && !structure.is_additive() && records.size() == 1 &&
       !options.refined_iv.noise_model && !options.delay_scan_samples && !options.delay_range &&
-      !options.relocate_modes && known.empty() && !fitted->verdict.usable &&
+      !options.relocate_modes && options.constraints.empty() && !fitted->verdict.usable &&
       options.refined_iv.input_delay_samples == 0 &&
       options.refined_iv.input_delay_fraction == 0.0) {
     try {

@@ -258,6 +258,22 @@ std::vector<std::pair<Eigen::Index, double>> held_coefficients(
   return held;
 }
 
+std::vector<std::tuple<Eigen::Index, double, double>> bounded_coefficients(
+    const AdditiveModel& model, const CoefficientConstraints& constraints) {
+  const std::vector<std::pair<Eigen::Index, double>> held = held_coefficients(model, constraints);
+  const std::vector<std::string> names = model.parameter_names();
+  std::vector<std::tuple<Eigen::Index, double, double>> bounds;
+  for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(names.size()); ++j) {
+    const CoefficientSetting* s = setting_of(constraints, j, names);
+    const bool is_held =
+        std::any_of(held.begin(), held.end(), [&](const auto& h) { return h.first == j; });
+    if (s == nullptr || is_held || !(s->lower || s->upper)) continue;
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    bounds.emplace_back(j, s->lower.value_or(-inf), s->upper.value_or(inf));
+  }
+  return bounds;
+}
+
 namespace {
 
 // theta = map x + offset from the settings: held parameters in offset, the DC gain's carrier
@@ -453,6 +469,14 @@ void judge_polish(OutputErrorPolishResult& r) {
   else
     check_fit(r.verdict, r.fit_percent, std::numeric_limits<double>::quiet_NaN());
   check_stable(r.verdict, r.transfer_function.poles());
+  // Decision 0058: the constraints that acted, in the verdict.
+  if (r.stability_constraint_active) {
+    r.verdict.active_constraints.push_back(
+        "stability: unstable start poles were mirrored or unstable trial points refused");
+  }
+  for (const std::string& name : r.active_bounds) {
+    r.verdict.active_constraints.push_back(name + " is at a bound");
+  }
 }
 
 // The names of the held parameters and of the free ones at a bound they were given.

@@ -25,6 +25,7 @@
 #include "ctid/simulation/stamps.h"
 #include "estimation/internal/scaled_least_squares.h"
 #include "refined_iv/internal/refined_iv_engine.h"
+#include "refined_iv/internal/refined_iv_passes.h"
 
 namespace ctid {
 
@@ -356,6 +357,8 @@ EstimationResult srivc_irregular(const IrregularRecord& record, const SubmodelOr
   }
   result.checks = std::move(checks);
   result.verdict = internal::refined_iv_verdict(result, false, false);
+  result.verdict.active_constraints =
+      internal::srivc_engine::active_constraint_notes(result.unstable_reflections, {}, {});
   return result;
 }
 

@@ -361,6 +361,13 @@ struct Run {
         workspace(layout) {}
 
   int delay_of(size_t r) const { return record_delay(options, r); }
+  // The held coefficients and those at a bound: what the covariance takes as known.
+  HeldCoefficients known() const {
+    HeldCoefficients all = problem.held_coefficients;
+    const HeldCoefficients at = coefficients_at_bounds(beta, problem.bounded_coefficients);
+    all.insert(all.end(), at.begin(), at.end());
+    return all;
+  }
 };
 
 // Right-half-plane roots of every A_i in b reflected, counted in the result; false, with b
@@ -544,11 +551,11 @@ StepOutcome take_step(Run& run, const ScaledEquations& e, const Eigen::MatrixXd&
                       int iteration) {
   const Layout& layout = run.layout;
   EstimationResult& result = run.result;
-  const HeldCoefficients& held = run.problem.held_coefficients;
-  const Eigen::MatrixXd solution =
-      held.empty() ? Eigen::MatrixXd(e.sp.cwiseInverse().asDiagonal() *
-                                     Eigen::MatrixXd(e.m.fullPivLu().solve(rhs)))
-                   : held_solution(e.m, e.sp, rhs, layout, held);
+  HeldCoefficients known = run.problem.held_coefficients;
+  HeldCoefficients at_bounds;
+  const Eigen::MatrixXd solution = constrained_solution(
+      e.m, e.sp, rhs, layout, known, run.problem.bounded_coefficients, at_bounds);
+  known.insert(known.end(), at_bounds.begin(), at_bounds.end());
   Eigen::VectorXd next(run.p);
   Eigen::MatrixXd off = solution.topRows(run.p);
   for (int i = 0; i < layout.size(); ++i) {
@@ -563,7 +570,7 @@ StepOutcome take_step(Run& run, const ScaledEquations& e, const Eigen::MatrixXd&
     return StepOutcome::stopped;
   }
   const bool reflected = reflect_all(run, next);
-  for (const auto& [j, value] : held) next(j) = value;  // a reflection keeps them
+  for (const auto& [j, value] : known) next(j) = value;  // a reflection keeps them
   if (!reflected || !realisable(run.layout, run.closed_loop, run.h, next)) {
     stop_degenerate(run, "the model at iteration " + std::to_string(iteration));
     return StepOutcome::stopped;
@@ -721,8 +728,8 @@ void refresh_free_responses(Run& run) {
   Moments sums;
   evaluate(run.layout, run.beta, run.initial_states, run.signals, run.source, run.h,
            run.options.output_interpolation, run.workspace, &sums, nullptr, nullptr);
-  if (std::optional<Eigen::MatrixXd> solution =
-          solve_scaled(sums, run.layout, run.problem.held_coefficients)) {
+  if (std::optional<Eigen::MatrixXd> solution = solve_scaled(
+          sums, run.layout, run.problem.held_coefficients, run.problem.bounded_coefficients)) {
     run.initial_states = free_response_coefficients(run.layout, *solution);
     run.states_at = run.beta;
   }
@@ -827,10 +834,10 @@ void set_statistics(Run& run) {
                                        run.source, run.h, options.output_interpolation,
                                        run.workspace, instrument, ar, scales);
                                  });
-  result.covariance =
-      run.problem.held_coefficients.empty()
-          ? Eigen::MatrixXd(joint.topLeftCorner(run.p, run.p))
-          : covariance_given_held(joint, run.problem.held_coefficients).topLeftCorner(run.p, run.p);
+  const HeldCoefficients known = run.known();
+  result.covariance = known.empty()
+                          ? Eigen::MatrixXd(joint.topLeftCorner(run.p, run.p))
+                          : covariance_given_held(joint, known).topLeftCorner(run.p, run.p);
   if (delay_column_used) {
     result.delay_standard_error = std::sqrt(std::max(joint(run.unknowns, run.unknowns), 0.0));
   }
@@ -854,6 +861,10 @@ void judge(Run& run) {
   }
   result.checks = std::move(checks);
   result.verdict = refined_iv_verdict(result, run.closed_loop, run.loop_unstable);
+  result.verdict.active_constraints =
+      active_constraint_notes(result.unstable_reflections,
+                              coefficients_at_bounds(run.beta, run.problem.bounded_coefficients),
+                              result.model.parameter_names());
   if (run.degenerate) {
     result.verdict.fail(
         "the iteration stopped before a degenerate model (A lost its leading "
@@ -891,6 +902,12 @@ std::optional<EstimationResult> run_from_start(const RefinedIvProblem& problem,
     require(j >= 0 && j < start.size(), name, ": held coefficient ", j, " is not in beta (",
             start.size(), " coefficients)");
     start(j) = value;
+  }
+  for (const auto& [j, lower, upper] : problem.bounded_coefficients) {
+    require(j >= 0 && j < start.size() && lower <= upper, name, ": bounded coefficient ", j,
+            " is not in beta (", start.size(), " coefficients) or its bounds [", lower, ", ", upper,
+            "] are empty");
+    start(j) = std::clamp(start(j), lower, upper);
   }
 
   se::Run run(problem, options, name, std::move(layout), std::move(checks), start,

@@ -14,6 +14,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/covariance.h"
@@ -644,19 +645,17 @@ Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares) {
 // The solution of (29) from its sums with unit-norm columns, or nothing if they are not
 // finite or the equations are singular.
 std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums, const Layout& layout,
-                                            const HeldCoefficients& held) {
+                                            const HeldCoefficients& held,
+                                            const CoefficientBounds& bounds) {
   if (!sums.all_finite()) return std::nullopt;
   const Eigen::VectorXd sz = norms_from_squares(sums.zz);
   const Eigen::VectorXd sp = norms_from_squares(sums.pp);
   const Eigen::MatrixXd m =
       sz.cwiseInverse().asDiagonal() * sums.zp * sp.cwiseInverse().asDiagonal();
-  const Eigen::FullPivLU<Eigen::MatrixXd> lu(m);
-  if (!(lu.rcond() > 1e-14)) return std::nullopt;
+  if (!(Eigen::FullPivLU<Eigen::MatrixXd>(m).rcond() > 1e-14)) return std::nullopt;
   const Eigen::MatrixXd rhs = sz.cwiseInverse().asDiagonal() * sums.zy;
-  Eigen::MatrixXd solution =
-      held.empty()
-          ? Eigen::MatrixXd(sp.cwiseInverse().asDiagonal() * Eigen::MatrixXd(lu.solve(rhs)))
-          : held_solution(m, sp, rhs, layout, held);
+  HeldCoefficients at_bounds;
+  Eigen::MatrixXd solution = constrained_solution(m, sp, rhs, layout, held, bounds, at_bounds);
   if (!solution.allFinite()) return std::nullopt;
   return solution;
 }
@@ -679,6 +678,14 @@ std::pair<std::vector<Eigen::Index>, std::vector<Eigen::Index>> free_and_held(
   return {f, h};
 }
 
+// The column of (29) that holds coefficient j: its submodel's (the one column of a solution
+// with one).
+Eigen::Index own_column(const Layout& layout, Eigen::Index j, Eigen::Index columns) {
+  int owner = 0;
+  while (owner + 1 < layout.size() && j >= layout.offset[owner + 1]) ++owner;
+  return std::min<Eigen::Index>(owner, columns - 1);
+}
+
 }  // namespace
 
 Eigen::MatrixXd held_solution(const Eigen::MatrixXd& m, const Eigen::VectorXd& sp,
@@ -688,9 +695,7 @@ Eigen::MatrixXd held_solution(const Eigen::MatrixXd& m, const Eigen::VectorXd& s
   // wh(k, c): held coefficient k in column c, its value in its own submodel's column.
   Eigen::MatrixXd wh = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(h.size()), rhs.cols());
   for (std::size_t k = 0; k < held.size(); ++k) {
-    int owner = 0;
-    while (owner + 1 < layout.size() && held[k].first >= layout.offset[owner + 1]) ++owner;
-    wh(static_cast<Eigen::Index>(k), std::min<Eigen::Index>(owner, rhs.cols() - 1)) =
+    wh(static_cast<Eigen::Index>(k), own_column(layout, held[k].first, rhs.cols())) =
         held[k].second;
   }
   const Eigen::MatrixXd vh = sp(h).asDiagonal() * wh;
@@ -701,6 +706,58 @@ Eigen::MatrixXd held_solution(const Eigen::MatrixXd& m, const Eigen::VectorXd& s
   }
   for (std::size_t k = 0; k < h.size(); ++k) w.row(h[k]) = wh.row(static_cast<Eigen::Index>(k));
   return w;
+}
+
+Eigen::MatrixXd constrained_solution(const Eigen::MatrixXd& m, const Eigen::VectorXd& sp,
+                                     const Eigen::MatrixXd& rhs, const Layout& layout,
+                                     const HeldCoefficients& held, const CoefficientBounds& bounds,
+                                     HeldCoefficients& at_bounds) {
+  at_bounds.clear();
+  Eigen::MatrixXd w = held.empty() ? Eigen::MatrixXd(sp.cwiseInverse().asDiagonal() *
+                                                     Eigen::MatrixXd(m.fullPivLu().solve(rhs)))
+                                   : held_solution(m, sp, rhs, layout, held);
+  // Each pass holds at least one more coefficient, so there are at most as many as bounds.
+  for (std::size_t pass = 0; pass < bounds.size(); ++pass) {
+    const std::size_t before = at_bounds.size();
+    for (const auto& [j, lower, upper] : bounds) {
+      const bool held_already = std::any_of(at_bounds.begin(), at_bounds.end(),
+                                            [&](const auto& a) { return a.first == j; });
+      const double value = w(j, own_column(layout, j, w.cols()));
+      if (held_already) continue;
+      if (value < lower) at_bounds.emplace_back(j, lower);
+      if (value > upper) at_bounds.emplace_back(j, upper);
+    }
+    if (at_bounds.size() == before) break;
+    HeldCoefficients fixed = held;
+    fixed.insert(fixed.end(), at_bounds.begin(), at_bounds.end());
+    std::sort(fixed.begin(), fixed.end());
+    w = held_solution(m, sp, rhs, layout, fixed);
+  }
+  std::sort(at_bounds.begin(), at_bounds.end());
+  return w;
+}
+
+HeldCoefficients coefficients_at_bounds(const Eigen::VectorXd& beta,
+                                        const CoefficientBounds& bounds) {
+  HeldCoefficients at;
+  for (const auto& [j, lower, upper] : bounds) {
+    if (beta(j) == lower || beta(j) == upper) at.emplace_back(j, beta(j));
+  }
+  return at;
+}
+
+std::vector<std::string> active_constraint_notes(int reflections, const HeldCoefficients& at_bounds,
+                                                 const std::vector<std::string>& names) {
+  std::vector<std::string> notes;
+  if (reflections > 0) {
+    notes.push_back("stability: right-half-plane poles were reflected into the left half-plane (" +
+                    std::to_string(reflections) + " times in the iteration)");
+  }
+  for (const auto& [j, value] : at_bounds) {
+    notes.push_back(names[static_cast<std::size_t>(j)] + " is at its bound " +
+                    format_significant(value, 6));
+  }
+  return notes;
 }
 
 Eigen::MatrixXd covariance_given_held(const Eigen::MatrixXd& p, const HeldCoefficients& held) {

@@ -67,6 +67,15 @@ TEST_F(PolishFlag, HeldDelayAndTheRefusals) {
   EXPECT_EQ(g["polish"]["parameters"][2].get<double>(), 1.9);
   EXPECT_DOUBLE_EQ(g["polish"]["parameters"][0].get<double>(), 0.395);
   EXPECT_EQ(g["parameters"][2].get<double>(), 1.9);  // the IV fit holds b0 = G(0) too
+  // Decision 0058: a bound the IV fit would cross holds its coefficient there, and says so.
+  const auto bound = ctid({"fit", data, "--poles", "2", "--zeros", "1", "--input-delay-samples",
+                           "3", "--bound", "theta1.b0=:1.5", "-o", "bound.json"});
+  ASSERT_EQ(bound.status, 0) << bound.err;
+  EXPECT_THAT(bound.out, HasSubstr("constraint acted: theta1.b0 is at its bound 1.5\n"));
+  const nlohmann::json b = io::read_json(path("bound.json"));
+  EXPECT_EQ(b["parameters"][2].get<double>(), 1.5);
+  EXPECT_EQ(b["standard_errors"][2].get<double>(), 0.0);
+  EXPECT_EQ(b["verdict"]["active_constraints"][0], "theta1.b0 is at its bound 1.5");
   expect_bad_input(ctid({"fit", data, "--poles", "2", "--zeros", "1", "--fix", "b0=2"}), "fit",
                    "parameter 'b0' is not in the model (its parameters: theta1.a1");
   expect_bad_input(ctid({"fit", data, "--poles", "2", "--zeros", "1", "--bound", "tau"}), "fit",

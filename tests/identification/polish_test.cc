@@ -2,6 +2,7 @@
 // paper's Section 6.1 system the output error never increases; a noise-free record with a
 // fractional delay is recovered exactly from a whole-sample IV fit; an iteration that did not
 // converge is restarted from the polish; the refusals name what is wrong.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -135,6 +136,29 @@ TEST(Polish, AKnownDcGainImpliesThePolishAndHoldsInItsModel) {
   EXPECT_EQ(r.estimate.parameters,
             identify(data, ModelStructure::additive(testing::open_loop_four_modes().orders()))
                 .estimate.parameters);
+}
+
+// Decision 0058: a bound acts in the IV fit too (the coefficient ends at it, with standard
+// error 0, and the verdict says so) and in the polish.
+TEST(Polish, ABoundActsInTheIvFitAndInThePolish) {
+  const SampledData data = section61_record(10);
+  const ModelStructure structure =
+      ModelStructure::additive(testing::open_loop_four_modes().orders());
+  IdentificationOptions options;
+  options.constraints.coefficients = {{"theta1.b0", std::nullopt, std::nullopt, 2.8}};  // 3
+  options.polish_options.estimate_delay = false;
+  const IdentificationResult r = identify(data, structure, options);
+  const std::vector<std::string> names = r.estimate.model.parameter_names();
+  const auto b0 =
+      static_cast<Eigen::Index>(std::find(names.begin(), names.end(), "theta1.b0") - names.begin());
+  EXPECT_EQ(r.estimate.parameters(b0), 2.8);
+  EXPECT_EQ(r.estimate.standard_errors(b0), 0.0);
+  EXPECT_THAT(r.estimate.verdict.active_constraints,
+              ::testing::Contains("theta1.b0 is at its bound 2.8"));
+  ASSERT_TRUE(r.polish.has_value());
+  EXPECT_LE(r.polish->parameters(b0), 2.8);
+  EXPECT_THAT(r.polish->active_bounds, ::testing::ElementsAre("theta1.b0"));
+  EXPECT_THAT(r.polish->verdict.active_constraints, ::testing::Contains("theta1.b0 is at a bound"));
 }
 
 TEST(Polish, RefusalsNameWhatIsWrong) {

@@ -27,6 +27,10 @@ struct Verdict {
   /// What to try, e.g. "a lower order or fewer modes; a start from the FRF peaks" (empty when
   /// usable).
   std::string advice;
+  /// One sentence per constraint that acted on the estimate (enforced stability, a coefficient
+  /// held at a bound; decision 0058). They do not make it unusable: they say it is the
+  /// constrained estimate, not the free one.
+  std::vector<std::string> active_constraints;
 
   static constexpr std::string_view type_name = "Verdict";
   static constexpr auto fields() {
@@ -35,6 +39,8 @@ struct Verdict {
         field("usable", &S::usable, "False when any check failed: do not use the model as is."),
         field("reasons", &S::reasons, "One sentence per failed check."),
         field("advice", &S::advice, "What to try instead (empty when usable)."),
+        field("active_constraints", &S::active_constraints,
+              "One sentence per constraint that acted (stability, a bound)."),
     };
   }
 

@@ -188,6 +188,12 @@ void validate_constraints(const AdditiveModel& model, const CoefficientConstrain
 std::vector<std::pair<Eigen::Index, double>> held_coefficients(
     const AdditiveModel& model, const CoefficientConstraints& constraints);
 
+/// The bounds a constraint puts on coefficients of beta that no constraint holds, as (index in
+/// beta, lower, upper), a side without a bound infinite (decision 0058: the refined IV
+/// iteration keeps them). The bounds of tau are the polish's own. Validates first.
+std::vector<std::tuple<Eigen::Index, double, double>> bounded_coefficients(
+    const AdditiveModel& model, const CoefficientConstraints& constraints);
+
 OutputErrorPolishResult polish_output_error(const SampledData& data, const AdditiveModel& start,
                                             const std::optional<ArmaModel>& noise = std::nullopt,
                                             const OutputErrorPolishOptions& options = {},

@@ -4,6 +4,7 @@
 // from the data and the structure (docs/architecture.md).
 #pragma once
 
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -34,6 +35,11 @@ struct RefinedIvProblem {
   /// column of (29)), and the covariance is that of the free ones given the held (decision
   /// 0057). Empty: every coefficient free.
   std::vector<std::pair<Eigen::Index, double>> held_coefficients;
+  /// Coefficients of beta kept within bounds, as (index in beta, lower, upper), none of them
+  /// held: the start is clamped into them, and a step whose solution leaves a bound holds that
+  /// coefficient at it and solves again (an active set rebuilt at every step); the covariance
+  /// holds those at a bound too, and the verdict lists them (decision 0058). Empty: no bound.
+  std::vector<std::tuple<Eigen::Index, double, double>> bounded_coefficients;
 };
 
 /// The refined IV estimate of the problem: the iteration of González et al. (eq. 29 and 30)

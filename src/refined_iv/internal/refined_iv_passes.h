@@ -6,6 +6,8 @@
 #pragma once
 
 #include <optional>
+#include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -231,8 +233,21 @@ Eigen::VectorXd norms_from_squares(const Eigen::VectorXd& squares);
 /// Coefficients held at known values: (index in the augmented vector, value).
 using HeldCoefficients = std::vector<std::pair<Eigen::Index, double>>;
 
+/// Coefficients kept within bounds: (index in the augmented vector, lower, upper).
+using CoefficientBounds = std::vector<std::tuple<Eigen::Index, double, double>>;
+
 std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums, const Layout& layout,
-                                            const HeldCoefficients& held = {});
+                                            const HeldCoefficients& held = {},
+                                            const CoefficientBounds& bounds = {});
+
+/// The solution of the scaled equations m v = rhs (v = sp w) with the held entries known
+/// (held_solution; none held: m's LU) and every bounded coefficient within its bounds: those
+/// whose value in their own column leaves a bound are held at the bound they cross and the
+/// equations solved again, until none leaves (decision 0058). `at_bounds` receives them.
+Eigen::MatrixXd constrained_solution(const Eigen::MatrixXd& m, const Eigen::VectorXd& sp,
+                                     const Eigen::MatrixXd& rhs, const Layout& layout,
+                                     const HeldCoefficients& held, const CoefficientBounds& bounds,
+                                     HeldCoefficients& at_bounds);
 
 /// The solution of the scaled equations m v = rhs (v = sp w, a column per submodel of (29))
 /// with the held entries of w known: the equations of the free entries only,
@@ -242,6 +257,14 @@ std::optional<Eigen::MatrixXd> solve_scaled(const Moments& sums, const Layout& l
 Eigen::MatrixXd held_solution(const Eigen::MatrixXd& m, const Eigen::VectorXd& sp,
                               const Eigen::MatrixXd& rhs, const Layout& layout,
                               const HeldCoefficients& held);
+
+/// The bounded coefficients of beta that sit at a bound, with their values (decision 0058).
+HeldCoefficients coefficients_at_bounds(const Eigen::VectorXd& beta,
+                                        const CoefficientBounds& bounds);
+/// The verdict's sentences on the constraints that acted (decision 0058): the reflections of
+/// unstable iterates, and the coefficients at a bound by their `names`.
+std::vector<std::string> active_constraint_notes(int reflections, const HeldCoefficients& at_bounds,
+                                                 const std::vector<std::string>& names);
 
 /// The covariance of the free entries given the held ones, P_ff - P_fh P_hh^-1 P_hf (for the
 /// white-noise instrument covariance this is (I_ff)^-1, the covariance of the estimator that
