@@ -3,8 +3,9 @@
 // into modes, standard errors by first-order perturbation or from segments; or the peaks of the
 // output spectral matrix's first singular value (fdd, efdd) (ctid::identify_output_only, the front
 // door of ctid::oma: identification/output_only.h; docs/oma.md).
-// Prints the modes and the verdict; -o writes an "oma_result" document. Exit 3 when no mode was
-// found.
+// Several files are setups of one structure with shared --reference-columns, merged by PoSER
+// (oma/multi_setup.h). Prints the modes and the verdict; -o writes an "oma_result" document.
+// Exit 3 when no mode was found.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -35,13 +36,16 @@ namespace ctid::cli {
 namespace {
 
 struct OmaFlags {
-  std::string file;
+  std::vector<std::string> files;
   std::vector<std::string> output_columns;
   std::vector<std::string> reference_columns;
   std::string time_column = "t";
   double sample_time = 0.0;
-  OmaOptions options;  ///< every field a flag (field_flags.h) but reference_channels
-  DataFlags prep;      ///< its preprocessing flags only (--rows, --time, --detrend, ...)
+  OmaOptions options;           ///< every field a flag (field_flags.h) but reference_channels
+  std::string merge = "poser";  // several setups (MultiSetupOptions, by hand)
+  double merge_frequency_tolerance = MultiSetupOptions{}.frequency_tolerance;
+  double merge_reference_mac = MultiSetupOptions{}.reference_mac;
+  DataFlags prep;  ///< its preprocessing flags only (--rows, --time, --detrend, ...)
   std::string output;
   std::string plot;  // DIR for stabilisation.png
   bool force = false;
@@ -50,10 +54,17 @@ struct OmaFlags {
 
 // The record: the output columns (names or ranges A:B) and the sample time from the uniform
 // time column, or -T (which overrides it); `t0` the first time stamp (0 without a column).
-Eigen::MatrixXd read_outputs(const OmaFlags& f, const CLI::App& app, const io::CsvTable& table,
-                             std::vector<std::string>& names, double& h, double& t0) {
+Eigen::MatrixXd read_outputs(const OmaFlags& f, const CLI::App& app, const std::string& file,
+                             const io::CsvTable& table, std::vector<std::string>& names, double& h,
+                             double& t0) {
   t0 = table.has_column(f.time_column) && table.rows() > 0 ? table.column(f.time_column)(0) : 0.0;
-  names = io::expand_columns(table, f.output_columns, "output");
+  if (f.output_columns.empty()) {  // every column but the time column
+    for (const std::string& name : table.names) {
+      if (name != f.time_column) names.push_back(name);
+    }
+  } else {
+    names = io::expand_columns(table, f.output_columns, "output");
+  }
   Eigen::MatrixXd y(table.rows(), static_cast<Eigen::Index>(names.size()));
   for (std::size_t j = 0; j < names.size(); ++j) {
     y.col(static_cast<Eigen::Index>(j)) = table.column(names[j]);
@@ -63,15 +74,15 @@ Eigen::MatrixXd read_outputs(const OmaFlags& f, const CLI::App& app, const io::C
     return y;
   }
   if (!table.has_column(f.time_column)) {
-    usage_error(internal::concat(f.file, " has no time column '", f.time_column,
+    usage_error(internal::concat(file, " has no time column '", f.time_column,
                                  "'; give --sample-time (-T) or --time-column"));
   }
   const Eigen::VectorXd& t = table.column(f.time_column);
-  require(t.size() >= 2, f.file, ": fewer than 2 samples");
+  require(t.size() >= 2, file, ": fewer than 2 samples");
   h = (t(t.size() - 1) - t(0)) / static_cast<double>(t.size() - 1);
   for (Eigen::Index k = 1; k < t.size(); ++k) {
     if (std::abs(t(k) - t(k - 1) - h) > 1e-3 * std::abs(h)) {
-      usage_error(internal::concat(f.file, ": time column '", f.time_column,
+      usage_error(internal::concat(file, ": time column '", f.time_column,
                                    "' is not uniform at row ", k + 1,
                                    "; give --sample-time (-T) to override it"));
     }
@@ -102,7 +113,9 @@ std::string preprocessing_summary(const PreprocessingRecord& p) {
 
 void print_summary(const OmaFlags& f, const OmaResult& r,
                    const std::optional<PreprocessingRecord>& preprocessing) {
-  std::cout << "ctid oma: " << enum_name(r.method) << " on " << f.file << ": " << r.channels.size()
+  std::string files;
+  for (const std::string& file : f.files) files += (files.empty() ? "" : ", ") + file;
+  std::cout << "ctid oma: " << enum_name(r.method) << " on " << files << ": " << r.channels.size()
             << " channels, " << r.reference_channels.size() << " references, " << r.samples
             << " samples, h = " << format_brief(r.sample_time) << " s; " << r.message << "\n";
   if (preprocessing)
@@ -126,67 +139,142 @@ void print_summary(const OmaFlags& f, const OmaResult& r,
   if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
 }
 
-// --plot DIR: the stabilisation diagram over the first singular value, from the document
-// (written to a temporary when -o is not given).
-void draw_stabilisation(const std::filesystem::path& package, const OmaFlags& f,
-                        const nlohmann::json& document) {
-  const TemporaryDirectory work;
-  std::filesystem::path input = f.output;
-  if (input.empty()) {
-    input = work.path() / "oma.json";
-    io::write_json(input, document);
+// The figures --plot DIR draws: stabilisation.png, or with several setups one per setup.
+std::vector<std::string> figure_names(const OmaFlags& f) {
+  if (f.files.size() == 1) return {"stabilisation.png"};
+  std::vector<std::string> names;
+  for (std::size_t k = 1; k <= f.files.size(); ++k) {
+    names.push_back("stabilisation_setup" + std::to_string(k) + ".png");
   }
-  const std::filesystem::path figure = std::filesystem::path(f.plot) / "stabilisation.png";
-  plot(package, {{"oma_stabilisation", input, figure,
-                  "ctid oma on " + std::filesystem::path(f.file).filename().string()}});
-  if (!f.quiet) std::cout << "wrote " << figure.string() << "\n";
+  return names;
+}
+
+// --plot DIR: the stabilisation diagram over the first singular value of each record, from its
+// document (written to a temporary directory).
+void draw_stabilisation(const std::filesystem::path& package, const OmaFlags& f,
+                        const std::vector<nlohmann::json>& documents) {
+  const TemporaryDirectory work;
+  const std::vector<std::string> names = figure_names(f);
+  std::vector<PlotJob> jobs;
+  for (std::size_t k = 0; k < documents.size(); ++k) {
+    const std::filesystem::path input = work.path() / ("oma" + std::to_string(k) + ".json");
+    io::write_json(input, documents[k]);
+    jobs.push_back({"oma_stabilisation", input, std::filesystem::path(f.plot) / names[k],
+                    "ctid oma on " + std::filesystem::path(f.files[k]).filename().string()});
+  }
+  plot(package, jobs);
+  if (f.quiet) return;
+  for (const PlotJob& job : jobs) std::cout << "wrote " << job.output.string() << "\n";
+}
+
+// One file's record, preprocessed as the flags say.
+struct Setup {
+  Eigen::MatrixXd y;
+  std::vector<std::string> names;
+  double h = 0.0;
+  std::optional<PreprocessingRecord> preprocessing;
+  io::CsvTable table;
+};
+
+Setup read_setup(const OmaFlags& f, const CLI::App& app, const std::string& file) {
+  Setup s;
+  double t0 = 0.0;
+  s.table = io::read_table(file);
+  s.y = read_outputs(f, app, file, s.table, s.names, s.h, t0);
+  if (f.prep.preprocessing_asked(app)) {
+    PreprocessingOptions p = f.prep.preprocessing_options();
+    p.input_scale = 1.0;
+    try {
+      PreprocessedOutputs done = preprocess_outputs(s.y, s.h, t0, p);
+      s.y = std::move(done.outputs);
+      s.h = done.record.sample_time;
+      s.preprocessing = std::move(done.record);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(file + ": " + e.what());
+    }
+  }
+  return s;
+}
+
+// Writes -o, prints, draws; the exit status from the verdict.
+ExitStatus finish(const OmaFlags& f, const std::filesystem::path& package, const OmaResult& result,
+                  const nlohmann::json& document,
+                  const std::optional<PreprocessingRecord>& preprocessing,
+                  const std::vector<nlohmann::json>& diagrams) {
+  if (!f.output.empty()) {
+    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  }
+  if (!f.quiet) print_summary(f, result, preprocessing);
+  if (!f.plot.empty()) draw_stabilisation(package, f, diagrams);
+  return result.verdict.usable ? kExitOk : kExitNoUsableModel;
+}
+
+// Several files: setups of one structure merged by PoSER (decision 0059). The document is the
+// merged oma_result with each setup's own under "setups".
+ExitStatus run_setups(const OmaFlags& f, const CLI::App& app,
+                      const std::filesystem::path& package) {
+  if (f.reference_columns.empty()) {
+    usage_error(
+        "several files are setups of one structure: give --reference-columns, the "
+        "channels every setup measures");
+  }
+  if (!f.output_columns.empty()) {
+    usage_error(
+        "--output-columns is for one file; with several setups each file's channels are "
+        "its columns other than the time column");
+  }
+  MultiSetupOptions options;
+  options.oma = f.options;
+  options.reference_names = f.reference_columns;
+  options.merge = parse_enum_word<OmaMerge>("--merge", f.merge);
+  options.frequency_tolerance = f.merge_frequency_tolerance;
+  options.reference_mac = f.merge_reference_mac;
+  std::vector<OmaSetup> setups;
+  std::vector<std::optional<PreprocessingRecord>> records;
+  for (const std::string& file : f.files) {
+    Setup s = read_setup(f, app, file);
+    setups.push_back({std::move(s.y), s.h, std::move(s.names)});
+    records.push_back(std::move(s.preprocessing));
+  }
+  const MultiSetupResult result = identify_output_only(setups, options);
+  nlohmann::json document = io::to_json(result.merged);
+  document["data"] = io::to_json(io::DataProvenance{.files = f.files});
+  document["setups"] = nlohmann::json::array();
+  for (std::size_t k = 0; k < result.setups.size(); ++k) {
+    nlohmann::json one = io::to_json(result.setups[k]);
+    one["data"] =
+        io::to_json(io::DataProvenance{.files = {f.files[k]}, .preprocessing = records[k]});
+    document["setups"].push_back(std::move(one));
+  }
+  const std::vector<nlohmann::json> diagrams(document["setups"].begin(), document["setups"].end());
+  return finish(f, package, result.merged, document, records.front(), diagrams);
 }
 
 ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
   std::filesystem::path package;
   if (!f.plot.empty()) {
     package = require_plotting();
-    prepare_plot_directory(f.plot, {"stabilisation.png"}, f.force);
+    prepare_plot_directory(f.plot, figure_names(f), f.force);
   }
+  if (f.files.size() > 1) return run_setups(f, app, package);
+  const std::string& file = f.files.front();
   OmaOptions options = f.options;
-  std::vector<std::string> names;
-  double h = 0.0;
-  double t0 = 0.0;
-  const io::CsvTable table = io::read_table(f.file);
-  Eigen::MatrixXd y = read_outputs(f, app, table, names, h, t0);
-  std::optional<PreprocessingRecord> preprocessing;
-  if (f.prep.preprocessing_asked(app)) {
-    PreprocessingOptions p = f.prep.preprocessing_options();
-    p.input_scale = 1.0;
-    try {
-      PreprocessedOutputs done = preprocess_outputs(y, h, t0, p);
-      y = std::move(done.outputs);
-      h = done.record.sample_time;
-      preprocessing = std::move(done.record);
-    } catch (const InvalidArgument& e) {
-      throw InvalidArgument(f.file + ": " + e.what());
-    }
-  }
+  const Setup s = read_setup(f, app, file);
   if (!f.reference_columns.empty()) {
-    for (const std::string& ref : io::expand_columns(table, f.reference_columns, "reference")) {
-      const auto at = std::find(names.begin(), names.end(), ref);
-      if (at == names.end()) {
+    for (const std::string& ref : io::expand_columns(s.table, f.reference_columns, "reference")) {
+      const auto at = std::find(s.names.begin(), s.names.end(), ref);
+      if (at == s.names.end()) {
         usage_error("--reference-columns names '" + ref +
                     "', which is not one of --output-columns");
       }
-      options.reference_channels.push_back(static_cast<int>(at - names.begin()));
+      options.reference_channels.push_back(static_cast<int>(at - s.names.begin()));
     }
   }
-  const OmaResult result = identify_output_only(y, h, options, names);
+  const OmaResult result = identify_output_only(s.y, s.h, options, s.names);
   nlohmann::json document = io::to_json(result);
   document["data"] =
-      io::to_json(io::DataProvenance{.files = {f.file}, .preprocessing = preprocessing});
-  if (!f.output.empty()) {
-    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
-  }
-  if (!f.quiet) print_summary(f, result, preprocessing);
-  if (!f.plot.empty()) draw_stabilisation(package, f, document);
-  return result.verdict.usable ? kExitOk : kExitNoUsableModel;
+      io::to_json(io::DataProvenance{.files = {file}, .preprocessing = s.preprocessing});
+  return finish(f, package, result, document, s.preprocessing, {document});
 }
 
 Command add_oma_command(CLI::App& parent) {
@@ -202,16 +290,37 @@ Command add_oma_command(CLI::App& parent) {
       "number of orders supporting it) and the verdict. -o X.json writes an \"oma_result\" "
       "document (docs/oma.md) with every pole of the stabilisation diagram.\n"
       "Exit status: 0 modes found, 3 no mode found, 2 bad usage or input, 1 other error.");
-  app->add_option("data", f.file, "CSV file with the output columns")
+  app->add_option("data", f.files,
+                  "CSV file with the output columns; several files: setups of one structure "
+                  "sharing --reference-columns, merged into global modes (--merge)")
       ->required()
       ->check(CLI::ExistingFile);
   app->add_option("--output-columns", f.output_columns,
-                  "Response channels: names or ranges A:B (file order), e.g. y1:y8")
-      ->delimiter(',')
-      ->required();
+                  "Response channels: names or ranges A:B (file order), e.g. y1:y8; default: "
+                  "every column but the time column")
+      ->delimiter(',');
   app->add_option(flag_of<OmaOptions>("reference_channels"), f.reference_columns,
                   "Reference channels (a subset of the outputs; default: all)")
       ->delimiter(',');
+  app->add_option("--merge", f.merge,
+                  "Several setups: how their modes are merged: " + command_line_list<OmaMerge>())
+      ->check([](const std::string& word) {
+        try {
+          parse_enum_word<OmaMerge>("--merge", word);
+          return std::string();
+        } catch (const CLI::ValidationError& e) {
+          return std::string(e.what());
+        }
+      })
+      ->capture_default_str();
+  app->add_option("--merge-frequency-tolerance", f.merge_frequency_tolerance,
+                  "Several setups: largest |df|/f between one mode's frequencies in two setups")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app->add_option("--merge-reference-mac", f.merge_reference_mac,
+                  "Several setups: smallest MAC of one mode's reference entries in two setups")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   app->add_option("--time-column", f.time_column, "Uniform time column")->capture_default_str();
   app->add_option("--sample-time,-T", f.sample_time, "Sample time [s] (overrides the time column)")
       ->check(CLI::PositiveNumber);

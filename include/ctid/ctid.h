@@ -48,6 +48,7 @@
 #include "ctid/estimation/verdict.h"
 
 #include "ctid/oma/fdd.h"
+#include "ctid/oma/multi_setup.h"
 #include "ctid/oma/oma.h"
 #include "ctid/oma/ssi_cov.h"
 #include "ctid/oma/ssi_data.h"

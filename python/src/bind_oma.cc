@@ -2,7 +2,8 @@
 // identification/output_only.h): ctid.oma(outputs, sample_time, options, channel_names,
 // **options) runs identify_output_only, as `ctid oma` does, and returns an OmaResult with its
 // modes, stabilisation diagram and verdict; OmaOptions, OmaMode, OmaPole, OmaMethod,
-// OmaUncertainty and PoleStability mirror the C++ names.
+// OmaUncertainty and PoleStability mirror the C++ names. ctid.oma_setups(outputs, sample_time,
+// channel_names, options, **options) merges several setups (MultiSetupOptions, MultiSetupResult).
 #include "common.h"
 #include "ctid/identification/output_only.h"
 #include "fields.h"
@@ -36,6 +37,33 @@ void bind_oma(py::module_& m) {
       "clustered into modes, standard errors by first-order perturbation or from segments; or "
       "fdd/efdd peaks. OmaOptions "
       "fields may be given as keywords.");
+  bind_enum<OmaMerge>(m, "OmaMerge", "How the modes of several setups are merged.");
+  bind_options<MultiSetupOptions>(m, "Options of multi-setup output-only analysis (docs/oma.md).");
+  bind_result<MultiSetupResult>(m, "The merged modes of several setups, and each setup's own.");
+  m.def(
+      "oma_setups",
+      [](const std::vector<Eigen::MatrixXd>& outputs, double sample_time,
+         const std::vector<std::vector<std::string>>& channel_names,
+         const std::optional<MultiSetupOptions>& options, const py::kwargs& kwargs) {
+        if (outputs.size() != channel_names.size()) {
+          throw InvalidArgument(ctid::internal::concat("oma_setups: ", outputs.size(),
+                                                       " records but ", channel_names.size(),
+                                                       " lists of channel names"));
+        }
+        std::vector<OmaSetup> setups;
+        for (std::size_t k = 0; k < outputs.size(); ++k) {
+          setups.push_back({outputs[k], sample_time, channel_names[k]});
+        }
+        return identify_output_only(setups,
+                                    options_from<MultiSetupOptions>("oma_setups", options, kwargs));
+      },
+      py::arg("outputs"), py::arg("sample_time"), py::arg("channel_names"),
+      py::arg("options") = py::none(),
+      "Several setups of one structure (a list of (N_k, l_k) arrays sampled every sample_time "
+      "seconds, channel_names one list per setup) with the reference channels every setup "
+      "measures (reference_names): each analysed alone, the modes merged into global ones by "
+      "PoSER, standard errors carried through. MultiSetupOptions fields may be given as "
+      "keywords.");
 }
 
 }  // namespace ctid::python

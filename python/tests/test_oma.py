@@ -242,3 +242,64 @@ def test_perturbation_standard_errors_are_finite_and_positive():
         for j, (re, im) in enumerate(zip(mode.shape_real_std, mode.shape_imag_std)):
             assert np.isfinite(re) and np.isfinite(im)
             assert (re == 0 and im == 0) if j == largest else (re > 0 and im > 0)
+
+
+def _numpy_poser(setups, references):
+    """PoSER in NumPy (decision 0059), from each setup's own modes: the modes of setup 1 found
+    in every setup (nearest frequency within 2 %), inverse-variance weighted means of f (the
+    variance scaled by nu / (nu - 2) for standard errors from 10 blocks), each shape
+    scaled onto setup 1's on the references, normalised at its largest entry."""
+    merged = []
+    for anchor in setups[0].modes:
+        chosen = [anchor]
+        for other in setups[1:]:
+            near = [m for m in other.modes
+                    if abs(m.frequency_hz / anchor.frequency_hz - 1.0) <= 0.02]
+            if not near:
+                break
+            chosen.append(min(near, key=lambda m: abs(m.frequency_hz - anchor.frequency_hz)))
+        if len(chosen) < len(setups):
+            continue
+        f = np.array([m.frequency_hz for m in chosen])
+        wf = 1.0 / np.array([m.frequency_hz_std for m in chosen]) ** 2
+        shapes = [np.array(m.shape_real) + 1j * np.array(m.shape_imag) for m in chosen]
+        refs = [[list(s.channels).index(r) for r in references] for s in setups]
+        first = shapes[0][refs[0]]
+        scaled = []
+        for shape, ref in zip(shapes, refs):
+            alpha = np.vdot(shape[ref], first) / np.vdot(shape[ref], shape[ref])
+            scaled.append(alpha * shape)
+        glob = [np.mean([s[ref][k] for s, ref in zip(scaled, refs)])
+                for k in range(len(references))]
+        for s, setup, ref in zip(scaled, setups, refs):
+            glob += [s[j] for j in range(len(s)) if j not in ref]
+        glob = np.array(glob)
+        nu = 10 - 1  # the standard errors' degrees of freedom (10 blocks)
+        merged.append((np.sum(wf * f) / np.sum(wf), np.sqrt(nu / (nu - 2) / np.sum(wf)),
+                       glob / glob[np.argmax(np.abs(glob))]))
+    return merged
+
+
+def test_oma_setups_merge_as_an_independent_numpy_poser():
+    """Three setups of a 4-mass chain, x2 and x4 the references (the third setup has no roving
+    sensor): ctid's merge equals a NumPy PoSER of the setups' own modes."""
+    dofs = [[0, 1, 3], [1, 2, 3], [1, 3]]
+    outputs, names = [], []
+    for s, own in enumerate(dofs):
+        y, _ = _record(40 + s, samples=20000, n=4)
+        outputs.append(y[:, own])
+        names.append([f"x{d + 1}" for d in own])
+    modes = _chain(4)[2]
+    picking = ctid.OmaOptions(max_order=16, modes_near_hz=[f for f, _ in modes])
+    result = ctid.oma_setups(outputs, H, names, reference_names=["x2", "x4"], oma=picking)
+    assert result.merged.verdict.usable, result.merged.message
+    assert list(result.merged.channels) == ["x2", "x4", "x1", "x3"]
+    expected = _numpy_poser(result.setups, ["x2", "x4"])
+    assert len(result.merged.modes) == len(expected) == len(modes)
+    for mode, (f, f_std, shape) in zip(result.merged.modes, expected):
+        assert mode.frequency_hz == pytest.approx(f, rel=1e-12)
+        assert mode.frequency_hz_std == pytest.approx(f_std, rel=1e-12)
+        got = np.array(mode.shape_real) + 1j * np.array(mode.shape_imag)
+        np.testing.assert_allclose(got, shape, atol=1e-12)
+    with pytest.raises(ValueError, match="reference channel 'x3' is missing from setup 1"):
+        ctid.oma_setups(outputs, H, names, reference_names=["x3"])

@@ -66,7 +66,8 @@ ValidationReport validation_report_from_json(const nlohmann::json& value,
 nlohmann::json to_json(const OmaResult& result) { return document(result, kOmaResultType); }
 
 OmaResult oma_result_from_json(const nlohmann::json& value, const std::string& source) {
-  return document_fields<OmaResult>(value, kOmaResultType, {"data"}, source);
+  // "setups": each setup's own document beside the merged modes (`ctid oma` on several files).
+  return document_fields<OmaResult>(value, kOmaResultType, {"data", "setups"}, source);
 }
 
 nlohmann::json to_json(const Frf& frf) { return document(frf, kFrfType); }

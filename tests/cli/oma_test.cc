@@ -2,6 +2,7 @@
 // oma_result document that io::read_result reads back; by ssi-cov and fdd), a record with no
 // resonance (exit 3, the verdict), and bad usage (exit 2, one line naming the flag).
 #include <cmath>
+#include <complex>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -57,6 +58,37 @@ class OmaCommand : public testing::CliTest {
           << -0.8 * x[0][0] + 0.6 * x[1][0] + 0.3 * normal(rng) << "\n";
     }
     return write("two_modes.csv", csv.str());
+  }
+  // One setup of a survey (decision 0059): the 5 and 12 Hz resonances of two_modes, each setup
+  // its own excitation; references a and b as in two_modes, and one roving channel `name`
+  // with the modal amplitudes (c5, c12).
+  std::string setup(const std::string& name, double c5, double c12, unsigned seed) const {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> normal;
+    const double h = 0.01;
+    double a[2][2];
+    const double hz[2] = {5.0, 12.0};
+    for (int i = 0; i < 2; ++i) {
+      const double w = 2.0 * 3.141592653589793 * hz[i];
+      const double radius = std::exp(-0.02 * w * h);
+      a[i][0] = 2.0 * radius * std::cos(w * h * std::sqrt(1.0 - 0.02 * 0.02));
+      a[i][1] = -radius * radius;
+    }
+    double x[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
+    std::ostringstream csv;
+    csv << "t,a,b," << name << "\n";
+    for (int k = -500; k < 12000; ++k) {
+      for (int i = 0; i < 2; ++i) {
+        const double next = a[i][0] * x[i][0] + a[i][1] * x[i][1] + normal(rng);
+        x[i][1] = x[i][0];
+        x[i][0] = next;
+      }
+      if (k < 0) continue;
+      csv << k * h << "," << x[0][0] + x[1][0] + 0.3 * normal(rng) << ","
+          << 0.5 * x[0][0] - x[1][0] + 0.3 * normal(rng) << ","
+          << c5 * x[0][0] + c12 * x[1][0] + 0.3 * normal(rng) << "\n";
+    }
+    return write(name + ".csv", csv.str());
   }
   // Three channels of independent white noise: no resonance.
   std::string white_noise() const {
@@ -211,6 +243,47 @@ TEST_F(OmaCommand, PlotDrawsTheStabilisationDiagram) {
   testing::expect_png(path("figures") / "stabilisation.png");
   EXPECT_THAT(r.out, HasSubstr("wrote figures/stabilisation.png"));
   testing::expect_bad_input(ctid(args), "oma", "stabilisation.png: file exists");
+}
+
+// Two setups sharing a and b, c and d roving: one document over a, b, c, d whose shapes are the
+// modal amplitudes of every channel.
+TEST_F(OmaCommand, SeveralFilesAreSetupsMergedIntoGlobalModes) {
+  const std::string one = setup("c", -0.8, 0.6, 21);
+  const std::string two = setup("d", 0.3, 0.9, 22);
+  const auto r = ctid(
+      {"oma", one, two, "--reference-columns", "a,b", "--max-order", "12", "-o", "merged.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("PoSER merge of 2 setups: 2 modes found in every setup"));
+  const nlohmann::json doc = io::read_json(path("merged.json"));
+  EXPECT_EQ(doc["channels"], nlohmann::json({"a", "b", "c", "d"}));
+  ASSERT_EQ(doc["setups"].size(), 2u);
+  EXPECT_EQ(doc["setups"][1]["data"]["file"], two);
+  ASSERT_TRUE(std::holds_alternative<OmaResult>(io::read_result(path("merged.json"))));
+  const double expected[2][4] = {{1.0, 0.5, -0.8, 0.3}, {1.0, -1.0, 0.6, 0.9}};
+  ASSERT_EQ(doc["modes"].size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    // MAC of the merged (complex) shape with the real amplitudes.
+    std::complex<double> dot = 0.0;
+    double shape = 0.0, truth = 0.0;
+    for (int j = 0; j < 4; ++j) {
+      const std::complex<double> v(doc["modes"][i]["shape_real"][j].get<double>(),
+                                   doc["modes"][i]["shape_imag"][j].get<double>());
+      dot += v * expected[i][j];
+      shape += std::norm(v);
+      truth += expected[i][j] * expected[i][j];
+    }
+    EXPECT_GE(std::norm(dot) / (shape * truth), 0.99) << i;
+  }
+  testing::expect_bad_input(ctid({"oma", one, two}), "oma",
+                            "several files are setups of one structure: give --reference-columns");
+  testing::expect_bad_input(
+      ctid({"oma", one, two, "--reference-columns", "a,b", "--output-columns", "a:c"}), "oma",
+      "--output-columns is for one file");
+  testing::expect_bad_input(
+      ctid({"oma", one, two, "--reference-columns", "a,c"}), "oma",
+      "reference channel 'c' is missing from setup 2 (its channels: a, b, d)");
+  testing::expect_bad_input(ctid({"oma", one, two, "--reference-columns", "a,b", "--merge", "x"}),
+                            "oma", "--merge is 'x'; it must be poser");
 }
 
 TEST_F(OmaCommand, BadUsageNamesTheFlag) {
