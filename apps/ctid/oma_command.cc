@@ -30,6 +30,7 @@
 #include "ctid/io/report_json.h"
 #include "data_flags.h"
 #include "field_flags.h"
+#include "output_only_data.h"
 #include "plot_support.h"
 
 namespace ctid::cli {
@@ -51,44 +52,6 @@ struct OmaFlags {
   bool force = false;
   bool quiet = false;
 };
-
-// The record: the output columns (names or ranges A:B) and the sample time from the uniform
-// time column, or -T (which overrides it); `t0` the first time stamp (0 without a column).
-Eigen::MatrixXd read_outputs(const OmaFlags& f, const CLI::App& app, const std::string& file,
-                             const io::CsvTable& table, std::vector<std::string>& names, double& h,
-                             double& t0) {
-  t0 = table.has_column(f.time_column) && table.rows() > 0 ? table.column(f.time_column)(0) : 0.0;
-  if (f.output_columns.empty()) {  // every column but the time column
-    for (const std::string& name : table.names) {
-      if (name != f.time_column) names.push_back(name);
-    }
-  } else {
-    names = io::expand_columns(table, f.output_columns, "output");
-  }
-  Eigen::MatrixXd y(table.rows(), static_cast<Eigen::Index>(names.size()));
-  for (std::size_t j = 0; j < names.size(); ++j) {
-    y.col(static_cast<Eigen::Index>(j)) = table.column(names[j]);
-  }
-  if (app.count("--sample-time") > 0) {
-    h = f.sample_time;
-    return y;
-  }
-  if (!table.has_column(f.time_column)) {
-    usage_error(internal::concat(file, " has no time column '", f.time_column,
-                                 "'; give --sample-time (-T) or --time-column"));
-  }
-  const Eigen::VectorXd& t = table.column(f.time_column);
-  require(t.size() >= 2, file, ": fewer than 2 samples");
-  h = (t(t.size() - 1) - t(0)) / static_cast<double>(t.size() - 1);
-  for (Eigen::Index k = 1; k < t.size(); ++k) {
-    if (std::abs(t(k) - t(k - 1) - h) > 1e-3 * std::abs(h)) {
-      usage_error(internal::concat(file, ": time column '", f.time_column,
-                                   "' is not uniform at row ", k + 1,
-                                   "; give --sample-time (-T) to override it"));
-    }
-  }
-  return y;
-}
 
 // "-" for a quantity the method does not estimate (fdd's damping).
 std::string with_error(double value, double error, int digits) {
@@ -168,32 +131,12 @@ void draw_stabilisation(const std::filesystem::path& package, const OmaFlags& f,
 }
 
 // One file's record, preprocessed as the flags say.
-struct Setup {
-  Eigen::MatrixXd y;
-  std::vector<std::string> names;
-  double h = 0.0;
-  std::optional<PreprocessingRecord> preprocessing;
-  io::CsvTable table;
-};
-
-Setup read_setup(const OmaFlags& f, const CLI::App& app, const std::string& file) {
-  Setup s;
-  double t0 = 0.0;
-  s.table = io::read_table(file);
-  s.y = read_outputs(f, app, file, s.table, s.names, s.h, t0);
-  if (f.prep.preprocessing_asked(app)) {
-    PreprocessingOptions p = f.prep.preprocessing_options();
-    p.input_scale = 1.0;
-    try {
-      PreprocessedOutputs done = preprocess_outputs(s.y, s.h, t0, p);
-      s.y = std::move(done.outputs);
-      s.h = done.record.sample_time;
-      s.preprocessing = std::move(done.record);
-    } catch (const InvalidArgument& e) {
-      throw InvalidArgument(file + ": " + e.what());
-    }
-  }
-  return s;
+OutputOnlyRecord read_setup(const OmaFlags& f, const CLI::App& app, const std::string& file) {
+  return read_output_only(
+      file, f.output_columns, f.time_column,
+      app.count("--sample-time") > 0 ? std::optional<double>(f.sample_time) : std::nullopt,
+      f.prep.preprocessing_asked(app) ? std::optional(f.prep.preprocessing_options())
+                                      : std::nullopt);
 }
 
 // Writes -o, prints, draws; the exit status from the verdict.
@@ -232,8 +175,8 @@ ExitStatus run_setups(const OmaFlags& f, const CLI::App& app,
   std::vector<OmaSetup> setups;
   std::vector<std::optional<PreprocessingRecord>> records;
   for (const std::string& file : f.files) {
-    Setup s = read_setup(f, app, file);
-    setups.push_back({std::move(s.y), s.h, std::move(s.names)});
+    OutputOnlyRecord s = read_setup(f, app, file);
+    setups.push_back({std::move(s.outputs), s.sample_time, std::move(s.names)});
     records.push_back(std::move(s.preprocessing));
   }
   const MultiSetupResult result = identify_output_only(setups, options);
@@ -259,7 +202,7 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
   if (f.files.size() > 1) return run_setups(f, app, package);
   const std::string& file = f.files.front();
   OmaOptions options = f.options;
-  const Setup s = read_setup(f, app, file);
+  const OutputOnlyRecord s = read_setup(f, app, file);
   if (!f.reference_columns.empty()) {
     for (const std::string& ref : io::expand_columns(s.table, f.reference_columns, "reference")) {
       const auto at = std::find(s.names.begin(), s.names.end(), ref);
@@ -270,7 +213,7 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
       options.reference_channels.push_back(static_cast<int>(at - s.names.begin()));
     }
   }
-  const OmaResult result = identify_output_only(s.y, s.h, options, s.names);
+  const OmaResult result = identify_output_only(s.outputs, s.sample_time, options, s.names);
   nlohmann::json document = io::to_json(result);
   document["data"] =
       io::to_json(io::DataProvenance{.files = {file}, .preprocessing = s.preprocessing});

@@ -1,8 +1,9 @@
 // `ctid track`: follows the modes of one channel through time (issue 17) with the library's
 // track_modes (identification/mode_tracking.h): consecutive windows of the record, each fitted with
-// a warm start from the previous window's model, the modes matched into tracks. Writes the whole
-// result as JSON (io/tracking_json.h), the per-window table as CSV and the tracking figure, and
-// prints one line per track.
+// a warm start from the previous window's model, the modes matched into tracks; several outputs
+// with track_mimo_modes, and records with no input (--output-only) with track_output_only_modes.
+// Writes the whole result as JSON (io/tracking_json.h), the per-window table as CSV and the
+// tracking figure, and prints one line per track.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -28,6 +29,7 @@
 #include "ctid/io/tracking_json.h"
 #include "data_flags.h"
 #include "field_flags.h"
+#include "output_only_data.h"
 #include "plot_support.h"
 #include "progress.h"
 #include "structure_flags.h"
@@ -57,6 +59,11 @@ struct TrackFlags {
   // Several outputs: MimoTrackingOptions' own fields a flag each (--mac-weight, --min-mac,
   // --direct, --rank-one, ...); those it shares with TrackingOptions come from the flags above.
   MimoTrackingOptions mimo;
+  // No input (--output-only): each window analysed by ctid oma's method; OmaTrackingOptions'
+  // own fields a flag each (its window and gates come from the flags above).
+  bool output_only = false;
+  OmaTrackingOptions oma;
+  std::vector<std::string> reference_columns;
   std::string controller;
   std::string start = "auto";
   std::string initial;
@@ -275,7 +282,77 @@ ExitStatus run_mimo_track(const TrackFlags& f, const CLI::App& app) {
   return report(f, app, result, data, std::move(document), package);
 }
 
+// The length and sample time of an output-only record, as report() asks of its data.
+struct OutputOnlyView {
+  const OutputOnlyRecord& record;
+  int size() const { return static_cast<int>(record.outputs.rows()); }
+  double sample_time() const { return record.sample_time; }
+  int output_count() const { return static_cast<int>(record.outputs.cols()); }
+  int input_count() const { return 0; }
+};
+
+// No input (--output-only, issue 34's monitoring): track_output_only_modes, each window analysed
+// by oma() and the modes matched by frequency, damping and shape (decision 0060).
+ExitStatus run_output_only_track(const TrackFlags& f, const CLI::App& app) {
+  for (const char* flag :
+       {"--input-columns", "--input-column", "--output-column", "--model", "--poles", "--zeros",
+        "--integrators", "--submodel", "--modes", "--controller", "--start", "--initial"}) {
+    if (app.get_option_no_throw(flag) != nullptr && app.count(flag) > 0) {
+      usage_error(std::string(flag) +
+                  " is not available with --output-only (no input, no model structure: each "
+                  "window is analysed as ctid oma analyses a record)");
+    }
+  }
+  if (f.data.output_columns.empty()) {
+    usage_error("--output-only needs --output-columns, the response channels");
+  }
+  check_windows_and_outputs(f);
+  std::filesystem::path package;
+  if (!f.plot.empty()) {
+    package = require_plotting();
+    prepare_plot_directory(f.plot, {"tracking.png"}, f.force);
+  }
+  OmaTrackingOptions options = f.oma;
+  options.window = f.options.window;
+  options.step = f.options.step;
+  options.max_frequency_jump = f.options.max_frequency_jump;
+  options.damping_weight = f.options.damping_weight;
+  options.mac_weight = f.mimo.mac_weight;
+  options.min_mac = f.mimo.min_mac;
+  const OutputOnlyRecord record = read_output_only(
+      f.data.file, f.data.output_columns, f.data.time_column,
+      app.count("--sample-time") > 0 ? std::optional<double>(f.data.sample_time) : std::nullopt,
+      f.data.preprocessing_asked(app) ? std::optional(f.data.preprocessing_options())
+                                      : std::nullopt);
+  for (const std::string& ref : f.reference_columns) {
+    const auto at = std::find(record.names.begin(), record.names.end(), ref);
+    if (at == record.names.end()) {
+      usage_error("--reference-columns names '" + ref + "', which is not one of --output-columns");
+    }
+    options.oma.reference_channels.push_back(static_cast<int>(at - record.names.begin()));
+  }
+  options.validate();
+
+  Progress progress("ctid track", f.quiet);
+  const MimoTrackingResult result =
+      track_output_only_modes(record.outputs, record.sample_time, record.start_time, record.names,
+                              options, progress.callback("window"));
+  progress.clear();
+
+  nlohmann::json document = io::to_json(result);
+  document["data"] =
+      io::to_json(io::DataProvenance{.files = {f.data.file},
+                                     .samples = static_cast<int>(record.outputs.rows()),
+                                     .sample_time = record.sample_time,
+                                     .start_time = record.start_time,
+                                     .outputs = record.names,
+                                     .preprocessing = record.preprocessing});
+  document["options"] = io::fields_to_json(options);
+  return report(f, app, result, OutputOnlyView{record}, std::move(document), package);
+}
+
 ExitStatus run_track(const TrackFlags& f, const CLI::App& app) {
+  if (f.output_only) return run_output_only_track(f, app);
   if (f.data.mimo_asked(app)) return run_mimo_track(f, app);
   for (const char* flag : {"--direct", "--input-delays-samples", "--rank-one", "--siso-engine"}) {
     if (app.count(flag) > 0) {
@@ -336,6 +413,8 @@ Command add_track_command(CLI::App& parent) {
       "shared-pole estimator (--modes K gives each mode a first-degree numerator, as ctid fit) "
       "and add 1 - MAC of the mode shapes to the matching cost (--mac-weight), pairing a mode "
       "with a track only if their MAC is at least --min-mac; the table gets a mac column.\n"
+      "No input: --output-only with --output-columns analyses every window as ctid oma does "
+      "(its flags below, under Output-only) and matches the modes as for several outputs.\n"
       "Matching: a window's modes join the tracks by the least total cost |w - w_t|/w_t + "
       "--damping-weight |zeta - zeta_t| among the assignments with the most pairs; a mode more "
       "than --max-frequency-jump (relative) from every track starts a new one. Modes of windows "
@@ -399,6 +478,19 @@ Command add_track_command(CLI::App& parent) {
   // The start of several outputs' first window: --start and --initial are one channel's.
   mimo.by_hand.push_back("initial_model");
   add_field_flags(*app, f.mimo, mimo);
+  app->add_flag("--output-only", f.output_only,
+                "No input: analyse every window of the --output-columns as ctid oma does and "
+                "match the modes by frequency, damping and shape")
+      ->group("Output-only");
+  app->add_option(flag_of<OmaTrackingOptions>("oma.reference_channels"), f.reference_columns,
+                  "--output-only: reference channels (a subset of the outputs; default: all)")
+      ->delimiter(',')
+      ->group("Output-only");
+  FieldFlagSettings oma;
+  oma.group = "Output-only";
+  oma.by_hand = shared_field_names<OmaTrackingOptions, MimoTrackingOptions>();
+  oma.by_hand.push_back("oma.reference_channels");  // names of columns, above
+  add_field_flags(*app, f.oma, oma);
 
   app->add_option("--output,-o", f.output, "Tracking JSON to write (the whole result)")
       ->group("Output");

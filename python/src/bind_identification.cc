@@ -78,6 +78,25 @@ void bind_mode_tracking(py::module_& m) {
       "match their modes into tracks by frequency, damping and MAC, as `ctid track` with "
       "several --output-columns does. Options are one MimoTrackingOptions or its fields as "
       "keywords (window [s] is required).");
+  bind_options<OmaTrackingOptions>(
+      m, "Options of track_output_only_modes: window and step [s], OmaOptions, matching gates.");
+  m.def(
+      "track_output_only_modes",
+      [](const Eigen::MatrixXd& outputs, double sample_time,
+         const std::optional<std::vector<std::string>>& channel_names, double start_time,
+         const std::optional<OmaTrackingOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<OmaTrackingOptions>("track_output_only_modes", options, kwargs);
+        py::gil_scoped_release release;
+        return track_output_only_modes(outputs, sample_time, start_time,
+                                       channel_names.value_or(std::vector<std::string>{}), o);
+      },
+      py::arg("outputs"), py::arg("sample_time"), py::arg("channel_names") = py::none(),
+      py::arg("start_time") = 0.0, py::arg("options") = py::none(),
+      "Follow the modes of an (N, l) record with no input through time: consecutive windows "
+      "each analysed by oma (OmaTrackingOptions.oma), their modes matched into tracks by "
+      "frequency, damping and MAC, as `ctid track --output-only` does. Returns a "
+      "MimoTrackingResult. Options are one OmaTrackingOptions or its fields as keywords "
+      "(window [s] is required).");
   m.def(
       "assign_mimo_modes",
       [](const std::vector<MimoMode>& tracks, const std::vector<MimoMode>& modes,

@@ -303,3 +303,21 @@ def test_oma_setups_merge_as_an_independent_numpy_poser():
         np.testing.assert_allclose(got, shape, atol=1e-12)
     with pytest.raises(ValueError, match="reference channel 'x3' is missing from setup 1"):
         ctid.oma_setups(outputs, H, names, reference_names=["x3"])
+
+
+def test_track_output_only_modes_windows_are_the_analysis_of_their_stretch():
+    """ctid.track_output_only_modes (decision 0060): window k's modes are ctid.oma of its
+    samples, in rad/s; the chain's three modes are followed through every window."""
+    y, modes = _record(50, samples=30000)
+    options = ctid.OmaOptions(max_order=16, block_rows=20)
+    result = ctid.track_output_only_modes(y, H, window=50.0, step=25.0, oma=options)
+    assert len(result.windows) == 5
+    for window in result.windows:
+        stretch = y[window.first_sample:window.first_sample + result.window_samples]
+        direct = ctid.oma(stretch, H, options)
+        assert [m.natural_frequency for m in window.modes] == \
+            [2 * np.pi * m.frequency_hz for m in direct.modes]
+    assert len(result.tracks) == len(modes)
+    for track, (f, _) in zip(result.tracks, modes):
+        assert track.windows_matched >= 4  # a window may miss a mode
+        assert track.mean_natural_frequency / (2 * np.pi) == pytest.approx(f, rel=0.01)

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <numbers>
 #include <utility>
 
 #include "ctid/core/error.h"
@@ -346,6 +347,126 @@ TrackingResult track_modes(const SampledData& data, const ModelStructure& struct
   return result;
 }
 
+namespace {
+
+// A usable window w (of `windows`) of several outputs: its modes join the tracks (those left
+// over start new ones), each with its MAC against its track's last shape; `last` holds each
+// track's last matched mode.
+void join_tracks(MimoTrackingResult& result, MimoTrackingWindow& window,
+                 std::vector<MimoMode>& last, const MimoTrackingOptions& options, int w,
+                 int windows) {
+  ++result.usable_windows;
+  window.tracks = assign_mimo_modes(last, window.modes, options);
+  for (std::size_t k = 0; k < window.modes.size(); ++k) {
+    const MimoMode& m = window.modes[k];
+    if (window.tracks[k] < 0) {
+      window.tracks[k] = static_cast<int>(result.tracks.size());
+      MimoModeTrack track;
+      static_cast<ModeTrack&>(track) = empty_track(windows);
+      track.mac.assign(static_cast<std::size_t>(windows), kNaN);
+      result.tracks.push_back(std::move(track));
+      last.push_back(m);
+    } else {
+      window.mac[k] =
+          modal_assurance(last[static_cast<std::size_t>(window.tracks[k])].shape, m.shape);
+    }
+    const auto t = static_cast<std::size_t>(window.tracks[k]);
+    const auto ws = static_cast<std::size_t>(w);
+    MimoModeTrack& track = result.tracks[t];
+    track.natural_frequency[ws] = m.natural_frequency;
+    track.natural_frequency_se[ws] = m.natural_frequency_se;
+    track.damping_ratio[ws] = m.damping_ratio;
+    track.damping_ratio_se[ws] = m.damping_ratio_se;
+    track.mac[ws] = window.mac[k];
+    last[t] = m;
+  }
+}
+
+// An output-only mode as the tracker's MimoMode: rad/s, the complex shape with its standard
+// errors, no participation.
+MimoMode as_mimo_mode(const OmaMode& m, int index) {
+  MimoMode out;
+  out.submodel = index;
+  out.natural_frequency = 2.0 * std::numbers::pi * m.frequency_hz;
+  out.natural_frequency_se = 2.0 * std::numbers::pi * m.frequency_hz_std;
+  out.damping_ratio = m.damping_ratio;
+  out.damping_ratio_se = m.damping_ratio_std;
+  const auto l = static_cast<Eigen::Index>(m.shape_real.size());
+  out.shape.resize(l);
+  out.shape_se_real.resize(l);
+  out.shape_se_imag.resize(l);
+  for (Eigen::Index j = 0; j < l; ++j) {
+    const auto k = static_cast<std::size_t>(j);
+    out.shape(j) = {m.shape_real[k], m.shape_imag[k]};
+    out.shape_se_real(j) = m.shape_real_std[k];
+    out.shape_se_imag(j) = m.shape_imag_std[k];
+  }
+  return out;
+}
+
+}  // namespace
+
+MimoTrackingResult track_output_only_modes(const Eigen::MatrixXd& outputs, double sample_time,
+                                           double start_time,
+                                           std::vector<std::string> channel_names,
+                                           const OmaTrackingOptions& options,
+                                           const std::function<void(int, int)>& progress) {
+  const auto samples = static_cast<int>(outputs.rows());
+  const WindowLayout layout =
+      layout_windows(options, samples, sample_time, OmaTrackingOptions::type_name);
+  options.oma.validate();
+  if (channel_names.empty()) {
+    for (Eigen::Index j = 0; j < outputs.cols(); ++j) {
+      channel_names.push_back("y" + std::to_string(j + 1));
+    }
+  }
+  MimoTrackingOptions gates;  // the matching of track_mimo_modes, with these gates
+  gates.max_frequency_jump = options.max_frequency_jump;
+  gates.damping_weight = options.damping_weight;
+  gates.mac_weight = options.mac_weight;
+  gates.min_mac = options.min_mac;
+  MimoTrackingResult result;
+  result.sample_time = sample_time;
+  result.window_samples = layout.window_samples;
+  result.step_samples = layout.step_samples;
+  result.output_names = channel_names;
+  std::vector<MimoMode> last;
+  bool ran = false;
+  std::optional<std::string> first_refusal;
+  for (int w = 0; w < layout.count; ++w) {
+    MimoTrackingWindow window;
+    place_window(window, layout, w, start_time, sample_time);
+    std::optional<OmaResult> analysed;
+    try {
+      analysed = oma(outputs.middleRows(window.first_sample, layout.window_samples), sample_time,
+                     options.oma, channel_names);
+    } catch (const InvalidArgument& e) {
+      if (!first_refusal) first_refusal = e.what();
+      refuse_window(window, e);
+    }
+    if (analysed) {
+      ran = true;
+      window.termination = analysed->termination;
+      window.message = analysed->message;
+      window.iterations = analysed->iterations;
+      window.verdict = analysed->verdict;
+      for (std::size_t k = 0; k < analysed->modes.size(); ++k) {
+        window.modes.push_back(as_mimo_mode(analysed->modes[k], static_cast<int>(k)));
+      }
+      window.tracks.assign(window.modes.size(), -1);
+      window.mac.assign(window.modes.size(), kNaN);
+      if (window.verdict.usable) join_tracks(result, window, last, gates, w, layout.count);
+    }
+    result.windows.push_back(std::move(window));
+    if (progress) progress(w + 1, layout.count);
+  }
+  if (!ran) {
+    throw InvalidArgument(internal::concat("every window was refused; window 1: ", *first_refusal));
+  }
+  for (MimoModeTrack& track : result.tracks) summarise(track);
+  return result;
+}
+
 MimoTrackingResult track_mimo_modes(const MimoData& data, const std::vector<SubmodelOrder>& orders,
                                     const MimoTrackingOptions& options,
                                     const std::function<void(int, int)>& progress) {
@@ -399,33 +520,7 @@ MimoTrackingResult track_mimo_modes(const MimoData& data, const std::vector<Subm
       window.tracks.assign(window.modes.size(), -1);
       window.mac.assign(window.modes.size(), kNaN);
     }
-    if (previous_usable) {
-      ++result.usable_windows;
-      window.tracks = assign_mimo_modes(last, window.modes, options);
-      for (std::size_t k = 0; k < window.modes.size(); ++k) {
-        const MimoMode& m = window.modes[k];
-        if (window.tracks[k] < 0) {
-          window.tracks[k] = static_cast<int>(result.tracks.size());
-          MimoModeTrack track;
-          static_cast<ModeTrack&>(track) = empty_track(layout.count);
-          track.mac.assign(static_cast<std::size_t>(layout.count), kNaN);
-          result.tracks.push_back(std::move(track));
-          last.push_back(m);
-        } else {
-          window.mac[k] =
-              modal_assurance(last[static_cast<std::size_t>(window.tracks[k])].shape, m.shape);
-        }
-        const auto t = static_cast<std::size_t>(window.tracks[k]);
-        const auto ws = static_cast<std::size_t>(w);
-        MimoModeTrack& track = result.tracks[t];
-        track.natural_frequency[ws] = m.natural_frequency;
-        track.natural_frequency_se[ws] = m.natural_frequency_se;
-        track.damping_ratio[ws] = m.damping_ratio;
-        track.damping_ratio_se[ws] = m.damping_ratio_se;
-        track.mac[ws] = window.mac[k];
-        last[t] = m;
-      }
-    }
+    if (previous_usable) join_tracks(result, window, last, options, w, layout.count);
     result.windows.push_back(std::move(window));
     if (progress) progress(w + 1, layout.count);
   }

@@ -111,7 +111,9 @@ SetupLayout setup_layout(const std::vector<OmaSetup>& setups, const MultiSetupOp
 }
 
 // The index of the mode of `r` that is `anchor`'s (frequency within the tolerance, reference
-// entries' MAC at least reference_mac, the best MAC among them), or -1.
+// entries' MAC at least reference_mac, the best MAC among them), or -1. A mode whose reference
+// entries are below 1e-3 of its largest entry (1) is one the references do not see: its scale
+// onto setup 1 is undetermined, so it matches nothing.
 int matching_mode(const OmaMode& anchor, const std::vector<int>& anchor_refs, const OmaResult& r,
                   const std::vector<int>& refs, const MultiSetupOptions& options) {
   auto reference_part = [](const OmaMode& m, const std::vector<int>& at) {
@@ -122,7 +124,9 @@ int matching_mode(const OmaMode& anchor, const std::vector<int>& anchor_refs, co
     }
     return part;
   };
+  constexpr double kSeen = 1e-3;
   const Eigen::VectorXcd a = reference_part(anchor, anchor_refs);
+  if (!(a.norm() > kSeen)) return -1;
   int best = -1;
   double best_mac = options.reference_mac;
   for (std::size_t i = 0; i < r.modes.size(); ++i) {
@@ -130,7 +134,9 @@ int matching_mode(const OmaMode& anchor, const std::vector<int>& anchor_refs, co
     if (std::abs(m.frequency_hz / anchor.frequency_hz - 1.0) > options.frequency_tolerance) {
       continue;
     }
-    const double mac = oma_detail::modal_assurance(a, reference_part(m, refs));
+    const Eigen::VectorXcd b = reference_part(m, refs);
+    if (!(b.norm() > kSeen)) continue;
+    const double mac = oma_detail::modal_assurance(a, b);
     if (mac >= best_mac) {
       best_mac = mac;
       best = static_cast<int>(i);

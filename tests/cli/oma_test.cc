@@ -3,6 +3,7 @@
 // resonance (exit 3, the verdict), and bad usage (exit 2, one line naming the flag).
 #include <cmath>
 #include <complex>
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -284,6 +285,36 @@ TEST_F(OmaCommand, SeveralFilesAreSetupsMergedIntoGlobalModes) {
       "reference channel 'c' is missing from setup 2 (its channels: a, b, d)");
   testing::expect_bad_input(ctid({"oma", one, two, "--reference-columns", "a,b", "--merge", "x"}),
                             "oma", "--merge is 'x'; it must be poser");
+}
+
+// `ctid track --output-only` (decision 0060): the two resonances followed through three
+// windows of 40 s, the document, the table and the refusals.
+TEST_F(OmaCommand, TrackOutputOnlyFollowsTheModesThroughTheWindows) {
+  const std::string data = two_modes();
+  const auto r = ctid({"track", data, "--output-only", "--output-columns", "a:c", "--window", "40",
+                       "--max-order", "20", "--block-rows", "20", "-o", "tracking.json", "--table",
+                       "tracking.csv"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("ctid track: 3 windows of 40 s (4000 samples, step 4000)"));
+  EXPECT_THAT(r.out, HasSubstr("3 outputs, 0 inputs"));
+  EXPECT_THAT(r.out, HasSubstr("usable windows: 3 of 3"));
+  const nlohmann::json doc = io::read_json(path("tracking.json"));
+  ASSERT_EQ(doc["tracks"].size(), 2u);
+  for (int t = 0; t < 2; ++t) {
+    const double hz = doc["tracks"][t]["mean_natural_frequency"].get<double>() / (2.0 * M_PI);
+    EXPECT_NEAR(hz, t == 0 ? 5.0 : 12.0, 0.05) << t;
+    EXPECT_EQ(doc["tracks"][t]["windows_matched"], 3);
+  }
+  EXPECT_EQ(doc["options"]["oma"]["max_order"], 20);
+  EXPECT_TRUE(std::filesystem::exists(path("tracking.csv")));
+  testing::expect_bad_input(ctid({"track", data, "--output-only", "--output-columns", "a:c",
+                                  "--window", "40", "--poles", "2"}),
+                            "track", "--poles is not available with --output-only");
+  testing::expect_bad_input(ctid({"track", data, "--output-only", "--window", "40"}), "track",
+                            "--output-only needs --output-columns");
+  testing::expect_bad_input(ctid({"track", data, "--output-only", "--output-columns", "a:c",
+                                  "--window", "40", "--reference-columns", "d"}),
+                            "track", "--reference-columns names 'd'");
 }
 
 TEST_F(OmaCommand, BadUsageNamesTheFlag) {

@@ -237,18 +237,21 @@ TEST(MultiSetup, TheMergePropagatesTheSetupsStandardErrors) {
     const int draws = 4000;
     Eigen::MatrixXd merged(draws, 10);
     for (int d = 0; d < draws; ++d) {
-      std::vector<OmaMode> noisy = exact;
-      for (OmaMode& m : noisy) {
+      // The merge itself (poser_shape, normalised as poser_mode normalises), on noisy shapes.
+      std::vector<Eigen::VectorXcd> noisy;
+      for (const OmaMode& m : exact) {
+        Eigen::VectorXcd shape(3);
         for (std::size_t j = 0; j < 3; ++j) {
-          m.shape_real[j] += m.shape_real_std[j] * normal(rng);
-          m.shape_imag[j] += m.shape_imag_std[j] * normal(rng);
+          shape(static_cast<Eigen::Index>(j)) = {
+              m.shape_real[j] + m.shape_real_std[j] * normal(rng),
+              m.shape_imag[j] + m.shape_imag_std[j] * normal(rng)};
         }
+        noisy.push_back(shape);
       }
-      const OmaMode r = oma_detail::poser_mode({&noisy[0], &noisy[1], &noisy[2]}, layout, 10);
-      for (int j = 0; j < 5; ++j) {
-        merged(d, j) = r.shape_real[static_cast<std::size_t>(j)];
-        merged(d, 5 + j) = r.shape_imag[static_cast<std::size_t>(j)];
-      }
+      const Eigen::VectorXcd r =
+          oma_detail::normalise_shape(oma_detail::poser_shape(noisy, layout));
+      merged.row(d).head(5) = r.real().transpose();
+      merged.row(d).tail(5) = r.imag().transpose();
     }
     for (int k = 0; k < 10; ++k) {
       const auto j = static_cast<std::size_t>(k % 5);

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "ctid/core/error.h"
@@ -143,6 +144,8 @@ TEST(OutputErrorPolish, KeepsTheModelStableAndSaysSo) {
   EXPECT_TRUE(r.stability_constraint_active);
   EXPECT_TRUE(r.transfer_function.is_stable());
   EXPECT_NEAR(r.parameters(0), 0.4, 1e-8);
+  EXPECT_THAT(r.verdict.active_constraints,
+              ::testing::Contains(::testing::HasSubstr("stability: unstable start poles")));
   const OutputErrorPolishResult free =
       polish_output_error(data, perturbed(truth, 0.05, 0.0), std::nullopt, options);
   EXPECT_FALSE(free.stability_constraint_active);
@@ -228,6 +231,10 @@ TEST(OutputErrorPolish, EnforcedStabilityOnARecordWhoseFreeFitIsUnstable) {
   EXPECT_TRUE(held.transfer_function.is_stable());
   EXPECT_TRUE(held.stability_constraint_active);
   EXPECT_GT(held.cost, free.cost);
+  // The verdict says so (decision 0058); the free fit's lists nothing.
+  EXPECT_THAT(held.verdict.active_constraints,
+              ::testing::Contains(::testing::HasSubstr("stability: ")));
+  EXPECT_TRUE(free.verdict.active_constraints.empty());
 }
 
 void expect_refusal(const AdditiveModel& model, const CoefficientConstraints& constraints,

@@ -23,6 +23,7 @@
 #include "ctid/estimation/termination.h"
 #include "ctid/estimation/verdict.h"
 #include "ctid/identification/identification.h"
+#include "ctid/oma/oma.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/mimo_srivc.h"
 
@@ -390,5 +391,55 @@ std::vector<int> assign_mimo_modes(const std::vector<MimoMode>& tracks,
 MimoTrackingResult track_mimo_modes(const MimoData& data, const std::vector<SubmodelOrder>& orders,
                                     const MimoTrackingOptions& options,
                                     const std::function<void(int, int)>& progress = {});
+
+/// Options of track_output_only_modes(): the windows and matching gates of MimoTrackingOptions,
+/// each window analysed output-only by oma() with `oma` (issue 34's monitoring).
+struct OmaTrackingOptions {
+  /// Length of every window [s], rounded to whole samples; 0 means not set (refused).
+  double window = 0.0;
+  /// Distance between window starts [s], rounded to whole samples; none: the window length.
+  std::optional<double> step;
+  /// The output-only analysis of every window.
+  OmaOptions oma;
+  double max_frequency_jump = 0.1;
+  double damping_weight = 1.0;
+  double mac_weight = 1.0;
+  double min_mac = 0.5;
+
+  static constexpr std::string_view type_name = "OmaTrackingOptions";
+  static constexpr auto fields() {
+    using O = OmaTrackingOptions;
+    return std::tuple{
+        field("window", &O::window, Finite{AtLeast{0.0}},
+              "Window length [s], rounded to whole samples; 0: not set (refused)."),
+        field("step", &O::step, Finite{GreaterThan{0.0}},
+              "Step between window starts [s], rounded to whole samples; none: the window."),
+        field("oma", &O::oma, "OmaOptions of every window's output-only analysis."),
+        field("max_frequency_jump", &O::max_frequency_jump, Finite{GreaterThan{0.0}},
+              "Largest relative frequency difference of a mode and the track it joins."),
+        field("damping_weight", &O::damping_weight, Finite{AtLeast{0.0}},
+              "Weight of the damping-ratio difference in the matching cost."),
+        field("mac_weight", &O::mac_weight, Finite{AtLeast{0.0}},
+              "Weight of 1 - MAC in the matching cost."),
+        field("min_mac", &O::min_mac, Between{0.0, 1.0, true, true},
+              "Smallest MAC of a mode's shape and the shape of the track it joins."),
+    };
+  }
+  void validate() const { validate_fields(*this); }
+};
+
+/// Modes of a record of several outputs and no input, followed through time: consecutive
+/// windows (N x l `outputs` from `start_time`, sample time h, channels `channel_names`, empty:
+/// y1..yl) each analysed by oma() with options.oma, and the modes of the windows where it found
+/// any matched into tracks by frequency, damping and mode shape as track_mimo_modes matches
+/// them. The result is a MimoTrackingResult: each window's modes as MimoMode (rad/s; shapes
+/// normalised as oma's, decision 0030; no participation), no model, no fit. Throws
+/// InvalidArgument for bad options or windows (before any analysis) and when oma() refuses
+/// every window; a window refused for its own data is kept as not usable (decision 0060).
+MimoTrackingResult track_output_only_modes(const Eigen::MatrixXd& outputs, double sample_time,
+                                           double start_time,
+                                           std::vector<std::string> channel_names,
+                                           const OmaTrackingOptions& options,
+                                           const std::function<void(int, int)>& progress = {});
 
 }  // namespace ctid
