@@ -102,28 +102,39 @@ void print_summary(const OmaFlags& f, const OmaResult& r,
   if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
 }
 
-// The figures --plot DIR draws: stabilisation.png, or with several setups one per setup.
+// The figures --plot DIR may draw: stabilisation.png (with several setups one per setup), and
+// shapes.png and mac.png of the modes found.
 std::vector<std::string> figure_names(const OmaFlags& f) {
-  if (f.files.size() == 1) return {"stabilisation.png"};
   std::vector<std::string> names;
-  for (std::size_t k = 1; k <= f.files.size(); ++k) {
+  if (f.files.size() == 1) names.push_back("stabilisation.png");
+  for (std::size_t k = 1; f.files.size() > 1 && k <= f.files.size(); ++k) {
     names.push_back("stabilisation_setup" + std::to_string(k) + ".png");
   }
+  names.push_back("shapes.png");
+  names.push_back("mac.png");
   return names;
 }
 
-// --plot DIR: the stabilisation diagram over the first singular value of each record, from its
-// document (written to a temporary directory).
-void draw_stabilisation(const std::filesystem::path& package, const OmaFlags& f,
-                        const std::vector<nlohmann::json>& documents) {
+// --plot DIR: the stabilisation diagram over the first singular value of each record (from
+// `diagrams`), and when modes were found their shapes and auto-MAC (from `document`), each
+// drawn from its document written to a temporary directory.
+void draw_figures(const std::filesystem::path& package, const OmaFlags& f,
+                  const nlohmann::json& document, const std::vector<nlohmann::json>& diagrams) {
   const TemporaryDirectory work;
   const std::vector<std::string> names = figure_names(f);
+  const std::filesystem::path dir(f.plot);
   std::vector<PlotJob> jobs;
-  for (std::size_t k = 0; k < documents.size(); ++k) {
+  for (std::size_t k = 0; k < diagrams.size(); ++k) {
     const std::filesystem::path input = work.path() / ("oma" + std::to_string(k) + ".json");
-    io::write_json(input, documents[k]);
-    jobs.push_back({"oma_stabilisation", input, std::filesystem::path(f.plot) / names[k],
+    io::write_json(input, diagrams[k]);
+    jobs.push_back({"oma_stabilisation", input, dir / names[k],
                     "ctid oma on " + std::filesystem::path(f.files[k]).filename().string()});
+  }
+  if (!document["modes"].empty()) {
+    const std::filesystem::path input = work.path() / "modes.json";
+    io::write_json(input, document);
+    jobs.push_back({"oma_shapes", input, dir / "shapes.png", "mode shapes"});
+    jobs.push_back({"oma_mac", input, dir / "mac.png", "auto-MAC"});
   }
   plot(package, jobs);
   if (f.quiet) return;
@@ -148,7 +159,7 @@ ExitStatus finish(const OmaFlags& f, const std::filesystem::path& package, const
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
   if (!f.quiet) print_summary(f, result, preprocessing);
-  if (!f.plot.empty()) draw_stabilisation(package, f, diagrams);
+  if (!f.plot.empty()) draw_figures(package, f, document, diagrams);
   return result.verdict.usable ? kExitOk : kExitNoUsableModel;
 }
 
@@ -274,8 +285,10 @@ Command add_oma_command(CLI::App& parent) {
   app->add_option("--output,-o", f.output, "JSON file for the oma_result document")
       ->group("Output");
   app->add_option("--plot", f.plot,
-                  "Directory for stabilisation.png: every pole by order and stability class, the "
-                  "modes, the first singular value behind them (python3 -m ctid.plot)")
+                  "Directory for stabilisation.png (every pole by order and stability class, "
+                  "the modes, the first singular value behind them; one per setup with several "
+                  "files) and, when modes were found, shapes.png and mac.png (auto-MAC), drawn "
+                  "by python3 -m ctid.plot")
       ->group("Output");
   app->add_flag("--force", f.force, "Replace an output file that exists")->group("Output");
   app->add_flag("--quiet,-q", f.quiet, "Print nothing")->group("Output");

@@ -4,8 +4,8 @@
                                   [--against RESULT2.json] [--frequency-unit Hz|rad/s]
 
 KIND is one of bode, modes, frf, frf_matrix, validation, compare, residuals, mse,
-stabilisation, mode_shapes, mac, frf_matrix_overlay, tracking, oma_stabilisation, step,
-impulse. INPUT is a result document the command line writes (read by ctid.read_result, or as
+stabilisation, mode_shapes, mac, frf_matrix_overlay, tracking, oma_stabilisation, oma_shapes,
+oma_mac, step, impulse. INPUT is a result document the command line writes (read by ctid.read_result, or as
 JSON for tracking; the table below says which kinds draw it) or one of the files of
 docs/python.md (the CLI's --plot inputs and CSV tables):
 
@@ -22,6 +22,7 @@ docs/python.md (the CLI's --plot inputs and CSV tables):
     mode_tracking_result (ctid track -o) tracking (frequency and damping against time)
     mimo_mode_tracking_result (ctid track --output-columns -o)
                                       tracking
+    oma_result (ctid oma -o)          oma_stabilisation, oma_shapes, oma_mac
     CSV of ctid step / impulse -o     step, impulse (t, y and, if present, lower, upper)
 
 --frf gives the measured FRF drawn under the model: bode and modes take an frf document or the
@@ -47,7 +48,7 @@ matplotlib.use("Agg")
 
 KINDS = ("bode", "modes", "frf", "frf_matrix", "validation", "compare", "residuals", "mse",
          "stabilisation", "mode_shapes", "mac", "frf_matrix_overlay", "tracking",
-         "oma_stabilisation", "step", "impulse")
+         "oma_stabilisation", "oma_shapes", "oma_mac", "step", "impulse")
 MIMO_KINDS = ("mode_shapes", "mac", "frf_matrix_overlay")
 
 
@@ -102,7 +103,7 @@ DOCUMENT_KINDS = {
     "frf_matrix_fit_result": MIMO_KINDS,
     "mode_tracking_result": ("tracking",),
     "mimo_mode_tracking_result": ("tracking",),
-    "oma_result": ("oma_stabilisation",),
+    "oma_result": ("oma_stabilisation", "oma_shapes", "oma_mac"),
 }
 
 
@@ -388,6 +389,14 @@ def run(kind, path, output, title=None, frf=None, against=None, frequency_unit="
     if kind == "oma_stabilisation":
         return plotting.oma_stabilisation(result, title=title, filename=output,
                                           frequency_unit=unit)
+    if kind in ("oma_shapes", "oma_mac"):
+        if result is None or not hasattr(result, "channels"):
+            raise InputError(f"{path}: {kind} draws an oma_result document")
+        if not result.modes:
+            raise InputError(f"{path}: the analysis found no mode")
+        if kind == "oma_shapes":
+            return plotting.oma_mode_shapes(result, title=title, filename=output)
+        return plotting.oma_mac(result, title=title, filename=output)
     if kind == "compare":
         return _compare_figure(path, output, title)
     if kind == "frf_matrix":

@@ -622,7 +622,8 @@ def mode_shapes(result_or_modes, output_names=None, geometry=None, title=None, f
             f"mode {mode.submodel + 1}: f_n = "
             f"{_plus_minus(mode.natural_frequency / hz, mode.natural_frequency_se / hz)} Hz, "
             f"ζ = {_plus_minus(mode.damping_ratio, mode.damping_ratio_se, 4)}\n"
-            f"rank-one share {mode.rank_one_share:.3g}", fontsize=9)
+            + (f"MPC {mode.mpc:.3g}" if hasattr(mode, "mpc")
+               else f"rank-one share {mode.rank_one_share:.3g}"), fontsize=9)
         if geometry is None:
             ax.set_xticks(x)
             ax.set_xticklabels(names, rotation=90 if outputs > 8 else 0,
@@ -758,6 +759,57 @@ def stabilisation(scan, title=None, filename=None, frequency_unit="Hz", ax=None)
     if title:
         ax.set_title(title)
     return _finish(figure, filename)
+
+
+class _OmaModeView:
+    """An output-only mode (ctid.OmaMode, Hz) with the fields mode_shapes and mac_matrix read
+    (rad/s, the complex shape, its standard errors, MPC in place of the rank-one share)."""
+
+    def __init__(self, index, mode):
+        hz = 2.0 * np.pi
+        self.submodel = index
+        self.natural_frequency = hz * mode.frequency_hz
+        std = mode.frequency_hz_std
+        self.natural_frequency_se = hz * std if std is not None else float("nan")
+        self.damping_ratio = mode.damping_ratio
+        self.damping_ratio_se = (mode.damping_ratio_std if mode.damping_ratio_std is not None
+                                 else float("nan"))
+        self.shape = np.asarray(mode.shape_real, dtype=float) + 1j * np.asarray(
+            mode.shape_imag, dtype=float)
+        self.shape_se_real = np.asarray(
+            [float("nan") if v is None else v for v in mode.shape_real_std], dtype=float)
+        self.mpc = mode.mpc
+
+
+def _oma_modes(result, where):
+    modes = [_OmaModeView(i, m) for i, m in enumerate(getattr(result, "modes", []))]
+    if not modes:
+        raise ValueError(f"{where}: the analysis found no mode to draw")
+    return modes
+
+
+def oma_mode_shapes(result, geometry=None, title=None, filename=None):
+    """The mode shapes of an output-only analysis (``ctid.oma``, ``ctid oma -o``), one panel per
+    mode, as :func:`mode_shapes` draws them: the real part with one standard error and the
+    magnitude signed by the phase, over the channels (named by ``result.channels``) or over
+    ``geometry``, one position per channel. Shapes are normalised as every output-only shape
+    (largest entry 1, decision 0030); each panel's title carries f_n, ζ and the MPC. Returns
+    the Figure."""
+    return mode_shapes(_oma_modes(result, "oma_mode_shapes"),
+                       output_names=list(result.channels), geometry=geometry, title=title,
+                       filename=filename)
+
+
+def oma_mac(result, other=None, title=None, filename=None, ax=None):
+    """The auto-MAC of an output-only analysis's modes (``other`` None: well-separated modes
+    give a MAC near the identity), or the MAC between its modes and those of ``other`` (another
+    analysis of the same channels, e.g. a later record). Annotated heat map as
+    :func:`mac_matrix`. Returns the Figure."""
+    rows = _oma_modes(result, "oma_mac")
+    cols = None if other is None else _oma_modes(other, "oma_mac")
+    if other is not None and list(other.channels) != list(result.channels):
+        raise ValueError("oma_mac: the two analyses have different channels")
+    return mac_matrix(rows, cols, title=title, filename=filename, ax=ax)
 
 
 def oma_stabilisation(result, title=None, filename=None, frequency_unit="Hz", ax=None):

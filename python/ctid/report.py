@@ -387,6 +387,13 @@ def _oma_section(path, document):
                    "Stabilisation diagram: the poles of every order and the modes chosen")
         parts.append('<div class="figures">' + _figure_html(
             _figure_uri(plotting.oma_stabilisation(result)), caption) + "</div>")
+    if result.modes:
+        parts.append('<div class="figures">' + _figure_html(
+            _figure_uri(plotting.oma_mode_shapes(result)),
+            "Mode shapes over the channels (real part ± one standard error; the magnitude "
+            "signed by the phase)") + _figure_html(
+            _figure_uri(plotting.oma_mac(result)),
+            "Auto-MAC of the modes: well-separated shapes give the identity") + "</div>")
     return words, "".join(parts)
 
 

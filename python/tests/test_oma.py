@@ -321,3 +321,36 @@ def test_track_output_only_modes_windows_are_the_analysis_of_their_stretch():
     for track, (f, _) in zip(result.tracks, modes):
         assert track.windows_matched >= 4  # a window may miss a mode
         assert track.mean_natural_frequency / (2 * np.pi) == pytest.approx(f, rel=0.01)
+
+
+def test_mode_shape_and_mac_figures_of_an_analysis(tmp_path):
+    """ctid.plotting.oma_mode_shapes draws one panel per mode over the named channels, and
+    oma_mac's image is the auto-MAC of the shapes (1 on the diagonal); python3 -m ctid.plot
+    draws both from the document."""
+    import subprocess
+    import sys
+
+    from ctid import plotting
+
+    y, _ = _record(3)
+    result = ctid.oma(y, H, max_order=16, channel_names=["a", "b", "c"])
+    assert len(result.modes) >= 2
+    figure = plotting.oma_mode_shapes(result, filename=str(tmp_path / "shapes.png"))
+    assert len(figure.axes) == len(result.modes)
+    assert [t.get_text() for t in figure.axes[0].get_xticklabels()] == ["a", "b", "c"]
+    figure = plotting.oma_mac(result)
+    image = figure.axes[0].images[0].get_array()
+    shapes = [np.array(m.shape_real) + 1j * np.array(m.shape_imag) for m in result.modes]
+    expected = [[abs(np.vdot(a, b)) ** 2 / (np.vdot(a, a).real * np.vdot(b, b).real)
+                 for b in shapes] for a in shapes]
+    np.testing.assert_allclose(image, expected, atol=1e-12)
+    document = tmp_path / "oma.json"
+    other = ctid.oma(y[:, :2], H, max_order=16)
+    with pytest.raises(ValueError, match="different channels"):
+        plotting.oma_mac(result, other)
+    ctid.write_result(str(document), result)
+    for kind in ("oma_shapes", "oma_mac"):
+        out = tmp_path / f"{kind}.png"
+        subprocess.run([sys.executable, "-m", "ctid.plot", kind, str(document), str(out)],
+                       check=True)
+        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

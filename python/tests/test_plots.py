@@ -244,8 +244,8 @@ def test_command_line_bad_input_exits_2(tmp_path):
     assert result.stderr.strip() == ("ctid.plot: unknown kind 'nyquist'; expected one of "
                                      "bode, modes, frf, frf_matrix, validation, compare, "
                                      "residuals, mse, stabilisation, mode_shapes, mac, "
-                                     "frf_matrix_overlay, tracking, oma_stabilisation, step, "
-                                     "impulse")
+                                     "frf_matrix_overlay, tracking, oma_stabilisation, "
+                                     "oma_shapes, oma_mac, step, impulse")
     (tmp_path / "bad.json").write_text('{"type": "state_space"}')
     result = run_plot("bode", tmp_path / "bad.json", tmp_path / "x.png")
     assert result.returncode == 2 and '"type" is "state_space"' in result.stderr

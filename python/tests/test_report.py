@@ -161,9 +161,10 @@ def test_a_fit_that_failed_its_verdict_says_why_and_what_to_try(pages, tmp_path)
 
 
 def test_the_oma_page_renders_its_modes_and_stabilisation_diagram(pages):
+    """The diagram, and the modes' shapes and auto-MAC."""
     dom = _rendered(pages["oma_page"])
     marker = re.search(r'images decoded (\d+) of (\d+)', dom)
-    assert marker and marker.group(1) == marker.group(2) == "1"
+    assert marker and marker.group(1) == marker.group(2) == "3"
     text = _text(dom)
     oma = json.loads(pages["oma"].read_text())
     assert "Chain, output only" in text
@@ -229,7 +230,7 @@ def test_an_fdd_page_draws_the_spectrum_and_claims_no_model_orders(tmp_path):
     path = tmp_path / "fdd.json"
     ctid.write_result(path, ctid.oma(y, H, method=ctid.OmaMethod.fdd))
     page = report.render([str(path)])
-    assert page.count('<img src="data:image/png;base64,') == 1
+    assert page.count('<img src="data:image/png;base64,') == 3  # spectrum, shapes, MAC
     assert "picked on it" in page and "Hankel block rows" not in page
 
 

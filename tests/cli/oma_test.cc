@@ -243,6 +243,13 @@ TEST_F(OmaCommand, PlotDrawsTheStabilisationDiagram) {
   EXPECT_EQ(r.status, 3) << r.err;  // no mode: the diagram is drawn all the same
   testing::expect_png(path("figures") / "stabilisation.png");
   EXPECT_THAT(r.out, HasSubstr("wrote figures/stabilisation.png"));
+  EXPECT_FALSE(std::filesystem::exists(path("figures") / "shapes.png"));  // no mode to draw
+  // Modes found: their shapes and auto-MAC beside the diagram.
+  const auto modes = ctid({"oma", two_modes(), "--max-order", "12", "--plot", "found"});
+  EXPECT_EQ(modes.status, 0) << modes.err;
+  for (const char* figure : {"stabilisation.png", "shapes.png", "mac.png"}) {
+    testing::expect_png(path("found") / figure);
+  }
   testing::expect_bad_input(ctid(args), "oma", "stabilisation.png: file exists");
 }
 
