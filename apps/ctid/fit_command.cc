@@ -614,6 +614,24 @@ double parameter_number(const std::string& text, const std::string& entry, const
   return *value;
 }
 
+// "NAME=LOWER:UPPER" (either bound may be empty): the name and the bounds given.
+struct BoundEntry {
+  std::string name;
+  std::optional<double> lower, upper;
+};
+BoundEntry bound_entry(const std::string& entry, const char* flag, const char* form) {
+  const auto [name, text] = parameter_entry(entry, flag, form);
+  const auto colon = text.find(':');
+  if (colon == std::string::npos)
+    usage_error(std::string(flag) + " '" + entry + "': expected " + form);
+  BoundEntry b{name, std::nullopt, std::nullopt};
+  const std::string lo = text.substr(0, colon);
+  const std::string hi = text.substr(colon + 1);
+  if (!lo.empty()) b.lower = parameter_number(lo, entry, flag, form);
+  if (!hi.empty()) b.upper = parameter_number(hi, entry, flag, form);
+  return b;
+}
+
 ProcessParameterSetting& setting_for(ProcessModelOptions& options, const std::string& name) {
   for (ProcessParameterSetting& s : options.parameters) {
     if (s.name == name) return s;
@@ -640,16 +658,11 @@ ProcessModelOptions process_options(const FitFlags& f) {
     s.fixed = true;
   }
   for (const std::string& entry : f.process_bound) {
-    constexpr const char* form = "NAME=LOWER:UPPER (either may be empty), e.g. Tp1=0.1:10";
-    const auto [name, text] = parameter_entry(entry, "--process-bound", form);
-    const auto colon = text.find(':');
-    if (colon == std::string::npos)
-      usage_error("--process-bound '" + entry + "': expected " + form);
-    ProcessParameterSetting& s = setting_for(options, name);
-    const std::string lo = text.substr(0, colon);
-    const std::string hi = text.substr(colon + 1);
-    if (!lo.empty()) s.lower = parameter_number(lo, entry, "--process-bound", form);
-    if (!hi.empty()) s.upper = parameter_number(hi, entry, "--process-bound", form);
+    const BoundEntry b = bound_entry(entry, "--process-bound",
+                                     "NAME=LOWER:UPPER (either may be empty), e.g. Tp1=0.1:10");
+    ProcessParameterSetting& s = setting_for(options, b.name);
+    if (b.lower) s.lower = b.lower;
+    if (b.upper) s.upper = b.upper;
   }
   return options;
 }
@@ -669,15 +682,11 @@ void add_constraints(const FitFlags& f, CoefficientConstraints& constraints) {
     setting(name).fixed = parameter_number(text, entry, "--fix", form);
   }
   for (const std::string& entry : f.bound) {
-    constexpr const char* form = "NAME=LOWER:UPPER (either may be empty), e.g. theta1.a1=0:2";
-    const auto [name, text] = parameter_entry(entry, "--bound", form);
-    const auto colon = text.find(':');
-    if (colon == std::string::npos) usage_error("--bound '" + entry + "': expected " + form);
-    CoefficientSetting& s = setting(name);
-    const std::string lo = text.substr(0, colon);
-    const std::string hi = text.substr(colon + 1);
-    if (!lo.empty()) s.lower = parameter_number(lo, entry, "--bound", form);
-    if (!hi.empty()) s.upper = parameter_number(hi, entry, "--bound", form);
+    const BoundEntry b =
+        bound_entry(entry, "--bound", "NAME=LOWER:UPPER (either may be empty), e.g. theta1.a1=0:2");
+    CoefficientSetting& s = setting(b.name);
+    if (b.lower) s.lower = b.lower;
+    if (b.upper) s.upper = b.upper;
   }
   constraints.dc_gain = f.dc_gain;
 }
