@@ -32,38 +32,17 @@ class OmaCommand : public testing::CliTest {
   }
   // Three channels of two lightly damped resonances (5 and 12 Hz, 2 % damping, each an AR(2)
   // process driven by white noise) plus sensor noise, h = 0.01 s.
-  std::string two_modes() const {
-    std::mt19937_64 rng(10);
-    std::normal_distribution<double> normal;
-    const double h = 0.01;
-    double a[2][2];
-    const double hz[2] = {5.0, 12.0};
-    for (int i = 0; i < 2; ++i) {
-      const double w = 2.0 * 3.141592653589793 * hz[i];
-      const double radius = std::exp(-0.02 * w * h);
-      a[i][0] = 2.0 * radius * std::cos(w * h * std::sqrt(1.0 - 0.02 * 0.02));
-      a[i][1] = -radius * radius;
-    }
-    double x[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
-    std::ostringstream csv;
-    csv << "t,a,b,c\n";
-    for (int k = -500; k < 12000; ++k) {
-      for (int i = 0; i < 2; ++i) {
-        const double next = a[i][0] * x[i][0] + a[i][1] * x[i][1] + normal(rng);
-        x[i][1] = x[i][0];
-        x[i][0] = next;
-      }
-      if (k < 0) continue;
-      csv << k * h << "," << x[0][0] + x[1][0] + 0.3 * normal(rng) << ","
-          << 0.5 * x[0][0] - x[1][0] + 0.3 * normal(rng) << ","
-          << -0.8 * x[0][0] + 0.6 * x[1][0] + 0.3 * normal(rng) << "\n";
-    }
-    return write("two_modes.csv", csv.str());
-  }
-  // One setup of a survey (decision 0059): the 5 and 12 Hz resonances of two_modes, each setup
-  // its own excitation; references a and b as in two_modes, and one roving channel `name`
-  // with the modal amplitudes (c5, c12).
+  std::string two_modes() const { return resonances("two_modes.csv", "c", -0.8, 0.6, 10); }
+  // One setup of a survey (decision 0059): the resonances of two_modes, each setup its own
+  // excitation; references a and b as in two_modes, and one roving channel `name` with the
+  // modal amplitudes (c5, c12).
   std::string setup(const std::string& name, double c5, double c12, unsigned seed) const {
+    return resonances(name + ".csv", name, c5, c12, seed);
+  }
+  // Columns t, a, b and `third`: a = x5 + x12, b = 0.5 x5 - x12, third = c5 x5 + c12 x12, each
+  // with sensor noise of 0.3, x5 and x12 the two resonances.
+  std::string resonances(const std::string& file, const std::string& third, double c5, double c12,
+                         unsigned seed) const {
     std::mt19937_64 rng(seed);
     std::normal_distribution<double> normal;
     const double h = 0.01;
@@ -77,7 +56,7 @@ class OmaCommand : public testing::CliTest {
     }
     double x[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
     std::ostringstream csv;
-    csv << "t,a,b," << name << "\n";
+    csv << "t,a,b," << third << "\n";
     for (int k = -500; k < 12000; ++k) {
       for (int i = 0; i < 2; ++i) {
         const double next = a[i][0] * x[i][0] + a[i][1] * x[i][1] + normal(rng);
@@ -89,7 +68,7 @@ class OmaCommand : public testing::CliTest {
           << 0.5 * x[0][0] - x[1][0] + 0.3 * normal(rng) << ","
           << c5 * x[0][0] + c12 * x[1][0] + 0.3 * normal(rng) << "\n";
     }
-    return write(name + ".csv", csv.str());
+    return write(file, csv.str());
   }
   // Three channels of independent white noise: no resonance.
   std::string white_noise() const {
