@@ -259,13 +259,6 @@ std::optional<OutputErrorPolishResult> polish_and_restart(const SampledData& dat
   return polished;
 }
 
-// Decision 0057: the coefficients the iteration holds, those the constraints determine.
-std::vector<std::pair<Eigen::Index, double>> determined_coefficients(
-    const ModelStructure& structure, const CoefficientConstraints& constraints) {
-  if (constraints.empty()) return {};
-  return held_coefficients(layout_model(structure), constraints);
-}
-
 IdentificationResult identify_records(std::span<const SampledData> records,
                                       const ModelStructure& structure,
                                       const IdentificationOptions& options,
@@ -305,12 +298,14 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   const std::vector<SubmodelOrder>& orders = structure.orders;
   const SampledData& data = records.front();
 
-  const std::vector<std::pair<Eigen::Index, double>> known =
-      determined_coefficients(structure, options.constraints);
-  const std::vector<std::tuple<Eigen::Index, double, double>> bounds =
-      options.constraints.empty()
-          ? std::vector<std::tuple<Eigen::Index, double, double>>{}
-          : bounded_coefficients(layout_model(structure), options.constraints);
+  // Decisions 0057 and 0058: the coefficients the constraints hold or bound in the iteration.
+  std::vector<std::pair<Eigen::Index, double>> known;
+  std::vector<std::tuple<Eigen::Index, double, double>> bounds;
+  if (!options.constraints.empty()) {
+    const AdditiveModel layout = layout_model(structure);
+    known = held_coefficients(layout, options.constraints);
+    bounds = bounded_coefficients(layout, options.constraints);
+  }
   // The estimators of srivc.h, on every record.
   auto run = [&](const RefinedIvOptions& o) {
     RefinedIvProblem problem;

@@ -10,6 +10,7 @@
 
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/oma/ssi_cov.h"
 
 namespace ctid {
 namespace {
@@ -392,15 +393,9 @@ MimoMode as_mimo_mode(const OmaMode& m, int index) {
   out.damping_ratio = m.damping_ratio;
   out.damping_ratio_se = m.damping_ratio_std;
   const auto l = static_cast<Eigen::Index>(m.shape_real.size());
-  out.shape.resize(l);
-  out.shape_se_real.resize(l);
-  out.shape_se_imag.resize(l);
-  for (Eigen::Index j = 0; j < l; ++j) {
-    const auto k = static_cast<std::size_t>(j);
-    out.shape(j) = {m.shape_real[k], m.shape_imag[k]};
-    out.shape_se_real(j) = m.shape_real_std[k];
-    out.shape_se_imag(j) = m.shape_imag_std[k];
-  }
+  out.shape = oma_detail::shape_of(m);
+  out.shape_se_real = Eigen::Map<const Eigen::VectorXd>(m.shape_real_std.data(), l);
+  out.shape_se_imag = Eigen::Map<const Eigen::VectorXd>(m.shape_imag_std.data(), l);
   return out;
 }
 

@@ -21,17 +21,10 @@ namespace oma_detail {
 Eigen::VectorXcd poser_shape(const std::vector<Eigen::VectorXcd>& shapes,
                              const SetupLayout& layout) {
   const std::size_t r = layout.references.front().size();
-  auto reference_part = [&](std::size_t s) {
-    Eigen::VectorXcd part(static_cast<Eigen::Index>(r));
-    for (std::size_t k = 0; k < r; ++k) {
-      part(static_cast<Eigen::Index>(k)) = shapes[s](layout.references[s][k]);
-    }
-    return part;
-  };
-  const Eigen::VectorXcd first = reference_part(0);
+  const Eigen::VectorXcd first = shapes[0](layout.references[0]);
   Eigen::VectorXcd global = Eigen::VectorXcd::Zero(layout.global_channels);
   for (std::size_t s = 0; s < shapes.size(); ++s) {
-    const Eigen::VectorXcd own = reference_part(s);
+    const Eigen::VectorXcd own = shapes[s](layout.references[s]);
     const std::complex<double> alpha = own.dot(first) / own.squaredNorm();  // dot conjugates own
     global.head(static_cast<Eigen::Index>(r)) += alpha * own / static_cast<double>(shapes.size());
     for (std::size_t j = 0; j < layout.roving[s].size(); ++j) {
@@ -116,16 +109,8 @@ SetupLayout setup_layout(const std::vector<OmaSetup>& setups, const MultiSetupOp
 // onto setup 1 is undetermined, so it matches nothing.
 int matching_mode(const OmaMode& anchor, const std::vector<int>& anchor_refs, const OmaResult& r,
                   const std::vector<int>& refs, const MultiSetupOptions& options) {
-  auto reference_part = [](const OmaMode& m, const std::vector<int>& at) {
-    Eigen::VectorXcd part(static_cast<Eigen::Index>(at.size()));
-    for (std::size_t k = 0; k < at.size(); ++k) {
-      const auto j = static_cast<std::size_t>(at[k]);
-      part(static_cast<Eigen::Index>(k)) = {m.shape_real[j], m.shape_imag[j]};
-    }
-    return part;
-  };
   constexpr double kSeen = 1e-3;
-  const Eigen::VectorXcd a = reference_part(anchor, anchor_refs);
+  const Eigen::VectorXcd a = oma_detail::shape_of(anchor)(anchor_refs);
   if (!(a.norm() > kSeen)) return -1;
   int best = -1;
   double best_mac = options.reference_mac;
@@ -134,7 +119,7 @@ int matching_mode(const OmaMode& anchor, const std::vector<int>& anchor_refs, co
     if (std::abs(m.frequency_hz / anchor.frequency_hz - 1.0) > options.frequency_tolerance) {
       continue;
     }
-    const Eigen::VectorXcd b = reference_part(m, refs);
+    const Eigen::VectorXcd b = oma_detail::shape_of(m)(refs);
     if (!(b.norm() > kSeen)) continue;
     const double mac = oma_detail::modal_assurance(a, b);
     if (mac >= best_mac) {
@@ -169,14 +154,6 @@ std::pair<double, double> mean_of_setups(const std::vector<double>& values,
   return {sum / weights, std::sqrt(variance)};
 }
 
-Eigen::VectorXcd shape_of(const OmaMode& m) {
-  Eigen::VectorXcd s(static_cast<Eigen::Index>(m.shape_real.size()));
-  for (std::size_t j = 0; j < m.shape_real.size(); ++j) {
-    s(static_cast<Eigen::Index>(j)) = {m.shape_real[j], m.shape_imag[j]};
-  }
-  return s;
-}
-
 // The merged shape, normalised at its largest entry (decision 0030), and the standard errors
 // of its real and imaginary parts to first order: central differences through the merge in
 // each setup's entries, taken as independent with their reported standard errors (the
@@ -184,7 +161,7 @@ Eigen::VectorXcd shape_of(const OmaMode& m) {
 void merge_shapes(const std::vector<const OmaMode*>& modes, const SetupLayout& layout,
                   OmaMode& out) {
   std::vector<Eigen::VectorXcd> shapes;
-  for (const OmaMode* m : modes) shapes.push_back(shape_of(*m));
+  for (const OmaMode* m : modes) shapes.push_back(oma_detail::shape_of(*m));
   const Eigen::VectorXcd raw = oma_detail::poser_shape(shapes, layout);
   Eigen::Index at = 0;
   raw.cwiseAbs().maxCoeff(&at);
@@ -251,7 +228,7 @@ OmaMode poser_mode(const std::vector<const OmaMode*>& modes, const SetupLayout& 
       multi_setup_detail::mean_of_setups(z, z_se, blocks);
   out.order = modes.front()->order;
   multi_setup_detail::merge_shapes(modes, layout, out);
-  const Eigen::VectorXcd shape = multi_setup_detail::shape_of(out);
+  const Eigen::VectorXcd shape = shape_of(out);
   out.mpc = oma_detail::modal_phase_collinearity(shape);
   out.mpd = oma_detail::mean_phase_deviation(shape);
   return out;

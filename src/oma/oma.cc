@@ -142,14 +142,6 @@ OmaMode make_mode(const oma_detail::PoleCluster& cluster, const std::vector<Orde
   return m;
 }
 
-Eigen::VectorXcd shape_of(const OmaMode& m) {
-  Eigen::VectorXcd s(static_cast<Eigen::Index>(m.shape_real.size()));
-  for (Eigen::Index j = 0; j < s.size(); ++j) {
-    s(j) = {m.shape_real[static_cast<std::size_t>(j)], m.shape_imag[static_cast<std::size_t>(j)]};
-  }
-  return s;
-}
-
 // The modes: clusters with enough supporting orders, and for each user frequency the nearest
 // cluster (any size) within kNearTolerance; reasons for the verdict when one is missing.
 std::vector<OmaMode> pick_modes(const std::vector<oma_detail::PoleCluster>& clusters,
@@ -222,7 +214,7 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
   for (const oma_detail::SsiFactor& factor : factors) {
     for (std::size_t i = 0; i < m; ++i) {
       const auto poles = oma_detail::ssi_poles(factor, modes[i].order, h, o.max_damping);
-      const Eigen::VectorXcd ref = shape_of(modes[i]);
+      const Eigen::VectorXcd ref = oma_detail::shape_of(modes[i]);
       const ModalPole* best = nullptr;
       double best_d = 0.0;
       for (const ModalPole& q : poles) {
@@ -517,5 +509,17 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
                        " block rows", lag_note, ")", error_note);
   return result;
 }
+
+namespace oma_detail {
+
+Eigen::VectorXcd shape_of(const OmaMode& m) {
+  Eigen::VectorXcd s(static_cast<Eigen::Index>(m.shape_real.size()));
+  for (Eigen::Index j = 0; j < s.size(); ++j) {
+    s(j) = {m.shape_real[static_cast<std::size_t>(j)], m.shape_imag[static_cast<std::size_t>(j)]};
+  }
+  return s;
+}
+
+}  // namespace oma_detail
 
 }  // namespace ctid

@@ -11,6 +11,10 @@
 
 #include <Eigen/Core>
 
+namespace ctid {
+struct OmaMode;  // oma.h
+}  // namespace ctid
+
 namespace ctid::oma_detail {
 
 /// R_1..R_max_lag (each l x r) of the mean-removed N x l record, biased estimate (sum / N).
@@ -61,6 +65,8 @@ std::vector<ModalPole> ssi_poles(const SsiFactor& factor, int order, double samp
 
 /// Decision 0030: rotate and scale so the entry of largest modulus is exactly 1.
 Eigen::VectorXcd normalise_shape(const Eigen::VectorXcd& shape);
+/// A mode's shape as one complex vector, shape_real + i shape_imag.
+Eigen::VectorXcd shape_of(const OmaMode& mode);
 /// |a^H b|^2 / (|a|^2 |b|^2).
 double modal_assurance(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b);
 /// Modal phase collinearity (1 for a real shape).
