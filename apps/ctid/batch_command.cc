@@ -1,7 +1,8 @@
-// `ctid batch`: runs `ctid fit` on many records (a JSON or CSV manifest, or a glob with one
-// shared spec) and writes one result document per record and a summary table. The spec is
-// fit's own flags (a JSON object keyed by fit's long flag names); each record runs exactly
-// `ctid fit DATA <flags> --output OUT/<name>.json --quiet` as a child process of this one
+// `ctid batch`: runs `ctid fit` (or `ctid oma`, --output-only) on many records (a JSON or CSV
+// manifest, or a glob with one shared spec) and writes one result document per record and a
+// summary table. The spec is the command's own flags (a JSON object keyed by its long flag
+// names); each record runs exactly `ctid fit DATA <flags> --output OUT/<name>.json --quiet` (or
+// `ctid oma ...`) as a child process of this one
 // (decision 0023: the fit prints on the process's std::cerr and a crash on one file must not
 // end the batch), on --jobs worker threads. Finished records are skipped on a rerun (resume);
 // a failed record leaves OUT/<name>.error.json. --scheduler hands the batch to the Python
@@ -61,9 +62,14 @@ struct BatchFlags {
   bool summarize = false;
   std::string scheduler;
   bool quiet = false;
+  bool output_only = false;
 };
 
-// fit's flags that the batch sets itself (or that write files the batch does not manage).
+// The command each record runs: fit, or oma for output-only records (decision 0061).
+std::string record_command(const BatchFlags& f) { return f.output_only ? "oma" : "fit"; }
+
+// The record command's flags that the batch sets itself (or that write files the batch does not
+// manage).
 const std::map<std::string, std::string>& reserved_flags() {
   static const std::map<std::string, std::string> reserved{
       {"output", "the batch writes OUT/<name>.json (--out)"},
@@ -79,8 +85,8 @@ const std::map<std::string, std::string>& reserved_flags() {
 // One record of the manifest with its settings merged over the shared spec.
 struct Task {
   std::string name;
-  std::vector<std::string> data;  // as passed to ctid fit
-  std::vector<std::string> args;  // after the executable: "fit", DATA..., flags
+  std::vector<std::string> data;  // as passed to ctid fit (or oma)
+  std::vector<std::string> args;  // after the executable: "fit" (or "oma"), DATA..., flags
   std::string output;             // OUT/<name>.json
   std::string error_output;       // OUT/<name>.error.json
   std::string context;            // where the record is in the manifest, for messages
@@ -90,15 +96,16 @@ struct Task {
 using FlagValue = io::ManifestValue;
 using FlagSet = io::ManifestSettings;
 
-// The subcommand `fit` on a scratch app, to check flag names against.
+// The subcommand the records run (`fit` or `oma`) on a scratch app, to check flag names against.
 class FitFlagsReference {
  public:
-  FitFlagsReference() {
+  explicit FitFlagsReference(const std::string& command) : name_(command) {
     for (const CommandRegistration& registration : registered_commands()) {
       commands_.push_back(registration.factory(app_));
     }
-    fit_ = app_.get_subcommand("fit");
+    fit_ = app_.get_subcommand(command);
   }
+  const std::string& name() const { return name_; }
   const CLI::App& fit() const { return *fit_; }
   const CLI::Option* option(const std::string& key) const {
     const CLI::Option* option = fit_->get_option_no_throw("--" + key);
@@ -106,6 +113,7 @@ class FitFlagsReference {
   }
 
  private:
+  std::string name_;
   CLI::App app_;
   std::vector<Command> commands_;  // own the storage the flags are bound to
   CLI::App* fit_ = nullptr;
@@ -189,8 +197,9 @@ void check_flag_name(const FitFlagsReference& fit, const std::string& key,
       for (auto dashes = hint.find("--"); dashes != std::string::npos; dashes = hint.find("--"))
         hint.erase(dashes, 2);
     }
-    usage_error(context + ": field '" + key + "' is not a ctid fit flag" +
-                (hint.empty() ? " (see 'ctid fit --help')" : "; " + hint));
+    const std::string command = "ctid " + fit.name();
+    usage_error(context + ": field '" + key + "' is not a " + command + " flag" +
+                (hint.empty() ? " (see '" + command + " --help')" : "; " + hint));
   }
 }
 
@@ -280,12 +289,12 @@ void check_outputs_are_not_inputs(const BatchFlags& f, const std::vector<Task>& 
   }
 }
 
-// The flags of every record parsed as `ctid fit` parses them (a value that is not a number,
-// not one of a flag's choices, a controller file that does not exist), so that a bad spec is
-// one usage error before anything runs rather than the same failure for every record. Each
+// The flags of every record parsed as `ctid fit` (or oma) parses them (a value that is not a
+// number, not one of a flag's choices, a controller file that does not exist), so that a bad spec
+// is one usage error before anything runs rather than the same failure for every record. Each
 // distinct set of flags is parsed once; a record whose data file is missing is left to fail
 // on its own.
-void check_flag_values(const std::vector<Task>& tasks) {
+void check_flag_values(const std::vector<Task>& tasks, const std::string& command) {
   std::set<std::vector<std::string>> checked;
   for (const Task& task : tasks) {
     std::error_code ignored;
@@ -301,20 +310,20 @@ void check_flag_values(const std::vector<Task>& tasks) {
     for (const CommandRegistration& registration : registered_commands()) {
       commands.push_back(registration.factory(top));
     }
-    std::vector<std::string> words{"fit", task.data.front()};
+    std::vector<std::string> words{command, task.data.front()};
     words.insert(words.end(), flags.begin(), flags.end());
     std::reverse(words.begin(), words.end());  // CLI11 takes the arguments last first
     try {
       top.parse(words);
     } catch (const CLI::ParseError& e) {
-      usage_error(task.context + ": the flags are not valid for ctid fit: " + e.what());
+      usage_error(task.context + ": the flags are not valid for ctid " + command + ": " + e.what());
     }
   }
 }
 
 // The manifest as tasks, in manifest order.
 std::vector<Task> expand(const BatchFlags& f) {
-  const FitFlagsReference fit;
+  const FitFlagsReference fit(record_command(f));
   if (f.manifest.empty() == f.glob_pattern.empty()) {
     usage_error("give a manifest (MANIFEST.json or MANIFEST.csv) or --glob PATTERN, not both");
   }
@@ -346,7 +355,7 @@ std::vector<Task> expand(const BatchFlags& f) {
     task.error_output = join_path(f.out, task.name + ".error.json");
     FlagSet merged = spec;
     for (const auto& [key, value] : entry.settings) merged[key] = value;
-    task.args.push_back("fit");
+    task.args.push_back(fit.name());
     task.args.insert(task.args.end(), task.data.begin(), task.data.end());
     for (const auto& [key, value] : merged) {
       const auto words = flag_words(key, value, *fit.option(key), entry.context);
@@ -357,7 +366,7 @@ std::vector<Task> expand(const BatchFlags& f) {
     task.context = entry.context;
     tasks.push_back(std::move(task));
   }
-  check_flag_values(tasks);
+  check_flag_values(tasks, fit.name());
   check_outputs_are_not_inputs(f, tasks);
   return tasks;
 }
@@ -381,7 +390,7 @@ ChildResult run_child(const std::vector<std::string>& command,
   for (std::string& word : words) argv.push_back(word.data());
   argv.push_back(nullptr);
   int pipe_fds[2];
-  if (::pipe2(pipe_fds, O_CLOEXEC) != 0) throw io::IoError("cannot create a pipe for ctid fit");
+  if (::pipe2(pipe_fds, O_CLOEXEC) != 0) throw io::IoError("cannot create a pipe for a record");
   const int null_fd = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
   const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
@@ -389,7 +398,7 @@ ChildResult run_child(const std::vector<std::string>& command,
     ::close(pipe_fds[0]);
     ::close(pipe_fds[1]);
     if (null_fd >= 0) ::close(null_fd);
-    throw io::IoError("cannot start ctid fit (fork failed)");
+    throw io::IoError("cannot start a record (fork failed)");
   }
   if (pid == 0) {
     // Only async-signal-safe calls between fork and exec.
@@ -420,8 +429,9 @@ ChildResult run_child(const std::vector<std::string>& command,
   return result;
 }
 
-// The message of a failed fit: its "ctid fit: error: ..." line, else its last line.
-std::string failure_message(const ChildResult& child) {
+// The message of a failed record (`command`: "ctid fit" or "ctid oma"): its "ctid fit: error: ..."
+// line, else its last line.
+std::string failure_message(const ChildResult& child, const std::string& command) {
   std::string last;
   std::string error_line;
   std::size_t at = 0;
@@ -430,16 +440,17 @@ std::string failure_message(const ChildResult& child) {
     std::string line = child.err.substr(at, stop - at);
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (!line.empty()) last = line;
-    if (line.rfind("ctid fit: error: ", 0) == 0) error_line = line;
+    if (line.rfind(command + ": error: ", 0) == 0) error_line = line;
     at = stop + 1;
   }
   if (!error_line.empty()) return error_line;
   if (child.exit_status > 128) {
-    return "ctid fit was ended by signal " + std::to_string(child.exit_status - 128) +
+    return command + " was ended by signal " + std::to_string(child.exit_status - 128) +
            (last.empty() ? "" : " (" + last + ")");
   }
   if (!last.empty()) return last;
-  return "ctid fit ended with exit status " + std::to_string(child.exit_status) + " and no message";
+  return command + " ended with exit status " + std::to_string(child.exit_status) +
+         " and no message";
 }
 
 void remove_file(const std::string& path) {
@@ -458,12 +469,13 @@ double run_task(const std::vector<std::string>& command, const Task& task) {
   if ((child.exit_status == kExitOk || child.exit_status == kExitNoUsableModel) && wrote) {
     return seconds;
   }
-  const json error = {
-      {"type", "ctid_batch_error"},
-      {"record", task.name},
-      {"message", wrote || child.exit_status != kExitOk ? failure_message(child)
-                                                        : "ctid fit wrote no result document"},
-      {"exit_status", child.exit_status}};
+  const std::string record_command = "ctid " + task.args.front();
+  const json error = {{"type", "ctid_batch_error"},
+                      {"record", task.name},
+                      {"message", wrote || child.exit_status != kExitOk
+                                      ? failure_message(child, record_command)
+                                      : record_command + " wrote no result document"},
+                      {"exit_status", child.exit_status}};
   io::write_text_file(task.error_output, io::json_text(error) + "\n", io::Overwrite::yes);
   return seconds;
 }
@@ -519,6 +531,7 @@ ExitStatus run_on_scheduler(const BatchFlags& f) {
   if (f.force) args.push_back("--force");
   if (f.strict) args.push_back("--strict");
   if (f.quiet) args.push_back("--quiet");
+  if (f.output_only) args.push_back("--output-only");
   ::setenv("PYTHONPATH", package.string().c_str(), 1);
   // The records run with this executable; from python3 -m ctid, the runner's own default.
   if (const std::vector<std::string> self = self_command(); self.size() == 1) {
@@ -617,13 +630,14 @@ Command add_batch_command(CLI::App& parent) {
   BatchFlags& f = *flags;
   CLI::App* app = parent.add_subcommand(
       "batch",
-      "Run ctid fit on many records (a manifest or a glob) and write one result per record and "
-      "a summary table; resumable, one bad file never stops the batch.");
+      "Run ctid fit (or ctid oma: --output-only) on many records (a manifest or a glob) and "
+      "write one result per record and a summary table; resumable, one bad file never stops the "
+      "batch.");
   app->footer(
       "Manifest: JSON {\"spec\": {FLAGS}, \"records\": [{\"name\": N, \"data\": FILE, FLAGS}]} "
-      "or CSV with a header name,data,<flag>...; FLAGS are ctid fit's long flags without dashes "
-      "({\"modes\": 2, \"detrend\": \"linear\", \"history\": true}). Relative data paths are "
-      "taken from the manifest's folder.\n"
+      "or CSV with a header name,data,<flag>...; FLAGS are ctid fit's (--output-only: ctid oma's) "
+      "long flags without dashes ({\"modes\": 2, \"detrend\": \"linear\", \"history\": true}). "
+      "Relative data paths are taken from the manifest's folder.\n"
       "Outputs in --out DIR: <name>.json (what 'ctid fit DATA FLAGS -o' writes), "
       "<name>.error.json for a record that failed, summary.csv and summary.json. A rerun skips "
       "finished records.\n"
@@ -634,7 +648,7 @@ Command add_batch_command(CLI::App& parent) {
       ->check(CLI::ExistingFile);
   app->add_option("--glob", f.glob_pattern,
                   "Fit every file matching this pattern (quote it) with the --spec flags");
-  app->add_option("--spec", f.spec, "JSON object of ctid fit flags shared by every record")
+  app->add_option("--spec", f.spec, "JSON object of ctid fit (or oma) flags shared by every record")
       ->check(CLI::ExistingFile);
   app->add_option("--out,-o", f.out, "Folder for the results (created if missing)")->required();
   app->add_option("--jobs,-j", f.jobs, "Records fitted at once (0: every core)")
@@ -643,7 +657,10 @@ Command add_batch_command(CLI::App& parent) {
   app->add_flag("--retry-failed", f.retry_failed, "Run again the records that failed before");
   app->add_flag("--force", f.force, "Run every record again and replace its result");
   app->add_flag("--strict", f.strict, "Exit 1 if any record failed, 3 if any has no usable model");
-  app->add_flag("--plan", f.plan, "Print the records' ctid fit commands as JSON and run nothing");
+  app->add_flag("--plan", f.plan, "Print the records' ctid commands as JSON and run nothing");
+  app->add_flag("--output-only", f.output_only,
+                "Records without a measured input: each runs ctid oma (its flags in the spec) "
+                "instead of ctid fit");
   app->add_flag("--summarize", f.summarize,
                 "Only rebuild summary.csv and summary.json from the documents in --out");
   app->add_option("--scheduler", f.scheduler,

@@ -1,11 +1,15 @@
 """Many ``ctid fit`` runs, locally or on a Dask cluster: the Python twin of ``ctid batch``.
 
     fit_many(records, spec=None, *, out_dir, client=None, jobs=None,
-             ctid_executable=None, retry_failed=False, force=False) -> list[dict]
+             ctid_executable=None, retry_failed=False, force=False,
+             output_only=False) -> list[dict]
 
     /usr/bin/python3 -m ctid.batch MANIFEST --out DIR [--scheduler ADDRESS] [--jobs N]
                                    [--spec SPEC.json] [--glob PATTERN] [--retry-failed]
-                                   [--force] [--strict] [--quiet]
+                                   [--force] [--strict] [--quiet] [--output-only]
+
+With ``output_only`` (``--output-only``) every record runs ``ctid oma`` instead of ``ctid fit``,
+the spec holding oma's flags (decision 0061); everything else is the same.
 
 The manifest is read in one place, ctid's C++ command line, which this package holds
 (decision 0052): ``ctid batch ... --plan``, run inside this process, gives the records' ``ctid
@@ -167,7 +171,7 @@ def _run_batch_command(args):
     return completed
 
 
-def plan(records, spec=None, *, out_dir, retry_failed=False, force=False):
+def plan(records, spec=None, *, out_dir, retry_failed=False, force=False, output_only=False):
     """The tasks of a batch as ``ctid batch ... --plan`` gives them: dicts with name, data,
     args (after the executable), output, error_output and done (finished before)."""
     with tempfile.TemporaryDirectory(prefix="ctid-batch-") as scratch:
@@ -177,6 +181,8 @@ def plan(records, spec=None, *, out_dir, retry_failed=False, force=False):
             args.append("--retry-failed")
         if force:
             args.append("--force")
+        if output_only:
+            args.append("--output-only")
         completed = _run_batch_command(args)
     return _tasks_of(completed.stdout)
 
@@ -195,24 +201,25 @@ def _tasks_of(plan_text):
     return tasks
 
 
-def _failure_message(stderr, exit_status):
-    """The message of a failed fit, worded as ctid batch words it (batch_command.cc)."""
+def _failure_message(stderr, exit_status, command="ctid fit"):
+    """The message of a failed record (`command`: "ctid fit" or "ctid oma"), worded as ctid
+    batch words it (batch_command.cc)."""
     last = ""
     error_line = ""
     for line in stderr.split("\n"):
         line = line.rstrip("\r")
         if line:
             last = line
-        if line.startswith("ctid fit: error: "):
+        if line.startswith(f"{command}: error: "):
             error_line = line
     if error_line:
         return error_line
     if exit_status > 128:
-        return (f"ctid fit was ended by signal {exit_status - 128}" +
+        return (f"{command} was ended by signal {exit_status - 128}" +
                 (f" ({last})" if last else ""))
     if last:
         return last
-    return f"ctid fit ended with exit status {exit_status} and no message"
+    return f"{command} ended with exit status {exit_status} and no message"
 
 
 def _write_json_atomically(path, value):
@@ -272,8 +279,9 @@ def run_task(task, executable=None, cwd=None):
         status = completed.returncode if completed.returncode >= 0 else 128 - completed.returncode
         wrote = (workdir / task["output"]).exists()
         if status not in (0, 3) or not wrote:
-            message = (_failure_message(completed.stderr, status) if wrote or status != 0
-                       else "ctid fit wrote no result document")
+            record_command = f"ctid {task['args'][0]}"  # fit, or oma for output-only records
+            message = (_failure_message(completed.stderr, status, record_command)
+                       if wrote or status != 0 else f"{record_command} wrote no result document")
             error = {"type": "ctid_batch_error", "record": task["name"], "message": message,
                      "exit_status": status}
     except Exception as exc:  # noqa: BLE001 - a record's failure never stops the batch
@@ -374,7 +382,7 @@ def _run_all(tasks, executable, client, jobs):
 
 
 def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, force, strict,
-           glob=False):
+           glob=False, output_only=False):
     executable = find_executable(ctid_executable)
     out_dir = os.fspath(out_dir)
     # The same rules as `ctid batch`, said before any work: a file is not a folder, and a job
@@ -387,6 +395,8 @@ def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, 
                          "every core)")
     with tempfile.TemporaryDirectory(prefix="ctid-batch-") as scratch:
         source = _source_arguments(records, spec, scratch, glob)
+        if output_only:  # the records run ctid oma, and the spec is checked against its flags
+            source.append("--output-only")
         flags = (["--retry-failed"] if retry_failed else []) + (["--force"] if force else [])
         planned = _tasks_of(_run_batch_command([*source, "--out", out_dir, "--plan", *flags]).stdout)
         os.makedirs(out_dir, exist_ok=True)
@@ -404,7 +414,7 @@ def _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, 
 
 
 def fit_many(records, spec=None, *, out_dir, client=None, jobs=None, ctid_executable=None,
-             retry_failed=False, force=False):
+             retry_failed=False, force=False, output_only=False):
     """Fits every record with ``ctid fit`` and returns the summary rows (dicts: name, data,
     status ok | no_usable_model | failed, usable, fit_percent, estimator, modes, seconds,
     message).
@@ -414,7 +424,9 @@ def fit_many(records, spec=None, *, out_dir, client=None, jobs=None, ctid_execut
     directory's. spec: fit flags shared by every record (a dict or a JSON file). client: a
     ``distributed.Client`` to run the records on; else ``jobs`` local threads (default every
     core; 1 runs them one after another). Finished records in out_dir are skipped unless
-    ``force``; failed ones are run again with ``retry_failed``.
+    ``force``; failed ones are run again with ``retry_failed``. output_only: records without a
+    measured input; each runs ``ctid oma`` with oma's flags (the estimator column is the
+    method, the modes are the output-only modes).
 
     A worker lost mid-record is Dask's to handle (the record runs again elsewhere; its fit
     ends with the worker). A cluster that stops running the batch (its scheduler lost) raises
@@ -422,7 +434,7 @@ def fit_many(records, spec=None, *, out_dir, client=None, jobs=None, ctid_execut
     document, so calling fit_many again fits only them.
     """
     rows, _ = _batch(records, spec, out_dir, client, jobs, ctid_executable, retry_failed, force,
-                     strict=False)
+                     strict=False, output_only=output_only)
     return rows
 
 
@@ -443,6 +455,8 @@ def main(argv=None):
     parser.add_argument("--force", action="store_true")
     parser.add_argument("--strict", action="store_true")
     parser.add_argument("--quiet", "-q", action="store_true")
+    parser.add_argument("--output-only", action="store_true",
+                        help="records without a measured input: each runs ctid oma")
     parser.add_argument("--ctid", dest="ctid_executable",
                         help="a ctid executable for the records (default: python3 -m ctid)")
     options = parser.parse_args(argv)
@@ -471,7 +485,8 @@ def main(argv=None):
                 return 1
         rows, status = _batch(records, options.spec, options.out, client, options.jobs,
                               options.ctid_executable, options.retry_failed, options.force,
-                              options.strict, glob=options.glob is not None)
+                              options.strict, glob=options.glob is not None,
+                              output_only=options.output_only)
     except ValueError as exc:
         print(f"ctid.batch: error: {exc}", file=sys.stderr)
         return 2

@@ -354,3 +354,36 @@ def test_mode_shape_and_mac_figures_of_an_analysis(tmp_path):
         subprocess.run([sys.executable, "-m", "ctid.plot", kind, str(document), str(out)],
                        check=True)
         assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_fit_many_output_only_runs_oma_on_every_record(tmp_path):
+    """ctid.batch.fit_many(output_only=True) (decision 0061): each record runs ctid oma with the
+    spec's flags; a summary row's modes are ctid.oma's of the same samples, a record without a
+    resonance has no usable model, and a fit flag in the spec is refused."""
+    import ctid.batch
+
+    records = []
+    for seed in (61, 62):
+        y, _ = _record(seed, samples=12000)
+        file = tmp_path / f"r{seed}.csv"
+        np.savetxt(file, y, delimiter=",", header="a,b,c", comments="", fmt="%.17g")
+        records.append((file, y))
+    noise = np.random.default_rng(63).standard_normal((4000, 3))
+    np.savetxt(tmp_path / "noise.csv", noise, delimiter=",", header="a,b,c", comments="",
+               fmt="%.17g")
+    spec = {"sample-time": H, "max-order": 16, "block-rows": 20}
+    rows = ctid.batch.fit_many(str(tmp_path / "*.csv"), spec, out_dir=tmp_path / "out", jobs=2,
+                               output_only=True)
+    by_name = {row["name"]: row for row in rows}
+    assert by_name["noise"]["status"] == "no_usable_model"
+    for file, y in records:
+        row = by_name[file.stem]
+        assert row["status"] == "ok" and row["estimator"] == "ssi-cov"
+        direct = ctid.oma(y, H, max_order=16, block_rows=20)
+        assert [m["frequency_hz"] for m in row["modes"]] == \
+            pytest.approx([m.frequency_hz for m in direct.modes], rel=1e-12)
+        assert [m["damping_se"] for m in row["modes"]] == \
+            pytest.approx([m.damping_ratio_std for m in direct.modes], rel=1e-9)
+    with pytest.raises(ValueError, match="field 'modes' is not a ctid oma flag"):
+        ctid.batch.fit_many(str(tmp_path / "r*.csv"), {"modes": 2}, out_dir=tmp_path / "no",
+                            output_only=True)

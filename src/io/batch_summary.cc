@@ -62,14 +62,25 @@ struct SummaryRow {
   json modes = json::array();    // {frequency_hz, frequency_se_hz, damping, damping_se}
 };
 
-// The modes of a fit document: a SISO fit gives them in Hz, a MIMO one (MimoMode) in rad/s.
-json summary_modes(const json& document, bool mimo) {
+// The kinds of document whose modes the summary reads.
+enum class ModeSource { siso, mimo, output_only };
+
+// The modes of a document: a SISO fit gives them in Hz, a MIMO one (MimoMode) in rad/s, an
+// output-only one (OmaMode) in Hz with *_std standard errors.
+json summary_modes(const json& document, ModeSource source) {
   json rows = json::array();
   const auto modes = document.find("modes");
   if (modes == document.end() || !modes->is_array()) return rows;
   for (const json& mode : *modes) {
     if (!mode.is_object()) continue;
-    if (mimo) {
+    if (source == ModeSource::output_only) {
+      rows.push_back({{"frequency_hz", summary_number(mode, "frequency_hz")},
+                      {"frequency_se_hz", summary_number(mode, "frequency_hz_std")},
+                      {"damping", summary_number(mode, "damping_ratio")},
+                      {"damping_se", summary_number(mode, "damping_ratio_std")}});
+      continue;
+    }
+    if (source == ModeSource::mimo) {
       const auto hz = [&](const char* key) {
         const json value = summary_number(mode, key);
         return value.is_null() ? value : json(value.get<double>() / (2.0 * std::numbers::pi));
@@ -97,7 +108,11 @@ void fill_from_document(SummaryRow& row, const json& document) {
   row.fields["usable"] = usable;
   row.fields["fit_percent"] = summary_number(document, "fit_percent");
   if (document.contains("estimator")) row.fields["estimator"] = document["estimator"];
-  const bool mimo = document.value("type", "") == "mimo_estimation_result";
+  const std::string type = document.value("type", "");
+  const bool mimo = type == "mimo_estimation_result";
+  if (type == "oma_result" && document.contains("method")) {
+    row.fields["estimator"] = document["method"];  // ssi-cov, ssi-data, fdd, efdd
+  }
   if (mimo) {
     // Several outputs: one fit per output, reported as their mean.
     row.fields["estimator"] = "mimo_srivc";
@@ -122,7 +137,9 @@ void fill_from_document(SummaryRow& row, const json& document) {
     }
     row.fields["message"] = reasons;
   }
-  row.modes = summary_modes(document, mimo);
+  row.modes = summary_modes(document, mimo                   ? ModeSource::mimo
+                                      : type == "oma_result" ? ModeSource::output_only
+                                                             : ModeSource::siso);
 }
 
 SummaryRow summary_row(const BatchRecordFiles& record, const std::map<std::string, double>& times) {
@@ -141,7 +158,7 @@ SummaryRow summary_row(const BatchRecordFiles& record, const std::map<std::strin
   if (fs::exists(record.output)) {
     const std::optional<json> document = read_json_if_readable(record.output);
     if (!document || !document->is_object() || !document->contains("verdict")) {
-      row.fields["message"] = record.output + " is not a ctid fit result document";
+      row.fields["message"] = record.output + " is not a ctid result document";
       return row;
     }
     fill_from_document(row, *document);

@@ -5,6 +5,7 @@
 #include <complex>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 #include <string>
@@ -16,6 +17,7 @@
 
 #include "cli/run_ctid.h"
 #include "ctid/io/documents.h"
+#include "ctid/io/file.h"
 #include "ctid/io/json.h"
 #include "support/sanitizers.h"
 
@@ -301,6 +303,58 @@ TEST_F(OmaCommand, TrackOutputOnlyFollowsTheModesThroughTheWindows) {
   testing::expect_bad_input(ctid({"track", data, "--output-only", "--output-columns", "a:c",
                                   "--window", "40", "--reference-columns", "d"}),
                             "track", "--reference-columns names 'd'");
+}
+
+// `ctid batch --output-only` (decision 0061): every record runs ctid oma with the spec's flags;
+// a document is the bytes a single `ctid oma -o` writes, the summary has the modes, a record
+// without a resonance is "no usable model" and a malformed one fails alone.
+TEST_F(OmaCommand, BatchOutputOnlyRunsOmaOnEveryRecord) {
+  std::filesystem::create_directories(path("records"));
+  resonances("records/r1.csv", "c", -0.8, 0.6, 10);
+  resonances("records/r2.csv", "c", 0.4, -1.1, 11);
+  std::filesystem::rename(white_noise(), path("records/noise.csv"));
+  write("records/bad.csv", "t,a,b,c\n0,1,2\n");
+  write("spec.json", R"({"output-columns": "a:c", "max-order": 20, "block-rows": 20})");
+  const auto r = ctid({"batch", "--output-only", "--glob", path("records/*.csv").string(), "--spec",
+                       path("spec.json").string(), "-o", path("out").string(), "-j", "2", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json summary = io::read_json(path("out/summary.json"));
+  std::map<std::string, nlohmann::json> rows;
+  for (const nlohmann::json& row : summary["records"]) rows[row["name"]] = row;
+  ASSERT_EQ(rows.size(), 4u) << summary.dump();
+  for (const char* name : {"r1", "r2"}) {
+    const nlohmann::json& row = rows[name];
+    EXPECT_EQ(row["status"], "ok") << row.dump();
+    EXPECT_EQ(row["estimator"], "ssi-cov");
+    ASSERT_EQ(row["modes"].size(), 2u) << row.dump();
+    for (int m = 0; m < 2; ++m) {
+      const nlohmann::json& mode = row["modes"][m];
+      EXPECT_NEAR(mode["frequency_hz"].get<double>(), m == 0 ? 5.0 : 12.0, 0.05) << name;
+      EXPECT_NEAR(mode["damping"].get<double>(), 0.02, 0.01) << name;
+      EXPECT_GT(mode["frequency_se_hz"].get<double>(), 0.0) << name;
+      EXPECT_GT(mode["damping_se"].get<double>(), 0.0) << name;
+    }
+  }
+  EXPECT_EQ(rows["noise"]["status"], "no_usable_model");
+  EXPECT_THAT(rows["noise"]["message"].get<std::string>(), HasSubstr("no mode found"));
+  EXPECT_EQ(rows["bad"]["status"], "failed");
+  EXPECT_THAT(rows["bad"]["message"].get<std::string>(), HasSubstr("ctid oma: error: "));
+  const auto single = ctid({"oma", path("records/r1.csv").string(), "--output-columns", "a:c",
+                            "--max-order", "20", "--block-rows", "20", "-o", "single.json", "-q"});
+  ASSERT_EQ(single.status, 0) << single.err;
+  EXPECT_TRUE(io::read_text_file(path("out/r1.json").string()) ==
+              io::read_text_file(path("single.json").string()))
+      << "out/r1.json differs from the single ctid oma document";
+  // The plan names ctid oma; a fit flag in the spec is refused before anything runs.
+  const auto plan = ctid({"batch", "--output-only", "--glob", path("records/r*.csv").string(),
+                          "--spec", path("spec.json").string(), "-o", "planned", "--plan"});
+  ASSERT_EQ(plan.status, 0) << plan.err;
+  EXPECT_EQ(nlohmann::json::parse(plan.out)[0]["args"][0], "oma");
+  write("fit_spec.json", R"({"output-columns": "a:c", "modes": 2})");
+  testing::expect_bad_input(
+      ctid({"batch", "--output-only", "--glob", path("records/r*.csv").string(), "--spec",
+            path("fit_spec.json").string(), "-o", "refused"}),
+      "batch", "field 'modes' is not a ctid oma flag");
 }
 
 TEST_F(OmaCommand, BadUsageNamesTheFlag) {

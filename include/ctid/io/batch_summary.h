@@ -42,8 +42,8 @@ void record_batch_timings(const std::string& out_dir, const std::map<std::string
 
 /// Writes `out_dir`/summary.csv and summary.json for `records` (in their order) and returns the
 /// counts. Each row: name, data, status (ok | no_usable_model | failed | not_run), usable,
-/// fit_percent, estimator, the modes' frequency (Hz), damping and their standard errors,
-/// seconds, message (the reasons of a verdict, or the error).
+/// fit_percent, estimator (an output-only record: its method), the modes' frequency (Hz),
+/// damping and their standard errors, seconds, message (the reasons of a verdict, or the error).
 BatchCounts write_batch_summary(const std::string& out_dir,
                                 const std::vector<BatchRecordFiles>& records);
 
