@@ -4,8 +4,8 @@
 // output spectral matrix's first singular value (fdd, efdd) (ctid::identify_output_only, the front
 // door of ctid::oma: identification/output_only.h; docs/oma.md).
 // Several files are setups of one structure with shared --reference-columns, merged by PoSER
-// (oma/multi_setup.h). Prints the modes and the verdict; -o writes an "oma_result" document.
-// Exit 3 when no mode was found.
+// or PreGER (oma/multi_setup.h). Prints the modes and the verdict; -o writes an "oma_result"
+// document. Exit 3 when no mode was found.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -102,11 +102,16 @@ void print_summary(const OmaFlags& f, const OmaResult& r,
   if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
 }
 
-// The figures --plot DIR may draw: stabilisation.png (with several setups one per setup), and
-// shapes.png and mac.png of the modes found.
+// Several setups merged by PreGER: one global stabilisation diagram of its own.
+bool global_diagram(const OmaFlags& f) {
+  return f.files.size() > 1 && parse_enum_word<OmaMerge>("--merge", f.merge) == OmaMerge::preger;
+}
+
+// The figures --plot DIR may draw: stabilisation.png (with several setups one per setup, and
+// PreGER's global one), and shapes.png and mac.png of the modes found.
 std::vector<std::string> figure_names(const OmaFlags& f) {
   std::vector<std::string> names;
-  if (f.files.size() == 1) names.push_back("stabilisation.png");
+  if (f.files.size() == 1 || global_diagram(f)) names.push_back("stabilisation.png");
   for (std::size_t k = 1; f.files.size() > 1 && k <= f.files.size(); ++k) {
     names.push_back("stabilisation_setup" + std::to_string(k) + ".png");
   }
@@ -115,20 +120,25 @@ std::vector<std::string> figure_names(const OmaFlags& f) {
   return names;
 }
 
-// --plot DIR: the stabilisation diagram over the first singular value of each record (from
-// `diagrams`), and when modes were found their shapes and auto-MAC (from `document`), each
-// drawn from its document written to a temporary directory.
+// One stabilisation diagram to draw: its document and the figure's title.
+struct Diagram {
+  nlohmann::json document;
+  std::string title;
+};
+
+// --plot DIR: the stabilisation diagrams (from `diagrams`, in the order of figure_names), and
+// when modes were found their shapes and auto-MAC (from `document`), each drawn from its
+// document written to a temporary directory.
 void draw_figures(const std::filesystem::path& package, const OmaFlags& f,
-                  const nlohmann::json& document, const std::vector<nlohmann::json>& diagrams) {
+                  const nlohmann::json& document, const std::vector<Diagram>& diagrams) {
   const TemporaryDirectory work;
   const std::vector<std::string> names = figure_names(f);
   const std::filesystem::path dir(f.plot);
   std::vector<PlotJob> jobs;
   for (std::size_t k = 0; k < diagrams.size(); ++k) {
     const std::filesystem::path input = work.path() / ("oma" + std::to_string(k) + ".json");
-    io::write_json(input, diagrams[k]);
-    jobs.push_back({"oma_stabilisation", input, dir / names[k],
-                    "ctid oma on " + std::filesystem::path(f.files[k]).filename().string()});
+    io::write_json(input, diagrams[k].document);
+    jobs.push_back({"oma_stabilisation", input, dir / names[k], diagrams[k].title});
   }
   if (!document["modes"].empty()) {
     const std::filesystem::path input = work.path() / "modes.json";
@@ -154,7 +164,7 @@ OutputOnlyRecord read_setup(const OmaFlags& f, const CLI::App& app, const std::s
 ExitStatus finish(const OmaFlags& f, const std::filesystem::path& package, const OmaResult& result,
                   const nlohmann::json& document,
                   const std::optional<PreprocessingRecord>& preprocessing,
-                  const std::vector<nlohmann::json>& diagrams) {
+                  const std::vector<Diagram>& diagrams) {
   if (!f.output.empty()) {
     io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
   }
@@ -163,8 +173,13 @@ ExitStatus finish(const OmaFlags& f, const std::filesystem::path& package, const
   return result.verdict.usable ? kExitOk : kExitNoUsableModel;
 }
 
-// Several files: setups of one structure merged by PoSER (decision 0059). The document is the
-// merged oma_result with each setup's own under "setups".
+// "ctid oma on FILE", a diagram's title.
+std::string title_of(const std::string& file) {
+  return "ctid oma on " + std::filesystem::path(file).filename().string();
+}
+
+// Several files: setups of one structure merged by PoSER (decision 0059) or PreGER (decision
+// 0062). The document is the merged oma_result with each setup's own under "setups".
 ExitStatus run_setups(const OmaFlags& f, const CLI::App& app,
                       const std::filesystem::path& package) {
   if (f.reference_columns.empty()) {
@@ -200,7 +215,14 @@ ExitStatus run_setups(const OmaFlags& f, const CLI::App& app,
         io::to_json(io::DataProvenance{.files = {f.files[k]}, .preprocessing = records[k]});
     document["setups"].push_back(std::move(one));
   }
-  const std::vector<nlohmann::json> diagrams(document["setups"].begin(), document["setups"].end());
+  std::vector<Diagram> diagrams;
+  if (global_diagram(f)) {
+    diagrams.push_back({io::to_json(result.merged),
+                        "PreGER merge of " + std::to_string(f.files.size()) + " setups"});
+  }
+  for (std::size_t k = 0; k < f.files.size(); ++k) {
+    diagrams.push_back({document["setups"][k], title_of(f.files[k])});
+  }
   return finish(f, package, result.merged, document, records.front(), diagrams);
 }
 
@@ -228,7 +250,7 @@ ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
   nlohmann::json document = io::to_json(result);
   document["data"] =
       io::to_json(io::DataProvenance{.files = {file}, .preprocessing = s.preprocessing});
-  return finish(f, package, result, document, s.preprocessing, {document});
+  return finish(f, package, result, document, s.preprocessing, {{document, title_of(file)}});
 }
 
 Command add_oma_command(CLI::App& parent) {
@@ -286,9 +308,9 @@ Command add_oma_command(CLI::App& parent) {
       ->group("Output");
   app->add_option("--plot", f.plot,
                   "Directory for stabilisation.png (every pole by order and stability class, "
-                  "the modes, the first singular value behind them; one per setup with several "
-                  "files) and, when modes were found, shapes.png and mac.png (auto-MAC), drawn "
-                  "by python3 -m ctid.plot")
+                  "the modes, the first singular value behind them; with several files one per "
+                  "setup, stabilisation_setupK.png, and PreGER's global one) and, when modes were "
+                  "found, shapes.png and mac.png (auto-MAC), drawn by python3 -m ctid.plot")
       ->group("Output");
   app->add_flag("--force", f.force, "Replace an output file that exists")->group("Output");
   app->add_flag("--quiet,-q", f.quiet, "Print nothing")->group("Output");

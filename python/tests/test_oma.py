@@ -387,3 +387,65 @@ def test_fit_many_output_only_runs_oma_on_every_record(tmp_path):
     with pytest.raises(ValueError, match="field 'modes' is not a ctid oma flag"):
         ctid.batch.fit_many(str(tmp_path / "r*.csv"), {"modes": 2}, out_dir=tmp_path / "no",
                             output_only=True)
+
+
+def _numpy_preger_frequencies(outputs, names, references, p, order, max_damping=0.2):
+    """PreGER written independently (decision 0062): each setup's SSI-cov Hankel matrix against
+    the references, O_s = U_n S_n^(1/2) at `order`, its reference rows fitted onto setup 1's by
+    least squares, the global observability matrix interleaved block row by block row (the
+    references, then each setup's other channels), A by least squares on its shifted rows."""
+    observabilities, refs = [], []
+    for y, own in zip(outputs, names):
+        ref = [own.index(r) for r in references]
+        y = y - y.mean(axis=0)
+        n = len(y)
+        r = [y[i:].T @ y[:n - i, ref] / n for i in range(1, 2 * p)]
+        hankel = np.block([[r[i + j] for j in range(p)] for i in range(p)])
+        u, s, _ = np.linalg.svd(hankel)
+        observabilities.append(u[:, :order] * np.sqrt(s[:order]))
+        refs.append(ref)
+    blocks = []
+    first = None
+    for o, own, ref in zip(observabilities, names, refs):
+        rows = o.reshape(p, len(own), order)
+        on_refs = rows[:, ref, :].reshape(p * len(ref), order)
+        if first is None:
+            first = on_refs
+            moved = rows
+            blocks.append(rows[:, ref, :])
+        else:
+            moved = (o @ np.linalg.lstsq(on_refs, first, rcond=None)[0]).reshape(p, len(own), order)
+        blocks.append(moved[:, [j for j in range(len(own)) if j not in ref], :])
+    glob = np.concatenate(blocks, axis=1)
+    channels = glob.shape[1]
+    glob = glob.reshape(p * channels, order)
+    a = np.linalg.lstsq(glob[:-channels], glob[channels:], rcond=None)[0]
+    lam = np.linalg.eigvals(a)
+    lam = lam[(lam.imag > 0) & (abs(lam) < 1)]
+    s_c = np.log(lam) / H
+    zeta = -s_c.real / abs(s_c)
+    return np.sort(abs(s_c[(zeta > 0) & (zeta < max_damping)]) / (2 * np.pi))
+
+
+def test_oma_setups_preger_gives_the_poles_of_an_independent_numpy_preger():
+    """Three setups of a 4-mass chain merged by PreGER: at every order the global diagram's
+    poles are those of a NumPy PreGER of the same records, and the chain's modes are found."""
+    dofs = [[0, 1, 3], [1, 2, 3], [1, 3]]
+    outputs, names = [], []
+    for s, own in enumerate(dofs):
+        y, _ = _record(70 + s, samples=20000, n=4)
+        outputs.append(y[:, own])
+        names.append([f"x{d + 1}" for d in own])
+    modes = _chain(4)[2]
+    options = ctid.OmaOptions(max_order=20, block_rows=20)
+    result = ctid.oma_setups(outputs, H, names, reference_names=["x2", "x4"], oma=options,
+                             merge=ctid.OmaMerge.preger)
+    assert result.merged.verdict.usable, result.merged.message
+    assert list(result.merged.channels) == ["x2", "x4", "x1", "x3"]
+    for order in (8, 14, 20):
+        ours = np.sort([q.frequency_hz for q in result.merged.stabilisation if q.order == order])
+        reference = _numpy_preger_frequencies(outputs, names, ["x2", "x4"], 20, order)
+        np.testing.assert_allclose(ours, reference, rtol=1e-8)
+    assert len(result.merged.modes) == len(modes)
+    for mode, (f, _) in zip(result.merged.modes, modes):
+        assert abs(mode.frequency_hz - f) < 4 * mode.frequency_hz_std

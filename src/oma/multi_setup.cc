@@ -1,4 +1,5 @@
-// Multi-setup output-only modal analysis by PoSER (multi_setup.h, decision 0059).
+// Multi-setup output-only modal analysis: PoSER (decision 0059) and PreGER (decision 0062),
+// multi_setup.h.
 #include "ctid/oma/multi_setup.h"
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
 #include "ctid/oma/ssi_cov.h"
+#include "oma/internal/ssi_pipeline.h"
 
 namespace ctid {
 namespace oma_detail {
@@ -30,6 +32,40 @@ Eigen::VectorXcd poser_shape(const std::vector<Eigen::VectorXcd>& shapes,
     for (std::size_t j = 0; j < layout.roving[s].size(); ++j) {
       const int g = layout.roving[s][j];
       if (g >= 0) global(g) = alpha * shapes[s](static_cast<Eigen::Index>(j));
+    }
+  }
+  return global;
+}
+
+Eigen::MatrixXd preger_observability(const std::vector<Eigen::MatrixXd>& observabilities,
+                                     const SetupLayout& layout) {
+  const auto r = static_cast<Eigen::Index>(layout.references.front().size());
+  const Eigen::Index g = layout.global_channels;
+  const Eigen::Index l1 = static_cast<Eigen::Index>(layout.roving.front().size());
+  const Eigen::Index p = observabilities.front().rows() / l1;
+  Eigen::MatrixXd global(p * g, observabilities.front().cols());
+  Eigen::MatrixXd first_references;
+  for (std::size_t s = 0; s < observabilities.size(); ++s) {
+    const Eigen::MatrixXd& own = observabilities[s];
+    const auto l = static_cast<Eigen::Index>(layout.roving[s].size());
+    Eigen::MatrixXd references(p * r, own.cols());
+    for (Eigen::Index i = 0; i < p; ++i) {
+      for (Eigen::Index k = 0; k < r; ++k) {
+        references.row(i * r + k) =
+            own.row(i * l + layout.references[s][static_cast<std::size_t>(k)]);
+      }
+    }
+    if (s == 0) first_references = references;
+    const Eigen::MatrixXd moved =
+        s == 0 ? own
+               : Eigen::MatrixXd(
+                     own * references.completeOrthogonalDecomposition().solve(first_references));
+    for (Eigen::Index i = 0; i < p; ++i) {
+      if (s == 0) global.middleRows(i * g, r) = references.middleRows(i * r, r);
+      for (Eigen::Index j = 0; j < l; ++j) {
+        const int at = layout.roving[s][static_cast<std::size_t>(j)];
+        if (at >= 0) global.row(i * g + at) = moved.row(i * l + j);
+      }
     }
   }
   return global;
@@ -236,10 +272,147 @@ OmaMode poser_mode(const std::vector<const OmaMode*>& modes, const SetupLayout& 
 
 }  // namespace oma_detail
 
+namespace multi_setup_detail {
+
+// The merged result's description, shared by both merges.
+OmaResult merged_frame(const std::vector<OmaResult>& setups,
+                       const std::vector<std::string>& channels, std::size_t references) {
+  OmaResult merged;
+  merged.method = setups.front().method;
+  merged.sample_time = setups.front().sample_time;
+  merged.block_rows = setups.front().block_rows;
+  merged.channels = channels;
+  for (std::size_t k = 0; k < references; ++k) {
+    merged.reference_channels.push_back(static_cast<int>(k));
+  }
+  for (const OmaResult& r : setups) merged.samples += r.samples;
+  merged.termination = Termination::converged;
+  return merged;
+}
+
+OmaResult poser_merge(const std::vector<OmaResult>& setups, const SetupLayout& layout,
+                      const std::vector<std::string>& channels, const MultiSetupOptions& options) {
+  OmaResult merged = merged_frame(setups, channels, options.reference_names.size());
+  const OmaResult& first = setups.front();
+  int left_out = 0;
+  for (const OmaMode& anchor : first.modes) {
+    std::vector<const OmaMode*> modes{&anchor};
+    for (std::size_t s = 1; s < setups.size(); ++s) {
+      const int i =
+          matching_mode(anchor, layout.references[0], setups[s], layout.references[s], options);
+      if (i < 0) break;
+      modes.push_back(&setups[s].modes[static_cast<std::size_t>(i)]);
+    }
+    if (modes.size() < setups.size()) {
+      ++left_out;
+      continue;
+    }
+    merged.modes.push_back(oma_detail::poser_mode(modes, layout, options.oma.uncertainty_blocks));
+  }
+  merged.message = internal::concat(
+      "PoSER merge of ", setups.size(), " setups: ", merged.modes.size(),
+      merged.modes.size() == 1 ? " mode" : " modes", " found in every setup",
+      left_out > 0 ? internal::concat(" (", left_out, " of setup 1's not in every setup)") : "");
+  if (merged.modes.empty()) {
+    merged.verdict.fail("no mode of setup 1 was found in every setup",
+                        {"longer records, or a wider --merge-frequency-tolerance",
+                         "reference channels where every mode moves"});
+  }
+  return merged;
+}
+
+// Each setup's observability matrix at the largest order, from block `block` of `blocks` of its
+// record (1 block: the whole record), and the smallest numerical rank among them.
+struct PregerSetups {
+  std::vector<Eigen::MatrixXd> observabilities;
+  int rank = 0;
+};
+
+PregerSetups preger_setups(const std::vector<OmaSetup>& setups, const SetupLayout& layout, int p,
+                           const OmaOptions& o, int block, int blocks, int threads) {
+  PregerSetups out;
+  out.rank = o.max_order;
+  for (std::size_t s = 0; s < setups.size(); ++s) {
+    const Eigen::MatrixXd& y = setups[s].outputs;
+    const Eigen::Index length = y.rows() / blocks;
+    oma_detail::SsiFactor own = oma_detail::record_factor(y.middleRows(block * length, length),
+                                                          layout.references[s], p, o, threads);
+    out.rank = std::min(out.rank, own.rank);
+    out.observabilities.push_back(std::move(own.observability));
+  }
+  return out;
+}
+
+// The poles of order n: each setup's observability matrix cut to its first n columns and merged
+// at that order (the transforms T_s are n x n least-squares fits over the p r reference rows;
+// one merge at the largest order instead lets the noise columns leak into the low orders and
+// loses modes the references see, e.g. 119, 229 and 239 Hz of the flexible structure).
+oma_detail::PolesOfOrder preger_poles(PregerSetups setups, const SetupLayout& layout, double h,
+                                      double max_damping) {
+  return [setups = std::move(setups), &layout, h, max_damping](int n) {
+    std::vector<Eigen::MatrixXd> cut;
+    for (const Eigen::MatrixXd& o : setups.observabilities) cut.push_back(o.leftCols(n));
+    oma_detail::SsiFactor merged;
+    merged.outputs = layout.global_channels;
+    merged.rank = setups.rank;
+    merged.observability = oma_detail::preger_observability(cut, layout);
+    oma_detail::shift_factor(merged);
+    return oma_detail::ssi_poles(merged, n, h, max_damping);
+  };
+}
+
+// PreGER: one identification of the global observability matrix with the smallest of the
+// setups' block rows, and segment standard errors (block b of every setup merged alike).
+OmaResult preger_merge(const std::vector<OmaSetup>& setups, const std::vector<OmaResult>& own,
+                       const SetupLayout& layout, const std::vector<std::string>& channels,
+                       const MultiSetupOptions& options) {
+  OmaResult merged = merged_frame(own, channels, options.reference_names.size());
+  int p = own.front().block_rows;
+  for (const OmaResult& r : own) p = std::min(p, r.block_rows);
+  merged.block_rows = p;
+  const OmaOptions& o = options.oma;
+  const double h = merged.sample_time;
+  oma_detail::ssi_modes(
+      preger_poles(preger_setups(setups, layout, p, o, 0, 1, 0), layout, h, o.max_damping), o,
+      merged);
+  const int nb = o.uncertainty_blocks;
+  bool blocks_long_enough = nb >= 2;
+  for (const OmaSetup& setup : setups) {
+    const auto l = setup.outputs.cols();
+    const auto r = static_cast<Eigen::Index>(options.reference_names.size());
+    blocks_long_enough = blocks_long_enough &&
+                         setup.outputs.rows() / nb >= oma_detail::ssi_samples_needed(o, p, l, r);
+  }
+  std::string errors;
+  if (blocks_long_enough && !merged.modes.empty()) {
+    oma_detail::segment_standard_errors(
+        nb,
+        [&](int b) {
+          return preger_poles(preger_setups(setups, layout, p, o, b, nb, 1), layout, h,
+                              o.max_damping);
+        },
+        o, merged.modes);
+    errors = internal::concat("; standard errors from ", nb, " segments of every setup");
+  } else if (nb >= 2 && !merged.modes.empty()) {
+    errors = internal::concat("; no standard errors: ", nb, " blocks of a setup are too short for ",
+                              p, " block rows");
+  }
+  merged.message =
+      internal::concat("PreGER merge of ", setups.size(), " setups: ", merged.modes.size(),
+                       " mode(s) from orders 2..", o.max_order, " (", p, " block rows)", errors);
+  return merged;
+}
+
+}  // namespace multi_setup_detail
+
 MultiSetupResult oma_multi_setup(const std::vector<OmaSetup>& setups,
                                  const MultiSetupOptions& options) {
   namespace md = multi_setup_detail;
   options.validate();
+  require(options.merge != OmaMerge::preger || options.oma.method == OmaMethod::ssi_cov ||
+              options.oma.method == OmaMethod::ssi_data,
+          "the PreGER merge needs an SSI method (ssi-cov or ssi-data); ",
+          enum_name(options.oma.method), " has no observability matrix (use --merge poser)");
   std::vector<std::string> channels;
   const oma_detail::SetupLayout layout = md::setup_layout(setups, options, channels);
   MultiSetupResult result;
@@ -253,41 +426,9 @@ MultiSetupResult oma_multi_setup(const std::vector<OmaSetup>& setups,
       throw InvalidArgument(internal::concat("setup ", s + 1, ": ", e.what()));
     }
   }
-  OmaResult& merged = result.merged;
-  const OmaResult& first = result.setups.front();
-  merged.method = first.method;
-  merged.sample_time = first.sample_time;
-  merged.block_rows = first.block_rows;
-  merged.channels = channels;
-  for (std::size_t k = 0; k < options.reference_names.size(); ++k) {
-    merged.reference_channels.push_back(static_cast<int>(k));
-  }
-  int left_out = 0;
-  for (const OmaMode& anchor : first.modes) {
-    std::vector<const OmaMode*> modes{&anchor};
-    for (std::size_t s = 1; s < setups.size(); ++s) {
-      const int i = md::matching_mode(anchor, layout.references[0], result.setups[s],
-                                      layout.references[s], options);
-      if (i < 0) break;
-      modes.push_back(&result.setups[s].modes[static_cast<std::size_t>(i)]);
-    }
-    if (modes.size() < setups.size()) {
-      ++left_out;
-      continue;
-    }
-    merged.modes.push_back(oma_detail::poser_mode(modes, layout, options.oma.uncertainty_blocks));
-  }
-  for (const OmaResult& r : result.setups) merged.samples += r.samples;
-  merged.termination = Termination::converged;
-  merged.message = internal::concat(
-      "PoSER merge of ", setups.size(), " setups: ", merged.modes.size(),
-      merged.modes.size() == 1 ? " mode" : " modes", " found in every setup",
-      left_out > 0 ? internal::concat(" (", left_out, " of setup 1's not in every setup)") : "");
-  if (merged.modes.empty()) {
-    merged.verdict.fail("no mode of setup 1 was found in every setup",
-                        {"longer records, or a wider --merge-frequency-tolerance",
-                         "reference channels where every mode moves"});
-  }
+  result.merged = options.merge == OmaMerge::preger
+                      ? md::preger_merge(setups, result.setups, layout, channels, options)
+                      : md::poser_merge(result.setups, layout, channels, options);
   return result;
 }
 

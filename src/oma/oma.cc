@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <functional>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -21,6 +22,7 @@
 #include "ctid/oma/ssi_data.h"
 #include "ctid/oma/ssi_uncertainty.h"
 #include "ctid/oma/stabilisation.h"
+#include "oma/internal/ssi_pipeline.h"
 
 namespace ctid {
 namespace {
@@ -113,13 +115,17 @@ RecordSsi record_ssi(const Eigen::MatrixXd& y, const std::vector<int>& refs, int
   return out;
 }
 
-std::vector<OrderPoles> all_orders(const oma_detail::SsiFactor& factor, double h,
-                                   const OmaOptions& o) {
+std::vector<OrderPoles> all_orders(const oma_detail::PolesOfOrder& poles, const OmaOptions& o) {
   std::vector<OrderPoles> orders;
-  for (int n = 2; n <= o.max_order; n += 2) {
-    orders.push_back({n, oma_detail::ssi_poles(factor, n, h, o.max_damping)});
-  }
+  for (int n = 2; n <= o.max_order; n += 2) orders.push_back({n, poles(n)});
   return orders;
+}
+
+// The poles of every order of one factor.
+oma_detail::PolesOfOrder poles_of(oma_detail::SsiFactor factor, double h, const OmaOptions& o) {
+  return [factor = std::move(factor), h, max_damping = o.max_damping](int n) {
+    return oma_detail::ssi_poles(factor, n, h, max_damping);
+  };
 }
 
 OmaMode make_mode(const oma_detail::PoleCluster& cluster, const std::vector<OrderPoles>& orders) {
@@ -191,9 +197,8 @@ double spread(const std::vector<double>& v, double blocks) {
   return std::sqrt(ss / static_cast<double>(v.size() - 1) / blocks);
 }
 
-// Segment-based standard errors: the record in n_b blocks, each identified at the mode's
-// order, the block pole nearest (|Δf|/f + 1 - MAC) taken as its estimate; the variance of the
-// full record's estimate is the blocks' variance over n_b.
+// Segment-based standard errors of one record (Reynders, Pintelon and De Roeck, MSSP 2008,
+// section 3): the record in n_b blocks of equal length.
 void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p, double h,
                          const OmaOptions& o, std::vector<OmaMode>& modes) {
   const int nb = o.uncertainty_blocks;
@@ -202,49 +207,13 @@ void segment_uncertainty(const Eigen::MatrixXd& y, const std::vector<int>& refs,
   if (nb < 2 || modes.empty() || length < ssi_samples_needed(o, p, y.cols(), r)) {
     return;
   }
-  const std::size_t m = modes.size();
-  std::vector<std::vector<double>> f(m), z(m);
-  std::vector<std::vector<Eigen::VectorXcd>> shapes(m);
-  // The blocks' factors on threads (each block on one), the matching in block order.
-  std::vector<oma_detail::SsiFactor> factors(static_cast<std::size_t>(nb));
-  parallel_for(nb, 0, [&](int b) {
-    factors[static_cast<std::size_t>(b)] =
-        record_ssi(y.middleRows(b * length, length), refs, p, o, false, 1).factor;
-  });
-  for (const oma_detail::SsiFactor& factor : factors) {
-    for (std::size_t i = 0; i < m; ++i) {
-      const auto poles = oma_detail::ssi_poles(factor, modes[i].order, h, o.max_damping);
-      const Eigen::VectorXcd ref = oma_detail::shape_of(modes[i]);
-      const ModalPole* best = nullptr;
-      double best_d = 0.0;
-      for (const ModalPole& q : poles) {
-        const double df = std::abs(q.frequency_hz - modes[i].frequency_hz) / modes[i].frequency_hz;
-        const double d = df + 1.0 - oma_detail::modal_assurance(ref, q.shape);
-        if (df < o.cluster_distance * 5.0 && (best == nullptr || d < best_d)) {
-          best = &q;
-          best_d = d;
-        }
-      }
-      if (best == nullptr) continue;
-      f[i].push_back(best->frequency_hz);
-      z[i].push_back(best->damping_ratio);
-      const std::complex<double> alpha = best->shape.dot(ref) / best->shape.squaredNorm();
-      shapes[i].push_back(alpha * best->shape);
-    }
-  }
-  for (std::size_t i = 0; i < m; ++i) {
-    modes[i].frequency_hz_std = spread(f[i], nb);
-    modes[i].damping_ratio_std = spread(z[i], nb);
-    for (std::size_t j = 0; j < modes[i].shape_real.size(); ++j) {
-      std::vector<double> re, im;
-      for (const auto& s : shapes[i]) {
-        re.push_back(s(static_cast<Eigen::Index>(j)).real());
-        im.push_back(s(static_cast<Eigen::Index>(j)).imag());
-      }
-      modes[i].shape_real_std[j] = spread(re, nb);
-      modes[i].shape_imag_std[j] = spread(im, nb);
-    }
-  }
+  oma_detail::segment_standard_errors(
+      nb,
+      [&](int b) {
+        return poles_of(record_ssi(y.middleRows(b * length, length), refs, p, o, false, 1).factor,
+                        h, o);
+      },
+      o, modes);
 }
 
 // First-order perturbation standard errors of the SSI-cov modes (decision 0036): the Hankel
@@ -488,22 +457,14 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
       options.uncertainty_blocks >= 2 &&
       outputs.rows() / options.uncertainty_blocks >= ssi_samples_needed(options, p, l, r);
   const RecordSsi record = record_ssi(outputs, refs, p, options, with_errors);
-  const auto orders = all_orders(record.factor, sample_time, options);
-  const auto stability = oma_detail::classify_poles(orders, options);
-  for (std::size_t o = 0; o < orders.size(); ++o) {
-    for (std::size_t k = 0; k < orders[o].poles.size(); ++k) {
-      const ModalPole& q = orders[o].poles[k];
-      result.stabilisation.push_back(
-          {orders[o].order, q.frequency_hz, q.damping_ratio, stability[o][k], q.mpc});
-    }
-  }
-  const auto clusters =
-      oma_detail::cluster_stable_poles(orders, stability, options.cluster_distance);
-  result.modes = pick_modes(clusters, orders, options, result.verdict);
+  oma_detail::ssi_modes(
+      [&](int n) {
+        return oma_detail::ssi_poles(record.factor, n, sample_time, options.max_damping);
+      },
+      options, result);
   const std::string error_note =
       standard_errors(outputs, record, refs, p, sample_time, options, result.modes);
   result.termination = Termination::converged;
-  result.iterations = static_cast<int>(orders.size());
   result.message =
       internal::concat(result.modes.size(), " mode(s) from orders 2..", options.max_order, " (", p,
                        " block rows", lag_note, ")", error_note);
@@ -511,6 +472,74 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
 }
 
 namespace oma_detail {
+
+SsiFactor record_factor(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p,
+                        const OmaOptions& options, int threads) {
+  return record_ssi(y, refs, p, options, false, threads).factor;
+}
+
+Eigen::Index ssi_samples_needed(const OmaOptions& options, int p, Eigen::Index l, Eigen::Index r) {
+  return ctid::ssi_samples_needed(options, p, l, r);
+}
+
+void ssi_modes(const PolesOfOrder& poles, const OmaOptions& options, OmaResult& result) {
+  const auto orders = all_orders(poles, options);
+  const auto stability = classify_poles(orders, options);
+  for (std::size_t o = 0; o < orders.size(); ++o) {
+    for (std::size_t k = 0; k < orders[o].poles.size(); ++k) {
+      const ModalPole& q = orders[o].poles[k];
+      result.stabilisation.push_back(
+          {orders[o].order, q.frequency_hz, q.damping_ratio, stability[o][k], q.mpc});
+    }
+  }
+  const auto clusters = cluster_stable_poles(orders, stability, options.cluster_distance);
+  result.modes = pick_modes(clusters, orders, options, result.verdict);
+  result.iterations = static_cast<int>(orders.size());
+}
+
+void segment_standard_errors(int nb, const std::function<PolesOfOrder(int)>& block_poles,
+                             const OmaOptions& o, std::vector<OmaMode>& modes) {
+  const std::size_t m = modes.size();
+  std::vector<std::vector<double>> f(m), z(m);
+  std::vector<std::vector<Eigen::VectorXcd>> shapes(m);
+  // The blocks' factors on threads (each block on one), the matching in block order.
+  std::vector<PolesOfOrder> blocks(static_cast<std::size_t>(nb));
+  parallel_for(nb, 0, [&](int b) { blocks[static_cast<std::size_t>(b)] = block_poles(b); });
+  for (const PolesOfOrder& poles_of_order : blocks) {
+    for (std::size_t i = 0; i < m; ++i) {
+      const auto poles = poles_of_order(modes[i].order);
+      const Eigen::VectorXcd ref = shape_of(modes[i]);
+      const ModalPole* best = nullptr;
+      double best_d = 0.0;
+      for (const ModalPole& q : poles) {
+        const double df = std::abs(q.frequency_hz - modes[i].frequency_hz) / modes[i].frequency_hz;
+        const double d = df + 1.0 - modal_assurance(ref, q.shape);
+        if (df < o.cluster_distance * 5.0 && (best == nullptr || d < best_d)) {
+          best = &q;
+          best_d = d;
+        }
+      }
+      if (best == nullptr) continue;
+      f[i].push_back(best->frequency_hz);
+      z[i].push_back(best->damping_ratio);
+      const std::complex<double> alpha = best->shape.dot(ref) / best->shape.squaredNorm();
+      shapes[i].push_back(alpha * best->shape);
+    }
+  }
+  for (std::size_t i = 0; i < m; ++i) {
+    modes[i].frequency_hz_std = spread(f[i], nb);
+    modes[i].damping_ratio_std = spread(z[i], nb);
+    for (std::size_t j = 0; j < modes[i].shape_real.size(); ++j) {
+      std::vector<double> re, im;
+      for (const auto& s : shapes[i]) {
+        re.push_back(s(static_cast<Eigen::Index>(j)).real());
+        im.push_back(s(static_cast<Eigen::Index>(j)).imag());
+      }
+      modes[i].shape_real_std[j] = spread(re, nb);
+      modes[i].shape_imag_std[j] = spread(im, nb);
+    }
+  }
+}
 
 Eigen::VectorXcd shape_of(const OmaMode& m) {
   Eigen::VectorXcd s(static_cast<Eigen::Index>(m.shape_real.size()));

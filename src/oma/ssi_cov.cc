@@ -95,20 +95,25 @@ SsiFactor hankel_factor(const Eigen::MatrixXd& hankel, int outputs, int max_orde
 
 SsiFactor observability_factor(const Eigen::MatrixXd& left_vectors,
                                const Eigen::VectorXd& singular_values, int outputs, int max_order) {
-  const Eigen::Index l = outputs;
-  const Eigen::Index p = left_vectors.rows() / l;
   SsiFactor f;
   f.outputs = outputs;
   const Eigen::VectorXd& sv = singular_values;
   f.rank = static_cast<int>((sv.array() > 1e-12 * sv(0)).count());
   f.observability = left_vectors.leftCols(max_order) * sv.head(max_order).cwiseSqrt().asDiagonal();
+  shift_factor(f);
+  return f;
+}
+
+void shift_factor(SsiFactor& f) {
+  const Eigen::Index l = f.outputs;
+  const Eigen::Index p = f.observability.rows() / l;
+  const Eigen::Index n = f.observability.cols();
   const Eigen::MatrixXd up = f.observability.topRows((p - 1) * l);
   const Eigen::MatrixXd down = f.observability.bottomRows((p - 1) * l);
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(up);
-  f.r = qr.matrixQR().topRows(max_order).triangularView<Eigen::Upper>();
+  f.r = qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
   const Eigen::MatrixXd qt_down = qr.householderQ().adjoint() * down;
-  f.s = qt_down.topRows(max_order);
-  return f;
+  f.s = qt_down.topRows(n);
 }
 
 Eigen::VectorXcd normalise_shape(const Eigen::VectorXcd& shape) {

@@ -272,7 +272,49 @@ TEST_F(OmaCommand, SeveralFilesAreSetupsMergedIntoGlobalModes) {
       ctid({"oma", one, two, "--reference-columns", "a,c"}), "oma",
       "reference channel 'c' is missing from setup 2 (its channels: a, b, d)");
   testing::expect_bad_input(ctid({"oma", one, two, "--reference-columns", "a,b", "--merge", "x"}),
-                            "oma", "--merge is 'x'; it must be poser");
+                            "oma", "--merge is 'x'; it must be poser or preger");
+}
+
+// The same two setups merged by PreGER (decision 0062): one identification of the global
+// observability matrix, its own stabilisation diagram beside each setup's, the same shapes.
+TEST_F(OmaCommand, PregerMergesTheSetupsInOneIdentification) {
+  const std::string one = setup("c", -0.8, 0.6, 21);
+  const std::string two = setup("d", 0.3, 0.9, 22);
+  std::vector<std::string> args = {"oma",    one,           two,          "--reference-columns",
+                                   "a,b",    "--max-order", "12",         "--merge",
+                                   "preger", "-o",          "merged.json"};
+  const bool plots = !testing::python_package().empty();
+  if (plots) args.insert(args.end(), {"--plot", "figures"});
+  const auto r = ctid(args);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("PreGER merge of 2 setups: 2 mode(s) from orders 2..12"));
+  const nlohmann::json doc = io::read_json(path("merged.json"));
+  EXPECT_EQ(doc["channels"], nlohmann::json({"a", "b", "c", "d"}));
+  EXPECT_FALSE(doc["stabilisation"].empty());
+  const double expected[2][4] = {{1.0, 0.5, -0.8, 0.3}, {1.0, -1.0, 0.6, 0.9}};
+  ASSERT_EQ(doc["modes"].size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    std::complex<double> dot = 0.0;
+    double shape = 0.0, truth = 0.0;
+    for (int j = 0; j < 4; ++j) {
+      const std::complex<double> v(doc["modes"][i]["shape_real"][j].get<double>(),
+                                   doc["modes"][i]["shape_imag"][j].get<double>());
+      dot += v * expected[i][j];
+      shape += std::norm(v);
+      truth += expected[i][j] * expected[i][j];
+    }
+    EXPECT_GE(std::norm(dot) / (shape * truth), 0.99) << i;
+    EXPECT_GT(doc["modes"][i]["frequency_hz_std"].get<double>(), 0.0) << i;
+  }
+  if (plots) {
+    for (const char* figure : {"stabilisation.png", "stabilisation_setup1.png",
+                               "stabilisation_setup2.png", "shapes.png", "mac.png"}) {
+      testing::expect_png(path("figures") / figure);
+    }
+  }
+  testing::expect_bad_input(
+      ctid({"oma", one, two, "--reference-columns", "a,b", "--merge", "preger", "--method", "fdd"}),
+      "oma", "the PreGER merge needs an SSI method (ssi-cov or ssi-data)");
 }
 
 // `ctid track --output-only` (decision 0060): the two resonances followed through three

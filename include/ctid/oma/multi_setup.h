@@ -1,10 +1,15 @@
 // Multi-setup output-only modal analysis: a structure measured in several setups, roving
-// sensors moved between them and reference sensors kept in place, each setup identified by
-// oma() on its own and the modes merged after (PoSER, post-separate-estimation re-scaling;
-// Döhler, Andersen and Mevel, IMAC 2010): frequencies and damping ratios averaged with
-// inverse-variance weights, each setup's shape scaled onto the first's by the least-squares
-// factor on the reference entries, into one global shape. The standard errors are carried
-// through the merge to first order (decision 0059).
+// sensors moved between them and reference sensors kept in place. Two merges:
+// - PoSER (post-separate-estimation re-scaling; Döhler, Andersen and Mevel, IMAC 2010): each
+//   setup identified by oma() on its own and the modes merged after: frequencies and damping
+//   ratios averaged with inverse-variance weights, each setup's shape scaled onto the first's
+//   by the least-squares factor on the reference entries, into one global shape; the standard
+//   errors carried through the merge to first order (decision 0059).
+// - PreGER (pre-global estimation re-scaling; Döhler and Mevel, "Modular subspace-based system
+//   identification from multi-setup measurements", IEEE TAC 2012): each setup's SSI
+//   observability matrix moved into the first setup's state basis through the reference rows,
+//   the global observability matrix interleaved from them, and one stabilisation diagram and
+//   one set of modes from it; standard errors from segments (decision 0062).
 #pragma once
 
 #include <array>
@@ -29,11 +34,15 @@ struct OmaSetup {
   std::vector<std::string> channel_names;
 };
 
-enum class OmaMerge { poser };
-inline constexpr std::array<Enumerator<OmaMerge>, 1> oma_merge_enumerators{{
+enum class OmaMerge { poser, preger };
+inline constexpr std::array<Enumerator<OmaMerge>, 2> oma_merge_enumerators{{
     {OmaMerge::poser, "poser",
      "Post-separate-estimation re-scaling: each setup identified alone, its shapes scaled "
      "onto the first setup's on the reference channels."},
+    {OmaMerge::preger, "preger",
+     "Pre-global estimation re-scaling: each setup's SSI observability matrix moved into the "
+     "first setup's state basis through the reference rows, one identification of the global "
+     "matrix (ssi-cov or ssi-data)."},
 }};
 constexpr std::span<const Enumerator<OmaMerge>> enumerators(OmaMerge) {
   return oma_merge_enumerators;
@@ -67,8 +76,8 @@ struct MultiSetupOptions {
 };
 
 /// The merged modes (an OmaResult over the global channels: the references, then each
-/// setup's other channels in setup order; no stabilisation diagram of its own) and each
-/// setup's own analysis.
+/// setup's other channels in setup order; PoSER has no stabilisation diagram of its own,
+/// PreGER has the global one) and each setup's own analysis.
 struct MultiSetupResult {
   OmaResult merged;
   std::vector<OmaResult> setups;
@@ -83,9 +92,11 @@ struct MultiSetupResult {
   }
 };
 
-/// The global modes of `setups` (two or more). A mode is global when every setup has it (the
-/// first setup's modes are matched in the others); the message says how many of the first
-/// setup's modes were not. Throws InvalidArgument for fewer than two setups, no reference, a
+/// The global modes of `setups` (two or more). PoSER: a mode is global when every setup has it
+/// (the first setup's modes are matched in the others); the message says how many of the first
+/// setup's modes were not. PreGER: the modes of the global observability matrix, with the
+/// smallest of the setups' block rows. Throws InvalidArgument for PreGER with fdd or efdd,
+/// fewer than two setups, no reference, a
 /// reference missing from a setup, sample times that differ by more than 1e-6 of setup 1's (a
 /// time column written to ten digits differs by less), a non-reference channel name in
 /// two setups, a name twice in one setup, names that do not match the columns, or what oma()
@@ -109,6 +120,14 @@ struct SetupLayout {
 /// entry its setup's scaled one.
 Eigen::VectorXcd poser_shape(const std::vector<Eigen::VectorXcd>& shapes,
                              const SetupLayout& layout);
+
+/// PreGER's global observability matrix from each setup's (p block rows of its own channels,
+/// the same columns). Setup s's reference rows O_ref,s are setup 1's in another state basis, so
+/// T_s = O_ref,s^+ O_ref,1 moves O_s into setup 1's basis (exactly, without noise, when the
+/// references observe every state). Block row i of the result: setup 1's reference rows, then
+/// each other global channel's row i of its setup's O_s T_s.
+Eigen::MatrixXd preger_observability(const std::vector<Eigen::MatrixXd>& observabilities,
+                                     const SetupLayout& layout);
 
 /// One global mode from each setup's mode of it (setup order): f and ζ the setups' means
 /// weighted by 1 / se², their variance 1 / Σ(1 / se²) scaled by ν / (ν - 2) for the se

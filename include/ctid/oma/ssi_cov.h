@@ -48,6 +48,8 @@ SsiFactor hankel_factor(const Eigen::MatrixXd& hankel, int outputs, int max_orde
 /// O = U_n S_n^{1/2} of order max_order, the numerical rank and the QR of O_up.
 SsiFactor observability_factor(const Eigen::MatrixXd& left_vectors,
                                const Eigen::VectorXd& singular_values, int outputs, int max_order);
+/// The QR of O_up and S = Q^T O_down of `f.observability` (f.outputs rows per block), into f.
+void shift_factor(SsiFactor& f);
 
 /// One continuous-time mode of one order.
 struct ModalPole {
