@@ -48,7 +48,9 @@ struct OmaFlags {
   double merge_reference_mac = MultiSetupOptions{}.reference_mac;
   DataFlags prep;  ///< its preprocessing flags only (--rows, --time, --detrend, ...)
   std::string output;
-  std::string plot;  // DIR for stabilisation.png
+  std::string plot;            // DIR for stabilisation.png
+  std::string geometry;        // sensors CSV: shapes.png on their wireframe (decision 0063)
+  std::string geometry_lines;  // lines CSV of that wireframe
   bool force = false;
   bool quiet = false;
 };
@@ -143,7 +145,12 @@ void draw_figures(const std::filesystem::path& package, const OmaFlags& f,
   if (!document["modes"].empty()) {
     const std::filesystem::path input = work.path() / "modes.json";
     io::write_json(input, document);
-    jobs.push_back({"oma_shapes", input, dir / "shapes.png", "mode shapes"});
+    std::vector<std::string> geometry;
+    if (!f.geometry.empty()) geometry = {"--geometry", f.geometry};
+    if (!f.geometry_lines.empty()) {
+      geometry.insert(geometry.end(), {"--geometry-lines", f.geometry_lines});
+    }
+    jobs.push_back({"oma_shapes", input, dir / "shapes.png", "mode shapes", geometry});
     jobs.push_back({"oma_mac", input, dir / "mac.png", "auto-MAC"});
   }
   plot(package, jobs);
@@ -227,6 +234,12 @@ ExitStatus run_setups(const OmaFlags& f, const CLI::App& app,
 }
 
 ExitStatus run_oma(const OmaFlags& f, const CLI::App& app) {
+  if (!f.geometry.empty() && f.plot.empty()) {
+    usage_error("--geometry draws shapes.png on the sensors' wireframe: give --plot DIR");
+  }
+  if (!f.geometry_lines.empty() && f.geometry.empty()) {
+    usage_error("--geometry-lines needs --geometry (the sensors file)");
+  }
   std::filesystem::path package;
   if (!f.plot.empty()) {
     package = require_plotting();
@@ -311,6 +324,15 @@ Command add_oma_command(CLI::App& parent) {
                   "the modes, the first singular value behind them; with several files one per "
                   "setup, stabilisation_setupK.png, and PreGER's global one) and, when modes were "
                   "found, shapes.png and mac.png (auto-MAC), drawn by python3 -m ctid.plot")
+      ->group("Output");
+  app->add_option("--geometry", f.geometry,
+                  "With --plot: sensors CSV (channel,x,y[,z][,dx,dy[,dz]]) on whose 2-D or 3-D "
+                  "wireframe shapes.png draws each mode")
+      ->check(CLI::ExistingFile)
+      ->group("Output");
+  app->add_option("--geometry-lines", f.geometry_lines,
+                  "With --geometry: lines CSV (from,to: channel names) joining the sensors' nodes")
+      ->check(CLI::ExistingFile)
       ->group("Output");
   app->add_flag("--force", f.force, "Replace an output file that exists")->group("Output");
   app->add_flag("--quiet,-q", f.quiet, "Print nothing")->group("Output");

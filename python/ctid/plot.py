@@ -2,6 +2,7 @@
 
     /usr/bin/python3 -m ctid.plot KIND INPUT OUTPUT [--title TEXT] [--frf FRF]
                                   [--against RESULT2.json] [--frequency-unit Hz|rad/s]
+                                  [--geometry SENSORS.csv [--geometry-lines LINES.csv]]
 
 KIND is one of bode, modes, frf, frf_matrix, validation, compare, residuals, mse,
 stabilisation, mode_shapes, mac, frf_matrix_overlay, tracking, oma_stabilisation, oma_shapes,
@@ -28,7 +29,8 @@ docs/python.md (the CLI's --plot inputs and CSV tables):
 --frf gives the measured FRF drawn under the model: bode and modes take an frf document or the
 CSV of `ctid frf -o X.csv`, frf_matrix_overlay a mimo_frf document, the CSV table of
 `ctid frf --input-columns ... -o X.csv` or a universal file. --against gives mac a second
-estimate for the columns. Frequency axes are in Hz unless --frequency-unit rad/s. OUTPUT ends in
+estimate for the columns. --geometry (and --geometry-lines) draws oma_shapes on the sensors'
+wireframe (ctid.geometry, decision 0063). Frequency axes are in Hz unless --frequency-unit rad/s. OUTPUT ends in
 .png or .svg. Exit status 0 on success, 2 for bad usage or input (one line on stderr), 1
 otherwise.
 """
@@ -351,11 +353,13 @@ def _response_figure(kind, path, output, title):
     return plotting.response_curve(t, y, lower, upper, kind=kind, title=title, filename=output)
 
 
-def run(kind, path, output, title=None, frf=None, against=None, frequency_unit="Hz"):
+def run(kind, path, output, title=None, frf=None, against=None, frequency_unit="Hz",
+        geometry=None, geometry_lines=None):
     """Draw one figure; returns the Figure. Raises InputError or ValueError on bad input.
     ``frf``: the measured FRF drawn under the model (bode, modes: an frf document or CSV;
     frf_matrix_overlay: a mimo_frf document, CSV table or universal file); ``against``: a
-    second MIMO estimate for the columns of mac; ``frequency_unit``: "Hz" or "rad/s"."""
+    second MIMO estimate for the columns of mac; ``frequency_unit``: "Hz" or "rad/s";
+    ``geometry``, ``geometry_lines``: oma_shapes on the sensors' wireframe (ctid.geometry)."""
     import ctid
     from . import plotting
 
@@ -369,6 +373,10 @@ def run(kind, path, output, title=None, frf=None, against=None, frequency_unit="
         raise InputError("--frf goes with bode, modes and frf_matrix_overlay")
     if against is not None and kind != "mac":
         raise InputError("--against goes with mac")
+    if (geometry is not None or geometry_lines is not None) and kind != "oma_shapes":
+        raise InputError("--geometry and --geometry-lines go with oma_shapes")
+    if geometry_lines is not None and geometry is None:
+        raise InputError("--geometry-lines needs --geometry (the sensors file)")
     unit = frequency_unit
     if kind == "tracking":
         return _tracking_figure(path, output, title, unit)
@@ -395,7 +403,11 @@ def run(kind, path, output, title=None, frf=None, against=None, frequency_unit="
         if not result.modes:
             raise InputError(f"{path}: the analysis found no mode")
         if kind == "oma_shapes":
-            return plotting.oma_mode_shapes(result, title=title, filename=output)
+            if geometry is not None:
+                from .geometry import read_geometry
+                geometry = read_geometry(geometry, geometry_lines)
+            return plotting.oma_mode_shapes(result, geometry=geometry, title=title,
+                                            filename=output)
         return plotting.oma_mac(result, title=title, filename=output)
     if kind == "compare":
         return _compare_figure(path, output, title)
@@ -456,13 +468,17 @@ def main(argv=None):
                         help="mac: a second mimo_estimation_result for the columns")
     parser.add_argument("--frequency-unit", default="Hz", choices=("Hz", "rad/s"),
                         help="unit of the frequency axes (default Hz)")
+    parser.add_argument("--geometry", default=None,
+                        help="oma_shapes: sensors CSV (channel,x,y[,z][,dx,dy[,dz]])")
+    parser.add_argument("--geometry-lines", default=None,
+                        help="oma_shapes: lines CSV (from,to channel names) of the wireframe")
     try:
         args = parser.parse_args(argv)
     except SystemExit as exit_:
         return 2 if exit_.code else 0
     try:
         run(args.kind, args.input, args.output, args.title, args.frf, args.against,
-            args.frequency_unit)
+            args.frequency_unit, args.geometry, args.geometry_lines)
     except (InputError, ValueError, TypeError, OSError, json.JSONDecodeError) as error:
         print(f"ctid.plot: {error}", file=sys.stderr)
         return 2

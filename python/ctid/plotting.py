@@ -790,14 +790,36 @@ def _oma_modes(result, where):
 
 def oma_mode_shapes(result, geometry=None, title=None, filename=None):
     """The mode shapes of an output-only analysis (``ctid.oma``, ``ctid oma -o``), one panel per
-    mode, as :func:`mode_shapes` draws them: the real part with one standard error and the
-    magnitude signed by the phase, over the channels (named by ``result.channels``) or over
-    ``geometry``, one position per channel. Shapes are normalised as every output-only shape
-    (largest entry 1, decision 0030); each panel's title carries f_n, ζ and the MPC. Returns
-    the Figure."""
-    return mode_shapes(_oma_modes(result, "oma_mode_shapes"),
-                       output_names=list(result.channels), geometry=geometry, title=title,
-                       filename=filename)
+    mode. Without a sensor geometry, as :func:`mode_shapes` draws them: the real part with one
+    standard error and the magnitude signed by the phase, over the channels (named by
+    ``result.channels``) or over ``geometry`` given as one position per channel. With
+    ``geometry`` a :class:`ctid.geometry.Geometry` (or the path of its sensors CSV file), each
+    shape deforms the 2-D or 3-D wireframe of the sensors (decision 0063). Shapes are
+    normalised as every output-only shape (largest entry 1, decision 0030); each panel's title
+    carries f_n, ζ and the MPC. Returns the Figure."""
+    from . import geometry as sensors
+
+    if isinstance(geometry, (str, bytes)) or hasattr(geometry, "__fspath__"):
+        geometry = sensors.read_geometry(geometry)
+    if not isinstance(geometry, sensors.Geometry):
+        return mode_shapes(_oma_modes(result, "oma_mode_shapes"),
+                           output_names=list(result.channels), geometry=geometry, title=title,
+                           filename=filename)
+    modes = _oma_modes(result, "oma_mode_shapes")
+    columns = 1 if len(modes) == 1 else 2
+    rows = math.ceil(len(modes) / columns)
+    figure = plt.figure(figsize=(5.0 * columns, 4.0 * rows + 0.5), layout="constrained")
+    figure._ctid_created = True
+    hz = 2.0 * np.pi
+    sensors.draw_shapes(
+        result, geometry, modes,
+        lambda m: (f"mode {m.submodel + 1}: f_n = "
+                   f"{_plus_minus(m.natural_frequency / hz, m.natural_frequency_se / hz)} Hz, "
+                   f"ζ = {_plus_minus(m.damping_ratio, m.damping_ratio_se, 4)}\nMPC {m.mpc:.3g}"),
+        figure)
+    if title:
+        figure.suptitle(title)
+    return _finish(figure, filename)
 
 
 def oma_mac(result, other=None, title=None, filename=None, ax=None):

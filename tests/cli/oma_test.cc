@@ -232,6 +232,21 @@ TEST_F(OmaCommand, PlotDrawsTheStabilisationDiagram) {
     testing::expect_png(path("found") / figure);
   }
   testing::expect_bad_input(ctid(args), "oma", "stabilisation.png: file exists");
+  // On a sensor geometry (decision 0063): the shapes deform the wireframe of a, b and c.
+  write("sensors.csv", "channel,x,y\na,0,0\nb,1,0\nc,2,0\n");
+  write("lines.csv", "from,to\na,b\nb,c\n");
+  const auto drawn =
+      ctid({"oma", two_modes(), "--max-order", "12", "--plot", "wireframe", "--geometry",
+            path("sensors.csv").string(), "--geometry-lines", path("lines.csv").string()});
+  EXPECT_EQ(drawn.status, 0) << drawn.err;
+  testing::expect_png(path("wireframe") / "shapes.png");
+  testing::expect_bad_input(
+      ctid({"oma", two_modes(), "--geometry", path("sensors.csv").string()}), "oma",
+      "--geometry draws shapes.png on the sensors' wireframe: give --plot DIR");
+  write("bad.csv", "channel,x,y\nq,0,0\n");
+  testing::expect_bad_input(ctid({"oma", two_modes(), "--max-order", "12", "--plot", "refused",
+                                  "--geometry", path("bad.csv").string()}),
+                            "oma", "the geometry's channel 'q' is not one of");
 }
 
 // Two setups sharing a and b, c and d roving: one document over a, b, c, d whose shapes are the
