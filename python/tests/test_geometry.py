@@ -43,6 +43,7 @@ def test_a_2d_geometry_with_lines_and_the_deformed_wireframe(tmp_path):
     sensors = _write(tmp_path / "s.csv", "channel,x,y\na,0,0\nb,1,0\nc,2,0\n")
     lines = _write(tmp_path / "l.csv", "from,to\na,b\nb,c\n")
     g = geometry.read_geometry(sensors, lines)
+    assert geometry.DRAWN_SHARE == 0.15  # docs/oma.md: "15 % of the structure's largest extent"
     assert g.dimension == 2 and g.lines == [(0, 1), (1, 2)]
     np.testing.assert_array_equal(g.directions[:, :2], [[0, 1]] * 3)  # along y by default
     result = _result()
