@@ -1,7 +1,9 @@
 // `ctid structure`: fits a range of structures (K modes, or unfactored n poles) with the
 // library's scan_structures (identification/structure_scan.h), prints a table of how each fit ended
 // and scores (estimation and held-out validation fit, YIC, RT2, AIC, BIC, usable), recommends
-// one by the stated rule, and writes the scan with its stabilisation diagram as JSON.
+// one by the stated rule, and writes the scan with its stabilisation diagram as JSON. With
+// --input-columns / --output-columns it scans mode counts of the shared-pole fit instead
+// (scan_mimo_modes, identification/mimo_structure_scan.h, decision 0064).
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -15,6 +17,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/fields.h"
 #include "ctid/core/format.h"
+#include "ctid/identification/mimo_structure_scan.h"
 #include "ctid/identification/structure_scan.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
@@ -37,6 +40,7 @@ struct StructureFlags {
   // Every field a flag (field_flags.h) but the controller and delay_scan, read from a file and
   // as A:B below, and those no scan takes from the command line (kNoScanFlag).
   StructureScanOptions options;
+  MimoRefinedIvOptions mimo;  ///< several channels: the fields not shared with refined_iv
   std::string controller;
   std::string delay_scan;  // A:B samples
   std::string output;
@@ -115,7 +119,86 @@ void print_table(std::ostream& out, const StructureScanResult& r, const std::str
   }
 }
 
+std::string mean_of(const Eigen::VectorXd& v, int decimals) {
+  return v.size() == 0 ? "-" : fixed(v.mean(), decimals);
+}
+
+void print_mimo_table(std::ostream& out, const MimoStructureScanResult& r, const MimoData& data,
+                      const std::string& file) {
+  out << "ctid structure: " << r.fits.size() << " mode counts on " << file << " ("
+      << data.input_count() << " inputs, " << data.output_count() << " outputs; "
+      << r.estimation_samples << " samples fitted, " << r.validation_samples << " held out)\n";
+  out << "   modes  est.fit %  val.fit %  val.error  usable  termination\n";
+  out << "          (means over the outputs)\n";
+  for (std::size_t i = 0; i < r.fits.size(); ++i) {
+    const MimoStructureFit& f = r.fits[i];
+    out << (static_cast<int>(i) == r.recommended ? " * " : "   ") << std::left << std::setw(5)
+        << f.modes << std::right << std::setw(11) << mean_of(f.estimation_fit, 2) << std::setw(11)
+        << mean_of(f.validation_fit, 2) << std::setw(11) << fixed(f.validation_error, 5)
+        << std::setw(8) << (f.usable ? "yes" : "no") << "  " << f.message << "\n";
+  }
+  if (r.recommended >= 0) {
+    out << "recommended: " << r.fits[static_cast<std::size_t>(r.recommended)].modes << " modes ("
+        << r.rule << ")\n";
+  } else {
+    out << "WARNING: " << r.rule << "; try other counts or a longer record\n";
+  }
+}
+
+// Several inputs and outputs: mode counts of the shared-pole fit (decision 0064).
+ExitStatus run_mimo_structure(const StructureFlags& f, const CLI::App& app) {
+  if (f.modes.empty()) usage_error("with --input-columns / --output-columns give --modes MIN:MAX");
+  for (const char* flag :
+       {"--poles", "--zeros", "--integrators", "--controller", "--delay-scan-samples"}) {
+    if (app.count(flag) > 0) {
+      usage_error(std::string(flag) +
+                  " is for one input and output; with --input-columns / --output-columns the "
+                  "scan is over --modes");
+    }
+  }
+  const auto [low, high] = parse_range(f.modes, "--modes");
+  std::vector<int> counts;
+  for (int k = low; k <= high; ++k) counts.push_back(k);
+  MimoStructureScanOptions options;
+  options.validation_fraction = f.options.validation_fraction;
+  options.error_tolerance = f.options.error_tolerance;
+  options.frequency_tolerance = f.options.frequency_tolerance;
+  options.damping_tolerance = f.options.damping_tolerance;
+  options.identification.refined_iv = f.mimo;
+  assign_shared_fields(options.identification.refined_iv, f.options.identification.refined_iv);
+  options.validate();
+  std::filesystem::path package;
+  if (!f.plot.empty()) {
+    package = require_plotting();
+    prepare_plot_directory(f.plot, {"stabilisation.png"}, f.force);
+  }
+  const MimoData data = f.data.load_mimo(app);
+  Progress progress("ctid structure", f.quiet);
+  const MimoStructureScanResult result =
+      scan_mimo_modes(data, counts, options, progress.callback("mode counts"));
+  progress.clear();
+  nlohmann::json document = io::to_json(result);
+  document["data"] = io::to_json(io::DataProvenance{
+      .files = {f.data.file}, .samples = data.size(), .sample_time = data.sample_time()});
+  if (!f.output.empty()) {
+    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  }
+  if (!f.quiet) {
+    print_mimo_table(std::cout, result, data, f.data.file);
+    if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
+  }
+  if (!f.plot.empty()) {
+    const TemporaryDirectory work;
+    io::write_json(work.path() / "scan.json", document);
+    plot(package, {{"stabilisation", work.path() / "scan.json",
+                    std::filesystem::path(f.plot) / "stabilisation.png",
+                    "ctid structure: " + std::filesystem::path(f.data.file).filename().string()}});
+  }
+  return result.recommended < 0 ? kExitNoUsableModel : kExitOk;
+}
+
 ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
+  if (f.data.mimo_asked(app)) return run_mimo_structure(f, app);
   const bool modes = !f.modes.empty();
   const bool poles = !f.poles.empty();
   if (modes == poles) usage_error("give one range: --modes MIN:MAX or --poles MIN:MAX");
@@ -218,7 +301,10 @@ Command add_structure_command(CLI::App& parent) {
       "Exit status: 0 ran, 3 ran but no structure gave a usable model, 2 bad usage or input, 1 "
       "other error.");
   f.data.add_to(*app, "data", true);
-  app->add_option("--modes", f.modes, "Additive: numbers of second-order modes, MIN:MAX")
+  f.data.add_mimo_columns(*app);
+  app->add_option("--modes", f.modes,
+                  "Additive: numbers of second-order modes, MIN:MAX (with --input-columns / "
+                  "--output-columns: modes shared by every channel, 2 poles and 1 zero each)")
       ->group("Structures");
   app->add_option("--poles", f.poles, "Unfactored: numbers of poles n, MIN:MAX")
       ->group("Structures");
@@ -242,6 +328,11 @@ Command add_structure_command(CLI::App& parent) {
   settings.by_hand = {"identification.controller", "identification.delay_scan_samples"};
   settings.none = kNoScanFlag;
   add_field_flags(*app, f.options, settings);
+  FieldFlagSettings mimo;
+  mimo.group = "Several inputs and outputs";
+  // Given by the identification.refined_iv flags above (one --max-iterations, ...).
+  mimo.by_hand = shared_field_names<MimoRefinedIvOptions, RefinedIvOptions>();
+  add_field_flags(*app, f.mimo, mimo);
   app->add_option("--output,-o", f.output, "Scan JSON to write")->group("Output");
   app->add_option("--plot", f.plot, "Directory for stabilisation.png (the stabilisation diagram)")
       ->group("Output");

@@ -93,6 +93,7 @@
 #include "ctid/identification/identification.h"
 #include "ctid/identification/irregular_validation.h"
 #include "ctid/identification/mimo.h"
+#include "ctid/identification/mimo_structure_scan.h"
 #include "ctid/identification/mode_tracking.h"
 #include "ctid/identification/output_only.h"
 #include "ctid/identification/structure_scan.h"

@@ -13,6 +13,8 @@ docs/python.md (the CLI's --plot inputs and CSV tables):
     estimation_result (ctid fit -o), mode_relocation_result,
     input_delay_scan_result          bode, modes (the estimate)
     structure_scan_result (structure) stabilisation; bode (the recommended fit)
+    mimo_structure_scan_result (structure --input-columns ... --output-columns ...)
+                                      stabilisation
     delayed_feedback_result (feedback) bode (forward and feedback paths)
     frf (ctid frf -o X.json)          frf
     mimo_frf (frf --input-columns)    frf_matrix
@@ -96,6 +98,7 @@ DOCUMENT_KINDS = {
     "mode_relocation_result": ("bode", "modes"),
     "input_delay_scan_result": ("bode", "modes"),
     "structure_scan_result": ("stabilisation", "bode"),
+    "mimo_structure_scan_result": ("stabilisation",),
     "delayed_feedback_result": ("bode",),
     "frf": ("frf",),
     "mimo_frf": ("frf_matrix",),

@@ -8,6 +8,7 @@
 #include "ctid/identification/identification.h"
 #include "ctid/identification/irregular_validation.h"
 #include "ctid/identification/mimo.h"
+#include "ctid/identification/mimo_structure_scan.h"
 #include "ctid/identification/mode_tracking.h"
 #include "ctid/identification/structure_scan.h"
 #include "fields.h"
@@ -226,6 +227,24 @@ void bind_identification(py::module_& m) {
       py::arg("data"), py::arg("candidates"), py::arg("options") = py::none(),
       "Fit every candidate structure on the first part of the record, score it on the held-out "
       "end (fit, YIC, RT2, AIC, BIC) and recommend one, as `ctid structure` does.");
+  bind_options<MimoStructureScanOptions>(
+      m, "Options of scan_mimo_modes: held-out share, parsimony tolerance, diagram tolerances, "
+         "the shared-pole fit's options.");
+  bind_result<MimoStructureFit>(m, "One mode count of a scan of several channels.");
+  bind_result<MimoStructureScanResult>(
+      m, "Every mode count's fit, the recommended one and the stabilisation diagram.");
+  m.def(
+      "scan_mimo_modes",
+      [](const MimoData& data, const std::vector<int>& mode_counts,
+         const std::optional<MimoStructureScanOptions>& options, const py::kwargs& kwargs) {
+        const auto o = options_from<MimoStructureScanOptions>("scan_mimo_modes", options, kwargs);
+        py::gil_scoped_release release;
+        return scan_mimo_modes(data, mode_counts, o);
+      },
+      py::arg("data"), py::arg("mode_counts"), py::arg("options") = py::none(),
+      "Fit each number of modes shared by every channel on the first part of a record of "
+      "several inputs and outputs, score it on the held-out end and recommend one, with the "
+      "stabilisation diagram, as `ctid structure --input-columns ... --output-columns ...`.");
   bind_mode_tracking(m);  // mode tracking (issue 17)
   m.def(
       "validate_on_stamps",

@@ -205,6 +205,7 @@ def documents(run, data, mimo_csv):
     folder = run("fit-frf", "all_mimo_frf.csv", "--modes", "2", "-o", "all_fit_frf.json", "-q")
     run("oma", mimo_csv, "--output-columns", "a1:a3", "--max-order", "8", "-o", "all_oma.json",
         "-q")
+    run("structure", mimo_csv, *mimo, "--modes", "1:2", "-o", "all_mimo_scan.json", "-q")
     return {
         "estimation_result": (folder / "all_fit.json", ctid.EstimationResult),
         "validation_report": (folder / "all_report.json", ctid.ValidationReport),
@@ -216,6 +217,8 @@ def documents(run, data, mimo_csv):
         "mimo_estimation_result": (folder / "all_mimo_fit.json", ctid.MimoEstimationResult),
         "frf_matrix_fit_result": (folder / "all_fit_frf.json", ctid.FrfMatrixFitResult),
         "oma_result": (folder / "all_oma.json", ctid.OmaResult),
+        "mimo_structure_scan_result": (folder / "all_mimo_scan.json",
+                                       ctid.MimoStructureScanResult),
     }
 
 

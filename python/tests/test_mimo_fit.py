@@ -114,3 +114,28 @@ def test_measured_structure_converges_and_beats_one_input_on_held_out_data():
                                [ctid.SubmodelOrder(2, 1)] * 2, max_iterations=200)
     one = ctid.validate_model(siso.model, validation.channel(1, 0), options).fit_percent
     assert two > one + 5.0, (two, one)
+
+
+def test_scan_mimo_modes_recommends_the_true_count_and_draws_its_diagram(tmp_path):
+    """ctid.scan_mimo_modes (decision 0064) on a two-mode record of two inputs and three
+    outputs: two modes recommended, the true natural frequencies stable in the three-mode fit,
+    the diagram drawn by ctid.plotting.stabilisation, and options as keywords."""
+    from ctid import plotting
+
+    truth = two_modes()
+    data = record(truth, n=3000)
+    data = ctid.MimoData(data.sample_time, data.inputs,
+                         data.outputs + 0.01 * np.random.default_rng(3).standard_normal(
+                             data.outputs.shape))
+    scan = ctid.scan_mimo_modes(data, [1, 2, 3], validation_fraction=0.25)
+    assert isinstance(scan, ctid.MimoStructureScanResult)
+    assert [f.modes for f in scan.fits] == [1, 2, 3]
+    assert scan.recommended == 1, scan.rule
+    assert scan.validation_samples == 750
+    for w in (1.4, 4.0):
+        assert any(p.order == 6 and abs(p.frequency / w - 1) < 0.01 and p.stable_damping
+                   for p in scan.stabilisation), w
+    figure = plotting.stabilisation(scan, filename=str(tmp_path / "stabilisation.png"))
+    assert figure.axes and (tmp_path / "stabilisation.png").stat().st_size > 0
+    with pytest.raises(ValueError, match="the mode count 2 is given twice"):
+        ctid.scan_mimo_modes(data, [2, 2])

@@ -21,7 +21,8 @@ std::vector<std::string> result_document_types() {
           kMimoEstimationResultType,
           kFrfMatrixFitResultType,
           kMimoFrfType,
-          kOmaResultType};
+          kOmaResultType,
+          kMimoStructureScanResultType};
 }
 
 ResultDocument result_from_json(const nlohmann::json& value, const std::string& source) {
@@ -44,6 +45,9 @@ ResultDocument result_from_json(const nlohmann::json& value, const std::string& 
   if (name == kFrfMatrixFitResultType) return frf_matrix_fit_result_from_json(value, source);
   if (name == kMimoFrfType) return mimo_frf_from_json(value, source);
   if (name == kOmaResultType) return oma_result_from_json(value, source);
+  if (name == kMimoStructureScanResultType) {
+    return mimo_structure_scan_result_from_json(value, source);
+  }
   throw InvalidArgument(source + ": \"type\" is \"" + name +
                         "\", which is not a result document (" + types + ")");
 }

@@ -280,6 +280,16 @@ StructureScanResult structure_scan_result_from_json(const nlohmann::json& value,
   return document_fields<StructureScanResult>(value, kStructureScanResultType, {"data"}, source);
 }
 
+nlohmann::json to_json(const MimoStructureScanResult& scan) {
+  return document(scan, kMimoStructureScanResultType);
+}
+
+MimoStructureScanResult mimo_structure_scan_result_from_json(const nlohmann::json& value,
+                                                             const std::string& source) {
+  return document_fields<MimoStructureScanResult>(value, kMimoStructureScanResultType, {"data"},
+                                                  source);
+}
+
 nlohmann::json to_json(const MimoEstimationResult& result) {
   return document(result, kMimoEstimationResultType);
 }

@@ -4,11 +4,14 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <string>
 #include <variant>
+#include <vector>
 
 #include "cli/run_ctid.h"
 #include "ctid/io/documents.h"
 #include "ctid/io/json.h"
+#include "support/sanitizers.h"
 
 namespace ctid::cli::structure_test {
 namespace {
@@ -78,6 +81,40 @@ TEST_F(StructureCommand, BadRangesExitTwoWithOneLine) {
                    "an improper model");
   expect_bad_input(ctid({"structure", "d.csv", "--modes", "1:2", "--validation-fraction", "2"}),
                    "--validation-fraction is 2");
+}
+
+// Several inputs and outputs (decision 0064): mode counts of the shared-pole fit on the measured
+// flexible structure, the table, the document and its diagram; SISO-only flags are refused.
+TEST_F(StructureCommand, SeveralChannelsScanModeCounts) {
+  const std::string data =
+      std::string(CTID_SOURCE_DIR) + "/data/daisy_flexible_structure/flexible_structure.csv";
+  const std::vector<std::string> channels = {"--time-column",    "t_s",
+                                             "--input-columns",  "u1_force:u2_force",
+                                             "--output-columns", "y1_acc:y28_acc"};
+  std::vector<std::string> refused = {"structure", data, "--modes", "2:3", "--poles", "2:3"};
+  refused.insert(refused.end(), channels.begin(), channels.end());
+  expect_bad_input(ctid(refused), "--poles is for one input and output");
+  std::vector<std::string> no_modes = {"structure", data};
+  no_modes.insert(no_modes.end(), channels.begin(), channels.end());
+  expect_bad_input(ctid(no_modes), "with --input-columns / --output-columns give --modes MIN:MAX");
+  CTID_SKIP_UNDER_SANITIZERS(
+      "MimoStructureScan.TwoModesAreRecommendedAndStableInTheDiagram runs the scan itself");
+  std::vector<std::string> args = {"structure", data,        "--modes",  "6:7",
+                                   "--direct",  "--detrend", "mean",     "--decimate",
+                                   "2",         "-o",        "mimo.json"};
+  args.insert(args.end(), channels.begin(), channels.end());
+  const auto r = ctid(args);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("ctid structure: 2 mode counts on"));
+  EXPECT_THAT(r.out, HasSubstr("(2 inputs, 28 outputs; 2984 samples fitted, 1278 held out)"));
+  EXPECT_THAT(r.out, HasSubstr("recommended: 7 modes"));
+  const auto doc = io::read_result(path("mimo.json"));
+  const auto* scan = std::get_if<MimoStructureScanResult>(&doc);
+  ASSERT_NE(scan, nullptr);
+  ASSERT_EQ(scan->fits.size(), 2u);
+  EXPECT_EQ(scan->fits[1].modes, 7);
+  EXPECT_EQ(scan->fits[1].validation_fit.size(), 28);
+  EXPECT_FALSE(scan->stabilisation.empty());
 }
 
 }  // namespace

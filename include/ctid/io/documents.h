@@ -18,6 +18,7 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/frequency/frf.h"
 #include "ctid/frf_fit/frf_matrix_fit.h"
+#include "ctid/identification/mimo_structure_scan.h"
 #include "ctid/identification/structure_scan.h"
 #include "ctid/io/feedback_result_json.h"
 #include "ctid/io/file.h"
@@ -34,14 +35,16 @@ namespace ctid::io {
 using ResultDocument =
     std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult, ValidationReport,
                  Frf, StudySummary, DelayedFeedbackResult, StructureScanResult,
-                 MimoEstimationResult, FrfMatrixFitResult, MimoFrf, OmaResult>;
+                 MimoEstimationResult, FrfMatrixFitResult, MimoFrf, OmaResult,
+                 MimoStructureScanResult>;
 
 /// The "type" values result_from_json reads, in the order of ResultDocument.
 std::vector<std::string> result_document_types();
 
 /// The result in `value`, by its "type" (estimation_result, mode_relocation_result,
 /// input_delay_scan_result, validation_report, frf, study_summary, delayed_feedback_result,
-/// structure_scan_result, mimo_estimation_result, frf_matrix_fit_result, mimo_frf, oma_result).
+/// structure_scan_result, mimo_estimation_result, frf_matrix_fit_result, mimo_frf, oma_result,
+/// mimo_structure_scan_result).
 /// Throws
 /// InvalidArgument naming `source` for a missing or unknown type, an unknown version or a bad
 /// field.

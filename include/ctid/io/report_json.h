@@ -14,6 +14,7 @@
 #include "ctid/frequency/frf.h"
 #include "ctid/frequency/mimo_frf.h"
 #include "ctid/frf_fit/frf_matrix_fit.h"
+#include "ctid/identification/mimo_structure_scan.h"
 #include "ctid/identification/structure_scan.h"
 #include "ctid/oma/oma.h"
 #include "ctid/refined_iv/mimo_srivc.h"
@@ -29,6 +30,7 @@ inline constexpr const char* kMimoFrfType = "mimo_frf";
 inline constexpr const char* kOmaResultType = "oma_result";
 inline constexpr const char* kStudySummaryType = "study_summary";
 inline constexpr const char* kStructureScanResultType = "structure_scan_result";
+inline constexpr const char* kMimoStructureScanResultType = "mimo_structure_scan_result";
 inline constexpr const char* kMimoEstimationResultType = "mimo_estimation_result";
 inline constexpr const char* kFrfMatrixFitResultType = "frf_matrix_fit_result";
 
@@ -83,5 +85,11 @@ FrfMatrixFitResult frf_matrix_fit_result_from_json(const nlohmann::json& value,
 /// Reads it back; the context `ctid structure` writes ("data") is accepted and not read.
 StructureScanResult structure_scan_result_from_json(const nlohmann::json& value,
                                                     const std::string& source);
+/// {"type": "mimo_structure_scan_result", "version": 1, <fields>} (`ctid structure
+/// --input-columns ... --output-columns ...`): every mode count's scores, the recommendation
+/// and the stabilisation diagram; the reader accepts the "data" the command adds.
+nlohmann::json to_json(const MimoStructureScanResult& scan);
+MimoStructureScanResult mimo_structure_scan_result_from_json(const nlohmann::json& value,
+                                                             const std::string& source);
 
 }  // namespace ctid::io
