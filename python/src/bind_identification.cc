@@ -228,8 +228,9 @@ void bind_identification(py::module_& m) {
       "Fit every candidate structure on the first part of the record, score it on the held-out "
       "end (fit, YIC, RT2, AIC, BIC) and recommend one, as `ctid structure` does.");
   bind_options<MimoStructureScanOptions>(
-      m, "Options of scan_mimo_modes: held-out share, parsimony tolerance, diagram tolerances, "
-         "the shared-pole fit's options.");
+      m,
+      "Options of scan_mimo_modes: held-out share, parsimony tolerance, diagram tolerances, "
+      "the shared-pole fit's options.");
   bind_result<MimoStructureFit>(m, "One mode count of a scan of several channels.");
   bind_result<MimoStructureScanResult>(
       m, "Every mode count's fit, the recommended one and the stabilisation diagram.");

@@ -32,11 +32,10 @@
 namespace ctid::io {
 
 /// A result read from a document, by its "type".
-using ResultDocument =
-    std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult, ValidationReport,
-                 Frf, StudySummary, DelayedFeedbackResult, StructureScanResult,
-                 MimoEstimationResult, FrfMatrixFitResult, MimoFrf, OmaResult,
-                 MimoStructureScanResult>;
+using ResultDocument = std::variant<EstimationResult, ModeRelocationResult, InputDelayScanResult,
+                                    ValidationReport, Frf, StudySummary, DelayedFeedbackResult,
+                                    StructureScanResult, MimoEstimationResult, FrfMatrixFitResult,
+                                    MimoFrf, OmaResult, MimoStructureScanResult>;
 
 /// The "type" values result_from_json reads, in the order of ResultDocument.
 std::vector<std::string> result_document_types();
