@@ -6,6 +6,7 @@
 // (scan_mimo_modes, identification/mimo_structure_scan.h, decision 0064).
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -119,6 +120,38 @@ void print_table(std::ostream& out, const StructureScanResult& r, const std::str
   }
 }
 
+// --plot DIR checked before any work; the plotting package (empty without --plot).
+std::filesystem::path prepare_plot(const StructureFlags& f) {
+  if (f.plot.empty()) return {};
+  std::filesystem::path package = require_plotting();
+  prepare_plot_directory(f.plot, {"stabilisation.png"}, f.force);
+  return package;
+}
+
+// Writes -o (the scan's `document` with its data), prints the table (`print`), draws --plot;
+// exit 3 when no fit is recommended.
+ExitStatus finish_scan(const StructureFlags& f, const std::filesystem::path& package,
+                       nlohmann::json document, int samples, double sample_time, int recommended,
+                       const std::function<void(std::ostream&)>& print) {
+  document["data"] = io::to_json(
+      io::DataProvenance{.files = {f.data.file}, .samples = samples, .sample_time = sample_time});
+  if (!f.output.empty()) {
+    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
+  }
+  if (!f.quiet) {
+    print(std::cout);
+    if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
+  }
+  if (!f.plot.empty()) {
+    const TemporaryDirectory work;
+    io::write_json(work.path() / "scan.json", document);
+    plot(package, {{"stabilisation", work.path() / "scan.json",
+                    std::filesystem::path(f.plot) / "stabilisation.png",
+                    "ctid structure: " + std::filesystem::path(f.data.file).filename().string()}});
+  }
+  return recommended < 0 ? kExitNoUsableModel : kExitOk;
+}
+
 std::string mean_of(const Eigen::VectorXd& v, int decimals) {
   return v.size() == 0 ? "-" : fixed(v.mean(), decimals);
 }
@@ -167,34 +200,15 @@ ExitStatus run_mimo_structure(const StructureFlags& f, const CLI::App& app) {
   options.identification.refined_iv = f.mimo;
   assign_shared_fields(options.identification.refined_iv, f.options.identification.refined_iv);
   options.validate();
-  std::filesystem::path package;
-  if (!f.plot.empty()) {
-    package = require_plotting();
-    prepare_plot_directory(f.plot, {"stabilisation.png"}, f.force);
-  }
+  const std::filesystem::path package = prepare_plot(f);
   const MimoData data = f.data.load_mimo(app);
   Progress progress("ctid structure", f.quiet);
   const MimoStructureScanResult result =
       scan_mimo_modes(data, counts, options, progress.callback("mode counts"));
   progress.clear();
-  nlohmann::json document = io::to_json(result);
-  document["data"] = io::to_json(io::DataProvenance{
-      .files = {f.data.file}, .samples = data.size(), .sample_time = data.sample_time()});
-  if (!f.output.empty()) {
-    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
-  }
-  if (!f.quiet) {
-    print_mimo_table(std::cout, result, data, f.data.file);
-    if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
-  }
-  if (!f.plot.empty()) {
-    const TemporaryDirectory work;
-    io::write_json(work.path() / "scan.json", document);
-    plot(package, {{"stabilisation", work.path() / "scan.json",
-                    std::filesystem::path(f.plot) / "stabilisation.png",
-                    "ctid structure: " + std::filesystem::path(f.data.file).filename().string()}});
-  }
-  return result.recommended < 0 ? kExitNoUsableModel : kExitOk;
+  return finish_scan(f, package, io::to_json(result), data.size(), data.sample_time(),
+                     result.recommended,
+                     [&](std::ostream& out) { print_mimo_table(out, result, data, f.data.file); });
 }
 
 ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
@@ -245,11 +259,7 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
     usage_error("the flags ask for " + std::to_string(candidates.size()) +
                 " structures; at most 64 per scan");
   }
-  std::filesystem::path package;
-  if (!f.plot.empty()) {
-    package = require_plotting();
-    prepare_plot_directory(f.plot, {"stabilisation.png"}, f.force);
-  }
+  const std::filesystem::path package = prepare_plot(f);
   StructureScanOptions options = f.options;
   if (!f.controller.empty()) {
     options.identification.controller = io::read_discrete_transfer_function(f.controller);
@@ -264,24 +274,9 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
   const StructureScanResult result =
       scan_structures(data, candidates, options, progress.callback("structure"));
   progress.clear();
-  nlohmann::json document = io::to_json(result);
-  document["data"] = io::to_json(io::DataProvenance{
-      .files = {f.data.file}, .samples = data.size(), .sample_time = data.sample_time()});
-  if (!f.output.empty()) {
-    io::write_json(f.output, document, f.force ? io::Overwrite::yes : io::Overwrite::no);
-  }
-  if (!f.quiet) {
-    print_table(std::cout, result, f.data.file);
-    if (!f.output.empty()) std::cout << "wrote " << f.output << "\n";
-  }
-  if (!f.plot.empty()) {
-    const TemporaryDirectory work;
-    io::write_json(work.path() / "scan.json", document);
-    plot(package, {{"stabilisation", work.path() / "scan.json",
-                    std::filesystem::path(f.plot) / "stabilisation.png",
-                    "ctid structure: " + std::filesystem::path(f.data.file).filename().string()}});
-  }
-  return result.recommended < 0 ? kExitNoUsableModel : kExitOk;
+  return finish_scan(f, package, io::to_json(result), data.size(), data.sample_time(),
+                     result.recommended,
+                     [&](std::ostream& out) { print_table(out, result, f.data.file); });
 }
 
 Command add_structure_command(CLI::App& parent) {

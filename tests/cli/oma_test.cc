@@ -249,6 +249,25 @@ TEST_F(OmaCommand, PlotDrawsTheStabilisationDiagram) {
                             "oma", "the geometry's channel 'q' is not one of");
 }
 
+// The merged document of setup("c", -0.8, 0.6) and setup("d", 0.3, 0.9): two modes whose shapes
+// over a, b, c, d are the modal amplitudes of every channel (MAC >= 0.99 with the real ones).
+void expect_the_setups_modal_amplitudes(const nlohmann::json& doc) {
+  const double expected[2][4] = {{1.0, 0.5, -0.8, 0.3}, {1.0, -1.0, 0.6, 0.9}};
+  ASSERT_EQ(doc["modes"].size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    std::complex<double> dot = 0.0;
+    double shape = 0.0, truth = 0.0;
+    for (int j = 0; j < 4; ++j) {
+      const std::complex<double> v(doc["modes"][i]["shape_real"][j].get<double>(),
+                                   doc["modes"][i]["shape_imag"][j].get<double>());
+      dot += v * expected[i][j];
+      shape += std::norm(v);
+      truth += expected[i][j] * expected[i][j];
+    }
+    EXPECT_GE(std::norm(dot) / (shape * truth), 0.99) << i;
+  }
+}
+
 // Two setups sharing a and b, c and d roving: one document over a, b, c, d whose shapes are the
 // modal amplitudes of every channel.
 TEST_F(OmaCommand, SeveralFilesAreSetupsMergedIntoGlobalModes) {
@@ -263,21 +282,7 @@ TEST_F(OmaCommand, SeveralFilesAreSetupsMergedIntoGlobalModes) {
   ASSERT_EQ(doc["setups"].size(), 2u);
   EXPECT_EQ(doc["setups"][1]["data"]["file"], two);
   ASSERT_TRUE(std::holds_alternative<OmaResult>(io::read_result(path("merged.json"))));
-  const double expected[2][4] = {{1.0, 0.5, -0.8, 0.3}, {1.0, -1.0, 0.6, 0.9}};
-  ASSERT_EQ(doc["modes"].size(), 2u);
-  for (int i = 0; i < 2; ++i) {
-    // MAC of the merged (complex) shape with the real amplitudes.
-    std::complex<double> dot = 0.0;
-    double shape = 0.0, truth = 0.0;
-    for (int j = 0; j < 4; ++j) {
-      const std::complex<double> v(doc["modes"][i]["shape_real"][j].get<double>(),
-                                   doc["modes"][i]["shape_imag"][j].get<double>());
-      dot += v * expected[i][j];
-      shape += std::norm(v);
-      truth += expected[i][j] * expected[i][j];
-    }
-    EXPECT_GE(std::norm(dot) / (shape * truth), 0.99) << i;
-  }
+  expect_the_setups_modal_amplitudes(doc);
   testing::expect_bad_input(ctid({"oma", one, two}), "oma",
                             "several files are setups of one structure: give --reference-columns");
   testing::expect_bad_input(
@@ -306,21 +311,8 @@ TEST_F(OmaCommand, PregerMergesTheSetupsInOneIdentification) {
   const nlohmann::json doc = io::read_json(path("merged.json"));
   EXPECT_EQ(doc["channels"], nlohmann::json({"a", "b", "c", "d"}));
   EXPECT_FALSE(doc["stabilisation"].empty());
-  const double expected[2][4] = {{1.0, 0.5, -0.8, 0.3}, {1.0, -1.0, 0.6, 0.9}};
-  ASSERT_EQ(doc["modes"].size(), 2u);
-  for (int i = 0; i < 2; ++i) {
-    std::complex<double> dot = 0.0;
-    double shape = 0.0, truth = 0.0;
-    for (int j = 0; j < 4; ++j) {
-      const std::complex<double> v(doc["modes"][i]["shape_real"][j].get<double>(),
-                                   doc["modes"][i]["shape_imag"][j].get<double>());
-      dot += v * expected[i][j];
-      shape += std::norm(v);
-      truth += expected[i][j] * expected[i][j];
-    }
-    EXPECT_GE(std::norm(dot) / (shape * truth), 0.99) << i;
-    EXPECT_GT(doc["modes"][i]["frequency_hz_std"].get<double>(), 0.0) << i;
-  }
+  expect_the_setups_modal_amplitudes(doc);
+  for (int i = 0; i < 2; ++i) EXPECT_GT(doc["modes"][i]["frequency_hz_std"].get<double>(), 0.0);
   if (plots) {
     for (const char* figure : {"stabilisation.png", "stabilisation_setup1.png",
                                "stabilisation_setup2.png", "shapes.png", "mac.png"}) {
