@@ -3,7 +3,8 @@
 // **options) runs identify_output_only, as `ctid oma` does, and returns an OmaResult with its
 // modes, stabilisation diagram and verdict; OmaOptions, OmaMode, OmaPole, OmaMethod,
 // OmaUncertainty and PoleStability mirror the C++ names. ctid.oma_setups(outputs, sample_time,
-// channel_names, options, **options) merges several setups (MultiSetupOptions, MultiSetupResult).
+// channel_names, options, **options) merges several setups by PoSER or PreGER (MultiSetupOptions,
+// MultiSetupResult).
 #include "common.h"
 #include "ctid/identification/output_only.h"
 #include "fields.h"
@@ -61,9 +62,10 @@ void bind_oma(py::module_& m) {
       py::arg("options") = py::none(),
       "Several setups of one structure (a list of (N_k, l_k) arrays sampled every sample_time "
       "seconds, channel_names one list per setup) with the reference channels every setup "
-      "measures (reference_names): each analysed alone, the modes merged into global ones by "
-      "PoSER, standard errors carried through. MultiSetupOptions fields may be given as "
-      "keywords.");
+      "measures (reference_names): each analysed alone and the modes merged into global ones "
+      "by PoSER with standard errors carried through (merge=OmaMerge.poser, the default), or "
+      "the setups identified together by PreGER with segment standard errors "
+      "(merge=OmaMerge.preger). MultiSetupOptions fields may be given as keywords.");
 }
 
 }  // namespace ctid::python
