@@ -10,6 +10,7 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -178,6 +179,27 @@ void print_mimo_table(std::ostream& out, const MimoStructureScanResult& r, const
   }
 }
 
+// With several channels, every "Choice and fits" flag of the one-channel scan that the
+// shared-pole scan does not use (all but the scan's own four and the estimator fields the two
+// estimators share, assign_shared_fields) is refused rather than ignored.
+void refuse_single_channel_fit_flags(const CLI::App& app) {
+  std::set<std::string> used;
+  for (const char* field :
+       {"validation_fraction", "error_tolerance", "frequency_tolerance", "damping_tolerance"}) {
+    used.insert(flag_of<StructureScanOptions>(field));
+  }
+  for (const std::string& name : shared_field_names<MimoRefinedIvOptions, RefinedIvOptions>()) {
+    used.insert(flag_of<StructureScanOptions>("identification.refined_iv." + name));
+  }
+  for (const CLI::Option* option : app.get_options()) {
+    if (option->get_group() != "Choice and fits" || option->count() == 0) continue;
+    if (used.count(option->get_name()) > 0) continue;
+    usage_error(option->get_name() +
+                " is for one input and output; with --input-columns / --output-columns the "
+                "shared-pole fit takes the flags of 'Several inputs and outputs'");
+  }
+}
+
 // Several inputs and outputs: mode counts of the shared-pole fit (decision 0064).
 ExitStatus run_mimo_structure(const StructureFlags& f, const CLI::App& app) {
   if (f.modes.empty()) usage_error("with --input-columns / --output-columns give --modes MIN:MAX");
@@ -189,6 +211,7 @@ ExitStatus run_mimo_structure(const StructureFlags& f, const CLI::App& app) {
                   "scan is over --modes");
     }
   }
+  refuse_single_channel_fit_flags(app);
   const auto [low, high] = parse_range(f.modes, "--modes");
   std::vector<int> counts;
   for (int k = low; k <= high; ++k) counts.push_back(k);

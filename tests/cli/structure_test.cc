@@ -97,11 +97,19 @@ TEST_F(StructureCommand, SeveralChannelsScanModeCounts) {
   std::vector<std::string> no_modes = {"structure", data};
   no_modes.insert(no_modes.end(), channels.begin(), channels.end());
   expect_bad_input(ctid(no_modes), "with --input-columns / --output-columns give --modes MIN:MAX");
+  // A one-channel estimator flag is refused, not ignored; a shared one is taken.
+  std::vector<std::string> history = {"structure", data, "--modes", "2:3", "--history"};
+  history.insert(history.end(), channels.begin(), channels.end());
+  expect_bad_input(ctid(history), "--history is for one input and output");
+  std::vector<std::string> relocate = {"structure", data, "--modes", "2:3", "--relocate-modes"};
+  relocate.insert(relocate.end(), channels.begin(), channels.end());
+  expect_bad_input(ctid(relocate), "--relocate-modes is for one input and output");
   CTID_SKIP_UNDER_SANITIZERS(
       "MimoStructureScan.TwoModesAreRecommendedAndStableInTheDiagram runs the scan itself");
-  std::vector<std::string> args = {"structure", data,        "--modes",  "6:7",
-                                   "--direct",  "--detrend", "mean",     "--decimate",
-                                   "2",         "-o",        "mimo.json"};
+  std::vector<std::string> args = {"structure", data, "--modes", "6:7", "--direct", "--detrend",
+                                   "mean", "--decimate", "2",
+                                   // a flag the two estimators share: taken (its default value)
+                                   "--max-iterations", "100", "-o", "mimo.json"};
   args.insert(args.end(), channels.begin(), channels.end());
   const auto r = ctid(args);
   ASSERT_EQ(r.status, 0) << r.err;
