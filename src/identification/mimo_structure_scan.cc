@@ -115,7 +115,9 @@ std::vector<StabilisationPoint> stabilisation_diagram(
     const std::vector<MimoStructureFit>& fits, const std::vector<std::vector<MimoMode>>& modes,
     const MimoStructureScanOptions& options) {
   std::vector<StabilisationPoint> points;
+  const std::vector<MimoMode> none;
   for (std::size_t i = 0; i < fits.size(); ++i) {
+    const std::vector<MimoMode>& previous = i == 0 ? none : modes[i - 1];
     for (const MimoMode& m : modes[i]) {
       StabilisationPoint point;
       point.fit = static_cast<int>(i);
@@ -123,7 +125,7 @@ std::vector<StabilisationPoint> stabilisation_diagram(
       point.frequency = m.natural_frequency;
       point.damping_ratio = m.damping_ratio;
       point.stable_pole = m.damping_ratio > 0.0;
-      for (const MimoMode& q : i == 0 ? std::vector<MimoMode>{} : modes[i - 1]) {
+      for (const MimoMode& q : previous) {
         const double w = q.natural_frequency;
         if (std::abs(point.frequency - w) <= options.frequency_tolerance * w) {
           point.stable_frequency = true;

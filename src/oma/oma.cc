@@ -58,13 +58,7 @@ void check_record(const Eigen::MatrixXd& y, double h, const std::vector<std::str
   }
 }
 
-// Samples the method needs for p block rows: SSI-cov kSamplesPerBlockRow per block row; SSI-data
-// that too, and at least as many Hankel columns as rows.
-Eigen::Index ssi_samples_needed(const OmaOptions& o, int p, Eigen::Index l, Eigen::Index r) {
-  const Eigen::Index needed = static_cast<Eigen::Index>(kSamplesPerBlockRow) * p;
-  if (o.method != OmaMethod::ssi_data) return needed;
-  return std::max(needed, oma_detail::ssi_data_samples_needed(p, l, r));
-}
+using oma_detail::ssi_samples_needed;
 
 int pick_block_rows(const OmaOptions& o, Eigen::Index l, Eigen::Index r, Eigen::Index n) {
   const int p = o.block_rows > 0 ? o.block_rows
@@ -457,11 +451,7 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
       options.uncertainty_blocks >= 2 &&
       outputs.rows() / options.uncertainty_blocks >= ssi_samples_needed(options, p, l, r);
   const RecordSsi record = record_ssi(outputs, refs, p, options, with_errors);
-  oma_detail::ssi_modes(
-      [&](int n) {
-        return oma_detail::ssi_poles(record.factor, n, sample_time, options.max_damping);
-      },
-      options, result);
+  oma_detail::ssi_modes(poles_of(record.factor, sample_time, options), options, result);
   const std::string error_note =
       standard_errors(outputs, record, refs, p, sample_time, options, result.modes);
   result.termination = Termination::converged;
@@ -478,8 +468,12 @@ SsiFactor record_factor(const Eigen::MatrixXd& y, const std::vector<int>& refs, 
   return record_ssi(y, refs, p, options, false, threads).factor;
 }
 
-Eigen::Index ssi_samples_needed(const OmaOptions& options, int p, Eigen::Index l, Eigen::Index r) {
-  return ctid::ssi_samples_needed(options, p, l, r);
+// SSI-cov kSamplesPerBlockRow per block row; SSI-data that too, and at least as many Hankel
+// columns as rows.
+Eigen::Index ssi_samples_needed(const OmaOptions& o, int p, Eigen::Index l, Eigen::Index r) {
+  const Eigen::Index needed = static_cast<Eigen::Index>(kSamplesPerBlockRow) * p;
+  if (o.method != OmaMethod::ssi_data) return needed;
+  return std::max(needed, ssi_data_samples_needed(p, l, r));
 }
 
 void ssi_modes(const PolesOfOrder& poles, const OmaOptions& options, OmaResult& result) {
@@ -502,7 +496,7 @@ void segment_standard_errors(int nb, const std::function<PolesOfOrder(int)>& blo
   const std::size_t m = modes.size();
   std::vector<std::vector<double>> f(m), z(m);
   std::vector<std::vector<Eigen::VectorXcd>> shapes(m);
-  // The blocks' factors on threads (each block on one), the matching in block order.
+  // The blocks' poles on threads (each block on one), the matching in block order.
   std::vector<PolesOfOrder> blocks(static_cast<std::size_t>(nb));
   parallel_for(nb, 0, [&](int b) { blocks[static_cast<std::size_t>(b)] = block_poles(b); });
   for (const PolesOfOrder& poles_of_order : blocks) {
