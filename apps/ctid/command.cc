@@ -295,6 +295,14 @@ std::string closest_name(const CLI::App& app, const std::vector<std::string>& un
 
 void usage_error(const std::string& message) { throw InvalidArgument(message); }
 
+void refuse_flags_not_taken(const CLI::App& app, const std::set<std::string>& groups,
+                            const std::set<std::string>& taken, const std::string& why) {
+  for (const CLI::Option* option : app.get_options()) {
+    if (option->count() == 0 || groups.count(option->get_group()) == 0) continue;
+    if (taken.count(option->get_name()) == 0) usage_error(option->get_name() + why);
+  }
+}
+
 CLI::Validator seed_validator() {
   return CLI::Validator(
       [](std::string& text) -> std::string {

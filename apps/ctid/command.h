@@ -8,6 +8,7 @@
 
 #include <functional>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <type_traits>
@@ -104,6 +105,12 @@ std::string closest_name(const CLI::App& app, const std::vector<std::string>& un
 /// Throws ctid::InvalidArgument with `message` (usage errors found after parsing, such as
 /// two inputs given at once).
 [[noreturn]] void usage_error(const std::string& message);
+
+/// Refuses (usage_error: the flag's name, then `why`) the first flag given on `app` whose help
+/// group is one of `groups` and whose name is not in `taken`: a path that reads only some of a
+/// command's flags (several channels) ignores none of the others.
+void refuse_flags_not_taken(const CLI::App& app, const std::set<std::string>& groups,
+                            const std::set<std::string>& taken, const std::string& why);
 
 /// The whole of a flag's `text` as an int or a double; none when it is empty, not a number
 /// or has characters after the number. Each command words its own usage error around it.

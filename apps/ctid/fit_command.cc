@@ -422,17 +422,17 @@ ExitStatus run_mimo_fit(const FitFlags& f, const CLI::App& app) {
         "with --input-columns / --output-columns give the modes (--modes K or "
         "--submodel N,M repeated); an unfactored model has no shared modes");
   }
-  for (const char* flag :
-       {"--controller", "--two-stage", "--input-delay-samples", "--delay-scan-samples",
-        "--delay-range", "--record-delay-samples", "--relocate-modes", "--history", "--noise-model",
-        "--polish", "--fix", "--bound", "--dc-gain"}) {
-    if (app.count(flag) > 0) {
-      usage_error(
-          std::string(flag) +
-          " is not available with --input-columns / --output-columns yet (the "
-          "shared-pole estimator is open loop; known per-input delays: --input-delays-samples)");
-    }
+  // Every structure, loop, process, iteration and constraint flag the shared-pole estimator
+  // does not read is refused, not ignored: the list is derived from the field tables.
+  std::set<std::string> taken = {"--model",    "--poles", "--zeros", "--integrators",
+                                 "--submodel", "--modes", "--start", "--initial"};
+  for (const std::string& name : shared_field_names<MimoRefinedIvOptions, RefinedIvOptions>()) {
+    taken.insert(flag_of<IdentificationOptions>("refined_iv." + name));
   }
+  refuse_flags_not_taken(
+      app, {"Structure", "Closed loop", "Process model", "Iteration", "Constraints"}, taken,
+      " is not available with --input-columns / --output-columns yet (the shared-pole estimator "
+      "is open loop; known per-input delays: --input-delays-samples)");
   if (!f.initial.empty() && f.start != "auto") usage_error("give --start or --initial, not both");
   if (f.start == "lssvf" || f.start == "frf") {
     usage_error("--start " + f.start +

@@ -191,13 +191,9 @@ void refuse_single_channel_fit_flags(const CLI::App& app) {
   for (const std::string& name : shared_field_names<MimoRefinedIvOptions, RefinedIvOptions>()) {
     used.insert(flag_of<StructureScanOptions>("identification.refined_iv." + name));
   }
-  for (const CLI::Option* option : app.get_options()) {
-    if (option->get_group() != "Choice and fits" || option->count() == 0) continue;
-    if (used.count(option->get_name()) > 0) continue;
-    usage_error(option->get_name() +
-                " is for one input and output; with --input-columns / --output-columns the "
-                "shared-pole fit takes the flags of 'Several inputs and outputs'");
-  }
+  refuse_flags_not_taken(app, {"Choice and fits"}, used,
+                         " is for one input and output; with --input-columns / --output-columns "
+                         "the shared-pole fit takes the flags of 'Several inputs and outputs'");
 }
 
 // Several inputs and outputs: mode counts of the shared-pole fit (decision 0064).

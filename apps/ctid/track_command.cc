@@ -240,19 +240,23 @@ ExitStatus run_mimo_track(const TrackFlags& f, const CLI::App& app) {
         "with --input-columns / --output-columns give the modes (--modes K or --submodel N,M "
         "repeated); an unfactored model has no shared modes");
   }
-  for (const char* flag : {"--controller", "--input-delay-samples", "--relocate-modes", "--history",
-                           "--noise-model"}) {
-    if (app.count(flag) > 0) {
-      usage_error(std::string(flag) +
-                  " is not available with --input-columns / --output-columns (the shared-pole "
-                  "estimator is open loop, without input delays here)");
-    }
-  }
   if (f.start != "auto" || !f.initial.empty()) {
     usage_error((f.initial.empty() ? "--start " + f.start : "--initial") +
                 " is for one input and output; with --input-columns / --output-columns every "
                 "window without a warm start starts automatically");
   }
+  // Every fit flag the shared-pole windows do not read is refused, derived from the field tables.
+  std::set<std::string> taken = {"--model",    "--poles", "--zeros", "--integrators",
+                                 "--submodel", "--modes", "--start"};
+  for (const std::string& name : shared_field_names<MimoTrackingOptions, TrackingOptions>()) {
+    taken.insert(flag_of<TrackingOptions>(name));
+  }
+  for (const std::string& name : shared_field_names<MimoRefinedIvOptions, RefinedIvOptions>()) {
+    taken.insert(flag_of<TrackingOptions>("identification.refined_iv." + name));
+  }
+  refuse_flags_not_taken(app, {"Structure", "Iteration"}, taken,
+                         " is not available with --input-columns / --output-columns (the "
+                         "shared-pole estimator is open loop, without input delays here)");
   check_windows_and_outputs(f);
   std::filesystem::path package;
   if (!f.plot.empty()) {
@@ -306,6 +310,17 @@ ExitStatus run_output_only_track(const TrackFlags& f, const CLI::App& app) {
   if (f.data.output_columns.empty()) {
     usage_error("--output-only needs --output-columns, the response channels");
   }
+  // The fit flags oma() does not read are refused, derived from the field tables.
+  std::set<std::string> taken;
+  for (const std::string& name : shared_field_names<OmaTrackingOptions, TrackingOptions>()) {
+    taken.insert(flag_of<TrackingOptions>(name));
+  }
+  for (const std::string& name : shared_field_names<OmaTrackingOptions, MimoTrackingOptions>()) {
+    taken.insert(flag_of<MimoTrackingOptions>(name));
+  }
+  refuse_flags_not_taken(app, {"Iteration", "Several outputs"}, taken,
+                         " is not available with --output-only (no input, no model structure: "
+                         "each window is analysed as ctid oma analyses a record)");
   check_windows_and_outputs(f);
   std::filesystem::path package;
   if (!f.plot.empty()) {
@@ -313,12 +328,8 @@ ExitStatus run_output_only_track(const TrackFlags& f, const CLI::App& app) {
     prepare_plot_directory(f.plot, {"tracking.png"}, f.force);
   }
   OmaTrackingOptions options = f.oma;
-  options.window = f.options.window;
-  options.step = f.options.step;
-  options.max_frequency_jump = f.options.max_frequency_jump;
-  options.damping_weight = f.options.damping_weight;
-  options.mac_weight = f.mimo.mac_weight;
-  options.min_mac = f.mimo.min_mac;
+  assign_shared_fields(options, f.mimo);     // mac_weight, min_mac
+  assign_shared_fields(options, f.options);  // window, step, ...: their flags are TrackingOptions'
   const OutputOnlyRecord record = read_output_only(
       f.data.file, f.data.output_columns, f.data.time_column,
       app.count("--sample-time") > 0 ? std::optional<double>(f.data.sample_time) : std::nullopt,
@@ -353,12 +364,10 @@ ExitStatus run_output_only_track(const TrackFlags& f, const CLI::App& app) {
 
 ExitStatus run_track(const TrackFlags& f, const CLI::App& app) {
   if (f.output_only) return run_output_only_track(f, app);
+  refuse_flags_not_taken(app, {"Output-only"}, {}, " goes with --output-only");
   if (f.data.mimo_asked(app)) return run_mimo_track(f, app);
-  for (const char* flag : {"--direct", "--input-delays-samples", "--rank-one", "--siso-engine"}) {
-    if (app.count(flag) > 0) {
-      usage_error(std::string(flag) + " goes with --input-columns / --output-columns");
-    }
-  }
+  refuse_flags_not_taken(app, {"Several outputs"}, {},
+                         " goes with --input-columns / --output-columns");
   const ModelStructure structure = model_structure(f, app);
   check_windows_and_outputs(f);
   const bool force = f.force;

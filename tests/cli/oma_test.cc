@@ -347,6 +347,9 @@ TEST_F(OmaCommand, TrackOutputOnlyFollowsTheModesThroughTheWindows) {
   testing::expect_bad_input(ctid({"track", data, "--output-only", "--output-columns", "a:c",
                                   "--window", "40", "--poles", "2"}),
                             "track", "--poles is not available with --output-only");
+  testing::expect_bad_input(ctid({"track", data, "--output-only", "--output-columns", "a:c",
+                                  "--window", "40", "--max-iterations", "5"}),
+                            "track", "--max-iterations is not available with --output-only");
   testing::expect_bad_input(ctid({"track", data, "--output-only", "--window", "40"}), "track",
                             "--output-only needs --output-columns");
   testing::expect_bad_input(ctid({"track", data, "--output-only", "--output-columns", "a:c",

@@ -183,6 +183,13 @@ TEST_F(TrackMimoCommand, RefusesWhatSeveralOutputsCannotDoWithOneLine) {
       "--input-delay-samples is not available with --input-columns / --output-columns");
   expect_bad_input(with({"--modes", "2", "--start", "lssvf"}),
                    "--start lssvf is for one input and output");
+  // Derived from the field tables: every one-channel fit flag the windows do not read.
+  expect_bad_input(with({"--modes", "2", "--no-step-control"}),
+                   "--step-control is not available with --input-columns / --output-columns");
+  expect_bad_input(with({"--modes", "2", "--method", "fdd"}), "--method goes with --output-only");
+  expect_bad_input(ctid({"track", "m.csv", "--input-column", "f1", "--output-column", "a1",
+                         "--window", "50", "--modes", "2", "--mac-weight", "1"}),
+                   "--mac-weight goes with --input-columns / --output-columns");
   expect_bad_input(with({"--modes", "2", "--min-mac", "1.5"}), "--min-mac is 1.5");
   expect_bad_input(ctid({"track", "m.csv", "--input-columns", "f1,f2", "--output-columns", "a1:a3",
                          "--window", "500", "--modes", "2"}),
