@@ -232,6 +232,8 @@ ExitStatus run_mimo_structure(const StructureFlags& f, const CLI::App& app) {
 
 ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
   if (f.data.mimo_asked(app)) return run_mimo_structure(f, app);
+  refuse_flags_not_taken(app, {"Several inputs and outputs"}, {},
+                         " goes with --input-columns / --output-columns");
   const bool modes = !f.modes.empty();
   const bool poles = !f.poles.empty();
   if (modes == poles) usage_error("give one range: --modes MIN:MAX or --poles MIN:MAX");

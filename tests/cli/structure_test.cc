@@ -104,6 +104,10 @@ TEST_F(StructureCommand, SeveralChannelsScanModeCounts) {
   std::vector<std::string> relocate = {"structure", data, "--modes", "2:3", "--relocate-modes"};
   relocate.insert(relocate.end(), channels.begin(), channels.end());
   expect_bad_input(ctid(relocate), "--relocate-modes is for one input and output");
+  // And the other way: a several-channel flag on one channel.
+  expect_bad_input(ctid({"structure", data, "--time-column", "t_s", "--input-column", "u1_force",
+                         "--output-column", "y1_acc", "--modes", "1:2", "--rank-one"}),
+                   "--rank-one goes with --input-columns / --output-columns");
   CTID_SKIP_UNDER_SANITIZERS(
       "MimoStructureScan.TwoModesAreRecommendedAndStableInTheDiagram runs the scan itself");
   std::vector<std::string> args = {"structure", data, "--modes", "6:7", "--direct", "--detrend",
