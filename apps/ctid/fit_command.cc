@@ -76,7 +76,7 @@ struct FitFlags {
   std::vector<std::string> fix;            // NAME=VALUE, held coefficients (decision 0057)
   std::vector<std::string> bound;          // NAME=LO:HI
   std::optional<double> dc_gain;
-  double max_delay = -1.0;  // [s]; negative: the default
+  ProcessModelOptions process_options;  // max_delay from its field's flag; the rest by hand
 
   std::string output;
   std::string model_output;
@@ -641,9 +641,8 @@ ProcessParameterSetting& setting_for(ProcessModelOptions& options, const std::st
 }
 
 ProcessModelOptions process_options(const FitFlags& f) {
-  ProcessModelOptions options;
+  ProcessModelOptions options = f.process_options;
   options.max_iterations = f.options.refined_iv.max_iterations;  // one --max-iterations
-  if (f.max_delay >= 0.0) options.max_delay = f.max_delay;
   for (const std::string& entry : f.process_start) {
     const auto [name, text] = parameter_entry(entry, "--process-start", "NAME=VALUE, e.g. Tp1=2");
     ProcessParameterSetting& s = setting_for(options, name);
@@ -727,36 +726,11 @@ ExitStatus run_process_fit(const FitFlags& f, const CLI::App& app) {
       "dead time is estimated, its settings are --process-start/--process-fix/--process-bound)";
   if (f.irregular) usage_error("--irregular" + why);
   if (f.data.mimo_asked(app)) usage_error("--input-columns / --output-columns" + why);
-  for (const char* flag : {"--model",
-                           "--poles",
-                           "--zeros",
-                           "--integrators",
-                           "--submodel",
-                           "--modes",
-                           "--input-delay-samples",
-                           "--delay-scan-samples",
-                           "--delay-range",
-                           "--record-delay-samples",
-                           "--controller",
-                           "--start",
-                           "--start-screening",
-                           "--initial",
-                           "--tolerance",
-                           "--interpolation",
-                           "--noise",
-                           "--initial-conditions",
-                           "--history",
-                           "--relocate-modes",
-                           "--polish",
-                           "--fix",
-                           "--bound",
-                           "--dc-gain",
-                           "--rank-one",
-                           "--input-delays-samples",
-                           "--direct",
-                           "--plot"}) {
-    if (app.count(flag) > 0) usage_error(std::string(flag) + why);
-  }
+  // Every fit flag but the one --max-iterations is refused, derived from the help groups.
+  refuse_flags_not_taken(
+      app, {"Structure", "Several inputs and outputs", "Closed loop", "Iteration", "Constraints"},
+      {flag_of<IdentificationOptions>("refined_iv.max_iterations")}, why);
+  if (app.count("--plot") > 0) usage_error("--plot" + why);
   if (f.data.files.size() > 1) usage_error("several data files" + why);
   const ProcessStructure structure = ProcessStructure::parse(f.process);
   const ProcessModelOptions options = process_options(f);
@@ -792,9 +766,7 @@ ExitStatus run_process_fit(const FitFlags& f, const CLI::App& app) {
 
 ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
   if (!f.process.empty()) return run_process_fit(f, app);
-  for (const char* flag : {"--process-start", "--process-fix", "--process-bound", "--max-delay"}) {
-    if (app.count(flag) > 0) usage_error(std::string(flag) + " goes with --process NAME");
-  }
+  refuse_flags_not_taken(app, {"Process model"}, {}, " goes with --process NAME");
   if (f.irregular) return run_irregular_fit(f, app);
   if (f.data.mimo_asked(app)) return run_mimo_fit(f, app);
   if (app.count("--rank-one") > 0) {
@@ -1031,11 +1003,11 @@ Command add_fit_command(CLI::App& parent) {
                   "comma-separated or repeated")
       ->delimiter(',')
       ->group("Process model");
-  app->add_option("--max-delay", f.max_delay,
-                  "Process model: largest dead time [s] the automatic start scans (default: a "
-                  "quarter of the record, at most 200 samples)")
-      ->check(non_negative_number())
-      ->group("Process model");
+  FieldFlagSettings process;
+  process.group = "Process model";
+  // --process-start/-fix/-bound above (NAME=VALUE lists); one --max-iterations for every fit.
+  process.by_hand = {"parameters", "max_iterations"};
+  add_field_flags(*app, f.process_options, process);
 
   app->add_option(flag_of<IdentificationOptions>("controller") + ",-c", f.controller,
                   "Discrete controller JSON (discrete_transfer_function in q): closed loop")

@@ -38,6 +38,7 @@
 #include "ctid/simulation/simulate.h"
 #include "ctid/simulation/stamps.h"
 #include "data_flags.h"
+#include "field_flags.h"
 
 namespace ctid::cli {
 namespace {
@@ -66,7 +67,6 @@ struct SimulateFlags {
   std::string excitation;
   std::string excitation_spec;
   io::ExcitationSpec spec;
-  std::string grid = io::to_string(io::ExcitationSpec{}.grid);
   double sample_time = 0.0;
 
   std::string controller;
@@ -88,33 +88,35 @@ const char* const kLoopOnlyFlags[] = {"--substeps", "--nsr"};
 
 // Flags of the generated input, and the one signal each applies to (none: every signal).
 struct SignalFlag {
-  const char* name;
+  const char* field;
   std::optional<io::ExcitationKind> only;
 };
 constexpr io::ExcitationKind kWhite = io::ExcitationKind::white_noise;
 constexpr io::ExcitationKind kPrbs = io::ExcitationKind::prbs;
 constexpr io::ExcitationKind kMultisine = io::ExcitationKind::multisine;
-const SignalFlag kSignalFlags[] = {{"--samples", std::nullopt},
-                                   {"--seed", std::nullopt},
-                                   {"--std", kWhite},
-                                   {"--amplitude", kPrbs},
-                                   {"--register-length", kPrbs},
-                                   {"--samples-per-bit", kPrbs},
-                                   {"--periods", kMultisine},
-                                   {"--min-frequency-hz", kMultisine},
-                                   {"--max-frequency-hz", kMultisine},
-                                   {"--grid", kMultisine},
-                                   {"--rms", kMultisine}};
+// The signal each field applies to (none: every signal), by field.
+const SignalFlag kSignalFlags[] = {{"samples", std::nullopt},
+                                   {"seed", std::nullopt},
+                                   {"standard_deviation", kWhite},
+                                   {"amplitude", kPrbs},
+                                   {"register_length", kPrbs},
+                                   {"samples_per_bit", kPrbs},
+                                   {"periods", kMultisine},
+                                   {"min_frequency_hz", kMultisine},
+                                   {"max_frequency_hz", kMultisine},
+                                   {"grid", kMultisine},
+                                   {"rms", kMultisine}};
 
 // A flag that would silently have no effect is a usage error: the user meant something.
 void reject_unused_signal_flags(CLI::App& app, const std::string& source,
                                 std::optional<io::ExcitationKind> kind) {
-  for (const SignalFlag& flag : kSignalFlags) {
-    if (app.count(flag.name) == 0) continue;
-    if (!kind) usage_error(std::string(flag.name) + " has no effect with " + source);
-    if (flag.only && *flag.only != *kind) {
-      usage_error(std::string(flag.name) + " applies to --excitation " + io::to_string(*flag.only) +
-                  " only, not " + io::to_string(*kind));
+  for (const SignalFlag& signal : kSignalFlags) {
+    const std::string flag = flag_of<io::ExcitationSpec>(signal.field);
+    if (app.count(flag) == 0) continue;
+    if (!kind) usage_error(flag + " has no effect with " + source);
+    if (signal.only && *signal.only != *kind) {
+      usage_error(flag + " applies to --excitation " + io::to_string(*signal.only) + " only, not " +
+                  io::to_string(*kind));
     }
   }
 }
@@ -178,7 +180,6 @@ io::ExcitationSpec excitation_spec(const SimulateFlags& f, CLI::App& app,
     spec = f.spec;
     spec.kind = io::excitation_kind_from_string(f.excitation);
     reject_unused_signal_flags(app, "", spec.kind);
-    spec.grid = io::frequency_grid_from_string(f.grid);
     if (app.count("--sample-time") > 0) {
       spec.sample_time = f.sample_time;
     } else if (controller) {
@@ -544,7 +545,7 @@ Command add_simulate_command(CLI::App& parent) {
                 "(docs/decisions/0053)")
       ->group("Input from a file");
 
-  auto* excitation = app->add_option("--excitation,-e", f.excitation,
+  auto* excitation = app->add_option(flag_of<io::ExcitationSpec>("kind") + ",-e", f.excitation,
                                      "Generate the input: white, prbs or multisine")
                          ->check(CLI::IsMember({"white", "prbs", "multisine"}))
                          ->group("Generated input");
@@ -553,53 +554,28 @@ Command add_simulate_command(CLI::App& parent) {
                                     "excitation flags")
                         ->check(CLI::ExistingFile)
                         ->group("Generated input");
-  app->add_option("--samples,-n", f.spec.samples, "Number of samples N")
+  app->add_option(flag_of<io::ExcitationSpec>("samples") + ",-n", f.spec.samples,
+                  "Number of samples N")
       ->capture_default_str()
       ->check(CLI::Range(2, kMaxGeneratedSamples))
       ->group("Generated input");
-  app->add_option("--sample-time,-T", f.sample_time,
+  app->add_option(flag_of<io::ExcitationSpec>("sample_time") + ",-T", f.sample_time,
                   "Sample time h in seconds (default: from the input's time column or the "
                   "controller)")
       ->check(positive_number())
       ->group("Generated input");
-  app->add_option("--seed", f.spec.seed,
+  app->add_option(flag_of<io::ExcitationSpec>("seed"), f.spec.seed,
                   "Seed of the white noise or multisine phases; for prbs it picks the start "
                   "state")
       ->check(seed_validator())
       ->capture_default_str()
       ->group("Generated input");
-  app->add_option("--std", f.spec.standard_deviation, "white: standard deviation")
-      ->capture_default_str()
-      ->group("Generated input");
-  app->add_option("--amplitude", f.spec.amplitude, "prbs: levels +-amplitude")
-      ->capture_default_str()
-      ->group("Generated input");
-  app->add_option("--register-length", f.spec.register_length,
-                  "prbs: shift-register length n, period 2^n - 1 bits")
-      ->capture_default_str()
-      ->group("Generated input");
-  app->add_option("--samples-per-bit", f.spec.samples_per_bit, "prbs: samples each bit is held")
-      ->capture_default_str()
-      ->group("Generated input");
-  app->add_option("--periods", f.spec.periods,
-                  "multisine: periods in the record (N must be a multiple)")
-      ->capture_default_str()
-      ->group("Generated input");
-  app->add_option("--min-frequency-hz", f.spec.min_frequency_hz, "multisine: band lower edge, Hz")
-      ->capture_default_str()
-      ->group("Generated input");
-  app->add_option("--max-frequency-hz", f.spec.max_frequency_hz,
-                  "multisine: band upper edge, Hz (0: up to Nyquist)")
-      ->capture_default_str()
-      ->group("Generated input");
-  app->add_option("--grid", f.grid,
-                  "multisine: excite every DFT line in the band (full) or odd lines only (odd)")
-      ->check(CLI::IsMember({"full", "odd"}))
-      ->capture_default_str()
-      ->group("Generated input");
-  app->add_option("--rms", f.spec.rms, "multisine: root mean square")
-      ->capture_default_str()
-      ->group("Generated input");
+  FieldFlagSettings signal;
+  signal.group = "Generated input";
+  // --excitation (optional: a file may give the input), -n, -T (a file's too) and the seed's
+  // range check are added above under the fields' spellings.
+  signal.by_hand = {"kind", "samples", "sample_time", "seed"};
+  add_field_flags(*app, f.spec, signal);
 
   app->add_option("--controller,-c", f.controller,
                   "Discrete controller JSON (discrete_transfer_function in q): closed loop, the "

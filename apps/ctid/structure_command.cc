@@ -212,10 +212,7 @@ ExitStatus run_mimo_structure(const StructureFlags& f, const CLI::App& app) {
   std::vector<int> counts;
   for (int k = low; k <= high; ++k) counts.push_back(k);
   MimoStructureScanOptions options;
-  options.validation_fraction = f.options.validation_fraction;
-  options.error_tolerance = f.options.error_tolerance;
-  options.frequency_tolerance = f.options.frequency_tolerance;
-  options.damping_tolerance = f.options.damping_tolerance;
+  assign_shared_fields(options, f.options);  // the scan's own four, by the field tables
   options.identification.refined_iv = f.mimo;
   assign_shared_fields(options.identification.refined_iv, f.options.identification.refined_iv);
   options.validate();

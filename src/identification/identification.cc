@@ -220,17 +220,8 @@ std::optional<OutputErrorPolishResult> polish_fit(const SampledData& record,
     return polish_output_error(data, fitted.model, fitted.noise_model, o, options.constraints);
   }
   o.estimate_delay = false;
-  const int noise =
-      fitted.noise_model ? fitted.noise_model->ar_order() + fitted.noise_model->ma_order() : 0;
-  if (!fitted.model.parameters().allFinite() ||
-      data.size() < 10 * (fitted.model.parameter_count() + noise)) {
-    return std::nullopt;
-  }
-  try {
-    return polish_output_error(data, fitted.model, fitted.noise_model, o);
-  } catch (const InvalidArgument&) {
-    return std::nullopt;  // the start's output is not finite: nothing to polish from
-  }
+  if (polish_start_refusal(data, fitted.model, fitted.noise_model, o)) return std::nullopt;
+  return polish_output_error(data, fitted.model, fitted.noise_model, o);
 }
 
 // Decision 0057: the polish of `fitted`; without polish_asked() (an iteration that did not
@@ -350,16 +341,17 @@ IdentificationResult identify_records(std::span<const SampledData> records,
   // hold (it reflects every unstable root); the fit with a stabilised prefilter replaces it
   // when that one is usable.
   if (closed_loop && !structure.is_additive() && records.size() == 1 &&
-      !options.refined_iv.noise_model && !options.delay_scan_samples && !options.delay_range &&
-      !options.relocate_modes && options.constraints.empty() && !fitted->verdict.usable &&
-      options.refined_iv.input_delay_samples == 0 &&
-      options.refined_iv.input_delay_fraction == 0.0) {
+      !options.delay_scan_samples && !options.delay_range && !options.relocate_modes &&
+      options.constraints.empty() && !fitted->verdict.usable &&
+      !unstable_clsrivc_refusal(data, *options.controller, orders[0], options.refined_iv)) {
     try {
       EstimationResult held =
           unstable_clsrivc(data, *options.controller, orders[0], options.refined_iv);
       if (held.verdict.usable) fitted = std::move(held);
     } catch (const InvalidArgument&) {
-      // an order it does not take (n = 0): the engine's fit stands
+      // Its bad-input refusals are ruled out above; what is left is initial_transfer_function
+      // refusing a record that forms no start of this order (as the engine refuses it): the
+      // engine's fit stands.
     }
   }
   // Decision 0057: the output-error polish, asked for or of an iteration that did not converge.

@@ -7,22 +7,10 @@
 
 namespace ctid::io {
 
-std::string to_string(ExcitationKind kind) {
-  switch (kind) {
-    case ExcitationKind::white_noise:
-      return "white";
-    case ExcitationKind::prbs:
-      return "prbs";
-    case ExcitationKind::multisine:
-      return "multisine";
-  }
-  return "unknown";
-}
+std::string to_string(ExcitationKind kind) { return std::string(enum_name(kind)); }
 
 ExcitationKind excitation_kind_from_string(std::string_view name) {
-  if (name == "white") return ExcitationKind::white_noise;
-  if (name == "prbs") return ExcitationKind::prbs;
-  if (name == "multisine") return ExcitationKind::multisine;
+  if (const auto kind = enum_from_name<ExcitationKind>(name)) return *kind;
   throw InvalidArgument(ctid::internal::concat("excitation signal '", name,
                                                "' is unknown; use white, prbs or multisine"));
 }
@@ -59,9 +47,7 @@ void ExcitationSpec::validate() const {
 
 PrbsOptions ExcitationSpec::prbs_options() const {
   PrbsOptions options;
-  options.register_length = register_length;
-  options.amplitude = amplitude;
-  options.samples_per_bit = samples_per_bit;
+  assign_shared_fields(options, *this);  // register_length, amplitude, samples_per_bit
   if (register_length >= 2 && register_length <= 62) {
     const std::uint64_t states = (std::uint64_t{1} << register_length) - 1;
     options.initial_state = 1 + seed % states;
@@ -71,14 +57,10 @@ PrbsOptions ExcitationSpec::prbs_options() const {
 
 MultisineOptions ExcitationSpec::multisine_options() const {
   MultisineOptions options;
+  assign_shared_fields(options, *this);  // periods, sample_time, grid, rms, seed
   options.period_length = periods >= 1 ? samples / periods : samples;
-  options.periods = periods;
-  options.sample_time = sample_time;
   options.min_frequency = min_frequency_hz;
   options.max_frequency = max_frequency_hz;
-  options.grid = grid;
-  options.rms = rms;
-  options.seed = seed;
   return options;
 }
 

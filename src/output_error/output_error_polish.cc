@@ -523,29 +523,50 @@ void set_polish_statistics(OutputErrorPolishResult& out, const PolishProblem& p,
 
 }  // namespace
 
+std::optional<std::string> polish_start_refusal(const SampledData& data, const AdditiveModel& start,
+                                                const std::optional<ArmaModel>& noise,
+                                                const OutputErrorPolishOptions& options,
+                                                const CoefficientConstraints& constraints) {
+  options.validate();
+  validate_constraints(start, constraints, options.estimate_delay);
+  if (data.has_reference()) {
+    return "the output-error polish is for open-loop records; this record has a reference";
+  }
+  if (!start.parameters().allFinite() || !std::isfinite(start.input_delay())) {
+    return "the output-error polish needs a finite start model";
+  }
+  bool mirrored_start = false;
+  const AdditiveModel first = options.keep_stable ? stabilised_start(start, mirrored_start) : start;
+  const PolishProblem p = polish_problem(data, first, noise, options, constraints);
+  if (data.size() < 10 * p.free()) {
+    return internal::concat("the output-error polish of ", p.free(), " free parameters needs ",
+                            10 * p.free(), " samples (10 per parameter); the record has ",
+                            data.size());
+  }
+  Eigen::VectorXd r0;
+  if (!p.evaluate(p.theta(start_vector(p, first, noise).data()), r0, nullptr, nullptr)) {
+    return internal::concat(
+        "the output-error polish cannot start: the start model",
+        p.refused > 0 ? " with the held values is unstable" : "'s output is not finite");
+  }
+  return std::nullopt;
+}
+
 OutputErrorPolishResult polish_output_error(const SampledData& data, const AdditiveModel& start,
                                             const std::optional<ArmaModel>& noise,
                                             const OutputErrorPolishOptions& options,
                                             const CoefficientConstraints& constraints) {
-  options.validate();
-  validate_constraints(start, constraints, options.estimate_delay);
-  require(!data.has_reference(),
-          "the output-error polish is for open-loop records; this record has a reference");
-  require(start.parameters().allFinite() && std::isfinite(start.input_delay()),
-          "the output-error polish needs a finite start model");
+  if (std::optional<std::string> refusal =
+          polish_start_refusal(data, start, noise, options, constraints)) {
+    throw InvalidArgument(*refusal);
+  }
   bool mirrored_start = false;
   const AdditiveModel first = options.keep_stable ? stabilised_start(start, mirrored_start) : start;
   const PolishProblem p = polish_problem(data, first, noise, options, constraints);
-  require(data.size() >= 10 * p.free(), "the output-error polish of ", p.free(),
-          " free parameters needs ", 10 * p.free(), " samples (10 per parameter); the record has ",
-          data.size());
-
   const Eigen::VectorXd x0 = start_vector(p, first, noise);
   Eigen::VectorXd r0;
   Eigen::VectorXd y0;
-  require(p.evaluate(p.theta(x0.data()), r0, &y0, nullptr),
-          "the output-error polish cannot start: the start model",
-          p.refused > 0 ? " with the held values is unstable" : "'s output is not finite");
+  p.evaluate(p.theta(x0.data()), r0, &y0, nullptr);  // it starts: polish_start_refusal says so
   const int refused_at_start = p.refused;
   Solved solved = solve_polish(p, x0, options.max_iterations);
   Eigen::VectorXd r1;

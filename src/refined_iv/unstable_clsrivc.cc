@@ -412,26 +412,46 @@ std::vector<AdditiveModel> unstable_clsrivc_starts(const SampledData& data,
   return starts;
 }
 
+std::optional<std::string> unstable_clsrivc_refusal(const SampledData& data,
+                                                    const DiscreteTransferFunction& controller,
+                                                    const SubmodelOrder& order,
+                                                    const RefinedIvOptions& options) {
+  options.validate();
+  const std::string name = "unstable_clsrivc";
+  using internal::concat;
+  if (options.noise_model) {
+    return concat(name,
+                  ": noise_model is set; the fit with a stabilised prefilter has no noise model "
+                  "(use the closed-loop estimator, CLRIVC)");
+  }
+  if (!data.has_reference()) {
+    return concat(name, ": closed-loop estimation needs a measured reference r");
+  }
+  if (std::abs(controller.sample_time() - data.sample_time()) > 1e-9 * data.sample_time()) {
+    return concat(name, ": the controller's sample time ", controller.sample_time(),
+                  " differs from the data's ", data.sample_time());
+  }
+  if (order.n < 1 || order.m < 0 || order.integrators < 0 ||
+      order.m > order.n + order.integrators) {
+    return concat(name, ": the order needs n >= 1 and 0 <= m <= n + integrators (n = ", order.n,
+                  ", m = ", order.m, ", integrators = ", order.integrators, ")");
+  }
+  if (options.input_delay_samples != 0 || options.input_delay_fraction != 0.0) {
+    return concat(name, ": an input delay is not supported");
+  }
+  if (data.size() < 3 * (order.n + order.m + 1) + 20) {
+    return concat(name, ": ", data.size(), " samples are too few");
+  }
+  return std::nullopt;
+}
+
 EstimationResult unstable_clsrivc(const SampledData& data,
                                   const DiscreteTransferFunction& controller,
                                   const SubmodelOrder& order, const RefinedIvOptions& options) {
-  options.validate();
-  const std::string name = "unstable_clsrivc";
-  require(!options.noise_model, name,
-          ": noise_model is set; the fit with a stabilised prefilter has no noise model (use "
-          "the closed-loop estimator, CLRIVC)");
-  require(data.has_reference(), name, ": closed-loop estimation needs a measured reference r");
-  require(std::abs(controller.sample_time() - data.sample_time()) <= 1e-9 * data.sample_time(),
-          name, ": the controller's sample time ", controller.sample_time(),
-          " differs from the data's ", data.sample_time());
-  require(order.n >= 1 && order.m >= 0 && order.integrators >= 0 &&
-              order.m <= order.n + order.integrators,
-          name, ": the order needs n >= 1 and 0 <= m <= n + integrators (n = ", order.n,
-          ", m = ", order.m, ", integrators = ", order.integrators, ")");
-  require(options.input_delay_samples == 0 && options.input_delay_fraction == 0.0, name,
-          ": an input delay is not supported");
-  require(data.size() >= 3 * (order.n + order.m + 1) + 20, name, ": ", data.size(),
-          " samples are too few");
+  if (std::optional<std::string> refusal =
+          unstable_clsrivc_refusal(data, controller, order, options)) {
+    throw InvalidArgument(*refusal);
+  }
   if (options.initial_model) {
     return unstable_clsrivc_from(data, controller, order, options, *options.initial_model);
   }

@@ -107,6 +107,13 @@ TEST_F(FitProcess, BadNamesAndSettingsAreRefusedWithOneLine) {
                    "--poles does not go with --process");
   expect_bad_input(ctid({"fit", data, "--poles", "1", "--process-fix", "K=1"}),
                    "--process-fix goes with --process NAME");
+  // Derived from the help groups: a refined IV setting the process fit does not read is
+  // refused (it was once ignored), --max-delay is the field's flag and is checked by its rule.
+  expect_bad_input(ctid({"fit", data, "--process", "P1D", "--no-step-control"}),
+                   "--step-control does not go with --process");
+  expect_bad_input(ctid({"fit", data, "--poles", "1", "--max-delay", "2"}),
+                   "--max-delay goes with --process NAME");
+  expect_bad_input(ctid({"fit", data, "--process", "P1D", "--max-delay", "-1"}), "--max-delay");
 }
 
 TEST_F(FitProcess, TooShortARecordIsRefused) {

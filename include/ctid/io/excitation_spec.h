@@ -4,19 +4,31 @@
 // themselves come from ctid/simulation/excitation.h.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <string_view>
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "ctid/core/fields.h"
 #include "ctid/simulation/excitation.h"
 
 namespace ctid::io {
 
 enum class ExcitationKind { white_noise, prbs, multisine };
+
+inline constexpr std::array<Enumerator<ExcitationKind>, 3> excitation_kind_enumerators{{
+    {ExcitationKind::white_noise, "white", "Gaussian white noise."},
+    {ExcitationKind::prbs, "prbs", "Maximum-length pseudo-random binary sequence."},
+    {ExcitationKind::multisine, "multisine", "Random-phase multisine."},
+}};
+constexpr std::span<const Enumerator<ExcitationKind>> enumerators(ExcitationKind) {
+  return excitation_kind_enumerators;
+}
 
 /// "white", "prbs" or "multisine".
 std::string to_string(ExcitationKind kind);
@@ -46,6 +58,31 @@ struct ExcitationSpec {
   FrequencyGrid grid = FrequencyGrid::full;
   double rms = 1.0;  ///< multisine root mean square
 
+  static constexpr std::string_view type_name = "ExcitationSpec";
+  /// The fields, documented; their rules depend on the kind, so validate() checks them.
+  static constexpr auto fields() {
+    using S = ExcitationSpec;
+    return std::tuple{
+        field("kind", &S::kind, "The signal: white, prbs or multisine.").with_flag("excitation"),
+        field("samples", &S::samples, "Number of samples N."),
+        field("sample_time", &S::sample_time, "Sample time h [s]."),
+        field("seed", &S::seed,
+              "Seed of the white noise or multisine phases; for prbs it picks the start state."),
+        field("standard_deviation", &S::standard_deviation, "white: standard deviation.")
+            .with_flag("std"),
+        field("register_length", &S::register_length,
+              "prbs: shift-register length n, period 2^n - 1 bits."),
+        field("amplitude", &S::amplitude, "prbs: levels +-amplitude."),
+        field("samples_per_bit", &S::samples_per_bit, "prbs: samples each bit is held."),
+        field("periods", &S::periods, "multisine: periods in the record (N must be a multiple)."),
+        field("min_frequency_hz", &S::min_frequency_hz, "multisine: band lower edge [Hz]."),
+        field("max_frequency_hz", &S::max_frequency_hz,
+              "multisine: band upper edge [Hz] (0: up to Nyquist)."),
+        field("grid", &S::grid,
+              "multisine: excite every DFT line in the band (full) or odd lines only (odd)."),
+        field("rms", &S::rms, "multisine: root mean square."),
+    };
+  }
   /// Throws InvalidArgument naming the field, its value and the rule.
   void validate() const;
   PrbsOptions prbs_options() const;

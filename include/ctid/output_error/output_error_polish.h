@@ -194,6 +194,16 @@ std::vector<std::pair<Eigen::Index, double>> held_coefficients(
 std::vector<std::tuple<Eigen::Index, double, double>> bounded_coefficients(
     const AdditiveModel& model, const CoefficientConstraints& constraints);
 
+/// Why polish_output_error would refuse to start from `start` on `data` (a record with a
+/// reference, a non-finite start, fewer than 10 samples per free parameter, a start whose output
+/// is not finite or, with held values, that is unstable), or none when it can start: its
+/// refusals as a value, for a caller that polishes only what can be polished. Bad options and
+/// constraints still throw InvalidArgument (validate_constraints).
+std::optional<std::string> polish_start_refusal(
+    const SampledData& data, const AdditiveModel& start,
+    const std::optional<ArmaModel>& noise = std::nullopt,
+    const OutputErrorPolishOptions& options = {}, const CoefficientConstraints& constraints = {});
+
 OutputErrorPolishResult polish_output_error(const SampledData& data, const AdditiveModel& start,
                                             const std::optional<ArmaModel>& noise = std::nullopt,
                                             const OutputErrorPolishOptions& options = {},

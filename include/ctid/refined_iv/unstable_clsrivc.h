@@ -20,6 +20,8 @@
 // (sensitivity_fallbacks), and the fit cannot converge or be usable until a loop is stable.
 #pragma once
 
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "ctid/core/additive_model.h"
@@ -41,6 +43,15 @@ namespace ctid {
 EstimationResult unstable_clsrivc(const SampledData& data,
                                   const DiscreteTransferFunction& controller,
                                   const SubmodelOrder& order, const RefinedIvOptions& options = {});
+
+/// Why unstable_clsrivc refuses `data`, `controller`, `order` and `options` (a noise model, no
+/// reference, another sample time, n < 1 or m outside 0..n + integrators, an input delay, too
+/// few samples), or none: its refusals of bad input as a value, before any work, for a caller
+/// that tries it only where it applies. Bad options still throw (RefinedIvOptions::validate).
+std::optional<std::string> unstable_clsrivc_refusal(const SampledData& data,
+                                                    const DiscreteTransferFunction& controller,
+                                                    const SubmodelOrder& order,
+                                                    const RefinedIvOptions& options = {});
 
 /// The starts tried without an initial model: the open-loop and the closed-loop start of
 /// initialization.h (initial_transfer_function without and with the controller), each with
