@@ -86,7 +86,7 @@ void print_summary(const OmaFlags& f, const OmaResult& r,
   if (preprocessing)
     std::cout << "preprocessing: " << preprocessing_summary(*preprocessing) << "\n";
   // fdd, efdd: no orders to count
-  const bool ssi = r.method == OmaMethod::ssi_cov || r.method == OmaMethod::ssi_data;
+  const bool ssi = r.method != OmaMethod::fdd && r.method != OmaMethod::efdd;  // orders
   if (!r.modes.empty()) {
     std::cout << "  mode  frequency [Hz]          damping ratio            MPC"
               << (ssi ? "    orders" : "") << "\n";
@@ -272,8 +272,9 @@ Command add_oma_command(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand(
       "oma",
       "Output-only (operational) modal analysis: modes of several response channels with no "
-      "measured input, by covariance-driven SSI (a stabilisation diagram and clustering) or "
-      "by frequency-domain decomposition (fdd, efdd).");
+      "measured input, by stochastic subspace identification (ssi-cov, ssi-data) or pLSCF "
+      "(plscf), each with a stabilisation diagram and clustering, or by frequency-domain "
+      "decomposition (fdd, efdd).");
   app->footer(
       "Prints each mode (frequency and damping with their standard errors, MPC, the "
       "number of orders supporting it) and the verdict. -o X.json writes an \"oma_result\" "

@@ -50,6 +50,7 @@
 #include "ctid/oma/fdd.h"
 #include "ctid/oma/multi_setup.h"
 #include "ctid/oma/oma.h"
+#include "ctid/oma/plscf.h"
 #include "ctid/oma/ssi_cov.h"
 #include "ctid/oma/ssi_data.h"
 #include "ctid/oma/ssi_uncertainty.h"

@@ -449,3 +449,56 @@ def test_oma_setups_preger_gives_the_poles_of_an_independent_numpy_preger():
     assert len(result.merged.modes) == len(modes)
     for mode, (f, _) in zip(result.merged.modes, modes):
         assert abs(mode.frequency_hz - f) < 4 * mode.frequency_hz_std
+
+
+def _numpy_plscf_frequencies(y, refs, lags, order, max_damping=0.2):
+    """pLSCF written independently, as PolyMAX's papers state it: direct lag sums, the
+    exponential window (w_M = 0.01) and the M-point grid's lines 0..M/2 (decision 0066's
+    definitions), the reduced normal equations M = 2 sum_o (T_o - S_o^T R^-1 S_o) with the
+    last coefficient the identity, the block companion matrix, s = ln(z)/h + beta."""
+    y = y - y.mean(axis=0)
+    n, l = y.shape
+    r = len(refs)
+    corr = [y[k:].T @ y[:n - k, refs] / n for k in range(1, lags + 1)]
+    beta = np.log(100.0) / (lags * H)
+    z = np.exp(2j * np.pi * np.arange(lags // 2 + 1) / lags)
+    spectra = [sum(np.exp(-beta * k * H) * z_j ** (-k) * corr[k - 1] for k in range(1, lags + 1))
+               for z_j in z]
+    x = np.stack([z ** k for k in range(order + 1)], axis=1)
+    rr = (x.conj().T @ x).real
+    m = np.zeros(((order + 1) * r, (order + 1) * r))
+    for o in range(l):
+        yo = -np.concatenate([x[:, [k]] * np.array([s[o] for s in spectra])
+                              for k in range(order + 1)], axis=1)
+        so = (x.conj().T @ yo).real
+        to = (yo.conj().T @ yo).real
+        m += 2.0 * (to - so.T @ np.linalg.solve(rr, so))
+    lo = order * r
+    alpha = -np.linalg.solve(m[:lo, :lo], m[:lo, lo:])
+    companion = np.zeros((lo, lo))
+    for k in range(order):
+        companion[:r, k * r:(k + 1) * r] = -alpha[(order - 1 - k) * r:(order - k) * r]
+    companion[r:, :lo - r] = np.eye(lo - r)
+    mu = np.linalg.eigvals(companion)
+    mu = mu[(mu.imag > 0) & (abs(mu) < 1)]
+    s_c = np.log(mu) / H + beta
+    zeta = -s_c.real / abs(s_c)
+    keep = (zeta > 0) & (zeta < max_damping)
+    return np.sort(abs(s_c[keep]) / (2 * np.pi))
+
+
+def test_numpy_plscf_gives_the_same_poles():
+    """The library's QR of the projected equations and the papers' reduced normal equations are
+    one least-squares problem: the same poles, to far below their standard errors."""
+    y, modes = _record(7, samples=20000)
+    refs, lags, order = [0, 2], 256, 6  # 256: the least lags (decision 0066)
+    expected = _numpy_plscf_frequencies(y, refs, lags, order)
+    result = ctid.oma(y, H, method=ctid.OmaMethod.plscf, max_order=2 * order,
+                      reference_channels=refs, block_rows=20, uncertainty_blocks=0)
+    assert result.method == ctid.OmaMethod.plscf
+    assert "polynomial orders 1..12" in result.message and "256 lags" in result.message
+    top = [p.frequency_hz for p in result.stabilisation if p.order == order]
+    assert len(top) == len(expected)
+    np.testing.assert_allclose(np.sort(top), expected, rtol=1e-8)
+    for f, _ in modes:
+        assert min(abs(m.frequency_hz - f) / f for m in result.modes) < 0.01

@@ -1,6 +1,7 @@
 // oma(): checks, the stabilisation diagram over every order, automatic picking and the
 // standard errors: first-order perturbation (ssi_uncertainty.h) or segment-based (Reynders,
-// Pintelon and De Roeck, MSSP 2008, section 3); decision 0036.
+// Pintelon and De Roeck, MSSP 2008, section 3); decision 0036. pLSCF shares the diagram,
+// picking and segment errors (decision 0066).
 #include "ctid/oma/oma.h"
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include <complex>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <string>
 #include <utility>
@@ -18,6 +20,7 @@
 #include "ctid/core/format.h"
 #include "ctid/core/parallel.h"
 #include "ctid/oma/fdd.h"
+#include "ctid/oma/plscf.h"
 #include "ctid/oma/ssi_cov.h"
 #include "ctid/oma/ssi_data.h"
 #include "ctid/oma/ssi_uncertainty.h"
@@ -37,6 +40,8 @@ constexpr int kSamplesPerBlockRow = 20;
 // Automatic block rows: lags spanning this many periods of the lowest spectral peak, within
 // this many rows (and columns) of the Hankel matrix (decision 0035).
 constexpr double kLagPeriods = 4.0;
+// pLSCF's least lags (decision 0066): 129 lines from 0 to Nyquist.
+constexpr int kPlscfMinLags = 256;
 constexpr double kMaxHankelRows = 1000.0;
 // A user frequency takes the nearest cluster within this relative distance.
 constexpr double kNearTolerance = 0.1;
@@ -63,10 +68,12 @@ using oma_detail::ssi_samples_needed;
 int pick_block_rows(const OmaOptions& o, Eigen::Index l, Eigen::Index r, Eigen::Index n) {
   const int p = o.block_rows > 0 ? o.block_rows
                                  : std::max(10, static_cast<int>((o.max_order + r - 1) / r) + 1);
-  require((p - 1) * l >= o.max_order && p * r >= o.max_order, "OmaOptions.max_order is ",
-          o.max_order, "; the Hankel matrix of ", p, " block rows (block_rows) over ", l,
-          " channels and ", r, " references holds at most order ",
-          std::min<Eigen::Index>((p - 1) * l, p * r), " (--max-order / --block-rows)");
+  // pLSCF has no Hankel matrix: its p only sets the lags (plscf_lags).
+  require(o.method == OmaMethod::plscf || ((p - 1) * l >= o.max_order && p * r >= o.max_order),
+          "OmaOptions.max_order is ", o.max_order, "; the Hankel matrix of ", p,
+          " block rows (block_rows) over ", l, " channels and ", r,
+          " references holds at most order ", std::min<Eigen::Index>((p - 1) * l, p * r),
+          " (--max-order / --block-rows)");
   require(n >= static_cast<Eigen::Index>(kSamplesPerBlockRow) * p, "the record has ", n,
           " samples; ", p, " block rows (max_order ", o.max_order, ") need at least ",
           kSamplesPerBlockRow * p, " (a lower --max-order or --block-rows, or a longer record)");
@@ -109,9 +116,11 @@ RecordSsi record_ssi(const Eigen::MatrixXd& y, const std::vector<int>& refs, int
   return out;
 }
 
-std::vector<OrderPoles> all_orders(const oma_detail::PolesOfOrder& poles, const OmaOptions& o) {
+// Orders step, 2 step, ... up to max_order (at least the first).
+std::vector<OrderPoles> all_orders(const oma_detail::PolesOfOrder& poles, const OmaOptions& o,
+                                   int step) {
   std::vector<OrderPoles> orders;
-  for (int n = 2; n <= o.max_order; n += 2) orders.push_back({n, poles(n)});
+  for (int n = step; n <= std::max(o.max_order, step); n += step) orders.push_back({n, poles(n)});
   return orders;
 }
 
@@ -410,6 +419,67 @@ void spectral_oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaO
 
 }  // namespace
 
+// pLSCF (decision 0066): the diagram's order is the polynomial order q (r q poles each, as
+// pyOMA2 counts its orders). Lags: the SSI choice 2p - 1 (spanning periods of
+// the lowest peak), 4 per polynomial coefficient (the M/2 + 1 lines then two per coefficient)
+// or kPlscfMinLags (lines close enough to resolve neighbouring modes), at most a tenth of the
+// samples and at least 2 per coefficient. The segments of the standard errors use as many lags
+// as they hold at 5 samples each, at least 2 per coefficient.
+int plscf_lags(int p, Eigen::Index samples, int largest) {
+  const int wanted = std::max({2 * p - 1, 4 * (largest + 1), kPlscfMinLags});
+  const int lags = static_cast<int>(std::min<Eigen::Index>(wanted, samples / 10));
+  require(lags >= 2 * (largest + 1), "the record has ", samples, " samples; plscf to ",
+          "polynomial order ", largest, " (--max-order) needs at least ", 20 * (largest + 1),
+          " (10 per lag over 2 (order + 1) lags; a lower --max-order or a longer record)");
+  return lags;
+}
+
+oma_detail::PolesOfOrder plscf_poles_of(const Eigen::MatrixXd& y, const std::vector<int>& refs,
+                                        int lags, double h, int largest, const OmaOptions& o) {
+  auto spectra = std::make_shared<const oma_detail::HalfSpectra>(
+      oma_detail::half_spectra(y, refs, lags, h, largest));
+  return [spectra, max_damping = o.max_damping](int q) {
+    return oma_detail::plscf_poles(*spectra, q, max_damping);
+  };
+}
+
+void plscf_oma(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p, double h,
+               const OmaOptions& o, const std::string& lag_note, OmaResult& result) {
+  const int r = static_cast<int>(refs.size());
+  // Polynomial orders 1..Q, Q = max_order, or ceil(4 max_order / r) with more than 4 references:
+  // at most 4 max_order + r poles at the largest order.
+  const int largest = std::min(o.max_order, (4 * o.max_order + r - 1) / r);
+  const int lags = plscf_lags(p, y.rows(), largest);
+  OmaOptions orders = o;  // the diagram's orders are 1..largest
+  orders.max_order = largest;
+  oma_detail::ssi_modes(plscf_poles_of(y, refs, lags, h, largest, o), orders, result, 1);
+  // Standard errors from segments (no first-order perturbation of pLSCF here).
+  const int nb = o.uncertainty_blocks;
+  const Eigen::Index length = y.rows() / std::max(nb, 1);
+  std::string error_note;
+  if (nb >= 2 && !result.modes.empty()) {
+    const int block_lags = static_cast<int>(std::min<Eigen::Index>(lags, length / 5));
+    if (block_lags >= 2 * (largest + 1)) {
+      oma_detail::segment_standard_errors(
+          nb,
+          [&](int b) {
+            return plscf_poles_of(y.middleRows(b * length, length), refs, block_lags, h, largest,
+                                  o);
+          },
+          o, result.modes);
+      error_note =
+          internal::concat("; standard errors from ", nb, " segments of ", block_lags, " lags");
+    } else {
+      error_note = internal::concat("; no standard errors: ", nb, " blocks of ", length,
+                                    " samples are too short for polynomial order ", largest);
+    }
+  }
+  result.termination = Termination::converged;
+  result.message =
+      internal::concat(result.modes.size(), " mode(s) from polynomial orders 1..", largest, " (", r,
+                       " poles per order; ", lags, " lags", lag_note, ")", error_note);
+}
+
 OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptions& options,
               std::vector<std::string> channel_names) {
   options.validate();
@@ -447,6 +517,10 @@ OmaResult oma(const Eigen::MatrixXd& outputs, double sample_time, const OmaOptio
   }
   result.block_rows = p;
   const auto r = static_cast<Eigen::Index>(refs.size());
+  if (options.method == OmaMethod::plscf) {
+    plscf_oma(outputs, refs, p, sample_time, options, lag_note, result);
+    return result;
+  }
   const bool with_errors =
       options.uncertainty_blocks >= 2 &&
       outputs.rows() / options.uncertainty_blocks >= ssi_samples_needed(options, p, l, r);
@@ -476,8 +550,9 @@ Eigen::Index ssi_samples_needed(const OmaOptions& o, int p, Eigen::Index l, Eige
   return std::max(needed, ssi_data_samples_needed(p, l, r));
 }
 
-void ssi_modes(const PolesOfOrder& poles, const OmaOptions& options, OmaResult& result) {
-  const auto orders = all_orders(poles, options);
+void ssi_modes(const PolesOfOrder& poles, const OmaOptions& options, OmaResult& result,
+               int order_step) {
+  const auto orders = all_orders(poles, options, order_step);
   const auto stability = classify_poles(orders, options);
   for (std::size_t o = 0; o < orders.size(); ++o) {
     for (std::size_t k = 0; k < orders[o].poles.size(); ++k) {

@@ -124,6 +124,31 @@ TEST_F(OmaCommand, SsiDataRunsOnTheFlexibleStructure) {
   EXPECT_FALSE(result->stabilisation.empty());
 }
 
+// plscf (decision 0066) on the two resonances: both modes within 1 % with segment standard
+// errors, the orders column, the method in the document, and the PreGER merge refusing it.
+TEST_F(OmaCommand, PlscfFindsBothResonances) {
+  const std::string data = two_modes();
+  const auto r = ctid({"oma", data, "--method", "plscf", "--max-order", "12", "-o", "p.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("ctid oma: plscf on"));
+  EXPECT_THAT(r.out, HasSubstr("polynomial orders 1..12"));
+  EXPECT_THAT(r.out, HasSubstr("orders"));
+  const io::ResultDocument doc = io::read_result(path("p.json"));
+  const auto* result = std::get_if<OmaResult>(&doc);
+  ASSERT_NE(result, nullptr);
+  EXPECT_EQ(result->method, OmaMethod::plscf);
+  ASSERT_EQ(result->modes.size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    const double f = i == 0 ? 5.0 : 12.0;
+    EXPECT_NEAR(result->modes[static_cast<std::size_t>(i)].frequency_hz, f, 0.01 * f);
+    EXPECT_GT(result->modes[static_cast<std::size_t>(i)].frequency_hz_std, 0.0);
+  }
+  testing::expect_bad_input(
+      ctid({"oma", setup("s1", 0.3, 0.8, 31), setup("s2", 0.9, -0.4, 32), "--reference-columns",
+            "a,b", "--merge", "preger", "--method", "plscf"}),
+      "oma", "plscf has no observability matrix");
+}
+
 // --uncertainty: perturbation (the default for ssi-cov) says so in the summary; segments gives
 // the same modes with other standard errors; a bad name is a usage error naming the flag.
 TEST_F(OmaCommand, UncertaintyChoosesHowTheStandardErrorsAreComputed) {
@@ -425,7 +450,8 @@ TEST_F(OmaCommand, BadUsageNamesTheFlag) {
   EXPECT_THAT(r.err, HasSubstr("noise.csv: "));
   r = ctid({"oma", noise, "--output-columns", "a:c", "--method", "pp"});
   EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.err, HasSubstr("--method is 'pp'; it must be ssi-cov, ssi-data, fdd or efdd"));
+  EXPECT_THAT(r.err,
+              HasSubstr("--method is 'pp'; it must be ssi-cov, ssi-data, fdd, efdd or plscf"));
   r = ctid({"oma", noise, "--output-columns", "a:c", "--method", "efdd", "--efdd-mac", "1.5"});
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("--efdd-mac is 1.5; it must be in (0, 1]"));

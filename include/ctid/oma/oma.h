@@ -24,8 +24,8 @@
 
 namespace ctid {
 
-enum class OmaMethod { ssi_cov, fdd, efdd, ssi_data };
-inline constexpr std::array<Enumerator<OmaMethod>, 4> oma_method_enumerators{{
+enum class OmaMethod { ssi_cov, fdd, efdd, ssi_data, plscf };
+inline constexpr std::array<Enumerator<OmaMethod>, 5> oma_method_enumerators{{
     {OmaMethod::ssi_cov, "ssi-cov", "Covariance-driven stochastic subspace identification."},
     {OmaMethod::ssi_data, "ssi-data",
      "Data-driven stochastic subspace identification: the projection of the future outputs on "
@@ -36,6 +36,10 @@ inline constexpr std::array<Enumerator<OmaMethod>, 4> oma_method_enumerators{{
     {OmaMethod::efdd, "efdd",
      "Enhanced FDD: frequency and damping from the correlation function of each peak's "
      "single-degree-of-freedom bell."},
+    {OmaMethod::plscf, "plscf",
+     "Poly-reference least-squares complex frequency domain (PolyMAX) on the half-spectra of "
+     "the positive-lag correlations; the diagram's orders are polynomial orders 1..max_order "
+     "(r q poles at order q; with more than 4 references up to ceil(4 max_order / r))."},
 }};
 constexpr std::span<const Enumerator<OmaMethod>> enumerators(OmaMethod) {
   return oma_method_enumerators;
@@ -71,7 +75,9 @@ constexpr std::span<const Enumerator<PoleStability>> enumerators(PoleStability) 
 
 struct OmaOptions {
   OmaMethod method = OmaMethod::ssi_cov;
-  /// Largest model order (states); orders 2, 4, ..., max_order are identified.
+  /// Largest model order (states); orders 2, 4, ..., max_order are identified. plscf: the
+  /// largest polynomial order Q, orders 1, 2, ..., Q (r q poles at order q, r references),
+  /// with more than 4 references Q = ceil(4 max_order / r).
   int max_order = 40;
   /// Block rows p (= block columns q) of the Hankel matrix of correlations R_1..R_{2p-1};
   /// ssi-data: p block rows of past references over p of future outputs.
