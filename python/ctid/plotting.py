@@ -880,7 +880,9 @@ def oma_stabilisation(result, title=None, filename=None, frequency_unit="Hz", ax
                     (mode.frequency_hz * factor, 1.0), xycoords=("data", "axes fraction"),
                     rotation=90, va="top", ha="right", fontsize="x-small")
     ax.set_xlabel(f"natural {axis_label}")
-    ax.set_ylabel("model order")
+    # pLSCF's orders are polynomial orders (decision 0066); SSI's are states.
+    plscf = getattr(getattr(result, "method", None), "name", None) == "plscf"
+    ax.set_ylabel("polynomial order" if plscf else "model order")
     ax.grid(True, alpha=0.3)
     if any(groups[name][0] for name, _, _ in styles):
         ax.legend(loc="lower right", fontsize="small")

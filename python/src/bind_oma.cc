@@ -34,10 +34,11 @@ void bind_oma(py::module_& m) {
       py::arg("outputs"), py::arg("sample_time"), py::arg("options") = py::none(),
       py::arg("channel_names") = py::none(),
       "Output-only modal analysis of the (N, l) array `outputs` sampled every sample_time "
-      "seconds: SSI-cov (or SSI-data, by method) over orders 2..max_order, stable poles "
-      "clustered into modes, standard errors by first-order perturbation or from segments; or "
-      "fdd/efdd peaks. OmaOptions "
-      "fields may be given as keywords.");
+      "seconds: SSI-cov (or SSI-data, by method) over orders 2..max_order, or pLSCF (plscf) "
+      "over polynomial orders, stable poles clustered into modes, standard errors by "
+      "first-order perturbation or from segments; or fdd/efdd peaks. OmaOptions fields may be "
+      "given as keywords, e.g. ctid.oma(y, h, method=ctid.OmaMethod.plscf, "
+      "reference_channels=[0, 3]).");
   bind_enum<OmaMerge>(m, "OmaMerge", "How the modes of several setups are merged.");
   bind_options<MultiSetupOptions>(m, "Options of multi-setup output-only analysis (docs/oma.md).");
   bind_result<MultiSetupResult>(m, "The merged modes of several setups, and each setup's own.");

@@ -182,6 +182,10 @@ def test_the_stabilisation_diagram_draws_the_first_singular_value_behind_the_pol
     np.testing.assert_allclose(curve.get_ydata(), 10 * np.log10(result.first_singular_value))
     assert poles_axis.get_zorder() > behind.get_zorder()
     assert "singular value" in behind.get_ylabel()
+    assert poles_axis.get_ylabel() == "model order"
+    # pLSCF's orders are polynomial orders, and the axis says so.
+    plscf = ctid.oma(y, H, method=ctid.OmaMethod.plscf, max_order=12, uncertainty_blocks=0)
+    assert plotting.oma_stabilisation(plscf).axes[0].get_ylabel() == "polynomial order"
 
 
 def _numpy_ssi_data_poles(y, p, order, max_damping=0.2):
