@@ -173,21 +173,13 @@ std::vector<ModalPole> plscf_poles(const HalfSpectra& h, int order, double max_d
   std::vector<ModalPole> poles;
   for (std::size_t k = 0; k < kept_mu.size(); ++k) {
     if (!(kept_mu[k].imag() > 0.0)) continue;
-    ModalPole pole;
-    pole.s = std::log(kept_mu[k]) / h.sample_time + h.window_decay;
-    const double wn = std::abs(pole.s);
-    pole.damping_ratio = -pole.s.real() / wn;
-    if (!(pole.damping_ratio > 0.0 && pole.damping_ratio < max_damping)) continue;
-    pole.frequency_hz = wn / (2.0 * std::numbers::pi);
-    const Eigen::JacobiSVD<Eigen::MatrixXcd> svd(res[k], Eigen::ComputeThinU);
-    pole.shape = normalise_shape(svd.matrixU().col(0));
-    if (!pole.shape.allFinite()) continue;
-    pole.mpc = modal_phase_collinearity(pole.shape);
-    pole.mpd = mean_phase_deviation(pole.shape);
-    poles.push_back(std::move(pole));
+    auto pole = modal_pole(std::log(kept_mu[k]) / h.sample_time + h.window_decay, max_damping, [&] {
+      const Eigen::JacobiSVD<Eigen::MatrixXcd> svd(res[k], Eigen::ComputeThinU);
+      return Eigen::VectorXcd(svd.matrixU().col(0));
+    });
+    if (pole) poles.push_back(std::move(*pole));
   }
-  std::sort(poles.begin(), poles.end(),
-            [](const ModalPole& x, const ModalPole& y) { return x.frequency_hz < y.frequency_hz; });
+  sort_by_frequency(poles);
   return poles;
 }
 

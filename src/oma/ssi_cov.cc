@@ -169,21 +169,17 @@ std::vector<ModalPole> ssi_poles(const SsiFactor& factor, int order, double samp
   for (Eigen::Index k = 0; k < order; ++k) {
     const std::complex<double> lambda = eig.eigenvalues()(k);
     if (!(lambda.imag() > 0.0) || !(std::abs(lambda) < 1.0)) continue;
-    ModalPole pole;
-    pole.s = std::log(lambda) / sample_time;
-    const double wn = std::abs(pole.s);
-    pole.damping_ratio = -pole.s.real() / wn;
-    if (!(pole.damping_ratio > 0.0 && pole.damping_ratio < max_damping)) continue;
-    pole.frequency_hz = wn / (2.0 * std::numbers::pi);
-    pole.shape = normalise_shape(c * eig.eigenvectors().col(k));
-    if (!pole.shape.allFinite()) continue;
-    pole.mpc = modal_phase_collinearity(pole.shape);
-    pole.mpd = mean_phase_deviation(pole.shape);
-    poles.push_back(std::move(pole));
+    auto pole = modal_pole(std::log(lambda) / sample_time, max_damping,
+                           [&] { return Eigen::VectorXcd(c * eig.eigenvectors().col(k)); });
+    if (pole) poles.push_back(std::move(*pole));
   }
+  sort_by_frequency(poles);
+  return poles;
+}
+
+void sort_by_frequency(std::vector<ModalPole>& poles) {
   std::sort(poles.begin(), poles.end(),
             [](const ModalPole& x, const ModalPole& y) { return x.frequency_hz < y.frequency_hz; });
-  return poles;
 }
 
 }  // namespace ctid::oma_detail

@@ -7,6 +7,8 @@
 #pragma once
 
 #include <complex>
+#include <numbers>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -75,5 +77,27 @@ double modal_assurance(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b);
 double modal_phase_collinearity(const Eigen::VectorXcd& shape);
 /// Mean phase deviation [deg] from the best straight line through the entries.
 double mean_phase_deviation(const Eigen::VectorXcd& shape);
+
+/// The continuous pole s with its natural frequency and damping ratio, and the shape `shape()`
+/// gives (called only inside the bounds) normalised with its MPC and MPD; none unless
+/// 0 < zeta < max_damping and the shape is finite. What every method's poles share.
+template <class Shape>
+std::optional<ModalPole> modal_pole(std::complex<double> s, double max_damping,
+                                    const Shape& shape) {
+  ModalPole pole;
+  pole.s = s;
+  const double wn = std::abs(s);
+  pole.damping_ratio = -s.real() / wn;
+  if (!(pole.damping_ratio > 0.0 && pole.damping_ratio < max_damping)) return std::nullopt;
+  pole.frequency_hz = wn / (2.0 * std::numbers::pi);
+  pole.shape = normalise_shape(shape());
+  if (!pole.shape.allFinite()) return std::nullopt;
+  pole.mpc = modal_phase_collinearity(pole.shape);
+  pole.mpd = mean_phase_deviation(pole.shape);
+  return pole;
+}
+
+/// Sorts poles by natural frequency.
+void sort_by_frequency(std::vector<ModalPole>& poles);
 
 }  // namespace ctid::oma_detail
