@@ -10,6 +10,7 @@
 #include <random>
 #include <vector>
 
+#include <gtest/gtest.h>
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 #include <unsupported/Eigen/KroneckerProduct>
@@ -129,6 +130,21 @@ inline const OmaMode* nearest(const OmaResult& r, double f) {
     }
   }
   return best;
+}
+
+/// The mode of `r` nearest the true mode, checked: finite positive standard errors, frequency
+/// and damping ratio within 4 of them, MAC >= 0.99 with the true shape and at least 3
+/// supporting orders. nullptr (and a failure) when `r` has no mode.
+inline const OmaMode* expect_found_within_errors(const OmaResult& r, const TrueMode& truth) {
+  const OmaMode* m = nearest(r, truth.frequency_hz);
+  EXPECT_NE(m, nullptr);
+  if (m == nullptr) return nullptr;
+  EXPECT_TRUE(std::isfinite(m->frequency_hz_std) && m->frequency_hz_std > 0.0);
+  EXPECT_LT(std::abs(m->frequency_hz - truth.frequency_hz), 4.0 * m->frequency_hz_std);
+  EXPECT_LT(std::abs(m->damping_ratio - truth.damping_ratio), 4.0 * m->damping_ratio_std);
+  EXPECT_GE(oma_detail::modal_assurance(shape_of(*m), truth.shape), 0.99);
+  EXPECT_GE(m->supporting_orders, 3);
+  return m;
 }
 
 }  // namespace ctid::oma_test

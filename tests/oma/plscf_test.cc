@@ -62,17 +62,11 @@ TEST(Plscf, SimulatedChainRecordGivesEveryModeWithinItsStandardErrors) {
   ASSERT_EQ(r.modes.size(), model.modes.size());
   for (const auto& truth : model.modes) {
     SCOPED_TRACE(truth.frequency_hz);
-    const OmaMode* m = oma_test::nearest(r, truth.frequency_hz);
-    ASSERT_NE(m, nullptr);
-    EXPECT_TRUE(std::isfinite(m->frequency_hz_std) && m->frequency_hz_std > 0.0);
-    EXPECT_LT(std::abs(m->frequency_hz - truth.frequency_hz), 4.0 * m->frequency_hz_std);
-    EXPECT_LT(std::abs(m->damping_ratio - truth.damping_ratio), 4.0 * m->damping_ratio_std);
-    EXPECT_GE(oma_detail::modal_assurance(oma_test::shape_of(*m), truth.shape), 0.99);
+    const OmaMode* m = oma_test::expect_found_within_errors(r, truth);
     const OmaMode* s = oma_test::nearest(reference, truth.frequency_hz);
-    ASSERT_NE(s, nullptr);
+    ASSERT_TRUE(m != nullptr && s != nullptr);
     EXPECT_LT(std::abs(m->frequency_hz / s->frequency_hz - 1.0), 0.005);
     EXPECT_GE(oma_detail::modal_assurance(oma_test::shape_of(*m), oma_test::shape_of(*s)), 0.99);
-    EXPECT_GE(m->supporting_orders, 3);
   }
 }
 

@@ -154,14 +154,9 @@ TEST(SsiData, SimulatedChainRecordGivesEveryModeWithinItsStandardErrors) {
   ASSERT_EQ(r.modes.size(), model.modes.size());
   for (const auto& truth : model.modes) {
     SCOPED_TRACE(truth.frequency_hz);
-    const OmaMode* m = oma_test::nearest(r, truth.frequency_hz);
+    const OmaMode* m = oma_test::expect_found_within_errors(r, truth);
     ASSERT_NE(m, nullptr);
-    EXPECT_TRUE(std::isfinite(m->frequency_hz_std) && m->frequency_hz_std > 0.0);
-    EXPECT_LT(std::abs(m->frequency_hz - truth.frequency_hz), 4.0 * m->frequency_hz_std);
-    EXPECT_LT(std::abs(m->damping_ratio - truth.damping_ratio), 4.0 * m->damping_ratio_std);
-    EXPECT_GE(oma_detail::modal_assurance(oma_test::shape_of(*m), truth.shape), 0.99);
     EXPECT_GT(m->mpc, 0.95);
-    EXPECT_GE(m->supporting_orders, 3);
   }
 }
 
