@@ -116,11 +116,11 @@ RecordSsi record_ssi(const Eigen::MatrixXd& y, const std::vector<int>& refs, int
   return out;
 }
 
-// Orders step, 2 step, ... up to max_order (at least the first).
-std::vector<OrderPoles> all_orders(const oma_detail::PolesOfOrder& poles, const OmaOptions& o,
-                                   int step) {
+// SSI's orders 2, 4, ..., max_order (states); pLSCF's polynomial orders 1, 2, ..., max_order.
+std::vector<OrderPoles> all_orders(const oma_detail::PolesOfOrder& poles, const OmaOptions& o) {
+  const int step = o.method == OmaMethod::plscf ? 1 : 2;
   std::vector<OrderPoles> orders;
-  for (int n = step; n <= std::max(o.max_order, step); n += step) orders.push_back({n, poles(n)});
+  for (int n = step; n <= o.max_order; n += step) orders.push_back({n, poles(n)});
   return orders;
 }
 
@@ -452,7 +452,7 @@ void plscf_oma(const Eigen::MatrixXd& y, const std::vector<int>& refs, int p, do
   const int lags = plscf_lags(p, y.rows(), largest);
   OmaOptions orders = o;  // the diagram's orders are 1..largest
   orders.max_order = largest;
-  oma_detail::ssi_modes(plscf_poles_of(y, refs, lags, h, largest, o), orders, result, 1);
+  oma_detail::ssi_modes(plscf_poles_of(y, refs, lags, h, largest, o), orders, result);
   // Standard errors from segments (no first-order perturbation of pLSCF here).
   const int nb = o.uncertainty_blocks;
   const Eigen::Index length = y.rows() / std::max(nb, 1);
@@ -550,9 +550,8 @@ Eigen::Index ssi_samples_needed(const OmaOptions& o, int p, Eigen::Index l, Eige
   return std::max(needed, ssi_data_samples_needed(p, l, r));
 }
 
-void ssi_modes(const PolesOfOrder& poles, const OmaOptions& options, OmaResult& result,
-               int order_step) {
-  const auto orders = all_orders(poles, options, order_step);
+void ssi_modes(const PolesOfOrder& poles, const OmaOptions& options, OmaResult& result) {
+  const auto orders = all_orders(poles, options);
   const auto stability = classify_poles(orders, options);
   for (std::size_t o = 0; o < orders.size(); ++o) {
     for (std::size_t k = 0; k < orders[o].poles.size(); ++k) {

@@ -24,11 +24,10 @@ Eigen::Index ssi_samples_needed(const OmaOptions& options, int p, Eigen::Index l
 /// PreGER's global matrix at that order.
 using PolesOfOrder = std::function<std::vector<ModalPole>(int order)>;
 
-/// The stabilisation diagram of orders step, 2 step, .., max_order (SSI: 2, 4, ...; pLSCF: the
-/// references r), its clustering, the picked modes (standard errors NaN) and the verdict, into
+/// The stabilisation diagram of orders 2, 4, .., max_order (pLSCF: polynomial orders 1, 2, ..,
+/// max_order), its clustering, the picked modes (standard errors NaN) and the verdict, into
 /// `result` (stabilisation, modes, verdict, iterations).
-void ssi_modes(const PolesOfOrder& poles, const OmaOptions& options, OmaResult& result,
-               int order_step = 2);
+void ssi_modes(const PolesOfOrder& poles, const OmaOptions& options, OmaResult& result);
 
 /// Segment-based standard errors: `block_poles(b)` gives the poles of block b of `blocks`
 /// (called on threads); each mode's estimate in a block is the pole of its order nearest in
