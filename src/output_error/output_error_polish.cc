@@ -6,6 +6,8 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <string>
+#include <variant>
 #include <vector>
 
 #include <ceres/ceres.h>
@@ -521,12 +523,25 @@ void set_polish_statistics(OutputErrorPolishResult& out, const PolishProblem& p,
   out.fit_percent = fit_percent(p.data.output(), y1);
 }
 
-}  // namespace
+// The polish's start: the start made stable when asked (and whether that mirrored a pole), its
+// problem, the free start vector and its residual and output.
+struct PolishStart {
+  AdditiveModel first;
+  bool mirrored = false;
+  PolishProblem p;
+  Eigen::VectorXd x0{};
+  Eigen::VectorXd r0{};
+  Eigen::VectorXd y0{};
+};
 
-std::optional<std::string> polish_start_refusal(const SampledData& data, const AdditiveModel& start,
-                                                const std::optional<ArmaModel>& noise,
-                                                const OutputErrorPolishOptions& options,
-                                                const CoefficientConstraints& constraints) {
+// The start, formed once, or why the polish refuses it (a record with a reference, a non-finite
+// start, fewer than 10 samples per free parameter, a start it cannot evaluate); bad options and
+// constraints throw.
+std::variant<std::string, PolishStart> start_polish(const SampledData& data,
+                                                    const AdditiveModel& start,
+                                                    const std::optional<ArmaModel>& noise,
+                                                    const OutputErrorPolishOptions& options,
+                                                    const CoefficientConstraints& constraints) {
   options.validate();
   validate_constraints(start, constraints, options.estimate_delay);
   if (data.has_reference()) {
@@ -535,20 +550,34 @@ std::optional<std::string> polish_start_refusal(const SampledData& data, const A
   if (!start.parameters().allFinite() || !std::isfinite(start.input_delay())) {
     return "the output-error polish needs a finite start model";
   }
-  bool mirrored_start = false;
-  const AdditiveModel first = options.keep_stable ? stabilised_start(start, mirrored_start) : start;
-  const PolishProblem p = polish_problem(data, first, noise, options, constraints);
+  bool mirrored = false;
+  AdditiveModel first = options.keep_stable ? stabilised_start(start, mirrored) : start;
+  PolishProblem p = polish_problem(data, first, noise, options, constraints);
   if (data.size() < 10 * p.free()) {
     return internal::concat("the output-error polish of ", p.free(), " free parameters needs ",
                             10 * p.free(), " samples (10 per parameter); the record has ",
                             data.size());
   }
+  Eigen::VectorXd x0 = start_vector(p, first, noise);
   Eigen::VectorXd r0;
-  if (!p.evaluate(p.theta(start_vector(p, first, noise).data()), r0, nullptr, nullptr)) {
+  Eigen::VectorXd y0;
+  if (!p.evaluate(p.theta(x0.data()), r0, &y0, nullptr)) {
     return internal::concat(
         "the output-error polish cannot start: the start model",
         p.refused > 0 ? " with the held values is unstable" : "'s output is not finite");
   }
+  return PolishStart{std::move(first), mirrored,      std::move(p),
+                     std::move(x0),    std::move(r0), std::move(y0)};
+}
+
+}  // namespace
+
+std::optional<std::string> polish_start_refusal(const SampledData& data, const AdditiveModel& start,
+                                                const std::optional<ArmaModel>& noise,
+                                                const OutputErrorPolishOptions& options,
+                                                const CoefficientConstraints& constraints) {
+  auto started = start_polish(data, start, noise, options, constraints);
+  if (const std::string* refusal = std::get_if<std::string>(&started)) return *refusal;
   return std::nullopt;
 }
 
@@ -556,17 +585,17 @@ OutputErrorPolishResult polish_output_error(const SampledData& data, const Addit
                                             const std::optional<ArmaModel>& noise,
                                             const OutputErrorPolishOptions& options,
                                             const CoefficientConstraints& constraints) {
-  if (std::optional<std::string> refusal =
-          polish_start_refusal(data, start, noise, options, constraints)) {
+  auto started = start_polish(data, start, noise, options, constraints);
+  if (const std::string* refusal = std::get_if<std::string>(&started)) {
     throw InvalidArgument(*refusal);
   }
-  bool mirrored_start = false;
-  const AdditiveModel first = options.keep_stable ? stabilised_start(start, mirrored_start) : start;
-  const PolishProblem p = polish_problem(data, first, noise, options, constraints);
-  const Eigen::VectorXd x0 = start_vector(p, first, noise);
-  Eigen::VectorXd r0;
-  Eigen::VectorXd y0;
-  p.evaluate(p.theta(x0.data()), r0, &y0, nullptr);  // it starts: polish_start_refusal says so
+  const PolishStart& begun = std::get<PolishStart>(started);
+  const PolishProblem& p = begun.p;
+  const AdditiveModel& first = begun.first;
+  const Eigen::VectorXd& x0 = begun.x0;
+  const Eigen::VectorXd& r0 = begun.r0;
+  const Eigen::VectorXd& y0 = begun.y0;
+  const bool mirrored_start = begun.mirrored;
   const int refused_at_start = p.refused;
   Solved solved = solve_polish(p, x0, options.max_iterations);
   Eigen::VectorXd r1;
