@@ -219,23 +219,8 @@ void check_inputs(const IrregularRecord& r, const SubmodelOrder& o,
 // One solve of (30) from the filtered signals: theta_{j+1}, with the reciprocal condition of
 // the column-scaled instrument-regressor matrix; nothing if it is singular or non-finite.
 std::optional<Eigen::VectorXd> solve_step(const FilteredSignals& f, double& rcond) {
-  if (!f.instrument.allFinite() || !f.regressor.allFinite() || !f.filtered_output.allFinite()) {
-    return std::nullopt;
-  }
-  const Eigen::VectorXd sz = internal::column_scales(f.instrument);
-  const Eigen::VectorXd sp = internal::column_scales(f.regressor);
-  const Eigen::MatrixXd m = sz.cwiseInverse().asDiagonal() *
-                            (f.instrument.transpose() * f.regressor) *
-                            sp.cwiseInverse().asDiagonal();
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(m);
-  const Eigen::VectorXd& sv = svd.singularValues();
-  rcond = sv(sv.size() - 1) / sv(0);
-  if (!(rcond > 1e-14)) return std::nullopt;
-  const Eigen::VectorXd rhs =
-      sz.cwiseInverse().asDiagonal() * (f.instrument.transpose() * f.filtered_output);
-  Eigen::VectorXd next = sp.cwiseInverse().asDiagonal() * Eigen::VectorXd(m.fullPivLu().solve(rhs));
-  if (!next.allFinite()) return std::nullopt;
-  return next;
+  return internal::solve_scaled_instrument_equations(f.instrument, f.regressor, f.filtered_output,
+                                                     rcond);
 }
 
 struct IterationEnd {

@@ -21,6 +21,7 @@
 #include "ctid/simulation/discretization.h"
 #include "ctid/simulation/simulate.h"
 #include "refined_iv/internal/refined_iv_engine.h"
+#include "refined_iv/internal/unstable_loop.h"
 
 namespace ctid {
 namespace {
@@ -287,7 +288,16 @@ EstimationResult unstable_clsrivc_from(const SampledData& data,
   }
   result.fit_percent = result.closed_loop_fit_percent;
 
-  Verdict& verdict = result.verdict;
+  result.verdict = internal::unstable_loop_verdict(result, loop_stable);
+  return result;
+}
+
+}  // namespace
+
+namespace internal {
+
+Verdict unstable_loop_verdict(const EstimationResult& result, bool loop_stable) {
+  Verdict verdict;
   check_finite(verdict, result.parameters.allFinite(), "a parameter");
   if (!loop_stable) {
     verdict.fail(
@@ -305,16 +315,39 @@ EstimationResult unstable_clsrivc_from(const SampledData& data,
                                      ? result.transfer_function.zeros()
                                      : Eigen::VectorXcd(0);
   if (poles.allFinite() && zeros.allFinite()) check_cancellation(verdict, poles, zeros);
+  std::vector<std::string> names;
+  Eigen::VectorXd values(static_cast<Eigen::Index>(result.modes.size()));
+  Eigen::VectorXd errors(values.size());
+  for (size_t k = 0; k < result.modes.size(); ++k) {
+    names.push_back("the natural frequency of mode " + std::to_string(k + 1));
+    values(static_cast<Eigen::Index>(k)) = result.modes[k].value.natural_frequency;
+    errors(static_cast<Eigen::Index>(k)) = result.modes[k].standard_error.natural_frequency;
+  }
+  check_standard_errors(verdict, names, values, errors);
   check_conditioning(verdict, result.reciprocal_condition, result.fit_percent);
-  return result;
+  return verdict;
 }
 
-}  // namespace
+EstimationResult best_loop_fit(const std::vector<AdditiveModel>& starts,
+                               const std::function<EstimationResult(const AdditiveModel&)>& fit) {
+  std::optional<EstimationResult> best;
+  for (const AdditiveModel& start : starts) {
+    EstimationResult r = fit(start);
+    auto score = [](const EstimationResult& e) {
+      return std::isnan(e.closed_loop_fit_percent) ? -HUGE_VAL : e.closed_loop_fit_percent;
+    };
+    if (!best || (r.verdict.usable && !best->verdict.usable) ||
+        (r.verdict.usable == best->verdict.usable && score(r) > score(*best))) {
+      best = std::move(r);
+    }
+  }
+  best->message += "; of " + std::to_string(starts.size()) +
+                   " fits from different starts, the usable one with the best closed-loop fit "
+                   "from r was kept";
+  return std::move(*best);
+}
 
-namespace {
-
-// g as one submodel B / (p^l A), A anti-monic.
-AdditiveModel unstable_loop_submodel(const TransferFunction& g) {
+AdditiveModel loop_start_submodel(const TransferFunction& g) {
   const Eigen::VectorXd d = g.denominator().coefficients();
   int l = 0;
   while (l < d.size() && d(l) == 0.0) ++l;
@@ -323,43 +356,28 @@ AdditiveModel unstable_loop_submodel(const TransferFunction& g) {
   return AdditiveModel({Submodel{Polynomial(a), g.numerator() * (1.0 / scale), l}});
 }
 
-}  // namespace
-
-std::vector<AdditiveModel> unstable_clsrivc_starts(const SampledData& data,
-                                                   const DiscreteTransferFunction& controller,
-                                                   const SubmodelOrder& order) {
-  // The open-loop start (SRIVC on u -> y, which reflects every unstable root it meets) and the
-  // closed-loop one (made stable and one the controller stabilises, decision 0011).
-  std::vector<AdditiveModel> bases;
-  InitializationOptions init;
-  bases.push_back(unstable_loop_submodel(initial_transfer_function(data, order, init)));
-  // Two-stage: the input's part explained by r (an open-loop SRIVC fit of r -> u of the
-  // loop's order, biproper like a biproper controller), free of the noise fed back, then the
-  // open-loop start on that input.
+std::optional<AdditiveModel> explained_input_start(const SampledData& data,
+                                                   const SubmodelOrder& order, int loop_order) {
   try {
-    const int loop_order = order.n + order.integrators + controller.denominator().degree();
     RefinedIvOptions quick;
     quick.compute_covariance = false;
     const EstimationResult sensitivity =
         srivc(SampledData(data.sample_time(), data.reference(), data.input()),
               SubmodelOrder{loop_order, loop_order, 0}, quick);
-    if (sensitivity.parameters.allFinite()) {
-      const Eigen::VectorXd explained =
-          simulate(sensitivity.transfer_function, data.reference(), data.sample_time());
-      if (explained.allFinite()) {
-        bases.push_back(unstable_loop_submodel(initial_transfer_function(
-            SampledData(data.sample_time(), explained, data.output()), order, init)));
-      }
-    }
+    if (!sensitivity.parameters.allFinite()) return std::nullopt;
+    const Eigen::VectorXd explained =
+        simulate(sensitivity.transfer_function, data.reference(), data.sample_time());
+    if (!explained.allFinite()) return std::nullopt;
+    return loop_start_submodel(initial_transfer_function(
+        SampledData(data.sample_time(), explained, data.output()), order, {}));
   } catch (const InvalidArgument&) {
-    // too short or too poorly excited for the first stage: the other starts remain
+    return std::nullopt;  // too short or too poorly excited for the first stage
   }
-  init.controller = controller;
-  bases.push_back(unstable_loop_submodel(initial_transfer_function(data, order, init)));
-  // Each with every combination of its real roots and complex pairs moved to the other
-  // half-plane (numerator kept: the static gain and |G(jw)| stay): the reflected start of an
-  // unstable plant becomes the plant again. Those the controller stabilises, by their
-  // closed-loop fit from r, the best kUnstableStarts kept.
+}
+
+std::vector<AdditiveModel> stabilised_starts(const std::vector<AdditiveModel>& bases,
+                                             const SubmodelOrder& order, const LoopFit& fit,
+                                             int keep) {
   struct Scored {
     double fit;
     AdditiveModel model;
@@ -388,15 +406,13 @@ std::vector<AdditiveModel> unstable_clsrivc_starts(const SampledData& data,
       if (a.degree() != order.n || s.b.degree() > order.m) continue;
       // The gain as it is, else the nearest power of two the controller stabilises.
       for (double gain : {1.0, 0.5, 2.0, 0.25, 4.0, 0.125, 8.0}) {
-        const AdditiveModel candidate({Submodel{a, gain * s.b, s.integrators}});
         Eigen::VectorXd theta = Eigen::VectorXd::Zero(order.n + order.m + 1);
         for (int k = 1; k <= order.n; ++k) theta(k - 1) = a[k];
         for (int k = 0; k <= s.b.degree(); ++k) theta(order.n + k) = gain * s.b[k];
         if (!theta.allFinite()) break;
-        const std::optional<UnstableLoopPass> pass =
-            unstable_loop_pass_at(order, theta, controller, data);
-        if (!pass) continue;
-        scored.push_back({unstable_loop_fit(data, *pass), candidate});
+        const std::optional<double> score = fit(theta);
+        if (!score) continue;
+        scored.push_back({*score, AdditiveModel({Submodel{a, gain * s.b, s.integrators}})});
         break;
       }
     }
@@ -405,9 +421,39 @@ std::vector<AdditiveModel> unstable_clsrivc_starts(const SampledData& data,
                    [](const Scored& x, const Scored& y) { return x.fit > y.fit; });
   std::vector<AdditiveModel> starts;
   for (Scored& c : scored) {
-    if (static_cast<int>(starts.size()) >= kUnstableStarts) break;
+    if (static_cast<int>(starts.size()) >= keep) break;
     starts.push_back(std::move(c.model));
   }
+  return starts;
+}
+
+}  // namespace internal
+
+std::vector<AdditiveModel> unstable_clsrivc_starts(const SampledData& data,
+                                                   const DiscreteTransferFunction& controller,
+                                                   const SubmodelOrder& order) {
+  // The open-loop start (SRIVC on u -> y, which reflects every unstable root it meets), the
+  // two-stage one (the open-loop start on the input's part r explains) and the closed-loop
+  // one (made stable and one the controller stabilises, decision 0011).
+  std::vector<AdditiveModel> bases;
+  InitializationOptions init;
+  bases.push_back(internal::loop_start_submodel(initial_transfer_function(data, order, init)));
+  const int loop_order = order.n + order.integrators + controller.denominator().degree();
+  if (std::optional<AdditiveModel> explained =
+          internal::explained_input_start(data, order, loop_order)) {
+    bases.push_back(std::move(*explained));
+  }
+  init.controller = controller;
+  bases.push_back(internal::loop_start_submodel(initial_transfer_function(data, order, init)));
+  // The reflected start of an unstable plant becomes the plant again when its roots move back.
+  const internal::LoopFit fit = [&](const Eigen::VectorXd& theta) -> std::optional<double> {
+    const std::optional<UnstableLoopPass> pass =
+        unstable_loop_pass_at(order, theta, controller, data);
+    if (!pass) return std::nullopt;
+    return unstable_loop_fit(data, *pass);
+  };
+  std::vector<AdditiveModel> starts =
+      internal::stabilised_starts(bases, order, fit, kUnstableStarts);
   if (starts.empty()) starts.push_back(bases.back());  // none stabilised: fails, named
   return starts;
 }
@@ -455,23 +501,10 @@ EstimationResult unstable_clsrivc(const SampledData& data,
   if (options.initial_model) {
     return unstable_clsrivc_from(data, controller, order, options, *options.initial_model);
   }
-  std::optional<EstimationResult> best;
-  int tried = 0;
-  for (const AdditiveModel& start : unstable_clsrivc_starts(data, controller, order)) {
-    EstimationResult r = unstable_clsrivc_from(data, controller, order, options, start);
-    ++tried;
-    auto score = [](const EstimationResult& e) {
-      return std::isnan(e.closed_loop_fit_percent) ? -HUGE_VAL : e.closed_loop_fit_percent;
-    };
-    if (!best || (r.verdict.usable && !best->verdict.usable) ||
-        (r.verdict.usable == best->verdict.usable && score(r) > score(*best))) {
-      best = std::move(r);
-    }
-  }
-  best->message += "; of " + std::to_string(tried) +
-                   " fits from different starts, the usable one with the best closed-loop fit "
-                   "from r was kept";
-  return std::move(*best);
+  return internal::best_loop_fit(
+      unstable_clsrivc_starts(data, controller, order), [&](const AdditiveModel& start) {
+        return unstable_clsrivc_from(data, controller, order, options, start);
+      });
 }
 
 }  // namespace ctid

@@ -26,7 +26,7 @@ ALLOWED = {
             "and the engine refuses a piece with too few samples or too little excitation for "
             "the order by throwing, as it refuses a caller's record, and a degenerate start "
             "given as the initial model is refused the same way"),
-    "src/refined_iv/unstable_clsrivc.cc:unstable_clsrivc_starts":
+    "src/refined_iv/unstable_clsrivc.cc:explained_input_start":
         (1, "the first stage is a whole SRIVC run of r -> u, which the engine refuses by "
             "throwing when r excites too little for the loop's order, and a start screen of "
             "its own"),

@@ -4,6 +4,8 @@
 // relocation and covariance, and frf_fit's numerator fits use the same scaling.
 #pragma once
 
+#include <optional>
+
 #include <Eigen/Dense>
 
 namespace ctid::internal {
@@ -36,6 +38,28 @@ inline ScaledLeastSquares scaled_least_squares(const Eigen::MatrixXd& x, const E
   const Eigen::MatrixXd scaled = x * s.cwiseInverse().asDiagonal();
   const Eigen::VectorXd z = scaled.colPivHouseholderQr().solve(y);
   return {z.cwiseQuotient(s), y - scaled * z};
+}
+
+/// The instrument equations (sum z phi') theta = sum z upsilon of one refined IV step, with
+/// the columns of z and phi scaled by column_scales first; `rcond` gets the reciprocal
+/// condition of the scaled matrix. None when a signal is not finite, the matrix is
+/// numerically singular (rcond <= 1e-14) or the solution is not finite.
+inline std::optional<Eigen::VectorXd> solve_scaled_instrument_equations(
+    const Eigen::MatrixXd& z, const Eigen::MatrixXd& phi, const Eigen::VectorXd& upsilon,
+    double& rcond) {
+  if (!z.allFinite() || !phi.allFinite() || !upsilon.allFinite()) return std::nullopt;
+  const Eigen::VectorXd sz = column_scales(z);
+  const Eigen::VectorXd sp = column_scales(phi);
+  const Eigen::MatrixXd m =
+      sz.cwiseInverse().asDiagonal() * (z.transpose() * phi) * sp.cwiseInverse().asDiagonal();
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(m);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  rcond = sv(sv.size() - 1) / sv(0);
+  if (!(rcond > 1e-14)) return std::nullopt;
+  const Eigen::VectorXd rhs = sz.cwiseInverse().asDiagonal() * (z.transpose() * upsilon);
+  Eigen::VectorXd next = sp.cwiseInverse().asDiagonal() * Eigen::VectorXd(m.fullPivLu().solve(rhs));
+  if (!next.allFinite()) return std::nullopt;
+  return next;
 }
 
 }  // namespace ctid::internal
