@@ -58,6 +58,7 @@
 
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/clsrivc.h"
+#include "ctid/refined_iv/clsrivc_continuous.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/initialization.h"

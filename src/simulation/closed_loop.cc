@@ -8,6 +8,8 @@
 #include <Eigen/Eigenvalues>
 
 #include "ctid/core/error.h"
+#include "ctid/core/format.h"
+#include "ctid/simulation/discretization.h"
 #include "ctid/simulation/simulate.h"
 #include "simulation/internal/state_recursion.h"
 
@@ -111,6 +113,75 @@ ClosedLoopSimulation simulate_closed_loop(const AdditiveModel& plant,
                                           const Eigen::VectorXd& noise) {
   return simulate_closed_loop(zoh_equivalent(plant, controller.sample_time()), controller,
                               reference, noise);
+}
+
+namespace {
+
+// y_k of g driven by x held as `hold` says, from rest (exact at the samples).
+Eigen::VectorXd held_response(const TransferFunction& g, const Eigen::VectorXd& x, double h,
+                              Hold hold) {
+  if (hold == Hold::zero_order_hold) return simulate(g, x, h);
+  const StateSpace ss = g.to_state_space();
+  const FohDiscretization f = discretize_foh(ss.a, ss.b, h);
+  Eigen::VectorXd y(x.size());
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(ss.a.rows());
+  for (Eigen::Index k = 0; k < x.size(); ++k) {
+    y(k) = ss.c.dot(z) + ss.d * x(k);
+    if (k + 1 < x.size()) z = f.phi * z + f.gamma0.col(0) * x(k) + f.gamma1.col(0) * x(k + 1);
+  }
+  return y;
+}
+
+}  // namespace
+
+Eigen::VectorXcd analog_closed_loop_poles(const TransferFunction& plant,
+                                          const TransferFunction& controller) {
+  require(plant.is_proper() && controller.is_proper(), "analog loop: the plant ", plant.to_string(),
+          " or the controller ", controller.to_string(), " is improper");
+  require(plant.input_delay() == 0.0 && controller.input_delay() == 0.0,
+          "analog loop: a delay in the loop is not supported (plant ", plant.input_delay(),
+          " s, controller ", controller.input_delay(), " s)");
+  const Polynomial acl =
+      plant.denominator() * controller.denominator() + plant.numerator() * controller.numerator();
+  const int degree = plant.denominator().degree() + controller.denominator().degree();
+  const Eigen::VectorXd& c = acl.coefficients();
+  require(acl.degree() == degree && c.allFinite() &&
+              std::abs(c(degree)) > 1e-12 * c.cwiseAbs().maxCoeff(),
+          "analog loop: 1 + G C vanishes at infinity (the plant's and the controller's "
+          "feedthroughs cancel), so the loop is ill-posed");
+  return degree > 0 ? acl.roots() : Eigen::VectorXcd(0);
+}
+
+ClosedLoopSimulation simulate_closed_loop(const TransferFunction& plant,
+                                          const TransferFunction& controller,
+                                          const Eigen::VectorXd& reference, double sample_time,
+                                          const Eigen::VectorXd& noise, Hold hold) {
+  require(sample_time > 0.0 && std::isfinite(sample_time), "analog loop: the sample time ",
+          sample_time, " must be positive");
+  require(noise.size() == 0 || noise.size() == reference.size(), "analog loop: the noise has ",
+          noise.size(), " samples and the reference ", reference.size());
+  const Eigen::VectorXcd poles = analog_closed_loop_poles(plant, controller);
+  for (Eigen::Index k = 0; k < poles.size(); ++k) {
+    require(poles(k).real() < 0.0, "analog loop: the controller does not stabilise the plant (",
+            "closed-loop pole ", format_number(poles(k).real()), " + ",
+            format_number(poles(k).imag()), "i has a real part >= 0)");
+  }
+  const Polynomial acl =
+      plant.denominator() * controller.denominator() + plant.numerator() * controller.numerator();
+  const TransferFunction t(plant.numerator() * controller.numerator(), acl);
+  const TransferFunction cs(controller.numerator() * plant.denominator(), acl);
+  require(reference.allFinite() && noise.allFinite(),
+          "analog loop: the reference or the noise has a sample that is not finite");
+  ClosedLoopSimulation out;
+  out.noise_free_output = held_response(t, reference, sample_time, hold);
+  out.input = held_response(cs, reference, sample_time, hold);
+  if (noise.size() > 0) {
+    out.noise_free_output -= simulate(t, noise, sample_time);
+    out.input -= simulate(cs, noise, sample_time);
+  }
+  out.output =
+      noise.size() > 0 ? Eigen::VectorXd(out.noise_free_output + noise) : out.noise_free_output;
+  return out;
 }
 
 }  // namespace ctid

@@ -30,6 +30,10 @@ ALLOWED = {
         (1, "the first stage is a whole SRIVC run of r -> u, which the engine refuses by "
             "throwing when r excites too little for the loop's order, and a start screen of "
             "its own"),
+    "src/refined_iv/clsrivc_continuous.cc:indirect_start":
+        (1, "the first stage is a whole SRIVC run of r -> y of the loop's order, which the "
+            "engine refuses by throwing when r excites too little for it; the other starts "
+            "remain"),
     "src/identification/identification.cc:identify_records":
         (1, "the stabilised-prefilter fallback after an unusable closed-loop fit: its bad-input "
             "refusals are ruled out first as a value (unstable_clsrivc_refusal); what is left is "

@@ -8,6 +8,7 @@
 
 #include "ctid/core/additive_model.h"
 #include "ctid/core/discrete_transfer_function.h"
+#include "ctid/core/hold.h"
 #include "ctid/core/state_space.h"
 #include "ctid/core/transfer_function.h"
 
@@ -41,5 +42,23 @@ ClosedLoopSimulation simulate_closed_loop(const StateSpace& discrete_plant,
                                           const DiscreteTransferFunction& controller,
                                           const Eigen::VectorXd& reference,
                                           const Eigen::VectorXd& noise = Eigen::VectorXd());
+
+/// Poles of the analog loop u = C(p)(r - y) around the plant G(p): the roots of
+/// den(G) den(C) + num(G) num(C). Throws InvalidArgument if a model is improper or has a delay,
+/// or the loop is ill-posed (1 + G C vanishes at infinity: the leading coefficients cancel).
+Eigen::VectorXcd analog_closed_loop_poles(const TransferFunction& plant,
+                                          const TransferFunction& controller);
+
+/// The analog loop sampled every `sample_time`: r_k held between the samples as `hold` says,
+/// e = r - y, u = C(p) e, x = G(p) u, y = x + v with v_k held (zero-order) as an output
+/// disturbance the controller sees; exact at the samples: y = T (r - v) + v, u = C S (r - v),
+/// T = G C / (1 + G C), S = 1 / (1 + G C). `noise` is v_k or empty for none. input holds u_k,
+/// output y_k, noise_free_output x_k. Throws InvalidArgument as analog_closed_loop_poles does,
+/// or naming a closed-loop pole with a real part >= 0.
+ClosedLoopSimulation simulate_closed_loop(const TransferFunction& plant,
+                                          const TransferFunction& controller,
+                                          const Eigen::VectorXd& reference, double sample_time,
+                                          const Eigen::VectorXd& noise = Eigen::VectorXd(),
+                                          Hold hold = Hold::zero_order_hold);
 
 }  // namespace ctid
