@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "command.h"
@@ -293,7 +294,14 @@ void add_constraints(const FitFlags& f, CoefficientConstraints& constraints);
 // The flags as IdentificationOptions (the controller and --initial read from their files).
 IdentificationOptions identification_options(const FitFlags& f) {
   IdentificationOptions options = f.options;
-  if (!f.controller.empty()) options.controller = io::read_discrete_transfer_function(f.controller);
+  if (!f.controller.empty()) {
+    io::ControllerModel c = io::read_controller(f.controller);
+    if (auto* digital = std::get_if<DiscreteTransferFunction>(&c)) {
+      options.controller = std::move(*digital);
+    } else {
+      options.continuous_controller = std::get<TransferFunction>(std::move(c));
+    }
+  }
   if (!f.delay_scan.empty()) options.delay_scan_samples = parse_delay_range(f.delay_scan);
   if (!f.delay_range.empty()) options.delay_range = parse_delay_interval(f.delay_range);
   if (f.two_stage) options.two_stage = f.two_stage_options;
@@ -813,7 +821,8 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
                 std::to_string(f.data.files.size()) + " data files; give one per file");
   }
   const std::vector<SampledData> records =
-      f.data.load_all(app, controller.has_value() || options.two_stage.has_value());
+      f.data.load_all(app, controller.has_value() || options.continuous_controller.has_value() ||
+                               options.two_stage.has_value());
   const SampledData& data = records.front();
   int samples = 0;
   for (std::size_t k = 0; k < records.size(); ++k) {
@@ -869,6 +878,9 @@ ExitStatus run_fit(const FitFlags& f, const CLI::App& app) {
     }
     document["data"] = io::to_json(provenance);
     if (controller) document["controller"] = io::to_json(*controller);
+    if (options.continuous_controller) {
+      document["controller"] = io::to_json(*options.continuous_controller);
+    }
     if (identified.two_stage) document["two_stage"] = io::fields_to_json(*identified.two_stage);
     if (identified.polish) {
       document["polish"] = io::fields_to_json(*identified.polish);
@@ -928,8 +940,10 @@ Command add_fit_command(CLI::App& parent) {
       "ranges of the file's columns) fit modes shared by every channel (open loop; --direct "
       "adds D; --start/--initial take a mimo_additive_model or mimo_estimation_result); the "
       "summary lists the modes and every output's fit.\n"
-      "Closed loop: --controller C.json (discrete controller) uses CLSRIVC / additive CL and "
-      "needs the reference column; with the controller unknown, --two-stage fits r -> u first "
+      "Closed loop: --controller C.json (a discrete_transfer_function: digital controller) uses "
+      "CLSRIVC / additive CL and needs the reference column; a transfer_function in p (analog "
+      "controller) fits one unfactored model by clsrivc_continuous; with the controller unknown, "
+      "--two-stage fits r -> u first "
       "and the plant from the simulated input.\n"
       "Output: --output RESULT.json holds everything; its \"model\" field (or --model-output) "
       "is a model file for 'ctid validate' and 'ctid simulate --model'.\n"
@@ -1010,7 +1024,8 @@ Command add_fit_command(CLI::App& parent) {
   add_field_flags(*app, f.process_options, process);
 
   app->add_option(flag_of<IdentificationOptions>("controller") + ",-c", f.controller,
-                  "Discrete controller JSON (discrete_transfer_function in q): closed loop")
+                  "Controller JSON: a discrete_transfer_function in q (digital) or a "
+                  "transfer_function in p (analog): closed loop")
       ->check(CLI::ExistingFile)
       ->group("Closed loop");
   app->add_flag(flag_of<IdentificationOptions>("two_stage"), f.two_stage,
@@ -1038,13 +1053,10 @@ Command add_fit_command(CLI::App& parent) {
   FieldFlagSettings settings;
   settings.group = "Iteration";
   // Read from files or as MIN:MAX, D1,D2,... and auto|lssvf|frf|FILE above; two_stage's own.
-  settings.by_hand = {"controller",
-                      "delay_scan_samples",
-                      "delay_range",
-                      "two_stage",
-                      "refined_iv.initial_model",
-                      "refined_iv.start",
-                      "refined_iv.record_delay_samples",
+  settings.by_hand = {"controller",         "continuous_controller",
+                      "delay_scan_samples", "delay_range",
+                      "two_stage",          "refined_iv.initial_model",
+                      "refined_iv.start",   "refined_iv.record_delay_samples",
                       "constraints"};
   add_field_flags(*app, f.options, settings);
   app->add_option("--fix", f.fix,

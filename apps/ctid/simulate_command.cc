@@ -14,6 +14,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <variant>
 
 #include "command.h"
@@ -431,7 +432,15 @@ void run_simulate(const SimulateFlags& f, CLI::App& app) {
   }
   const io::ContinuousModel model = read_model_or_result(document, f.model);
   std::optional<DiscreteTransferFunction> controller;
-  if (!f.controller.empty()) controller = io::read_discrete_transfer_function(f.controller);
+  std::optional<TransferFunction> analog;  // an analog controller C(p) (decision 0067)
+  if (!f.controller.empty()) {
+    io::ControllerModel c = io::read_controller(f.controller);
+    if (auto* digital = std::get_if<DiscreteTransferFunction>(&c)) {
+      controller = std::move(*digital);
+    } else {
+      analog = std::get<TransferFunction>(std::move(c));
+    }
+  }
   const Hold hold = f.hold == "foh" ? Hold::first_order_hold : Hold::zero_order_hold;
   if (controller && hold == Hold::first_order_hold) {
     usage_error("--hold foh: in closed loop the controller's output is held (zoh) by its DAC");
@@ -466,6 +475,23 @@ void run_simulate(const SimulateFlags& f, CLI::App& app) {
         [&](const auto& plant) { return simulate_closed_loop(plant, *controller, *r, v); }, model);
     u = loop.input;
     y = loop.output;
+  } else if (analog) {
+    r = in.values;
+    const TransferFunction plant = std::visit(
+        [](const auto& g) -> TransferFunction {
+          if constexpr (std::is_same_v<std::decay_t<decltype(g)>, TransferFunction>) {
+            return g;
+          } else {
+            return g.to_transfer_function();
+          }
+        },
+        model);
+    const Eigen::VectorXd noise_free =
+        simulate_closed_loop(plant, *analog, *r, h, Eigen::VectorXd(), hold).output;
+    const Eigen::VectorXd v = output_noise(f.noise, noise_free, h);
+    const ClosedLoopSimulation loop = simulate_closed_loop(plant, *analog, *r, h, v, hold);
+    u = loop.input;
+    y = loop.output;
   } else {
     u = in.values;
     const Eigen::VectorXd noise_free =
@@ -485,9 +511,12 @@ void run_simulate(const SimulateFlags& f, CLI::App& app) {
   io::write_sampled_data(output, data, columns, f.force ? io::Overwrite::yes : io::Overwrite::no);
   if (!f.quiet) {
     std::cout << "wrote " << n << " samples (" << (r ? "t,u,y,r" : "t,u,y") << ", h = " << h
-              << " s, " << (controller ? "closed loop" : "open loop")
-              << (hold == Hold::first_order_hold ? ", input foh" : "") << ") to " << output.string()
-              << "\n";
+              << " s, "
+              << (controller ? "closed loop"
+                  : analog   ? "analog closed loop"
+                             : "open loop")
+              << (hold == Hold::first_order_hold ? (r ? ", reference foh" : ", input foh") : "")
+              << ") to " << output.string() << "\n";
   }
 }
 
@@ -502,7 +531,9 @@ Command add_simulate_command(CLI::App& parent) {
   app->footer(
       "Input: exactly one of --input (a CSV column) or --excitation/--excitation-spec.\n"
       "Closed loop (--controller): the input is the reference r, u_k = C_d(q)(r_k - y_k), and "
-      "the CSV gets an r column.\n"
+      "the CSV gets an r column. A transfer_function controller C(p) closes an analog loop, "
+      "u = C(p)(r - y), exact at the samples with r held as --hold says and the noise held "
+      "(zoh) as a disturbance the controller sees; give --sample-time.\n"
       "Delayed feedback loop (model type delayed_feedback_loop): y = F e, e = u - (H y)(t - "
       "delay), input continued by --hold, RK4 with --substeps per sample; white noise only.\n"
       "Several inputs and outputs (model type mimo_additive_model): the multisine of the "

@@ -338,7 +338,8 @@ Command add_structure_command(CLI::App& parent) {
       ->group("Structures");
   FieldFlagSettings settings;
   settings.group = "Choice and fits";
-  settings.by_hand = {"identification.controller", "identification.delay_scan_samples"};
+  settings.by_hand = {"identification.controller", "identification.continuous_controller",
+                      "identification.delay_scan_samples"};
   settings.none = kNoScanFlag;
   add_field_flags(*app, f.options, settings);
   FieldFlagSettings mimo;

@@ -472,8 +472,8 @@ Command add_track_command(CLI::App& parent) {
       ->group("Iteration");
   FieldFlagSettings settings;
   settings.group = "Iteration";
-  settings.by_hand = {"identification.controller", "identification.refined_iv.start",
-                      "identification.refined_iv.initial_model"};
+  settings.by_hand = {"identification.controller", "identification.continuous_controller",
+                      "identification.refined_iv.start", "identification.refined_iv.initial_model"};
   settings.none = kNoFlag;
   add_field_flags(*app, f.options, settings);
   app->get_option("--window")->required();

@@ -5,6 +5,7 @@
 #include "ctid/estimation/mimo_modes.h"
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/clsrivc.h"
+#include "ctid/refined_iv/clsrivc_continuous.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/estimation_result.h"
 #include "ctid/refined_iv/initialization.h"
@@ -118,6 +119,17 @@ void bind_refined_iv_estimators(py::module_& m) {
       },
       py::arg("data"), py::arg("controller"), py::arg("order"), py::arg("options") = py::none(),
       "CLSRIVC: one unfactored model from closed-loop data with a known controller.");
+  m.def(
+      "clsrivc_continuous",
+      [](const SampledData& data, const TransferFunction& controller, const SubmodelOrder& order,
+         const std::optional<RefinedIvOptions>& options, const py::kwargs& kwargs) {
+        const auto o = refined("clsrivc_continuous", options, kwargs);
+        py::gil_scoped_release release;
+        return clsrivc_continuous(data, controller, order, o);
+      },
+      py::arg("data"), py::arg("controller"), py::arg("order"), py::arg("options") = py::none(),
+      "CLSRIVC with a continuous-time controller C(p) (an analog loop, the reference held as "
+      "data.input_hold says): the closed-loop output error from r (decision 0067).");
   m.def(
       "additive_srivc",
       [](const SampledData& data, const std::vector<SubmodelOrder>& orders,

@@ -93,6 +93,17 @@ void bind_simulation(py::module_& m) {
                           const Eigen::VectorXd&, const Eigen::VectorXd&>(&simulate_closed_loop),
         py::arg("discrete_plant"), py::arg("controller"), py::arg("reference"),
         py::arg("noise") = Eigen::VectorXd(), "The same for a discrete ZOH plant.");
+  m.def("analog_closed_loop_poles", &analog_closed_loop_poles, py::arg("plant"),
+        py::arg("controller"),
+        "Poles of the analog loop u = C(p)(r - y): roots of den(G) den(C) + num(G) num(C).");
+  m.def("simulate_closed_loop",
+        py::overload_cast<const TransferFunction&, const TransferFunction&, const Eigen::VectorXd&,
+                          double, const Eigen::VectorXd&, Hold>(&simulate_closed_loop),
+        py::arg("plant"), py::arg("controller"), py::arg("reference"), py::arg("sample_time"),
+        py::arg("noise") = Eigen::VectorXd(), py::arg("hold") = Hold::zero_order_hold,
+        "Analog loop u = C(p)(r - y) around G(p), sampled every sample_time: r held as `hold` "
+        "says, the noise held (zoh) as a disturbance the controller sees; exact at the "
+        "samples. ValueError if the loop is ill-posed or unstable.");
 
   // Excitation.
   m.def("white_noise", &white_noise, py::arg("length"), py::arg("standard_deviation"),

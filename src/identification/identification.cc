@@ -13,6 +13,7 @@
 
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/refined_iv/clsrivc_continuous.h"
 #include "ctid/refined_iv/refined_iv.h"
 #include "ctid/refined_iv/unstable_clsrivc.h"
 #include "ctid/simulation/simulate.h"
@@ -70,6 +71,12 @@ void IdentificationOptions::check_relations(const std::string& path) const {
   require(!two_stage || !controller, path, ".two_stage and ", path,
           ".controller are both set; the two-stage method is for an unknown controller (with a "
           "known one, CLSRIVC uses it)");
+  require(!continuous_controller || (!controller && !two_stage), path,
+          ".continuous_controller and ", path, controller ? ".controller" : ".two_stage",
+          " are both set; a loop has one controller");
+  require(!continuous_controller || (!delay_scan_samples && !delay_range && !known), path,
+          ".continuous_controller is set with an input delay; a delay in an analog loop is not "
+          "supported");
 }
 
 RefinedIvEstimator choose_estimator(const ModelStructure& structure, bool closed_loop,
@@ -103,7 +110,7 @@ void validate_identification(const ModelStructure& structure,
     require(structure.is_additive(),
             "IdentificationOptions.relocate_modes is true but the structure is unfactored; mode "
             "relocation moves submodels of an additive model");
-    require(!options.controller,
+    require(!options.controller && !options.continuous_controller,
             "IdentificationOptions.relocate_modes is true but a controller is given; mode "
             "relocation is for open-loop data");
   }
@@ -111,9 +118,10 @@ void validate_identification(const ModelStructure& structure,
     validate_constraints(layout_model(structure), options.constraints,
                          options.polish_options.estimate_delay);
   }
-  require(!options.polish_asked() || (!options.controller && !options.two_stage),
+  require(!options.polish_asked() ||
+              (!options.controller && !options.continuous_controller && !options.two_stage),
           "IdentificationOptions.polish (or a constraint) is set but the data are closed loop (",
-          options.controller ? "a controller" : "the two-stage method",
+          options.two_stage ? "the two-stage method" : "a controller",
           " is given); the output-error polish is for open-loop records");
 }
 
@@ -250,12 +258,35 @@ std::optional<OutputErrorPolishResult> polish_and_restart(const SampledData& dat
   return polished;
 }
 
+// An analog loop (IdentificationOptions::continuous_controller, decision 0067):
+// clsrivc_continuous on one record, an unfactored structure.
+IdentificationResult identify_analog_loop(std::span<const SampledData> records,
+                                          const ModelStructure& structure,
+                                          const IdentificationOptions& options) {
+  require(!structure.is_additive(),
+          "IdentificationOptions.continuous_controller is set but the structure is additive; "
+          "with a continuous-time controller one unfactored model is fitted");
+  require(records.size() == 1, "IdentificationOptions.continuous_controller is set but ",
+          records.size(),
+          " records are given; with a continuous-time controller one record is "
+          "fitted");
+  require(!options.refined_iv.noise_model,
+          "IdentificationOptions.continuous_controller is set with refined_iv.noise_model; "
+          "with a continuous-time controller no noise model is fitted");
+  IdentificationResult result(clsrivc_continuous(records.front(), *options.continuous_controller,
+                                                 structure.orders.front(), options.refined_iv));
+  result.estimator = RefinedIvEstimator::clsrivc_continuous;
+  result.closed_loop = true;
+  return result;
+}
+
 IdentificationResult identify_records(std::span<const SampledData> records,
                                       const ModelStructure& structure,
                                       const IdentificationOptions& options,
                                       const IdentificationProgress& progress) {
   if (options.two_stage) return identify_two_stage(records, structure, options, progress);
   validate_identification(structure, options);
+  if (options.continuous_controller) return identify_analog_loop(records, structure, options);
   require(!records.empty(), "identify: no data record was given");
   require(!options.relocate_modes || records.size() == 1,
           "IdentificationOptions.relocate_modes is true but ", records.size(),
@@ -444,7 +475,8 @@ IdentificationResult identify(const IrregularRecord& record, const ModelStructur
       "; irregular time stamps are fitted by srivc_irregular, an unfactored "
       "open-loop SRIVC (docs/decisions/0034)";
   require(!structure.is_additive(), "ModelStructure.kind is additive", why);
-  require(!options.controller, "IdentificationOptions.controller is set (closed loop)", why);
+  require(!options.controller && !options.continuous_controller,
+          "IdentificationOptions.controller is set (closed loop)", why);
   require(!options.delay_scan_samples && !options.delay_range,
           "IdentificationOptions.delay_scan_samples or delay_range is set", why);
   require(!options.relocate_modes, "IdentificationOptions.relocate_modes is true", why);

@@ -303,6 +303,23 @@ DiscreteTransferFunction read_discrete_transfer_function(const std::filesystem::
   return discrete_transfer_function_from_json(read_json(path), path.string());
 }
 
+ControllerModel controller_from_json(const nlohmann::json& value, const std::string& source) {
+  const auto type = value.is_object() ? value.find("type") : value.end();
+  const bool named = type != value.end() && type->is_string();
+  if (named && *type == kTransferFunctionType) return transfer_function_from_json(value, source);
+  if (named && *type == kDiscreteTransferFunctionType) {
+    return discrete_transfer_function_from_json(value, source);
+  }
+  throw InvalidArgument(ctid::internal::concat(
+      source, ": \"type\" is ", named ? "\"" + type->get<std::string>() + "\"" : "missing",
+      "; a controller is a \"", kDiscreteTransferFunctionType,
+      "\" (C_d(q), a digital loop) or a \"", kTransferFunctionType, "\" (C(p), an analog loop)"));
+}
+
+ControllerModel read_controller(const std::filesystem::path& path) {
+  return controller_from_json(read_json(path), path.string());
+}
+
 void write_model(const std::filesystem::path& path, const ContinuousModel& model,
                  Overwrite overwrite) {
   write_json(path, to_json(model), overwrite);

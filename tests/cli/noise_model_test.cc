@@ -10,6 +10,7 @@
 #include "ctid/core/additive_model.h"
 #include "ctid/io/json.h"
 #include "ctid/io/report_json.h"
+#include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
 #include "ctid/simulation/simulate.h"
 

@@ -19,6 +19,7 @@
 #include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
+#include "ctid/core/transfer_function.h"
 #include "ctid/identification/two_stage.h"
 #include "ctid/output_error/output_error_polish.h"
 #include "ctid/process_model/process_model.h"
@@ -133,9 +134,11 @@ enum class RefinedIvEstimator {
   clrivc,            ///< unfactored, closed loop, with an ARMA noise model
   additive_rivc,     ///< additive, open loop, with an ARMA noise model
   additive_clrivc,   ///< additive, closed loop, with an ARMA noise model
+  /// unfactored, closed loop with a continuous-time controller (clsrivc_continuous.h)
+  clsrivc_continuous,
 };
 
-inline constexpr std::array<Enumerator<RefinedIvEstimator>, 9> refined_iv_estimator_enumerators{{
+inline constexpr std::array<Enumerator<RefinedIvEstimator>, 10> refined_iv_estimator_enumerators{{
     {RefinedIvEstimator::srivc, "srivc", "SRIVC: unfactored, open loop (eq. 30, instrument (10))."},
     {RefinedIvEstimator::clsrivc, "clsrivc",
      "CLSRIVC: unfactored, closed loop (eq. 30, instrument (20))."},
@@ -153,6 +156,9 @@ inline constexpr std::array<Enumerator<RefinedIvEstimator>, 9> refined_iv_estima
      "Additive, open loop, with an ARMA noise model (decision 0056)."},
     {RefinedIvEstimator::additive_clrivc, "additive_clrivc",
      "Additive, closed loop, with an ARMA noise model (decision 0056)."},
+    {RefinedIvEstimator::clsrivc_continuous, "clsrivc_continuous",
+     "Unfactored, closed loop with a continuous-time controller: the loop's output error "
+     "from r (decision 0067)."},
 }};
 constexpr std::span<const Enumerator<RefinedIvEstimator>> enumerators(RefinedIvEstimator) {
   return refined_iv_estimator_enumerators;
@@ -167,6 +173,11 @@ struct IdentificationOptions {
   /// The known discrete controller u_k = C_d(q)(r_k - y_k) of closed-loop data (the data
   /// must then hold the reference); none: open loop.
   std::optional<DiscreteTransferFunction> controller;
+  /// The known continuous-time controller u = C(p)(r - y) of an analog loop (the data must
+  /// then hold the reference, held between samples as the data's input hold says):
+  /// clsrivc_continuous, one unfactored model, one record, no delay (decision 0067). None:
+  /// open loop, or the discrete controller.
+  std::optional<TransferFunction> continuous_controller;
   /// Scan these whole-sample input delays and keep the best output-error fit (converged fits
   /// first); none: the known delay refined_iv.input_delay_samples (which must then be 0 if set).
   std::optional<DelayRange> delay_scan_samples;
@@ -207,6 +218,9 @@ struct IdentificationOptions {
     return std::tuple{
         field("controller", &O::controller,
               "Known discrete controller of closed-loop data, or none (open loop)."),
+        field("continuous_controller", &O::continuous_controller,
+              "Known continuous-time controller of an analog loop, or none.")
+            .with_flag("controller"),
         field("delay_scan_samples", &O::delay_scan_samples,
               "DelayRange of input delays to scan, or none (the known "
               "refined_iv.input_delay_samples)."),

@@ -73,6 +73,13 @@ ContinuousModel continuous_model_from_json(const nlohmann::json& value, const st
 ContinuousModel read_continuous_model(const std::filesystem::path& path);
 DiscreteTransferFunction read_discrete_transfer_function(const std::filesystem::path& path);
 
+/// A controller: C_d(q) of a digital loop or C(p) of an analog one (decision 0067).
+using ControllerModel = std::variant<DiscreteTransferFunction, TransferFunction>;
+/// Dispatches on "type": discrete_transfer_function or transfer_function; any other type is
+/// refused naming both.
+ControllerModel controller_from_json(const nlohmann::json& value, const std::string& source);
+ControllerModel read_controller(const std::filesystem::path& path);
+
 void write_model(const std::filesystem::path& path, const ContinuousModel& model,
                  Overwrite overwrite = Overwrite::no);
 void write_model(const std::filesystem::path& path, const DiscreteTransferFunction& model,
