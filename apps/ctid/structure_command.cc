@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "command.h"
@@ -280,7 +281,12 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
   const std::filesystem::path package = prepare_plot(f);
   StructureScanOptions options = f.options;
   if (!f.controller.empty()) {
-    options.identification.controller = io::read_discrete_transfer_function(f.controller);
+    io::ControllerModel c = io::read_controller(f.controller);
+    if (auto* digital = std::get_if<DiscreteTransferFunction>(&c)) {
+      options.identification.controller = std::move(*digital);
+    } else {
+      options.identification.continuous_controller = std::get<TransferFunction>(std::move(c));
+    }
   }
   if (!f.delay_scan.empty()) {
     const auto [d_low, d_high] = parse_range(f.delay_scan, "--delay-scan-samples", 0);
@@ -330,7 +336,8 @@ Command add_structure_command(CLI::App& parent) {
                   "--poles may start at 0, a pure integrator)")
       ->group("Structures");
   app->add_option(flag_of<StructureScanOptions>("identification.controller") + ",-c", f.controller,
-                  "Discrete controller JSON: closed loop (the data need the reference)")
+                  "Controller JSON, a discrete_transfer_function (digital) or a "
+                  "transfer_function (analog): closed loop (the data need the reference)")
       ->check(CLI::ExistingFile)
       ->group("Structures");
   app->add_option(flag_of<StructureScanOptions>("identification.delay_scan_samples"), f.delay_scan,

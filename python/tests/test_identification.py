@@ -233,8 +233,9 @@ def test_options_and_structure_are_checked_with_the_field_path(open_loop):
 
 def test_classes_follow_the_cpp_field_lists():
     assert ctid.IdentificationOptions.fields == (
-        "controller", "delay_scan_samples", "delay_range", "relocate_modes", "relocation", "polish",
-        "polish_options", "constraints", "refined_iv", "two_stage")
+        "controller", "continuous_controller", "delay_scan_samples", "delay_range",
+        "relocate_modes", "relocation", "polish", "polish_options", "constraints", "refined_iv",
+        "two_stage")
     assert ctid.IdentificationResult.fields == (
         "estimator", "closed_loop", "estimate", "delay_scan", "mode_relocation", "two_stage",
         "polish", "restarted_from_polish")
@@ -242,6 +243,7 @@ def test_classes_follow_the_cpp_field_lists():
     assert ctid.DelayRange.fields == ("min", "max")
     options = ctid.IdentificationOptions()
     assert options.controller is None and options.delay_scan_samples is None
+    assert options.continuous_controller is None
     assert not options.relocate_modes
     assert options.refined_iv == ctid.RefinedIvOptions()
     options.refined_iv.max_iterations = 7  # nested options are edited in place

@@ -14,6 +14,7 @@
 #include "ctid/core/format.h"
 #include "ctid/core/parallel.h"
 #include "ctid/estimation/validation.h"
+#include "ctid/simulation/closed_loop.h"
 
 namespace ctid {
 namespace {
@@ -104,6 +105,17 @@ Eigen::VectorXd scan_simulation(const AdditiveModel& model, const SampledData& d
     from_state.window_start = data.start_time();
     from_state.window_end = data.start_time() + (fitted - 1) * data.sample_time();
     return validation_output(model, data, from_state);
+  }
+  // An analog loop's plant input is not held and its plant may be unstable: the model's output
+  // from r through the loop, which its fit is judged by (decision 0067).
+  if (const std::optional<TransferFunction>& c = options.identification.continuous_controller) {
+    const TransferFunction g = model.to_transfer_function();
+    if (!analog_loop_is_stable(g, *c)) {
+      return Eigen::VectorXd::Constant(data.size(), std::numeric_limits<double>::quiet_NaN());
+    }
+    return simulate_closed_loop(g, *c, data.reference(), data.sample_time(), Eigen::VectorXd(),
+                                data.input_hold())
+        .output;
   }
   return model_output(model, data.input(), data.sample_time(), data.input_hold());
 }

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <complex>
+#include <optional>
 
 #include <Eigen/Eigenvalues>
 
@@ -117,6 +118,21 @@ ClosedLoopSimulation simulate_closed_loop(const AdditiveModel& plant,
 
 namespace {
 
+// den(G) den(C) + num(G) num(C), or none when it is not finite or its leading coefficient
+// cancels (1 + G C vanishes at infinity: an ill-posed loop).
+std::optional<Polynomial> analog_loop_denominator(const TransferFunction& plant,
+                                                  const TransferFunction& controller) {
+  const Polynomial acl =
+      plant.denominator() * controller.denominator() + plant.numerator() * controller.numerator();
+  const int degree = plant.denominator().degree() + controller.denominator().degree();
+  const Eigen::VectorXd& c = acl.coefficients();
+  if (acl.degree() != degree || !c.allFinite() ||
+      !(std::abs(c(degree)) > 1e-12 * c.cwiseAbs().maxCoeff())) {
+    return std::nullopt;
+  }
+  return acl;
+}
+
 // y_k of g driven by x held as `hold` says, from rest (exact at the samples).
 Eigen::VectorXd held_response(const TransferFunction& g, const Eigen::VectorXd& x, double h,
                               Hold hold) {
@@ -141,15 +157,22 @@ Eigen::VectorXcd analog_closed_loop_poles(const TransferFunction& plant,
   require(plant.input_delay() == 0.0 && controller.input_delay() == 0.0,
           "analog loop: a delay in the loop is not supported (plant ", plant.input_delay(),
           " s, controller ", controller.input_delay(), " s)");
-  const Polynomial acl =
-      plant.denominator() * controller.denominator() + plant.numerator() * controller.numerator();
-  const int degree = plant.denominator().degree() + controller.denominator().degree();
-  const Eigen::VectorXd& c = acl.coefficients();
-  require(acl.degree() == degree && c.allFinite() &&
-              std::abs(c(degree)) > 1e-12 * c.cwiseAbs().maxCoeff(),
+  const std::optional<Polynomial> acl = analog_loop_denominator(plant, controller);
+  require(acl.has_value(),
           "analog loop: 1 + G C vanishes at infinity (the plant's and the controller's "
           "feedthroughs cancel), so the loop is ill-posed");
-  return degree > 0 ? acl.roots() : Eigen::VectorXcd(0);
+  return acl->degree() > 0 ? acl->roots() : Eigen::VectorXcd(0);
+}
+
+bool analog_loop_is_stable(const TransferFunction& plant, const TransferFunction& controller) {
+  if (!plant.is_proper() || !controller.is_proper() || plant.input_delay() != 0.0 ||
+      controller.input_delay() != 0.0) {
+    return false;
+  }
+  const std::optional<Polynomial> acl = analog_loop_denominator(plant, controller);
+  if (!acl) return false;
+  const Eigen::VectorXcd poles = acl->degree() > 0 ? acl->roots() : Eigen::VectorXcd(0);
+  return poles.allFinite() && (poles.size() == 0 || poles.real().maxCoeff() < 0.0);
 }
 
 ClosedLoopSimulation simulate_closed_loop(const TransferFunction& plant,

@@ -1,4 +1,5 @@
-// `ctid simulate` and `ctid fit` with an analog controller, a transfer_function C(p) given to
+// `ctid simulate`, `ctid fit` and `ctid structure` with an analog controller, a transfer_function
+// C(p) given to
 // --controller (decision 0067): the simulated loop is the library's, the fit gives the unstable
 // plant from the noise-free record to 1e-8 through clsrivc_continuous, and what it does not take
 // is refused in one line.
@@ -62,6 +63,18 @@ TEST_F(AnalogLoop, FitGivesTheUnstablePlantFromTheNoiseFreeRecord) {
   for (std::size_t i = 0; i < truth.size(); ++i) {
     EXPECT_NEAR(result["parameters"][i].get<double>(), truth[i], 1e-8) << i;
   }
+}
+
+// Each candidate is judged by its output from r through the analog loop (its plant is
+// unstable, so y - G u would diverge): the true two-pole structure is recommended.
+TEST_F(AnalogLoop, StructureRecommendsTheTrueOrderJudgedThroughTheLoop) {
+  const auto r = ctid({"structure", "loop.csv", "--poles", "1:3", "--zeros", "0", "--controller",
+                       controller_, "-o", "scan.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("recommended: n=2 m=0 ("));
+  const nlohmann::json scan = io::read_json(path("scan.json"));
+  const nlohmann::json& chosen = scan["fits"][scan["recommended"].get<int>()];
+  EXPECT_GT(chosen["validation_fit"].get<double>(), 100.0 - 1e-6);
 }
 
 TEST_F(AnalogLoop, WhatTheAnalogFitDoesNotTakeIsRefusedInOneLine) {

@@ -49,6 +49,10 @@ ClosedLoopSimulation simulate_closed_loop(const StateSpace& discrete_plant,
 Eigen::VectorXcd analog_closed_loop_poles(const TransferFunction& plant,
                                           const TransferFunction& controller);
 
+/// Whether the analog loop is well posed with every pole's real part negative; false (not an
+/// exception) for an improper model, a delay in the loop or an ill-posed loop.
+bool analog_loop_is_stable(const TransferFunction& plant, const TransferFunction& controller);
+
 /// The analog loop sampled every `sample_time`: r_k held between the samples as `hold` says,
 /// e = r - y, u = C(p) e, x = G(p) u, y = x + v with v_k held (zero-order) as an output
 /// disturbance the controller sees; exact at the samples: y = T (r - v) + v, u = C S (r - v),
