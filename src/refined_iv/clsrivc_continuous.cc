@@ -117,21 +117,31 @@ std::optional<AnalogLoopSignals> analog_loop_signals(const SampledData& data,
   return s;
 }
 
+// numerator / A_cl at theta as one filter sampled for `hold`, or none as
+// stable_loop_denominator.
+std::optional<SampledFilter> over_loop_denominator(const SampledData& data, const SubmodelOrder& o,
+                                                   const Eigen::VectorXd& theta,
+                                                   const TransferFunction& controller,
+                                                   const Polynomial& numerator, Hold hold) {
+  const std::optional<Polynomial> acl = stable_loop_denominator(o, theta, controller);
+  if (!acl) return std::nullopt;
+  const std::optional<FilterRealization> bank = finite_derivative_filters(*acl);
+  if (!bank) return std::nullopt;
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank->outputs());
+  w.head(numerator.degree() + 1) = numerator.coefficients();
+  return SampledFilter(combine_outputs(*bank, w), data.sample_time(), hold);
+}
+
 // The model's output x = B N_c / A_cl r alone (a start's score), or none as
 // analog_loop_signals.
 std::optional<Eigen::VectorXd> analog_loop_output(const SampledData& data, const SubmodelOrder& o,
                                                   const Eigen::VectorXd& theta,
                                                   const TransferFunction& controller) {
-  const std::optional<Polynomial> acl = stable_loop_denominator(o, theta, controller);
-  if (!acl) return std::nullopt;
-  const std::optional<FilterRealization> bank = finite_derivative_filters(*acl);
-  if (!bank) return std::nullopt;
-  const Polynomial bn = analog_plant_b(o, theta) * controller.numerator();
-  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank->outputs());
-  w.head(bn.degree() + 1) = bn.coefficients();
-  Eigen::VectorXd x =
-      SampledFilter(combine_outputs(*bank, w), data.sample_time(), data.input_hold())
-          .apply(data.reference());
+  const std::optional<SampledFilter> loop =
+      over_loop_denominator(data, o, theta, controller,
+                            analog_plant_b(o, theta) * controller.numerator(), data.input_hold());
+  if (!loop) return std::nullopt;
+  Eigen::VectorXd x = loop->apply(data.reference());
   if (!x.allFinite()) return std::nullopt;
   return x;
 }
@@ -147,26 +157,21 @@ std::optional<Eigen::MatrixXd> loop_covariance(const SampledData& data, const Su
                                                const TransferFunction& controller,
                                                const Eigen::MatrixXd& psi,
                                                const Eigen::VectorXd& residual) {
-  const std::optional<Polynomial> acl = stable_loop_denominator(o, theta, controller);
-  if (!acl) return std::nullopt;
-  const std::optional<FilterRealization> bank = finite_derivative_filters(*acl);
-  if (!bank) return std::nullopt;
-  const Polynomial sn =
-      Polynomial::monomial(o.integrators) * analog_plant_a(o, theta) * controller.denominator();
-  Eigen::VectorXd w = Eigen::VectorXd::Zero(bank->outputs());
-  w.head(sn.degree() + 1) = sn.coefficients();
-  const SampledFilter sensitivity(combine_outputs(*bank, w), data.sample_time(),
-                                  Hold::zero_order_hold);
+  const std::optional<SampledFilter> sensitivity = over_loop_denominator(
+      data, o, theta, controller,
+      Polynomial::monomial(o.integrators) * analog_plant_a(o, theta) * controller.denominator(),
+      Hold::zero_order_hold);
+  if (!sensitivity) return std::nullopt;
   const Eigen::Index n = psi.rows();
   const auto p = static_cast<int>(psi.cols());
   Eigen::VectorXd pulse = Eigen::VectorXd::Zero(n);
   pulse(0) = 1.0;
-  const double energy = sensitivity.apply(pulse).squaredNorm();
+  const double energy = sensitivity->apply(pulse).squaredNorm();
   const double sigma2 = residual.squaredNorm() / static_cast<double>(n - p) / energy;
   Eigen::MatrixXd adjoint(n, p);
   for (int c = 0; c < p; ++c) {
     const Eigen::VectorXd reversed = psi.col(c).reverse();
-    adjoint.col(c) = sensitivity.apply(reversed).col(0).reverse();
+    adjoint.col(c) = sensitivity->apply(reversed).col(0).reverse();
   }
   const Eigen::VectorXd scale = internal::column_scales(psi);
   const Eigen::MatrixXd scaled = psi * scale.cwiseInverse().asDiagonal();
