@@ -19,6 +19,7 @@
 #include "ctid/refined_iv/initialization.h"
 #include "ctid/refined_iv/srivc.h"
 #include "estimation/internal/scaled_least_squares.h"
+#include "refined_iv/internal/refined_iv_engine.h"
 #include "refined_iv/internal/unstable_loop.h"
 
 namespace ctid {
@@ -320,27 +321,17 @@ std::optional<AnalogLoopSignals> iterate_analog_loop(
   return signals;
 }
 
+// Assumption 1 on the reference (the order the engine asks of a closed loop) and 4 on the
+// estimate.
 DataChecks analog_loop_checks(const SampledData& data, const SubmodelOrder& o,
-                              const AdditiveModel& model) {
+                              const TransferFunction& controller, const AdditiveModel& model) {
   DataChecks checks;
   const int p = o.n + o.m + 1;
-  checks.excitation_order_required = 2 * (o.n + o.integrators);
+  checks.excitation_order_required = 2 * (o.n + o.integrators) + controller.denominator().degree();
   checks.excitation_order =
       persistent_excitation_order(data.reference(), std::max(checks.excitation_order_required, p));
-  checks.persistently_exciting = checks.excitation_order >= checks.excitation_order_required;
-  checks.nyquist_frequency = M_PI / data.sample_time();
-  checks.largest_pole_frequency = largest_pole_frequency(model);
-  checks.sampling_rate_ok = checks.largest_pole_frequency < checks.nyquist_frequency;
-  if (!checks.persistently_exciting) {
-    checks.warnings.push_back("the reference is persistently exciting of order " +
-                              std::to_string(checks.excitation_order) + ", below the " +
-                              std::to_string(checks.excitation_order_required) +
-                              " of Assumption 1; consistency is not guaranteed");
-  }
-  if (!checks.sampling_rate_ok) {
-    checks.warnings.push_back("a pole's imaginary part is not below pi / h " +
-                              format_significant(checks.nyquist_frequency, 3) + " rad/s");
-  }
+  internal::note_excitation(checks, "reference");
+  internal::note_sampling_rate(checks, model, data.sample_time(), "the Nyquist frequency");
   return checks;
 }
 
@@ -374,7 +365,7 @@ EstimationResult clsrivc_continuous_from(const SampledData& data,
   }
   result.fit_percent = result.closed_loop_fit_percent;
   result.start_fit_percent = result.start_closed_loop_fit_percent;
-  result.checks = analog_loop_checks(data, o, result.model);
+  result.checks = analog_loop_checks(data, o, controller, result.model);
   result.verdict = internal::unstable_loop_verdict(result, signals.has_value());
   return result;
 }
@@ -428,6 +419,11 @@ std::optional<std::string> clsrivc_continuous_refusal(const SampledData& data,
   if (data.size() < 3 * p + 20) {
     return concat(name, ": ", data.size(), " samples are too few for ", p, " parameters; at least ",
                   3 * p + 20, " are needed");
+  }
+  if (const int excited = persistent_excitation_order(data.reference(), p); excited < p) {
+    return concat(name, ": the reference is persistently exciting of order ", excited,
+                  " only; the ", p, " parameters need at least order ", p,
+                  " (e.g. a constant or a single sine cannot)");
   }
   return std::nullopt;
 }

@@ -297,7 +297,7 @@ EstimationResult srivc_irregular(const IrregularRecord& record, const SubmodelOr
   require(checks.excitation_order >= p,
           "srivc_irregular: the input is persistently exciting of order ", checks.excitation_order,
           " only; the ", p, " parameters need at least order ", p);
-  checks.persistently_exciting = checks.excitation_order >= checks.excitation_order_required;
+  internal::note_excitation(checks, "input");
   Eigen::VectorXd theta = d::start_parameters(record, order, options);
   require(theta.size() == p && theta.allFinite(),
           "srivc_irregular: no finite start was found on the resampled record");
@@ -327,19 +327,7 @@ EstimationResult srivc_irregular(const IrregularRecord& record, const SubmodelOr
     result.standard_errors = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
     result.modes = modal_estimates(result.model, result.covariance, true);
   }
-  checks.nyquist_frequency = M_PI / record.median_step();
-  checks.largest_pole_frequency = largest_pole_frequency(result.model);
-  checks.sampling_rate_ok = checks.largest_pole_frequency < checks.nyquist_frequency;
-  if (!checks.persistently_exciting) {
-    checks.warnings.push_back("the input is persistently exciting of order " +
-                              std::to_string(checks.excitation_order) + ", below the " +
-                              std::to_string(checks.excitation_order_required) +
-                              " of Assumption 1; consistency is not guaranteed");
-  }
-  if (!checks.sampling_rate_ok) {
-    checks.warnings.push_back("a pole's imaginary part is not below pi / (median step) " +
-                              format_significant(checks.nyquist_frequency, 3) + " rad/s");
-  }
+  internal::note_sampling_rate(checks, result.model, record.median_step(), "pi / (median step)");
   result.checks = std::move(checks);
   result.verdict = internal::refined_iv_verdict(result, false, false);
   result.verdict.active_constraints =

@@ -32,6 +32,29 @@ namespace ctid {
 
 namespace internal {
 
+void note_excitation(DataChecks& checks, const std::string& signal) {
+  checks.persistently_exciting = checks.excitation_order >= checks.excitation_order_required;
+  if (!checks.persistently_exciting) {
+    checks.warnings.push_back("the " + signal + " is persistently exciting of order " +
+                              std::to_string(checks.excitation_order) + ", below the " +
+                              std::to_string(checks.excitation_order_required) +
+                              " of Assumption 1; consistency is not guaranteed");
+  }
+}
+
+void note_sampling_rate(DataChecks& checks, const AdditiveModel& model, double step,
+                        const std::string& limit) {
+  checks.nyquist_frequency = M_PI / step;
+  checks.largest_pole_frequency = largest_pole_frequency(model);
+  checks.sampling_rate_ok = checks.largest_pole_frequency < checks.nyquist_frequency;
+  if (!checks.sampling_rate_ok) {
+    checks.warnings.push_back(
+        "a pole's imaginary part " + format_significant(checks.largest_pole_frequency, 3) +
+        " rad/s is not below " + limit + " " + format_significant(checks.nyquist_frequency, 3) +
+        " rad/s (Assumption 4): sample faster or lower the model order");
+  }
+}
+
 Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loop_unstable) {
   // A returned start (no step completed, or none fitted better) is judged like any model, by
   // its fit and the checks below, never by the iteration count: on noise-free data the start
@@ -244,14 +267,7 @@ DataChecks check_excitation(const RefinedIvProblem& problem, const Layout& layou
   require(checks.excitation_order >= p, name, ": the ", closed_loop ? "reference" : "input",
           " is persistently exciting of order ", checks.excitation_order, " only; the ", p,
           " parameters need at least order ", p, " (e.g. a constant or a single sine cannot)");
-  checks.persistently_exciting = checks.excitation_order >= checks.excitation_order_required;
-  if (!checks.persistently_exciting) {
-    checks.warnings.push_back("the " + std::string(closed_loop ? "reference" : "input") +
-                              " is persistently exciting of order " +
-                              std::to_string(checks.excitation_order) + ", below the " +
-                              std::to_string(checks.excitation_order_required) +
-                              " of Assumption 1; consistency is not guaranteed");
-  }
+  note_excitation(checks, closed_loop ? "reference" : "input");
   return checks;
 }
 
@@ -849,16 +865,7 @@ void set_statistics(Run& run) {
 void judge(Run& run) {
   DataChecks& checks = run.checks;
   EstimationResult& result = run.result;
-  checks.nyquist_frequency = M_PI / run.h;
-  checks.largest_pole_frequency = largest_pole_frequency(result.model);
-  checks.sampling_rate_ok = checks.largest_pole_frequency < checks.nyquist_frequency;
-  if (!checks.sampling_rate_ok) {
-    checks.warnings.push_back("a pole's imaginary part " +
-                              format_significant(checks.largest_pole_frequency, 3) +
-                              " rad/s is not below the Nyquist frequency " +
-                              format_significant(checks.nyquist_frequency, 3) +
-                              " rad/s (Assumption 4): sample faster or lower the model order");
-  }
+  note_sampling_rate(checks, result.model, run.h, "the Nyquist frequency");
   result.checks = std::move(checks);
   result.verdict = refined_iv_verdict(result, run.closed_loop, run.loop_unstable);
   result.verdict.active_constraints =

@@ -254,6 +254,10 @@ TEST(ClsrivcContinuous, BadInputIsRefusedNamingWhatIsWrong) {
                                  data.reference().head(20));
   EXPECT_THAT(refusal(short_record, loop.controller, loop.order, {}),
               HasSubstr("20 samples are too few"));
+  const SampledData constant(kH, data.input(), data.output(),
+                             Eigen::VectorXd::Constant(data.size(), 1.0));
+  EXPECT_THAT(refusal(constant, loop.controller, loop.order, {}),
+              HasSubstr("the reference is persistently exciting of order 1 only"));
 }
 
 TEST(AnalogClosedLoopSimulation, RefusesALoopTheControllerDoesNotStabilise) {

@@ -42,7 +42,8 @@ EstimationResult clsrivc_continuous(const SampledData& data, const TransferFunct
 /// Why clsrivc_continuous refuses its arguments, or none: no reference, a controller that is
 /// improper, has a delay or a non-finite coefficient, n + integrators < 1 or m outside
 /// 0..n + integrators, an input delay, a noise model, estimated initial conditions, too few
-/// samples for the parameters. Bad options still throw (RefinedIvOptions::validate).
+/// samples for the parameters, a reference not persistently exciting of the parameters' count. Bad
+/// options still throw (RefinedIvOptions::validate).
 std::optional<std::string> clsrivc_continuous_refusal(const SampledData& data,
                                                       const TransferFunction& controller,
                                                       const SubmodelOrder& order,

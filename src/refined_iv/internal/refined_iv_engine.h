@@ -61,6 +61,15 @@ struct FreeResponseChain {
 };
 FreeResponseChain free_response_chain(const Polynomial& a, int integrators, double h);
 
+/// Assumption 1's persistency check: sets checks.persistently_exciting from excitation_order
+/// and excitation_order_required, and warns that `signal` ("input", "reference") excites too
+/// little for consistency when it is below.
+void note_excitation(DataChecks& checks, const std::string& signal);
+/// Assumption 4 on an estimate: its fastest pole against pi / step (`limit`, e.g. "the
+/// Nyquist frequency", names that bound in the warning when the pole is not below it).
+void note_sampling_rate(DataChecks& checks, const AdditiveModel& model, double step,
+                        const std::string& limit);
+
 /// The checks of estimation/verdict.h on a finished estimate (decision 0007).
 /// `loop_unstable`: closed loop, and the known controller does not stabilise the estimate.
 Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loop_unstable);
