@@ -28,16 +28,18 @@ namespace {
 // Starts iterated from, at most (the best by their closed-loop fit from r).
 constexpr int kAnalogLoopStarts = 3;
 
-// theta = [a_1..a_n, b_0..b_m] of B / (p^l A) as A (anti-monic) and B.
+// theta = [a_1..a_n, b_0..b_m] of B / (p^l A) as A (anti-monic) and B, zero leading
+// coefficients dropped: a start with fewer zeros than the order is padded with b_m = 0, and an
+// iterate whose a_n is 0 has a loop of lower degree, which stable_loop_denominator refuses.
 Polynomial analog_plant_a(const SubmodelOrder& o, const Eigen::VectorXd& theta) {
   Eigen::VectorXd a(o.n + 1);
   a(0) = 1.0;
   a.tail(o.n) = theta.head(o.n);
-  return Polynomial(a);
+  return Polynomial::trimmed(a);
 }
 
 Polynomial analog_plant_b(const SubmodelOrder& o, const Eigen::VectorXd& theta) {
-  return Polynomial(Eigen::VectorXd(theta.tail(o.m + 1)));
+  return Polynomial::trimmed(theta.tail(o.m + 1));
 }
 
 // A_cl = p^l A D_c + B N_c, or none when the loop is ill-posed (its degree falls below

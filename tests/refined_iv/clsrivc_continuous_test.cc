@@ -101,6 +101,24 @@ TEST(ClsrivcContinuous, TheTrueStartIsAFixedPoint) {
   EXPECT_LT(e.relative_change, 1e-10);
 }
 
+// An order with more zeros than the plant has: the true b_1 is 0, and a start with fewer zeros
+// than the order (padded with a zero coefficient) is a start like any other.
+TEST(ClsrivcContinuous, AStartWithFewerZerosThanTheOrderIsPaddedNotRefused) {
+  AnalogLoop loop = resonant_plant();
+  loop.order = SubmodelOrder{2, 1, 0};
+  RefinedIvOptions options;
+  options.initial_model = AdditiveModel({Submodel{Polynomial{1.0, 0.2, 0.25}, Polynomial{1.0}, 0}});
+  const EstimationResult e =
+      clsrivc_continuous(loop_record(loop, 15, 0.0), loop.controller, loop.order, options);
+  EXPECT_EQ(e.termination, Termination::converged) << e.message;
+  EXPECT_LT((e.parameters - Eigen::Vector4d(0.2, 0.25, 1.0, 0.0)).norm(), 1e-9)
+      << e.parameters.transpose();
+  const EstimationResult automatic =
+      clsrivc_continuous(loop_record(loop, 15, 0.0), loop.controller, loop.order);
+  EXPECT_LT((automatic.parameters - Eigen::Vector4d(0.2, 0.25, 1.0, 0.0)).norm(), 1e-9)
+      << automatic.parameters.transpose();
+}
+
 // Seeded Monte Carlo: the mean squared error of every parameter within 20 % of the mean
 // reported variance (the sensitivity-shaped sandwich), and no bias beyond 3 standard errors
 // of the mean. An AR model of the residual gave several times too small a variance on the
