@@ -6,6 +6,7 @@
 #include <optional>
 #include <type_traits>
 #include <utility>
+#include <variant>
 
 #include "command.h"
 #include "ctid/core/error.h"
@@ -13,6 +14,7 @@
 #include "ctid/core/mimo_preprocessing.h"
 #include "ctid/io/csv.h"
 #include "ctid/io/mimo_data_csv.h"
+#include "ctid/io/model_json.h"
 #include "ctid/io/npy.h"
 #include "ctid/io/sampled_data_csv.h"
 
@@ -71,6 +73,16 @@ Hold resolved_hold(const io::CsvTable& table, const std::string& path, const std
 }  // namespace
 
 bool same_sample_time(double a, double b) { return std::abs(a - b) <= 1e-9 * std::abs(b); }
+
+void read_controller(const std::string& path, std::optional<DiscreteTransferFunction>& digital,
+                     std::optional<TransferFunction>& analog) {
+  io::ControllerModel c = io::read_controller(path);
+  if (auto* d = std::get_if<DiscreteTransferFunction>(&c)) {
+    digital = std::move(*d);
+  } else {
+    analog = std::get<TransferFunction>(std::move(c));
+  }
+}
 
 void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_reference, bool several) {
   if (several) {

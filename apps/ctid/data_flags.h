@@ -5,6 +5,7 @@
 // Errors are one line naming the file, the column and the flag to use.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -96,5 +97,10 @@ struct DataFlags {
 
 /// Agreement of two sample times given in different places (flag, file, controller).
 bool same_sample_time(double a, double b);
+
+/// The file of --controller: a discrete_transfer_function is a digital controller C_d(q), put
+/// in `digital`; a transfer_function an analog one C(p), put in `analog` (decision 0067).
+void read_controller(const std::string& path, std::optional<DiscreteTransferFunction>& digital,
+                     std::optional<TransferFunction>& analog);
 
 }  // namespace ctid::cli

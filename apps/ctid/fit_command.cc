@@ -295,12 +295,7 @@ void add_constraints(const FitFlags& f, CoefficientConstraints& constraints);
 IdentificationOptions identification_options(const FitFlags& f) {
   IdentificationOptions options = f.options;
   if (!f.controller.empty()) {
-    io::ControllerModel c = io::read_controller(f.controller);
-    if (auto* digital = std::get_if<DiscreteTransferFunction>(&c)) {
-      options.controller = std::move(*digital);
-    } else {
-      options.continuous_controller = std::get<TransferFunction>(std::move(c));
-    }
+    read_controller(f.controller, options.controller, options.continuous_controller);
   }
   if (!f.delay_scan.empty()) options.delay_scan_samples = parse_delay_range(f.delay_scan);
   if (!f.delay_range.empty()) options.delay_range = parse_delay_interval(f.delay_range);

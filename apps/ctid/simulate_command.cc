@@ -14,7 +14,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <type_traits>
 #include <variant>
 
 #include "command.h"
@@ -433,14 +432,7 @@ void run_simulate(const SimulateFlags& f, CLI::App& app) {
   const io::ContinuousModel model = read_model_or_result(document, f.model);
   std::optional<DiscreteTransferFunction> controller;
   std::optional<TransferFunction> analog;  // an analog controller C(p) (decision 0067)
-  if (!f.controller.empty()) {
-    io::ControllerModel c = io::read_controller(f.controller);
-    if (auto* digital = std::get_if<DiscreteTransferFunction>(&c)) {
-      controller = std::move(*digital);
-    } else {
-      analog = std::get<TransferFunction>(std::move(c));
-    }
-  }
+  if (!f.controller.empty()) read_controller(f.controller, controller, analog);
   const Hold hold = f.hold == "foh" ? Hold::first_order_hold : Hold::zero_order_hold;
   if (controller && hold == Hold::first_order_hold) {
     usage_error("--hold foh: in closed loop the controller's output is held (zoh) by its DAC");
@@ -477,19 +469,16 @@ void run_simulate(const SimulateFlags& f, CLI::App& app) {
     y = loop.output;
   } else if (analog) {
     r = in.values;
-    const TransferFunction plant = std::visit(
-        [](const auto& g) -> TransferFunction {
-          if constexpr (std::is_same_v<std::decay_t<decltype(g)>, TransferFunction>) {
-            return g;
-          } else {
-            return g.to_transfer_function();
-          }
-        },
-        model);
-    const Eigen::VectorXd noise_free =
-        simulate_closed_loop(plant, *analog, *r, h, Eigen::VectorXd(), hold).output;
-    const Eigen::VectorXd v = output_noise(f.noise, noise_free, h);
-    const ClosedLoopSimulation loop = simulate_closed_loop(plant, *analog, *r, h, v, hold);
+    const auto loop_with = [&](const Eigen::VectorXd& v) {
+      return std::visit(
+          [&](const auto& plant) { return simulate_closed_loop(plant, *analog, *r, h, v, hold); },
+          model);
+    };
+    // As above, the SNR reference is the loop's noise-free response to r.
+    const Eigen::VectorXd v = output_noise(
+        f.noise, f.noise.wanted() ? loop_with(Eigen::VectorXd()).output : Eigen::VectorXd::Zero(n),
+        h);
+    const ClosedLoopSimulation loop = loop_with(v);
     u = loop.input;
     y = loop.output;
   } else {

@@ -13,7 +13,6 @@
 #include <set>
 #include <sstream>
 #include <string>
-#include <variant>
 #include <vector>
 
 #include "command.h"
@@ -281,12 +280,8 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
   const std::filesystem::path package = prepare_plot(f);
   StructureScanOptions options = f.options;
   if (!f.controller.empty()) {
-    io::ControllerModel c = io::read_controller(f.controller);
-    if (auto* digital = std::get_if<DiscreteTransferFunction>(&c)) {
-      options.identification.controller = std::move(*digital);
-    } else {
-      options.identification.continuous_controller = std::get<TransferFunction>(std::move(c));
-    }
+    read_controller(f.controller, options.identification.controller,
+                    options.identification.continuous_controller);
   }
   if (!f.delay_scan.empty()) {
     const auto [d_low, d_high] = parse_range(f.delay_scan, "--delay-scan-samples", 0);

@@ -242,18 +242,6 @@ std::optional<AdditiveModel> indirect_start(const SampledData& data, const Submo
   return AdditiveModel::from_parameters({o}, theta, 0.0);
 }
 
-Eigen::VectorXd parameters_of(const SubmodelOrder& o, const AdditiveModel& start) {
-  require(start.size() == 1 && start[0].n() == o.n && start[0].integrators == o.integrators &&
-              start[0].m() <= o.m,
-          "clsrivc_continuous: the initial model is not one submodel with n = ", o.n,
-          ", integrators = ", o.integrators, " and m <= ", o.m);
-  Eigen::VectorXd theta = Eigen::VectorXd::Zero(o.n + o.m + 1);
-  for (int k = 1; k <= o.n; ++k) theta(k - 1) = start[0].a[k];
-  for (int k = 0; k <= start[0].m(); ++k) theta(o.n + k) = start[0].b[k];
-  require(theta.allFinite(), "clsrivc_continuous: the initial model has a non-finite parameter");
-  return theta;
-}
-
 // The iteration from theta: the accepted iterate and its signals (none if the controller
 // does not stabilise even the start); result's termination, message, iterations,
 // relative_change, reciprocal_condition, step_halvings and history are set.
@@ -341,7 +329,7 @@ EstimationResult clsrivc_continuous_from(const SampledData& data,
                                          const TransferFunction& controller, const SubmodelOrder& o,
                                          const RefinedIvOptions& options,
                                          const AdditiveModel& start) {
-  Eigen::VectorXd theta = parameters_of(o, start);
+  Eigen::VectorXd theta = internal::parameters_for_orders(start, {o});
   EstimationResult result{start, start.to_transfer_function()};
   const std::optional<AnalogLoopSignals> signals =
       iterate_analog_loop(data, controller, o, options, theta, result);

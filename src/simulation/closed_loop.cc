@@ -189,8 +189,7 @@ ClosedLoopSimulation simulate_closed_loop(const TransferFunction& plant,
             "closed-loop pole ", format_number(poles(k).real()), " + ",
             format_number(poles(k).imag()), "i has a real part >= 0)");
   }
-  const Polynomial acl =
-      plant.denominator() * controller.denominator() + plant.numerator() * controller.numerator();
+  const Polynomial acl = *analog_loop_denominator(plant, controller);  // checked by the poles
   const TransferFunction t(plant.numerator() * controller.numerator(), acl);
   const TransferFunction cs(controller.numerator() * plant.denominator(), acl);
   require(reference.allFinite() && noise.allFinite(),
@@ -205,6 +204,14 @@ ClosedLoopSimulation simulate_closed_loop(const TransferFunction& plant,
   out.output =
       noise.size() > 0 ? Eigen::VectorXd(out.noise_free_output + noise) : out.noise_free_output;
   return out;
+}
+
+ClosedLoopSimulation simulate_closed_loop(const AdditiveModel& plant,
+                                          const TransferFunction& controller,
+                                          const Eigen::VectorXd& reference, double sample_time,
+                                          const Eigen::VectorXd& noise, Hold hold) {
+  return simulate_closed_loop(plant.to_transfer_function(), controller, reference, sample_time,
+                              noise, hold);
 }
 
 }  // namespace ctid

@@ -64,5 +64,11 @@ ClosedLoopSimulation simulate_closed_loop(const TransferFunction& plant,
                                           const Eigen::VectorXd& reference, double sample_time,
                                           const Eigen::VectorXd& noise = Eigen::VectorXd(),
                                           Hold hold = Hold::zero_order_hold);
+/// The same for an additive plant (its sum as one transfer function).
+ClosedLoopSimulation simulate_closed_loop(const AdditiveModel& plant,
+                                          const TransferFunction& controller,
+                                          const Eigen::VectorXd& reference, double sample_time,
+                                          const Eigen::VectorXd& noise = Eigen::VectorXd(),
+                                          Hold hold = Hold::zero_order_hold);
 
 }  // namespace ctid
