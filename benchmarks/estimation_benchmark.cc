@@ -60,6 +60,36 @@ void run(benchmark::State& state, bool additive) {
       benchmark::Counter(1e3 * seconds / static_cast<double>(std::max(iterations, 1)));
 }
 
+// Threads inside one fit (issue 38, decision 0068): one additive four-mode iteration on
+// range(0) samples with range(1) threads for its passes (from runs of 1 and 6 iterations, no
+// covariance, as BM_IterationOverFilterPass). The estimates are the same bits whatever the
+// thread count (tests/refined_iv/refined_iv_threads_test.cc).
+void BM_AdditiveThreads(benchmark::State& state) {
+  const Setup setup = make_setup(static_cast<int>(state.range(0)));
+  ctid::RefinedIvOptions options;
+  options.initial_model = setup.start;
+  options.tolerance = 1e-300;  // never converged: every run does its max_iterations
+  options.compute_covariance = false;
+  options.threads = static_cast<int>(state.range(1));
+  double one = 0.0;
+  double six = 0.0;
+  for (auto _ : state) {
+    for (const int iterations : {1, 6}) {
+      options.max_iterations = iterations;
+      const auto begin = std::chrono::steady_clock::now();
+      const ctid::EstimationResult r =
+          ctid::additive_srivc(setup.data, setup.truth.orders(), options);
+      const double seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+      (iterations == 1 ? one : six) += seconds;
+      benchmark::DoNotOptimize(r.parameters.data());
+    }
+  }
+  const auto runs = static_cast<double>(state.iterations());
+  state.counters["iteration_ms"] = benchmark::Counter(1e3 * (six - one) / 5.0 / runs);
+  state.counters["estimate_ms"] = benchmark::Counter(1e3 * six / runs);
+}
+
 void BM_SrivcEightPolesSixZeros(benchmark::State& state) { run(state, false); }
 void BM_AdditiveFourModes(benchmark::State& state) { run(state, true); }
 
@@ -162,6 +192,11 @@ void BM_FilterKernel(benchmark::State& state) {
 }
 
 BENCHMARK(BM_IterationOverFilterPass)->Arg(100000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AdditiveThreads)
+    ->Args({1000000, 1})
+    ->Args({1000000, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_FilterKernel)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
 
 BENCHMARK(BM_SrivcEightPolesSixZeros)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);

@@ -355,6 +355,11 @@ std::vector<Task> expand(const BatchFlags& f) {
     task.error_output = join_path(f.out, task.name + ".error.json");
     FlagSet merged = spec;
     for (const auto& [key, value] : entry.settings) merged[key] = value;
+    // The records run side by side, so each fit filters on one thread unless the spec says
+    // otherwise (decision 0068).
+    if (fit.option("threads") != nullptr && merged.count("threads") == 0) {
+      merged["threads"] = io::ManifestValue{1, false};
+    }
     task.args.push_back(fit.name());
     task.args.insert(task.args.end(), task.data.begin(), task.data.end());
     for (const auto& [key, value] : merged) {

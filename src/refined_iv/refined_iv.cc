@@ -17,6 +17,7 @@
 #include "core/internal/polynomial_if_finite.h"
 #include "ctid/core/error.h"
 #include "ctid/core/format.h"
+#include "ctid/core/parallel.h"
 #include "ctid/estimation/arma.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/estimation/verdict.h"
@@ -319,6 +320,16 @@ std::optional<Eigen::VectorXd> starting_point(const RefinedIvProblem& problem,
   return parameters_for_orders(*grouped, layout.orders);
 }
 
+// The threads of one estimate's passes (RefinedIvOptions::threads): at most one per submodel,
+// and when automatic, the idle cores for a long record outside a parallel loop.
+int pass_threads(int requested, int samples, int submodels) {
+  constexpr int kLongRecord = 100000;
+  if (submodels < 2) return 1;
+  if (requested > 0) return std::min(requested, submodels);
+  if (inside_parallel_loop() || samples < kLongRecord) return 1;
+  return std::min(idle_thread_count(), submodels);
+}
+
 // What the phases of one estimate share: the problem, the layout, the stacked signals, the
 // current iterate and its free-response coefficients, and the result being filled in.
 struct Run {
@@ -374,7 +385,7 @@ struct Run {
         beta(start),
         signals(pr.records.size()),
         y(n_samples),
-        workspace(layout) {}
+        workspace(layout, pass_threads(op.threads, n_samples, layout.size())) {}
 
   int delay_of(size_t r) const { return record_delay(options, r); }
   // The held coefficients and those at a bound: what the covariance takes as known.

@@ -4,6 +4,7 @@
 // of the residual output y~_i (23) through 1/A_i, run block by block over every record.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <string>
@@ -346,8 +347,10 @@ std::vector<SubmodelFilters> record_filters(const Layout& layout, const Eigen::V
   }
   if (layout.free_responses()) {
     const int free = layout.augmented - layout.parameters;
-    w.instrument.rightCols(free).setZero();
-    w.regressor.rightCols(free).setZero();
+    for (StepBuffers& b : w.steps) {
+      b.instrument.rightCols(free).setZero();
+      b.regressor.rightCols(free).setZero();
+    }
   }
   return filters;
 }
@@ -372,132 +375,219 @@ void restore(std::vector<SubmodelFilters>& filters, const FilterCheckpoint& c) {
   }
 }
 
-// Rows [k0, k0 + len) of one record through its filters, which continue from row k0: the
-// instrument and regressor rows, the submodel outputs and their sum and, with the regressor,
-// the filtered residual outputs (22).
-void filter_block(const Layout& layout, int record, const RecordSignals& signals,
-                  const Eigen::VectorXd* source, Eigen::Index k0, Eigen::Index len,
-                  bool need_instrument, bool need_regressor, std::vector<SubmodelFilters>& filters,
-                  Workspace& w) {
+// Submodel i's filters of the instrument source and of the input, and its free response, on
+// rows [k0, k0 + len) of one record, continuing from row k0, into rows [row0, row0 + len) of
+// a step's buffers `to`: the submodel's instrument columns, the B-part of its regressor columns and
+// its output G_i u.
+void filter_inputs(const Layout& layout, int record, const RecordSignals& signals,
+                   const Eigen::VectorXd* source, int i, Eigen::Index k0, Eigen::Index len,
+                   Eigen::Index row0, bool need_instrument, bool need_regressor, SubmodelFilters& f,
+                   Workspace& w, StepBuffers& to) {
   const Eigen::VectorXd& u = signals.u;
-  const Eigen::VectorXd& y = *signals.y;
-  const int k_count = layout.size();
   const bool closed_loop = source != nullptr;
-  for (int i = 0; i < k_count; ++i) {
-    const auto at = static_cast<size_t>(i);
-    const SubmodelOrder& o = layout.orders[at];
-    const int off = layout.offset[at];
-    SubmodelFilters& f = filters[at];
-    if (f.source) {
-      Eigen::MatrixXd& out = w.source_out[at];
-      out.resize(len, f.source->outputs());
-      f.source->run((closed_loop ? *source : u).segment(k0, len), f.source_stream, out);
-      w.instrument.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
-      if (o.n > 0) w.instrument.block(0, off, len, o.n) = -out.middleCols(o.m + 1, o.n);
-      if (!closed_loop) {
-        w.outputs.col(i).head(len) = out.col(o.m + o.n + 1);
-        if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+  const auto at = static_cast<size_t>(i);
+  const SubmodelOrder& o = layout.orders[at];
+  const int off = layout.offset[at];
+  if (f.source) {
+    Eigen::MatrixXd& out = w.source_out[at];
+    out.resize(len, f.source->outputs());
+    f.source->run((closed_loop ? *source : u).segment(k0, len), f.source_stream, out);
+    to.instrument.block(row0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+    if (o.n > 0) to.instrument.block(row0, off, len, o.n) = -out.middleCols(o.m + 1, o.n);
+    if (!closed_loop) {
+      to.outputs.col(i).segment(row0, len) = out.col(o.m + o.n + 1);
+      if (need_regressor) {
+        to.regressor.block(row0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
       }
-    }
-    if (f.input) {
-      Eigen::MatrixXd& out = w.input_out[at];
-      out.resize(len, f.input->outputs());
-      f.input->run(u.segment(k0, len), f.input_stream, out);
-      w.outputs.col(i).head(len) = out.col(o.m + 1);
-      if (need_regressor) w.regressor.block(0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
-    }
-    if (f.free) {
-      FreeResponse& r = *f.free;
-      const int s = layout.states(i);
-      for (Eigen::Index k = 0; k < len; ++k) {
-        r.basis.row(k).noalias() = r.c0 * r.state.leftCols(s);
-        r.value(k) = r.c0.dot(r.state.col(s));
-        if (o.n > 0) r.filtered.row(k).noalias() = (r.ck * r.state.col(s)).transpose();
-        r.next.noalias() = r.phi * r.state;
-        r.state.swap(r.next);
-      }
-      const int free_off = layout.free_at(record, i);
-      w.outputs.col(i).head(len) += r.value.head(len);
-      if (need_instrument) {
-        w.instrument.block(0, free_off, len, s) = r.basis.topRows(len);
-        if (!closed_loop && o.n > 0) {
-          w.instrument.block(0, off, len, o.n) -= r.filtered.topRows(len);
-        }
-      }
-      if (need_regressor) w.regressor.block(0, free_off, len, s) = r.basis.topRows(len);
     }
   }
-  w.total.head(len) = w.outputs.topRows(len).rowwise().sum();
-  if (need_regressor) {
-    for (int i = 0; i < k_count; ++i) {
-      const auto at = static_cast<size_t>(i);
-      const SubmodelOrder& o = layout.orders[at];
-      const int off = layout.offset[at];
-      SubmodelFilters& f = filters[at];
-      w.residual_output.head(len) =
-          y.segment(k0, len) - w.total.head(len) + w.outputs.col(i).head(len);  // (23)
-      if (f.output) {
-        Eigen::MatrixXd& out = w.output_out[at];
-        out.resize(len, f.output->outputs());
-        f.output->run(w.residual_output.head(len), f.output_stream, out);
-        w.filtered.col(i).head(len) = out.col(0);                       // (22)
-        w.regressor.block(0, off, len, o.n) = -out.middleCols(1, o.n);  // (24)
-      } else {
-        w.filtered.col(i).head(len) = w.residual_output.head(len);
+  if (f.input) {
+    Eigen::MatrixXd& out = w.input_out[at];
+    out.resize(len, f.input->outputs());
+    f.input->run(u.segment(k0, len), f.input_stream, out);
+    to.outputs.col(i).segment(row0, len) = out.col(o.m + 1);
+    if (need_regressor) to.regressor.block(row0, off + o.n, len, o.m + 1) = out.leftCols(o.m + 1);
+  }
+  if (f.free) {
+    FreeResponse& r = *f.free;
+    const int s = layout.states(i);
+    for (Eigen::Index k = 0; k < len; ++k) {
+      r.basis.row(k).noalias() = r.c0 * r.state.leftCols(s);
+      r.value(k) = r.c0.dot(r.state.col(s));
+      if (o.n > 0) r.filtered.row(k).noalias() = (r.ck * r.state.col(s)).transpose();
+      r.next.noalias() = r.phi * r.state;
+      r.state.swap(r.next);
+    }
+    const int free_off = layout.free_at(record, i);
+    to.outputs.col(i).segment(row0, len) += r.value.head(len);
+    if (need_instrument) {
+      to.instrument.block(row0, free_off, len, s) = r.basis.topRows(len);
+      if (!closed_loop && o.n > 0) {
+        to.instrument.block(row0, off, len, o.n) -= r.filtered.topRows(len);
       }
     }
+    if (need_regressor) to.regressor.block(row0, free_off, len, s) = r.basis.topRows(len);
   }
 }
 
-// Rows of a record between two checkpoints of the instrument pass.
-constexpr Eigen::Index kSegment = 16 * kBlock;
+// Submodel i's residual output y~_i (23) on rows [k0, k0 + len) of record output y through its
+// bank of 1/A_i, into rows [row0, row0 + len) of `to`: its column of Upsilon (22) and
+// the a-part of its regressor columns (24). Needs every submodel's output on those rows.
+void filter_output(const Layout& layout, const Eigen::VectorXd& y, int i, Eigen::Index k0,
+                   Eigen::Index len, Eigen::Index row0, SubmodelFilters& f, Workspace& w,
+                   StepBuffers& to) {
+  const auto at = static_cast<size_t>(i);
+  const SubmodelOrder& o = layout.orders[at];
+  Eigen::VectorXd& residual_output = w.residual_output[at];
+  residual_output.head(len) = y.segment(k0, len) - to.total.segment(row0, len) +
+                              to.outputs.col(i).segment(row0, len);  // (23)
+  if (f.output) {
+    Eigen::MatrixXd& out = w.output_out[at];
+    out.resize(len, f.output->outputs());
+    f.output->run(residual_output.head(len), f.output_stream, out);
+    to.filtered.col(i).segment(row0, len) = out.col(0);                               // (22)
+    to.regressor.block(row0, layout.offset[at], len, o.n) = -out.middleCols(1, o.n);  // (24)
+  } else {
+    to.filtered.col(i).segment(row0, len) = residual_output.head(len);
+  }
+}
+
+// Rows [k0, k0 + len) of one record through its filters, which continue from row k0, into
+// rows [row0, row0 + len) of `to`: the instrument and regressor rows, the submodel
+// outputs and their sum and, with the regressor, the filtered residual outputs (22).
+void filter_block(const Layout& layout, int record, const RecordSignals& signals,
+                  const Eigen::VectorXd* source, Eigen::Index k0, Eigen::Index len,
+                  Eigen::Index row0, bool need_instrument, bool need_regressor,
+                  std::vector<SubmodelFilters>& filters, Workspace& w, StepBuffers& to) {
+  for (int i = 0; i < layout.size(); ++i) {
+    filter_inputs(layout, record, signals, source, i, k0, len, row0, need_instrument,
+                  need_regressor, filters[static_cast<size_t>(i)], w, to);
+  }
+  to.total.segment(row0, len) = to.outputs.middleRows(row0, len).rowwise().sum();
+  if (!need_regressor) return;
+  for (int i = 0; i < layout.size(); ++i) {
+    filter_output(layout, *signals.y, i, k0, len, row0, filters[static_cast<size_t>(i)], w, to);
+  }
+}
+
+// Calls body(b0, len) for the kBlock-row blocks of `rows` rows, in order.
+template <typename Body>
+void for_blocks(Eigen::Index rows, Body&& body) {
+  for (Eigen::Index b0 = 0; b0 < rows; b0 += kBlock) body(b0, std::min(kBlock, rows - b0));
+}
+
+// Runs body(task) for every task in [0, count), on the workspace's team when it has one.
+void run_tasks(int count, Workspace& w, const std::function<void(int)>& body) {
+  if (w.team) {
+    w.team->run(count, body);
+  } else {
+    for (int task = 0; task < count; ++task) body(task);
+  }
+}
+
+// What a pass does with rows [k0, k0 + len) of a record once they are filtered into buffer `b`,
+// in row order, block by block: RIVC's prefilter, the sums of eq. (29), the residual, the sum
+// of squares and the instrument's sums.
+struct StepTail {
+  const Layout& layout;
+  const RecordSignals& signals;
+  bool need_instrument;
+  bool need_regressor;
+  Workspace& w;
+  Moments* moments;
+  Eigen::VectorXd* residual;
+  InstrumentPass* instrument;
+  double* sse;
+
+  void operator()(Eigen::Index k0, Eigen::Index len, StepBuffers& b) const {
+    const Eigen::VectorXd& y = *signals.y;
+    const Eigen::Index first = signals.offset;
+    for_blocks(len, [&](Eigen::Index b0, Eigen::Index bl) {
+      if (w.prefilter && need_instrument)
+        w.prefilter->instrument.apply(b.instrument.middleRows(b0, bl));
+      if (w.prefilter && need_regressor) {
+        w.prefilter->regressor.apply(b.regressor.middleRows(b0, bl));
+        w.prefilter->filtered.apply(b.filtered.middleRows(b0, bl));
+      }
+      if (moments != nullptr) {
+        const auto z = b.instrument.middleRows(b0, bl);
+        const auto phi = b.regressor.middleRows(b0, bl);
+        moments->zp.noalias() += z.transpose() * phi;
+        moments->zy.noalias() += z.transpose() * b.filtered.middleRows(b0, bl);
+        moments->zz += z.colwise().squaredNorm().transpose();
+        moments->pp += phi.colwise().squaredNorm().transpose();
+      }
+      const auto error = y.segment(k0 + b0, bl) - b.total.segment(b0, bl);
+      if (residual != nullptr) residual->segment(first + k0 + b0, bl) = error;
+      if (sse != nullptr) *sse += error.squaredNorm();
+      if (instrument != nullptr) {
+        auto z = instrument->rows.topRows(bl);
+        instrument->copy_rows(layout, b, first, k0 + b0, b0, bl, z);
+        instrument->gram.noalias() += z.transpose() * z;
+        if (instrument->stored != nullptr) instrument->stored->middleRows(first + k0 + b0, bl) = z;
+      }
+    });
+  }
+};
 
 // evaluate() on one record: its filters from rest, its free responses, its rows of the
-// stacked residual and instrument; the sums are added to.
+// stacked residual and instrument; the sums are added to. A pipeline of three stages over the
+// steps, one buffer each: at step t, one task per submodel runs its input filters over step t,
+// one per submodel its residual-output bank over step t - 1 (whose outputs are all known), and
+// one task adds the tail of step t - 2. Each filter and each sum still sees its rows in order.
 void evaluate_record(const Layout& layout, const Eigen::VectorXd& beta,
                      const Eigen::VectorXd& initial_states, int record,
                      const RecordSignals& signals, const Eigen::VectorXd* source, double h,
                      Hold output_interpolation, Workspace& w, Moments* moments,
                      Eigen::VectorXd* residual, InstrumentPass* instrument, double* sse) {
-  const Eigen::VectorXd& y = *signals.y;
   const Eigen::Index n = signals.u.size();
-  const Eigen::Index first = signals.offset;
   const bool need_instrument = moments != nullptr || instrument != nullptr;
   const bool need_regressor = moments != nullptr;
+  const int k_count = layout.size();
   std::vector<SubmodelFilters> filters =
       record_filters(layout, beta, initial_states, record, h, output_interpolation,
                      source != nullptr, need_instrument, need_regressor, w);
   if (w.prefilter) w.prefilter->reset();
-  for (Eigen::Index k0 = 0; k0 < n; k0 += kBlock) {
-    const Eigen::Index len = std::min(kBlock, n - k0);
-    if (instrument != nullptr && instrument->keep_checkpoints && k0 % kSegment == 0) {
+  const StepTail tail{layout,     signals, need_instrument, need_regressor, w, moments, residual,
+                      instrument, sse};
+  const Eigen::Index steps = (n + kStep - 1) / kStep;
+  const auto first_row = [](Eigen::Index step) { return step * kStep; };
+  const auto rows = [&](Eigen::Index step) { return std::min(kStep, n - step * kStep); };
+  const auto buffer = [&](Eigen::Index step) -> StepBuffers& {
+    return w.steps[static_cast<size_t>(step % 3)];
+  };
+  for (Eigen::Index t = 0; t < steps + 2; ++t) {
+    const bool filtering = t < steps;
+    const bool banking = need_regressor && t >= 1 && t - 1 < steps;
+    const bool finishing = t >= 2;
+    if (filtering && instrument != nullptr && instrument->keep_checkpoints &&
+        first_row(t) % kSegment == 0) {
       instrument->saved[static_cast<size_t>(record)].push_back(checkpoint(filters));
     }
-    filter_block(layout, record, signals, source, k0, len, need_instrument, need_regressor, filters,
-                 w);
-    if (w.prefilter && need_instrument) w.prefilter->instrument.apply(w.instrument.topRows(len));
-    if (w.prefilter && need_regressor) {
-      w.prefilter->regressor.apply(w.regressor.topRows(len));
-      w.prefilter->filtered.apply(w.filtered.topRows(len));
+    if (t >= 1 && t - 1 < steps) {
+      StepBuffers& b = buffer(t - 1);
+      b.total.head(rows(t - 1)) = b.outputs.topRows(rows(t - 1)).rowwise().sum();
     }
-    if (moments != nullptr) {
-      const auto z = w.instrument.topRows(len);
-      const auto phi = w.regressor.topRows(len);
-      moments->zp.noalias() += z.transpose() * phi;
-      moments->zy.noalias() += z.transpose() * w.filtered.topRows(len);
-      moments->zz += z.colwise().squaredNorm().transpose();
-      moments->pp += phi.colwise().squaredNorm().transpose();
-    }
-    if (residual != nullptr) {
-      residual->segment(first + k0, len) = y.segment(k0, len) - w.total.head(len);
-    }
-    if (sse != nullptr) *sse += (y.segment(k0, len) - w.total.head(len)).squaredNorm();
-    if (instrument != nullptr) {
-      auto z = instrument->rows.topRows(len);
-      instrument->copy_rows(layout, w, first, k0, len, z);
-      instrument->gram.noalias() += z.transpose() * z;
-      if (instrument->stored != nullptr) instrument->stored->middleRows(first + k0, len) = z;
-    }
+    run_tasks(1 + 2 * k_count, w, [&](int task) {
+      if (task == 0) {
+        if (finishing) tail(first_row(t - 2), rows(t - 2), buffer(t - 2));
+      } else if (task <= k_count) {
+        if (!filtering) return;
+        const int i = task - 1;
+        for_blocks(rows(t), [&](Eigen::Index b0, Eigen::Index bl) {
+          filter_inputs(layout, record, signals, source, i, first_row(t) + b0, bl, b0,
+                        need_instrument, need_regressor, filters[static_cast<size_t>(i)], w,
+                        buffer(t));
+        });
+      } else {
+        if (!banking) return;
+        const int i = task - 1 - k_count;
+        for_blocks(rows(t - 1), [&](Eigen::Index b0, Eigen::Index bl) {
+          filter_output(layout, *signals.y, i, first_row(t - 1) + b0, bl, b0,
+                        filters[static_cast<size_t>(i)], w, buffer(t - 1));
+        });
+      }
+    });
   }
 }
 
@@ -587,8 +677,10 @@ Eigen::MatrixXd adjoint_instrument_sum(const Layout& layout, const Eigen::Vector
       const Eigen::Index length = std::min(kSegment, n - start);
       for (Eigen::Index k0 = start; k0 < start + length; k0 += kBlock) {
         const Eigen::Index len = std::min(kBlock, n - k0);
-        filter_block(layout, record, signals, source, k0, len, true, false, filters, w);
-        pass.copy_rows(layout, w, signals.offset, k0, len, segment.middleRows(k0 - start, len));
+        filter_block(layout, record, signals, source, k0, len, 0, true, false, filters, w,
+                     w.steps[0]);
+        pass.copy_rows(layout, w.steps[0], signals.offset, k0, 0, len,
+                       segment.middleRows(k0 - start, len));
       }
       sum.add_earlier(segment.topRows(length));
     }

@@ -198,9 +198,10 @@ TEST_F(BatchCommand, PlanListsTheFitCommandsAndRunsNothing) {
   const nlohmann::json plan = nlohmann::json::parse(r.out);
   ASSERT_EQ(plan.size(), 8u);
   EXPECT_EQ(plan[1]["name"], "a2-linear");
-  EXPECT_EQ(plan[1]["args"],
-            nlohmann::json({"fit", "records/a2.csv", "--detrend=linear", "--modes=1",
-                            "--start=auto", "--output", "out/a2-linear.json", "--quiet"}));
+  // Records run side by side: each fit on one thread (decision 0068).
+  EXPECT_EQ(plan[1]["args"], nlohmann::json({"fit", "records/a2.csv", "--detrend=linear",
+                                             "--modes=1", "--start=auto", "--threads=1", "--output",
+                                             "out/a2-linear.json", "--quiet"}));
   EXPECT_EQ(plan[1]["done"], false);
   EXPECT_FALSE(fs::exists(path("out")));
 }

@@ -155,6 +155,11 @@ struct RefinedIvOptions {
   /// (n_i + l_i coefficients each) to the regressor and the instrument; the reported
   /// covariance is the parameter block of the joint one. Default `zero`: decision 0010.
   InitialConditions initial_conditions = InitialConditions::zero;
+  /// Threads that filter one record's submodels in parallel during the passes (decision 0068).
+  /// 0: automatic, the idle cores (idle_thread_count) for a record of at least 100 000
+  /// samples, one inside a parallel loop (studies, scans) and for shorter records. Never more
+  /// than the submodels. The estimate does not depend on it, to the bit. >= 0.
+  int threads = 0;
 
   static constexpr std::string_view type_name = "RefinedIvOptions";
   static constexpr auto fields() {
@@ -200,6 +205,10 @@ struct RefinedIvOptions {
               "Compute covariance, standard errors and modal standard errors."),
         field("initial_conditions", &O::initial_conditions,
               "State at the first sample: zero (at rest) or estimate (nuisance parameters)."),
+        field("threads", &O::threads, AtLeast{0},
+              "Threads that filter one record's submodels in parallel; 0: the idle cores for a "
+              "record of at least 100000 samples, one inside studies and scans. Same bits "
+              "whatever the count."),
     };
   }
   /// Throws InvalidArgument naming the first bad field, its value and the rule.

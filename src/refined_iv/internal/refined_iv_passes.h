@@ -5,6 +5,8 @@
 // refined_iv.
 #pragma once
 
+#include <array>
+#include <memory>
 #include <optional>
 #include <string>
 #include <tuple>
@@ -16,6 +18,7 @@
 #include "ctid/core/additive_model.h"
 #include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/hold.h"
+#include "ctid/core/parallel.h"
 #include "ctid/core/polynomial.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/core/state_space.h"
@@ -71,10 +74,20 @@ struct Layout {
   }
 };
 
-// Rows of the record processed together: the block buffers (a few times kBlock x p doubles)
-// stay in cache, and the sums of eq. (29) are formed block by block, so no N x p matrix is
-// ever stored during the iteration.
+// Rows of the record filtered together by one call of a filter and summed together: the
+// filters' scratch stays in cache, and the sums of eq. (29) are added block by block, so no
+// N x p matrix is ever stored during the iteration.
 constexpr Eigen::Index kBlock = 256;
+
+// Rows between two checkpoints of the instrument pass.
+constexpr Eigen::Index kSegment = 16 * kBlock;
+
+// Rows of one step of a pass (decision 0068): the submodels' filters run over a step's rows as
+// one task each, beside the residual-output banks of the step before and the sums of the step
+// before that, each of the three steps in one of the workspace's three buffers. Every filter
+// and every sum keeps its order of operations, so the bits do not depend on the number of
+// threads.
+constexpr Eigen::Index kStep = 4 * kBlock;
 
 // Sums of eq. (29) over the record: Z'Phi, Z'Upsilon and the squared column norms of the
 // instrument Z and regressor Phi (for the unit-norm scaling).
@@ -108,30 +121,43 @@ struct NoisePrefilter {
   }
 };
 
-// Block buffers reused by every pass of one estimate.
+// A step's rows of the signals the passes form (kStep rows each).
+struct StepBuffers {
+  Eigen::MatrixXd instrument;  // x p
+  Eigen::MatrixXd regressor;   // x p
+  Eigen::MatrixXd filtered;    // x K, Upsilon (26)
+  Eigen::MatrixXd outputs;     // x K, G_i u
+  Eigen::VectorXd total;
+
+  explicit StepBuffers(const Layout& layout)
+      : instrument(kStep, layout.augmented),
+        regressor(kStep, layout.augmented),
+        filtered(kStep, layout.size()),
+        outputs(kStep, layout.size()),
+        total(kStep) {}
+};
+
+// Buffers reused by every pass of one estimate: three steps' rows (kStep), each submodel's
+// scratch, and the team of threads that runs the tasks of a step (none: one thread).
 struct Workspace {
-  Eigen::MatrixXd instrument;  // kBlock x p
-  Eigen::MatrixXd regressor;   // kBlock x p
-  Eigen::MatrixXd filtered;    // kBlock x K, Upsilon (26)
-  Eigen::MatrixXd outputs;     // kBlock x K, G_i u
-  Eigen::VectorXd total;       // kBlock
-  Eigen::VectorXd residual_output;
+  std::array<StepBuffers, 3> steps;
+  std::vector<Eigen::VectorXd> residual_output;  // per submodel, kBlock: y~_i (23)
   std::vector<Eigen::MatrixXd> source_out;
   std::vector<Eigen::MatrixXd> input_out;
   std::vector<Eigen::MatrixXd> output_out;
   // RIVC: the prefilter the passes apply after the continuous filters; none for SRIVC.
   std::optional<NoisePrefilter> prefilter;
+  std::unique_ptr<ThreadTeam> team;
 
-  explicit Workspace(const Layout& layout)
-      : instrument(kBlock, layout.augmented),
-        regressor(kBlock, layout.augmented),
-        filtered(kBlock, layout.size()),
-        outputs(kBlock, layout.size()),
-        total(kBlock),
-        residual_output(kBlock),
+  Workspace(const Layout& layout, int threads)
+      : steps{StepBuffers(layout), StepBuffers(layout), StepBuffers(layout)},
+        residual_output(static_cast<size_t>(layout.size()), Eigen::VectorXd(kBlock)),
         source_out(static_cast<size_t>(layout.size())),
         input_out(static_cast<size_t>(layout.size())),
-        output_out(static_cast<size_t>(layout.size())) {}
+        output_out(static_cast<size_t>(layout.size())) {
+    if (threads > 1) team = std::make_unique<ThreadTeam>(threads);
+  }
+  explicit Workspace(const Layout& layout) : Workspace(layout, 1) {}
 };
 
 // One record's signals: the input delayed by the whole samples of the delay, the output, and
@@ -168,11 +194,11 @@ struct InstrumentPass {
 
   int columns(const Layout& layout) const { return layout.augmented + (extra != nullptr ? 1 : 0); }
 
-  // psi's rows [k0, k0 + len) of the record starting at `first`, from the workspace, into `to`
-  // (len x q).
-  void copy_rows(const Layout& layout, const Workspace& w, Eigen::Index first, Eigen::Index k0,
-                 Eigen::Index len, Eigen::Ref<Eigen::MatrixXd> to) const {
-    to.leftCols(layout.augmented) = w.instrument.topRows(len);
+  // psi's rows [k0, k0 + len) of the record starting at `first`, from rows [row0, row0 + len)
+  // of a step's buffers, into `to` (len x q).
+  void copy_rows(const Layout& layout, const StepBuffers& b, Eigen::Index first, Eigen::Index k0,
+                 Eigen::Index row0, Eigen::Index len, Eigen::Ref<Eigen::MatrixXd> to) const {
+    to.leftCols(layout.augmented) = b.instrument.middleRows(row0, len);
     if (extra != nullptr) to.col(layout.augmented) = extra->segment(first + k0, len);
   }
 };
