@@ -74,8 +74,15 @@ SampledData SampledData::from_time_stamps(const Eigen::VectorXd& time, Eigen::Ve
                                           double relative_tolerance) {
   require(time.size() == input.size(), "time has ", time.size(), " samples but input has ",
           input.size(), "; they must have equal lengths");
+  const UniformGrid grid = uniform_grid(time, relative_tolerance);
+  return SampledData(grid.sample_time, std::move(input), std::move(output), std::move(reference),
+                     grid.start_time);
+}
+
+UniformGrid uniform_grid(const Eigen::VectorXd& time, double relative_tolerance) {
   require(time.size() >= 2, "a record needs at least 2 samples; got ", time.size());
   require_finite_signal(time, "time");
+  internal::require_magnitude_in_range(time, "time");
   const TimeStampCheck check = check_time_stamps(time, relative_tolerance);
   if (check.worst_sample) {
     const Eigen::Index k = *check.worst_sample;
@@ -85,8 +92,9 @@ SampledData SampledData::from_time_stamps(const Eigen::VectorXd& time, Eigen::Ve
             " s from the first and last stamps; stamps printed to ", check.digits,
             " significant digits allow ", format_brief(check.tolerance), " s");
   }
-  return SampledData(check.step, std::move(input), std::move(output), std::move(reference),
-                     time(0));
+  require(std::isfinite(check.step), "sample time is ", check.step,
+          " s; it must be finite and > 0");
+  return UniformGrid{time(0), check.step};
 }
 
 TimeStampCheck check_time_stamps(const Eigen::VectorXd& time, double relative_tolerance) {

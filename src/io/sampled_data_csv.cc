@@ -24,10 +24,7 @@ TimeGrid uniform_time_grid(const CsvTable& table, const std::string& time_column
                            double relative_tolerance) {
   const Eigen::VectorXd& time = table.column(time_column);
   try {
-    // The stamps stand in for the signals: only the time check and its message are wanted.
-    const SampledData checked =
-        SampledData::from_time_stamps(time, time, time, std::nullopt, relative_tolerance);
-    return TimeGrid{checked.start_time(), checked.sample_time()};
+    return uniform_grid(time, relative_tolerance);
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(
         ctid::internal::concat(table.source, ": column '", time_column, "': ", e.what()));

@@ -81,4 +81,16 @@ struct TimeStampCheck {
 /// after the first. A stamp off the grid is reported, not thrown.
 TimeStampCheck check_time_stamps(const Eigen::VectorXd& time, double relative_tolerance = 1e-6);
 
+/// The grid t_0 + k h of uniform time stamps.
+struct UniformGrid {
+  double start_time = 0.0;   ///< t_0 [s]
+  double sample_time = 0.0;  ///< h [s]
+};
+
+/// The grid time stamps lie on, checked as SampledData::from_time_stamps checks them, without
+/// a record: at least 2 stamps, each finite, their largest magnitude within 1e-100..1e100 as
+/// a signal's, and every stamp on the grid within check_time_stamps's tolerance. Throws
+/// InvalidArgument naming the stamp at fault.
+UniformGrid uniform_grid(const Eigen::VectorXd& time, double relative_tolerance = 1e-6);
+
 }  // namespace ctid

@@ -48,13 +48,10 @@ struct CsvColumns {
 };
 
 /// Where a uniform time column puts the samples.
-struct TimeGrid {
-  double start_time = 0.0;
-  double sample_time = 0.0;
-};
+using TimeGrid = UniformGrid;
 
-/// Checks that `time_column` is uniformly sampled (SampledData::from_time_stamps's rule) and
-/// returns its grid; errors name the table's source and the column. Every CSV reader of
+/// Checks that `time_column` is uniformly sampled (ctid::uniform_grid's rule) and returns its
+/// grid; errors name the table's source and the column. Every CSV reader of
 /// records (SISO, MIMO, single signals) checks its time stamps here.
 TimeGrid uniform_time_grid(const CsvTable& table, const std::string& time_column,
                            double relative_tolerance = 1e-6);
