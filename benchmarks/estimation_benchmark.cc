@@ -60,31 +60,34 @@ void run(benchmark::State& state, bool additive) {
       benchmark::Counter(1e3 * seconds / static_cast<double>(std::max(iterations, 1)));
 }
 
+// Adds to `one` and `six` the seconds of additive runs of 1 and 6 iterations from the
+// setup's start (no covariance, never converged: every run does its max_iterations); their
+// difference over 5 is one iteration.
+void time_iterations(const Setup& setup, ctid::RefinedIvOptions options, double& one, double& six) {
+  options.initial_model = setup.start;
+  options.compute_covariance = false;
+  options.tolerance = 1e-300;
+  for (const int iterations : {1, 6}) {
+    options.max_iterations = iterations;
+    const auto begin = std::chrono::steady_clock::now();
+    const ctid::EstimationResult r =
+        ctid::additive_srivc(setup.data, setup.truth.orders(), options);
+    benchmark::DoNotOptimize(r.parameters.data());
+    (iterations == 1 ? one : six) +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+  }
+}
+
 // Threads inside one fit (issue 38, decision 0068): one additive four-mode iteration on
-// range(0) samples with range(1) threads for its passes (from runs of 1 and 6 iterations, no
-// covariance, as BM_IterationOverFilterPass). The estimates are the same bits whatever the
-// thread count (tests/refined_iv/refined_iv_threads_test.cc).
+// range(0) samples with range(1) threads for its passes. The estimates are the same bits
+// whatever the thread count (tests/refined_iv/pass_threads_test.cc).
 void BM_AdditiveThreads(benchmark::State& state) {
   const Setup setup = make_setup(static_cast<int>(state.range(0)));
   ctid::RefinedIvOptions options;
-  options.initial_model = setup.start;
-  options.tolerance = 1e-300;  // never converged: every run does its max_iterations
-  options.compute_covariance = false;
   options.threads = static_cast<int>(state.range(1));
   double one = 0.0;
   double six = 0.0;
-  for (auto _ : state) {
-    for (const int iterations : {1, 6}) {
-      options.max_iterations = iterations;
-      const auto begin = std::chrono::steady_clock::now();
-      const ctid::EstimationResult r =
-          ctid::additive_srivc(setup.data, setup.truth.orders(), options);
-      const double seconds =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
-      (iterations == 1 ? one : six) += seconds;
-      benchmark::DoNotOptimize(r.parameters.data());
-    }
-  }
+  for (auto _ : state) time_iterations(setup, options, one, six);
   const auto runs = static_cast<double>(state.iterations());
   state.counters["iteration_ms"] = benchmark::Counter(1e3 * (six - one) / 5.0 / runs);
   state.counters["estimate_ms"] = benchmark::Counter(1e3 * six / runs);
@@ -130,23 +133,11 @@ double filter_pass_seconds(const Setup& setup) {
 // covariance), of one minimal filter pass, and their ratio.
 void BM_IterationOverFilterPass(benchmark::State& state) {
   const Setup setup = make_setup(static_cast<int>(state.range(0)));
-  ctid::RefinedIvOptions options;
-  options.initial_model = setup.start;
-  options.compute_covariance = false;
-  options.tolerance = 1e-300;  // never converged: every run does its max_iterations
   double one = 0.0;
   double six = 0.0;
   double pass = 0.0;
   for (auto _ : state) {
-    for (const int iterations : {1, 6}) {
-      options.max_iterations = iterations;
-      const auto begin = std::chrono::steady_clock::now();
-      const ctid::EstimationResult r =
-          ctid::additive_srivc(setup.data, setup.truth.orders(), options);
-      benchmark::DoNotOptimize(r.parameters.data());
-      (iterations == 1 ? one : six) +=
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
-    }
+    time_iterations(setup, {}, one, six);
     pass += filter_pass_seconds(setup);
   }
   const double runs = static_cast<double>(state.iterations());

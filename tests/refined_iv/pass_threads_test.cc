@@ -5,6 +5,7 @@
 // the passes: open loop with the coloured-noise covariance and an estimated delay's column,
 // closed loop, several records with their free responses, RIVC's prefilter, and the automatic
 // count on a long record.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -59,13 +60,19 @@ RefinedIvOptions started_at(const AdditiveModel& truth, double factor) {
   return options;
 }
 
+// n samples of `truth` under white noise input (seed), with the paper's coloured output noise
+// (seed + 1).
+SampledData open_loop_record(const AdditiveModel& truth, int n, std::uint64_t seed) {
+  const Eigen::VectorXd u = white_noise(n, 1.0, seed);
+  return SampledData(
+      kH, u,
+      simulate(truth, u, kH) + colored_noise(testing::open_loop_noise_filter(), n, 0.02, seed + 1));
+}
+
 TEST(PassThreads, OpenLoopSameBitsWithColouredCovarianceAndADelayColumn) {
   const AdditiveModel truth = testing::open_loop_four_modes();
-  const int n = 3 * 4096 + 1500;  // whole segments of checkpoints, steps and a partial step
-  const Eigen::VectorXd u = white_noise(n, 1.0, 81);
-  const SampledData data(
-      kH, u,
-      simulate(truth, u, kH) + colored_noise(testing::open_loop_noise_filter(), n, 0.02, 82));
+  // Whole segments of checkpoints, steps and a partial step.
+  const SampledData data = open_loop_record(truth, 3 * 4096 + 1500, 81);
   internal::RefinedIvProblem problem;
   problem.records = {&data};
   problem.orders = truth.orders();
@@ -113,11 +120,7 @@ TEST(PassThreads, SeveralRecordsWithFreeResponsesSameBits) {
 
 TEST(PassThreads, RivcPrefilterSameBits) {
   const AdditiveModel truth = testing::closed_loop_two_modes();
-  const int n = 6000;
-  const Eigen::VectorXd u = white_noise(n, 1.0, 87);
-  const SampledData data(
-      kH, u,
-      simulate(truth, u, kH) + colored_noise(testing::open_loop_noise_filter(), n, 0.02, 88));
+  const SampledData data = open_loop_record(truth, 6000, 87);
   internal::RefinedIvProblem problem;
   problem.records = {&data};
   problem.orders = truth.orders();
