@@ -452,21 +452,14 @@ void filter_output(const Layout& layout, const Eigen::VectorXd& y, int i, Eigen:
   }
 }
 
-// Rows [k0, k0 + len) of one record through its filters, which continue from row k0, into
-// rows [row0, row0 + len) of `to`: the instrument and regressor rows, the submodel
-// outputs and their sum and, with the regressor, the filtered residual outputs (22).
-void filter_block(const Layout& layout, int record, const RecordSignals& signals,
-                  const Eigen::VectorXd* source, Eigen::Index k0, Eigen::Index len,
-                  Eigen::Index row0, bool need_instrument, bool need_regressor,
-                  std::vector<SubmodelFilters>& filters, Workspace& w, StepBuffers& to) {
+// Rows [k0, k0 + len) of one record's instrument, its filters continuing from row k0, into the
+// first len rows of `to` (the covariance's backward pass, which needs nothing else).
+void instrument_block(const Layout& layout, int record, const RecordSignals& signals,
+                      const Eigen::VectorXd* source, Eigen::Index k0, Eigen::Index len,
+                      std::vector<SubmodelFilters>& filters, Workspace& w, StepBuffers& to) {
   for (int i = 0; i < layout.size(); ++i) {
-    filter_inputs(layout, record, signals, source, i, k0, len, row0, need_instrument,
-                  need_regressor, filters[static_cast<size_t>(i)], w, to);
-  }
-  to.total.segment(row0, len) = to.outputs.middleRows(row0, len).rowwise().sum();
-  if (!need_regressor) return;
-  for (int i = 0; i < layout.size(); ++i) {
-    filter_output(layout, *signals.y, i, k0, len, row0, filters[static_cast<size_t>(i)], w, to);
+    filter_inputs(layout, record, signals, source, i, k0, len, 0, true, false,
+                  filters[static_cast<size_t>(i)], w, to);
   }
 }
 
@@ -558,13 +551,14 @@ void evaluate_record(const Layout& layout, const Eigen::VectorXd& beta,
   };
   for (Eigen::Index t = 0; t < steps + 2; ++t) {
     const bool filtering = t < steps;
-    const bool banking = need_regressor && t >= 1 && t - 1 < steps;
+    const bool previous = t >= 1 && t - 1 < steps;  // step t - 1 exists
+    const bool banking = need_regressor && previous;
     const bool finishing = t >= 2;
     if (filtering && instrument != nullptr && instrument->keep_checkpoints &&
         first_row(t) % kSegment == 0) {
       instrument->saved[static_cast<size_t>(record)].push_back(checkpoint(filters));
     }
-    if (t >= 1 && t - 1 < steps) {
+    if (previous) {
       StepBuffers& b = buffer(t - 1);
       b.total.head(rows(t - 1)) = b.outputs.topRows(rows(t - 1)).rowwise().sum();
     }
@@ -677,8 +671,7 @@ Eigen::MatrixXd adjoint_instrument_sum(const Layout& layout, const Eigen::Vector
       const Eigen::Index length = std::min(kSegment, n - start);
       for (Eigen::Index k0 = start; k0 < start + length; k0 += kBlock) {
         const Eigen::Index len = std::min(kBlock, n - k0);
-        filter_block(layout, record, signals, source, k0, len, 0, true, false, filters, w,
-                     w.steps[0]);
+        instrument_block(layout, record, signals, source, k0, len, filters, w, w.steps[0]);
         pass.copy_rows(layout, w.steps[0], signals.offset, k0, 0, len,
                        segment.middleRows(k0 - start, len));
       }

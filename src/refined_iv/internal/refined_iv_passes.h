@@ -157,7 +157,6 @@ struct Workspace {
         output_out(static_cast<size_t>(layout.size())) {
     if (threads > 1) team = std::make_unique<ThreadTeam>(threads);
   }
-  explicit Workspace(const Layout& layout) : Workspace(layout, 1) {}
 };
 
 // One record's signals: the input delayed by the whole samples of the delay, the output, and
