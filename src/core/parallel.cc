@@ -32,48 +32,6 @@ int idle_thread_count() {
   return std::clamp(1 + static_cast<int>(std::max(idle, 0.0)), 1, cores);
 }
 
-void parallel_for(int count, int threads, const std::function<void(int)>& body) {
-  require(count >= 0, "parallel_for: count is ", count, "; it must be >= 0");
-  require(threads >= 0, "parallel_for: threads is ", threads, "; it must be >= 0");
-  const int workers = std::min(resolve_thread_count(threads), std::max(count, 1));
-  std::atomic<int> next{0};
-  std::atomic<bool> failed{false};
-  std::exception_ptr first_error;
-  std::mutex error_mutex;
-  auto work = [&] {
-    for (;;) {
-      if (failed.load()) return;
-      const int i = next.fetch_add(1);
-      if (i >= count) return;
-      try {
-        body(i);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (!first_error) first_error = std::current_exception();
-        failed.store(true);
-        return;
-      }
-    }
-  };
-  if (workers <= 1) {
-    const bool was = parallel_worker;
-    parallel_worker = true;
-    work();
-    parallel_worker = was;
-  } else {
-    std::vector<std::thread> pool;
-    pool.reserve(static_cast<size_t>(workers));
-    for (int t = 0; t < workers; ++t) {
-      pool.emplace_back([&work] {
-        parallel_worker = true;
-        work();
-      });
-    }
-    for (std::thread& thread : pool) thread.join();
-  }
-  if (first_error) std::rethrow_exception(first_error);
-}
-
 namespace internal {
 
 // A barrier for the short phases of a ThreadTeam: a participant that arrives early spins for
@@ -185,6 +143,21 @@ void ThreadTeam::run(int count, const std::function<void(int)>& body) {
     s.done.arrive_and_wait();
   }
   if (s.first_error) std::rethrow_exception(s.first_error);
+}
+
+void parallel_for(int count, int threads, const std::function<void(int)>& body) {
+  require(count >= 0, "parallel_for: count is ", count, "; it must be >= 0");
+  require(threads >= 0, "parallel_for: threads is ", threads, "; it must be >= 0");
+  // The caller is one of the team, and inside the loop too while it runs bodies.
+  const bool was = parallel_worker;
+  parallel_worker = true;
+  try {
+    ThreadTeam(std::min(resolve_thread_count(threads), std::max(count, 1))).run(count, body);
+  } catch (...) {
+    parallel_worker = was;
+    throw;
+  }
+  parallel_worker = was;
 }
 
 }  // namespace ctid
