@@ -2,6 +2,7 @@
 // output, fit, the quality verdict and the residual tests of a model on data (validation.h).
 #include "common.h"
 #include "ctid/estimation/arma.h"
+#include "ctid/estimation/mimo_modes.h"
 #include "ctid/estimation/prediction.h"
 #include "ctid/estimation/residual_correlation.h"
 #include "ctid/estimation/termination.h"
@@ -83,6 +84,14 @@ void bind_estimation(py::module_& m) {
         py::arg("max_order"), py::arg("tolerance") = 1e-9, "Order of PE seen in the record.");
   m.def("largest_pole_frequency", &largest_pole_frequency, py::arg("model"),
         "Largest |Im pole| [rad/s].");
+  bind_result<MimoMode>(m, "A mode shared by every channel: w_n, zeta, shape, participation.");
+  m.def("modal_assurance",
+        py::overload_cast<const Eigen::VectorXcd&, const Eigen::VectorXcd&>(&modal_assurance),
+        py::arg("a"), py::arg("b"), "MAC of two shapes: |a^H b|^2 / ((a^H a)(b^H b)).");
+  m.def("modal_assurance",
+        py::overload_cast<const std::vector<MimoMode>&, const std::vector<MimoMode>&>(
+            &modal_assurance),
+        py::arg("a"), py::arg("b"), "MAC matrix of two lists of modes.");
 }
 
 }  // namespace ctid::python

@@ -2,7 +2,6 @@
 // closed loop, delay scans, mode relocation, automatic initialisation, covariance. Options are
 // keyword arguments.
 #include "common.h"
-#include "ctid/estimation/mimo_modes.h"
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/clsrivc.h"
 #include "ctid/refined_iv/clsrivc_continuous.h"
@@ -59,7 +58,6 @@ void bind_refined_iv_estimators(py::module_& m) {
   bind_options<RefinedIvOptions>(m, "Options of srivc, clsrivc, additive_srivc, additive_clsrivc.");
 
   bind_options<MimoRefinedIvOptions>(m, "Options of mimo_srivc.");
-  bind_result<MimoMode>(m, "A mode shared by every channel: w_n, zeta, shape, participation.");
   bind_result<MimoEstimationResult>(
       m, "What mimo_srivc found: the model, per-output fits, the verdict and the modes.")
       .def("converged", &MimoEstimationResult::converged, "termination == converged.");
@@ -76,13 +74,6 @@ void bind_refined_iv_estimators(py::module_& m) {
       py::arg("options") = py::none(),
       "Open-loop refined IV with poles shared by every input-output pair of a MimoData; "
       "options are one MimoRefinedIvOptions or its fields as keywords.");
-  m.def("modal_assurance",
-        py::overload_cast<const Eigen::VectorXcd&, const Eigen::VectorXcd&>(&modal_assurance),
-        py::arg("a"), py::arg("b"), "MAC of two shapes: |a^H b|^2 / ((a^H a)(b^H b)).");
-  m.def("modal_assurance",
-        py::overload_cast<const std::vector<MimoMode>&, const std::vector<MimoMode>&>(
-            &modal_assurance),
-        py::arg("a"), py::arg("b"), "MAC matrix of two lists of modes.");
 
   m.def(
       "srivc",

@@ -39,6 +39,7 @@ MimoStructureFit fit_count(const MimoData& data, const MimoData& estimation, int
     const MimoEstimationResult r = identify(estimation, orders, options.identification);
     fit.termination = r.termination;
     fit.message = r.brief_report();
+    fit.iterations = r.iterations;
     fit.estimation_fit = r.fit_percent;
     modes = r.modes;
     if (!r.model) {

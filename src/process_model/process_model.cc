@@ -244,8 +244,19 @@ struct Problem {
     }
     return p;
   }
+  // The model's output at p, or an empty vector where p forms no finite model (a solver's
+  // trial point or a difference step whose coefficients overflow, or whose state matrix has no
+  // eigenvalues: the core types refuse those by throwing). Callers take an empty output for an
+  // infeasible point.
   Eigen::VectorXd output(const Eigen::VectorXd& p) const {
-    return process_model_output(structure, p, data.input(), data.sample_time(), data.input_hold());
+    try {
+      return process_model_output(structure, p, data.input(), data.sample_time(),
+                                  data.input_hold());
+    } catch (const InvalidArgument&) {
+      return {};
+    } catch (const ComputationError&) {
+      return {};
+    }
   }
 };
 
@@ -254,25 +265,19 @@ struct OutputErrorCost {
   bool operator()(double const* const* theta, double* residuals) const {
     const Eigen::VectorXd p = problem->with(theta[0]);
     if (!p.allFinite()) return false;
-    Eigen::VectorXd y;
-    try {
-      y = problem->output(p);
-    } catch (const std::exception&) {
-      return false;
-    }
+    const Eigen::VectorXd y = problem->output(p);
     const Eigen::VectorXd& measured = problem->data.output();
+    if (y.size() != measured.size()) return false;
     for (Eigen::Index k = 0; k < measured.size(); ++k) residuals[k] = measured(k) - y(k);
     return y.allFinite();
   }
 };
 
 double sum_of_squares(const Problem& problem, const Eigen::VectorXd& p) {
-  try {
-    const Eigen::VectorXd e = problem.data.output() - problem.output(p);
-    return e.allFinite() ? e.squaredNorm() : std::numeric_limits<double>::infinity();
-  } catch (const std::exception&) {
-    return std::numeric_limits<double>::infinity();
-  }
+  const Eigen::VectorXd y = problem.output(p);
+  if (y.size() != problem.data.output().size()) return std::numeric_limits<double>::infinity();
+  const Eigen::VectorXd e = problem.data.output() - y;
+  return e.allFinite() ? e.squaredNorm() : std::numeric_limits<double>::infinity();
 }
 
 struct Refined {
@@ -424,12 +429,8 @@ Eigen::VectorXd clamp_into(const Eigen::VectorXd& p, const Eigen::VectorXd& lo,
 void best_gain(const Problem& problem, Eigen::VectorXd& p) {
   Eigen::VectorXd unit = p;
   unit(0) = 1.0;
-  Eigen::VectorXd y;
-  try {
-    y = problem.output(unit);
-  } catch (const std::exception&) {
-    return;
-  }
+  const Eigen::VectorXd y = problem.output(unit);
+  if (y.size() != problem.data.output().size()) return;
   const double yy = y.squaredNorm();
   if (yy > 0.0 && std::isfinite(yy)) {
     p(0) =
@@ -532,11 +533,13 @@ Eigen::MatrixXd gauss_newton_covariance(const Problem& problem, const Eigen::Vec
         minus(j) = p(j);
         width = step;
       }
-      try {
-        jac.col(c) = (problem.output(plus) - problem.output(minus)) / width;
-      } catch (const std::exception&) {
+      const Eigen::VectorXd y_plus = problem.output(plus);
+      const Eigen::VectorXd y_minus = problem.output(minus);
+      if (y_plus.size() != n || y_minus.size() != n) {
         ok = false;
+        continue;
       }
+      jac.col(c) = (y_plus - y_minus) / width;
     }
     if (ok && jac.allFinite()) {
       const Eigen::MatrixXd info = jac.transpose() * jac;
@@ -610,8 +613,10 @@ std::optional<Eigen::VectorXd> srivc_process_start(const SampledData& data,
     if (r.parameters.allFinite() && r.model.size() == 1) {
       return from_rational(structure, r.model[0], base);
     }
-  } catch (const std::exception&) {
+  } catch (const InvalidArgument&) {
     // Orders the record cannot support at this delay: the default start stands.
+  } catch (const ComputationError&) {
+    // A fit whose polynomial roots do not converge: the default start stands.
   }
   return std::nullopt;
 }

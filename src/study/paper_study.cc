@@ -7,9 +7,11 @@
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <utility>
 
+#include "core/internal/finite_transfer_function.h"
 #include "ctid/core/error.h"
 #include "ctid/refined_iv/additive_srivc.h"
 #include "ctid/refined_iv/clsrivc.h"
@@ -60,14 +62,9 @@ Eigen::MatrixXd compared_jacobian(StudyKind kind, const AdditiveModel& model,
     Eigen::VectorXd minus = beta;
     plus[j] += step;
     minus[j] -= step;
-    Eigen::VectorXd f_plus;
-    Eigen::VectorXd f_minus;
-    try {
-      f_plus = compared_parameters(kind, model.with_parameters(plus));
-      f_minus = compared_parameters(kind, model.with_parameters(minus));
-    } catch (const InvalidArgument&) {
-      return {};
-    }
+    if (!plus.allFinite() || !minus.allFinite()) return {};
+    const Eigen::VectorXd f_plus = compared_parameters(kind, model.with_parameters(plus));
+    const Eigen::VectorXd f_minus = compared_parameters(kind, model.with_parameters(minus));
     if (f_plus.size() != outputs || f_minus.size() != outputs) return {};
     jacobian.col(j) = (f_plus - f_minus) / (2.0 * step);
   }
@@ -207,8 +204,11 @@ Eigen::VectorXd compared_parameters(StudyKind kind, const AdditiveModel& model) 
   const StudySetup setup = study_setup(kind);
   const int modes = setup.system.size();
   if (model.size() == 1 && model[0].n() > 2) {
-    AdditiveModel split = AdditiveModel::from_transfer_function(model.to_transfer_function());
-    return compared_parameters(kind, split);
+    // A model without a finite transfer function or with repeated poles does not split.
+    const std::optional<TransferFunction> g = internal::transfer_function_if_finite(model);
+    const std::optional<AdditiveModel> split =
+        g ? AdditiveModel::split_transfer_function(*g) : std::nullopt;
+    return split ? compared_parameters(kind, *split) : Eigen::VectorXd();
   }
   if (model.size() != modes) return {};
   const bool dc_gains_only = kind == StudyKind::open_loop;
@@ -260,14 +260,8 @@ std::vector<StudyRecord> run_study_case(const StudyOptions& options, int size_in
     record.standard_error = Eigen::VectorXd::Constant(compared_count, kNaN);
     try {
       const EstimationResult result = run_estimator(estimator, setup, input.data, riv);
-      record.termination = result.termination;
-      record.iterations = result.iterations;
-      Eigen::VectorXd compared;
-      try {
-        compared = compared_parameters(options.kind, result.model);
-      } catch (const InvalidArgument&) {
-        compared.resize(0);  // repeated poles: no partial-fraction split
-      }
+      static_cast<Outcome&>(record) = result;
+      const Eigen::VectorXd compared = compared_parameters(options.kind, result.model);
       if (compared.size() == compared_count && compared.allFinite()) {
         record.valid = true;
         record.estimate = compared;

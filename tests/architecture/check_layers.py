@@ -8,14 +8,18 @@ One front door (issue 32, decision 0044): no file under apps/ includes a header 
 module (ESTIMATOR_MODULES); nor does one under python/src, except the bindings listed in
 PYTHON_ESTIMATOR_BINDINGS, which expose the papers' estimators themselves on purpose. Both
 reach estimators, their options and their results through the identification layer. No
-estimator module includes anything from identification.
+estimator module includes anything from identification. The package's own modules
+(python/ctid/**/*.py) call none of the functions those listed bindings define (decision 0069):
+they are there for a user to call by name, and the package's workflows use the front door.
 
     python3 tests/architecture/check_layers.py SOURCE_DIR
 Exit 0 when the tree is layered; otherwise one line per offending include, exit 1.
 """
+import io
 import pathlib
 import re
 import sys
+import tokenize
 
 PAPER_MODULES = ("refined_iv", "delayed_feedback")
 # Modules that hold estimators and nothing that chooses between them; the identification
@@ -87,6 +91,51 @@ def front_door_problems(root):
     return problems
 
 
+def bound_estimators(root):
+    """{function name: binding file} of every m.def("name", ...) in the listed bindings."""
+    names = {}
+    for binding in PYTHON_ESTIMATOR_BINDINGS:
+        path = root / "python" / "src" / binding
+        if path.is_file():
+            for name in re.findall(r'\bm\.def\(\s*"(\w+)"', path.read_text(encoding="utf-8")):
+                names[name] = binding
+    return names
+
+
+def code_references(text):
+    """[(name, line)] of every module.name in the code of a Python file (strings and comments
+    skipped), module being _ctid or ctid, and of every name imported from ._ctid."""
+    tokens = [t for t in tokenize.generate_tokens(io.StringIO(text).readline)
+              if t.type in (tokenize.NAME, tokenize.OP, tokenize.NEWLINE)]
+    found = []
+    for i, token in enumerate(tokens[:-2]):
+        if token.string in ("_ctid", "ctid") and tokens[i + 1].string == "." \
+                and tokens[i + 2].type == tokenize.NAME:
+            found.append((tokens[i + 2].string, tokens[i + 2].start[0]))
+        if token.string == "import" and i > 0 and tokens[i - 1].string == "_ctid":
+            for later in tokens[i + 1:]:
+                if later.type == tokenize.NAME:
+                    found.append((later.string, later.start[0]))
+                elif later.string not in (",", "(", ")"):
+                    break
+    return found
+
+
+def python_package_problems(root):
+    """python/ctid modules use no estimator that the listed bindings expose."""
+    names = bound_estimators(root)
+    package = root / "python" / "ctid"
+    problems = []
+    for path in sorted(package.rglob("*.py")) if package.is_dir() else []:
+        for name, line in code_references(path.read_text(encoding="utf-8")):
+            if name in names:
+                problems.append(
+                    f"{path.relative_to(root)}:{line}: uses '{name}', an estimator bound by "
+                    f"python/src/{names[name]}; the package reaches estimators through "
+                    f"'{FRONT_DOOR}' (decision 0069)")
+    return problems
+
+
 def main(root):
     root = pathlib.Path(root)
     layers = declared_layers((root / "CMakeLists.txt").read_text(encoding="utf-8"))
@@ -126,6 +175,7 @@ def main(root):
             problems.append(f"CMakeLists.txt: layer '{layer}' declares a dependency on "
                             f"'{dep}' but includes nothing from it")
     problems += front_door_problems(root)
+    problems += python_package_problems(root)
     for problem in problems:
         print(problem)
     print(f"check_layers: {len(layers)} layers, {len(problems)} problem(s)")

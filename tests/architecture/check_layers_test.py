@@ -1,5 +1,6 @@
-"""check_layers.py fails on a broken front door (decision 0044): a copy of the tree passes, and
-each offending include added to it makes the script exit 1 with one line naming that include.
+"""check_layers.py fails on a broken front door (decisions 0044, 0069): a copy of the tree
+passes, and each offending include, or a package module's call of an estimator binding, added to
+it makes the script exit 1 with one line naming it.
 
     python3 tests/architecture/check_layers_test.py SOURCE_DIR
 """
@@ -19,7 +20,7 @@ class CheckLayersTest(unittest.TestCase):
         self.temp = tempfile.TemporaryDirectory()
         self.tree = pathlib.Path(self.temp.name)
         shutil.copy(ROOT / "CMakeLists.txt", self.tree / "CMakeLists.txt")
-        for folder in ("include", "src", "tests", "apps", "python/src"):
+        for folder in ("include", "src", "tests", "apps", "python/src", "python/ctid"):
             shutil.copytree(ROOT / folder, self.tree / folder,
                             ignore=shutil.ignore_patterns("*.csv", "*.json", "*.npy", "*.txt"))
 
@@ -70,6 +71,24 @@ class CheckLayersTest(unittest.TestCase):
         self.assertEqual(len(problems), 1, problems)
         self.assertTrue(problems[0].startswith(f"python/src/bind_frf_fit.cc:{line}: "), problems)
         self.assertIn("estimator module 'frf_fit'", problems[0])
+
+    def test_a_package_module_calling_an_estimator_binding_fails(self):
+        path = self.tree / "python/ctid/report.py"
+        text = path.read_text(encoding="utf-8")
+        path.write_text(text + '\n\ndef _quick(data, order):\n'
+                        '    """Not ctid.srivc(data) in a docstring."""  # nor _ctid.lssvf here\n'
+                        '    from ._ctid import (\n        AdditiveModel, additive_srivc)\n'
+                        '    return _ctid.srivc(data, order)\n', encoding="utf-8")
+        first = text.count("\n") + 6  # the line naming additive_srivc
+        code, problems = self.run_check()
+        self.assertEqual(code, 1)
+        self.assertEqual(problems, [
+            f"python/ctid/report.py:{first}: uses 'additive_srivc', an estimator bound by "
+            "python/src/bind_refined_iv.cc; the package reaches estimators through "
+            "'identification' (decision 0069)",
+            f"python/ctid/report.py:{first + 1}: uses 'srivc', an estimator bound by "
+            "python/src/bind_refined_iv.cc; the package reaches estimators through "
+            "'identification' (decision 0069)"])
 
     def test_an_estimator_module_including_identification_fails(self):
         line = self.add_include("src/oma/oma.cc", "ctid/identification/identification.h")

@@ -34,6 +34,7 @@ void expect_same_record(const StudyRecord& a, const StudyRecord& b) {
   EXPECT_EQ(a.estimator, b.estimator);
   EXPECT_EQ(a.termination, b.termination);
   EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.message, b.message);
   EXPECT_EQ(a.valid, b.valid);
   EXPECT_TRUE(same_bits(a.estimate, b.estimate));
   EXPECT_TRUE(same_bits(a.standard_error, b.standard_error));
@@ -118,6 +119,16 @@ TEST(ComparedParameters, RecoversTheTruthFromTheUnfactoredModel) {
     const Eigen::VectorXd split = compared_parameters(kind, unfactored);
     ASSERT_EQ(split.size(), setup.true_parameters.size());
     EXPECT_LT((split - setup.true_parameters).cwiseAbs().maxCoeff(), 1e-9);
+  }
+}
+
+TEST(ComparedParameters, AModelThatDoesNotSplitGivesNoneInsteadOfThrowing) {
+  // (p^2 + 2 p + 1)^4: a repeated pole pair, no partial-fraction split into four modes.
+  const Polynomial double_pole{1.0, 2.0, 1.0};
+  const Polynomial a = double_pole * double_pole * double_pole * double_pole;
+  const AdditiveModel repeated({Submodel{a, Polynomial{1.0, 0.5}, 0}});
+  for (StudyKind kind : {StudyKind::open_loop, StudyKind::closed_loop}) {
+    EXPECT_EQ(compared_parameters(kind, repeated).size(), 0);
   }
 }
 

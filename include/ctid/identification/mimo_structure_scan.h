@@ -16,6 +16,7 @@
 
 #include "ctid/core/fields.h"
 #include "ctid/core/mimo_data.h"
+#include "ctid/estimation/termination.h"
 #include "ctid/identification/mimo.h"
 #include "ctid/identification/structure_scan.h"
 
@@ -53,11 +54,10 @@ struct MimoStructureScanOptions {
   void validate() const { validate_fields(*this); }
 };
 
-/// One mode count: how its fit ended and how it scores.
-struct MimoStructureFit {
+/// One mode count: how its fit ended (the Outcome; `message` is the fit's one-line report, or
+/// the error that stopped it) and how it scores.
+struct MimoStructureFit : Outcome {
   int modes = 0;  ///< second-order submodels (2 poles, 1 zero each)
-  Termination termination = Termination::not_run;
-  std::string message;  ///< the fit's one-line report, or the error that stopped it
   /// False when the fit failed or its verdict says so, or when it fits the estimation data
   /// worse (by more than 2 sqrt(2 / N_v), relative) than a usable fit with fewer modes.
   bool usable = false;
@@ -71,17 +71,19 @@ struct MimoStructureFit {
   static constexpr std::string_view type_name = "MimoStructureFit";
   static constexpr auto fields() {
     using S = MimoStructureFit;
-    return std::tuple{
-        field("modes", &S::modes, "Second-order submodels of the fit."),
-        field("termination", &S::termination, "How the fit ended."),
-        field("message", &S::message, "The fit's report, or the error that stopped it."),
-        field("usable", &S::usable, "The fit's verdict says usable and it reached its optimum."),
-        field("reasons", &S::reasons, "Why not usable (empty when usable)."),
-        field("estimation_fit", &S::estimation_fit, "Per output: fit % on the estimation part."),
-        field("validation_fit", &S::validation_fit, "Per output: fit % on the held-out part."),
-        field("validation_error", &S::validation_error,
-              "Mean over the outputs of (1 - fit/100)^2 on the held-out part."),
-    };
+    return std::tuple_cat(
+        std::tuple{field("modes", &S::modes, "Second-order submodels of the fit.")},
+        Outcome::fields(),
+        std::tuple{
+            field("usable", &S::usable,
+                  "The fit's verdict says usable and it reached its optimum."),
+            field("reasons", &S::reasons, "Why not usable (empty when usable)."),
+            field("estimation_fit", &S::estimation_fit,
+                  "Per output: fit % on the estimation part."),
+            field("validation_fit", &S::validation_fit, "Per output: fit % on the held-out part."),
+            field("validation_error", &S::validation_error,
+                  "Mean over the outputs of (1 - fit/100)^2 on the held-out part."),
+        });
   }
 };
 

@@ -16,6 +16,7 @@
 
 #include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
+#include "ctid/estimation/termination.h"
 #include "ctid/identification/identification.h"
 
 namespace ctid {
@@ -60,13 +61,11 @@ struct StructureScanOptions {
   void validate() const { validate_fields(*this); }
 };
 
-/// One candidate structure: how its fit ended and how it scores.
-struct StructureFit {
+/// One candidate structure: how its fit ended (the Outcome; `message` is the fit's one-line
+/// report, or the error that stopped it) and how it scores.
+struct StructureFit : Outcome {
   ModelStructure structure;
   int parameters = 0;  ///< entries of beta
-  Termination termination = Termination::not_run;
-  std::string message;  ///< the fit's one-line report, or the error that stopped it
-  int iterations = 0;
   /// False when the fit failed, did not give a finite, stable model, or its verdict says so,
   /// or when it fits the estimation data worse, by more than 2 sqrt(2 / N_v) (relative; N_v
   /// as for error_tolerance, whatever error_tolerance says), than a usable fit
@@ -90,25 +89,26 @@ struct StructureFit {
   static constexpr std::string_view type_name = "StructureFit";
   static constexpr auto fields() {
     using S = StructureFit;
-    return std::tuple{
-        field("structure", &S::structure, "The candidate ModelStructure."),
-        field("parameters", &S::parameters, "Entries of beta."),
-        field("termination", &S::termination, "How the fit ended."),
-        field("message", &S::message, "The fit's report, or the error that stopped it."),
-        field("iterations", &S::iterations, "Iterations of the fit."),
-        field("usable", &S::usable, "Finite, stable, and the fit's verdict says usable."),
-        field("reasons", &S::reasons,
-              "Why not usable: the verdict's reasons and the scan's (empty when usable)."),
-        field("estimation_fit", &S::estimation_fit, "fit_percent on the estimation part."),
-        field("validation_fit", &S::validation_fit, "fit_percent on the held-out part."),
-        field("validation_error", &S::validation_error,
-              "Mean squared output error on the held-out part."),
-        field("yic", &S::yic, "Young's information criterion (more negative is better)."),
-        field("rt2", &S::rt2, "1 - s_e^2 / s_y^2 on the estimation part."),
-        field("aic", &S::aic, "N ln(s_e^2) + 2 p."),
-        field("bic", &S::bic, "N ln(s_e^2) + p ln N."),
-        field("transfer_function", &S::transfer_function, "The estimate, unfactored."),
-    };
+    return std::tuple_cat(
+        std::tuple{
+            field("structure", &S::structure, "The candidate ModelStructure."),
+            field("parameters", &S::parameters, "Entries of beta."),
+        },
+        Outcome::fields(),
+        std::tuple{
+            field("usable", &S::usable, "Finite, stable, and the fit's verdict says usable."),
+            field("reasons", &S::reasons,
+                  "Why not usable: the verdict's reasons and the scan's (empty when usable)."),
+            field("estimation_fit", &S::estimation_fit, "fit_percent on the estimation part."),
+            field("validation_fit", &S::validation_fit, "fit_percent on the held-out part."),
+            field("validation_error", &S::validation_error,
+                  "Mean squared output error on the held-out part."),
+            field("yic", &S::yic, "Young's information criterion (more negative is better)."),
+            field("rt2", &S::rt2, "1 - s_e^2 / s_y^2 on the estimation part."),
+            field("aic", &S::aic, "N ln(s_e^2) + 2 p."),
+            field("bic", &S::bic, "N ln(s_e^2) + p ln N."),
+            field("transfer_function", &S::transfer_function, "The estimate, unfactored."),
+        });
   }
 };
 

@@ -21,6 +21,7 @@
 #include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/fields.h"
 #include "ctid/core/sampled_data.h"
+#include "ctid/estimation/termination.h"
 #include "ctid/refined_iv/estimation_result.h"
 
 namespace ctid {
@@ -151,15 +152,14 @@ struct StudyRunInput {
 /// reference (closed loop) from stream 0, the noise from stream 1, the start from stream 2.
 StudyRunInput simulate_study_run(const StudyOptions& options, int samples, std::uint64_t seed);
 
-/// One estimator's outcome in one run.
-struct StudyRecord {
+/// One estimator's outcome in one run: how it stopped (the Outcome, `message` the estimator's
+/// own) and the compared parameters.
+struct StudyRecord : Outcome {
   int size_index = 0;
   int run_index = 0;
   int samples = 0;
   std::uint64_t seed = 0;
   StudyEstimator estimator = StudyEstimator::srivc;
-  Termination termination = Termination::not_run;
-  int iterations = 0;
   /// The compared parameters could be formed (the estimate splits into the true structure,
   /// e.g. four complex-pole modes); otherwise `estimate` is NaN.
   bool valid = false;
@@ -174,20 +174,22 @@ struct StudyRecord {
   static constexpr std::string_view type_name = "StudyRecord";
   static constexpr auto fields() {
     using S = StudyRecord;
-    return std::tuple{
-        field("size_index", &S::size_index, "Index of the sample size."),
-        field("run_index", &S::run_index, "Index of the run."),
-        field("samples", &S::samples, "N."),
-        field("seed", &S::seed, "The run's seed."),
-        field("estimator", &S::estimator, "StudyEstimator."),
-        field("termination", &S::termination, "How the estimator stopped."),
-        field("iterations", &S::iterations, "Iterations run."),
-        field("valid", &S::valid, "The compared parameters could be formed."),
-        field("estimate", &S::estimate, "The compared parameters (NaN unless valid)."),
-        field("standard_error", &S::standard_error,
-              "Their delta-method standard errors (NaN without covariance)."),
-        field("error", &S::error, "The message if the estimator threw, else empty."),
-    };
+    return std::tuple_cat(
+        std::tuple{
+            field("size_index", &S::size_index, "Index of the sample size."),
+            field("run_index", &S::run_index, "Index of the run."),
+            field("samples", &S::samples, "N."),
+            field("seed", &S::seed, "The run's seed."),
+            field("estimator", &S::estimator, "StudyEstimator."),
+        },
+        Outcome::fields(),
+        std::tuple{
+            field("valid", &S::valid, "The compared parameters could be formed."),
+            field("estimate", &S::estimate, "The compared parameters (NaN unless valid)."),
+            field("standard_error", &S::standard_error,
+                  "Their delta-method standard errors (NaN without covariance)."),
+            field("error", &S::error, "The message if the estimator threw, else empty."),
+        });
   }
 };
 
