@@ -307,8 +307,8 @@ Command add_structure_command(CLI::App& parent) {
       "YIC, RT2, AIC, BIC, and a stabilisation diagram of the poles.");
   app->footer(
       "The last --validation-fraction of the record is held out: every estimate is simulated "
-      "over the whole record (from rest, or from its fitted initial state) and scored there. "
-      "Recommended: the fewest parameters "
+      "over the whole record (from rest, or from its fitted initial state; with --controller, "
+      "from rest through the loop from r) and scored there. Recommended: the fewest parameters "
       "among usable fits whose held-out mean squared error is within --error-tolerance "
       "(relative; default 2 sqrt(2 / held-out samples)) of the best.\n"
       "-o SCAN.json writes every fit, the recommendation and the stabilisation diagram.\n"

@@ -55,6 +55,13 @@ void check_fit(Verdict& verdict, double fit_percent, double start_fit_percent) {
 }
 
 void check_closed_loop_fit(Verdict& verdict, double fit_percent, double start_fit_percent) {
+  if (std::isfinite(fit_percent) && fit_percent < 0.0) {
+    verdict.fail("the closed-loop fit from the reference " + format_brief(fit_percent) +
+                     " % is negative (the model's loop output from r is worse than the mean of "
+                     "the output)",
+                 {verdict_advice::lower_order, verdict_advice::better_start});
+    return;
+  }
   if (std::isfinite(fit_percent) && std::isfinite(start_fit_percent) && start_fit_percent > 0.0 &&
       fit_percent < verdict_thresholds::closed_loop_fit_share * start_fit_percent) {
     verdict.fail("the closed-loop fit from the reference " + format_brief(fit_percent) +

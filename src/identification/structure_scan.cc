@@ -15,6 +15,7 @@
 #include "ctid/core/parallel.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/simulation/closed_loop.h"
+#include "ctid/simulation/simulate.h"
 
 namespace ctid {
 namespace {
@@ -105,6 +106,15 @@ Eigen::VectorXd scan_simulation(const AdditiveModel& model, const SampledData& d
     from_state.window_start = data.start_time();
     from_state.window_end = data.start_time() + (fitted - 1) * data.sample_time();
     return validation_output(model, data, from_state);
+  }
+  // A digital loop: the model's output from r through the known controller, as a closed-loop
+  // fit is judged (decision 0028); NaN where the model does not stabilise the loop.
+  if (const std::optional<DiscreteTransferFunction>& c = options.identification.controller) {
+    const StateSpace plant = zoh_equivalent(model, data.sample_time());
+    if (!digital_loop_is_stable(plant, *c)) {
+      return Eigen::VectorXd::Constant(data.size(), std::numeric_limits<double>::quiet_NaN());
+    }
+    return simulate_closed_loop(plant, *c, data.reference()).output;
   }
   // An analog loop's plant input is not held and its plant may be unstable: the model's output
   // from r through the loop, which its fit is judged by (decision 0067).

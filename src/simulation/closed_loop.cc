@@ -17,12 +17,16 @@
 namespace ctid {
 namespace {
 
-/// 1 + D_c D_g, the loop's algebraic-loop factor; must not vanish.
+/// Whether 1 + D_c D_g, the loop's algebraic-loop factor, is clear of zero.
+bool well_posed(const StateSpace& plant, const StateSpace& controller) {
+  return std::abs(1.0 + controller.d * plant.d) > 1e-12 * (1.0 + std::abs(controller.d * plant.d));
+}
+
+/// 1 + D_c D_g; must not vanish.
 double loop_factor(const StateSpace& plant, const StateSpace& controller) {
   const double factor = 1.0 + controller.d * plant.d;
-  require(std::abs(factor) > 1e-12 * (1.0 + std::abs(controller.d * plant.d)),
-          "closed loop is ill-posed: 1 + D_c D_g = ", factor, " (controller feedthrough ",
-          controller.d, ", plant feedthrough ", plant.d, ")");
+  require(well_posed(plant, controller), "closed loop is ill-posed: 1 + D_c D_g = ", factor,
+          " (controller feedthrough ", controller.d, ", plant feedthrough ", plant.d, ")");
   return factor;
 }
 
@@ -62,6 +66,17 @@ Eigen::VectorXcd closed_loop_poles(const StateSpace& discrete_plant,
   a.bottomRightCorner(nc, nc) = c.a - c.b * (g.d * u_from_xc);
   if (a.size() == 0) return Eigen::VectorXcd();
   return Eigen::EigenSolver<Eigen::MatrixXd>(a, false).eigenvalues();
+}
+
+bool digital_loop_is_stable(const StateSpace& discrete_plant,
+                            const DiscreteTransferFunction& controller) {
+  if (!discrete_plant.a.allFinite() || !discrete_plant.b.allFinite() ||
+      !discrete_plant.c.allFinite() || !std::isfinite(discrete_plant.d) ||
+      !well_posed(discrete_plant, controller.to_state_space())) {
+    return false;
+  }
+  const Eigen::VectorXcd poles = closed_loop_poles(discrete_plant, controller);
+  return poles.allFinite() && (poles.size() == 0 || poles.cwiseAbs().maxCoeff() < 1.0);
 }
 
 ClosedLoopSimulation simulate_closed_loop(const StateSpace& discrete_plant,

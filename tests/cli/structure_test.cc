@@ -129,5 +129,28 @@ TEST_F(StructureCommand, SeveralChannelsScanModeCounts) {
   EXPECT_FALSE(scan->stabilisation.empty());
 }
 
+// A digital loop, a discrete PI controller around 2 / ((p + 1)(p + 3)) written by `ctid
+// simulate --controller`: with the controller, each candidate is judged through the loop from r
+// (decision 0070) and the true order is recommended, its held-out end fitted exactly.
+class DigitalLoopStructure : public testing::CliTest {};
+
+TEST_F(DigitalLoopStructure, RecommendsTheTrueOrderJudgedThroughTheLoop) {
+  const std::string plant = write("g.json", R"({"type": "transfer_function",
+      "numerator_ascending": [2], "denominator_ascending": [3, 4, 1]})");
+  const std::string controller = write("c.json", R"({"type": "discrete_transfer_function",
+      "numerator_ascending": [-1.6, 1.64], "denominator_ascending": [-1, 1],
+      "sample_time": 0.02})");
+  const auto sim = ctid({"simulate", "-m", plant, "--controller", controller, "-e", "white", "-n",
+                         "3000", "-T", "0.02", "-o", "loop.csv"});
+  ASSERT_EQ(sim.status, 0) << sim.err;
+  const auto r = ctid({"structure", "loop.csv", "--poles", "1:3", "--zeros", "0", "--controller",
+                       controller, "-o", "scan.json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("recommended: n=2 m=0 ("));
+  const nlohmann::json scan = io::read_json(path("scan.json"));
+  const nlohmann::json& chosen = scan["fits"][scan["recommended"].get<int>()];
+  EXPECT_GT(chosen["validation_fit"].get<double>(), 100.0 - 1e-6);
+}
+
 }  // namespace
 }  // namespace ctid::cli::structure_test

@@ -80,8 +80,20 @@ TEST(Verdict, ClosedLoopFitCheck) {
   check_closed_loop_fit(good, 28.4, 45.3);  // a consistent fit can fit worse than a good start
   check_closed_loop_fit(good, kNaN, 44.0);  // an unstable loop is another check's business
   check_closed_loop_fit(good, 20.0, kNaN);  // no start known
-  check_closed_loop_fit(good, -5.0, -3.0);  // a start that explains nothing sets no bar
+  check_closed_loop_fit(good, 5.0, -3.0);   // a start that explains nothing sets no bar
   EXPECT_TRUE(good.usable);
+
+  // The true loop's fit from r is positive whatever the noise: a negative one is a wrong loop,
+  // whatever its start's.
+  for (const double start : {-3.0, 14.0, kNaN}) {
+    Verdict negative;
+    check_closed_loop_fit(negative, -5.0, start);
+    EXPECT_FALSE(negative.usable) << start;
+    ASSERT_EQ(negative.reasons.size(), 1U);
+    EXPECT_THAT(negative.reasons[0], HasSubstr("closed-loop fit from the reference -5 % is "
+                                               "negative"));
+    EXPECT_THAT(negative.advice, HasSubstr(verdict_advice::lower_order));
+  }
 
   Verdict astray;
   check_closed_loop_fit(astray, 0.0178, 14.03);

@@ -9,8 +9,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "ctid/core/discrete_transfer_function.h"
 #include "ctid/core/error.h"
+#include "ctid/core/transfer_function.h"
 #include "ctid/estimation/validation.h"
+#include "ctid/simulation/closed_loop.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
 #include "support/sanitizers.h"
@@ -114,6 +117,76 @@ TEST(StructureScan, TheTrueModesAreStableInTheStabilisationDiagram) {
     }
     EXPECT_TRUE(found) << "w = " << w;
   }
+}
+
+// A digital loop u_k = C_d(q)(r_k - y_k) around G(p) = 2 / ((p + 1)(p + 3)) with a discrete PI
+// controller (K_p = 1.6, K_i = 2), r white and white output noise (stdev `noise`).
+TransferFunction loop_plant() { return {Polynomial{2.0}, Polynomial{3.0, 4.0, 1.0}}; }
+DiscreteTransferFunction loop_controller() {
+  return {Polynomial{-1.6, 1.64}, Polynomial{-1.0, 1.0}, kH};
+}
+
+SampledData digital_loop(double noise) {
+  const Eigen::VectorXd r = white_noise(kN, 1.0, 7);
+  const ClosedLoopSimulation sim = simulate_closed_loop(
+      loop_plant(), loop_controller(), r,
+      noise > 0.0 ? white_noise(kN, noise, 8) : Eigen::VectorXd(Eigen::VectorXd::Zero(kN)));
+  return SampledData(kH, sim.input, sim.output, r);
+}
+
+Eigen::VectorXd open_loop_output(const TransferFunction& g, const Eigen::VectorXd& u) {
+  return model_output(AdditiveModel({Submodel{g.denominator(), g.numerator(), 0}}), u, kH);
+}
+
+// With a known digital controller each candidate is judged by its output from r through the
+// loop (decision 0028), not by y - G u: the scores match that simulation, computed here
+// independently, and differ from the open-loop one.
+TEST(StructureScan, WithADigitalControllerCandidatesAreJudgedFromTheReference) {
+  const SampledData data = digital_loop(0.05);
+  StructureScanOptions options;
+  options.identification.controller = loop_controller();
+  const std::vector<ModelStructure> candidates{ModelStructure::unfactored(1, 0),
+                                               ModelStructure::unfactored(2, 0),
+                                               ModelStructure::unfactored(3, 0)};
+  const StructureScanResult r = scan_structures(data, candidates, options);
+  ASSERT_EQ(r.fits.size(), 3U);
+  ASSERT_EQ(r.recommended, 1) << r.rule;
+  const int fitted = r.estimation_samples;
+  int checked = 0;
+  for (const StructureFit& fit : r.fits) {
+    if (!fit.usable) continue;
+    ++checked;
+    const Eigen::VectorXd& y = data.output();
+    const Eigen::VectorXd from_r =
+        simulate_closed_loop(fit.transfer_function, loop_controller(), data.reference()).output;
+    EXPECT_NEAR(fit.estimation_fit, fit_percent(y.head(fitted), from_r.head(fitted)), 1e-9)
+        << fit.message;
+    EXPECT_NEAR(fit.validation_fit,
+                fit_percent(y.tail(r.validation_samples), from_r.tail(r.validation_samples)), 1e-9);
+    const Eigen::VectorXd from_u = open_loop_output(fit.transfer_function, data.input());
+    EXPECT_GT(std::abs(fit.estimation_fit - fit_percent(y.head(fitted), from_u.head(fitted))),
+              1e-3);
+  }
+  EXPECT_GE(checked, 2);
+}
+
+// Noise-free, the true order is recommended and fits the record from r exactly; whether a loop
+// is stable is a value (false for a destabilising gain and for an ill-posed loop, no throw).
+TEST(StructureScan, WithADigitalControllerTheTrueOrderFitsExactlyFromTheReference) {
+  StructureScanOptions options;
+  options.identification.controller = loop_controller();
+  const StructureScanResult r =
+      scan_structures(digital_loop(0.0), {ModelStructure::unfactored(2, 0)}, options);
+  ASSERT_EQ(r.recommended, 0) << r.rule;
+  EXPECT_GT(r.fits[0].validation_fit, 100.0 - 1e-6);
+  const StateSpace plant = zoh_equivalent(loop_plant(), kH);
+  EXPECT_TRUE(digital_loop_is_stable(plant, loop_controller()));
+  EXPECT_FALSE(digital_loop_is_stable(
+      plant, DiscreteTransferFunction(Polynomial{-160.0, 200.0}, Polynomial{-1.0, 1.0}, kH)));
+  StateSpace biproper = plant;
+  biproper.d = 1.0;  // 1 + D_c D_g = 1 - 1 = 0
+  EXPECT_FALSE(digital_loop_is_stable(
+      biproper, DiscreteTransferFunction(Polynomial{-1.0}, Polynomial{1.0}, kH)));
 }
 
 TEST(StructureScan, RefusesBadOptionsAndEmptyScans) {

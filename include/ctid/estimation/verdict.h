@@ -84,8 +84,10 @@ void check_finite(Verdict& verdict, bool finite, std::string_view what);
 /// `start_fit_percent` (ignored when NaN).
 void check_fit(Verdict& verdict, double fit_percent, double start_fit_percent);
 /// Closed loop: fails when the closed-loop fit (of the model's output from the reference
-/// through the known controller) is below closed_loop_fit_share of the start's, a start with a
-/// positive closed-loop fit (ignored when either is NaN). In closed loop neither this fit nor
+/// through the known controller) is negative, or below closed_loop_fit_share of the start's, a
+/// start with a positive closed-loop fit (ignored when either is NaN). The true loop's fit from
+/// r is positive whatever the noise (y - mean y holds its output from r plus noise independent
+/// of r), so a negative one is a wrong loop. In closed loop neither this fit nor
 /// the output-error fit with the measured input is the estimator's criterion, so a consistent
 /// estimate can fit worse than a good start; the check catches an iteration that went astray,
 /// not that (decision 0028).

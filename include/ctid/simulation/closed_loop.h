@@ -26,6 +26,11 @@ struct ClosedLoopSimulation {
 Eigen::VectorXcd closed_loop_poles(const StateSpace& discrete_plant,
                                    const DiscreteTransferFunction& controller);
 
+/// Whether the loop is well posed with every closed-loop pole inside the unit circle; false
+/// (not an exception) otherwise.
+bool digital_loop_is_stable(const StateSpace& discrete_plant,
+                            const DiscreteTransferFunction& controller);
+
 /// Simulates the loop with sample time controller.sample_time(). `noise` is v_k (same
 /// length as `reference`) or empty for none. Throws InvalidArgument if the loop is
 /// ill-posed or not stable (some closed-loop pole with |z| >= 1), naming the pole.
