@@ -37,9 +37,8 @@ MimoStructureFit fit_count(const MimoData& data, const MimoData& estimation, int
     const std::vector<SubmodelOrder> orders(static_cast<std::size_t>(count),
                                             SubmodelOrder{2, 1, 0});
     const MimoEstimationResult r = identify(estimation, orders, options.identification);
-    fit.termination = r.termination;
-    fit.message = r.brief_report();
-    fit.iterations = r.iterations;
+    static_cast<Outcome&>(fit) = r;
+    fit.message = r.brief_report();  // the one-line report, not the bare message
     fit.estimation_fit = r.fit_percent;
     modes = r.modes;
     if (!r.model) {

@@ -174,9 +174,8 @@ StructureFit fit_candidate(const SampledData& data, const SampledData& estimatio
     const IdentificationResult r = identify(estimation, structure, options.identification);
     const EstimationResult& e = r.estimate;
     fit.parameters = static_cast<int>(e.parameters.size());
-    fit.termination = e.termination;
-    fit.message = e.brief_report();
-    fit.iterations = e.iterations;
+    static_cast<Outcome&>(fit) = e;
+    fit.message = e.brief_report();  // the one-line report, not the bare message
     fit.transfer_function = e.transfer_function;
     const Eigen::VectorXd simulated = scan_simulation(e.model, data, split.fitted, options);
     estimation_error = score_fit(fit, e, data, simulated, split);

@@ -536,8 +536,8 @@ Eigen::MatrixXd gauss_newton_covariance(const Problem& problem, const Eigen::Vec
       const Eigen::VectorXd y_plus = problem.output(plus);
       const Eigen::VectorXd y_minus = problem.output(minus);
       if (y_plus.size() != n || y_minus.size() != n) {
-        ok = false;
-        continue;
+        ok = false;  // the covariance is NaN: no other column is needed
+        break;
       }
       jac.col(c) = (y_plus - y_minus) / width;
     }
