@@ -21,6 +21,7 @@
 #include "ctid/core/format.h"
 #include "ctid/identification/mimo_structure_scan.h"
 #include "ctid/identification/structure_scan.h"
+#include "ctid/identification/two_stage.h"
 #include "ctid/io/json.h"
 #include "ctid/io/model_json.h"
 #include "ctid/io/provenance.h"
@@ -44,7 +45,9 @@ struct StructureFlags {
   StructureScanOptions options;
   MimoRefinedIvOptions mimo;  ///< several channels: the fields not shared with refined_iv
   std::string controller;
-  std::string delay_scan;  // A:B samples
+  bool two_stage = false;             // closed loop, unknown controller (decision 0071)
+  TwoStageOptions two_stage_options;  // with --two-stage
+  std::string delay_scan;             // A:B samples
   std::string output;
   std::string plot;
   bool force = false;
@@ -52,11 +55,10 @@ struct StructureFlags {
 };
 
 // Fields of StructureScanOptions with no flag: one start model does not suit structures of
-// other orders, and a continuous delay, a two-stage fit and per-record delays are not scanned
-// (decision 0051); the polish and the constraints named by coefficient are ctid fit's (0057).
+// other orders, and a continuous delay and per-record delays are not scanned (decision 0051);
+// the polish and the constraints named by coefficient are ctid fit's (0057).
 const std::vector<std::string> kNoScanFlag = {"identification.refined_iv.initial_model",
                                               "identification.delay_range",
-                                              "identification.two_stage",
                                               "identification.refined_iv.record_delay_samples",
                                               "identification.polish",
                                               "identification.polish_options",
@@ -199,8 +201,8 @@ void refuse_single_channel_fit_flags(const CLI::App& app) {
 // Several inputs and outputs: mode counts of the shared-pole fit (decision 0064).
 ExitStatus run_mimo_structure(const StructureFlags& f, const CLI::App& app) {
   if (f.modes.empty()) usage_error("with --input-columns / --output-columns give --modes MIN:MAX");
-  for (const char* flag :
-       {"--poles", "--zeros", "--integrators", "--controller", "--delay-scan-samples"}) {
+  for (const char* flag : {"--poles", "--zeros", "--integrators", "--controller", "--two-stage",
+                           "--delay-scan-samples"}) {
     if (app.count(flag) > 0) {
       usage_error(std::string(flag) +
                   " is for one input and output; with --input-columns / --output-columns the "
@@ -283,12 +285,13 @@ ExitStatus run_structure(const StructureFlags& f, const CLI::App& app) {
     read_controller(f.controller, options.identification.controller,
                     options.identification.continuous_controller);
   }
+  if (f.two_stage) options.identification.two_stage = f.two_stage_options;
   if (!f.delay_scan.empty()) {
     const auto [d_low, d_high] = parse_range(f.delay_scan, "--delay-scan-samples", 0);
     options.identification.delay_scan_samples = DelayRange{d_low, d_high};
   }
   options.validate();
-  const SampledData data = f.data.load(app, !f.controller.empty());
+  const SampledData data = f.data.load(app, !f.controller.empty() || f.two_stage);
   Progress progress("ctid structure", f.quiet);
   const StructureScanResult result =
       scan_structures(data, candidates, options, progress.callback("structure"));
@@ -308,7 +311,8 @@ Command add_structure_command(CLI::App& parent) {
   app->footer(
       "The last --validation-fraction of the record is held out: every estimate is simulated "
       "over the whole record (from rest, or from its fitted initial state; with --controller, "
-      "from rest through the loop from r) and scored there. Recommended: the fewest parameters "
+      "from rest through the loop from r; with --two-stage, from the input stage 1 simulates "
+      "from r) and scored there. Recommended: the fewest parameters "
       "among usable fits whose held-out mean squared error is within --error-tolerance "
       "(relative; default 2 sqrt(2 / held-out samples)) of the best.\n"
       "-o SCAN.json writes every fit, the recommendation and the stabilisation diagram.\n"
@@ -335,13 +339,24 @@ Command add_structure_command(CLI::App& parent) {
                   "transfer_function (analog): closed loop (the data need the reference)")
       ->check(CLI::ExistingFile)
       ->group("Structures");
+  app->add_flag(flag_of<StructureScanOptions>("identification.two_stage"), f.two_stage,
+                "Closed loop with an unknown controller: every structure's plant fitted from the "
+                "input simulated by a model of r -> u, and scored from it (needs the reference "
+                "column; decisions 0043, 0071)")
+      ->excludes("--controller")
+      ->group("Structures");
+  FieldFlagSettings two_stage;
+  two_stage.group = "Structures";
+  two_stage.needs = flag_of<StructureScanOptions>("identification.two_stage");
+  two_stage.path = "StructureScanOptions.identification.two_stage";
+  add_field_flags(*app, f.two_stage_options, two_stage);
   app->add_option(flag_of<StructureScanOptions>("identification.delay_scan_samples"), f.delay_scan,
                   "Scan the input delay MIN:MAX (samples) in every structure; each keeps its best")
       ->group("Structures");
   FieldFlagSettings settings;
   settings.group = "Choice and fits";
   settings.by_hand = {"identification.controller", "identification.continuous_controller",
-                      "identification.delay_scan_samples"};
+                      "identification.two_stage", "identification.delay_scan_samples"};
   settings.none = kNoScanFlag;
   add_field_flags(*app, f.options, settings);
   FieldFlagSettings mimo;

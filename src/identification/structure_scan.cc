@@ -14,6 +14,7 @@
 #include "ctid/core/format.h"
 #include "ctid/core/parallel.h"
 #include "ctid/estimation/validation.h"
+#include "ctid/identification/two_stage.h"
 #include "ctid/simulation/closed_loop.h"
 #include "ctid/simulation/simulate.h"
 
@@ -128,6 +129,21 @@ Eigen::VectorXd scan_simulation(const AdditiveModel& model, const SampledData& d
         .output;
   }
   return model_output(model, data.input(), data.sample_time(), data.input_hold());
+}
+
+// The record the candidates are scored on: the data itself, or with the two-stage method the
+// data with u replaced by u_hat = S_hat r over the whole record, S_hat the stage-1 model that
+// identify fits on the estimation part (decision 0071). Stage 2 fits from u_hat, and the
+// measured u carries the noise fed back, so y - G u would misjudge the candidates as it does
+// with a known controller (decision 0070).
+SampledData scoring_record(const SampledData& data, const SampledData& estimation,
+                           const StructureScanOptions& options) {
+  const std::optional<TwoStageOptions>& two_stage = options.identification.two_stage;
+  if (!two_stage) return data;
+  const SensitivityFit stage1 = fit_sensitivity(estimation, *two_stage);
+  return SampledData(data.sample_time(), sensitivity_output(stage1, data.reference()),
+                     data.output(), data.reference(), data.start_time())
+      .with_input_hold(data.input_hold());
 }
 
 // The scores of a fit (fit percentages, held-out error, RT2, AIC, BIC, YIC); returns the mean
@@ -330,6 +346,7 @@ StructureScanResult scan_structures(const SampledData& data,
   }
   const ScanSplit split = split_for_scan(data.size(), options.validation_fraction);
   const SampledData estimation = data.segment(0, split.fitted);
+  const SampledData scored = scoring_record(data, estimation, options);
 
   StructureScanResult result;
   result.estimation_samples = split.fitted;
@@ -344,15 +361,15 @@ StructureScanResult scan_structures(const SampledData& data,
   parallel_for(static_cast<int>(candidates.size()), 0, [&](int index) {
     const auto slot = static_cast<std::size_t>(index);
     result.fits[slot] =
-        fit_candidate(data, estimation, candidates[slot], options, split, estimation_error[slot]);
+        fit_candidate(scored, estimation, candidates[slot], options, split, estimation_error[slot]);
     if (progress) {
       const std::lock_guard<std::mutex> lock(progress_mutex);
       progress(++done, static_cast<int>(candidates.size()));
     }
   });
 
-  const int scored = split.held_out > 0 ? split.held_out : split.fitted;
-  const double noise_tolerance = 2.0 * std::sqrt(2.0 / scored);
+  const int scored_samples = split.held_out > 0 ? split.held_out : split.fitted;
+  const double noise_tolerance = 2.0 * std::sqrt(2.0 / scored_samples);
   judge_against_contained(result.fits, estimation_error, noise_tolerance, split.held_out);
   recommend(result, options.error_tolerance.value_or(noise_tolerance));
   result.stabilisation = stabilisation_diagram(result.fits, options);

@@ -10,6 +10,7 @@
 #include <complex>
 #include <limits>
 #include <optional>
+#include <string>
 
 #include "ctid/core/error.h"
 #include "ctid/core/polynomial.h"
@@ -244,6 +245,14 @@ void TwoStageOptions::check_relations(const std::string& path) const {
           ".sensitivity_order is ", sensitivity_order,
           " but sensitivity_model is automatic; an order goes with sensitivity_model fir or "
           "rational (0 lets AIC choose)");
+}
+
+Eigen::VectorXd sensitivity_output(const SensitivityFit& fit, const Eigen::VectorXd& reference) {
+  require(fit.denominator.size() >= 1 && fit.denominator(0) == 1.0,
+          "sensitivity_output: the denominator must start with 1, got ",
+          fit.denominator.size() == 0 ? std::string("none") : internal::concat(fit.denominator(0)));
+  require(reference.allFinite(), "sensitivity_output: the reference has non-finite samples");
+  return filter_from_rest(fit.numerator, fit.denominator, reference);
 }
 
 SensitivityFit fit_sensitivity(const SampledData& record, const TwoStageOptions& options) {

@@ -13,6 +13,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/transfer_function.h"
 #include "ctid/estimation/validation.h"
+#include "ctid/identification/two_stage.h"
 #include "ctid/simulation/closed_loop.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/simulate.h"
@@ -187,6 +188,74 @@ TEST(StructureScan, WithADigitalControllerTheTrueOrderFitsExactlyFromTheReferenc
   biproper.d = 1.0;  // 1 + D_c D_g = 1 - 1 = 0
   EXPECT_FALSE(digital_loop_is_stable(
       biproper, DiscreteTransferFunction(Polynomial{-1.0}, Polynomial{1.0}, kH)));
+}
+
+// u_hat = B/A r from rest, written out here apart from the library's filter.
+Eigen::VectorXd stage_one_input(const SensitivityFit& fit, const Eigen::VectorXd& r) {
+  Eigen::VectorXd u(r.size());
+  for (Eigen::Index k = 0; k < r.size(); ++k) {
+    double v = 0.0;
+    for (Eigen::Index i = 0; i < fit.numerator.size() && i <= k; ++i) {
+      v += fit.numerator(i) * r(k - i);
+    }
+    for (Eigen::Index i = 1; i < fit.denominator.size() && i <= k; ++i) {
+      v -= fit.denominator(i) * u(k - i);
+    }
+    u(k) = v;
+  }
+  return u;
+}
+
+// With the two-stage method (controller unknown) each candidate is judged by its output from
+// the input stage 1 simulates from r over the whole record, stage 1 fitted on the estimation
+// part as identify fits it (decision 0071): the scores match that simulation, computed here
+// independently, and differ from those of y - G u; the true order is recommended.
+TEST(StructureScan, WithTheTwoStageMethodCandidatesAreJudgedFromTheSimulatedInput) {
+  const SampledData data = digital_loop(0.05);
+  StructureScanOptions options;
+  options.identification.two_stage = TwoStageOptions{};
+  const std::vector<ModelStructure> candidates{ModelStructure::unfactored(1, 0),
+                                               ModelStructure::unfactored(2, 0),
+                                               ModelStructure::unfactored(3, 0)};
+  const StructureScanResult r = scan_structures(data, candidates, options);
+  ASSERT_EQ(r.fits.size(), 3U);
+  ASSERT_EQ(r.recommended, 1) << r.rule;
+  const int fitted = r.estimation_samples;
+  const int held_out = r.validation_samples;
+  const SensitivityFit stage1 = fit_sensitivity(data.segment(0, fitted), TwoStageOptions{});
+  const Eigen::VectorXd u_hat = stage_one_input(stage1, data.reference());
+  EXPECT_LT((u_hat.head(fitted) - stage1.simulated_input).norm(),
+            1e-12 * stage1.simulated_input.norm());
+  EXPECT_LT((sensitivity_output(stage1, data.reference()) - u_hat).norm(), 1e-12 * u_hat.norm());
+  int checked = 0;
+  for (const StructureFit& fit : r.fits) {
+    if (!fit.usable) continue;
+    ++checked;
+    const Eigen::VectorXd& y = data.output();
+    const Eigen::VectorXd from_r = open_loop_output(fit.transfer_function, u_hat);
+    EXPECT_NEAR(fit.estimation_fit, fit_percent(y.head(fitted), from_r.head(fitted)), 1e-9)
+        << fit.message;
+    EXPECT_NEAR(fit.validation_fit, fit_percent(y.tail(held_out), from_r.tail(held_out)), 1e-9);
+    const Eigen::VectorXd from_u = open_loop_output(fit.transfer_function, data.input());
+    EXPECT_GT(std::abs(fit.validation_fit - fit_percent(y.tail(held_out), from_u.tail(held_out))),
+              1e-3);
+  }
+  EXPECT_GE(checked, 2);
+}
+
+// The two-stage scan needs the reference; without one it says so once, not per candidate.
+TEST(StructureScan, TheTwoStageScanWithoutAReferenceIsRefused) {
+  const SampledData loop = digital_loop(0.05);
+  const SampledData no_reference(kH, loop.input(), loop.output());
+  StructureScanOptions options;
+  options.identification.two_stage = TwoStageOptions{};
+  try {
+    (void)scan_structures(no_reference, {ModelStructure::unfactored(2, 0)}, options);
+    FAIL() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("the record has no reference"));
+    EXPECT_THAT(e.what(), HasSubstr("--reference-column"));
+  }
 }
 
 TEST(StructureScan, RefusesBadOptionsAndEmptyScans) {

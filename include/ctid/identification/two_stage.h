@@ -93,6 +93,11 @@ struct SensitivityFit {
 /// excite the model (singular equations, or no stable iterate).
 SensitivityFit fit_sensitivity(const SampledData& record, const TwoStageOptions& options);
 
+/// Stage 1's model driven by `reference` from rest, B/A r (r = 0 and u = 0 before it): the
+/// simulated input for a reference other than the one it was fitted on, e.g. a whole record
+/// of which stage 1 saw only the first part.
+Eigen::VectorXd sensitivity_output(const SensitivityFit& fit, const Eigen::VectorXd& reference);
+
 /// What stage 1 did, in IdentificationResult::two_stage.
 struct TwoStageResult {
   /// The model of r -> u and its order (FIR taps, or n).
