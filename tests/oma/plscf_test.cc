@@ -14,6 +14,7 @@
 
 #include "ctid/core/error.h"
 #include "ctid/oma/oma.h"
+#include "oma/calibration.h"
 #include "oma/chain_model.h"
 #include "support/sanitizers.h"
 
@@ -70,31 +71,31 @@ TEST(Plscf, SimulatedChainRecordGivesEveryModeWithinItsStandardErrors) {
   }
 }
 
-// 100 seeded ambient records of the chain: the truth within 3 segment standard errors in at
-// least 90 % of the records for every mode's frequency and damping ratio (issue 34's bound).
+// 200 seeded ambient records of the chain: the truth within 3 segment standard errors in at
+// least 90 % of the records for every mode's frequency and damping ratio (issue 34's bound),
+// and the Monte Carlo variance over the mean reported variance as docs/oma.md quotes it.
 TEST(Plscf, SegmentStandardErrorsCoverTheTruthInMonteCarlo) {
-  CTID_SKIP_UNDER_SANITIZERS("100 analyses; Release only");
+  CTID_SKIP_UNDER_SANITIZERS("200 analyses; Release only");
   const ChainModel model;
-  const int runs = 100;
-  std::vector<int> frequency_hits(model.modes.size(), 0);
-  std::vector<int> damping_hits(model.modes.size(), 0);
+  const int runs = 200;
+  std::vector<oma_test::Calibration> cal(model.modes.size());
   for (int run = 0; run < runs; ++run) {
     const OmaResult r = oma(model.simulate(20000, 0.05, 500u + static_cast<unsigned>(run)), model.h,
                             plscf_options());
     for (std::size_t i = 0; i < model.modes.size(); ++i) {
-      const OmaMode* m = oma_test::nearest(r, model.modes[i].frequency_hz);
-      if (m == nullptr) continue;
-      frequency_hits[i] +=
-          std::abs(m->frequency_hz - model.modes[i].frequency_hz) < 3.0 * m->frequency_hz_std;
-      damping_hits[i] +=
-          std::abs(m->damping_ratio - model.modes[i].damping_ratio) < 3.0 * m->damping_ratio_std;
+      const auto& truth = model.modes[i];
+      const OmaMode* m = oma_test::nearest(r, truth.frequency_hz);
+      if (m == nullptr || std::abs(m->frequency_hz / truth.frequency_hz - 1.0) > 0.02) continue;
+      cal[i].add(truth, m->frequency_hz, m->frequency_hz_std, m->damping_ratio,
+                 m->damping_ratio_std);
     }
   }
-  for (std::size_t i = 0; i < model.modes.size(); ++i) {
-    SCOPED_TRACE(model.modes[i].frequency_hz);
-    EXPECT_GE(frequency_hits[i], 90);
-    EXPECT_GE(damping_hits[i], 90);
-  }
+  oma_test::expect_quoted(cal,
+                          {{98.5, 99.0, 0.87, 0.74},
+                           {99.0, 97.5, 1.02, 0.94},
+                           {96.5, 98.5, 1.14, 0.70},
+                           {99.5, 100.0, 0.88, 0.87}},
+                          runs, "plscf segments, oma()");
 }
 
 TEST(Plscf, WhiteNoiseHasNoMode) {

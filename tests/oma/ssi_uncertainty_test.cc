@@ -16,13 +16,16 @@
 
 #include "ctid/oma/oma.h"
 #include "ctid/oma/ssi_cov.h"
+#include "oma/calibration.h"
 #include "oma/chain_model.h"
 #include "support/sanitizers.h"
 
 namespace ctid::ssi_uncertainty_test {
 namespace {
 
+using oma_test::Calibration;
 using oma_test::ChainModel;
+using oma_test::expect_quoted;
 
 std::complex<double> discrete_pole(const oma_test::TrueMode& m, double h) {
   const double wn = 2.0 * std::numbers::pi * m.frequency_hz;
@@ -96,40 +99,6 @@ TEST(SsiUncertainty, LinearisedChangeMatchesCentralDifferences) {
   }
 }
 
-// Per mode: the estimates over the runs, their reported variances and how often the truth
-// lies within 3 reported standard errors.
-struct Calibration {
-  std::vector<double> f, z, f_var, z_var;
-  int f_inside = 0, z_inside = 0;
-
-  static double mean(const std::vector<double>& v) {
-    double m = 0.0;
-    for (double x : v) m += x / static_cast<double>(v.size());
-    return m;
-  }
-  static double variance(const std::vector<double>& v) {
-    const double m = mean(v);
-    double ss = 0.0;
-    for (double x : v) ss += (x - m) * (x - m);
-    return ss / static_cast<double>(v.size() - 1);
-  }
-  double runs() const { return static_cast<double>(f.size()); }
-  double coverage_f() const { return f_inside / runs(); }
-  double coverage_z() const { return z_inside / runs(); }
-  /// Monte Carlo variance of the estimates over the mean reported variance (N times both).
-  double ratio_f() const { return variance(f) / mean(f_var); }
-  double ratio_z() const { return variance(z) / mean(z_var); }
-
-  void add(const oma_test::TrueMode& truth, double freq, double f_std, double zeta, double z_std) {
-    f.push_back(freq);
-    z.push_back(zeta);
-    f_var.push_back(f_std * f_std);
-    z_var.push_back(z_std * z_std);
-    if (std::abs(freq - truth.frequency_hz) < 3.0 * f_std) ++f_inside;
-    if (std::abs(zeta - truth.damping_ratio) < 3.0 * z_std) ++z_inside;
-  }
-};
-
 // The seeded records of every calibration: the 4-mass chain (6.3, 19.6, 30.1 and 38.2 Hz,
 // damping 0.8-1.3 %), 20000 samples, sensor noise 5 % of each channel's deviation.
 constexpr int kSamples = 20000;
@@ -160,8 +129,10 @@ std::vector<Calibration> at_true_order(const ChainModel& model, int runs) {
 
 // What a user gets: oma() over orders 2..24 with the modes named (so that every run reports
 // every mode), standard errors of the kind asked for.
-std::vector<Calibration> through_oma(const ChainModel& model, int runs, OmaUncertainty kind) {
+std::vector<Calibration> through_oma(const ChainModel& model, int runs, OmaUncertainty kind,
+                                     OmaMethod method = OmaMethod::ssi_cov) {
   OmaOptions o;
+  o.method = method;
   o.max_order = 24;
   o.block_rows = kBlockRows;
   o.uncertainty = kind;
@@ -178,35 +149,6 @@ std::vector<Calibration> through_oma(const ChainModel& model, int runs, OmaUncer
     }
   }
   return cal;
-}
-
-// The figures docs/oma.md quotes, per mode: coverage of f and ζ [%], Monte Carlo variance
-// over mean reported variance of f and ζ.
-struct Quoted {
-  double coverage_f, coverage_z, ratio_f, ratio_z;
-};
-
-// Every run finds every mode; the truth within 3 reported standard errors in at least 90 % of
-// the runs (issue 34); and each figure as docs/oma.md quotes it (coverage to the run, 0.5 %;
-// ratios to their two decimals), so that the page fails here when the numbers drift.
-void expect_quoted(const std::vector<Calibration>& cal, const std::vector<Quoted>& quoted, int runs,
-                   const char* name) {
-  ASSERT_EQ(cal.size(), quoted.size());
-  for (std::size_t i = 0; i < cal.size(); ++i) {
-    SCOPED_TRACE(::testing::Message() << name << ", mode " << i);
-    const Calibration& c = cal[i];
-    std::printf(
-        "%s mode %zu: coverage f %.1f %% zeta %.1f %%, MC/reported variance f %.3f "
-        "zeta %.3f\n",
-        name, i, 100.0 * c.coverage_f(), 100.0 * c.coverage_z(), c.ratio_f(), c.ratio_z());
-    ASSERT_EQ(static_cast<int>(c.f.size()), runs);
-    EXPECT_GE(c.coverage_f(), 0.9);
-    EXPECT_GE(c.coverage_z(), 0.9);
-    EXPECT_NEAR(100.0 * c.coverage_f(), quoted[i].coverage_f, 0.26);
-    EXPECT_NEAR(100.0 * c.coverage_z(), quoted[i].coverage_z, 0.26);
-    EXPECT_NEAR(c.ratio_f(), quoted[i].ratio_f, 0.0051);
-    EXPECT_NEAR(c.ratio_z(), quoted[i].ratio_z, 0.0051);
-  }
 }
 
 // Always on: 20 records at the true order; the truth within 3 reported standard errors in at
@@ -263,6 +205,19 @@ TEST(SsiUncertainty, SegmentsThroughOmaAreCalibrated) {
                  {99.0, 98.5, 0.78, 0.80},
                  {99.5, 98.5, 0.88, 0.72}},
                 200, "segments, oma()");
+}
+
+// Data-driven SSI has no perturbation estimate (decision 0036): its segment standard errors,
+// the mode re-identified on each of the 10 blocks, calibrated on the same records.
+TEST(SsiUncertainty, SsiDataSegmentsThroughOmaAreCalibrated) {
+  CTID_SKIP_UNDER_SANITIZERS("200 Monte Carlo runs; Release only");
+  const ChainModel model;
+  expect_quoted(through_oma(model, 200, OmaUncertainty::segments, OmaMethod::ssi_data),
+                {{99.5, 99.5, 0.65, 0.27},
+                 {99.5, 98.0, 0.66, 0.72},
+                 {99.5, 99.0, 0.70, 0.80},
+                 {99.5, 99.0, 0.79, 0.72}},
+                200, "ssi-data segments, oma()");
 }
 
 }  // namespace
