@@ -17,6 +17,7 @@
 #include "ctid/io/model_json.h"
 #include "ctid/io/npy.h"
 #include "ctid/io/sampled_data_csv.h"
+#include "field_flags.h"
 
 namespace ctid::cli {
 namespace {
@@ -82,6 +83,17 @@ void read_controller(const std::string& path, std::optional<DiscreteTransferFunc
   } else {
     analog = std::get<TransferFunction>(std::move(c));
   }
+}
+
+void add_two_stage_flags(CLI::App& app, bool& asked, TwoStageOptions& options,
+                         const std::string& flag, const std::string& path, const std::string& group,
+                         const std::string& description) {
+  app.add_flag(flag, asked, description)->excludes("--controller")->group(group);
+  FieldFlagSettings settings;
+  settings.group = group;
+  settings.needs = flag;
+  settings.path = path;
+  add_field_flags(app, options, settings);
 }
 
 void DataFlags::add_to(CLI::App& app, const std::string& name, bool with_reference, bool several) {

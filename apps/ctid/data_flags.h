@@ -15,6 +15,7 @@
 #include "ctid/core/preprocessing.h"
 #include "ctid/core/sampled_data.h"
 #include "ctid/identification/identification.h"
+#include "ctid/identification/two_stage.h"
 #include "ctid/io/csv.h"
 
 namespace ctid::cli {
@@ -102,5 +103,12 @@ bool same_sample_time(double a, double b);
 /// in `digital`; a transfer_function an analog one C(p), put in `analog` (decision 0067).
 void read_controller(const std::string& path, std::optional<DiscreteTransferFunction>& digital,
                      std::optional<TransferFunction>& analog);
+
+/// The flag `flag` (--two-stage: closed loop, controller unknown; decision 0043) setting
+/// `asked`, and the fields of TwoStageOptions as flags that need it, all in `group`; `path`
+/// names the options in messages.
+void add_two_stage_flags(CLI::App& app, bool& asked, TwoStageOptions& options,
+                         const std::string& flag, const std::string& path, const std::string& group,
+                         const std::string& description);
 
 }  // namespace ctid::cli

@@ -1023,18 +1023,12 @@ Command add_fit_command(CLI::App& parent) {
                   "transfer_function in p (analog): closed loop")
       ->check(CLI::ExistingFile)
       ->group("Closed loop");
-  app->add_flag(flag_of<IdentificationOptions>("two_stage"), f.two_stage,
-                "Closed loop with an unknown controller: model r -> u (discrete, refined IV), then "
-                "fit the "
-                "plant from the simulated noise-free input (needs the reference column; "
-                "decision 0043)")
-      ->excludes("--controller")
-      ->group("Closed loop");
-  FieldFlagSettings two_stage;
-  two_stage.group = "Closed loop";
-  two_stage.needs = flag_of<IdentificationOptions>("two_stage");
-  two_stage.path = "IdentificationOptions.two_stage";
-  add_field_flags(*app, f.two_stage_options, two_stage);
+  add_two_stage_flags(
+      *app, f.two_stage, f.two_stage_options, flag_of<IdentificationOptions>("two_stage"),
+      "IdentificationOptions.two_stage", "Closed loop",
+      "Closed loop with an unknown controller: model r -> u (discrete, refined IV), "
+      "then fit the plant from the simulated noise-free input (needs the "
+      "reference column; decision 0043)");
 
   app->add_option(flag_of<IdentificationOptions>("refined_iv.start"), f.start,
                   "Start: auto (LSSVF grid and FRF peaks, best output error), lssvf, frf, or a "

@@ -339,17 +339,12 @@ Command add_structure_command(CLI::App& parent) {
                   "transfer_function (analog): closed loop (the data need the reference)")
       ->check(CLI::ExistingFile)
       ->group("Structures");
-  app->add_flag(flag_of<StructureScanOptions>("identification.two_stage"), f.two_stage,
-                "Closed loop with an unknown controller: every structure's plant fitted from the "
-                "input simulated by a model of r -> u, and scored from it (needs the reference "
-                "column; decisions 0043, 0071)")
-      ->excludes("--controller")
-      ->group("Structures");
-  FieldFlagSettings two_stage;
-  two_stage.group = "Structures";
-  two_stage.needs = flag_of<StructureScanOptions>("identification.two_stage");
-  two_stage.path = "StructureScanOptions.identification.two_stage";
-  add_field_flags(*app, f.two_stage_options, two_stage);
+  add_two_stage_flags(*app, f.two_stage, f.two_stage_options,
+                      flag_of<StructureScanOptions>("identification.two_stage"),
+                      "StructureScanOptions.identification.two_stage", "Structures",
+                      "Closed loop with an unknown controller: every structure's plant fitted "
+                      "from the input simulated by a model of r -> u, and scored from it (needs "
+                      "the reference column; decisions 0043, 0071)");
   app->add_option(flag_of<StructureScanOptions>("identification.delay_scan_samples"), f.delay_scan,
                   "Scan the input delay MIN:MAX (samples) in every structure; each keeps its best")
       ->group("Structures");

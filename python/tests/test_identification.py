@@ -253,3 +253,23 @@ def test_classes_follow_the_cpp_field_lists():
     assert (structure.orders[0].n, structure.orders[0].m, structure.orders[0].integrators) == \
         (3, 1, 1)
     assert len(ctid.ModelStructure.modes(3).orders) == 3
+
+
+def test_two_stage_structure_scan_equals_ctid_structure(cli, closed_loop):
+    """scan_structures with the two-stage method is `ctid structure --two-stage`: every
+    candidate scored from the simulated input (decision 0071), the same numbers in both."""
+    data, csv = closed_loop
+    options = ctid.StructureScanOptions()
+    options.identification.two_stage = ctid.TwoStageOptions()
+    scan = ctid.scan_structures(data, [ctid.ModelStructure.modes(k) for k in (1, 2, 3)], options)
+    assert scan.recommended == 1, scan.rule
+    out = csv.with_name("closed_scan.json")
+    run = subprocess.run([str(cli), "structure", str(csv), "-T", str(H), "--modes", "1:3",
+                          "--two-stage", "-o", str(out), "--force", "-q"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    document = json.loads(out.read_text())
+    assert document["recommended"] == scan.recommended
+    for fit, row in zip(scan.fits, document["fits"], strict=True):
+        for key in ("estimation_fit", "validation_fit", "validation_error", "aic"):
+            assert row[key] == pytest.approx(getattr(fit, key), rel=1e-14, abs=0), key

@@ -132,17 +132,24 @@ TEST_F(StructureCommand, SeveralChannelsScanModeCounts) {
 // A digital loop, a discrete PI controller around 2 / ((p + 1)(p + 3)) written by `ctid
 // simulate --controller`: with the controller, each candidate is judged through the loop from r
 // (decision 0070) and the true order is recommended, its held-out end fitted exactly.
-class DigitalLoopStructure : public testing::CliTest {};
+class DigitalLoopStructure : public testing::CliTest {
+ protected:
+  // Writes the loop's record, noise-free, to loop.csv; returns the controller file.
+  std::string simulate_loop() {
+    const std::string plant = write("g.json", R"({"type": "transfer_function",
+        "numerator_ascending": [2], "denominator_ascending": [3, 4, 1]})");
+    const std::string controller = write("c.json", R"({"type": "discrete_transfer_function",
+        "numerator_ascending": [-1.6, 1.64], "denominator_ascending": [-1, 1],
+        "sample_time": 0.02})");
+    const auto sim = ctid({"simulate", "-m", plant, "--controller", controller, "-e", "white", "-n",
+                           "3000", "-T", "0.02", "-o", "loop.csv"});
+    EXPECT_EQ(sim.status, 0) << sim.err;
+    return controller;
+  }
+};
 
 TEST_F(DigitalLoopStructure, RecommendsTheTrueOrderJudgedThroughTheLoop) {
-  const std::string plant = write("g.json", R"({"type": "transfer_function",
-      "numerator_ascending": [2], "denominator_ascending": [3, 4, 1]})");
-  const std::string controller = write("c.json", R"({"type": "discrete_transfer_function",
-      "numerator_ascending": [-1.6, 1.64], "denominator_ascending": [-1, 1],
-      "sample_time": 0.02})");
-  const auto sim = ctid({"simulate", "-m", plant, "--controller", controller, "-e", "white", "-n",
-                         "3000", "-T", "0.02", "-o", "loop.csv"});
-  ASSERT_EQ(sim.status, 0) << sim.err;
+  const std::string controller = simulate_loop();
   const auto r = ctid({"structure", "loop.csv", "--poles", "1:3", "--zeros", "0", "--controller",
                        controller, "-o", "scan.json"});
   ASSERT_EQ(r.status, 0) << r.err;
@@ -157,14 +164,7 @@ TEST_F(DigitalLoopStructure, RecommendsTheTrueOrderJudgedThroughTheLoop) {
 // the true order is recommended and fits the held-out end exactly. --two-stage with a
 // controller, or with several channels, is refused in one line.
 TEST_F(DigitalLoopStructure, TwoStageRecommendsTheTrueOrderWithoutTheController) {
-  const std::string plant = write("g.json", R"({"type": "transfer_function",
-      "numerator_ascending": [2], "denominator_ascending": [3, 4, 1]})");
-  const std::string controller = write("c.json", R"({"type": "discrete_transfer_function",
-      "numerator_ascending": [-1.6, 1.64], "denominator_ascending": [-1, 1],
-      "sample_time": 0.02})");
-  const auto sim = ctid({"simulate", "-m", plant, "--controller", controller, "-e", "white", "-n",
-                         "3000", "-T", "0.02", "-o", "loop.csv"});
-  ASSERT_EQ(sim.status, 0) << sim.err;
+  const std::string controller = simulate_loop();
   const auto r = ctid({"structure", "loop.csv", "--poles", "1:3", "--zeros", "0", "--two-stage",
                        "--sensitivity-model", "rational", "-o", "scan.json"});
   ASSERT_EQ(r.status, 0) << r.err;

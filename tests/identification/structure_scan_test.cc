@@ -139,6 +139,15 @@ Eigen::VectorXd open_loop_output(const TransferFunction& g, const Eigen::VectorX
   return model_output(AdditiveModel({Submodel{g.denominator(), g.numerator(), 0}}), u, kH);
 }
 
+// Unfactored candidates of 1 to 3 poles and no zeros, scanned on `data`.
+StructureScanResult one_to_three_poles(const SampledData& data,
+                                       const StructureScanOptions& options) {
+  return scan_structures(data,
+                         {ModelStructure::unfactored(1, 0), ModelStructure::unfactored(2, 0),
+                          ModelStructure::unfactored(3, 0)},
+                         options);
+}
+
 // With a known digital controller each candidate is judged by its output from r through the
 // loop (decision 0028), not by y - G u: the scores match that simulation, computed here
 // independently, and differ from the open-loop one.
@@ -146,10 +155,7 @@ TEST(StructureScan, WithADigitalControllerCandidatesAreJudgedFromTheReference) {
   const SampledData data = digital_loop(0.05);
   StructureScanOptions options;
   options.identification.controller = loop_controller();
-  const std::vector<ModelStructure> candidates{ModelStructure::unfactored(1, 0),
-                                               ModelStructure::unfactored(2, 0),
-                                               ModelStructure::unfactored(3, 0)};
-  const StructureScanResult r = scan_structures(data, candidates, options);
+  const StructureScanResult r = one_to_three_poles(data, options);
   ASSERT_EQ(r.fits.size(), 3U);
   ASSERT_EQ(r.recommended, 1) << r.rule;
   const int fitted = r.estimation_samples;
@@ -214,10 +220,7 @@ TEST(StructureScan, WithTheTwoStageMethodCandidatesAreJudgedFromTheSimulatedInpu
   const SampledData data = digital_loop(0.05);
   StructureScanOptions options;
   options.identification.two_stage = TwoStageOptions{};
-  const std::vector<ModelStructure> candidates{ModelStructure::unfactored(1, 0),
-                                               ModelStructure::unfactored(2, 0),
-                                               ModelStructure::unfactored(3, 0)};
-  const StructureScanResult r = scan_structures(data, candidates, options);
+  const StructureScanResult r = one_to_three_poles(data, options);
   ASSERT_EQ(r.fits.size(), 3U);
   ASSERT_EQ(r.recommended, 1) << r.rule;
   const int fitted = r.estimation_samples;
