@@ -73,9 +73,7 @@ OutputErrorResult refine_output_error(const SampledData& data, const DelayedFeed
   settings.function_tolerance = 1e-12;
   settings.parameter_tolerance = 1e-12;
   const internal::LeastSquaresOutcome outcome = internal::solve_least_squares(problem, settings);
-  result.iterations = outcome.iterations;
-  result.termination = outcome.termination;
-  result.message = outcome.message;
+  static_cast<Outcome&>(result) = outcome;
   rho = params.head(np);
   const double delay = options.estimate_delay ? params(np) : start.delay;
   result.loop = loop_from_parameters(rho, n, m, delay);

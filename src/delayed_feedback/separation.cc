@@ -256,9 +256,7 @@ KroneckerSeparationResult separate_kronecker(const Polynomial& alpha, const Poly
     if (j < best.cost) {
       best.cost = j;
       best.best_start = name;
-      best.termination = outcome.termination;
-      best.iterations = outcome.iterations;
-      best.message = outcome.message;
+      static_cast<Outcome&>(best) = outcome;
       best_p = p;
     }
   }

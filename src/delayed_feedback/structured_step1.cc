@@ -155,9 +155,7 @@ StructuredStep1Result estimate_structured_step1(const FeedbackRegression& reg,
     ++best.starts;
     if (rho.allFinite() && j < best.cost) {
       best.cost = j;
-      best.termination = outcome.termination;
-      best.iterations = outcome.iterations;
-      best.message = outcome.message;
+      static_cast<Outcome&>(best) = outcome;
       best.loop = loop_from_parameters(rho, n, m, reg.delay);
     }
   }

@@ -163,9 +163,7 @@ void summarise(ModeTrack& track) {
 }
 
 void fill_window(TrackingWindow& window, const EstimationResult& estimate) {
-  window.termination = estimate.termination;
-  window.message = estimate.message;
-  window.iterations = estimate.iterations;
+  static_cast<Outcome&>(window) = estimate;
   window.verdict = estimate.verdict;
   window.fit_percent = estimate.fit_percent;
   window.model = estimate.model;

@@ -14,6 +14,7 @@
 #include <Eigen/SVD>
 
 #include "ctid/core/error.h"
+#include "ctid/core/fields.h"
 #include "ctid/core/format.h"
 #include "ctid/estimation/validation.h"
 #include "ctid/estimation/verdict.h"
@@ -645,14 +646,10 @@ void check_orders(const std::vector<SubmodelOrder>& orders, const MimoData& data
 MimoEstimationResult siso_result(const Layout& layout, const MimoData& data,
                                  const MimoRefinedIvOptions& options,
                                  const std::optional<MimoAdditiveModel>& initial_model) {
+  // The settings the two estimators share, by their field tables: the iteration, the
+  // interpolation, the noise, the covariance and the initial conditions.
   RefinedIvOptions siso;
-  siso.max_iterations = options.max_iterations;
-  siso.tolerance = options.tolerance;
-  siso.output_interpolation = options.output_interpolation;
-  siso.noise = options.noise;
-  siso.noise_model_max_order = options.noise_model_max_order;
-  siso.compute_covariance = options.compute_covariance;
-  siso.initial_conditions = options.initial_conditions;
+  assign_shared_fields(siso, options);
   if (!options.input_delays_samples.empty()) {
     const DelaySplit delay =
         split_delay(options.input_delays_samples.front() * data.sample_time(), data.sample_time());
@@ -666,9 +663,7 @@ MimoEstimationResult siso_result(const Layout& layout, const MimoData& data,
   for (const Submodel& s : r.model.submodels()) submodels.push_back({s.a, {s.b}, s.integrators});
   result.model = MimoAdditiveModel(1, 1, std::move(submodels), {},
                                    Eigen::VectorXd::Constant(1, r.model.input_delay()));
-  result.termination = r.termination;
-  result.message = r.message;
-  result.iterations = r.iterations;
+  static_cast<Outcome&>(result) = r;
   result.step_halvings = r.step_halvings;
   result.mean_squared_errors = Eigen::VectorXd::Constant(1, r.mean_squared_error);
   result.fit_percent = Eigen::VectorXd::Constant(1, r.fit_percent);

@@ -20,13 +20,10 @@ struct LeastSquaresSettings {
   bool nonmonotonic_steps = false;
 };
 
-struct LeastSquaresOutcome {
+/// Outcome's termination: converged (Ceres reported CONVERGENCE), iteration_limit (Ceres'
+/// NO_CONVERGENCE) or non_finite (a failed evaluation); its message is Ceres' own.
+struct LeastSquaresOutcome : Outcome {
   double sum_of_squares = 0.0;  ///< |r|² at the end (twice Ceres' cost)
-  int iterations = 0;
-  bool converged = false;  ///< Ceres reported CONVERGENCE (not a cap or a failure)
-  /// converged, iteration_limit (Ceres' NO_CONVERGENCE) or non_finite (a failed evaluation).
-  Termination termination = Termination::not_run;
-  std::string message;
 };
 
 /// Levenberg-Marquardt with a dense QR on `problem`, silently; the parameter blocks hold the
@@ -46,8 +43,7 @@ inline LeastSquaresOutcome solve_least_squares(ceres::Problem& problem,
   LeastSquaresOutcome outcome;
   outcome.sum_of_squares = 2.0 * summary.final_cost;
   outcome.iterations = static_cast<int>(summary.iterations.size());
-  outcome.converged = summary.termination_type == ceres::CONVERGENCE;
-  outcome.termination = outcome.converged ? Termination::converged
+  outcome.termination = summary.termination_type == ceres::CONVERGENCE ? Termination::converged
                         : summary.termination_type == ceres::NO_CONVERGENCE
                             ? Termination::iteration_limit
                             : Termination::non_finite;
