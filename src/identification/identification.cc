@@ -17,6 +17,7 @@
 #include "ctid/refined_iv/refined_iv.h"
 #include "ctid/refined_iv/unstable_clsrivc.h"
 #include "ctid/simulation/simulate.h"
+#include "internal/two_stage_stages.h"
 
 namespace ctid {
 
@@ -409,49 +410,8 @@ IdentificationResult identify_two_stage(std::span<const SampledData> records,
                                         const IdentificationOptions& options,
                                         const IdentificationProgress& progress) {
   validate_identification(structure, options);
-  require(!records.empty(), "identify: no data record was given");
-  const SampledData* longest = &records.front();
-  for (const SampledData& record : records) {
-    require(record.has_reference(),
-            "IdentificationOptions.two_stage is set but a record has no reference; the two-stage "
-            "method fits the map from the reference r to the input u (--reference-column)");
-    if (record.size() > longest->size()) longest = &record;
-  }
-  // The kind and order are chosen on the longest record, whose fit is then kept as it is.
-  TwoStageOptions chosen = *options.two_stage;
-  std::optional<SensitivityFit> longest_fit;
-  if (chosen.sensitivity_model == SensitivityModel::automatic || chosen.sensitivity_order == 0) {
-    longest_fit = fit_sensitivity(*longest, chosen);
-    chosen = TwoStageOptions{longest_fit->model, longest_fit->order};
-  }
-  TwoStageResult stage;
-  stage.sensitivity_model = chosen.sensitivity_model;
-  stage.sensitivity_order = chosen.sensitivity_order;
-  std::vector<SampledData> simulated;
-  simulated.reserve(records.size());
-  for (const SampledData& record : records) {
-    SensitivityFit fit = &record == longest && longest_fit ? std::move(*longest_fit)
-                                                           : fit_sensitivity(record, chosen);
-    stage.sensitivity_fit_percent.push_back(fit.fit_percent);
-    simulated.push_back(SampledData(record.sample_time(), std::move(fit.simulated_input),
-                                    record.output(), std::nullopt, record.start_time())
-                            .with_input_hold(record.input_hold()));
-  }
-  stage.assumptions =
-      "r is external (uncorrelated with the noise) and excites the loop; the loop is linear and "
-      "time-invariant, and stage 1's model holds its map r -> u (an FIR its impulse response); the "
-      "standard errors treat the simulated input as exact, so they leave out stage 1's error";
-  IdentificationOptions open = options;
-  open.two_stage.reset();
-  IdentificationResult result = identify_records(simulated, structure, open, progress);
-  result.closed_loop = true;
-  result.estimate.message += internal::concat(
-      "; two-stage (unknown controller): r -> u by a ", enum_name(chosen.sensitivity_model),
-      " model of order ", chosen.sensitivity_order, " (fit ",
-      format_significant(stage.sensitivity_fit_percent.front(), 4),
-      " %), then the plant from the simulated input");
-  result.two_stage = std::move(stage);
-  return result;
+  return internal::identify_from_stage_one(internal::fit_stage_one(records, *options.two_stage),
+                                           structure, options, progress);
 }
 
 }  // namespace
@@ -505,4 +465,64 @@ TimeResponse time_response(const ProcessModelResult& result, const TimeResponseO
   return process_time_response(result, options);
 }
 
+namespace internal {
+
+StageOne fit_stage_one(std::span<const SampledData> records, const TwoStageOptions& two_stage) {
+  require(!records.empty(), "identify: no data record was given");
+  const SampledData* longest = &records.front();
+  for (const SampledData& record : records) {
+    require(record.has_reference(),
+            "IdentificationOptions.two_stage is set but a record has no reference; the two-stage "
+            "method fits the map from the reference r to the input u (--reference-column)");
+    if (record.size() > longest->size()) longest = &record;
+  }
+  // The kind and order are chosen on the longest record, whose fit is then kept as it is.
+  StageOne out;
+  out.chosen = two_stage;
+  std::optional<SensitivityFit> longest_fit;
+  if (out.chosen.sensitivity_model == SensitivityModel::automatic ||
+      out.chosen.sensitivity_order == 0) {
+    longest_fit = fit_sensitivity(*longest, out.chosen);
+    out.chosen = TwoStageOptions{longest_fit->model, longest_fit->order};
+  }
+  out.fits.reserve(records.size());
+  out.simulated.reserve(records.size());
+  for (const SampledData& record : records) {
+    out.fits.push_back(&record == longest && longest_fit ? std::move(*longest_fit)
+                                                         : fit_sensitivity(record, out.chosen));
+    out.simulated.push_back(SampledData(record.sample_time(), out.fits.back().simulated_input,
+                                        record.output(), std::nullopt, record.start_time())
+                                .with_input_hold(record.input_hold()));
+  }
+  return out;
+}
+
+IdentificationResult identify_from_stage_one(const StageOne& stage_one,
+                                             const ModelStructure& structure,
+                                             const IdentificationOptions& options,
+                                             const IdentificationProgress& progress) {
+  TwoStageResult stage;
+  stage.sensitivity_model = stage_one.chosen.sensitivity_model;
+  stage.sensitivity_order = stage_one.chosen.sensitivity_order;
+  for (const SensitivityFit& fit : stage_one.fits) {
+    stage.sensitivity_fit_percent.push_back(fit.fit_percent);
+  }
+  stage.assumptions =
+      "r is external (uncorrelated with the noise) and excites the loop; the loop is linear and "
+      "time-invariant, and stage 1's model holds its map r -> u (an FIR its impulse response); the "
+      "standard errors treat the simulated input as exact, so they leave out stage 1's error";
+  IdentificationOptions open = options;
+  open.two_stage.reset();
+  IdentificationResult result = identify_records(stage_one.simulated, structure, open, progress);
+  result.closed_loop = true;
+  result.estimate.message += internal::concat(
+      "; two-stage (unknown controller): r -> u by a ", enum_name(stage.sensitivity_model),
+      " model of order ", stage.sensitivity_order, " (fit ",
+      format_significant(stage.sensitivity_fit_percent.front(), 4),
+      " %), then the plant from the simulated input");
+  result.two_stage = std::move(stage);
+  return result;
+}
+
+}  // namespace internal
 }  // namespace ctid

@@ -7,6 +7,7 @@
 #include <limits>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,7 @@
 #include "ctid/identification/two_stage.h"
 #include "ctid/simulation/closed_loop.h"
 #include "ctid/simulation/simulate.h"
+#include "internal/two_stage_stages.h"
 
 namespace ctid {
 namespace {
@@ -131,18 +133,36 @@ Eigen::VectorXd scan_simulation(const AdditiveModel& model, const SampledData& d
   return model_output(model, data.input(), data.sample_time(), data.input_hold());
 }
 
-// The record the candidates are scored on: the data itself, or with the two-stage method the
-// data with u replaced by u_hat = S_hat r over the whole record, S_hat the stage-1 model that
-// identify fits on the estimation part (decision 0071). Stage 2 fits from u_hat, and the
-// measured u carries the noise fed back, so y - G u would misjudge the candidates as it does
-// with a known controller (decision 0070).
-SampledData scoring_record(const SampledData& data, const SampledData& estimation,
-                           const StructureScanOptions& options) {
+// With the two-stage method, stage 1 fitted once on the estimation part, as identify fits it
+// there; every candidate's stage 2 starts from it (decision 0071).
+std::optional<internal::StageOne> scan_stage_one(const SampledData& estimation,
+                                                 const StructureScanOptions& options) {
   const std::optional<TwoStageOptions>& two_stage = options.identification.two_stage;
-  if (!two_stage) return data;
-  const SensitivityFit stage1 = fit_sensitivity(estimation, *two_stage);
-  return SampledData(data.sample_time(), sensitivity_output(stage1, data.reference()),
-                     data.output(), data.reference(), data.start_time())
+  if (!two_stage) return std::nullopt;
+  return internal::fit_stage_one(std::span<const SampledData>(&estimation, 1), *two_stage);
+}
+
+// A candidate's identification on the estimation part: identify itself, or with the two-stage
+// method the checks and stage 2 of identify's two-stage path, from the scan's stage 1.
+IdentificationResult identify_candidate(const SampledData& estimation,
+                                        const std::optional<internal::StageOne>& stage_one,
+                                        const ModelStructure& structure,
+                                        const IdentificationOptions& options) {
+  if (!stage_one) return identify(estimation, structure, options);
+  validate_identification(structure, options);
+  return internal::identify_from_stage_one(*stage_one, structure, options, {});
+}
+
+// The record the candidates are scored on: the data itself, or with the two-stage method the
+// data with u replaced by u_hat = S_hat r over the whole record, S_hat stage 1's model
+// (decision 0071). Stage 2 fits from u_hat, and the measured u carries the noise fed back, so
+// y - G u would misjudge the candidates as it does with a known controller (decision 0070).
+SampledData scoring_record(const SampledData& data,
+                           const std::optional<internal::StageOne>& stage_one) {
+  if (!stage_one) return data;
+  return SampledData(data.sample_time(),
+                     sensitivity_output(stage_one->fits.front(), data.reference()), data.output(),
+                     data.reference(), data.start_time())
       .with_input_hold(data.input_hold());
 }
 
@@ -180,6 +200,7 @@ double score_fit(StructureFit& fit, const EstimationResult& e, const SampledData
 // One candidate fitted on the estimation part and scored; `estimation_error` receives its mean
 // squared output error on that part (NaN when the fit failed).
 StructureFit fit_candidate(const SampledData& data, const SampledData& estimation,
+                           const std::optional<internal::StageOne>& stage_one,
                            const ModelStructure& structure, const StructureScanOptions& options,
                            ScanSplit split, double& estimation_error) {
   StructureFit fit;
@@ -187,7 +208,8 @@ StructureFit fit_candidate(const SampledData& data, const SampledData& estimatio
   fit.yic = fit.rt2 = fit.aic = fit.bic = kNan;
   fit.estimation_fit = fit.validation_fit = fit.validation_error = kNan;
   try {
-    const IdentificationResult r = identify(estimation, structure, options.identification);
+    const IdentificationResult r =
+        identify_candidate(estimation, stage_one, structure, options.identification);
     const EstimationResult& e = r.estimate;
     fit.parameters = static_cast<int>(e.parameters.size());
     static_cast<Outcome&>(fit) = e;
@@ -346,7 +368,8 @@ StructureScanResult scan_structures(const SampledData& data,
   }
   const ScanSplit split = split_for_scan(data.size(), options.validation_fraction);
   const SampledData estimation = data.segment(0, split.fitted);
-  const SampledData scored = scoring_record(data, estimation, options);
+  const std::optional<internal::StageOne> stage_one = scan_stage_one(estimation, options);
+  const SampledData scored = scoring_record(data, stage_one);
 
   StructureScanResult result;
   result.estimation_samples = split.fitted;
@@ -360,8 +383,8 @@ StructureScanResult scan_structures(const SampledData& data,
   int done = 0;
   parallel_for(static_cast<int>(candidates.size()), 0, [&](int index) {
     const auto slot = static_cast<std::size_t>(index);
-    result.fits[slot] =
-        fit_candidate(scored, estimation, candidates[slot], options, split, estimation_error[slot]);
+    result.fits[slot] = fit_candidate(scored, estimation, stage_one, candidates[slot], options,
+                                      split, estimation_error[slot]);
     if (progress) {
       const std::lock_guard<std::mutex> lock(progress_mutex);
       progress(++done, static_cast<int>(candidates.size()));

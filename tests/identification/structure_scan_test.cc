@@ -13,6 +13,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/transfer_function.h"
 #include "ctid/estimation/validation.h"
+#include "ctid/identification/identification.h"
 #include "ctid/identification/two_stage.h"
 #include "ctid/simulation/closed_loop.h"
 #include "ctid/simulation/excitation.h"
@@ -244,6 +245,15 @@ TEST(StructureScan, WithTheTwoStageMethodCandidatesAreJudgedFromTheSimulatedInpu
               1e-3);
   }
   EXPECT_GE(checked, 2);
+  // Stage 1 is fitted once for the scan; each candidate's estimate and report are still those
+  // identify gives on the estimation part, bit for bit.
+  const IdentificationResult direct =
+      identify(data.segment(0, fitted), ModelStructure::unfactored(2, 0), options.identification);
+  EXPECT_EQ(r.fits[1].transfer_function.numerator().coefficients(),
+            direct.estimate.transfer_function.numerator().coefficients());
+  EXPECT_EQ(r.fits[1].transfer_function.denominator().coefficients(),
+            direct.estimate.transfer_function.denominator().coefficients());
+  EXPECT_EQ(r.fits[1].message, direct.estimate.brief_report());
 }
 
 // The two-stage scan needs the reference; without one it says so once, not per candidate.
@@ -256,7 +266,7 @@ TEST(StructureScan, TheTwoStageScanWithoutAReferenceIsRefused) {
     (void)scan_structures(no_reference, {ModelStructure::unfactored(2, 0)}, options);
     FAIL() << "no error";
   } catch (const InvalidArgument& e) {
-    EXPECT_THAT(e.what(), HasSubstr("the record has no reference"));
+    EXPECT_THAT(e.what(), HasSubstr("two_stage is set but a record has no reference"));
     EXPECT_THAT(e.what(), HasSubstr("--reference-column"));
   }
 }
