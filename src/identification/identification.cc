@@ -17,6 +17,7 @@
 #include "ctid/refined_iv/refined_iv.h"
 #include "ctid/refined_iv/unstable_clsrivc.h"
 #include "ctid/simulation/simulate.h"
+#include "internal/two_stage_covariance.h"
 #include "internal/two_stage_stages.h"
 
 namespace ctid {
@@ -493,6 +494,8 @@ StageOne fit_stage_one(std::span<const SampledData> records, const TwoStageOptio
     out.simulated.push_back(SampledData(record.sample_time(), out.fits.back().simulated_input,
                                         record.output(), std::nullopt, record.start_time())
                                 .with_input_hold(record.input_hold()));
+    out.references.push_back(record.reference());
+    out.input_errors.push_back(record.input() - out.fits.back().simulated_input);
   }
   return out;
 }
@@ -507,14 +510,17 @@ IdentificationResult identify_from_stage_one(const StageOne& stage_one,
   for (const SensitivityFit& fit : stage_one.fits) {
     stage.sensitivity_fit_percent.push_back(fit.fit_percent);
   }
-  stage.assumptions =
-      "r is external (uncorrelated with the noise) and excites the loop; the loop is linear and "
-      "time-invariant, and stage 1's model holds its map r -> u (an FIR its impulse response); the "
-      "standard errors treat the simulated input as exact, so they leave out stage 1's error";
   IdentificationOptions open = options;
   open.two_stage.reset();
   IdentificationResult result = identify_records(stage_one.simulated, structure, open, progress);
   result.closed_loop = true;
+  stage.assumptions = internal::concat(
+      "r is external (uncorrelated with the noise) and excites the loop; the loop is linear and "
+      "time-invariant, and stage 1's model holds its map r -> u (an FIR its impulse response); ",
+      include_stage_one_error(result, structure, open, stage_one)
+          ? "the standard errors include stage 1's error and its correlation with stage 2's noise"
+          : "the standard errors treat the simulated input as exact, so they leave out stage 1's "
+            "error");
   result.estimate.message += internal::concat(
       "; two-stage (unknown controller): r -> u by a ", enum_name(stage.sensitivity_model),
       " model of order ", stage.sensitivity_order, " (fit ",

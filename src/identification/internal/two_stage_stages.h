@@ -6,6 +6,8 @@
 #include <span>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "ctid/core/sampled_data.h"
 #include "ctid/identification/identification.h"
 #include "ctid/identification/two_stage.h"
@@ -16,8 +18,10 @@ namespace ctid::internal {
 /// the records with u replaced by the simulated input u_hat = S_hat r.
 struct StageOne {
   TwoStageOptions chosen;
-  std::vector<SensitivityFit> fits;    // per record
-  std::vector<SampledData> simulated;  // per record: (u_hat, y)
+  std::vector<SensitivityFit> fits;           // per record
+  std::vector<SampledData> simulated;         // per record: (u_hat, y)
+  std::vector<Eigen::VectorXd> references;    // per record: r
+  std::vector<Eigen::VectorXd> input_errors;  // per record: u - u_hat
 };
 
 /// Stage 1 as identify runs it with IdentificationOptions::two_stage (`two_stage`: those
