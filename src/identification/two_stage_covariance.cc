@@ -221,26 +221,29 @@ VectorAutoregression fit_vector_autoregression(const Eigen::MatrixXd& x, int max
 // the adjoint filter z(s) = g(s) - sum_j z(s + j) a_j run backwards.
 Eigen::MatrixXd whitened_sum(const std::vector<Eigen::MatrixXd>& g,
                              const VectorAutoregression& ar) {
-  const Eigen::Index m = static_cast<Eigen::Index>(g.size());
+  const std::size_t m = g.size();
   const Eigen::Index n = g[0].rows();
-  std::vector<Eigen::MatrixXd> z = g;
+  // Time runs along the columns (p x N), so each step touches contiguous memory.
+  std::vector<Eigen::MatrixXd> z;
+  for (const Eigen::MatrixXd& factor : g) z.push_back(factor.transpose());
   for (Eigen::Index s = n - 1; s >= 0; --s) {
     for (std::size_t j = 1; j <= ar.a.size() && s + static_cast<Eigen::Index>(j) < n; ++j) {
       const Eigen::MatrixXd& a = ar.a[j - 1];
-      for (Eigen::Index c = 0; c < m; ++c) {
-        for (Eigen::Index d = 0; d < m; ++d) {
-          z[static_cast<std::size_t>(c)].row(s) -=
-              a(d, c) * z[static_cast<std::size_t>(d)].row(s + static_cast<Eigen::Index>(j));
+      const Eigen::Index later = s + static_cast<Eigen::Index>(j);
+      for (std::size_t c = 0; c < m; ++c) {
+        for (std::size_t d = 0; d < m; ++d) {
+          z[c].col(s) -=
+              a(static_cast<Eigen::Index>(d), static_cast<Eigen::Index>(c)) * z[d].col(later);
         }
       }
     }
   }
   const Eigen::Index p = g[0].cols();
   Eigen::MatrixXd q = Eigen::MatrixXd::Zero(p, p);
-  for (Eigen::Index c = 0; c < m; ++c) {
-    for (Eigen::Index d = 0; d < m; ++d) {
-      q.noalias() += ar.innovation(c, d) * z[static_cast<std::size_t>(c)].transpose() *
-                     z[static_cast<std::size_t>(d)];
+  for (std::size_t c = 0; c < m; ++c) {
+    for (std::size_t d = 0; d < m; ++d) {
+      q.noalias() += ar.innovation(static_cast<Eigen::Index>(c), static_cast<Eigen::Index>(d)) *
+                     z[c] * z[d].transpose();
     }
   }
   return q;
