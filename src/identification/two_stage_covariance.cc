@@ -3,9 +3,9 @@
 // To first order, stage 2's output-error estimate moves by
 //   d theta = R^-1 sum_t psi(t) [w(t) - (G d u_hat)(t)],   R = sum_t psi psi',
 // psi the gradient of G(theta) u_hat, w = y - G u_hat. Stage 1's output-error fit of r -> u
-// moves u_hat = B/A r by d u_hat = Phi d eta, d eta = (Phi'Phi)^-1 sum_t Phi(t) e(t), Phi its
+// moves u_hat = B/A r by d u_hat = Phi d eta, d eta = (Phi'Phi)^+ sum_t Phi(t) e(t), Phi its
 // own output gradient (shifted copies of r/A and of -u_hat/A) and e = u - u_hat. So
-//   d theta = R^-1 sum_t [psi(t) w(t) - d(t) e(t)],   d(t)' = Phi(t)' (Phi'Phi)^-1 M',
+//   d theta = R^-1 sum_t [psi(t) w(t) - d(t) e(t)],   d(t)' = Phi(t)' (Phi'Phi)^+ M',
 // M = sum_t psi(t) (G Phi)(t)'. w and e are the same noise seen twice (in closed loop
 // e = -C w), so the sum is taken with one vector AR model of (w, e): its adjoint filter
 // whitens the sum, as the scalar AR does for one estimate (refined_iv/covariance.h).
