@@ -314,7 +314,9 @@ bool stage_two_is_output_error_srivc(const IdentificationResult& result,
   for (const SampledData& record : stage_one.simulated) {
     zero_order_hold = zero_order_hold && record.input_hold() == Hold::zero_order_hold;
   }
-  return zero_order_hold && result.estimator == RefinedIvEstimator::srivc && !iv.noise_model &&
+  const bool output_error_srivc = result.estimator == RefinedIvEstimator::srivc ||
+                                  result.estimator == RefinedIvEstimator::additive_srivc;
+  return zero_order_hold && output_error_srivc && !iv.noise_model &&
          iv.initial_conditions == InitialConditions::zero && !options.delay_range &&
          iv.record_delay_samples.empty() && options.constraints.empty() &&
          !result.mode_relocation && result.estimate.covariance.size() > 0 &&

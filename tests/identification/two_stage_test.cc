@@ -169,8 +169,12 @@ TEST(TwoStage, GivesThePlantOfANoiseFreeLoop) {
 
 // When u is the noise-free S r (the noise is added to y only), stage 1 is exact and adds
 // nothing: the joint covariance (decision 0072) is then stage 2's own, the coloured-noise
-// covariance of SRIVC on (u, y) computed by the refined IV module.
-TEST(TwoStage, CovarianceWithAnExactStageOneIsStageTwos) {
+// covariance of SRIVC on (u, y) computed by the refined IV module, for the unfactored and
+// the additive estimator alike.
+class ExactStageOne : public ::testing::TestWithParam<ModelStructure> {};
+
+TEST_P(ExactStageOne, GivesStageTwosCovariance) {
+  const ModelStructure structure = GetParam();
   const Eigen::VectorXd r = white_noise(3000, 1.0, 21);
   const ClosedLoopSimulation clean = simulate_closed_loop(plant(), pi_controller(), r);
   const DiscreteTransferFunction colour(Polynomial{0.0, 1.0}, Polynomial{-0.9, 1.0}, kH);
@@ -180,10 +184,9 @@ TEST(TwoStage, CovarianceWithAnExactStageOneIsStageTwos) {
   IdentificationOptions options = two_stage_options();
   options.two_stage->sensitivity_model = SensitivityModel::rational;
   options.two_stage->sensitivity_order = 3;
-  const IdentificationResult two =
-      identify(SampledData(kH, clean.input, y, r), ModelStructure::unfactored(2, 0), options);
-  const IdentificationResult open =
-      identify(SampledData(kH, clean.input, y), ModelStructure::unfactored(2, 0), {});
+  const IdentificationResult two = identify(SampledData(kH, clean.input, y, r), structure, options);
+  const IdentificationResult open = identify(SampledData(kH, clean.input, y), structure, {});
+  ASSERT_EQ(two.estimator, open.estimator);
   ASSERT_THAT(two.two_stage->assumptions, HasSubstr("include stage 1's error"));
   ASSERT_EQ(two.estimate.covariance.rows(), open.estimate.covariance.rows());
   const Eigen::MatrixXd& reference = open.estimate.covariance;
@@ -191,6 +194,10 @@ TEST(TwoStage, CovarianceWithAnExactStageOneIsStageTwos) {
       (two.estimate.covariance - reference).cwiseAbs().maxCoeff() / reference.cwiseAbs().maxCoeff(),
       1e-6);
 }
+
+INSTANTIATE_TEST_SUITE_P(TwoStage, ExactStageOne,
+                         ::testing::Values(ModelStructure::unfactored(2, 0),
+                                           ModelStructure::modes(1)));
 
 // The joint covariance is for stage 2's output-error SRIVC fit; with a noise model (RIVC)
 // the standard errors stay stage 2's, and the assumptions say so.
