@@ -21,6 +21,7 @@
 #include "ctid/estimation/validation.h"
 #include "ctid/filtering/filter_bank.h"
 #include "ctid/refined_iv/covariance.h"
+#include "ctid/refined_iv/refined_iv.h"
 #include "ctid/refined_iv/srivc.h"
 #include "ctid/simulation/stamps.h"
 #include "estimation/internal/scaled_least_squares.h"
@@ -329,7 +330,7 @@ EstimationResult srivc_irregular(const IrregularRecord& record, const SubmodelOr
   }
   internal::note_sampling_rate(checks, result.model, record.median_step(), "pi / (median step)");
   result.checks = std::move(checks);
-  result.verdict = internal::refined_iv_verdict(result, false, false);
+  result.verdict = refined_iv_verdict(result, false, false);
   result.verdict.active_constraints =
       internal::srivc_engine::active_constraint_notes(result.unstable_reflections, {}, {});
   return result;

@@ -56,67 +56,6 @@ void note_sampling_rate(DataChecks& checks, const AdditiveModel& model, double s
   }
 }
 
-Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loop_unstable) {
-  // A returned start (no step completed, or none fitted better) is judged like any model, by
-  // its fit and the checks below, never by the iteration count: on noise-free data the start
-  // can already be exact (issue 33), and a poor start fails the fit check. The termination
-  // message says that the model is the start.
-  Verdict verdict;
-  check_finite(verdict, r.parameters.allFinite(), "a parameter");
-  if (closed_loop) {
-    check_fit(verdict, r.fit_percent, std::numeric_limits<double>::quiet_NaN());
-    check_closed_loop_fit(verdict, r.closed_loop_fit_percent, r.start_closed_loop_fit_percent);
-  } else if (r.noise_model) {
-    // RIVC starts from the estimate without a noise model, whose output error is about the
-    // best the structure gives: a fit well below it is the noise model taking up what the
-    // plant misses (decision 0056), not a bad start.
-    check_fit(verdict, r.fit_percent, std::numeric_limits<double>::quiet_NaN());
-    if (std::isfinite(r.start_fit_percent) &&
-        r.fit_percent < r.start_fit_percent - verdict_thresholds::fit_tolerance_points) {
-      verdict.fail("the output-error fit " + format_brief(r.fit_percent) + " % is worse than " +
-                       format_brief(r.start_fit_percent) +
-                       " % without a noise model: the plant structure is likely too simple, and "
-                       "the noise model takes up what it misses",
-                   {verdict_advice::other_structure});
-    }
-  } else {
-    check_fit(verdict, r.fit_percent, r.start_fit_percent);
-  }
-  if (loop_unstable) {
-    // The record came from a loop that ran; a model the controller cannot hold is not it.
-    verdict.fail(
-        "the known controller does not stabilise the fitted model, so the model cannot "
-        "describe the loop that was recorded",
-        {verdict_advice::better_start, verdict_advice::lower_order});
-  }
-  Eigen::VectorXcd poles(0);
-  for (int i = 0; i < r.model.size(); ++i) {
-    if (r.model[i].a.degree() < 1) continue;
-    const Eigen::VectorXcd roots = r.model[i].a.roots();
-    poles.conservativeResize(poles.size() + roots.size());
-    poles.tail(roots.size()) = roots;
-  }
-  if (poles.allFinite()) {
-    check_stable(verdict, poles);
-    const Eigen::VectorXcd zeros = r.transfer_function.numerator().degree() >= 1
-                                       ? r.transfer_function.zeros()
-                                       : Eigen::VectorXcd(0);
-    if (zeros.allFinite()) check_cancellation(verdict, poles, zeros);
-  }
-  std::vector<std::string> names;
-  Eigen::VectorXd values(static_cast<Eigen::Index>(r.modes.size()));
-  Eigen::VectorXd errors(values.size());
-  for (size_t k = 0; k < r.modes.size(); ++k) {
-    const ModalEstimate& m = r.modes[k];
-    names.push_back("the natural frequency of submodel " + std::to_string(m.submodel + 1));
-    values(static_cast<Eigen::Index>(k)) = m.value.natural_frequency;
-    errors(static_cast<Eigen::Index>(k)) = m.standard_error.natural_frequency;
-  }
-  check_standard_errors(verdict, names, values, errors);
-  check_conditioning(verdict, r.reciprocal_condition, r.fit_percent);
-  return verdict;
-}
-
 std::optional<Polynomial> reflect_unstable_roots_if_finite(const Polynomial& a, bool& reflected,
                                                            std::string* failure) {
   reflected = false;
@@ -997,4 +936,65 @@ EstimationResult run_refined_iv_from_start(const RefinedIvProblem& problem,
 }
 
 }  // namespace internal
+
+Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loop_unstable) {
+  // A returned start (no step completed, or none fitted better) is judged like any model, by
+  // its fit and the checks below, never by the iteration count: on noise-free data the start
+  // can already be exact (issue 33), and a poor start fails the fit check. The termination
+  // message says that the model is the start.
+  Verdict verdict;
+  check_finite(verdict, r.parameters.allFinite(), "a parameter");
+  if (closed_loop) {
+    check_fit(verdict, r.fit_percent, std::numeric_limits<double>::quiet_NaN());
+    check_closed_loop_fit(verdict, r.closed_loop_fit_percent, r.start_closed_loop_fit_percent);
+  } else if (r.noise_model) {
+    // RIVC starts from the estimate without a noise model, whose output error is about the
+    // best the structure gives: a fit well below it is the noise model taking up what the
+    // plant misses (decision 0056), not a bad start.
+    check_fit(verdict, r.fit_percent, std::numeric_limits<double>::quiet_NaN());
+    if (std::isfinite(r.start_fit_percent) &&
+        r.fit_percent < r.start_fit_percent - verdict_thresholds::fit_tolerance_points) {
+      verdict.fail("the output-error fit " + format_brief(r.fit_percent) + " % is worse than " +
+                       format_brief(r.start_fit_percent) +
+                       " % without a noise model: the plant structure is likely too simple, and "
+                       "the noise model takes up what it misses",
+                   {verdict_advice::other_structure});
+    }
+  } else {
+    check_fit(verdict, r.fit_percent, r.start_fit_percent);
+  }
+  if (loop_unstable) {
+    // The record came from a loop that ran; a model the controller cannot hold is not it.
+    verdict.fail(
+        "the known controller does not stabilise the fitted model, so the model cannot "
+        "describe the loop that was recorded",
+        {verdict_advice::better_start, verdict_advice::lower_order});
+  }
+  Eigen::VectorXcd poles(0);
+  for (int i = 0; i < r.model.size(); ++i) {
+    if (r.model[i].a.degree() < 1) continue;
+    const Eigen::VectorXcd roots = r.model[i].a.roots();
+    poles.conservativeResize(poles.size() + roots.size());
+    poles.tail(roots.size()) = roots;
+  }
+  if (poles.allFinite()) {
+    check_stable(verdict, poles);
+    const Eigen::VectorXcd zeros = r.transfer_function.numerator().degree() >= 1
+                                       ? r.transfer_function.zeros()
+                                       : Eigen::VectorXcd(0);
+    if (zeros.allFinite()) check_cancellation(verdict, poles, zeros);
+  }
+  std::vector<std::string> names;
+  Eigen::VectorXd values(static_cast<Eigen::Index>(r.modes.size()));
+  Eigen::VectorXd errors(values.size());
+  for (size_t k = 0; k < r.modes.size(); ++k) {
+    const ModalEstimate& m = r.modes[k];
+    names.push_back("the natural frequency of submodel " + std::to_string(m.submodel + 1));
+    values(static_cast<Eigen::Index>(k)) = m.value.natural_frequency;
+    errors(static_cast<Eigen::Index>(k)) = m.standard_error.natural_frequency;
+  }
+  check_standard_errors(verdict, names, values, errors);
+  check_conditioning(verdict, r.reciprocal_condition, r.fit_percent);
+  return verdict;
+}
 }  // namespace ctid

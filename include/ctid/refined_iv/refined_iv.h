@@ -48,4 +48,9 @@ struct RefinedIvProblem {
 EstimationResult estimate_refined_iv(const RefinedIvProblem& problem,
                                      const RefinedIvOptions& options = {});
 
+/// The checks of estimation/verdict.h on a finished estimate (decision 0007), as the refined
+/// IV estimators judge theirs; a caller that changes an estimate's covariance judges it again
+/// with this. `loop_unstable`: closed loop, and the known controller does not stabilise it.
+Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loop_unstable);
+
 }  // namespace ctid

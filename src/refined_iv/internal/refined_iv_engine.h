@@ -70,10 +70,6 @@ void note_excitation(DataChecks& checks, const std::string& signal);
 void note_sampling_rate(DataChecks& checks, const AdditiveModel& model, double step,
                         const std::string& limit);
 
-/// The checks of estimation/verdict.h on a finished estimate (decision 0007).
-/// `loop_unstable`: closed loop, and the known controller does not stabilise the estimate.
-Verdict refined_iv_verdict(const EstimationResult& r, bool closed_loop, bool loop_unstable);
-
 /// Parameters of `model` laid out for `orders` (b padded with zeros up to m_i); throws
 /// InvalidArgument if the structure does not fit.
 Eigen::VectorXd parameters_for_orders(const AdditiveModel& model,
