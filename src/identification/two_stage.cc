@@ -15,6 +15,7 @@
 #include "ctid/core/error.h"
 #include "ctid/core/polynomial.h"
 #include "ctid/estimation/validation.h"
+#include "internal/delayed_gram.h"
 
 namespace ctid {
 namespace {
@@ -40,9 +41,8 @@ Eigen::VectorXd filter_from_rest(const Eigen::VectorXd& b, const Eigen::VectorXd
 }
 
 // The normal equations of u_k = sum_{i<L} g_i r_{k-i} over k = 0..N-1, r = 0 before the
-// record: the Gram matrix (L x L) and the right-hand side. Its first row is a correlation;
-// each step down the diagonal removes the product of the samples that leave at the record's
-// end, so the matrix is exact in O(N L + L^2).
+// record: the Gram matrix (L x L, exact in O(N L + L^2): delayed_gram) and the right-hand
+// side.
 struct FirNormalEquations {
   Eigen::MatrixXd gram;
   Eigen::VectorXd rhs;
@@ -53,18 +53,9 @@ FirNormalEquations fir_normal_equations(const Eigen::VectorXd& r, const Eigen::V
                                         int taps) {
   const Eigen::Index n = r.size();
   FirNormalEquations e;
-  e.gram.resize(taps, taps);
+  e.gram = internal::delayed_gram(r, 0, taps, r, 0, taps);
   e.rhs.resize(taps);
-  for (Eigen::Index j = 0; j < taps; ++j) {
-    e.gram(0, j) = r.segment(j, n - j).dot(r.head(n - j));
-    e.rhs(j) = u.segment(j, n - j).dot(r.head(n - j));
-  }
-  for (Eigen::Index i = 0; i + 1 < taps; ++i) {
-    for (Eigen::Index j = i; j + 1 < taps; ++j) {
-      e.gram(i + 1, j + 1) = e.gram(i, j) - r(n - 1 - i) * r(n - 1 - j);
-    }
-  }
-  e.gram.triangularView<Eigen::StrictlyLower>() = e.gram.transpose();
+  for (Eigen::Index j = 0; j < taps; ++j) e.rhs(j) = u.segment(j, n - j).dot(r.head(n - j));
   e.output_energy = u.squaredNorm();
   return e;
 }
@@ -292,4 +283,29 @@ SensitivityFit fit_sensitivity(const SampledData& record, const TwoStageOptions&
   return std::move(*fit);
 }
 
+namespace internal {
+
+Eigen::MatrixXd delayed_gram(const Eigen::VectorXd& x, Eigen::Index dx, Eigen::Index rows,
+                             const Eigen::VectorXd& y, Eigen::Index dy, Eigen::Index cols) {
+  const Eigen::Index n = x.size();
+  // sum_t x(t - a) y(t - b) over the samples where both are inside the record.
+  const auto dot = [&](Eigen::Index a, Eigen::Index b) {
+    const Eigen::Index m = std::max(a, b);
+    return m >= n ? 0.0 : x.segment(m - a, n - m).dot(y.segment(m - b, n - m));
+  };
+  const bool symmetric = &x == &y && dx == dy && rows == cols;
+  Eigen::MatrixXd g(rows, cols);
+  for (Eigen::Index j = 0; j < cols; ++j) g(0, j) = dot(dx, dy + j);
+  for (Eigen::Index i = 1; i < rows; ++i) g(i, 0) = symmetric ? g(0, i) : dot(dx + i, dy);
+  for (Eigen::Index i = 1; i < rows; ++i) {
+    for (Eigen::Index j = 1; j < cols; ++j) {
+      const Eigen::Index a = dx + i;
+      const Eigen::Index b = dy + j;
+      g(i, j) = g(i - 1, j - 1) - (a <= n && b <= n ? x(n - a) * y(n - b) : 0.0);
+    }
+  }
+  return g;
+}
+
+}  // namespace internal
 }  // namespace ctid

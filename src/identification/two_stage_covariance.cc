@@ -18,13 +18,13 @@
 #include <cmath>
 #include <limits>
 #include <string>
-#include <string_view>
 #include <utility>
 #include <vector>
 
-#include "ctid/estimation/verdict.h"
 #include "ctid/refined_iv/covariance.h"
+#include "ctid/refined_iv/refined_iv.h"
 #include "ctid/simulation/simulate.h"
+#include "internal/delayed_gram.h"
 
 namespace ctid::internal {
 namespace {
@@ -68,7 +68,8 @@ struct ShiftedBlock {
 
 // x / A(q^-1) from rest.
 Eigen::VectorXd over_denominator(const SensitivityFit& fit, const Eigen::VectorXd& x) {
-  SensitivityFit denominator_only = fit;
+  SensitivityFit denominator_only;
+  denominator_only.denominator = fit.denominator;
   denominator_only.numerator = Eigen::VectorXd::Ones(1);
   return sensitivity_output(denominator_only, x);
 }
@@ -85,33 +86,9 @@ std::vector<ShiftedBlock> stage_one_gradient(const SensitivityFit& fit, const Ei
   return blocks;
 }
 
-// sum_t x(t - dx) y(t - dy) over the record, both zero before it.
-double shifted_dot(const Eigen::VectorXd& x, Eigen::Index dx, const Eigen::VectorXd& y,
-                   Eigen::Index dy) {
-  const Eigen::Index n = x.size();
-  const Eigen::Index m = std::max(dx, dy);
-  if (m >= n) return 0.0;
-  return x.segment(m - dx, n - m).dot(y.segment(m - dy, n - m));
-}
-
-// Phi_x' Phi_y of two blocks in O(N (count_x + count_y) + count_x count_y): one step down
-// the diagonal drops the product of the samples that leave at the record's end.
+// Phi_x' Phi_y of two blocks (delayed_gram).
 Eigen::MatrixXd block_gram(const ShiftedBlock& x, const ShiftedBlock& y) {
-  const Eigen::Index n = x.base.size();
-  Eigen::MatrixXd g(x.count, y.count);
-  for (Eigen::Index j = 0; j < y.count; ++j)
-    g(0, j) = shifted_dot(x.base, x.first, y.base, y.first + j);
-  for (Eigen::Index i = 1; i < x.count; ++i)
-    g(i, 0) = shifted_dot(x.base, x.first + i, y.base, y.first);
-  for (Eigen::Index i = 1; i < x.count; ++i) {
-    for (Eigen::Index j = 1; j < y.count; ++j) {
-      const Eigen::Index dx = x.first + i;
-      const Eigen::Index dy = y.first + j;
-      const double leaving = dx <= n && dy <= n ? x.base(n - dx) * y.base(n - dy) : 0.0;
-      g(i, j) = g(i - 1, j - 1) - leaving;
-    }
-  }
-  return x.sign * y.sign * g;
+  return x.sign * y.sign * delayed_gram(x.base, x.first, x.count, y.base, y.first, y.count);
 }
 
 // The pseudo-inverse of a Gram matrix, its directions below kGramFloor of the largest
@@ -320,28 +297,7 @@ bool stage_two_is_output_error_srivc(const IdentificationResult& result,
          iv.initial_conditions == InitialConditions::zero && !options.delay_range &&
          iv.record_delay_samples.empty() && options.constraints.empty() &&
          !result.mode_relocation && result.estimate.covariance.size() > 0 &&
-         result.estimate.parameters.allFinite() &&
-         stage_one.references.size() == stage_one.fits.size();
-}
-
-// The standard-error checks of the verdict redone with the new errors.
-void recheck_standard_errors(Verdict& verdict, const std::vector<ModalEstimate>& modes) {
-  constexpr std::string_view kPrefix = "the standard error ";
-  std::erase_if(verdict.reasons,
-                [&](const std::string& reason) { return reason.starts_with(kPrefix); });
-  if (verdict.reasons.empty()) {
-    verdict.usable = true;
-    verdict.advice.clear();
-  }
-  std::vector<std::string> names;
-  Eigen::VectorXd values(static_cast<Eigen::Index>(modes.size()));
-  Eigen::VectorXd errors(values.size());
-  for (std::size_t k = 0; k < modes.size(); ++k) {
-    names.push_back("the natural frequency of submodel " + std::to_string(modes[k].submodel + 1));
-    values(static_cast<Eigen::Index>(k)) = modes[k].value.natural_frequency;
-    errors(static_cast<Eigen::Index>(k)) = modes[k].standard_error.natural_frequency;
-  }
-  check_standard_errors(verdict, names, values, errors);
+         result.estimate.parameters.allFinite();
 }
 
 }  // namespace
@@ -357,7 +313,11 @@ bool include_stage_one_error(IdentificationResult& result, const ModelStructure&
   estimate.standard_errors = covariance->diagonal().cwiseMax(0.0).cwiseSqrt();
   estimate.modes =
       modal_estimates(estimate.model, estimate.covariance, structure.kind == ModelKind::unfactored);
-  recheck_standard_errors(estimate.verdict, estimate.modes);
+  // Judged again with the new errors, as the estimator judged it; the constraints that acted
+  // on the estimate are unchanged.
+  std::vector<std::string> active_constraints = std::move(estimate.verdict.active_constraints);
+  estimate.verdict = refined_iv_verdict(estimate, false, false);
+  estimate.verdict.active_constraints = std::move(active_constraints);
   return true;
 }
 

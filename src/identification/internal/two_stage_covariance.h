@@ -19,11 +19,11 @@ namespace ctid::internal {
 std::optional<Eigen::MatrixXd> two_stage_covariance(const AdditiveModel& model,
                                                     const StageOne& stage_one, int max_noise_order);
 
-/// The covariance above in place of stage 2's in result.estimate (its standard errors, modal
-/// errors and their verdict check with it), when stage 2 was that fit: SRIVC, unfactored or
-/// additive, without a noise model, initial conditions, an estimated delay, per-record
-/// delays, constraints or relocated modes, on records with a zero-order-hold input. Returns
-/// whether it was put in.
+/// The covariance above in place of stage 2's in result.estimate (its standard errors and
+/// modal errors, and the verdict judged again with them), when stage 2 was that fit: SRIVC,
+/// unfactored or additive, without a noise model, initial conditions, an estimated delay,
+/// per-record delays, constraints or relocated modes, on records with a zero-order-hold input.
+/// Returns whether it was put in.
 bool include_stage_one_error(IdentificationResult& result, const ModelStructure& structure,
                              const IdentificationOptions& options, const StageOne& stage_one);
 
