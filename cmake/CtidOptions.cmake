@@ -8,10 +8,7 @@ target_compile_options(ctid_compile_options INTERFACE
   -Wimplicit-fallthrough
   # GCC 12 reports false -Wrestrict positives inside std::string concatenation at -O3.
   $<$<CXX_COMPILER_ID:GNU>:-Wno-restrict>
-  $<$<BOOL:${CTID_WERROR}>:-Werror>
-  # Eigen's decompositions compiled once, in ctid_core, not in every file that uses them
-  # (src/core/internal/eigen_instances.h, decision 0073).
-  $<BUILD_INTERFACE:-include${PROJECT_SOURCE_DIR}/src/core/internal/eigen_instances.h>)
+  $<$<BOOL:${CTID_WERROR}>:-Werror>)
 
 # Sanitizers apply to the whole build (libraries, tests, CLI, benchmarks) rather than
 # through ctid_compile_options: every object that ends up in one executable must agree,

@@ -49,10 +49,7 @@ def cli():
 def reference_binary():
     binary = _reference_binary()
     if binary is None:
-        pytest.fail(
-            "ctid_python_reference was not built next to the ctid package: build it with "
-            "`cmake --build build --target ctid_python_reference` (scripts/test.sh builds all)"
-        )
+        pytest.fail("ctid_python_reference was not built next to the ctid package")
     return binary
 
 
