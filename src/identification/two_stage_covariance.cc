@@ -21,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "ctid/estimation/verdict.h"
 #include "ctid/refined_iv/covariance.h"
 #include "ctid/refined_iv/refined_iv.h"
 #include "ctid/simulation/simulate.h"
@@ -309,15 +310,22 @@ bool include_stage_one_error(IdentificationResult& result, const ModelStructure&
   const std::optional<Eigen::MatrixXd> covariance =
       two_stage_covariance(estimate.model, stage_one, options.refined_iv.noise_model_max_order);
   if (!covariance || covariance->rows() != estimate.covariance.rows()) return false;
+  // Only the judgement is redone with the new errors: a failure the estimator added after
+  // judging (a stop before a degenerate iterate, decision 0050) and the constraints that acted
+  // stay as they were.
+  const Verdict judged = refined_iv_verdict(estimate, false, false);
   estimate.covariance = *covariance;
   estimate.standard_errors = covariance->diagonal().cwiseMax(0.0).cwiseSqrt();
   estimate.modes =
       modal_estimates(estimate.model, estimate.covariance, structure.kind == ModelKind::unfactored);
-  // Judged again with the new errors, as the estimator judged it; the constraints that acted
-  // on the estimate are unchanged.
-  std::vector<std::string> active_constraints = std::move(estimate.verdict.active_constraints);
-  estimate.verdict = refined_iv_verdict(estimate, false, false);
-  estimate.verdict.active_constraints = std::move(active_constraints);
+  Verdict verdict = refined_iv_verdict(estimate, false, false);
+  for (const std::string& reason : estimate.verdict.reasons) {
+    if (std::ranges::find(judged.reasons, reason) == judged.reasons.end()) {
+      verdict.fail(reason, {estimate.verdict.advice});
+    }
+  }
+  verdict.active_constraints = std::move(estimate.verdict.active_constraints);
+  estimate.verdict = std::move(verdict);
   return true;
 }
 

@@ -15,6 +15,8 @@
 #include "ctid/simulation/closed_loop.h"
 #include "ctid/simulation/excitation.h"
 #include "ctid/simulation/noise.h"
+#include "identification/internal/two_stage_covariance.h"
+#include "identification/internal/two_stage_stages.h"
 #include "support/sanitizers.h"
 
 namespace ctid::two_stage_test {
@@ -198,6 +200,21 @@ TEST_P(ExactStageOne, GivesStageTwosCovariance) {
 INSTANTIATE_TEST_SUITE_P(TwoStage, ExactStageOne,
                          ::testing::Values(ModelStructure::unfactored(2, 0),
                                            ModelStructure::modes(1)));
+
+// With the joint covariance only the verdict's judgement is redone: a failure the estimator
+// added after judging (as at a stop before a degenerate iterate) stays, with its advice.
+TEST(TwoStage, KeepsAFailureTheEstimatorAddedAfterJudging) {
+  const std::vector<SampledData> records{loop_record(2000, 41, true)};
+  const internal::StageOne stage_one = internal::fit_stage_one(records, TwoStageOptions{});
+  const ModelStructure structure = ModelStructure::unfactored(2, 0);
+  IdentificationResult result = identify(stage_one.simulated.front(), structure, {});
+  result.estimate.verdict.fail("a failure added after judging", {"a remedy added with it"});
+  ASSERT_TRUE(internal::include_stage_one_error(result, structure, {}, stage_one));
+  const Verdict& verdict = result.estimate.verdict;
+  EXPECT_FALSE(verdict.usable);
+  EXPECT_THAT(verdict.reasons, ::testing::Contains("a failure added after judging"));
+  EXPECT_THAT(verdict.advice, HasSubstr("a remedy added with it"));
+}
 
 // The joint covariance is for stage 2's output-error SRIVC fit; with a noise model (RIVC)
 // the standard errors stay stage 2's, and the assumptions say so.
